@@ -1,0 +1,5 @@
+"""``python -m deformctl``."""
+
+from deformctl.cli import main
+
+main()
