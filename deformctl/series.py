@@ -1,0 +1,118 @@
+"""In-memory time series shared by the stages: one squeeze, one lift attempt.
+
+These are the contract between the simulator (:mod:`deformctl.sim`), the ingestion of real logs
+(:mod:`deformctl.measure`), the estimators (:mod:`deformctl.characterize`), the lifting-force
+search (:mod:`deformctl.lift`) and the artifact layer (:mod:`deformctl.artifacts`), which maps them
+to MCAP messages one sample per message. Arrays are 1-D float64 of shape ``[n]`` on one time base,
+in SI units named in the field.
+
+Compression ``d`` is defined once, here: the *total* compression between the two palms,
+``d(t) = gap(t0) - gap(t)`` where ``gap = palm_right_x_m - palm_left_x_m`` and ``t0`` is the first
+sample of the squeeze (palms touching the unloaded object). It is positive when squeezed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+
+def _as_1d(name: str, value: object, n: int | None) -> FloatArray:
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.ndim != 1:
+        raise ValueError(f"{name} must be 1-D, got shape {arr.shape}")
+    if n is not None and arr.shape[0] != n:
+        raise ValueError(f"{name} has {arr.shape[0]} samples, time_s has {n}")
+    return arr
+
+
+@dataclass(frozen=True)
+class SqueezeSeries:
+    """One squeeze operation of one object.
+
+    Attributes:
+        object_id: catalog id of the squeezed object.
+        squeeze_index: 0-based index of this squeeze among the object's squeezes.
+        time_s: sample times since the start of the squeeze, s, shape ``[n]``, increasing.
+        force_n: force felt by the manipulator (mean of the two palms' normal forces), N, ``[n]``.
+        compression_m: total compression between the palms (see module docstring), m, ``[n]``.
+        commanded_force_n: the commanded palm force, N, ``[n]``, when known.
+        palm_left_x_m, palm_right_x_m: palm positions along the squeeze axis, m, when known.
+    """
+
+    object_id: str
+    squeeze_index: int
+    time_s: FloatArray
+    force_n: FloatArray
+    compression_m: FloatArray
+    commanded_force_n: FloatArray | None = None
+    palm_left_x_m: FloatArray | None = None
+    palm_right_x_m: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        t = _as_1d("time_s", self.time_s, None)
+        object.__setattr__(self, "time_s", t)
+        n = t.shape[0]
+        for name in ("force_n", "compression_m"):
+            object.__setattr__(self, name, _as_1d(name, getattr(self, name), n))
+        for name in ("commanded_force_n", "palm_left_x_m", "palm_right_x_m"):
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, _as_1d(name, value, n))
+
+    def __len__(self) -> int:
+        return int(self.time_s.shape[0])
+
+
+@dataclass(frozen=True)
+class LiftAttemptSeries:
+    """The time series of one lift attempt at one grip force.
+
+    Attributes:
+        time_s: sample times since the start of the attempt, s, ``[n]``.
+        palm_z_m: palm height above its start, m, ``[n]``.
+        object_com_z_m: object centre-of-mass height above its start, m, ``[n]``.
+        slip_m: accumulated sliding of the object against the palms, m, ``[n]``.
+        friction_force_n: total tangential (vertical) force the two palms carry, N, ``[n]``.
+        normal_force_n: normal force of each palm (force felt), N, ``[n]``.
+    """
+
+    time_s: FloatArray
+    palm_z_m: FloatArray
+    object_com_z_m: FloatArray
+    slip_m: FloatArray
+    friction_force_n: FloatArray
+    normal_force_n: FloatArray
+
+    def __post_init__(self) -> None:
+        t = _as_1d("time_s", self.time_s, None)
+        object.__setattr__(self, "time_s", t)
+        n = t.shape[0]
+        for name in ("palm_z_m", "object_com_z_m", "slip_m", "friction_force_n", "normal_force_n"):
+            object.__setattr__(self, name, _as_1d(name, getattr(self, name), n))
+
+    def __len__(self) -> int:
+        return int(self.time_s.shape[0])
+
+
+@dataclass(frozen=True)
+class TrialOutcome:
+    """What one lift attempt at ``grip_force_n`` found; returned by every trial runner.
+
+    Attributes:
+        grip_force_n: the grip (normal) force of each palm, N.
+        lifted: True when the object came up without slipping beyond the tolerance.
+        slip_m: the slip distance the runner measured, m (NaN when the runner cannot tell).
+        series: the attempt's time series, when the runner records one.
+        details: runner-specific extras (e.g. camera frame paths from a rig), JSON-serialisable.
+    """
+
+    grip_force_n: float
+    lifted: bool
+    slip_m: float
+    series: LiftAttemptSeries | None = None
+    details: dict[str, object] = field(default_factory=dict)
