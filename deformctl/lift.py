@@ -1,0 +1,420 @@
+"""Iterative lifting: search for the minimum lifting force L_f of one object.
+
+The seed paper grips an object of weight ``W`` with the rigid-object force ``F_w = W / (2 mu)``
+(two palms, friction coefficient ``mu``), lifts it, checks for slip, and raises the grip force by
+20 % until the object comes up. The force that first lifts is the object's lifting force
+``L_f = F_w + F_d``, where ``F_d >= 0`` is the surplus the deformation demands.
+
+The search here does not care where a trial runs. A *trial runner* (:class:`TrialRunner`) takes a
+grip force and an attempt index and returns a :class:`deformctl.series.TrialOutcome`; the built-in
+simulator and an external rig (:class:`deformctl.rig.RigRunner`) are both runners, so the same code
+drives a simulation and a real robot.
+
+Two protocols:
+
+``paper``
+    Try ``F_w * growth**k`` for ``k = 0, 1, 2, ...`` until a trial lifts; report that force. Its
+    bracket is ``(F_w * growth**(k-1), F_w * growth**k]``, so the answer is at most ``growth``
+    times the true threshold (20 % for ``growth = 1.2``).
+
+``refine`` (default)
+    Bracket exactly as ``paper`` does (the same forces in the same order, so the paper's last
+    bracket is reproduced), then bisect between the last force that slipped (``low``) and the
+    first that lifted (``high``) until ``(high - low) / high <= tolerance_rel``. The reported L_f is
+    ``high``: the smallest force that was actually tried *and* lifted. A force that was not tried
+    is never reported.
+
+Both start at ``F_w``; the search never tries a force below it (the paper defines ``L_f >= F_w``).
+If ``F_w`` itself lifts, ``L_f = F_w`` with bracket ``(F_w, F_w)`` and ``converged = True``.
+
+Rule for a search that runs out of attempts (``max_attempts`` counts every trial, bracketing and
+bisection alike):
+
+* nothing lifted: ``converged = False``, ``lift_force_n = NaN``, ``f_d_n = NaN``,
+  ``bracket_n = (last force tried, inf)``; ``message`` names the object and the last force tried.
+* something lifted but the bisection did not reach the tolerance (``refine`` only):
+  ``converged = False``, ``lift_force_n`` = the smallest force that lifted (a tried upper bound),
+  ``bracket_n = (low, high)``.
+
+The search uses the *commanded* force in its bookkeeping; runners are expected to echo it in
+``TrialOutcome.grip_force_n``. It assumes that lifting is monotone in the grip force (more force
+never slips where less force lifted); with a noisy real rig the bisection still terminates, but its
+answer is only as good as that assumption.
+
+If the runner raises a :class:`deformctl.errors.DeformctlError` (a crashed rig, a simulator that
+blew up), the search raises :class:`SearchAbortedError` (or :class:`RigSearchAbortedError` for a
+:class:`~deformctl.errors.RigError`), whose ``partial`` attribute is the result so far, so the
+caller can still write every attempt to the log.
+
+Example:
+    >>> from deformctl.series import TrialOutcome
+    >>> def runner(grip_force_n: float, attempt_index: int) -> TrialOutcome:
+    ...     return TrialOutcome(grip_force_n, grip_force_n >= 7.0, 0.0)
+    >>> result = find_min_lift_force(runner, weight_n=5.0, friction_mu=0.5, object_id="A")
+    >>> result.f_w_n, result.converged, 7.0 <= result.lift_force_n <= 7.0 / (1 - 0.01)
+    (5.0, True, True)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal, Protocol
+
+from deformctl.errors import DeformctlError, RigError, SearchError, UsageError
+from deformctl.series import TrialOutcome
+
+SearchProtocol = Literal["refine", "paper"]
+PROTOCOLS: tuple[SearchProtocol, ...] = ("refine", "paper")
+
+DEFAULT_GROWTH = 1.2  #: the paper's +20 % per attempt
+DEFAULT_TOLERANCE_REL = 0.01  #: refine stops when (high - low) / high <= 1 %
+DEFAULT_MAX_ATTEMPTS = 50  #: covers F_w * 1.2**40 (about 1500 x F_w) plus the bisection
+
+__all__ = [
+    "DEFAULT_GROWTH",
+    "DEFAULT_MAX_ATTEMPTS",
+    "DEFAULT_TOLERANCE_REL",
+    "PROTOCOLS",
+    "LiftSearchResult",
+    "RigSearchAbortedError",
+    "SearchAbortedError",
+    "SearchProtocol",
+    "TrialRunner",
+    "find_min_lift_force",
+    "rigid_grip_force_n",
+]
+
+
+class TrialRunner(Protocol):
+    """Anything that runs one lift attempt: ``runner(grip_force_n, attempt_index) -> TrialOutcome``.
+
+    Arguments are positional. ``grip_force_n`` is the normal force each palm applies, N (> 0).
+    ``attempt_index`` is the 0-based index of this attempt within the object's search (the search
+    calls 0, 1, 2, ... in order). The runner lifts the object by its protocol (the paper: half the
+    object's height), decides whether it slipped, and returns a
+    :class:`~deformctl.series.TrialOutcome` with ``grip_force_n`` equal to the commanded force,
+    ``lifted``, ``slip_m`` (NaN when unknown) and, when it records one, the attempt's time series.
+
+    A runner reports a failure it cannot recover from (a rig that crashed, a simulation that went
+    non-finite) by raising a :class:`~deformctl.errors.DeformctlError`; every other exception is
+    treated as a bug and propagates unchanged.
+
+    A plain function ``def run(grip_force_n: float, attempt_index: int) -> TrialOutcome`` is a
+    ``TrialRunner``.
+    """
+
+    def __call__(self, grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
+        """Run one attempt at ``grip_force_n`` (N) and report what happened."""
+        ...
+
+
+@dataclass(frozen=True)
+class LiftSearchResult:
+    """The outcome of one lifting-force search, in the manner of scipy's ``RootResults``.
+
+    Attributes:
+        object_id: catalog id of the object.
+        lift_force_n: L_f, N: the smallest grip force that was tried and lifted; NaN when no
+            attempt lifted (see the module docstring for the rule).
+        f_w_n: F_w = W / (2 mu), N, the rigid-object force the search starts at.
+        f_d_n: F_d = L_f - F_w, N (NaN when L_f is NaN).
+        attempts: number of trials run (``len(trials)``).
+        bracket_n: ``(low, high)``, N: the largest force that slipped below ``high`` and the
+            smallest that lifted; ``(F_w, F_w)`` when F_w lifted; ``(last tried, inf)`` when nothing
+            lifted.
+        converged: True when a force lifted and (``refine``) the bracket met the tolerance.
+        protocol: ``"refine"`` or ``"paper"``.
+        tolerance_rel: the relative bracket width ``refine`` aims for (recorded; ``paper`` does
+            not use it).
+        growth: the ramp factor between bracketing attempts.
+        trials: every attempt's outcome, in the order run.
+        message: one line for a human: what was found, or why not (names the object and, when
+            nothing lifted, the last force tried).
+        weight_n: the object's weight W, N.
+        friction_mu: the palm/object friction coefficient mu.
+        max_attempts: the attempt budget the search had.
+        ramp_attempts: how many of ``trials`` belong to the paper ramp (the rest are bisection).
+    """
+
+    object_id: str
+    lift_force_n: float
+    f_w_n: float
+    f_d_n: float
+    attempts: int
+    bracket_n: tuple[float, float]
+    converged: bool
+    protocol: SearchProtocol
+    tolerance_rel: float
+    growth: float
+    trials: tuple[TrialOutcome, ...]
+    message: str
+    weight_n: float = math.nan
+    friction_mu: float = math.nan
+    max_attempts: int = DEFAULT_MAX_ATTEMPTS
+    ramp_attempts: int = 0
+
+    @property
+    def lifted(self) -> bool:
+        """True when at least one attempt lifted the object."""
+        return any(t.lifted for t in self.trials)
+
+    @property
+    def last_force_n(self) -> float:
+        """The grip force of the last attempt run, N (NaN before any attempt)."""
+        return self.trials[-1].grip_force_n if self.trials else math.nan
+
+    @property
+    def paper_bracket_n(self) -> tuple[float, float]:
+        """The bracket the paper ramp ended with: (last slipped ramp force, first lifted), N.
+
+        ``(F_w, F_w)`` when F_w lifted; ``(last ramp force, inf)`` when the ramp never lifted.
+        """
+        ramp = self.trials[: self.ramp_attempts]
+        if not ramp:
+            return (math.nan, math.nan)
+        if not ramp[-1].lifted:
+            return (ramp[-1].grip_force_n, math.inf)
+        if len(ramp) == 1:
+            return (ramp[0].grip_force_n, ramp[0].grip_force_n)
+        return (ramp[-2].grip_force_n, ramp[-1].grip_force_n)
+
+    def summary(self) -> dict[str, object]:
+        """The scalar fields as a JSON-friendly dict (no trials), e.g. for a table row."""
+        return {
+            "object_id": self.object_id,
+            "lift_force_n": self.lift_force_n,
+            "f_w_n": self.f_w_n,
+            "f_d_n": self.f_d_n,
+            "attempts": self.attempts,
+            "bracket_low_n": self.bracket_n[0],
+            "bracket_high_n": self.bracket_n[1],
+            "converged": self.converged,
+            "protocol": self.protocol,
+            "tolerance_rel": self.tolerance_rel,
+            "growth": self.growth,
+            "weight_n": self.weight_n,
+            "friction_mu": self.friction_mu,
+            "max_attempts": self.max_attempts,
+            "last_force_n": self.last_force_n,
+            "message": self.message,
+        }
+
+
+class SearchAbortedError(SearchError):
+    """A search stopped because its runner failed; ``partial`` holds the attempts so far.
+
+    ``partial`` is a :class:`LiftSearchResult` with ``converged = False`` built from the trials
+    that completed before the failure (the failed attempt is not among them). ``__cause__`` is the
+    runner's error.
+    """
+
+    def __init__(self, message: str, *, partial: LiftSearchResult) -> None:
+        self.partial = partial
+        super().__init__(message)
+
+
+class RigSearchAbortedError(SearchAbortedError, RigError):
+    """A search stopped because the external rig failed (crash, time-out, bad answer)."""
+
+
+def rigid_grip_force_n(weight_n: float, friction_mu: float) -> float:
+    """F_w = W / (2 mu), N: the force two palms need to hold a rigid object of weight W at rest."""
+    return weight_n / (2.0 * friction_mu)
+
+
+def _validate(
+    *,
+    weight_n: float,
+    friction_mu: float,
+    protocol: str,
+    growth: float,
+    tolerance_rel: float,
+    max_attempts: int,
+    object_id: str,
+) -> None:
+    where = f"object {object_id!r}: "
+    if not (math.isfinite(weight_n) and weight_n > 0):
+        raise UsageError(f"{where}weight must be a finite number > 0 N, got {weight_n!r}")
+    if not (math.isfinite(friction_mu) and friction_mu > 0):
+        raise UsageError(f"{where}friction mu must be a finite number > 0, got {friction_mu!r}")
+    if protocol not in PROTOCOLS:
+        raise UsageError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {protocol!r}")
+    if not (math.isfinite(growth) and growth > 1):
+        raise UsageError(f"growth must be a finite number > 1, got {growth!r}")
+    if not (math.isfinite(tolerance_rel) and 0 < tolerance_rel < 1):
+        raise UsageError(f"tolerance must be a relative value in (0, 1), got {tolerance_rel!r}")
+    if isinstance(max_attempts, bool) or not isinstance(max_attempts, int) or max_attempts < 1:
+        raise UsageError(f"max attempts must be an integer >= 1, got {max_attempts!r}")
+
+
+@dataclass
+class _Search:
+    """Mutable bookkeeping of one search; turned into a frozen result by :meth:`result`."""
+
+    object_id: str
+    weight_n: float
+    friction_mu: float
+    f_w_n: float
+    protocol: SearchProtocol
+    growth: float
+    tolerance_rel: float
+    max_attempts: int
+    trials: list[TrialOutcome]
+    ramp_attempts: int = 0
+    low_n: float = math.nan  # largest force that slipped below high_n
+    high_n: float = math.nan  # smallest force that lifted
+
+    def result(self, *, converged: bool, message: str) -> LiftSearchResult:
+        lifted = math.isfinite(self.high_n)
+        lift_force_n = self.high_n if lifted else math.nan
+        if lifted:
+            bracket = (self.low_n if math.isfinite(self.low_n) else self.high_n, self.high_n)
+        else:
+            last = self.trials[-1].grip_force_n if self.trials else math.nan
+            bracket = (last, math.inf)
+        return LiftSearchResult(
+            object_id=self.object_id,
+            lift_force_n=lift_force_n,
+            f_w_n=self.f_w_n,
+            f_d_n=lift_force_n - self.f_w_n,
+            attempts=len(self.trials),
+            bracket_n=bracket,
+            converged=converged,
+            protocol=self.protocol,
+            tolerance_rel=self.tolerance_rel,
+            growth=self.growth,
+            trials=tuple(self.trials),
+            message=message,
+            weight_n=self.weight_n,
+            friction_mu=self.friction_mu,
+            max_attempts=self.max_attempts,
+            ramp_attempts=self.ramp_attempts,
+        )
+
+
+def find_min_lift_force(
+    runner: TrialRunner,
+    *,
+    weight_n: float,
+    friction_mu: float,
+    protocol: SearchProtocol = "refine",
+    growth: float = DEFAULT_GROWTH,
+    tolerance_rel: float = DEFAULT_TOLERANCE_REL,
+    max_attempts: int = DEFAULT_MAX_ATTEMPTS,
+    object_id: str = "object",
+) -> LiftSearchResult:
+    """Find the minimum grip force that lifts one object, by iterative lifting.
+
+    Args:
+        runner: the trial runner (see :class:`TrialRunner`); called with positional
+            ``(grip_force_n, attempt_index)``, attempt indices 0, 1, 2, ...
+        weight_n: the object's weight W, N (> 0).
+        friction_mu: palm/object friction coefficient mu (> 0).
+        protocol: ``"refine"`` (default) or ``"paper"``; see the module docstring.
+        growth: factor between successive ramp forces (> 1; the paper's 1.2).
+        tolerance_rel: ``refine`` stops when ``(high - low) / high <= tolerance_rel``; in (0, 1).
+        max_attempts: the most trials to run in total (>= 1).
+        object_id: the object's catalog id, used in messages and the result.
+
+    Returns:
+        A :class:`LiftSearchResult`. A search that runs out of attempts returns
+        ``converged = False`` (it does not raise); the caller decides the exit code.
+
+    Raises:
+        UsageError: a parameter out of range (one-line message).
+        SearchAbortedError: the runner raised a :class:`~deformctl.errors.DeformctlError`;
+            ``err.partial`` holds the attempts so far (:class:`RigSearchAbortedError` when the
+            runner's error is a :class:`~deformctl.errors.RigError`).
+    """
+    _validate(
+        weight_n=weight_n,
+        friction_mu=friction_mu,
+        protocol=protocol,
+        growth=growth,
+        tolerance_rel=tolerance_rel,
+        max_attempts=max_attempts,
+        object_id=object_id,
+    )
+    s = _Search(
+        object_id=object_id,
+        weight_n=float(weight_n),
+        friction_mu=float(friction_mu),
+        f_w_n=rigid_grip_force_n(float(weight_n), float(friction_mu)),
+        protocol=protocol,
+        growth=float(growth),
+        tolerance_rel=float(tolerance_rel),
+        max_attempts=max_attempts,
+        trials=[],
+    )
+    obj = f"object {object_id!r}"
+
+    def attempt(force_n: float) -> bool:
+        index = len(s.trials)
+        try:
+            outcome = runner(force_n, index)
+        except DeformctlError as err:
+            why = f"{obj}: attempt {index} at {force_n:.6g} N failed: {err}"
+            partial = s.result(converged=False, message=f"search aborted: {why}")
+            cls = RigSearchAbortedError if isinstance(err, RigError) else SearchAbortedError
+            raise cls(why, partial=partial) from err
+        if not isinstance(outcome, TrialOutcome):
+            raise TypeError(f"trial runner returned {type(outcome).__name__}, not TrialOutcome")
+        s.trials.append(outcome)
+        if outcome.lifted:
+            s.high_n = force_n if not math.isfinite(s.high_n) else min(s.high_n, force_n)
+        elif not math.isfinite(s.low_n) or force_n > s.low_n:
+            s.low_n = force_n
+        return bool(outcome.lifted)
+
+    # Phase 1: the paper's ramp F_w * growth**k until a force lifts.
+    k = 0
+    while True:
+        force_n = s.f_w_n * s.growth**k
+        lifted = attempt(force_n)
+        s.ramp_attempts = len(s.trials)
+        if lifted:
+            break
+        if len(s.trials) >= max_attempts:
+            return s.result(
+                converged=False,
+                message=(
+                    f"{obj}: did not lift within {max_attempts} attempts; "
+                    f"last force tried {force_n:.6g} N slipped (F_w = {s.f_w_n:.6g} N)"
+                ),
+            )
+        k += 1
+
+    if s.protocol == "paper" or len(s.trials) == 1:
+        return s.result(converged=True, message=_found_message(obj, s))
+
+    # Phase 2 (refine): bisect the last ramp bracket (low slipped, high lifted).
+    while (s.high_n - s.low_n) / s.high_n > s.tolerance_rel:
+        if len(s.trials) >= max_attempts:
+            return s.result(
+                converged=False,
+                message=(
+                    f"{obj}: bracket [{s.low_n:.6g}, {s.high_n:.6g}] N did not reach "
+                    f"tolerance {s.tolerance_rel:g} within {max_attempts} attempts; "
+                    f"smallest force that lifted {s.high_n:.6g} N"
+                ),
+            )
+        mid_n = 0.5 * (s.low_n + s.high_n)
+        if not s.low_n < mid_n < s.high_n:  # the bracket is as narrow as floats allow
+            return s.result(
+                converged=False,
+                message=(
+                    f"{obj}: tolerance {s.tolerance_rel:g} is below floating-point resolution "
+                    f"at {s.high_n:.6g} N"
+                ),
+            )
+        attempt(mid_n)
+    return s.result(converged=True, message=_found_message(obj, s))
+
+
+def _found_message(obj: str, s: _Search) -> str:
+    low = s.low_n if math.isfinite(s.low_n) else s.high_n
+    return (
+        f"{obj}: lifted at L_f = {s.high_n:.6g} N (F_w = {s.f_w_n:.6g} N, "
+        f"bracket [{low:.6g}, {s.high_n:.6g}] N) after {len(s.trials)} attempts ({s.protocol})"
+    )

@@ -1,0 +1,315 @@
+"""Drive an external rig (a real robot's driver, or a stand-in) as a lift trial runner.
+
+:class:`RigRunner` runs a command once per lift attempt, writes one JSON request to its stdin and
+reads one JSON answer from its stdout. It is a :class:`deformctl.lift.TrialRunner`, so
+:func:`deformctl.lift.find_min_lift_force` drives a rig exactly as it drives the simulator.
+
+Rig protocol, version 1
+-----------------------
+The command is given as a string (split with :func:`shlex.split`, never run through a shell) or
+as an argument list. deformctl starts it once per attempt, in ``cwd`` when given.
+
+Request (stdin, one JSON object, UTF-8, followed by a newline; then stdin is closed)::
+
+    {"object_id": "sponge", "attempt_index": 0, "grip_force_n": 3.5,
+     "weight_n": 2.1, "friction_mu": 0.3, "size_cm": [8.0, 5.0, 4.0]}
+
+* ``object_id`` (string): the catalog id of the object on the rig.
+* ``attempt_index`` (integer >= 0): 0-based index of the attempt within this object's search.
+* ``grip_force_n`` (number > 0, N): the normal force each palm must apply during the lift.
+* ``weight_n`` (number > 0, N) and ``friction_mu`` (number > 0): the object's catalog values.
+* ``size_cm`` ([x, y, z] numbers, cm): the object's size, present only when the catalog knows it.
+
+The rig grips the object with ``grip_force_n``, lifts it (the paper: by half its height), checks
+for slip and answers.
+
+Response (stdout, exactly one JSON object and nothing else; logs belong on stderr)::
+
+    {"lifted": true, "slip_m": 0.0004, "message": "ok"}
+    {"before_frame": "frames/a0_before.png", "after_frame": "frames/a0_after.png"}
+
+* ``lifted`` (boolean): true when the object came up with the palms without slipping out.
+* ``slip_m`` (number >= 0, m): how far the object slid against the palms. Required with
+  ``lifted``; not allowed without it.
+* ``before_frame``, ``after_frame`` (strings, optional, together): paths to camera frames taken
+  before and after the lift; relative paths are relative to ``cwd``. They must exist when the answer
+  is read. Without ``lifted``, deformctl decides ``lifted`` and ``slip_m`` from the frames with the
+  ``slip_from_frames`` function it was given (the vision stage provides one); with ``lifted``, the
+  frames are only recorded.
+* ``message`` (string, optional): a note recorded with the attempt.
+* Any other key is ignored (room for later versions).
+
+Failures. A command that cannot be started, exits non-zero, runs longer than ``timeout_s`` (it is
+killed with its whole process group), or answers with something that is not one JSON object
+matching the contract above raises :class:`deformctl.errors.RigError` with one line naming the
+object, the attempt, the force and what went wrong (for a non-zero exit: the last non-empty line of
+stderr). The search wraps it so the attempts made so far are kept
+(:class:`deformctl.lift.RigSearchAbortedError`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shlex
+import signal
+import subprocess
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any, TypeGuard
+
+from deformctl.errors import DeformctlError, RigError, UsageError
+from deformctl.series import TrialOutcome
+
+RIG_PROTOCOL_VERSION = 1
+
+SlipFromFrames = Callable[[Path, Path], tuple[bool, float]]
+"""``(before_frame, after_frame) -> (lifted, slip_m)``: decide a lift from two camera frames."""
+
+_MAX_SHOWN_CHARS = 120  # how much of a bad answer or stderr line goes into an error message
+
+__all__ = ["RIG_PROTOCOL_VERSION", "RigRunner", "SlipFromFrames", "parse_rig_response"]
+
+
+def _is_number(value: object) -> TypeGuard[int | float]:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _is_positive(value: object) -> TypeGuard[int | float]:
+    return _is_number(value) and math.isfinite(value) and value > 0
+
+
+def _shorten(text: str) -> str:
+    text = " ".join(text.split())
+    return text if len(text) <= _MAX_SHOWN_CHARS else text[: _MAX_SHOWN_CHARS - 3] + "..."
+
+
+def _reject_constant(name: str) -> float:
+    raise ValueError(f"non-standard JSON constant {name}")
+
+
+def parse_rig_response(text: str) -> dict[str, Any]:
+    """Parse and check one rig answer; return it as a dict.
+
+    Args:
+        text: the rig's whole stdout.
+
+    Returns:
+        The answer object. When ``lifted`` is present, ``slip_m`` is a finite number >= 0.
+
+    Raises:
+        ValueError: the text is not one JSON object matching the response contract; the message
+            says what is wrong (the caller adds the attempt context).
+    """
+    if not text.strip():
+        raise ValueError("empty answer on stdout (expected one JSON object)")
+    try:
+        answer = json.loads(text, parse_constant=_reject_constant)
+    except ValueError as err:
+        raise ValueError(f"answer is not valid JSON ({err}): {_shorten(text)!r}") from None
+    if not isinstance(answer, dict):
+        raise ValueError(f"answer must be a JSON object, got {type(answer).__name__}")
+    if "lifted" in answer:
+        if not isinstance(answer["lifted"], bool):
+            raise ValueError(f"'lifted' must be true or false, got {answer['lifted']!r}")
+        if "slip_m" not in answer:
+            raise ValueError("'slip_m' is required with 'lifted'")
+        slip = answer["slip_m"]
+        if not _is_number(slip) or not math.isfinite(slip) or slip < 0:
+            raise ValueError(f"'slip_m' must be a number >= 0 (m), got {slip!r}")
+    elif "slip_m" in answer:
+        raise ValueError("'slip_m' given without 'lifted'")
+    has_before, has_after = "before_frame" in answer, "after_frame" in answer
+    if has_before != has_after:
+        raise ValueError("'before_frame' and 'after_frame' must be given together")
+    for key in ("before_frame", "after_frame"):
+        if key in answer and not (isinstance(answer[key], str) and answer[key]):
+            raise ValueError(f"{key!r} must be a non-empty path string, got {answer[key]!r}")
+    if "lifted" not in answer and not has_before:
+        raise ValueError("answer has neither 'lifted' nor 'before_frame'/'after_frame'")
+    if "message" in answer and not isinstance(answer["message"], str):
+        raise ValueError(f"'message' must be a string, got {answer['message']!r}")
+    return answer
+
+
+def _last_line(text: str) -> str:
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    return _shorten(lines[-1]) if lines else "(no stderr)"
+
+
+class RigRunner:
+    """A :class:`~deformctl.lift.TrialRunner` that asks an external command for each attempt.
+
+    Args:
+        command: the rig command, a string (split with :func:`shlex.split`) or an argument list.
+        timeout_s: the longest one attempt may take, s (> 0); the command is killed after it.
+        object: the object on the rig: ``object_id`` (str), ``weight_n`` (N, > 0),
+            ``friction_mu`` (> 0) and optionally ``size_cm`` ([x, y, z], cm). Other keys are
+            ignored.
+        cwd: the directory to run the command in (and to resolve relative frame paths against);
+            the current directory when None.
+        slip_from_frames: decides ``(lifted, slip_m)`` from ``(before_path, after_path)`` for a rig
+            that answers with frames only; without it such an answer is a :class:`RigError`.
+
+    Raises:
+        UsageError: an empty command, a bad ``timeout_s`` or a bad object description.
+
+    Example:
+        >>> import sys
+        >>> runner = RigRunner([sys.executable, "rig.py"], timeout_s=30,
+        ...                    object={"object_id": "A", "weight_n": 2.0, "friction_mu": 0.5})
+    """
+
+    def __init__(
+        self,
+        command: str | Sequence[str],
+        *,
+        timeout_s: float,
+        object: Mapping[str, Any],
+        cwd: str | os.PathLike[str] | None = None,
+        slip_from_frames: SlipFromFrames | None = None,
+    ) -> None:
+        argv = shlex.split(command) if isinstance(command, str) else [str(a) for a in command]
+        if not argv:
+            raise UsageError("rig command is empty")
+        if not _is_positive(timeout_s):
+            raise UsageError(f"rig timeout must be a number > 0 s, got {timeout_s!r}")
+        self.argv: list[str] = argv
+        self.timeout_s = float(timeout_s)
+        self.cwd: Path | None = None if cwd is None else Path(cwd)
+        self.slip_from_frames = slip_from_frames
+        self.object_id, self._object_fields = self._check_object(object)
+
+    @staticmethod
+    def _check_object(obj: Mapping[str, Any]) -> tuple[str, dict[str, Any]]:
+        object_id = obj.get("object_id")
+        if not isinstance(object_id, str) or not object_id:
+            raise UsageError(f"rig object needs a non-empty string 'object_id', got {object_id!r}")
+        fields: dict[str, Any] = {}
+        for key in ("weight_n", "friction_mu"):
+            value = obj.get(key)
+            if not _is_positive(value):
+                raise UsageError(f"object {object_id!r}: {key} must be a number > 0, got {value!r}")
+            fields[key] = float(value)
+        size = obj.get("size_cm")
+        if size is not None:
+            ok = (
+                isinstance(size, Sequence)
+                and not isinstance(size, str)
+                and len(size) == 3
+                and all(_is_positive(v) for v in size)
+            )
+            if not ok:
+                raise UsageError(
+                    f"object {object_id!r}: size_cm must be three numbers > 0, got {size!r}"
+                )
+            fields["size_cm"] = [float(v) for v in size]
+        return object_id, fields
+
+    def request(self, grip_force_n: float, attempt_index: int) -> dict[str, Any]:
+        """The JSON request (as a dict) sent for one attempt."""
+        req: dict[str, Any] = {
+            "object_id": self.object_id,
+            "attempt_index": int(attempt_index),
+            "grip_force_n": float(grip_force_n),
+            "weight_n": self._object_fields["weight_n"],
+            "friction_mu": self._object_fields["friction_mu"],
+        }
+        if "size_cm" in self._object_fields:
+            req["size_cm"] = list(self._object_fields["size_cm"])
+        return req
+
+    def __call__(self, grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
+        """Run the rig command for one attempt and turn its answer into a TrialOutcome.
+
+        Raises:
+            RigError: the command could not start, failed, timed out or answered badly.
+        """
+        where = (
+            f"rig: object {self.object_id!r} attempt_index {attempt_index} at {grip_force_n:.6g} N"
+        )
+        payload = json.dumps(self.request(grip_force_n, attempt_index)) + "\n"
+        stdout = self._run(payload, where)
+        try:
+            answer = parse_rig_response(stdout)
+        except ValueError as err:
+            raise RigError(f"{where}: {err}") from None
+        details: dict[str, object] = {}
+        if "message" in answer:
+            details["message"] = answer["message"]
+        frames: tuple[Path, Path] | None = None
+        if "before_frame" in answer:
+            frames = (
+                self._frame(answer["before_frame"], where),
+                self._frame(answer["after_frame"], where),
+            )
+            details["before_frame"] = str(frames[0])
+            details["after_frame"] = str(frames[1])
+        if "lifted" in answer:
+            lifted, slip_m = bool(answer["lifted"]), float(answer["slip_m"])
+            details["slip_source"] = "rig"
+        else:
+            assert frames is not None  # parse_rig_response guarantees frames here
+            lifted, slip_m = self._from_frames(frames, where)
+            details["slip_source"] = "frames"
+        return TrialOutcome(float(grip_force_n), lifted, slip_m, None, details)
+
+    def _run(self, payload: str, where: str) -> str:
+        try:
+            proc = subprocess.Popen(
+                self.argv,
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                cwd=self.cwd,
+                start_new_session=True,  # own process group, so a time-out kills its children too
+            )
+        except OSError as err:
+            raise RigError(f"{where}: cannot run {self.argv[0]!r}: {err.strerror or err}") from None
+        try:
+            out_b, err_b = proc.communicate(payload.encode("utf-8"), timeout=self.timeout_s)
+        except subprocess.TimeoutExpired:
+            self._kill(proc)
+            raise RigError(f"{where}: no answer within {self.timeout_s:g} s (killed)") from None
+        stdout = out_b.decode("utf-8", errors="replace")
+        stderr = err_b.decode("utf-8", errors="replace")
+        if proc.returncode != 0:
+            status = (
+                f"killed by signal {-proc.returncode}"
+                if proc.returncode < 0
+                else f"exited with status {proc.returncode}"
+            )
+            raise RigError(f"{where}: {status}: {_last_line(stderr)}")
+        return stdout
+
+    @staticmethod
+    def _kill(proc: subprocess.Popen[bytes]) -> None:
+        try:
+            if hasattr(os, "killpg"):
+                os.killpg(proc.pid, signal.SIGKILL)
+            else:  # pragma: no cover - non-POSIX
+                proc.kill()
+        except ProcessLookupError:  # pragma: no cover - it ended on its own meanwhile
+            pass
+        proc.communicate()
+
+    def _frame(self, raw: str, where: str) -> Path:
+        path = Path(raw)
+        if not path.is_absolute():
+            path = (self.cwd or Path.cwd()) / path
+        if not path.is_file():
+            raise RigError(f"{where}: frame {raw!r} does not exist")
+        return path
+
+    def _from_frames(self, frames: tuple[Path, Path], where: str) -> tuple[bool, float]:
+        if self.slip_from_frames is None:
+            raise RigError(
+                f"{where}: answer has frames but no 'lifted', and no slip-from-frames "
+                "function was given"
+            )
+        try:
+            lifted, slip_m = self.slip_from_frames(*frames)
+        except DeformctlError as err:
+            raise RigError(f"{where}: slip from frames failed: {err}") from err
+        return bool(lifted), float(slip_m)
