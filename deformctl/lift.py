@@ -62,6 +62,7 @@ from dataclasses import dataclass
 from typing import Literal, Protocol
 
 from deformctl.errors import DeformctlError, RigError, SearchError, UsageError
+from deformctl.rig import RigAttemptError
 from deformctl.series import TrialOutcome
 
 SearchProtocol = Literal["refine", "paper"]
@@ -354,8 +355,13 @@ def find_min_lift_force(
         try:
             outcome = runner(force_n, index)
         except DeformctlError as err:
-            why = f"{obj}: attempt {index} at {force_n:.6g} N failed: {err}"
-            partial = s.result(converged=False, message=f"search aborted: {why}")
+            kept = f"{index} attempt{'' if index == 1 else 's'} kept"
+            if isinstance(err, RigAttemptError):  # names the object, attempt and force itself
+                detail = str(err)
+            else:
+                detail = f"{obj}: attempt {index} at {force_n:.6g} N: {err}"
+            why = f"search aborted, {kept}: {detail}"
+            partial = s.result(converged=False, message=why)
             cls = RigSearchAbortedError if isinstance(err, RigError) else SearchAbortedError
             raise cls(why, partial=partial) from err
         if not isinstance(outcome, TrialOutcome):

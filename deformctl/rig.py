@@ -69,7 +69,36 @@ SlipFromFrames = Callable[[Path, Path], tuple[bool, float]]
 
 _MAX_SHOWN_CHARS = 120  # how much of a bad answer or stderr line goes into an error message
 
-__all__ = ["RIG_PROTOCOL_VERSION", "RigRunner", "SlipFromFrames", "parse_rig_response"]
+__all__ = [
+    "RIG_PROTOCOL_VERSION",
+    "RigAttemptError",
+    "RigRunner",
+    "SlipFromFrames",
+    "parse_rig_response",
+]
+
+
+class RigAttemptError(RigError):
+    """One rig attempt failed; the message names the object, the attempt and the force.
+
+    Attributes:
+        object_id: the object on the rig.
+        attempt_index: the 0-based attempt index sent to the rig.
+        grip_force_n: the grip force of the failed attempt, N.
+        reason: what went wrong, without the attempt context.
+    """
+
+    def __init__(
+        self, object_id: str, attempt_index: int, grip_force_n: float, reason: str
+    ) -> None:
+        self.object_id = object_id
+        self.attempt_index = attempt_index
+        self.grip_force_n = grip_force_n
+        self.reason = reason
+        super().__init__(
+            f"rig: object {object_id!r} attempt_index {attempt_index} "
+            f"at {grip_force_n:.6g} N: {reason}"
+        )
 
 
 def _is_number(value: object) -> TypeGuard[int | float]:
@@ -224,17 +253,15 @@ class RigRunner:
         """Run the rig command for one attempt and turn its answer into a TrialOutcome.
 
         Raises:
-            RigError: the command could not start, failed, timed out or answered badly.
+            RigAttemptError: the command could not start, failed, timed out or answered badly.
         """
-        where = (
-            f"rig: object {self.object_id!r} attempt_index {attempt_index} at {grip_force_n:.6g} N"
-        )
+        where = (attempt_index, grip_force_n)
         payload = json.dumps(self.request(grip_force_n, attempt_index)) + "\n"
         stdout = self._run(payload, where)
         try:
             answer = parse_rig_response(stdout)
         except ValueError as err:
-            raise RigError(f"{where}: {err}") from None
+            raise self._error(where, str(err)) from None
         details: dict[str, object] = {}
         if "message" in answer:
             details["message"] = answer["message"]
@@ -255,7 +282,10 @@ class RigRunner:
             details["slip_source"] = "frames"
         return TrialOutcome(float(grip_force_n), lifted, slip_m, None, details)
 
-    def _run(self, payload: str, where: str) -> str:
+    def _error(self, where: tuple[int, float], reason: str) -> RigAttemptError:
+        return RigAttemptError(self.object_id, where[0], where[1], reason)
+
+    def _run(self, payload: str, where: tuple[int, float]) -> str:
         try:
             proc = subprocess.Popen(
                 self.argv,
@@ -266,12 +296,14 @@ class RigRunner:
                 start_new_session=True,  # own process group, so a time-out kills its children too
             )
         except OSError as err:
-            raise RigError(f"{where}: cannot run {self.argv[0]!r}: {err.strerror or err}") from None
+            raise self._error(
+                where, f"cannot run {self.argv[0]!r}: {err.strerror or err}"
+            ) from None
         try:
             out_b, err_b = proc.communicate(payload.encode("utf-8"), timeout=self.timeout_s)
         except subprocess.TimeoutExpired:
             self._kill(proc)
-            raise RigError(f"{where}: no answer within {self.timeout_s:g} s (killed)") from None
+            raise self._error(where, f"no answer within {self.timeout_s:g} s (killed)") from None
         stdout = out_b.decode("utf-8", errors="replace")
         stderr = err_b.decode("utf-8", errors="replace")
         if proc.returncode != 0:
@@ -280,7 +312,7 @@ class RigRunner:
                 if proc.returncode < 0
                 else f"exited with status {proc.returncode}"
             )
-            raise RigError(f"{where}: {status}: {_last_line(stderr)}")
+            raise self._error(where, f"{status}: {_last_line(stderr)}")
         return stdout
 
     @staticmethod
@@ -294,22 +326,24 @@ class RigRunner:
             pass
         proc.communicate()
 
-    def _frame(self, raw: str, where: str) -> Path:
+    def _frame(self, raw: str, where: tuple[int, float]) -> Path:
         path = Path(raw)
         if not path.is_absolute():
             path = (self.cwd or Path.cwd()) / path
         if not path.is_file():
-            raise RigError(f"{where}: frame {raw!r} does not exist")
+            raise self._error(where, f"frame {raw!r} does not exist")
         return path
 
-    def _from_frames(self, frames: tuple[Path, Path], where: str) -> tuple[bool, float]:
+    def _from_frames(
+        self, frames: tuple[Path, Path], where: tuple[int, float]
+    ) -> tuple[bool, float]:
         if self.slip_from_frames is None:
-            raise RigError(
-                f"{where}: answer has frames but no 'lifted', and no slip-from-frames "
-                "function was given"
+            raise self._error(
+                where,
+                "answer has frames but no 'lifted', and no slip-from-frames function was given",
             )
         try:
             lifted, slip_m = self.slip_from_frames(*frames)
         except DeformctlError as err:
-            raise RigError(f"{where}: slip from frames failed: {err}") from err
+            raise self._error(where, f"slip from frames failed: {err}") from err
         return bool(lifted), float(slip_m)

@@ -208,7 +208,9 @@ def test_rig_failure_mid_search_keeps_partial_attempts() -> None:
     assert "\n" not in str(err)
     assert "'sponge'" in str(err)
     assert "attempt 2 at 14.4 N" in str(err)
-    assert "encoder lost" in str(err)
+    assert str(err) == "search aborted, 2 attempts kept: object 'sponge': attempt 2 at 14.4 N: " + (
+        "rig: encoder lost"
+    )
     assert isinstance(err.__cause__, RigError)
     partial = err.partial
     assert _forces(partial) == pytest.approx([10.0, 12.0])

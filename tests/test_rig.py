@@ -14,7 +14,7 @@ import pytest
 
 from deformctl.errors import InputDataError, RigError, SearchError, UsageError
 from deformctl.lift import RigSearchAbortedError, find_min_lift_force
-from deformctl.rig import RigRunner, parse_rig_response
+from deformctl.rig import RigAttemptError, RigRunner, parse_rig_response
 from deformctl.series import TrialOutcome
 
 RIGS = Path(__file__).parent / "rigs"
@@ -98,7 +98,10 @@ def test_rig_crash_mid_search_is_one_line_and_keeps_attempts() -> None:
     assert isinstance(err, SearchError)
     assert [t.grip_force_n for t in err.partial.trials] == pytest.approx([10.0, 12.0])
     assert not err.partial.converged
-    assert "aborted" in err.partial.message
+    assert message.startswith("search aborted, 2 attempts kept: rig: object 'sponge' ")
+    assert err.partial.message == message
+    assert isinstance(err.__cause__, RigAttemptError)
+    assert err.__cause__.attempt_index == 2
 
 
 def test_garbage_answer_is_a_one_line_rig_error() -> None:
@@ -115,8 +118,14 @@ def test_garbage_mid_search_keeps_attempts_so_far() -> None:
     runner = RigRunner(rig("garbage_rig.py"), timeout_s=30, object=OBJECT)
     with pytest.raises(RigSearchAbortedError) as info:
         find_min_lift_force(runner, weight_n=10.0, friction_mu=0.5, object_id="sponge")
+    message = str(info.value)
+    assert message.startswith(
+        "search aborted, 0 attempts kept: rig: object 'sponge' attempt_index 0 at 10 N: "
+        "answer is not valid JSON"
+    )
+    assert message.count("sponge") == 1
     assert info.value.partial.attempts == 0
-    assert "attempt 0 at 10 N" in str(info.value)
+    assert info.value.partial.message == message
 
 
 def test_timeout_kills_the_rig() -> None:
