@@ -376,7 +376,15 @@ def find_min_lift_force(
     # Phase 1: the paper's ramp F_w * growth**k until a force lifts.
     k = 0
     while True:
-        force_n = s.f_w_n * s.growth**k
+        try:
+            force_n = s.f_w_n * s.growth**k
+        except OverflowError:
+            force_n = math.inf
+        if not math.isfinite(force_n):  # only with a huge budget and growth
+            return s.result(
+                converged=False,
+                message=f"{obj}: did not lift; the ramp overflowed after {len(s.trials)} attempts",
+            )
         lifted = attempt(force_n)
         s.ramp_attempts = len(s.trials)
         if lifted:

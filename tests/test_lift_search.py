@@ -294,3 +294,12 @@ def test_search_invariants_hold_for_any_threshold(
         assert refine.attempts - paper.attempts <= math.ceil(
             math.log2((growth - 1) / tolerance_rel)
         )
+
+
+def test_ramp_overflow_stops_without_trying_an_infinite_force() -> None:
+    runner = ThresholdRunner(math.inf)
+    r = find_min_lift_force(runner, weight_n=W_N, friction_mu=MU, growth=1e100, max_attempts=100)
+    assert not r.converged
+    assert all(math.isfinite(f) for f, _ in runner.calls)
+    assert r.attempts == 4  # 10 * 1e100**k is finite for k <= 3 (max float ~1.8e308)
+    assert "overflowed" in r.message

@@ -318,3 +318,27 @@ def test_rig_runs_in_cwd(tmp_path: Path) -> None:
     )(10.0, 0)
     assert (tmp_path / "frames" / "a0_after.txt").is_file()
     assert set(os.listdir(".")) == before
+
+
+def _json_blocks(markdown: str) -> list[str]:
+    blocks, inside, current = [], False, []
+    for line in markdown.splitlines():
+        if line.startswith("```json"):
+            inside, current = True, []
+        elif line.startswith("```") and inside:
+            inside = False
+            blocks.append("\n".join(current))
+        elif inside:
+            current.append(line)
+    return blocks
+
+
+def test_protocol_doc_examples_match_the_code(tmp_path: Path) -> None:
+    doc = (Path(__file__).parents[1] / "docs" / "rig-protocol.md").read_text(encoding="utf-8")
+    request_text, decided_text, frames_text = _json_blocks(doc)
+    request = json.loads(request_text)
+    obj = {k: request[k] for k in ("object_id", "weight_n", "friction_mu", "size_cm")}
+    runner = RigRunner("rig", timeout_s=1, object=obj)
+    assert runner.request(request["grip_force_n"], request["attempt_index"]) == request
+    assert parse_rig_response(decided_text)["lifted"] is True
+    assert set(parse_rig_response(frames_text)) == {"before_frame", "after_frame"}
