@@ -73,6 +73,8 @@ DEFAULT_MIN_COMPRESSION_FRAC = 0.02
 DEFAULT_MIN_RATE_FRAC = 0.05
 #: A squeeze whose peak compression is at or below this is "no compression", m.
 NO_COMPRESSION_M = 1e-6
+#: ... or at or below this multiple of the estimated position noise std (max of pure noise ≈ 4σ).
+NO_COMPRESSION_NOISE_MULT = 6.0
 #: Fewest samples a squeeze must have (before trimming).
 MIN_SAMPLES = 10
 #: Relative spread of the sampling interval above which a log is resampled to a uniform grid.
@@ -169,12 +171,25 @@ def validate_squeeze(s: SqueezeSeries, *, min_samples: int = MIN_SAMPLES) -> Non
             f"follow time_s[{i - 1}]={s.time_s[i - 1]:.9g} s"
         )
     peak_m = float(np.max(s.compression_m))
-    if peak_m <= NO_COMPRESSION_M:
+    noise_m = _noise_std_m(s.compression_m)
+    if peak_m <= max(NO_COMPRESSION_M, NO_COMPRESSION_NOISE_MULT * noise_m):
         raise InputDataError(
-            f"{_where(s)}: no compression (peak compression {peak_m:.3g} m); the palms did not "
-            "squeeze the object, or compression has the wrong sign (it must be positive when "
-            "squeezed)"
+            f"{_where(s)}: no compression (peak compression {peak_m:.3g} m, position noise "
+            f"{noise_m:.3g} m); the palms did not squeeze the object, or compression has the "
+            "wrong sign (it must be positive when squeezed)"
         )
+
+
+def _noise_std_m(compression_m: FloatArray) -> float:
+    """Robust white-noise std of a sampled signal from the MAD of its second differences, m.
+
+    For a smooth signal sampled densely the second difference is noise only:
+    ``Δ²e`` has std ``√6 σ``; the median absolute deviation ignores the few corners.
+    """
+    dd = np.diff(compression_m, 2)
+    if dd.size == 0:
+        return 0.0
+    return float(np.median(np.abs(dd - np.median(dd))) / 0.6745 / math.sqrt(6.0))
 
 
 def _uniform(s: SqueezeSeries) -> tuple[float, FloatArray, FloatArray]:
@@ -466,7 +481,7 @@ def characterize(
 # --------------------------------------------------------------------------------------------
 
 
-def _piecewise_linear_response(
+def kelvin_voigt_piecewise_linear(
     time_s: FloatArray,
     knot_time_s: FloatArray,
     knot_force_n: FloatArray,
@@ -547,7 +562,7 @@ def kelvin_voigt_response(
     if profile == "ramp_hold_release":
         knots = duration_s * np.array([0.0, 0.25, 0.65, 0.90, 1.0])
         forces = peak_force_n * np.array([0.0, 1.0, 1.0, 0.0, 0.0])
-        return np.interp(t, knots, forces), _piecewise_linear_response(t, knots, forces, k, c)
+        return np.interp(t, knots, forces), kelvin_voigt_piecewise_linear(t, knots, forces, k, c)
     if profile == "sine":
         a = 0.5 * peak_force_n
         w = 4.0 * math.pi / duration_s
