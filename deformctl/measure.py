@@ -14,9 +14,13 @@ Both readers return ``list[SqueezeSeries]`` in SI units with compression ``d`` a
 * ``compression`` (CSV only): the compression itself, e.g. a testing machine's crosshead travel
   against a fixed anvil: ``d = c(t) − c(t0)``.
 
-``t0`` is the first sample of the recording (of the force/position overlap, for bags), so the
-recording must start with the palms touching the unloaded object. Every squeeze in a recording
-is referenced to that same ``t0``: an object that has not fully recovered between squeezes is
+The zero of compression is the median position over the recording's lead-in (the samples from
+the start of the force/position overlap until the force first reaches half the segmentation
+threshold), so the recording must start with the palms touching the unloaded object
+(``compression_zero="lead_in"``, the default for bags, whose position noise would otherwise
+enter every compression through one sample), or the first sample (``"first"``, the default for
+CSV exports of testing machines, which start at the contact point). Every squeeze in a recording
+is referenced to that same zero: an object that has not fully recovered between squeezes is
 still measured from its unloaded shape.
 
 **Segmentation.** With ``segment=True`` a recording is split into squeezes where the force rises
@@ -54,6 +58,7 @@ from deformctl.units import NS_PER_S
 
 Axis = Literal["x", "y", "z"]
 PositionIs = Literal["gap", "palm"]
+CompressionZero = Literal["first", "lead_in"]
 
 WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
 POSE_TYPE = "geometry_msgs/msg/PoseStamped"
@@ -110,9 +115,33 @@ def _check_stream(name: str, time_s: FloatArray, values: FloatArray, path: str) 
         raise InputDataError(f"{name}: only {time_s.shape[0]} sample(s)", path=path)
 
 
-def _compression(position: FloatArray, force_n: FloatArray, kind: str, path: str) -> FloatArray:
+def _unloaded_reference(position: FloatArray, force_n: FloatArray, threshold_frac: float) -> float:
+    """Position of the unloaded object: the median over the lead-in before the first squeeze.
+
+    The lead-in is the run of samples from the start whose force stays below half the
+    segmentation threshold; one noisy sample would put its noise into every compression.
+    """
+    peak = float(np.max(force_n))
+    loaded = np.flatnonzero(force_n >= 0.5 * threshold_frac * peak)
+    n_lead = int(loaded[0]) if loaded.size else position.shape[0]
+    return float(np.median(position[: max(n_lead, 1)]))
+
+
+def _compression(
+    position: FloatArray,
+    force_n: FloatArray,
+    kind: str,
+    path: str,
+    threshold_frac: float,
+    zero: str,
+) -> FloatArray:
     """Compression ``[n]`` (m) from a gap, a symmetric palm's travel, or a direct compression."""
-    rel = position - position[0]
+    if zero == "first":
+        rel = position - position[0]
+    elif zero == "lead_in":
+        rel = position - _unloaded_reference(position, force_n, threshold_frac)
+    else:
+        raise UsageError(f"compression_zero must be 'first' or 'lead_in', got {zero!r}")
     if kind == "gap":
         d = -rel
     elif kind == "palm":
@@ -309,6 +338,7 @@ def squeeze_from_ros2_bag(
     axis: Axis = "x",
     joint: str | None = None,
     position_is: PositionIs = "palm",
+    compression_zero: CompressionZero = "lead_in",
     segment: bool = True,
     force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
     min_gap_s: float = DEFAULT_MIN_GAP_S,
@@ -326,6 +356,7 @@ def squeeze_from_ros2_bag(
         joint: joint name in a JointState topic (its ``position`` in m).
         position_is: ``"palm"`` (one palm's travel, symmetric partner: d = 2·travel) or
             ``"gap"`` (the distance between the palms: d = gap(t0) − gap).
+        compression_zero: ``"lead_in"`` (median over the unloaded lead-in) or ``"first"``.
         segment: split the recording into squeezes (else one squeeze).
         force_threshold_frac, min_gap_s, min_squeeze_s: segmentation (module docstring).
 
@@ -388,7 +419,9 @@ def squeeze_from_ros2_bag(
     position = np.interp(time_s, pos_t, pos_v)
     if time_s.shape[0] < 2:
         raise InputDataError("fewer than two force samples inside the overlap", path=p)
-    compression_m = _compression(position, force_n, position_is, where)
+    compression_m = _compression(
+        position, force_n, position_is, where, force_threshold_frac, compression_zero
+    )
     return _to_squeezes(
         time_s,
         force_n,
@@ -426,6 +459,7 @@ def squeeze_from_csv(
     object_id: str,
     units: Mapping[str, str] | None = None,
     position_is: PositionIs = "palm",
+    compression_zero: CompressionZero = "first",
     segment: bool = False,
     force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
     min_gap_s: float = DEFAULT_MIN_GAP_S,
@@ -447,6 +481,7 @@ def squeeze_from_csv(
         units: mapping of the same keys to units: time s/ms/us/ns, force N/kN/mN/lbf,
             lengths m/cm/mm/um/in.
         position_is: meaning of a ``position`` column: ``"palm"`` or ``"gap"``.
+        compression_zero: ``"first"`` (the first row) or ``"lead_in"`` (module docstring).
         segment: split the file into squeezes (default: one squeeze per file).
         force_threshold_frac, min_gap_s, min_squeeze_s: segmentation (module docstring).
 
@@ -540,7 +575,9 @@ def squeeze_from_csv(
     for k in keys:
         _check_stream(f"column {columns[k]!r}", time_s, arrays[k], where)
     kind = position_is if pos_key == "position" else pos_key
-    compression_m = _compression(arrays[pos_key], arrays["force"], kind, where)
+    compression_m = _compression(
+        arrays[pos_key], arrays["force"], kind, where, force_threshold_frac, compression_zero
+    )
     return _to_squeezes(
         time_s - time_s[0],
         arrays["force"],
