@@ -111,6 +111,7 @@ def write_bag(
     pose_rate_hz: float = 100.0,
     pose_offset_s: float = 0.003,
     joint_state: bool = False,
+    n_squeezes: int = 3,
     edit_force: Callable[[np.ndarray, np.ndarray], None] | None = None,
     edit_pose: Callable[[np.ndarray, np.ndarray], None] | None = None,
 ) -> None:
@@ -121,7 +122,7 @@ def write_bag(
     −f on the right one. With ``joint_state`` the position topic is a JointState whose joint
     ``gripper_width`` is the gap between the palms.
     """
-    knots_t, knots_f = recording(d_n_per_cm, lam_ns_per_cm)
+    knots_t, knots_f = recording(d_n_per_cm, lam_ns_per_cm, n_squeezes)
     rng = np.random.default_rng(seed)
     k, c = d_n_per_cm * 100.0, lam_ns_per_cm * 100.0
     tf = np.arange(0.0, knots_t[-1], 1.0 / force_rate_hz)
@@ -318,7 +319,7 @@ def _still_pose(tp: np.ndarray, pos: np.ndarray) -> None:
 )
 def test_bag_bad_streams(tmp_path: Path, kwargs: dict[str, object], match: str) -> None:
     path = tmp_path / "bad.mcap"
-    write_bag(path, 20.0, 1.0, **kwargs)  # type: ignore[arg-type]
+    write_bag(path, 20.0, 1.0, n_squeezes=1, **kwargs)  # type: ignore[arg-type]
     msg = _err(
         lambda: squeeze_from_ros2_bag(
             path, wrench_topics=[LEFT, RIGHT], position_topic=POSE, object_id="x"
@@ -331,7 +332,7 @@ def test_bag_bad_streams(tmp_path: Path, kwargs: dict[str, object], match: str) 
 
 def test_bag_joint_state_needs_joint(tmp_path: Path) -> None:
     path = tmp_path / "js.mcap"
-    write_bag(path, 20.0, 1.0, joint_state=True)
+    write_bag(path, 20.0, 1.0, joint_state=True, n_squeezes=1)
     with pytest.raises(UsageError, match="pass a joint name") as info:
         squeeze_from_ros2_bag(path, wrench_topics=[LEFT], position_topic=JOINTS, object_id="x")
     assert info.value.exit_code == EXIT_USAGE
