@@ -1,0 +1,595 @@
+"""Squeeze logs from real rigs: ROS 2 MCAP bags and CSV exports, as :class:`SqueezeSeries`.
+
+Both readers return ``list[SqueezeSeries]`` in SI units with compression ``d`` as defined in
+:mod:`deformctl.series` (total compression between the palms, positive when squeezed).
+
+**Where the compression comes from.** A position signal is one of:
+
+* ``gap``: the distance between the palms (e.g. a parallel gripper's opening width):
+  ``d = gap(t0) − gap(t)``.
+* ``palm``: the travel of one palm along the squeeze axis while its partner moves symmetrically
+  (mirror-image arms, as in the paper's rig): ``d = 2 · s · (p(t) − p(t0))``, with the sign
+  ``s = ±1`` chosen so that ``d`` is positive at the sample of peak force (so it does not matter
+  whether the logged palm is the left or the right one).
+* ``compression`` (CSV only): the compression itself, e.g. a testing machine's crosshead travel
+  against a fixed anvil: ``d = c(t) − c(t0)``.
+
+The zero of compression is the median position over the recording's lead-in (the samples from
+the start of the force/position overlap until the force first reaches half the segmentation
+threshold), so the recording must start with the palms touching the unloaded object
+(``compression_zero="lead_in"``, the default for bags, whose position noise would otherwise
+enter every compression through one sample), or the first sample (``"first"``, the default for
+CSV exports of testing machines, which start at the contact point). Every squeeze in a recording
+is referenced to that same zero: an object that has not fully recovered between squeezes is
+still measured from its unloaded shape.
+
+**Segmentation.** With ``segment=True`` a recording is split into squeezes where the force rises
+above ``force_threshold_frac`` of the recording's peak force and falls back: runs above the
+threshold that are closer than ``min_gap_s`` are merged, runs shorter than ``min_squeeze_s`` are
+dropped, and the recording is cut at the midpoints of the quiet stretches between runs, so each
+squeeze includes its unloaded lead-in and relaxation. With ``segment=False`` the recording is
+one squeeze. Bags default to segmenting (a rig logs several squeezes per object, the paper
+three); CSV exports default to one squeeze per file (one test per export).
+
+**Force.** For bags, ``geometry_msgs/msg/WrenchStamped`` ``wrench.force.<axis>``: the force
+felt is its magnitude; with two wrench topics (one per palm) it is the mean of the two palms'
+magnitudes, the second palm interpolated onto the first palm's timestamps.
+
+**Alignment.** Streams are aligned by their header stamps; position is linearly interpolated
+onto the force timestamps inside the overlap of the two streams. Samples outside the overlap are
+dropped.
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import math
+from collections.abc import Mapping, Sequence
+from os import PathLike
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from deformctl.errors import InputDataError, MissingInputError, UsageError
+from deformctl.series import FloatArray, SqueezeSeries
+from deformctl.units import NS_PER_S
+
+Axis = Literal["x", "y", "z"]
+PositionIs = Literal["gap", "palm"]
+CompressionZero = Literal["first", "lead_in"]
+
+WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
+POSE_TYPE = "geometry_msgs/msg/PoseStamped"
+JOINT_STATE_TYPE = "sensor_msgs/msg/JointState"
+
+#: Segmentation defaults (see the module docstring).
+DEFAULT_FORCE_THRESHOLD_FRAC = 0.1
+DEFAULT_MIN_GAP_S = 0.1
+DEFAULT_MIN_SQUEEZE_S = 0.2
+
+#: Multiply a value in the unit by the factor to get SI; keys are lower-case unit names.
+TIME_UNITS_S: dict[str, float] = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9}
+FORCE_UNITS_N: dict[str, float] = {"n": 1.0, "kn": 1e3, "mn": 1e-3, "lbf": 4.4482216152605}
+LENGTH_UNITS_M: dict[str, float] = {
+    "m": 1.0,
+    "cm": 1e-2,
+    "mm": 1e-3,
+    "um": 1e-6,
+    "µm": 1e-6,
+    "in": 0.0254,
+}
+_UNITS_BY_KEY: dict[str, dict[str, float]] = {
+    "time": TIME_UNITS_S,
+    "force": FORCE_UNITS_N,
+    "position": LENGTH_UNITS_M,
+    "gap": LENGTH_UNITS_M,
+    "compression": LENGTH_UNITS_M,
+}
+_POSITION_KEYS = ("position", "gap", "compression")
+
+
+# ---------------------------------------------------------------------------------------------
+# shared helpers
+# ---------------------------------------------------------------------------------------------
+
+
+def _check_stream(name: str, time_s: FloatArray, values: FloatArray, path: str) -> None:
+    """Refuse NaN samples and timestamps that do not strictly increase."""
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise InputDataError(
+            f"{name}: {bad.size} NaN/inf sample(s), first at index {int(bad[0])}", path=path
+        )
+    steps = np.diff(time_s)
+    back = np.flatnonzero(steps <= 0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise InputDataError(
+            f"{name}: non-monotonic timestamps, sample {i} at {time_s[i]:.9f} s does not follow "
+            f"sample {i - 1} at {time_s[i - 1]:.9f} s",
+            path=path,
+        )
+    if time_s.shape[0] < 2:
+        raise InputDataError(f"{name}: only {time_s.shape[0]} sample(s)", path=path)
+
+
+def _unloaded_reference(position: FloatArray, force_n: FloatArray, threshold_frac: float) -> float:
+    """Position of the unloaded object: the median over the lead-in before the first squeeze.
+
+    The lead-in is the run of samples from the start whose force stays below half the
+    segmentation threshold; one noisy sample would put its noise into every compression.
+    """
+    peak = float(np.max(force_n))
+    loaded = np.flatnonzero(force_n >= 0.5 * threshold_frac * peak)
+    n_lead = int(loaded[0]) if loaded.size else position.shape[0]
+    return float(np.median(position[: max(n_lead, 1)]))
+
+
+def _compression(
+    position: FloatArray,
+    force_n: FloatArray,
+    kind: str,
+    path: str,
+    threshold_frac: float,
+    zero: str,
+) -> FloatArray:
+    """Compression ``[n]`` (m) from a gap, a symmetric palm's travel, or a direct compression."""
+    if zero == "first":
+        rel = position - position[0]
+    elif zero == "lead_in":
+        rel = position - _unloaded_reference(position, force_n, threshold_frac)
+    else:
+        raise UsageError(f"compression_zero must be 'first' or 'lead_in', got {zero!r}")
+    if kind == "gap":
+        d = -rel
+    elif kind == "palm":
+        peak = int(np.argmax(force_n))
+        sign = 1.0 if rel[peak] >= 0 else -1.0
+        d = 2.0 * sign * rel
+    elif kind == "compression":
+        d = rel
+    else:
+        raise UsageError(f"unknown position kind {kind!r}; expected 'gap' or 'palm'")
+    if float(np.max(np.abs(d))) <= 0.0:
+        raise InputDataError(
+            "no compression: the position signal never moves (zero displacement)", path=path
+        )
+    return np.asarray(d, dtype=np.float64)
+
+
+def segment_squeezes(
+    time_s: FloatArray,
+    force_n: FloatArray,
+    *,
+    force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
+    min_gap_s: float = DEFAULT_MIN_GAP_S,
+    min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
+) -> list[slice]:
+    """Index ranges of the squeezes in a recording (see the module docstring).
+
+    Args:
+        time_s: sample times ``[n]``, s, increasing.
+        force_n: force felt ``[n]``, N.
+        force_threshold_frac: threshold as a fraction of the recording's peak force.
+        min_gap_s: runs above the threshold closer than this are one squeeze, s.
+        min_squeeze_s: runs shorter than this are ignored, s.
+
+    Returns:
+        Slices into the arrays, in time order; empty when no squeeze is found.
+    """
+    peak = float(np.max(force_n))
+    if not peak > 0:
+        return []
+    above = force_n > force_threshold_frac * peak
+    edges = np.diff(above.astype(np.int8))
+    starts: list[int] = (np.flatnonzero(edges == 1) + 1).tolist()
+    stops: list[int] = (np.flatnonzero(edges == -1) + 1).tolist()
+    if above[0]:
+        starts.insert(0, 0)
+    if above[-1]:
+        stops.append(above.shape[0])
+    runs: list[list[int]] = []
+    for a, b in zip(starts, stops, strict=True):
+        if runs and time_s[a] - time_s[runs[-1][1] - 1] < min_gap_s:
+            runs[-1][1] = b
+        else:
+            runs.append([a, b])
+    runs = [r for r in runs if time_s[r[1] - 1] - time_s[r[0]] >= min_squeeze_s]
+    if not runs:
+        return []
+    cuts = [0]
+    for (_, b0), (a1, _) in itertools.pairwise(runs):
+        cuts.append((b0 + a1) // 2)
+    cuts.append(time_s.shape[0])
+    return [slice(cuts[i], cuts[i + 1]) for i in range(len(runs))]
+
+
+def _to_squeezes(
+    time_s: FloatArray,
+    force_n: FloatArray,
+    compression_m: FloatArray,
+    *,
+    object_id: str,
+    segment: bool,
+    path: str,
+    force_threshold_frac: float,
+    min_gap_s: float,
+    min_squeeze_s: float,
+) -> list[SqueezeSeries]:
+    if segment:
+        slices = segment_squeezes(
+            time_s,
+            force_n,
+            force_threshold_frac=force_threshold_frac,
+            min_gap_s=min_gap_s,
+            min_squeeze_s=min_squeeze_s,
+        )
+        if not slices:
+            raise InputDataError(
+                f"no squeeze found: the force never stays above {force_threshold_frac:g} of its "
+                f"peak for {min_squeeze_s:g} s",
+                path=path,
+            )
+    else:
+        slices = [slice(0, time_s.shape[0])]
+    out = []
+    for i, sl in enumerate(slices):
+        t = time_s[sl]
+        out.append(
+            SqueezeSeries(
+                object_id=object_id,
+                squeeze_index=i,
+                time_s=t - t[0],
+                force_n=force_n[sl],
+                compression_m=compression_m[sl],
+            )
+        )
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# ROS 2 bags
+# ---------------------------------------------------------------------------------------------
+
+
+def _stamp_ns(msg: Any) -> int:
+    stamp = msg.header.stamp
+    return int(stamp.sec) * NS_PER_S + int(stamp.nanosec)
+
+
+def _read_topics(
+    path: Path, roles: Mapping[str, tuple[str, ...]], joint: str | None, axis: Axis
+) -> dict[str, tuple[list[int], list[float]]]:
+    """Read ``(stamp_ns list, value list)`` per topic: |force.axis|, position.axis or joint.
+
+    Args:
+        path: the bag.
+        roles: topic → the message types accepted on it.
+        joint: JointState joint name.
+        axis: squeeze axis.
+    """
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    topics = list(roles)
+    out: dict[str, tuple[list[int], list[float]]] = {t: ([], []) for t in topics}
+    with path.open("rb") as fh:
+        try:
+            reader = make_reader(fh, decoder_factories=[DecoderFactory()])
+            summary = reader.get_summary()
+        except (McapError, ValueError, OSError) as err:
+            raise InputDataError(f"not a readable MCAP file ({err})", path=path) from err
+        if summary is None:
+            raise InputDataError("MCAP file has no summary (unindexed bag)", path=path)
+        types: dict[str, str] = {}
+        for ch in summary.channels.values():
+            schema = summary.schemas.get(ch.schema_id)
+            types[ch.topic] = schema.name if schema is not None else ""
+        available = ", ".join(sorted(types)) or "none"
+        for topic in topics:
+            if topic not in types:
+                raise InputDataError(
+                    f"topic {topic!r} is not in the bag; topics: {available}", path=path
+                )
+        for topic in topics:
+            want = types[topic]
+            if want not in roles[topic]:
+                raise InputDataError(
+                    f"topic {topic!r} has type {want or 'unknown'}, expected "
+                    f"{' or '.join(roles[topic])}",
+                    path=path,
+                )
+            if want == JOINT_STATE_TYPE and joint is None:
+                raise UsageError(f"topic {topic!r} is {JOINT_STATE_TYPE}: pass a joint name")
+        try:
+            for _schema, channel, _message, msg in reader.iter_decoded_messages(topics=topics):
+                stamps, values = out[channel.topic]
+                stamps.append(_stamp_ns(msg))
+                values.append(_extract(msg, types[channel.topic], axis, joint, channel.topic, path))
+        except McapError as err:
+            raise InputDataError(f"cannot decode bag ({err})", path=path) from err
+    return out
+
+
+def _extract(
+    msg: Any, type_name: str, axis: Axis, joint: str | None, topic: str, path: Path
+) -> float:
+    if type_name == WRENCH_TYPE:
+        return abs(float(getattr(msg.wrench.force, axis)))
+    if type_name == POSE_TYPE:
+        return float(getattr(msg.pose.position, axis))
+    names = list(msg.name)
+    if joint not in names:
+        raise InputDataError(
+            f"topic {topic!r}: joint {joint!r} not in the JointState names {names}", path=path
+        )
+    return float(msg.position[names.index(joint)])
+
+
+def squeeze_from_ros2_bag(
+    path: str | PathLike[str],
+    *,
+    wrench_topics: Sequence[str],
+    position_topic: str,
+    object_id: str,
+    axis: Axis = "x",
+    joint: str | None = None,
+    position_is: PositionIs = "palm",
+    compression_zero: CompressionZero = "lead_in",
+    segment: bool = True,
+    force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
+    min_gap_s: float = DEFAULT_MIN_GAP_S,
+    min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
+) -> list[SqueezeSeries]:
+    """Read the squeezes of one object from a ROS 2 MCAP bag (``ros2msg`` schemas, ``cdr``).
+
+    Args:
+        path: the bag, one ``.mcap`` file.
+        wrench_topics: one or two ``geometry_msgs/msg/WrenchStamped`` topics (one per palm).
+        position_topic: a ``geometry_msgs/msg/PoseStamped`` topic (palm pose) or a
+            ``sensor_msgs/msg/JointState`` topic (with ``joint``).
+        object_id: catalog id written into every squeeze.
+        axis: the squeeze axis in the wrench and pose frames.
+        joint: joint name in a JointState topic (its ``position`` in m).
+        position_is: ``"palm"`` (one palm's travel, symmetric partner: d = 2·travel) or
+            ``"gap"`` (the distance between the palms: d = gap(t0) − gap).
+        compression_zero: ``"lead_in"`` (median over the unloaded lead-in) or ``"first"``.
+        segment: split the recording into squeezes (else one squeeze).
+        force_threshold_frac, min_gap_s, min_squeeze_s: segmentation (module docstring).
+
+    Returns:
+        The squeezes, time in s from each squeeze's first sample, on the (first) wrench
+        topic's timestamps inside the overlap with the position stream.
+
+    Raises:
+        MissingInputError: the bag does not exist.
+        InputDataError: not an MCAP file, a topic not in the bag (the message lists those that
+            are), a topic of the wrong type, a joint not in the JointState, NaN samples,
+            non-monotonic header stamps, streams that do not overlap, no compression, no squeeze.
+        UsageError: no or more than two wrench topics, an unknown axis or position kind, a
+            JointState topic without ``joint``.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise MissingInputError("no such bag file", path=p)
+    if not 1 <= len(wrench_topics) <= 2:
+        raise UsageError(f"give one or two wrench topics, got {len(wrench_topics)}")
+    if axis not in ("x", "y", "z"):
+        raise UsageError(f"axis must be x, y or z, got {axis!r}")
+    if position_is not in ("gap", "palm"):
+        raise UsageError(f"position_is must be 'gap' or 'palm', got {position_is!r}")
+    if position_topic in wrench_topics:
+        raise UsageError(f"topic {position_topic!r} given as both wrench and position topic")
+    roles: dict[str, tuple[str, ...]] = dict.fromkeys(wrench_topics, (WRENCH_TYPE,))
+    roles[position_topic] = (POSE_TYPE, JOINT_STATE_TYPE)
+    data = _read_topics(p, roles, joint, axis)
+    where = str(p)
+
+    streams: list[tuple[FloatArray, FloatArray]] = []
+    t_ref_ns = min((data[t][0][0] for t in data if data[t][0]), default=0)
+    for topic in [*wrench_topics, position_topic]:
+        stamps, values = data[topic]
+        if not stamps:
+            raise InputDataError(f"topic {topic!r} has no messages", path=p)
+        t_s = (np.asarray(stamps, dtype=np.int64) - t_ref_ns).astype(np.float64) / NS_PER_S
+        v = np.asarray(values, dtype=np.float64)
+        _check_stream(f"topic {topic!r}", t_s, v, where)
+        streams.append((t_s, v))
+
+    pos_t, pos_v = streams[-1]
+    force_streams = streams[:-1]
+    lo = max(max(s[0][0] for s in force_streams), pos_t[0])
+    hi = min(min(s[0][-1] for s in force_streams), pos_t[-1])
+    if not hi > lo:
+        spans = "; ".join(
+            f"{name} {t[0]:.3f}..{t[-1]:.3f} s"
+            for name, (t, _) in zip([*wrench_topics, position_topic], streams, strict=True)
+        )
+        raise InputDataError(f"force and position streams do not overlap in time: {spans}", path=p)
+    t0, f0 = force_streams[0]
+    keep = (t0 >= lo) & (t0 <= hi)
+    time_s = t0[keep]
+    force_n = f0[keep]
+    if len(force_streams) == 2:
+        t1, f1 = force_streams[1]
+        force_n = 0.5 * (force_n + np.interp(time_s, t1, f1))
+    position = np.interp(time_s, pos_t, pos_v)
+    if time_s.shape[0] < 2:
+        raise InputDataError("fewer than two force samples inside the overlap", path=p)
+    compression_m = _compression(
+        position, force_n, position_is, where, force_threshold_frac, compression_zero
+    )
+    return _to_squeezes(
+        time_s,
+        force_n,
+        compression_m,
+        object_id=object_id,
+        segment=segment,
+        path=where,
+        force_threshold_frac=force_threshold_frac,
+        min_gap_s=min_gap_s,
+        min_squeeze_s=min_squeeze_s,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# CSV exports
+# ---------------------------------------------------------------------------------------------
+
+
+def _norm_unit(text: str) -> str:
+    return text.strip().strip("[]()").strip().lower()
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def squeeze_from_csv(
+    path: str | PathLike[str],
+    *,
+    columns: Mapping[str, str],
+    object_id: str,
+    units: Mapping[str, str] | None = None,
+    position_is: PositionIs = "palm",
+    compression_zero: CompressionZero = "first",
+    segment: bool = False,
+    force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
+    min_gap_s: float = DEFAULT_MIN_GAP_S,
+    min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
+) -> list[SqueezeSeries]:
+    """Read squeezes from a CSV export: plain, or names in row one and units in row two.
+
+    The file is a two-header-row export when every mapped column's second row is not a number;
+    that row is then read as the columns' units (``N``, ``[mm]``, ``(s)`` are all accepted).
+    Units given in ``units`` apply to columns whose unit the file does not state; a unit stated
+    in both places must agree. Columns with no unit anywhere are taken as SI (s, N, m).
+
+    Args:
+        path: the CSV file (comma-separated; UTF-8, a BOM is accepted).
+        columns: mapping of ``time``, ``force`` and exactly one of ``position`` (one palm's
+            travel, see ``position_is``), ``gap`` (between the palms) or ``compression`` (the
+            compression itself, e.g. a testing machine's crosshead travel) to CSV column names.
+        object_id: catalog id written into the squeezes.
+        units: mapping of the same keys to units: time s/ms/us/ns, force N/kN/mN/lbf,
+            lengths m/cm/mm/um/in.
+        position_is: meaning of a ``position`` column: ``"palm"`` or ``"gap"``.
+        compression_zero: ``"first"`` (the first row) or ``"lead_in"`` (module docstring).
+        segment: split the file into squeezes (default: one squeeze per file).
+        force_threshold_frac, min_gap_s, min_squeeze_s: segmentation (module docstring).
+
+    Returns:
+        The squeezes in SI.
+
+    Raises:
+        MissingInputError: the file does not exist.
+        InputDataError: a mapped column missing from the file, an unknown unit in the file,
+            file and option units that disagree, non-numeric or NaN cells, non-monotonic time,
+            no compression.
+        UsageError: a bad ``columns`` mapping or an unknown unit in ``units``.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise MissingInputError("no such CSV file", path=p)
+    pos_keys = [k for k in _POSITION_KEYS if k in columns]
+    unknown = sorted(set(columns) - {"time", "force", *_POSITION_KEYS})
+    if unknown or "time" not in columns or "force" not in columns or len(pos_keys) != 1:
+        raise UsageError(
+            "columns must map time, force and exactly one of position, gap, compression; got "
+            + ",".join(f"{k}={v}" for k, v in columns.items())
+        )
+    pos_key = pos_keys[0]
+    keys = ("time", "force", pos_key)
+    opt_units = {k: _norm_unit(v) for k, v in (units or {}).items()}
+    for k, u in opt_units.items():
+        if k not in _UNITS_BY_KEY:
+            raise UsageError(f"units: unknown key {k!r}; expected time, force, {pos_key}")
+        if u not in _UNITS_BY_KEY[k]:
+            raise UsageError(
+                f"units: unknown {k} unit {u!r}; supported: {', '.join(_UNITS_BY_KEY[k])}"
+            )
+
+    with p.open(newline="", encoding="utf-8-sig") as fh:
+        rows = [r for r in csv.reader(fh) if any(cell.strip() for cell in r)]
+    if not rows:
+        raise InputDataError("empty CSV file", path=p)
+    header = [h.strip() for h in rows[0]]
+    idx: dict[str, int] = {}
+    for k in keys:
+        name = columns[k]
+        if name not in header:
+            raise InputDataError(
+                f"mapped column {k}={name!r} not in the file; columns: {', '.join(header)}",
+                path=p,
+            )
+        idx[k] = header.index(name)
+    body = rows[1:]
+    file_units: dict[str, str] = {}
+    if body and all(not _is_number(_cell(body[0], idx[k])) for k in keys):
+        for k in keys:
+            u = _norm_unit(_cell(body[0], idx[k]))
+            if not u:
+                continue
+            if u not in _UNITS_BY_KEY[k]:
+                raise InputDataError(
+                    f"column {columns[k]!r}: unknown {k} unit {u!r} in the units row; "
+                    f"supported: {', '.join(_UNITS_BY_KEY[k])}",
+                    path=p,
+                )
+            file_units[k] = u
+        body = body[1:]
+    for k, u in file_units.items():
+        if k in opt_units and _UNITS_BY_KEY[k][opt_units[k]] != _UNITS_BY_KEY[k][u]:
+            raise InputDataError(
+                f"column {columns[k]!r}: the file says unit {u!r}, the option says "
+                f"{opt_units[k]!r}",
+                path=p,
+            )
+    arrays: dict[str, FloatArray] = {}
+    for k in keys:
+        u = (
+            file_units.get(k)
+            or opt_units.get(k)
+            or ("s" if k == "time" else "n" if k == "force" else "m")
+        )
+        vals = np.empty(len(body))
+        for i, row in enumerate(body):
+            cell = _cell(row, idx[k]).strip()
+            try:
+                vals[i] = float(cell) if cell else math.nan
+            except ValueError as err:
+                raise InputDataError(
+                    f"column {columns[k]!r}: non-numeric value {cell!r} in data row {i + 1}",
+                    path=p,
+                ) from err
+        arrays[k] = vals * _UNITS_BY_KEY[k][u]
+    where = str(p)
+    time_s = arrays["time"]
+    for k in keys:
+        _check_stream(f"column {columns[k]!r}", time_s, arrays[k], where)
+    kind = position_is if pos_key == "position" else pos_key
+    compression_m = _compression(
+        arrays[pos_key], arrays["force"], kind, where, force_threshold_frac, compression_zero
+    )
+    return _to_squeezes(
+        time_s - time_s[0],
+        arrays["force"],
+        compression_m,
+        object_id=object_id,
+        segment=segment,
+        path=where,
+        force_threshold_frac=force_threshold_frac,
+        min_gap_s=min_gap_s,
+        min_squeeze_s=min_squeeze_s,
+    )
+
+
+def _cell(row: Sequence[str], i: int) -> str:
+    return row[i] if i < len(row) else ""
