@@ -304,6 +304,11 @@ def _check_channels(contents: McapContents) -> dict[int, str]:
     return out
 
 
+def _reject_constant(token: str) -> float:
+    """``json.loads`` hook: NaN / Infinity are not JSON and never written by deformctl."""
+    raise ValueError(f"non-standard JSON constant {token}")
+
+
 def _decoded_messages(contents: McapContents, topic: str) -> list[dict[str, Any]]:
     """Parse and JSON-Schema-validate every message on ``topic``, in file order."""
     schema_ids = _check_channels(contents)
@@ -314,7 +319,7 @@ def _decoded_messages(contents: McapContents, topic: str) -> list[dict[str, Any]
             continue
         where = f"message {i} on {topic}"
         try:
-            obj = json.loads(msg.data)
+            obj = json.loads(msg.data, parse_constant=_reject_constant)
         except ValueError as err:
             raise SchemaError(
                 f"{where}: not valid JSON ({_short(err)})", path=contents.path, field=topic

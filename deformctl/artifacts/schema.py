@@ -19,6 +19,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from importlib.resources import files
 from typing import Any
@@ -167,14 +168,110 @@ def json_validator(name: str) -> jsonschema.protocols.Validator:
     return validator
 
 
+Check = Callable[[Any], bool]
+_ANNOTATIONS = {"description", "title", "$schema", "$id", "$comment", "x-unit", "x-deformctl"}
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool)
+
+
+def _is_integer(v: Any) -> bool:
+    # JSON Schema counts 1.0 as an integer, so does this check.
+    return (isinstance(v, int) and not isinstance(v, bool)) or (
+        isinstance(v, float) and v.is_integer()
+    )
+
+
+_TYPE_CHECKS: dict[str, Check] = {
+    "object": lambda v: isinstance(v, dict),
+    "string": lambda v: isinstance(v, str),
+    "number": _is_number,
+    "integer": _is_integer,
+    "boolean": lambda v: isinstance(v, bool),
+    "null": lambda v: v is None,
+}
+
+
+def _compile(schema: Any) -> Check | None:
+    """Compile the small JSON Schema subset deformctl uses into a fast predicate.
+
+    Handles ``type`` (a name or a list), ``properties``, ``required``,
+    ``additionalProperties: false``, ``minimum`` and ``minLength``; returns None for a schema
+    using anything else, so the caller falls back to :mod:`jsonschema`. The predicate answers
+    only "valid or not"; error messages always come from :mod:`jsonschema`.
+    """
+    if not isinstance(schema, dict):
+        return None
+    known = _ANNOTATIONS | {
+        "type",
+        "properties",
+        "required",
+        "additionalProperties",
+        "minimum",
+        "minLength",
+    }
+    if set(schema) - known:
+        return None
+    checks: list[Check] = []
+    typ = schema.get("type")
+    if typ is not None:
+        names = [typ] if isinstance(typ, str) else list(typ)
+        if any(n not in _TYPE_CHECKS for n in names):
+            return None
+        type_checks = [_TYPE_CHECKS[n] for n in names]
+        checks.append(lambda v: any(c(v) for c in type_checks))
+    if "minimum" in schema:
+        low = schema["minimum"]
+        checks.append(lambda v: not _is_number(v) or v >= low)
+    if "minLength" in schema:
+        n = schema["minLength"]
+        checks.append(lambda v: not isinstance(v, str) or len(v) >= n)
+    props: dict[str, Check] = {}
+    for key, sub in schema.get("properties", {}).items():
+        compiled = _compile(sub)
+        if compiled is None:
+            return None
+        props[key] = compiled
+    required = tuple(schema.get("required", ()))
+    additional = schema.get("additionalProperties", True)
+    if additional not in (True, False):
+        return None
+    if props or required or additional is False:
+
+        def check_object(v: Any) -> bool:
+            if not isinstance(v, dict):
+                return True
+            if any(r not in v for r in required):
+                return False
+            if additional is False and any(k not in props for k in v):
+                return False
+            return all(c(v[k]) for k, c in props.items() if k in v)
+
+        checks.append(check_object)
+    return lambda v: all(c(v) for c in checks)
+
+
+@functools.cache
+def fast_check(name: str) -> Check | None:
+    """The compiled predicate of ``schemas/<name>.schema.json`` (None if not compilable)."""
+    return _compile(load_json_schema(name))
+
+
 def validate_message(
     name: str, message: object, *, path: PathArg | None = None, where: str = ""
 ) -> None:
     """Check one decoded message against the JSON Schema ``name``.
 
+    A compiled predicate (:func:`fast_check`) accepts valid messages quickly; anything it does
+    not accept is judged by :mod:`jsonschema`, which also writes the error message.
+
     Raises:
         SchemaError: naming the field (JSON path) that does not match.
     """
+    check = fast_check(name)
+    if check is not None and check(message):
+        return
     error = jsonschema.exceptions.best_match(json_validator(name).iter_errors(message))
     if error is not None:
         field = ".".join(str(p) for p in error.absolute_path) or None
@@ -216,14 +313,15 @@ def _check_column(df: pd.DataFrame, col: ColumnSpec, kind: str, path: PathArg | 
             bad = finite & (values < col.minimum)
             if bad.any():
                 i = _first(bad)
-                raise fail(f"{_row_label(df, i)}: must be >= {col.minimum:g}, got {values[i]!r}")
+                raise fail(
+                    f"{_row_label(df, i)}: must be >= {col.minimum:g}, got {float(values[i])!r}"
+                )
         if col.exclusive_minimum is not None:
             bad = finite & (values <= col.exclusive_minimum)
             if bad.any():
                 i = _first(bad)
-                raise fail(
-                    f"{_row_label(df, i)}: must be > {col.exclusive_minimum:g}, got {values[i]!r}"
-                )
+                low = col.exclusive_minimum
+                raise fail(f"{_row_label(df, i)}: must be > {low:g}, got {float(values[i])!r}")
         out = pd.Series(values, index=s.index, name=col.name)
     elif col.dtype == "int64":
         if pd.api.types.is_bool_dtype(s) or not pd.api.types.is_integer_dtype(s):

@@ -180,10 +180,30 @@ def read_parquet_bytes(data: bytes, path: PathArg) -> tuple[pa.Table, dict[str, 
     if len(data) < 12 or data[:4] != PARQUET_MAGIC or data[-4:] != PARQUET_MAGIC:
         raise InputDataError("not a Parquet file (bad magic bytes)", path=name)
     try:
-        table = pq.read_table(io.BytesIO(data))
+        pf = pq.ParquetFile(io.BytesIO(data))
+        created_by = str(pf.metadata.created_by or "")
+        kv_keys = set((pf.metadata.metadata or {}).keys())
+        table = pf.read()
     except _DECODE_ERRORS as err:
         raise InputDataError(f"not a readable Parquet file ({_short(err)})", path=name) from None
-    raw = (table.schema.metadata or {}).get(META_KEY)
+    if (not created_by or created_by.startswith("parquet-cpp-arrow")) and (
+        b"ARROW:schema" not in kv_keys
+    ):
+        # pyarrow always stores its schema (and every writer names itself); without them the
+        # footer's key/value metadata was lost.
+        raise SchemaError(
+            "damaged table: written by Arrow but its schema metadata is missing",
+            path=name,
+            field="ARROW:schema",
+        )
+    schema_meta = table.schema.metadata or {}
+    raw = schema_meta.get(META_KEY)
+    if raw is None and _looks_like_ours(table):
+        raise SchemaError(
+            "damaged table: deformctl column metadata without the 'deformctl' table metadata",
+            path=name,
+            field="deformctl",
+        )
     meta = _parse_meta(raw, name)
     if meta is not None:
         expected = meta.get("content_sha256")
@@ -198,6 +218,21 @@ def read_parquet_bytes(data: bytes, path: PathArg) -> tuple[pa.Table, dict[str, 
                 field="content_sha256",
             )
     return table, meta
+
+
+def _looks_like_ours(table: pa.Table) -> bool:
+    """True for a table that has deformctl's traces but lost its ``deformctl`` key.
+
+    A flipped byte in the key's name would otherwise turn a deformctl table into an anonymous
+    one that is read without its provenance and digest.
+    """
+    if any(fld.metadata and b"unit" in fld.metadata for fld in table.schema):
+        return True
+    keys = (table.schema.metadata or {}).keys()
+    return any(
+        len(k) == len(META_KEY) and sum(a != b for a, b in zip(k, META_KEY, strict=True)) <= 1
+        for k in keys
+    )
 
 
 def _short(err: BaseException) -> str:
@@ -299,6 +334,8 @@ def read_catalog_bytes(data: bytes, path: PathArg) -> pd.DataFrame:
     name = display_name(path)
     if data[:4] == PARQUET_MAGIC:
         table, meta = read_parquet_bytes(data, path)
+        if table.num_rows == 0:
+            raise InputDataError("empty catalog: no objects", path=name)
         df = _frame_from_arrow(table, meta, "catalog", path)
     else:
         df = _parse_catalog_csv(data, name)
@@ -326,6 +363,8 @@ def _parse_catalog_csv(data: bytes, name: str) -> pd.DataFrame:
     except (pd.errors.ParserError, pd.errors.EmptyDataError, ValueError, TypeError) as err:
         raise InputDataError(f"not a valid CSV catalog ({_short(err)})", path=name) from None
     raw.columns = [str(c).strip() for c in raw.columns]
+    if len(raw) == 0:
+        raise InputDataError("empty catalog: no objects", path=name)
     unnamed = [c for c in raw.columns if c.startswith("Unnamed:")]
     if unnamed:
         raise SchemaError("header has an empty column name", path=name, field=unnamed[0])
