@@ -48,6 +48,7 @@ def _root(
 def _register() -> None:
     """Import the subcommand modules in pipeline order; each adds itself to ``app``."""
     # One import per subcommand module, in pipeline order, as each one lands.
+    from deformctl.cli import inspect  # noqa: F401  (any artifact; last in the list)
 
 
 _register()

@@ -1,0 +1,270 @@
+"""Identify an artifact and summarise it (the library behind ``deformctl inspect``).
+
+:func:`detect_kind` tells which artifact a file is from its bytes: the MCAP ``deformctl``
+metadata record (or its topics), the Parquet ``deformctl`` schema metadata (or, for tables written
+by other tools, the spec whose required columns it has), or a CSV header with the catalog's
+columns. :func:`describe` reads the file through the matching reader, so everything ``inspect``
+reports has passed the same validation the pipeline applies, and returns a JSON-serialisable dict.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import pandas as pd
+
+from deformctl.artifacts.io import PathArg, display_name, read_input_bytes
+from deformctl.artifacts.mcaplog import (
+    KIND_LIFT,
+    KIND_SQUEEZE,
+    MCAP_MAGIC,
+    TOPIC_SCHEMAS,
+    McapContents,
+    decode_objects,
+    decode_provenance,
+    lift_attempts_from_contents,
+    load_mcap,
+    squeezes_from_contents,
+)
+from deformctl.artifacts.schema import (
+    TABLE_KINDS,
+    load_json_schema,
+    load_table_spec,
+    schema_version,
+)
+from deformctl.artifacts.tables import (
+    PARQUET_MAGIC,
+    _frame_from_arrow,
+    read_catalog_bytes,
+    read_parquet_bytes,
+)
+from deformctl.errors import InputDataError, SchemaError
+from deformctl.units import NS_PER_S
+
+GENERIC_MCAP = "mcap"  #: kind of an MCAP file deformctl did not write (e.g. a ROS 2 bag)
+
+
+def sniff_format(data: bytes) -> str:
+    """``"mcap"``, ``"parquet"`` or ``"csv"`` from a file's first bytes."""
+    if data.startswith(MCAP_MAGIC):
+        return "mcap"
+    if data.startswith(PARQUET_MAGIC):
+        return "parquet"
+    return "csv"
+
+
+def _table_kind_from_columns(columns: list[str], name: str) -> str:
+    """The table kind whose required columns ``columns`` has (the most specific one)."""
+    best: tuple[int, str] | None = None
+    for kind in TABLE_KINDS:
+        required = load_table_spec(kind).required
+        if set(required) <= set(columns) and (best is None or len(required) > best[0]):
+            best = (len(required), kind)
+    if best is None:
+        raise SchemaError("columns match no deformctl table spec", path=name)
+    return best[1]
+
+
+def _csv_header(data: bytes, name: str) -> list[str]:
+    try:
+        first = data.decode("utf-8-sig").splitlines()[0] if data.strip() else ""
+    except UnicodeDecodeError as err:
+        raise InputDataError(f"not UTF-8 text (byte {err.start})", path=name) from None
+    return [c.strip() for c in first.split(",")]
+
+
+def _detect(data: bytes, path: PathArg) -> tuple[str, str]:
+    name = display_name(path)
+    fmt = sniff_format(data)
+    if fmt == "mcap":
+        return fmt, load_mcap(data, path).kind or GENERIC_MCAP
+    if fmt == "parquet":
+        table, meta = read_parquet_bytes(data, path)
+        if meta is not None:
+            return fmt, str(meta["kind"])
+        return fmt, _table_kind_from_columns(table.column_names, name)
+    if not data.strip():
+        raise InputDataError("empty file", path=name)
+    header = _csv_header(data, name)
+    if set(load_table_spec("catalog").required) <= set(header):
+        return fmt, "catalog"
+    raise InputDataError(
+        "not a deformctl artifact (not MCAP, not Parquet, no catalog header)", path=name
+    )
+
+
+def detect_kind(path: PathArg) -> str:
+    """Which artifact ``path`` is.
+
+    Returns:
+        A table kind (``catalog``, ``coefficients``, ``lift_results``, ``index_table``,
+        ``predictions``), ``squeeze_log``, ``lift_log``, or ``mcap`` for another MCAP file.
+
+    Raises:
+        MissingInputError: ``path`` does not exist (exit 66).
+        InputDataError, SchemaError: the file is damaged or is no artifact deformctl knows (65).
+    """
+    return _detect(read_input_bytes(path), path)[1]
+
+
+def _clean(value: Any) -> Any:
+    """JSON-safe copy: NaN/inf → None, numpy scalars → Python."""
+    if isinstance(value, dict):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_clean(v) for v in value]
+    if hasattr(value, "item") and not isinstance(value, str | bytes):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _dtype_name(series: pd.Series) -> str:
+    """A spec-style dtype name for a column the spec does not list."""
+    if pd.api.types.is_bool_dtype(series):
+        return "bool"
+    if pd.api.types.is_integer_dtype(series):
+        return "int64"
+    if pd.api.types.is_float_dtype(series):
+        return "float64"
+    if pd.api.types.is_string_dtype(series):
+        return "string"
+    return str(series.dtype)
+
+
+def _table_summary(df: pd.DataFrame, kind: str) -> dict[str, Any]:
+    spec = load_table_spec(kind)
+    columns = []
+    units = df.attrs.get("units", {})
+    for c in df.columns:
+        col = spec.column(str(c))
+        columns.append(
+            {
+                "name": str(c),
+                "dtype": col.dtype if col else _dtype_name(df[c]),
+                "unit": units.get(str(c)),
+                "required": bool(col.required) if col else False,
+                "description": col.description if col else "",
+            }
+        )
+    prov = df.attrs.get("provenance")
+    out: dict[str, Any] = {
+        "kind": kind,
+        "schema": {"name": spec.name, "version": df.attrs.get("schema_version", spec.version)},
+        "rows": len(df),
+        "columns": columns,
+        "provenance": None if prov is None else prov.to_dict(),
+    }
+    if kind == "catalog":
+        out["objects"] = df.to_dict("records")
+    return out
+
+
+def _fields(schema_name: str) -> list[dict[str, Any]]:
+    schema = load_json_schema(schema_name)
+    required = set(schema.get("required", []))
+    fields = []
+    for key, prop in schema["properties"].items():
+        typ = prop.get("type")
+        fields.append(
+            {
+                "name": key,
+                "type": typ if isinstance(typ, str) else "|".join(typ),
+                "unit": prop.get("x-unit"),
+                "required": key in required,
+                "description": prop.get("description", ""),
+            }
+        )
+    return fields
+
+
+def _mcap_summary(contents: McapContents) -> dict[str, Any]:
+    kind = contents.kind or GENERIC_MCAP
+    extra: dict[str, Any] = {}
+    if kind == KIND_SQUEEZE:
+        squeezes = squeezes_from_contents(contents)
+        per_object: dict[str, int] = {}
+        for sq in squeezes:
+            per_object[sq.object_id] = per_object.get(sq.object_id, 0) + 1
+        extra = {"squeezes": len(squeezes), "squeezes_per_object": per_object}
+    elif kind == KIND_LIFT:
+        attempts = lift_attempts_from_contents(contents)
+        per_object = {}
+        for att in attempts:
+            per_object[att.object_id] = per_object.get(att.object_id, 0) + 1
+        extra = {
+            "attempts": len(attempts),
+            "attempts_per_object": per_object,
+            "lifted": sum(att.outcome.lifted for att in attempts),
+        }
+    objects = decode_objects(contents) if kind != GENERIC_MCAP else []
+    counts = contents.message_counts()
+    channels = []
+    for channel in contents.channels.values():
+        schema = contents.schemas.get(channel.schema_id)
+        entry: dict[str, Any] = {
+            "topic": channel.topic,
+            "message_encoding": channel.message_encoding,
+            "schema": None if schema is None else schema.name,
+            "schema_encoding": None if schema is None else schema.encoding,
+            "messages": counts.get(channel.topic, 0),
+        }
+        if kind != GENERIC_MCAP and channel.topic in TOPIC_SCHEMAS:
+            name = TOPIC_SCHEMAS[channel.topic]
+            entry["schema_version"] = schema_version(load_json_schema(name))
+            entry["fields"] = _fields(name)
+        channels.append(entry)
+    rng = contents.time_range_ns()
+    prov = decode_provenance(contents) if kind != GENERIC_MCAP else None
+    return {
+        "kind": kind,
+        "schema": None if kind == GENERIC_MCAP else {"name": kind, "version": 1},
+        "messages": len(contents.messages),
+        "channels": channels,
+        "time_range": None
+        if rng is None
+        else {
+            "start_ns": rng[0],
+            "end_ns": rng[1],
+            "duration_s": (rng[1] - rng[0]) / NS_PER_S,
+        },
+        "metadata": sorted({n for n, _ in contents.metadata}),
+        "objects": objects,
+        **extra,
+        "provenance": None if prov is None else prov.to_dict(),
+    }
+
+
+def describe(path: PathArg) -> dict[str, Any]:
+    """Read, validate and summarise any artifact.
+
+    Returns:
+        A JSON-serialisable dict: ``path``, ``format``, ``kind``, ``schema`` (name, version),
+        ``provenance``; for tables ``rows`` and ``columns`` (name, dtype, unit, required,
+        description) and, for a catalog, ``objects``; for MCAP logs ``messages``, ``channels``
+        (topic, schema, message count, fields with units), ``time_range`` and ``objects``.
+
+    Raises:
+        MissingInputError: ``path`` does not exist (exit 66).
+        InputDataError, SchemaError: damaged or invalid (exit 65).
+    """
+    data = read_input_bytes(path)
+    name = display_name(path)
+    fmt = sniff_format(data)
+    if fmt == "mcap":
+        summary = _mcap_summary(load_mcap(data, path))
+    elif fmt == "parquet":
+        table, meta = read_parquet_bytes(data, path)
+        kind = str(meta["kind"]) if meta else _table_kind_from_columns(table.column_names, name)
+        if kind not in TABLE_KINDS:
+            raise SchemaError(f"unknown table kind {kind!r}", path=name, field="kind")
+        if kind == "catalog":
+            summary = _table_summary(read_catalog_bytes(data, path), kind)
+        else:
+            summary = _table_summary(_frame_from_arrow(table, meta, kind, path), kind)
+    else:
+        _detect(data, path)  # refuses a CSV without the catalog header
+        summary = _table_summary(read_catalog_bytes(data, path), "catalog")
+    return _clean({"path": name, "format": fmt, **summary})

@@ -1,0 +1,703 @@
+"""MCAP logs of squeezes and lift attempts: JSON messages with JSON Schemas, one sample per message.
+
+Layout of a log written here (it opens in Foxglove):
+
+* metadata record ``deformctl``: ``kind`` (``squeeze_log`` or ``lift_log``) and ``format_version``;
+* metadata record ``provenance`` (see :class:`~deformctl.artifacts.provenance.Provenance`);
+* one metadata record ``object`` per object: its catalog row, each value JSON-encoded;
+* channels, message encoding ``json``, schema encoding ``jsonschema`` with the schema files of
+  ``schemas/``: ``/squeeze`` (``squeeze_sample``) in a squeeze log; ``/lift/attempt_sample``
+  (``lift_attempt_sample``) and ``/lift/attempt_result`` (``lift_attempt_result``) in a lift log.
+
+``log_time`` (ns) lays the squeezes / attempts end to end on one time line, in write order, with
+:data:`GAP_S` between them, so a plot shows them one after another; the per-squeeze time
+``time_s`` is a message field and is what the readers return.
+
+Integrity: the writer enables the chunk CRCs, the data-section CRC and the summary CRC. Before the
+mcap library parses anything, :func:`load_mcap` checks the closing magic, the footer and both
+section CRCs, so a truncated file or any flipped byte is refused (exit 65) instead of decoding
+into different numbers. Reading then goes through the mcap library's :class:`StreamReader`, which
+checks every chunk CRC, and every message is validated against its JSON Schema.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import struct
+import zlib
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import zstandard
+from mcap.exceptions import McapError
+from mcap.opcode import Opcode
+from mcap.records import Channel, Header, Message, Metadata, Schema
+from mcap.stream_reader import StreamReader
+from mcap.writer import CompressionType, Writer
+
+from deformctl import __version__
+from deformctl.artifacts.io import PathArg, atomic_output, display_name, read_input_bytes
+from deformctl.artifacts.provenance import Provenance, _json_default
+from deformctl.artifacts.schema import (
+    json_schema_bytes,
+    load_json_schema,
+    schema_version,
+    validate_message,
+)
+from deformctl.errors import InputDataError, SchemaError
+from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
+from deformctl.units import NS_PER_S
+
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+KIND_SQUEEZE = "squeeze_log"
+KIND_LIFT = "lift_log"
+MCAP_KINDS = (KIND_SQUEEZE, KIND_LIFT)
+FORMAT_VERSION = "1"
+SQUEEZE_TOPIC = "/squeeze"
+LIFT_SAMPLE_TOPIC = "/lift/attempt_sample"
+LIFT_RESULT_TOPIC = "/lift/attempt_result"
+#: topic → JSON Schema name, for every topic deformctl writes
+TOPIC_SCHEMAS = {
+    SQUEEZE_TOPIC: "squeeze_sample",
+    LIFT_SAMPLE_TOPIC: "lift_attempt_sample",
+    LIFT_RESULT_TOPIC: "lift_attempt_result",
+}
+KIND_TOPICS = {
+    KIND_SQUEEZE: (SQUEEZE_TOPIC,),
+    KIND_LIFT: (LIFT_SAMPLE_TOPIC, LIFT_RESULT_TOPIC),
+}
+GAP_S = 1.0  #: log-time gap between consecutive squeezes / attempts, s
+_FOOTER_LEN = 1 + 8 + 20  # opcode, record length, summary_start, summary_offset_start, crc
+_DATA_END_LEN = 1 + 8 + 4  # opcode, record length, data_section_crc
+_SQUEEZE_OPTIONAL = (
+    "commanded_force_n",
+    "force_left_n",
+    "force_right_n",
+    "palm_left_x_m",
+    "palm_right_x_m",
+)
+_LIFT_FIELDS = ("palm_z_m", "object_com_z_m", "slip_m", "friction_force_n", "normal_force_n")
+
+#: Everything decoding a damaged MCAP can raise inside the mcap / zstd / lz4 / json libraries.
+_DECODE_ERRORS = (
+    McapError,
+    ValueError,  # includes CRCValidationError, UnicodeDecodeError, json.JSONDecodeError
+    struct.error,
+    EOFError,
+    KeyError,
+    IndexError,
+    TypeError,
+    OverflowError,
+    MemoryError,
+    RuntimeError,  # lz4.frame
+    zstandard.ZstdError,
+    AttributeError,
+)
+
+
+@dataclass(frozen=True)
+class LiftAttempt:
+    """One lift attempt of one object, as stored in a lift log.
+
+    Attributes:
+        object_id: catalog id of the object.
+        attempt_index: 0-based index of the attempt among the object's attempts.
+        outcome: what the attempt found (``outcome.series`` is the attempt's time series, when
+            recorded; ``outcome.details`` must be JSON-serialisable).
+    """
+
+    object_id: str
+    attempt_index: int
+    outcome: TrialOutcome
+
+
+@dataclass
+class McapContents:
+    """What a CRC-verified MCAP holds, decoded by the mcap library (messages not yet parsed).
+
+    Attributes:
+        path: the file name used in messages.
+        header: the MCAP header record.
+        metadata: ``(name, key/value)`` of every metadata record, in file order.
+        schemas: schema id → schema record.
+        channels: channel id → channel record.
+        messages: every message record, in file order.
+        crcs_present: True when both the data-section and the summary CRC were written.
+    """
+
+    path: str
+    header: Header | None = None
+    metadata: list[tuple[str, dict[str, str]]] = field(default_factory=list)
+    schemas: dict[int, Schema] = field(default_factory=dict)
+    channels: dict[int, Channel] = field(default_factory=dict)
+    messages: list[Message] = field(default_factory=list)
+    crcs_present: bool = False
+
+    def metadata_named(self, name: str) -> list[dict[str, str]]:
+        """The key/value maps of every metadata record called ``name``."""
+        return [m for n, m in self.metadata if n == name]
+
+    @property
+    def kind(self) -> str | None:
+        """``squeeze_log`` / ``lift_log`` from the ``deformctl`` record, else from the topics."""
+        records = self.metadata_named("deformctl")
+        if records:
+            return records[0].get("kind")
+        topics = {c.topic for c in self.channels.values()}
+        for kind, kind_topics in KIND_TOPICS.items():
+            if topics and topics <= set(kind_topics) | {""}:
+                return kind
+        return None
+
+    def message_counts(self) -> dict[str, int]:
+        """Topic → number of messages."""
+        counts = {c.topic: 0 for c in self.channels.values()}
+        for msg in self.messages:
+            channel = self.channels.get(msg.channel_id)
+            if channel is not None:
+                counts[channel.topic] += 1
+        return counts
+
+    def time_range_ns(self) -> tuple[int, int] | None:
+        """(first, last) message ``log_time`` in ns, None without messages."""
+        if not self.messages:
+            return None
+        times = [m.log_time for m in self.messages]
+        return min(times), max(times)
+
+
+# ---------------------------------------------------------------------------------------- reading
+
+
+def _verify_integrity(data: bytes, name: str) -> bool:
+    """Check magic, footer, data-section CRC and summary CRC; return True when both CRCs exist."""
+    if len(data) < len(MCAP_MAGIC) or data[: len(MCAP_MAGIC)] != MCAP_MAGIC:
+        raise InputDataError("not an MCAP file (bad magic bytes)", path=name)
+    min_len = 2 * len(MCAP_MAGIC) + _FOOTER_LEN + _DATA_END_LEN
+    if len(data) < min_len or data[-len(MCAP_MAGIC) :] != MCAP_MAGIC:
+        raise InputDataError("truncated or damaged MCAP file (no closing magic)", path=name)
+    footer_start = len(data) - len(MCAP_MAGIC) - _FOOTER_LEN
+    opcode, length, summary_start, _summary_offset_start, summary_crc = struct.unpack_from(
+        "<BQQQI", data, footer_start
+    )
+    if opcode != Opcode.FOOTER or length != 20:
+        raise InputDataError("damaged MCAP file (bad footer record)", path=name)
+    data_end_stop = summary_start if summary_start else footer_start
+    data_end_start = data_end_stop - _DATA_END_LEN
+    if data_end_start < len(MCAP_MAGIC) or data_end_stop > footer_start:
+        raise InputDataError("damaged MCAP file (bad summary offset)", path=name)
+    de_opcode, de_length, data_crc = struct.unpack_from("<BQI", data, data_end_start)
+    if de_opcode != Opcode.DATA_END or de_length != 4:
+        raise InputDataError("damaged MCAP file (no data end record)", path=name)
+    if data_crc != 0 and zlib.crc32(data[:data_end_start]) != data_crc:
+        raise InputDataError("damaged MCAP file (data section CRC mismatch)", path=name)
+    if summary_crc != 0:
+        covered = data[(summary_start or footer_start) : footer_start + _FOOTER_LEN - 4]
+        if zlib.crc32(covered) != summary_crc:
+            raise InputDataError("damaged MCAP file (summary CRC mismatch)", path=name)
+    return data_crc != 0 and summary_crc != 0
+
+
+def _short(err: BaseException) -> str:
+    text = " ".join(str(err).split()) or type(err).__name__
+    return text if len(text) <= 160 else text[:157] + "..."
+
+
+def load_mcap(data: bytes, path: PathArg) -> McapContents:
+    """Verify an MCAP's CRCs and decode its records with the mcap library.
+
+    Args:
+        data: the whole file.
+        path: the file name for error messages (``-`` shows as ``<stdin>``).
+
+    Raises:
+        InputDataError: not MCAP, truncated, a CRC mismatch or any decoding failure (exit 65).
+    """
+    name = display_name(path)
+    crcs = _verify_integrity(data, name)
+    contents = McapContents(path=name, crcs_present=crcs)
+    try:
+        reader = StreamReader(io.BytesIO(data), validate_crcs=True, record_size_limit=len(data))
+        for record in reader.records:
+            if isinstance(record, Header):
+                contents.header = record
+            elif isinstance(record, Metadata):
+                contents.metadata.append((record.name, dict(record.metadata)))
+            elif isinstance(record, Schema):
+                contents.schemas[record.id] = record
+            elif isinstance(record, Channel):
+                contents.channels[record.id] = record
+            elif isinstance(record, Message):
+                contents.messages.append(record)
+    except _DECODE_ERRORS as err:
+        raise InputDataError(f"damaged MCAP file ({_short(err)})", path=name) from None
+    for msg in contents.messages:
+        if msg.channel_id not in contents.channels:
+            raise InputDataError(f"message on unknown channel {msg.channel_id}", path=name)
+    return contents
+
+
+def _check_kind(contents: McapContents, kind: str) -> None:
+    """Refuse a log of another kind, a format it cannot read or a log without its CRCs."""
+    name = contents.path
+    found = contents.kind
+    if found != kind:
+        what = f"a {found}" if found else "not a deformctl log"
+        raise SchemaError(f"is {what}, expected a {kind}", path=name, field="deformctl")
+    records = contents.metadata_named("deformctl")
+    if records and records[0].get("format_version") != FORMAT_VERSION:
+        raise SchemaError(
+            f"format version {records[0].get('format_version')!r} not supported "
+            f"(this deformctl reads {FORMAT_VERSION})",
+            path=name,
+            field="format_version",
+        )
+    if records and not contents.crcs_present:
+        raise SchemaError("written without CRCs; cannot be trusted", path=name, field="crc")
+
+
+def _check_channels(contents: McapContents) -> dict[int, str]:
+    """Map channel id → JSON Schema name for deformctl topics, checking encodings and versions."""
+    name = contents.path
+    out: dict[int, str] = {}
+    for cid, channel in contents.channels.items():
+        schema_name = TOPIC_SCHEMAS.get(channel.topic)
+        if schema_name is None:
+            continue
+        ours = load_json_schema(schema_name)
+        schema = contents.schemas.get(channel.schema_id)
+        if channel.message_encoding != "json":
+            raise SchemaError(
+                f"channel {channel.topic}: message encoding {channel.message_encoding!r}, "
+                "expected 'json'",
+                path=name,
+                field=channel.topic,
+            )
+        if schema is None or schema.encoding != "jsonschema" or schema.name != ours["title"]:
+            got = None if schema is None else f"{schema.name} ({schema.encoding})"
+            raise SchemaError(
+                f"channel {channel.topic}: schema {got!r}, expected {ours['title']!r}",
+                path=name,
+                field=channel.topic,
+            )
+        try:
+            embedded = json.loads(schema.data)
+        except ValueError as err:
+            raise SchemaError(
+                f"channel {channel.topic}: embedded JSON Schema is not JSON ({_short(err)})",
+                path=name,
+                field=channel.topic,
+            ) from None
+        version = schema_version(embedded) if isinstance(embedded, dict) else 0
+        if version < 1 or version > schema_version(ours):
+            raise SchemaError(
+                f"channel {channel.topic}: schema version {version} not supported "
+                f"(this deformctl reads {schema_version(ours)})",
+                path=name,
+                field=channel.topic,
+            )
+        out[cid] = schema_name
+    return out
+
+
+def _reject_constant(token: str) -> float:
+    """``json.loads`` hook: NaN / Infinity are not JSON and never written by deformctl."""
+    raise ValueError(f"non-standard JSON constant {token}")
+
+
+def _decoded_messages(contents: McapContents, topic: str) -> list[dict[str, Any]]:
+    """Parse and JSON-Schema-validate every message on ``topic``, in file order."""
+    schema_ids = _check_channels(contents)
+    out: list[dict[str, Any]] = []
+    for i, msg in enumerate(contents.messages):
+        channel = contents.channels[msg.channel_id]
+        if channel.topic != topic:
+            continue
+        where = f"message {i} on {topic}"
+        try:
+            obj = json.loads(msg.data, parse_constant=_reject_constant)
+        except ValueError as err:
+            raise SchemaError(
+                f"{where}: not valid JSON ({_short(err)})", path=contents.path, field=topic
+            ) from None
+        validate_message(schema_ids[msg.channel_id], obj, path=contents.path, where=where)
+        out.append(obj)
+    return out
+
+
+def decode_objects(contents: McapContents) -> list[dict[str, Any]]:
+    """The catalog rows stored as ``object`` metadata records, values JSON-decoded."""
+    objects: list[dict[str, Any]] = []
+    seen: set[str] = set()
+    for record in contents.metadata_named("object"):
+        try:
+            obj = {k: json.loads(v) for k, v in record.items()}
+        except ValueError as err:
+            raise SchemaError(
+                f"object metadata is not JSON ({_short(err)})", path=contents.path, field="object"
+            ) from None
+        oid = obj.get("object_id")
+        if not isinstance(oid, str) or not oid:
+            raise SchemaError(
+                "object metadata without an object_id", path=contents.path, field="object"
+            )
+        if oid in seen:
+            raise SchemaError(f"object {oid!r} stored twice", path=contents.path, field="object_id")
+        seen.add(oid)
+        objects.append(obj)
+    return objects
+
+
+def decode_provenance(contents: McapContents) -> Provenance | None:
+    """The ``provenance`` metadata record, None when the log has none."""
+    records = contents.metadata_named("provenance")
+    if not records:
+        return None
+    return Provenance.from_mcap_metadata(records[0], path=contents.path)
+
+
+def _group(
+    messages: Iterable[dict[str, Any]], index_key: str
+) -> dict[tuple[str, int], list[dict[str, Any]]]:
+    groups: dict[tuple[str, int], list[dict[str, Any]]] = {}
+    for m in messages:
+        groups.setdefault((m["object_id"], m[index_key]), []).append(m)
+    return groups
+
+
+def _column(samples: list[dict[str, Any]], key: str) -> np.ndarray:
+    return np.fromiter((s[key] for s in samples), dtype=np.float64, count=len(samples))
+
+
+def _check_time(t: np.ndarray, label: str, path: str) -> None:
+    if t.size and np.any(np.diff(t) < 0):
+        raise SchemaError(f"{label}: time_s decreases", path=path, field="time_s")
+
+
+def squeezes_from_contents(contents: McapContents) -> list[SqueezeSeries]:
+    """Rebuild the squeezes of a verified squeeze log (see :func:`read_squeeze_log`)."""
+    _check_kind(contents, KIND_SQUEEZE)
+    messages = _decoded_messages(contents, SQUEEZE_TOPIC)
+    out: list[SqueezeSeries] = []
+    for (oid, idx), samples in _group(messages, "squeeze_index").items():
+        label = f"object {oid!r} squeeze {idx}"
+        optional: dict[str, np.ndarray | None] = {}
+        for key in _SQUEEZE_OPTIONAL:
+            present = sum(key in s for s in samples)
+            if present not in (0, len(samples)):
+                raise SchemaError(
+                    f"{label}: present in {present} of {len(samples)} samples",
+                    path=contents.path,
+                    field=key,
+                )
+            optional[key] = _column(samples, key) if present else None
+        t = _column(samples, "time_s")
+        _check_time(t, label, contents.path)
+        out.append(
+            SqueezeSeries(
+                object_id=oid,
+                squeeze_index=idx,
+                time_s=t,
+                force_n=_column(samples, "force_n"),
+                compression_m=_column(samples, "compression_m"),
+                commanded_force_n=optional["commanded_force_n"],
+                palm_left_x_m=optional["palm_left_x_m"],
+                palm_right_x_m=optional["palm_right_x_m"],
+            )
+        )
+    return out
+
+
+def read_squeeze_log(path: PathArg) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
+    """Read a squeeze log.
+
+    Args:
+        path: the ``.mcap`` file, or ``-`` for stdin (read into memory).
+
+    Returns:
+        ``(objects, squeezes)``: the catalog rows stored in the log (values as written) and the
+        squeezes in the order their first sample appears. ``force_left_n`` / ``force_right_n``
+        are validated but not part of :class:`SqueezeSeries`, so they are not returned.
+
+    Raises:
+        MissingInputError: ``path`` does not exist (exit 66).
+        InputDataError: not MCAP, truncated or damaged (exit 65).
+        SchemaError: not a squeeze log, or a message that does not match its schema (exit 65).
+    """
+    contents = load_mcap(read_input_bytes(path), path)
+    squeezes = squeezes_from_contents(contents)
+    return decode_objects(contents), squeezes
+
+
+def lift_attempts_from_contents(contents: McapContents) -> list[LiftAttempt]:
+    """Rebuild the attempts of a verified lift log (see :func:`read_lift_log`)."""
+    _check_kind(contents, KIND_LIFT)
+    samples_by_key = _group(_decoded_messages(contents, LIFT_SAMPLE_TOPIC), "attempt_index")
+    results = _decoded_messages(contents, LIFT_RESULT_TOPIC)
+    out: list[LiftAttempt] = []
+    seen: set[tuple[str, int]] = set()
+    for res in results:
+        key = (res["object_id"], res["attempt_index"])
+        label = f"object {key[0]!r} attempt {key[1]}"
+        if key in seen:
+            raise SchemaError(f"{label}: two results", path=contents.path, field=LIFT_RESULT_TOPIC)
+        seen.add(key)
+        series = None
+        samples = samples_by_key.get(key)
+        if samples:
+            if any(s["grip_force_n"] != res["grip_force_n"] for s in samples):
+                raise SchemaError(
+                    f"{label}: samples and result disagree on the grip force",
+                    path=contents.path,
+                    field="grip_force_n",
+                )
+            t = _column(samples, "time_s")
+            _check_time(t, label, contents.path)
+            series = LiftAttemptSeries(t, *(_column(samples, k) for k in _LIFT_FIELDS))
+        slip = res["slip_m"]
+        outcome = TrialOutcome(
+            grip_force_n=float(res["grip_force_n"]),
+            lifted=bool(res["lifted"]),
+            slip_m=math.nan if slip is None else float(slip),
+            series=series,
+            details=dict(res["details"]),
+        )
+        out.append(LiftAttempt(object_id=key[0], attempt_index=key[1], outcome=outcome))
+    orphans = set(samples_by_key) - seen
+    if orphans:
+        oid, idx = sorted(orphans)[0]
+        raise SchemaError(
+            f"object {oid!r} attempt {idx}: samples without a result",
+            path=contents.path,
+            field=LIFT_RESULT_TOPIC,
+        )
+    return out
+
+
+def read_lift_log(path: PathArg) -> tuple[list[dict[str, Any]], list[LiftAttempt]]:
+    """Read a lift log.
+
+    Args:
+        path: the ``.mcap`` file, or ``-`` for stdin (read into memory).
+
+    Returns:
+        ``(objects, attempts)``: the catalog rows stored in the log and the attempts in the order
+        of their result messages; ``slip_m`` is NaN where the runner could not tell.
+
+    Raises:
+        MissingInputError: ``path`` does not exist (exit 66).
+        InputDataError: not MCAP, truncated or damaged (exit 65).
+        SchemaError: not a lift log, or a message that does not match its schema (exit 65).
+    """
+    contents = load_mcap(read_input_bytes(path), path)
+    attempts = lift_attempts_from_contents(contents)
+    return decode_objects(contents), attempts
+
+
+# ---------------------------------------------------------------------------------------- writing
+
+
+class _LogWriter:
+    """A thin layer over :class:`mcap.writer.Writer` with deformctl's records and time line."""
+
+    def __init__(self, fh: io.BufferedWriter, kind: str, provenance: Provenance | None) -> None:
+        self._w = Writer(
+            fh,
+            compression=CompressionType.ZSTD,
+            enable_crcs=True,
+            enable_data_crcs=True,
+        )
+        self._w.start(profile="", library=f"deformctl {__version__}")
+        self._w.add_metadata("deformctl", {"kind": kind, "format_version": FORMAT_VERSION})
+        if provenance is not None:
+            self._w.add_metadata("provenance", provenance.to_mcap_metadata())
+        self._channels: dict[str, int] = {}
+        self._sequence: dict[str, int] = {}
+        self.offset_ns = 0
+
+    def add_objects(self, objects: Iterable[Mapping[str, Any]], path: str) -> None:
+        for obj in objects:
+            oid = obj.get("object_id")
+            if not isinstance(oid, str) or not oid:
+                raise InputDataError("object without a string object_id", path=path)
+            data = {str(k): json.dumps(v, default=_json_default) for k, v in obj.items()}
+            self._w.add_metadata("object", data)
+
+    def channel(self, topic: str) -> int:
+        if topic not in self._channels:
+            name = TOPIC_SCHEMAS[topic]
+            sid = self._w.register_schema(
+                name=load_json_schema(name)["title"],
+                encoding="jsonschema",
+                data=json_schema_bytes(name),
+            )
+            self._channels[topic] = self._w.register_channel(
+                topic=topic, message_encoding="json", schema_id=sid
+            )
+            self._sequence[topic] = 0
+        return self._channels[topic]
+
+    def add(self, topic: str, log_time_ns: int, message: Mapping[str, Any]) -> None:
+        cid = self.channel(topic)
+        data = json.dumps(message, separators=(",", ":"), allow_nan=False).encode()
+        self._w.add_message(
+            channel_id=cid,
+            log_time=log_time_ns,
+            data=data,
+            publish_time=log_time_ns,
+            sequence=self._sequence[topic],
+        )
+        self._sequence[topic] += 1
+
+    def finish(self) -> None:
+        self._w.finish()
+
+
+def _time_line_ns(t: np.ndarray, offset_ns: int) -> list[int]:
+    """Log times: ``offset_ns`` plus the time since the first sample, ns."""
+    if t.size == 0:
+        return []
+    return [offset_ns + int(v) for v in np.rint((t - t[0]) * NS_PER_S).astype(np.int64)]
+
+
+def _finite(label: str, key: str, arr: np.ndarray, path: str) -> list[float]:
+    if not np.all(np.isfinite(arr)):
+        raise InputDataError(f"{label}: {key} has non-finite values", path=path)
+    values: list[float] = arr.tolist()
+    return values
+
+
+def _check_ids(oid: object, idx: object, label: str, path: str) -> None:
+    if not isinstance(oid, str) or not oid:
+        raise InputDataError(f"{label}: object_id must be a non-empty string", path=path)
+    if not isinstance(idx, int | np.integer) or int(idx) < 0:
+        raise InputDataError(f"{label}: index must be a non-negative integer", path=path)
+
+
+def write_squeeze_log(
+    path: PathArg,
+    objects: Sequence[Mapping[str, Any]],
+    squeezes: Sequence[SqueezeSeries],
+    *,
+    provenance: Provenance | None,
+    force: bool = False,
+) -> None:
+    """Write a squeeze log atomically (see the module docstring for the layout).
+
+    Args:
+        path: destination ``.mcap`` file, or ``-`` for stdout.
+        objects: catalog rows (e.g. ``catalog.to_dict("records")``), one ``object`` metadata
+            record each; values must be JSON-serialisable (numpy scalars are fine).
+        squeezes: the squeezes, written in this order, one ``/squeeze`` message per sample.
+        provenance: stored as the ``provenance`` metadata record.
+        force: overwrite an existing file.
+
+    Raises:
+        InputDataError: a non-finite sample value or time going backwards (nothing is written).
+        OutputExistsError: ``path`` exists and ``force`` is false.
+    """
+    name = display_name(path)
+    with atomic_output(path, force=force) as tmp, tmp.open("wb") as fh:
+        log = _LogWriter(fh, KIND_SQUEEZE, provenance)
+        log.add_objects(objects, name)
+        log.channel(SQUEEZE_TOPIC)
+        for sq in squeezes:
+            label = f"object {sq.object_id!r} squeeze {sq.squeeze_index}"
+            _check_ids(sq.object_id, sq.squeeze_index, label, name)
+            _check_time(sq.time_s, label, name)
+            columns: dict[str, list[float]] = {
+                "time_s": _finite(label, "time_s", sq.time_s, name),
+                "force_n": _finite(label, "force_n", sq.force_n, name),
+                "compression_m": _finite(label, "compression_m", sq.compression_m, name),
+            }
+            for key in ("commanded_force_n", "palm_left_x_m", "palm_right_x_m"):
+                arr = getattr(sq, key)
+                if arr is not None:
+                    columns[key] = _finite(label, key, arr, name)
+            times = _time_line_ns(sq.time_s, log.offset_ns)
+            base = {"object_id": sq.object_id, "squeeze_index": int(sq.squeeze_index)}
+            for i, log_time in enumerate(times):
+                msg = dict(base)
+                msg.update({k: v[i] for k, v in columns.items()})
+                log.add(SQUEEZE_TOPIC, log_time, msg)
+            if times:
+                log.offset_ns = times[-1] + round(GAP_S * NS_PER_S)
+        log.finish()
+
+
+def write_lift_log(
+    path: PathArg,
+    objects: Sequence[Mapping[str, Any]],
+    attempts: Sequence[LiftAttempt],
+    *,
+    provenance: Provenance | None,
+    force: bool = False,
+) -> None:
+    """Write a lift log atomically: each attempt's samples, then its result message.
+
+    Args:
+        path: destination ``.mcap`` file, or ``-`` for stdout.
+        objects: catalog rows, one ``object`` metadata record each.
+        attempts: the attempts in search order; ``outcome.series`` may be None (a rig that
+            records no time series), ``outcome.slip_m`` may be NaN (stored as null).
+        provenance: stored as the ``provenance`` metadata record.
+        force: overwrite an existing file.
+
+    Raises:
+        InputDataError: non-finite samples, or details that are not JSON (nothing is written).
+        OutputExistsError: ``path`` exists and ``force`` is false.
+    """
+    name = display_name(path)
+    with atomic_output(path, force=force) as tmp, tmp.open("wb") as fh:
+        log = _LogWriter(fh, KIND_LIFT, provenance)
+        log.add_objects(objects, name)
+        log.channel(LIFT_SAMPLE_TOPIC)
+        log.channel(LIFT_RESULT_TOPIC)
+        for att in attempts:
+            label = f"object {att.object_id!r} attempt {att.attempt_index}"
+            _check_ids(att.object_id, att.attempt_index, label, name)
+            out = att.outcome
+            grip = float(out.grip_force_n)
+            if not math.isfinite(grip) or grip < 0:
+                raise InputDataError(f"{label}: grip_force_n must be finite and >= 0", path=name)
+            base = {
+                "object_id": att.object_id,
+                "attempt_index": int(att.attempt_index),
+                "grip_force_n": grip,
+            }
+            end_ns = log.offset_ns
+            if out.series is not None:
+                s = out.series
+                _check_time(s.time_s, label, name)
+                columns = {"time_s": _finite(label, "time_s", s.time_s, name)}
+                for key in _LIFT_FIELDS:
+                    columns[key] = _finite(label, key, getattr(s, key), name)
+                times = _time_line_ns(s.time_s, log.offset_ns)
+                for i, log_time in enumerate(times):
+                    msg = dict(base)
+                    msg.update({k: v[i] for k, v in columns.items()})
+                    log.add(LIFT_SAMPLE_TOPIC, log_time, msg)
+                if times:
+                    end_ns = times[-1]
+            slip = float(out.slip_m)
+            try:
+                details = json.loads(
+                    json.dumps(out.details, default=_json_default, allow_nan=False)
+                )
+            except (TypeError, ValueError) as err:
+                raise InputDataError(f"{label}: details are not JSON ({err})", path=name) from None
+            result = dict(base)
+            result.update(
+                {
+                    "lifted": bool(out.lifted),
+                    "slip_m": slip if math.isfinite(slip) else None,
+                    "details": details,
+                }
+            )
+            log.add(LIFT_RESULT_TOPIC, end_ns, result)
+            log.offset_ns = end_ns + round(GAP_S * NS_PER_S)
+        log.finish()

@@ -1,0 +1,83 @@
+"""``deformctl inspect``: what an artifact is and what it holds."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import typer
+
+from deformctl.artifacts.describe import describe
+from deformctl.cli import app
+from deformctl.cli._common import translate_errors
+
+
+def _unit(unit: object) -> str:
+    return str(unit) if unit else "-"
+
+
+def render_text(info: dict[str, Any]) -> str:
+    """The human-readable form of :func:`deformctl.artifacts.describe` output."""
+    lines = [f"file: {info['path']}", f"format: {info['format']}", f"kind: {info['kind']}"]
+    schema = info.get("schema")
+    if schema:
+        lines.append(f"schema: {schema['name']} v{schema['version']}")
+    if "rows" in info:
+        lines.append(f"rows: {info['rows']}")
+        lines.append("columns:")
+        for c in info["columns"]:
+            req = "required" if c["required"] else "optional"
+            lines.append(f"  {c['name']:<30} {c['dtype']:<8} {_unit(c['unit']):<8} {req}")
+    if "messages" in info:
+        lines.append(f"messages: {info['messages']}")
+        rng = info.get("time_range")
+        if rng:
+            lines.append(
+                f"time range: {rng['start_ns']} .. {rng['end_ns']} ns ({rng['duration_s']:.3f} s)"
+            )
+        for key in ("squeezes", "attempts", "lifted"):
+            if key in info:
+                lines.append(f"{key}: {info[key]}")
+        lines.append("channels:")
+        for ch in info["channels"]:
+            lines.append(f"  {ch['topic']}: {ch['messages']} messages, schema {ch['schema']}")
+            for f in ch.get("fields", []):
+                lines.append(f"    {f['name']:<20} {f['type']:<12} {_unit(f['unit'])}")
+    objects = info.get("objects") or []
+    if objects:
+        ids = ", ".join(str(o.get("object_id")) for o in objects)
+        lines.append(f"objects ({len(objects)}): {ids}")
+    prov = info.get("provenance")
+    if prov:
+        lines.append("provenance:")
+        lines.append(f"  tool: {prov['tool']} {prov['tool_version']}")
+        lines.append(f"  command: {' '.join(prov['command_line'])}")
+        lines.append(f"  seed: {prov['seed']}")
+        for p, digest in prov["inputs"].items():
+            lines.append(f"  input: {p} sha256:{digest}")
+        if prov["settings"]:
+            lines.append(f"  settings: {json.dumps(prov['settings'], sort_keys=True)}")
+    else:
+        lines.append("provenance: none")
+    return "\n".join(lines)
+
+
+@app.command()
+@translate_errors
+def inspect(
+    file: str = typer.Argument(
+        ..., help="Any deformctl artifact (MCAP, Parquet, catalog CSV); - for stdin."
+    ),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON document instead of text."),
+) -> None:
+    """Show an artifact's kind, schema, counts, time range, units and provenance.
+
+    The file is fully validated first; a damaged or invalid file exits with 65.
+
+    Example: deformctl inspect datasets/paper/objects.csv --json
+    """
+    info = describe(file)
+    if as_json:
+        typer.echo(json.dumps(info, indent=2, allow_nan=False))
+    else:
+        typer.echo(render_text(info))
