@@ -305,7 +305,7 @@ def _find_reference(
             path=path,
         )
     if len(chosen) > 1:
-        listed = ", ".join(str(ids[i]) for i in chosen)
+        listed = ", ".join(str(i) for i in sorted(ids[i] for i in chosen))
         raise InputDataError(
             f"found {len(chosen)} ArUco markers (ids {listed}) in the {view} image; the scale "
             "reference is ambiguous: show exactly one marker or choose one with --marker-id",
@@ -591,10 +591,16 @@ def _foreground(
         model = _background_model(img, exclude)
         diff = np.linalg.norm(img.astype(np.float64) - model, axis=2)
     diff = cv2.GaussianBlur(diff, (3, 3), 0)
-    thresh = _otsu_threshold(diff, valid)
+    # A threshold that does not clear the background's own variation (noise, lighting left
+    # over by the model) separates nothing: then there is no object.
+    floor = max(_MIN_CONTRAST, 4.0 * float(np.median(diff[valid])))
+    thresh = max(_otsu_threshold(diff, valid), floor)
     return _Foreground((diff > thresh) & valid, np.where(valid, diff, 0.0), thresh)
 
 
+#: Smallest colour difference from the background (0..255 scale, Euclidean over B, G, R) that
+#: counts as foreground.
+_MIN_CONTRAST = 12.0
 #: Upsampling factor for the sub-pixel object outline.
 _SUBPIXEL = 4
 
@@ -1186,7 +1192,8 @@ def detect_slip(
     palms' and the object's visible faces. The palms are tracked by template matching of
     ``palm_regions`` (``x, y, w, h`` in the before frame; each must contain a distinctive part of
     a palm, e.g. its lower end, not only a uniform surface) or by ArUco markers on the palms
-    (``palm_marker_ids``); with neither, the palms' rise is ``lift_height_m`` (the commanded lift).
+    (``palm_marker_ids``); with neither, the palms' rise is ``lift_height_m`` (the commanded lift)
+    and, if the palms touch the object in the image, ``object_region`` must keep them out.
     The object is the largest foreground region in the columns between the palms (central 60 %;
     or in ``object_region``), with markers removed; its rise is the shift of that region's
     centroid. Scale: ``scale_px_per_m``, else the mean side of the markers in view of known size
@@ -1200,7 +1207,8 @@ def detect_slip(
         after_frame: path or image of the same size, taken after the lift.
         palm_regions: palm rectangles ``[(x, y, w, h), ...]`` in the before frame, px.
         palm_marker_ids: ids of ArUco markers fixed to the palms.
-        object_region: ``(x, y, w, h)`` that contains the object in the before frame (optional).
+        object_region: ``(x, y, w, h)`` in the before frame; its columns (which should show only
+            the object and the background) are where the object is tracked. Optional.
         lift_height_m: the commanded lift, m (used when the palms are not tracked).
         tolerance_m: largest shortfall of the object's rise that still counts as lifted, m.
         marker_size_cm: side of the markers in view, cm (for the scale).
@@ -1255,7 +1263,11 @@ def detect_slip(
     if palm_regions:
         for k, reg in enumerate(palm_regions):
             x, y, w, h = _check_region(reg, before.shape, f"palm region {k + 1}")
-            mx, my = _match_subpixel(g1, _u8(g0[y : y + h, x : x + w]))
+            # Colour template, searched in a band of columns around the palm: the lift is
+            # vertical, and a uniform palm's lower end can look like the object's in grey.
+            sx0, sx1 = max(0, x - max(w, 20)), min(before.shape[1], x + w + max(w, 20))
+            mx, my = _match_subpixel(after[:, sx0:sx1], _u8(before[y : y + h, x : x + w]))
+            mx += sx0
             palm_rises.append(y - my)
             palms0.append((x, y, w, h))
             palms1.append((round(mx), round(my), w, h))

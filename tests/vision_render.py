@@ -124,10 +124,36 @@ class Marker:
         return Marker(c, **kw)  # type: ignore[arg-type]
 
 
+@dataclass(frozen=True)
+class Checkerboard:
+    """A printed checkerboard of ``(cols + 1) x (rows + 1)`` squares with a one-square white margin.
+
+    ``corners`` are the squares' outer corners TL, TR, BR, BL in the world, cm ``[4, 3]``.
+    """
+
+    corners: FloatArray
+    cols: int
+    rows: int
+
+    @staticmethod
+    def flat(x0: float, y0: float, cols: int, rows: int, square: float) -> Checkerboard:
+        w, h = (cols + 1) * square, (rows + 1) * square
+        c = np.array([[x0, y0 + h, 0], [x0 + w, y0 + h, 0], [x0 + w, y0, 0], [x0, y0, 0]], float)
+        return Checkerboard(c, cols, rows)
+
+    @staticmethod
+    def upright(
+        x0: float, y: float, z0: float, cols: int, rows: int, square: float
+    ) -> Checkerboard:
+        w, h = (cols + 1) * square, (rows + 1) * square
+        c = np.array([[x0, y, z0 + h], [x0 + w, y, z0 + h], [x0 + w, y, z0], [x0, y, z0]], float)
+        return Checkerboard(c, cols, rows)
+
+
 @dataclass
 class Scene:
     boxes: list[Box] = field(default_factory=list)
-    markers: list[Marker] = field(default_factory=list)
+    markers: list[Marker | Checkerboard] = field(default_factory=list)
     background_bgr: tuple[int, int, int] = (190, 195, 200)
     light_dir: tuple[float, float, float] = (0.3, -0.5, 0.8)
 
@@ -197,36 +223,53 @@ def _fill_convex(canvas: NDArray[np.float32], pts: FloatArray, color: tuple[floa
     canvas[y0:y1, x0:x1][inside] = color
 
 
-def _draw_marker(canvas: NDArray[np.float32], m: Marker, cam: Camera, ss: int) -> None:
-    side_px = 240
-    dictionary = cv2.aruco.getPredefinedDictionary(m.dictionary)
-    tex = cv2.aruco.generateImageMarker(dictionary, m.marker_id, side_px)
-    pad = round(m.margin * side_px)
-    tex = cv2.copyMakeBorder(tex, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=255)
-    n = tex.shape[0]
-    # World corners of the card: the black square grown by the margin.
+def _card_texture(m: Marker | Checkerboard) -> tuple[NDArray[np.uint8], FloatArray]:
+    """The card's texture and its world corners (the printed pattern plus the white margin)."""
     c = m.corners
     ex, ey = (c[1] - c[0]), (c[3] - c[0])
-    f = m.margin
+    if isinstance(m, Marker):
+        side_px = 240
+        dictionary = cv2.aruco.getPredefinedDictionary(m.dictionary)
+        tex = cv2.aruco.generateImageMarker(dictionary, m.marker_id, side_px)
+        pad = round(m.margin * side_px)
+        fx = fy = m.margin
+    else:
+        sq = 40
+        nx, ny = m.cols + 1, m.rows + 1
+        iy, ix = np.mgrid[0 : ny * sq, 0 : nx * sq] // sq
+        tex = np.where((ix + iy) % 2 == 0, 0, 255).astype(np.uint8)
+        pad = sq
+        fx, fy = 1.0 / nx, 1.0 / ny
+    tex = cv2.copyMakeBorder(tex, pad, pad, pad, pad, cv2.BORDER_CONSTANT, value=255)
     card = np.array(
         [
-            c[0] - f * ex - f * ey,
-            c[1] + f * ex - f * ey,
-            c[2] + f * ex + f * ey,
-            c[3] - f * ex + f * ey,
+            c[0] - fx * ex - fy * ey,
+            c[1] + fx * ex - fy * ey,
+            c[2] + fx * ex + fy * ey,
+            c[3] - fx * ex + fy * ey,
         ]
     )
+    return tex, card
+
+
+def _draw_marker(
+    canvas: NDArray[np.float32], m: Marker | Checkerboard, cam: Camera, ss: int
+) -> None:
+    tex, card = _card_texture(m)
+    nh, nw = tex.shape
     dst = cam.project(card, ss)
     h, w = canvas.shape[:2]
     x0, y0 = (max(0, int(np.floor(v)) - 1) for v in dst.min(axis=0))
     x1, y1 = min(w, int(np.ceil(dst[:, 0].max())) + 2), min(h, int(np.ceil(dst[:, 1].max())) + 2)
     if x0 >= x1 or y0 >= y1:
         return
-    src = np.array([[-0.5, -0.5], [n - 0.5, -0.5], [n - 0.5, n - 0.5], [-0.5, n - 0.5]], np.float32)
+    src = np.array(
+        [[-0.5, -0.5], [nw - 0.5, -0.5], [nw - 0.5, nh - 0.5], [-0.5, nh - 0.5]], np.float32
+    )
     hmat = cv2.getPerspectiveTransform(src, (dst - [x0, y0]).astype(np.float32))
     size = (x1 - x0, y1 - y0)
     warped = cv2.warpPerspective(tex.astype(np.float32), hmat, size, flags=cv2.INTER_LINEAR)
-    mask = cv2.warpPerspective(np.ones((n, n), np.float32), hmat, size, flags=cv2.INTER_LINEAR)
+    mask = cv2.warpPerspective(np.ones((nh, nw), np.float32), hmat, size, flags=cv2.INTER_LINEAR)
     roi = canvas[y0:y1, x0:x1]
     roi *= (1.0 - mask)[..., None]
     roi += (warped * mask)[..., None]
