@@ -21,6 +21,8 @@ it is chosen for a tiny data set and a tiny network:
   ``restarts`` networks from seeded initialisations and keeps the one with the smallest RMS
   relative error **on the training rows** (the test rows are never looked at).
 * **alpha** (L2 penalty) small (1e-4): 11 weights on 40 rows cannot overfit much.
+* **One BLAS thread** while fitting and predicting (``threadpoolctl``): the matrices are
+  ``[40, 3]``, threads only cost time, and a fixed thread count keeps results bit-identical.
 
 Everything random is seeded from ``seed``: the train/test split (a permutation of the rows
 sorted by ``object_id``) and the restarts' initial weights, so the same table and seed give
@@ -48,6 +50,7 @@ from sklearn.neural_network import MLPRegressor
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils.validation import check_is_fitted, validate_data
+from threadpoolctl import threadpool_limits
 
 from deformctl.errors import InputDataError, SchemaError, UsageError
 from deformctl.table import format_ids, standard_scales, standardized_distances
@@ -367,7 +370,9 @@ def train_model(
             random_state=rs,
             target=target,
         )
-        with warnings.catch_warnings(record=True) as caught:
+        # One BLAS thread: the matrices are tiny, so threads only add overhead (20x slower on a
+        # loaded 2-core machine) and a thread-count-dependent summation order.
+        with warnings.catch_warnings(record=True) as caught, threadpool_limits(limits=1):
             warnings.simplefilter("always", ConvergenceWarning)
             try:
                 candidate.fit(X_train, y_train)
@@ -380,8 +385,9 @@ def train_model(
             best_converged = not any(issubclass(w.category, ConvergenceWarning) for w in caught)
     assert best is not None
 
-    pred_train = best.predict(X_train)
-    pred_test = best.predict(X_test)
+    with threadpool_limits(limits=1):
+        pred_train = best.predict(X_train)
+        pred_test = best.predict(X_test)
     nn_train, nn_test = _nearest_baseline(train, test)
     fw_train, fw_test = _f_w(train), _f_w(test)
 
@@ -498,7 +504,8 @@ def predict(model: ScaledTargetRegressor, features: pd.DataFrame) -> Prediction:
     if bad.any():
         raise InputDataError(f"weight_n must be > 0; it is not for {format_ids(names[bad])}")
 
-    pred = model.predict(X) if len(X) else np.empty(0)
+    with threadpool_limits(limits=1):
+        pred = model.predict(X) if len(X) else np.empty(0)
     values = X.to_numpy()
     lo, hi = model.feature_min_, model.feature_max_
     outside = (values < lo) | (values > hi)
