@@ -308,7 +308,7 @@ def lookup(
         ...     "lift_force_n": [30.0, 60.0]})
         >>> r = lookup(t, weight_n=39.0, deformability_n_per_cm=49.0, damping_ns_per_cm=9.0)
         >>> r.row["object_id"], round(r.distance, 3)
-        ('B', 0.173)
+        ('B', 0.245)
     """
     q = _query(weight_n, deformability_n_per_cm, damping_ns_per_cm)
     validate_index_table(index_table)

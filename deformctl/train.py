@@ -12,8 +12,9 @@ it is chosen for a tiny data set and a tiny network:
   (:class:`ScaledTargetRegressor`). The inputs are still exactly (W, D, λ), unscaled, and the
   core is still ``Pipeline(StandardScaler, MLPRegressor)`` (``model.regressor_``). With 2 hidden
   nodes this matters: the product ``W · r(W, D, λ)`` is hard to express as a sum of two
-  ``tanh`` units, the ratio ``r`` is not. On the synthetic data of the tests it roughly halves
-  the median and the maximum relative error compared to fitting L_f directly.
+  ``tanh`` units, the ratio ``r`` is not. On the synthetic data of the tests (10 populations)
+  it halves the median relative test error compared to fitting L_f directly (0.6 % vs 1.1 %),
+  and the direct fit failed on one population (max error 37 %) where the ratio fit did not.
 * **Solver.** ``lbfgs`` (full-batch quasi-Newton): on 40 samples and 11 weights it converges in a
   few hundred iterations to a much better minimum than ``adam``/``sgd`` in thousands of epochs.
 * **Activation.** ``tanh``: smooth and zero-centred, suits standardized inputs.
