@@ -1,0 +1,253 @@
+"""Model files: the lifting-force model and its metadata in one skops file, loaded safely.
+
+A model file is a `skops <https://skops.readthedocs.io>`_ archive (a zip of ``schema.json`` and
+``.npy`` arrays; no pickle) holding one dict::
+
+    {"format": MODEL_FORMAT, "metadata_json": "<JSON text>", "model": ScaledTargetRegressor(...)}
+
+The metadata (seed, features, training ranges, metrics summary, tool version, ...) is stored as
+JSON *text*, so reading it back is ``json.loads`` and can never build an object.
+
+Loading never trusts the file. Before anything is imported or constructed,
+:func:`load_model` reads ``schema.json`` as plain JSON and walks the whole object tree: every
+node's type (``module.Class``) must be in :data:`ALLOWED_TYPES` and every node's loader in
+:data:`ALLOWED_LOADERS` -- the handful of types the model is made of (builtins containers and
+scalars, numpy arrays, ``RandomState``, ``Pipeline``, ``StandardScaler``, ``MLPRegressor`` and
+:class:`deformctl.train.ScaledTargetRegressor`). A file with anything else (a function such as
+``os.system``, any other class) is refused with :class:`~deformctl.errors.InputDataError` (exit 65)
+naming the type(s). Only then is ``skops.io.load`` called, with ``trusted`` set to the types
+``skops.io.get_untrusted_types`` reports, after checking that they too are in the allow-list;
+``trusted=True`` is never used. A truncated or non-zip file is refused the same way.
+
+Writes are atomic: the archive is written to a temporary file in the target directory and moved
+into place with :func:`os.replace`; an existing file is only replaced with ``force=True``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import tempfile
+import zipfile
+from collections.abc import Iterator, Mapping
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as _dist_version
+from pathlib import Path
+from typing import Any
+
+import skops.io as sio
+
+from deformctl.errors import InputDataError, MissingInputError, OutputExistsError, UsageError
+from deformctl.train import ScaledTargetRegressor
+
+#: The ``format`` tag of a deformctl model file.
+MODEL_FORMAT = "deformctl-lift-force-model/1"
+
+#: Every type a model file may contain, as ``module.Class`` (the form skops reports).
+ALLOWED_TYPES: frozenset[str] = frozenset(
+    {
+        "builtins.dict",
+        "builtins.list",
+        "builtins.tuple",
+        "builtins.str",
+        "builtins.int",
+        "builtins.float",
+        "builtins.bool",
+        "builtins.NoneType",
+        "numpy.ndarray",
+        "numpy.float64",
+        "numpy.int64",
+        "numpy.random.mtrand.RandomState",
+        "sklearn.pipeline.Pipeline",
+        "sklearn.preprocessing._data.StandardScaler",
+        "sklearn.neural_network._multilayer_perceptron.MLPRegressor",
+        "deformctl.train.ScaledTargetRegressor",
+    }
+)
+
+#: The skops node loaders a model file may use (no functions, methods, operators, partials).
+ALLOWED_LOADERS: frozenset[str] = frozenset(
+    {
+        "DictNode",
+        "ListNode",
+        "TupleNode",
+        "JsonNode",
+        "TypeNode",
+        "NdArrayNode",
+        "ObjectNode",
+        "RandomStateNode",
+    }
+)
+
+
+def _tool_version() -> str:
+    try:
+        return _dist_version("deformctl")
+    except PackageNotFoundError:  # pragma: no cover - running from a source tree
+        return "unknown"
+
+
+def _walk_types(node: Any) -> Iterator[tuple[str, str | None]]:
+    """Yield ``(module.Class, loader)`` for every typed node of a skops ``schema.json`` tree."""
+    stack = [node]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, dict):
+            if "__class__" in item or "__module__" in item:
+                loader = item.get("__loader__")
+                yield (
+                    f"{item.get('__module__')}.{item.get('__class__')}",
+                    loader if isinstance(loader, str) else str(loader),
+                )
+            stack.extend(item.values())
+        elif isinstance(item, list):
+            stack.extend(item)
+
+
+def inspect_types(path: str | os.PathLike[str]) -> tuple[set[str], set[str]]:
+    """All types and loaders named in a skops file's ``schema.json``, without loading it.
+
+    Returns:
+        ``(types, loaders)``: sets of ``module.Class`` strings and loader names.
+
+    Raises:
+        MissingInputError: the file does not exist.
+        InputDataError: not a zip archive (e.g. truncated), or no valid ``schema.json``.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise MissingInputError("model file not found", path=p)
+    try:
+        with zipfile.ZipFile(p) as archive:
+            schema = json.loads(archive.read("schema.json"))
+    except zipfile.BadZipFile:
+        raise InputDataError(
+            "not a skops model file (truncated or not a zip archive)", path=p
+        ) from None
+    except KeyError:
+        raise InputDataError("not a skops model file (no schema.json)", path=p) from None
+    except (ValueError, OSError, EOFError) as err:
+        raise InputDataError(
+            f"unreadable model file ({type(err).__name__}: {err})", path=p
+        ) from None
+    types: set[str] = set()
+    loaders: set[str] = set()
+    for type_name, loader in _walk_types(schema):
+        types.add(type_name)
+        if loader is not None and loader != "None":
+            loaders.add(loader)
+    return types, loaders
+
+
+def save_model(
+    path: str | os.PathLike[str],
+    model: ScaledTargetRegressor,
+    *,
+    metadata: Mapping[str, Any],
+    force: bool = False,
+) -> Path:
+    """Write ``model`` and ``metadata`` to a skops file at ``path``, atomically.
+
+    Args:
+        path: the output file (conventionally ``*.skops``).
+        model: a fitted lifting-force model (:func:`deformctl.train.train_model`).
+        metadata: JSON-serialisable facts about the model (seed, features, training ranges,
+            metrics summary, ...); ``tool_version`` and ``format`` are added.
+        force: replace an existing file.
+
+    Returns:
+        The path written.
+
+    Raises:
+        OutputExistsError: ``path`` exists and ``force`` is False.
+        UsageError: the directory does not exist, ``model`` is not a lifting-force model, the
+            metadata is not JSON-serialisable, or the model contains a type that
+            :func:`load_model` would refuse.
+    """
+    out = Path(path)
+    if out.exists() and not force:
+        raise OutputExistsError(out)
+    if not out.parent.is_dir():
+        raise UsageError("output directory does not exist", path=out.parent)
+    if not isinstance(model, ScaledTargetRegressor):
+        raise UsageError(f"not a lifting-force model: {type(model).__name__}")
+    meta = {"format": MODEL_FORMAT, "tool_version": _tool_version(), **dict(metadata)}
+    try:
+        metadata_json = json.dumps(meta, sort_keys=True, allow_nan=True)
+    except (TypeError, ValueError) as err:
+        raise UsageError(f"model metadata is not JSON-serialisable: {err}") from None
+    payload = {"format": MODEL_FORMAT, "metadata_json": metadata_json, "model": model}
+
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        sio.dump(payload, tmp)
+        types, loaders = inspect_types(tmp)
+        bad = sorted(types - ALLOWED_TYPES) + sorted(loaders - ALLOWED_LOADERS)
+        if bad:
+            raise UsageError(
+                f"the model contains types a model file may not hold: {', '.join(bad)}"
+            )
+        os.replace(tmp, out)
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+    return out
+
+
+def load_model(path: str | os.PathLike[str]) -> tuple[ScaledTargetRegressor, dict[str, Any]]:
+    """Load a model file written by :func:`save_model`, trusting only :data:`ALLOWED_TYPES`.
+
+    Returns:
+        ``(model, metadata)``.
+
+    Raises:
+        MissingInputError: the file does not exist (exit 66).
+        InputDataError: the file is truncated / not a skops archive, contains a type or loader
+            outside the allow-list (named in the message), or is not a deformctl model file
+            (exit 65).
+    """
+    p = Path(path)
+    types, loaders = inspect_types(p)
+    unexpected = sorted(types - ALLOWED_TYPES)
+    bad_loaders = sorted(loaders - ALLOWED_LOADERS)
+    if unexpected or bad_loaders:
+        what = ", ".join([*unexpected, *(f"loader {x}" for x in bad_loaders)])
+        raise InputDataError(
+            f"refusing to load: unexpected type(s) in the model file: {what}", path=p
+        )
+    try:
+        untrusted = sio.get_untrusted_types(file=p)
+    except Exception as err:  # an untrusted file may break skops' parser in any way
+        raise InputDataError(
+            f"unreadable model file ({type(err).__name__}: {err})", path=p
+        ) from None
+    outside = sorted(set(untrusted) - ALLOWED_TYPES)
+    if outside:
+        raise InputDataError(
+            f"refusing to load: unexpected type(s) in the model file: {', '.join(outside)}", path=p
+        )
+    try:
+        payload = sio.load(p, trusted=sorted(untrusted))
+    except Exception as err:  # truncated members, bad arrays, skops' own refusals, ...
+        raise InputDataError(
+            f"unreadable model file ({type(err).__name__}: {err})", path=p
+        ) from None
+
+    if not isinstance(payload, dict) or payload.get("format") != MODEL_FORMAT:
+        raise InputDataError(f"not a deformctl model file (expected format {MODEL_FORMAT})", path=p)
+    model = payload.get("model")
+    if not isinstance(model, ScaledTargetRegressor):
+        raise InputDataError(
+            f"the model file holds a {type(model).__name__}, not a lifting-force model", path=p
+        )
+    raw = payload.get("metadata_json")
+    try:
+        metadata = json.loads(raw) if isinstance(raw, str) else None
+    except ValueError:
+        metadata = None
+    if not isinstance(metadata, dict):
+        raise InputDataError("the model file's metadata is not a JSON object", path=p)
+    return model, metadata

@@ -1,0 +1,195 @@
+"""Seeded object catalogs: the paper's population and a small golden population for CI.
+
+A *catalog* is the input of ``measure`` and ``lift``: one row per object, in the paper's units at
+the edge (cm, N, N/cm, N·s/cm). Its columns, in order, are :data:`CATALOG_COLUMNS`:
+
+==================================  ======  ====================================================
+column                              unit    meaning
+==================================  ======  ====================================================
+``object_id``                       --      unique id, ``<prefix><index>`` zero padded
+``size_x_cm``                       cm      box size along the squeeze axis
+``size_y_cm``                       cm      box size across the palms
+``size_z_cm``                       cm      box height (the lift moves the palms by half of it)
+``weight_n``                        N       weight W
+``friction_mu``                     --      Coulomb friction coefficient palm/object
+``material_stiffness_n_per_cm``     N/cm    the object's true squeeze stiffness (deformability D)
+``material_damping_ns_per_cm``      N·s/cm  the object's true squeeze damping (λ)
+==================================  ======  ====================================================
+
+The paper (section V.A) trains its network on 73 simulated objects, 40 for training and 33 for
+testing, with W about 20-60 N, D about 30-50 N/cm and λ 0-13 N·s/cm (its Table III). The paper's
+network has no friction input, so by default every object of a population shares one friction
+coefficient: a per-object μ would add variance to L_f that W, D and λ cannot explain. Pass a
+``(low, high)`` range to ``friction_mu`` to sample it anyway.
+
+Example:
+    >>> cat = make_population(73, seed=0)
+    >>> len(cat), cat["object_id"].iloc[0], cat["object_id"].iloc[-1]
+    (73, 'P00', 'P72')
+    >>> bool(cat["weight_n"].between(20, 60).all())
+    True
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from deformctl.errors import UsageError
+
+#: The catalog columns, in order (see the module docstring for units).
+CATALOG_COLUMNS: tuple[str, ...] = (
+    "object_id",
+    "size_x_cm",
+    "size_y_cm",
+    "size_z_cm",
+    "weight_n",
+    "friction_mu",
+    "material_stiffness_n_per_cm",
+    "material_damping_ns_per_cm",
+)
+
+#: The paper's population size and split (section V.A).
+PAPER_POPULATION_SIZE = 73
+PAPER_TRAIN_SIZE = 40
+
+#: Default friction coefficient of a population (constant: the network has no friction input).
+DEFAULT_FRICTION_MU = 0.5
+
+Range = tuple[float, float]
+
+
+def _check_range(name: str, value: Range, *, low_bound: float, strict: bool) -> Range:
+    """Validate a ``(low, high)`` range; ``strict`` requires ``low > low_bound``."""
+    try:
+        low, high = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise UsageError(f"{name} must be a (low, high) pair of numbers, got {value!r}") from None
+    if not (math.isfinite(low) and math.isfinite(high)) or low > high:
+        raise UsageError(f"{name} must be a finite range with low <= high, got ({low}, {high})")
+    if (low <= low_bound) if strict else (low < low_bound):
+        op = ">" if strict else ">="
+        raise UsageError(f"{name} must be {op} {low_bound}, got low = {low}")
+    return (low, high)
+
+
+def make_population(
+    n: int,
+    *,
+    seed: int,
+    weight_n: Range = (20.0, 60.0),
+    deformability_n_per_cm: Range = (30.0, 50.0),
+    damping_ns_per_cm: Range = (0.0, 13.0),
+    friction_mu: float | Range = DEFAULT_FRICTION_MU,
+    size_x_cm: Range = (10.0, 20.0),
+    size_y_cm: Range = (10.0, 20.0),
+    size_z_cm: Range = (8.0, 20.0),
+    id_prefix: str = "P",
+) -> pd.DataFrame:
+    """Sample a catalog of ``n`` box-shaped objects, uniformly and independently within ranges.
+
+    Every attribute is drawn from ``numpy.random.default_rng(seed)`` in a fixed order (weight,
+    deformability, damping, friction, sizes x, y, z), so the same arguments give the same catalog
+    on every machine. The defaults are the paper's population (section V.A, Table III); the sizes
+    are a few to 20 cm like the paper's Table I objects.
+
+    Args:
+        n: number of objects (>= 1); the paper uses 73 (:data:`PAPER_POPULATION_SIZE`).
+        seed: seed of the generator.
+        weight_n: range of the weight W, N (> 0).
+        deformability_n_per_cm: range of D, N/cm (> 0), written to ``material_stiffness_n_per_cm``.
+        damping_ns_per_cm: range of λ, N·s/cm (>= 0), written to ``material_damping_ns_per_cm``.
+        friction_mu: one μ for every object (default 0.5), or a ``(low, high)`` range to sample.
+        size_x_cm, size_y_cm, size_z_cm: ranges of the box sizes, cm (> 0).
+        id_prefix: prefix of the object ids; ids are ``prefix`` + zero-padded index.
+
+    Returns:
+        The catalog, ``n`` rows, columns :data:`CATALOG_COLUMNS` (floats are float64).
+
+    Raises:
+        UsageError: ``n`` < 1, or a range that is empty, reversed, non-finite or out of bounds.
+    """
+    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+        raise UsageError(f"population size must be an integer >= 1, got {n!r}")
+    n = int(n)
+    w = _check_range("weight_n", weight_n, low_bound=0.0, strict=True)
+    d = _check_range("deformability_n_per_cm", deformability_n_per_cm, low_bound=0.0, strict=True)
+    lam = _check_range("damping_ns_per_cm", damping_ns_per_cm, low_bound=0.0, strict=False)
+    if isinstance(friction_mu, tuple | list):
+        mu: Range = _check_range("friction_mu", friction_mu, low_bound=0.0, strict=True)
+    else:
+        mu = _check_range("friction_mu", (friction_mu, friction_mu), low_bound=0.0, strict=True)
+    sizes = [
+        _check_range(name, rng_, low_bound=0.0, strict=True)
+        for name, rng_ in (
+            ("size_x_cm", size_x_cm),
+            ("size_y_cm", size_y_cm),
+            ("size_z_cm", size_z_cm),
+        )
+    ]
+
+    rng = np.random.default_rng(seed)
+
+    def draw(bounds: Range) -> np.ndarray:
+        return rng.uniform(bounds[0], bounds[1], size=n)
+
+    weight = draw(w)
+    stiffness = draw(d)
+    damping = draw(lam)
+    mu_values = draw(mu) if mu[0] != mu[1] else np.full(n, mu[0])
+    sx, sy, sz = (draw(b) for b in sizes)
+
+    width = max(2, len(str(n - 1)))
+    ids = [f"{id_prefix}{i:0{width}d}" for i in range(n)]
+    return pd.DataFrame(
+        {
+            "object_id": ids,
+            "size_x_cm": sx,
+            "size_y_cm": sy,
+            "size_z_cm": sz,
+            "weight_n": weight,
+            "friction_mu": mu_values,
+            "material_stiffness_n_per_cm": stiffness,
+            "material_damping_ns_per_cm": damping,
+        },
+        columns=list(CATALOG_COLUMNS),
+    )
+
+
+def paper_population(seed: int = 0) -> pd.DataFrame:
+    """The paper's population: :data:`PAPER_POPULATION_SIZE` (73) objects with the default ranges.
+
+    The first :data:`PAPER_TRAIN_SIZE` (40) rows are not special: ``train`` draws its own seeded
+    40/33 split.
+    """
+    return make_population(PAPER_POPULATION_SIZE, seed=seed)
+
+
+#: The golden population (CI dataset regression): 8 fixed objects spanning the paper's ranges.
+#: Written out literally (not sampled) so that a change of the sampler never moves the golden
+#: numbers. Corners and the centre of the (W, D, λ) box, plus two low-friction / small objects.
+_GOLDEN_ROWS: tuple[tuple[str, float, float, float, float, float, float, float], ...] = (
+    # object_id, x cm, y cm, z cm, W N, mu, D N/cm, λ N·s/cm
+    ("G0", 12.0, 12.0, 10.0, 20.0, 0.5, 30.0, 0.0),
+    ("G1", 15.0, 14.0, 12.0, 60.0, 0.5, 30.0, 13.0),
+    ("G2", 14.0, 16.0, 11.0, 20.0, 0.5, 50.0, 13.0),
+    ("G3", 18.0, 18.0, 15.0, 60.0, 0.5, 50.0, 0.0),
+    ("G4", 15.0, 15.0, 12.0, 40.0, 0.5, 40.0, 6.5),
+    ("G5", 11.0, 13.0, 9.0, 30.0, 0.5, 35.0, 3.0),
+    ("G6", 16.0, 12.0, 14.0, 50.0, 0.4, 45.0, 10.0),
+    ("G7", 10.0, 10.0, 8.0, 25.0, 0.7, 32.0, 1.0),
+)
+
+
+def golden_population() -> pd.DataFrame:
+    """The fixed 8-object golden population used by the CI dataset regression.
+
+    Returns:
+        The catalog, 8 rows, columns :data:`CATALOG_COLUMNS`; identical on every call.
+    """
+    return pd.DataFrame(
+        [list(row) for row in _GOLDEN_ROWS],
+        columns=list(CATALOG_COLUMNS),
+    ).astype(dict.fromkeys(CATALOG_COLUMNS[1:], "float64"))

@@ -1,0 +1,428 @@
+"""The index table: each object's attributes joined with its minimum lifting force, and lookups.
+
+The paper (section III.C) stores what iterative lifting learned in an *index table*: given weight,
+deformability and damping, read off the lifting force. :func:`build_index_table` joins the
+coefficients (``characterize``) and the lift results (``lift``) on ``object_id``;
+:func:`lookup` returns the nearest entry, :func:`interpolate` an inverse-distance weighted
+estimate from the ``k`` nearest.
+
+Index table columns (:data:`INDEX_COLUMNS`), in the paper's units:
+
+=========================== ======= ===========================================================
+``object_id``               --      catalog id
+``weight_n``                N       weight W
+``deformability_n_per_cm``  N/cm    D
+``damping_ns_per_cm``       N·s/cm  λ
+``lift_force_n``            N       minimum lifting force L_f (per palm)
+``friction_mu``             --      friction coefficient used by the lift
+``f_w_n``                   N       F_w = W / (2 μ), the rigid-object force (physics baseline)
+``converged``               --      whether the lifting-force search converged
+=========================== ======= ===========================================================
+
+Distances are measured in *standardized units*: each key column is divided by its standard
+deviation over the table (population std, ``ddof = 0``, as ``StandardScaler`` does), so one unit
+is one standard deviation of that attribute; a column with no spread is compared in its own
+units. The distance is the Euclidean norm of the standardized differences.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from deformctl.errors import InputDataError, SchemaError, UsageError
+
+#: The columns of an index table, in order.
+INDEX_COLUMNS: tuple[str, ...] = (
+    "object_id",
+    "weight_n",
+    "deformability_n_per_cm",
+    "damping_ns_per_cm",
+    "lift_force_n",
+    "friction_mu",
+    "f_w_n",
+    "converged",
+)
+
+#: The attributes a lookup matches on (the model's features), in order.
+LOOKUP_KEYS: tuple[str, ...] = ("weight_n", "deformability_n_per_cm", "damping_ns_per_cm")
+
+#: Columns the two inputs must have. ``weight_n`` and ``friction_mu`` may come from either side
+#: (the lift results are preferred); ``f_w_n`` is computed as W / (2 μ) when the lift results
+#: do not carry it.
+COEFFICIENT_COLUMNS: tuple[str, ...] = ("object_id", "deformability_n_per_cm", "damping_ns_per_cm")
+LIFT_COLUMNS: tuple[str, ...] = ("object_id", "lift_force_n", "converged")
+
+#: How many offending ids an error message names before "and N more".
+MAX_IDS_IN_MESSAGE = 5
+
+
+def format_ids(ids: Iterable[object], limit: int = MAX_IDS_IN_MESSAGE) -> str:
+    """Name up to ``limit`` ids, then ``and N more``: ``"A, B, C and 4 more"``."""
+    items = [str(i) for i in ids]
+    shown = ", ".join(items[:limit])
+    return f"{shown} and {len(items) - limit} more" if len(items) > limit else shown
+
+
+def _require_columns(frame: pd.DataFrame, columns: Iterable[str], what: str) -> None:
+    for col in columns:
+        if col not in frame.columns:
+            raise SchemaError(f"{what} have no column {col!r}", field=col)
+
+
+def _duplicates(frame: pd.DataFrame, what: str) -> None:
+    dup = frame["object_id"][frame["object_id"].duplicated()].unique()
+    if len(dup):
+        raise InputDataError(f"{what} list object(s) more than once: {format_ids(sorted(dup))}")
+
+
+def _pick(
+    name: str, lift: pd.DataFrame, coefficients: pd.DataFrame, joined: pd.DataFrame
+) -> pd.Series:
+    """Column ``name`` from the lift side if present, else from the coefficients side."""
+    lift_col, coef_col = f"{name}__lift", f"{name}__coef"
+    if name in lift.columns and name in coefficients.columns:
+        a = joined[lift_col].to_numpy(dtype=float)
+        b = joined[coef_col].to_numpy(dtype=float)
+        bad = ~np.isclose(a, b, rtol=1e-6, atol=0.0, equal_nan=True)
+        if bad.any():
+            ids = joined["object_id"][bad]
+            raise InputDataError(
+                f"{name} differs between the coefficients and the lift results for "
+                f"{format_ids(ids)}"
+            )
+        return joined[lift_col]
+    if name in lift.columns:
+        return joined[lift_col]
+    if name in coefficients.columns:
+        return joined[coef_col]
+    raise SchemaError(f"neither the coefficients nor the lift results have {name!r}", field=name)
+
+
+def build_index_table(
+    coefficients: pd.DataFrame,
+    lift_results: pd.DataFrame,
+    *,
+    allow_unconverged: bool = False,
+) -> pd.DataFrame:
+    """Join coefficients and lift results on ``object_id`` into an index table.
+
+    Args:
+        coefficients: one row per object with ``object_id``, ``deformability_n_per_cm`` (N/cm),
+            ``damping_ns_per_cm`` (N·s/cm), and optionally ``weight_n`` / ``friction_mu``.
+        lift_results: one row per object with ``object_id``, ``lift_force_n`` (N), ``converged``
+            and optionally ``weight_n``, ``friction_mu``, ``f_w_n``. ``weight_n`` and
+            ``friction_mu`` must be present on at least one side; when on both they must agree.
+        allow_unconverged: keep objects whose search did not converge (``converged`` False),
+            as long as they have a finite lifting force (an upper bound that did lift).
+
+    Returns:
+        The index table, columns :data:`INDEX_COLUMNS`, one row per object, sorted by
+        ``object_id``; floats are float64 and ``converged`` is bool.
+
+    Raises:
+        SchemaError: a required column is missing.
+        InputDataError: an object listed twice on one side or missing on the other side, an
+            unconverged object (unless ``allow_unconverged``), a non-finite attribute or lifting
+            force, or a weight / friction that differs between the sides. The message names the
+            offending ids (up to a few, then "and N more").
+    """
+    _require_columns(coefficients, COEFFICIENT_COLUMNS, "the coefficients")
+    _require_columns(lift_results, LIFT_COLUMNS, "the lift results")
+    coef = coefficients.copy()
+    lift = lift_results.copy()
+    coef["object_id"] = coef["object_id"].astype(str)
+    lift["object_id"] = lift["object_id"].astype(str)
+    _duplicates(coef, "the coefficients")
+    _duplicates(lift, "the lift results")
+
+    coef_ids, lift_ids = set(coef["object_id"]), set(lift["object_id"])
+    no_lift = sorted(coef_ids - lift_ids)
+    no_coef = sorted(lift_ids - coef_ids)
+    if no_lift or no_coef:
+        parts = []
+        if no_lift:
+            parts.append(f"{len(no_lift)} object(s) have no lift result: {format_ids(no_lift)}")
+        if no_coef:
+            parts.append(f"{len(no_coef)} object(s) have no coefficients: {format_ids(no_coef)}")
+        raise InputDataError("; ".join(parts))
+
+    joined = coef.merge(lift, on="object_id", how="inner", suffixes=("__coef", "__lift"))
+    # Suffixes are only applied to clashing names; give every optional column a suffixed alias.
+    for name in ("weight_n", "friction_mu", "f_w_n"):
+        if name in joined.columns:
+            side = "__lift" if name in lift.columns else "__coef"
+            joined[f"{name}{side}"] = joined[name]
+
+    converged = joined["converged"]
+    if converged.isna().any():
+        ids = joined["object_id"][converged.isna()]
+        raise InputDataError(f"converged is missing for {format_ids(ids)}")
+    converged = converged.astype(bool)
+    if not allow_unconverged and not converged.all():
+        ids = sorted(joined["object_id"][~converged])
+        raise InputDataError(
+            f"{len(ids)} object(s) did not converge: {format_ids(ids)} "
+            "(use --allow-unconverged to keep them)"
+        )
+
+    weight = _pick("weight_n", lift, coef, joined).astype(float)
+    mu = _pick("friction_mu", lift, coef, joined).astype(float)
+    if "f_w_n" in lift.columns or "f_w_n" in coef.columns:
+        f_w = _pick("f_w_n", lift, coef, joined).astype(float)
+    else:
+        f_w = weight / (2.0 * mu)
+
+    table = pd.DataFrame(
+        {
+            "object_id": joined["object_id"].astype(str),
+            "weight_n": weight.to_numpy(dtype=np.float64),
+            "deformability_n_per_cm": joined["deformability_n_per_cm"].to_numpy(dtype=np.float64),
+            "damping_ns_per_cm": joined["damping_ns_per_cm"].to_numpy(dtype=np.float64),
+            "lift_force_n": joined["lift_force_n"].to_numpy(dtype=np.float64),
+            "friction_mu": mu.to_numpy(dtype=np.float64),
+            "f_w_n": f_w.to_numpy(dtype=np.float64),
+            "converged": converged.to_numpy(dtype=bool),
+        },
+        columns=list(INDEX_COLUMNS),
+    )
+    for col in INDEX_COLUMNS[1:-1]:
+        bad = ~np.isfinite(table[col].to_numpy())
+        if bad.any():
+            ids = sorted(table["object_id"][bad])
+            raise InputDataError(f"{col} is not a finite number for {format_ids(ids)}")
+    return table.sort_values("object_id", kind="stable").reset_index(drop=True)
+
+
+def validate_index_table(table: pd.DataFrame) -> None:
+    """Check that ``table`` has the lookup columns and at least one row of finite values.
+
+    Raises:
+        SchemaError: a column of :data:`LOOKUP_KEYS` or ``lift_force_n`` is missing.
+        InputDataError: the table is empty or a lookup key is not finite somewhere.
+    """
+    _require_columns(table, ("object_id", *LOOKUP_KEYS, "lift_force_n"), "the index table")
+    if len(table) == 0:
+        raise InputDataError("the index table has no rows")
+    for col in LOOKUP_KEYS:
+        bad = ~np.isfinite(table[col].to_numpy(dtype=float))
+        if bad.any():
+            raise InputDataError(
+                f"{col} is not a finite number for {format_ids(table['object_id'][bad])}"
+            )
+
+
+def standard_scales(table: pd.DataFrame, keys: Iterable[str] = LOOKUP_KEYS) -> np.ndarray:
+    """Per-key scale of the standardized distance: the population std, or 1 if it is 0.
+
+    Returns:
+        ``[len(keys)]`` float64 scales, in the units of each key.
+    """
+    values = table[list(keys)].to_numpy(dtype=np.float64)
+    std = values.std(axis=0, ddof=0)
+    return np.where(np.isfinite(std) & (std > 0), std, 1.0)
+
+
+def standardized_distances(
+    reference: pd.DataFrame, queries: np.ndarray, scales: np.ndarray | None = None
+) -> np.ndarray:
+    """Distances between query points and every reference row, in standardized units.
+
+    Args:
+        reference: rows with the :data:`LOOKUP_KEYS` columns, ``[m]`` rows.
+        queries: ``[n, 3]`` points in the order of :data:`LOOKUP_KEYS`, paper units.
+        scales: ``[3]`` per-key scales; default :func:`standard_scales` of ``reference``.
+
+    Returns:
+        ``[n, m]`` Euclidean distances of the standardized differences.
+    """
+    ref = reference[list(LOOKUP_KEYS)].to_numpy(dtype=np.float64)
+    sc = standard_scales(reference) if scales is None else np.asarray(scales, dtype=np.float64)
+    q = np.atleast_2d(np.asarray(queries, dtype=np.float64))
+    diff = (q[:, None, :] - ref[None, :, :]) / sc
+    return np.sqrt(np.sum(diff * diff, axis=-1))
+
+
+def _query(
+    weight_n: float | None,
+    deformability_n_per_cm: float | None,
+    damping_ns_per_cm: float | None,
+) -> np.ndarray:
+    values = {
+        "weight_n": weight_n,
+        "deformability_n_per_cm": deformability_n_per_cm,
+        "damping_ns_per_cm": damping_ns_per_cm,
+    }
+    missing = [k for k, v in values.items() if v is None]
+    if missing:
+        raise UsageError(
+            f"lookup is missing {', '.join(missing)}; expected keys: {', '.join(LOOKUP_KEYS)}"
+        )
+    out = np.array([float(v) for v in values.values()])  # type: ignore[arg-type]
+    if not np.isfinite(out).all():
+        bad = [k for k, v in zip(values, out, strict=True) if not math.isfinite(v)]
+        raise UsageError(f"lookup value of {', '.join(bad)} is not a finite number")
+    return out
+
+
+@dataclass(frozen=True)
+class LookupResult:
+    """The nearest index-table entry to a query.
+
+    Attributes:
+        row: the entry, column name -> value (all :data:`INDEX_COLUMNS` the table has).
+        distance: distance to the query in standardized units (see the module docstring).
+    """
+
+    row: dict[str, object]
+    distance: float
+
+
+def lookup(
+    index_table: pd.DataFrame,
+    *,
+    weight_n: float | None = None,
+    deformability_n_per_cm: float | None = None,
+    damping_ns_per_cm: float | None = None,
+) -> LookupResult:
+    """The nearest entry of ``index_table`` to (W, D, λ), and its standardized distance.
+
+    Ties go to the first row in table order.
+
+    Args:
+        index_table: an index table (at least the :data:`LOOKUP_KEYS` and ``lift_force_n``).
+        weight_n: W, N. deformability_n_per_cm: D, N/cm. damping_ns_per_cm: λ, N·s/cm.
+            All three are required.
+
+    Raises:
+        UsageError: a key is missing (the message names it and the expected keys) or not finite.
+        SchemaError / InputDataError: see :func:`validate_index_table`.
+
+    Example:
+        >>> t = pd.DataFrame({"object_id": ["A", "B"], "weight_n": [20.0, 40.0],
+        ...     "deformability_n_per_cm": [30.0, 50.0], "damping_ns_per_cm": [0.0, 10.0],
+        ...     "lift_force_n": [30.0, 60.0]})
+        >>> r = lookup(t, weight_n=39.0, deformability_n_per_cm=49.0, damping_ns_per_cm=9.0)
+        >>> r.row["object_id"], round(r.distance, 3)
+        ('B', 0.245)
+    """
+    q = _query(weight_n, deformability_n_per_cm, damping_ns_per_cm)
+    validate_index_table(index_table)
+    dist = standardized_distances(index_table, q)[0]
+    i = int(np.argmin(dist))
+    row = {k: _plain(v) for k, v in index_table.iloc[i].to_dict().items()}
+    return LookupResult(row=row, distance=float(dist[i]))
+
+
+@dataclass(frozen=True)
+class InterpolationResult:
+    """An inverse-distance weighted estimate of the lifting force.
+
+    Attributes:
+        lift_force_n: the weighted mean of the neighbours' ``lift_force_n``, N.
+        object_ids: the ``k`` neighbours, nearest first.
+        distances: their standardized distances, ``[k]``.
+        weights: their normalised weights, ``[k]``, summing to 1.
+    """
+
+    lift_force_n: float
+    object_ids: tuple[str, ...]
+    distances: tuple[float, ...]
+    weights: tuple[float, ...]
+
+
+def interpolate(
+    index_table: pd.DataFrame,
+    *,
+    weight_n: float | None = None,
+    deformability_n_per_cm: float | None = None,
+    damping_ns_per_cm: float | None = None,
+    k: int = 4,
+    power: float = 2.0,
+) -> InterpolationResult:
+    """Inverse-distance weighting (Shepard) of the ``k`` nearest entries' lifting forces.
+
+    Each neighbour ``i`` gets weight ``1 / d_i**power`` (standardized distances), normalised to
+    sum 1. A query that coincides with an entry (``d = 0``) returns that entry's force exactly
+    (shared equally among coinciding entries). ``k`` is capped at the table's size.
+
+    Raises:
+        UsageError: a key is missing or not finite, ``k < 1`` or ``power <= 0``.
+    """
+    if k < 1:
+        raise UsageError(f"k must be >= 1, got {k}")
+    if not power > 0:
+        raise UsageError(f"power must be > 0, got {power}")
+    q = _query(weight_n, deformability_n_per_cm, damping_ns_per_cm)
+    validate_index_table(index_table)
+    dist = standardized_distances(index_table, q)[0]
+    order = np.argsort(dist, kind="stable")[: min(k, len(dist))]
+    d = dist[order]
+    w = (d == 0).astype(float) if (d == 0).any() else 1.0 / d**power
+    w = w / w.sum()
+    forces = index_table["lift_force_n"].to_numpy(dtype=np.float64)[order]
+    return InterpolationResult(
+        lift_force_n=float(np.dot(w, forces)),
+        object_ids=tuple(str(x) for x in index_table["object_id"].to_numpy()[order]),
+        distances=tuple(float(x) for x in d),
+        weights=tuple(float(x) for x in w),
+    )
+
+
+def parse_lookup(text: str) -> dict[str, float]:
+    """Parse ``"weight_n=40,deformability_n_per_cm=41.5,damping_ns_per_cm=0.2"``.
+
+    Returns:
+        key -> value for exactly the :data:`LOOKUP_KEYS`.
+
+    Raises:
+        UsageError: a malformed item, an unknown, repeated or missing key (the message names it
+            and the expected keys), or a value that is not a finite number.
+    """
+    expected = ", ".join(LOOKUP_KEYS)
+    out: dict[str, float] = {}
+    for item in (s.strip() for s in text.split(",")):
+        if not item:
+            continue
+        key, sep, value = item.partition("=")
+        key = key.strip()
+        if not sep:
+            raise UsageError(f"lookup item {item!r} is not key=value; expected keys: {expected}")
+        if key not in LOOKUP_KEYS:
+            raise UsageError(f"unknown lookup key {key!r}; expected keys: {expected}")
+        if key in out:
+            raise UsageError(f"lookup key {key!r} given twice")
+        try:
+            out[key] = float(value)
+        except ValueError:
+            raise UsageError(f"lookup value of {key} is not a number: {value.strip()!r}") from None
+        if not math.isfinite(out[key]):
+            raise UsageError(f"lookup value of {key} is not a finite number")
+    missing = [k for k in LOOKUP_KEYS if k not in out]
+    if missing:
+        raise UsageError(f"lookup is missing {', '.join(missing)}; expected keys: {expected}")
+    return out
+
+
+def lookup_mapping(index_table: pd.DataFrame, query: Mapping[str, float]) -> LookupResult:
+    """:func:`lookup` with the keys in a mapping (e.g. from :func:`parse_lookup`)."""
+    unknown = [k for k in query if k not in LOOKUP_KEYS]
+    if unknown:
+        raise UsageError(
+            f"unknown lookup key {unknown[0]!r}; expected keys: {', '.join(LOOKUP_KEYS)}"
+        )
+    return lookup(
+        index_table,
+        weight_n=query.get("weight_n"),
+        deformability_n_per_cm=query.get("deformability_n_per_cm"),
+        damping_ns_per_cm=query.get("damping_ns_per_cm"),
+    )
+
+
+def _plain(value: object) -> object:
+    """numpy scalars -> Python scalars, so a row dict is JSON friendly."""
+    return value.item() if isinstance(value, np.generic) else value

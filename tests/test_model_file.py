@@ -1,0 +1,179 @@
+"""Model files: round trip, atomic/no-overwrite writes, and refusal of anything unexpected."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import skops.io as sio
+from sklearn.linear_model import LinearRegression
+from sklearn.pipeline import make_pipeline
+from sklearn.preprocessing import FunctionTransformer
+
+from deformctl.artifacts.model import (
+    ALLOWED_TYPES,
+    MODEL_FORMAT,
+    inspect_types,
+    load_model,
+    save_model,
+)
+from deformctl.errors import InputDataError, MissingInputError, OutputExistsError, UsageError
+from deformctl.train import FEATURES, TrainResult, predict, train_model
+
+LOADED_EVIL: list[str] = []
+
+
+class Evil:
+    """A custom class that records being rebuilt (skops would call ``__setstate__``)."""
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        LOADED_EVIL.append("rebuilt")
+        self.__dict__.update(state)
+
+
+def _table(n: int = 30) -> pd.DataFrame:
+    rng = np.random.default_rng(4)
+    w = rng.uniform(20, 60, n)
+    d = rng.uniform(30, 50, n)
+    lam = rng.uniform(0, 13, n)
+    return pd.DataFrame(
+        {
+            "object_id": [f"M{i:02d}" for i in range(n)],
+            "weight_n": w,
+            "deformability_n_per_cm": d,
+            "damping_ns_per_cm": lam,
+            "lift_force_n": w * (1 + 0.5 * w / d * np.exp(-lam / 5)),
+            "f_w_n": w,
+        }
+    )
+
+
+@pytest.fixture(scope="module")
+def trained() -> TrainResult:
+    return train_model(_table(), train_size=20, seed=1, restarts=1)
+
+
+def _metadata(result: TrainResult) -> dict[str, object]:
+    return {
+        "seed": result.metrics["seed"],
+        "features": list(FEATURES),
+        "training_range": result.metrics["training_range"],
+        "metrics": {"test": result.metrics["model"]["test"]},
+    }
+
+
+def test_round_trip_model_and_metadata(trained: TrainResult, tmp_path: Path) -> None:
+    path = save_model(tmp_path / "model.skops", trained.model, metadata=_metadata(trained))
+    assert sorted(os.listdir(tmp_path)) == ["model.skops"]  # no temp file left behind
+    model, meta = load_model(path)
+    features = _table()[list(FEATURES)]
+    np.testing.assert_array_equal(model.predict(features), trained.model.predict(features))
+    np.testing.assert_array_equal(
+        predict(model, features).frame["predicted_lift_force_n"],
+        predict(trained.model, features).frame["predicted_lift_force_n"],
+    )
+    assert meta["seed"] == 1
+    assert meta["features"] == list(FEATURES)
+    assert meta["training_range"] == json.loads(json.dumps(trained.metrics["training_range"]))
+    assert (
+        meta["metrics"]["test"]["max_rel_error"]
+        == trained.metrics["model"]["test"]["max_rel_error"]
+    )
+    assert meta["format"] == MODEL_FORMAT
+    assert meta["tool_version"]
+    types, _ = inspect_types(path)
+    assert types <= ALLOWED_TYPES
+    assert "deformctl.train.ScaledTargetRegressor" in types
+
+
+def test_existing_file_needs_force(trained: TrainResult, tmp_path: Path) -> None:
+    path = tmp_path / "model.skops"
+    path.write_bytes(b"old")
+    with pytest.raises(OutputExistsError) as exc:
+        save_model(path, trained.model, metadata={})
+    assert str(exc.value) == f"{path}: exists already, not overwriting (use --force)"
+    assert path.read_bytes() == b"old"
+    save_model(path, trained.model, metadata={}, force=True)
+    assert load_model(path)[1]["format"] == MODEL_FORMAT
+    assert sorted(os.listdir(tmp_path)) == ["model.skops"]
+
+
+def test_save_refuses_bad_model_or_metadata_and_leaves_nothing(
+    trained: TrainResult, tmp_path: Path
+) -> None:
+    with pytest.raises(UsageError, match="not a lifting-force model: LinearRegression"):
+        save_model(tmp_path / "m.skops", LinearRegression(), metadata={})  # type: ignore[arg-type]
+    with pytest.raises(UsageError, match="not JSON-serialisable"):
+        save_model(tmp_path / "m.skops", trained.model, metadata={"x": object()})
+    with pytest.raises(UsageError, match="does not exist"):
+        save_model(tmp_path / "nope" / "m.skops", trained.model, metadata={})
+    assert os.listdir(tmp_path) == []
+
+
+def _crafted(tmp_path: Path, model: object, name: str = "evil.skops") -> Path:
+    path = tmp_path / name
+    sio.dump({"format": MODEL_FORMAT, "metadata_json": "{}", "model": model}, path)
+    return path
+
+
+def test_function_reference_is_refused_and_named(tmp_path: Path) -> None:
+    path = _crafted(tmp_path, make_pipeline(FunctionTransformer(func=os.system)))
+    with pytest.raises(InputDataError) as exc:
+        load_model(path)
+    msg = str(exc.value)
+    assert exc.value.exit_code == 65
+    assert "\n" not in msg
+    assert msg.startswith(f"{path}: refusing to load: unexpected type(s)")
+    assert f"{os.system.__module__}.system" in msg
+    assert "sklearn.preprocessing._function_transformer.FunctionTransformer" in msg
+
+
+def test_custom_class_is_refused_without_being_rebuilt(tmp_path: Path) -> None:
+    evil = Evil()
+    evil.payload = "x"  # type: ignore[attr-defined]
+    path = _crafted(tmp_path, evil)
+    LOADED_EVIL.clear()
+    with pytest.raises(InputDataError, match=rf"unexpected type\(s\).*{__name__}\.Evil"):
+        load_model(path)
+    assert LOADED_EVIL == []
+
+
+def test_types_skops_trusts_by_default_are_still_refused(tmp_path: Path) -> None:
+    # skops trusts scikit-learn estimators by default; a model file may hold only ours.
+    path = _crafted(tmp_path, LinearRegression())
+    assert sio.get_untrusted_types(file=path) == []
+    with pytest.raises(InputDataError, match=r"sklearn\.linear_model\._base\.LinearRegression"):
+        load_model(path)
+
+
+def test_wrong_format_tag_is_refused(trained: TrainResult, tmp_path: Path) -> None:
+    path = tmp_path / "other.skops"
+    sio.dump({"format": "something-else", "metadata_json": "{}", "model": trained.model}, path)
+    with pytest.raises(InputDataError, match="not a deformctl model file"):
+        load_model(path)
+
+
+@pytest.mark.parametrize("keep", [0.5, 0.9])
+def test_truncated_file_is_refused(trained: TrainResult, tmp_path: Path, keep: float) -> None:
+    good = save_model(tmp_path / "good.skops", trained.model, metadata={})
+    data = good.read_bytes()
+    bad = tmp_path / "bad.skops"
+    bad.write_bytes(data[: int(len(data) * keep)])
+    with pytest.raises(InputDataError) as exc:
+        load_model(bad)
+    assert exc.value.exit_code == 65
+    assert str(exc.value) == f"{bad}: not a skops model file (truncated or not a zip archive)"
+
+
+def test_garbage_and_missing_files(tmp_path: Path) -> None:
+    garbage = tmp_path / "g.skops"
+    garbage.write_text("not a zip")
+    with pytest.raises(InputDataError, match="truncated or not a zip archive"):
+        load_model(garbage)
+    with pytest.raises(MissingInputError) as exc:
+        load_model(tmp_path / "missing.skops")
+    assert exc.value.exit_code == 66
