@@ -82,6 +82,13 @@ class SimSettings:
             squeeze stiffness measured on the table is the object's own D).
         grip_ramp_s: time to ramp the grip force from 0 before a lift, s.
         grip_settle_s: time at full grip force before the palms start to rise, s.
+        max_squeeze_strain: compression (fraction of the width between the palms) at which the
+            object is fully densified: the palms stop there (a unilateral constraint) and any
+            further force goes into the dense core. The catalog D is a small-strain stiffness;
+            without this, a paper-range grip (e.g. W = 60 N, mu = 0.2 needs > 150 N per palm on
+            D = 5 N/cm) would squeeze the lattice through itself.
+        contact_margin_m: contact rows farther than this, receding and without impulse are
+            skipped in the contact solve (pure speed-up), m.
         pgs_iterations: maximum projected Gauss–Seidel sweeps per step (an exact active-set
             solve follows).
         pgs_tolerance_m_s: PGS stopping tolerance on the constraint velocity, m/s.
@@ -96,6 +103,8 @@ class SimSettings:
     table_mu: float = 0.0
     grip_ramp_s: float = 0.1
     grip_settle_s: float = 0.1
+    max_squeeze_strain: float = 0.5
+    contact_margin_m: float = 0.005
     pgs_iterations: int = 60
     pgs_tolerance_m_s: float = 1e-13
     max_particles: int = 1500
@@ -105,6 +114,8 @@ class SimSettings:
             raise UsageError(f"alpha_cm must be > 0, got {self.alpha_cm}")
         if not (math.isfinite(self.dt_s) and 0 < self.dt_s <= 0.05):
             raise UsageError(f"dt_s must be in (0, 0.05] s, got {self.dt_s}")
+        if not (0 < self.max_squeeze_strain < 1):
+            raise UsageError(f"max_squeeze_strain must be in (0, 1), got {self.max_squeeze_strain}")
         if self.particles_per_side < 2:
             raise UsageError(f"particles_per_side must be >= 2, got {self.particles_per_side}")
         for name in ("palm_mass_kg", "table_mu", "grip_ramp_s", "grip_settle_s"):
@@ -131,7 +142,8 @@ class Model:
         particle_mass_kg: mass of every particle, kg; dof_mass_kg: ``[n_dof]``.
         stiffness_n_per_m, damping_ns_per_m: element constants, ``[m]``.
         a_inv: inverse implicit matrix, 1/kg, ``[n_dof, n_dof]``.
-        row_dof, row_type, row_link: contact rows; bottom_particles, bottom_row: table contact map.
+        row_dof, row_dof2, row_particle, row_type, row_link: contact rows (see kernels);
+        bottom_particles, bottom_row: table contact map (every particle).
         gravity_m_s2: gravity along -z (0 when off).
     """
 
@@ -144,12 +156,15 @@ class Model:
     palm_x_dof: IntArray
     palm_z_dof: IntArray
     palm_x0: FloatArray
+    palm_stop_m: FloatArray
     particle_mass_kg: float
     dof_mass_kg: FloatArray
     stiffness_n_per_m: FloatArray
     damping_ns_per_m: FloatArray
     a_inv: FloatArray
     row_dof: IntArray
+    row_dof2: IntArray
+    row_particle: IntArray
     row_type: IntArray
     row_link: IntArray
     bottom_particles: IntArray
@@ -223,9 +238,13 @@ def build_model(
     a_inv = np.ascontiguousarray(0.5 * (a_inv + a_inv.T))
 
     row_dof: list[int] = []
+    row_dof2: list[int] = []
     row_type: list[int] = []
     row_link: list[int] = []
-    bottom = np.flatnonzero(lattice.bottom_mask()) if table else np.zeros(0, dtype=np.int64)
+    row_particle: list[int] = []
+    # every particle can touch the table (rows are skipped while far and receding)
+    bottom = np.arange(n, dtype=np.int64) if table else np.zeros(0, dtype=np.int64)
+    on_bottom = lattice.bottom_mask()
     bottom_row = np.zeros(bottom.size, dtype=np.int64)
     row_of_dof: dict[int, int] = {}
     for b, p in enumerate(bottom):
@@ -239,6 +258,8 @@ def build_model(
     if table and settings.table_mu > 0:
         seen: set[int] = set()
         for b, p in enumerate(bottom):
+            if not on_bottom[p]:
+                continue
             for axis in (0, 1):
                 d = int(dof_of[3 * p + axis])
                 if d in seen or d in palm_x:
@@ -247,11 +268,35 @@ def build_model(
                 row_dof.append(d)
                 row_type.append(2)
                 row_link.append(int(bottom_row[b]))
+    palm_stop = np.zeros(2)
     if gripped:
         for side in (0, 1):
             row_dof.append(int(palm_z[side]))
             row_type.append(1)
             row_link.append(-1)
+        centre = 0.5 * (palm_x0[0] + palm_x0[1])
+        half_dense = 0.5 * (palm_x0[1] - palm_x0[0]) * (1.0 - settings.max_squeeze_strain)
+        palm_stop[:] = (centre - half_dense, centre + half_dense)
+        for side in (0, 1):
+            row_dof.append(int(palm_x[side]))
+            row_type.append(3 + side)
+            row_link.append(-1)
+        # no particle may pass through a palm plane
+        row_dof2 += [-1] * (len(row_dof) - len(row_dof2))
+        row_particle += [-1] * (len(row_dof) - len(row_particle))
+        nx = lattice.shape[0]
+        if nx >= 3:
+            interior = (lattice.grid_index[:, 0] > 0) & (lattice.grid_index[:, 0] < nx - 1)
+            for side in (0, 1):
+                for p in np.flatnonzero(interior):
+                    xd = int(dof_of[3 * p])
+                    row_dof.append(xd if side == 0 else int(palm_x[1]))
+                    row_dof2.append(int(palm_x[0]) if side == 0 else xd)
+                    row_type.append(5 + side)
+                    row_link.append(-1)
+                    row_particle.append(int(p))
+    row_dof2 += [-1] * (len(row_dof) - len(row_dof2))
+    row_particle += [-1] * (len(row_dof) - len(row_particle))
     return Model(
         spec=spec,
         settings=settings,
@@ -262,12 +307,15 @@ def build_model(
         palm_x_dof=palm_x,
         palm_z_dof=palm_z,
         palm_x0=palm_x0,
+        palm_stop_m=palm_stop,
         particle_mass_kg=particle_mass,
         dof_mass_kg=dof_mass,
         stiffness_n_per_m=stiffness,
         damping_ns_per_m=damping,
         a_inv=a_inv,
         row_dof=np.asarray(row_dof, dtype=np.int64),
+        row_dof2=np.asarray(row_dof2, dtype=np.int64),
+        row_particle=np.asarray(row_particle, dtype=np.int64),
         row_type=np.asarray(row_type, dtype=np.int64),
         row_link=np.asarray(row_link, dtype=np.int64),
         bottom_particles=bottom.astype(np.int64),
@@ -317,16 +365,20 @@ def run_model(
         model.palm_x_dof,
         model.palm_z_dof,
         model.palm_x0,
+        model.palm_stop_m,
         s.palm_mass_kg,
         np.ascontiguousarray(force_cmd_n, dtype=np.float64),
         np.ascontiguousarray(palm_vz_m_s, dtype=np.float64),
         model.spec.friction_mu,
         s.table_mu,
         model.row_dof,
+        model.row_dof2,
         model.row_type,
         model.row_link,
+        model.row_particle,
         model.bottom_particles,
         model.bottom_row,
+        s.contact_margin_m,
         s.dt_s,
         n_steps,
         s.nonlinear_springs,

@@ -18,7 +18,9 @@ gather from ``A^-1``.
 
 Row types: 0 table normal (``v >= -gap/dt``, ``Lambda >= 0``); 1 palm friction on a face-patch z
 DOF (``v = v_palm`` or ``|Lambda| = mu N dt``); 2 table friction on a bottom x/y DOF
-(``|Lambda| <= mu_table Lambda_normal``, a four-sided friction pyramid).
+(``|Lambda| <= mu_table Lambda_normal``, a four-sided friction pyramid); 3 and 4 the left and
+right palm stops (the palm x may not pass the densification limit, see ``SimSettings``); 5 and 6
+non-penetration of a particle next to the left / right palm plane (two-DOF rows).
 """
 
 from __future__ import annotations
@@ -170,6 +172,38 @@ def _element_rhs(
 
 
 @njit(cache=True)
+def _solve_dense(a: FloatArray, b: FloatArray, out: FloatArray) -> bool:
+    """Gaussian elimination with partial pivoting (in place); False when singular."""
+    n = b.shape[0]
+    scale = 0.0
+    for i in range(n):
+        scale = max(scale, abs(a[i, i]))
+    for col in range(n):
+        piv = col
+        for r in range(col + 1, n):
+            if abs(a[r, col]) > abs(a[piv, col]):
+                piv = r
+        if abs(a[piv, col]) <= 1e-12 * scale:
+            return False
+        if piv != col:
+            for c in range(n):
+                a[col, c], a[piv, c] = a[piv, c], a[col, c]
+            b[col], b[piv] = b[piv], b[col]
+        for r in range(col + 1, n):
+            f = a[r, col] / a[col, col]
+            if f != 0.0:
+                for c in range(col, n):
+                    a[r, c] -= f * a[col, c]
+                b[r] -= f * b[col]
+    for i in range(n - 1, -1, -1):
+        acc = b[i]
+        for c in range(i + 1, n):
+            acc -= a[i, c] * out[c]
+        out[i] = acc / a[i, i]
+    return True
+
+
+@njit(cache=True)
 def _polish(
     w: FloatArray,
     vrow: FloatArray,
@@ -179,54 +213,75 @@ def _polish(
     lam: FloatArray,
     row_type: IntArray,
     row_dof: IntArray,
+    live: IntArray,
 ) -> None:
-    """Exact solve on the PGS active set; keeps the PGS answer when the set is inconsistent."""
-    nr = lam.shape[0]
-    active = np.zeros(nr, dtype=np.bool_)
-    for r in range(nr):
-        if row_type[r] == 0:
-            active[r] = lam[r] > 0.0
+    """Exact solve on the PGS active set (among ``live`` rows); keeps PGS when inconsistent."""
+    nl = live.shape[0]
+    active = np.zeros(nl, dtype=np.bool_)
+    for i in range(nl):
+        r = live[i]
+        t = row_type[r]
+        if t == 0 or t >= 4:
+            active[i] = lam[r] > 0.0
+        elif t == 3:
+            active[i] = lam[r] < 0.0
         else:
-            active[r] = lo[r] < lam[r] < hi[r]
+            active[i] = lo[r] < lam[r] < hi[r]
     # a table row on a face-patch DOF duplicates that patch's friction row: keep one
-    for r in range(nr):
-        if active[r] and row_type[r] == 0:
-            for s in range(nr):
-                if row_type[s] == 1 and row_dof[s] == row_dof[r] and active[s]:
-                    active[r] = False
-    idx = np.flatnonzero(active)
-    na = idx.shape[0]
+    for i in range(nl):
+        r = live[i]
+        if active[i] and row_type[r] == 0:
+            for j in range(nl):
+                s = live[j]
+                if row_type[s] == 1 and row_dof[s] == row_dof[r] and active[j]:
+                    active[i] = False
+    na = 0
+    for i in range(nl):
+        if active[i]:
+            na += 1
     if na == 0:
         return
+    idx = np.empty(na, dtype=np.int64)
+    na = 0
+    for i in range(nl):
+        if active[i]:
+            idx[na] = live[i]
+            na += 1
     a = np.empty((na, na))
     b = np.empty(na)
     for p in range(na):
         r = idx[p]
         rhs = target[r] - vrow[r]
-        for s in range(nr):
-            if not active[s]:
-                rhs -= w[r, s] * lam[s]
+        for j in range(nl):
+            if not active[j]:
+                rhs -= w[r, live[j]] * lam[live[j]]
         b[p] = rhs
         for q in range(na):
             a[p, q] = w[r, idx[q]]
-    sol = np.linalg.solve(a, b)
+    sol = np.empty(na)
+    if not _solve_dense(a, b, sol):
+        return
     trial = lam.copy()
     for p in range(na):
         trial[idx[p]] = sol[p]
-    # feasibility: bounds, and non-active table rows must not penetrate
-    for r in range(nr):
-        if row_type[r] == 0:
-            if trial[r] < 0.0:
+    # feasibility: bounds, and non-active unilateral rows must not penetrate
+    for i in range(nl):
+        r = live[i]
+        t = row_type[r]
+        if t == 0 or t >= 3:
+            sign = -1.0 if t == 3 else 1.0
+            if sign * trial[r] < 0.0:
                 return
-            if not active[r]:
+            if not active[i]:
                 vr = vrow[r]
-                for s in range(nr):
-                    vr += w[r, s] * trial[s]
-                if vr < target[r] - 1e-9:
+                for j in range(nl):
+                    vr += w[r, live[j]] * trial[live[j]]
+                if sign * (vr - target[r]) < -1e-9:
                     return
         elif trial[r] > hi[r] or trial[r] < lo[r]:
             return
-    lam[:] = trial
+    for p in range(na):
+        lam[idx[p]] = trial[idx[p]]
 
 
 @njit(cache=True)
@@ -247,16 +302,20 @@ def integrate(
     palm_x_dof: IntArray,
     palm_z_dof: IntArray,
     palm_x0: FloatArray,
+    palm_stop: FloatArray,
     palm_mass: float,
     force_cmd: FloatArray,
     palm_vz: FloatArray,
     mu: float,
     mu_table: float,
     row_dof: IntArray,
+    row_dof2: IntArray,
     row_type: IntArray,
     row_link: IntArray,
+    row_particle: IntArray,
     bottom_particles: IntArray,
     bottom_row: IntArray,
+    contact_margin: float,
     dt: float,
     n_steps: int,
     nonlinear: bool,
@@ -277,13 +336,17 @@ def integrate(
         gravity: gravitational acceleration along -z, m/s².
         palm_x_dof, palm_z_dof: DOFs of the two palms / face patches (``-1`` = no palms), ``[2]``.
         palm_x0: palm x positions when the palm DOFs are zero, m, ``[2]``.
+        palm_stop: innermost x of the left and right palm, m, ``[2]``.
         palm_mass: mass of each palm, kg (moves with its x DOF; the felt force excludes it).
         force_cmd: commanded normal force per palm at each step end, N, ``[n_steps + 1]``.
         palm_vz: palm vertical velocity at each step end, m/s, ``[n_steps + 1]``.
         mu, mu_table: palm and table friction coefficients.
-        row_dof, row_type, row_link: constraint rows (see module docs); ``row_link`` is the normal
-            row of a table-friction row.
-        bottom_particles, bottom_row: bottom-layer particles and their table normal row.
+        row_dof, row_dof2, row_type, row_link, row_particle: constraint rows (see module docs):
+            ``J_r = e[row_dof] - e[row_dof2]`` (no second term when ``row_dof2 < 0``);
+            ``row_link`` is the normal row of a table-friction row, ``row_particle`` the particle
+            of a palm-plane row.
+        bottom_particles, bottom_row: particles in table contact and their table normal row.
+        contact_margin: unilateral rows farther than this (m) and without impulse are skipped.
         dt: time step, s. nonlinear: exact spring geometry (else linear small-strain forces).
         pgs_iterations, pgs_tolerance: PGS limits (tolerance in m/s).
 
@@ -306,7 +369,21 @@ def integrate(
     w = np.empty((nr, nr))
     for r in range(nr):
         for s in range(nr):
-            w[r, s] = a_inv[row_dof[r], row_dof[s]]
+            a_r = row_dof[r]
+            b_r = row_dof2[r]
+            a_s = row_dof[s]
+            b_s = row_dof2[s]
+            val = a_inv[a_r, a_s]
+            if b_s >= 0:
+                val -= a_inv[a_r, b_s]
+            if b_r >= 0:
+                val -= a_inv[b_r, a_s]
+                if b_s >= 0:
+                    val += a_inv[b_r, b_s]
+            w[r, s] = val
+    skip = np.zeros(nr, dtype=np.bool_)
+    live = np.zeros(nr, dtype=np.int64)
+    u = np.zeros(nr)
     lam = np.zeros(nr)
     lo = np.zeros(nr)
     hi = np.zeros(nr)
@@ -355,39 +432,74 @@ def integrate(
                 if z < gap[r]:
                     gap[r] = z
             for r in range(nr):
-                vrow[r] = vfree[row_dof[r]]
                 t = row_type[r]
-                if t == 0:
+                if t == 5:
+                    gap[r] = x[row_particle[r], 0] - palm_x0[0] - q[palm_x_dof[0]]
+                elif t == 6:
+                    gap[r] = palm_x0[1] + q[palm_x_dof[1]] - x[row_particle[r], 0]
+            for r in range(nr):
+                vrow[r] = vfree[row_dof[r]]
+                if row_dof2[r] >= 0:
+                    vrow[r] -= vfree[row_dof2[r]]
+                t = row_type[r]
+                skip[r] = False
+                if t == 0 or t >= 5:
                     target[r] = -gap[r] / dt
                     lo[r] = 0.0
                     hi[r] = 1e300
+                    skip[r] = lam[r] == 0.0 and gap[r] > contact_margin and vrow[r] >= target[r]
                 elif t == 1:
                     target[r] = palm_vz[step + 1]
                     bound = mu * max(f_now, 0.0) * dt
                     lo[r] = -bound
                     hi[r] = bound
+                elif t == 3:
+                    target[r] = (palm_stop[0] - palm_x0[0] - q[palm_x_dof[0]]) / dt
+                    lo[r] = -1e300
+                    hi[r] = 0.0
+                elif t == 4:
+                    target[r] = (palm_stop[1] - palm_x0[1] - q[palm_x_dof[1]]) / dt
+                    lo[r] = 0.0
+                    hi[r] = 1e300
                 else:
                     target[r] = 0.0
+            n_live = 0
+            for r in range(nr):
+                if not skip[r]:
+                    live[n_live] = r
+                    n_live += 1
+            lv = live[:n_live]
+            # u = current row velocities J v for the warm-started impulses
+            for i in range(n_live):
+                r = lv[i]
+                acc = vrow[r]
+                for j in range(n_live):
+                    s = lv[j]
+                    if lam[s] != 0.0:
+                        acc += w[r, s] * lam[s]
+                u[r] = acc
             for _it in range(pgs_iterations):
                 change = 0.0
-                for r in range(nr):
+                for i in range(n_live):
+                    r = lv[i]
                     t = row_type[r]
                     if t == 2:
                         bound = mu_table * lam[row_link[r]]
                         lo[r] = -bound
                         hi[r] = bound
-                    res = vrow[r] - target[r]
-                    for s in range(nr):
-                        res += w[r, s] * lam[s]
-                    new = lam[r] - res / w[r, r]
+                    new = lam[r] - (u[r] - target[r]) / w[r, r]
                     if new < lo[r]:
                         new = lo[r]
                     elif new > hi[r]:
                         new = hi[r]
-                    delta = abs(new - lam[r]) * w[r, r]
-                    if delta > change:
-                        change = delta
-                    lam[r] = new
+                    delta = new - lam[r]
+                    if delta != 0.0:
+                        lam[r] = new
+                        for j in range(n_live):
+                            s = lv[j]
+                            u[s] += w[s, r] * delta
+                        if abs(delta) * w[r, r] > change:
+                            change = abs(delta) * w[r, r]
                 if change < pgs_tolerance:
                     break
             for r in range(nr):
@@ -395,12 +507,16 @@ def integrate(
                     bound = mu_table * lam[row_link[r]]
                     lo[r] = -bound
                     hi[r] = bound
-            _polish(w, vrow, target, lo, hi, lam, row_type, row_dof)
+            _polish(w, vrow, target, lo, hi, lam, row_type, row_dof, lv)
             for r in range(nr):
                 if lam[r] != 0.0:
                     d = row_dof[r]
+                    d2 = row_dof2[r]
                     for i in range(n_dof):
                         vfree[i] += a_inv[i, d] * lam[r]
+                    if d2 >= 0:
+                        for i in range(n_dof):
+                            vfree[i] -= a_inv[i, d2] * lam[r]
         # ---- records (palm quantities before the position update use the new velocities)
         table_n = 0.0
         fric_l = 0.0
