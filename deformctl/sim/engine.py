@@ -17,10 +17,12 @@ Euler step whose Jacobian error is of the order of the rotations and strains, wh
 the grip. Because the system matrix ``A`` does not change, it is factorised **once per model**
 (we keep ``A^-1``, dense: default lattices have a few hundred DOFs), so a step is one element
 force pass, one dense mat-vec and a small contact solve. The step is chosen for accuracy, not
-stability: the default ``dt = 1 ms`` resolves the lift-profile's jerk ramps (50 ms) and the
-object's squeeze retardation time lambda/D (>= 1.7 ms in the paper range only at the very
-lightest damping, where backward Euler's dt/2 lag is still < 2 % of the lift force), and halving
-it changes the lifting force by < 2 % (tests/sim/test_convergence.py).
+stability: the default ``dt = 1 ms`` resolves the lift profile's 50 ms jerk ramps; backward
+Euler's lag of about dt/2 on the retardation time lambda/D is 3 % at lambda/D = 17 ms and
+negligible above. Measured (Table I objects, search to 0.1 %): halving dt to 0.5 ms moves the
+lifting force by 0.0 % (sponge), 0.1 % (cotton), 0.0 % (sand), 0.4 % (undamped water bag);
+doubling it to 2 ms by <= 0.7 %. Halving alpha (9 instead of 5 particles per longest side) moves
+it by 0.0-2.8 % at 10-50x the cost, so the default is 5 particles per longest side.
 
 Contacts are velocity-level constraints solved each step (:mod:`deformctl.sim.kernels`): unilateral
 table contact on the bottom layer, and Coulomb friction between each palm and its face patch with
