@@ -1,0 +1,394 @@
+"""The simulation model: settings, lattice + palms + table assembled for the implicit integrator.
+
+Integrator choice
+-----------------
+Heavily damped lattices are stiff: with lambda = 15 N·s/cm on a coarse lattice the damper time
+scale ``m_p / c_e`` is microseconds, so any explicit scheme would need microsecond steps. We use
+**linearised backward Euler with the tangent frozen at the rest configuration**::
+
+    (M + dt C + dt^2 K) dv = dt (f(x, v) + f_ext - dt K v) + J^T Lambda
+
+where ``f`` is the exact nonlinear Kelvin element force, ``K`` the lattice stiffness at rest and
+``C = (lambda / D) K`` the damping matrix (dampers are proportional to springs, see
+:mod:`deformctl.sim.lattice`). For the linear small-strain lattice (``nonlinear_springs=False``)
+this *is* backward Euler, unconditionally stable (A-stable, L-stable) for any stiffness, damping
+and step. With the geometrically exact springs (default) it is a one-Newton-iteration backward
+Euler step whose Jacobian error is of the order of the rotations and strains, which stay small in
+the grip. Because the system matrix ``A`` does not change, it is factorised **once per model**
+(we keep ``A^-1``, dense: default lattices have a few hundred DOFs), so a step is one element
+force pass, one dense mat-vec and a small contact solve. The step is chosen for accuracy, not
+stability: the default ``dt = 1 ms`` resolves the lift profile's 50 ms jerk ramps; backward
+Euler's lag of about dt/2 on the retardation time lambda/D is 3 % at lambda/D = 17 ms and
+negligible above. Measured (Table I objects, search to 0.1 %): halving dt to 0.5 ms moves the
+lifting force by 0.0 % (sponge), 0.1 % (cotton), 0.0 % (sand), 0.4 % (undamped water bag);
+doubling it to 2 ms by <= 0.7 %. Halving alpha (9 instead of 5 particles per longest side) moves
+it by 0.0-2.8 % at 10-50x the cost, so the default is 5 particles per longest side.
+
+Contacts are velocity-level constraints solved each step (:mod:`deformctl.sim.kernels`): unilateral
+table contact on the bottom layer, and Coulomb friction between each palm and its face patch with
+a true static regime (exact stick, impulse bounded by ``mu N dt``) and a kinetic regime (impulse at
+the bound, opposing sliding). There is no regularised friction, so a hold inside the cone does not
+creep.
+
+Palm model
+----------
+Each palm is rigid and flat and its face layer is bonded to it along x (the face moves with the
+palm; the palm DOF receives the commanded force, so the normal force felt equals the command up to
+the palm's own inertia, ``palm_mass_kg``). Along z, the face patch moves as one rigid patch with
+one DOF per palm: it follows the palm while friction sticks and slides (with the accumulated
+slip recorded) when the tangential load exceeds ``mu N``. Along y the face particles are free (no
+y load arises in the symmetric grip).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import NDArray
+
+from deformctl.errors import UsageError
+from deformctl.sim import kernels
+from deformctl.sim.lattice import (
+    Lattice,
+    build_lattice,
+    palm_dof_map,
+    reduced_stiffness,
+    resting_positions_m,
+    unit_squeeze_stiffness_n_per_m,
+)
+from deformctl.sim.objects import ObjectSpec
+from deformctl.units import CM, GRAVITY_M_S2
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+@dataclass(frozen=True)
+class SimSettings:
+    """Numerical settings of the simulator (defaults from the convergence study, see bench/).
+
+    Attributes:
+        alpha_cm: lattice spacing alpha, cm. ``None`` (default) picks
+            ``alpha = longest side / (particles_per_side - 1)``, i.e. 5 particles along the
+            longest side: the squeeze stiffness is calibrated exactly for any alpha, and halving
+            alpha changes the lifting force by a few % while costing ~10x.
+        dt_s: time step, s. 1 ms: halving it changes the lifting force < 2 %.
+        particles_per_side: particles along the longest side when ``alpha_cm`` is None.
+        nonlinear_springs: geometrically exact springs (True) or linear small-strain springs.
+        palm_mass_kg: mass of each palm, kg (0: the felt force equals the commanded force).
+        table_mu: friction coefficient of the table (0: frictionless table, the default, so the
+            squeeze stiffness measured on the table is the object's own D).
+        grip_ramp_s: time to ramp the grip force from 0 before a lift, s.
+        grip_settle_s: time at full grip force before the palms start to rise, s.
+        max_squeeze_strain: compression (fraction of the width between the palms) at which the
+            object is fully densified: the palms stop there (a unilateral constraint) and any
+            further force goes into the dense core. The catalog D is a small-strain stiffness;
+            without this, a paper-range grip (e.g. W = 60 N, mu = 0.2 needs > 150 N per palm on
+            D = 5 N/cm) would squeeze the lattice through itself.
+        contact_margin_m: contact rows farther than this, receding and without impulse are
+            skipped in the contact solve (pure speed-up), m.
+        pgs_iterations: maximum projected Gauss–Seidel sweeps per step (an exact active-set
+            solve follows).
+        pgs_tolerance_m_s: PGS stopping tolerance on the constraint velocity, m/s.
+        max_particles: refuse lattices larger than this (dense implicit solve).
+    """
+
+    alpha_cm: float | None = None
+    dt_s: float = 1e-3
+    particles_per_side: int = 5
+    nonlinear_springs: bool = True
+    palm_mass_kg: float = 0.0
+    table_mu: float = 0.0
+    grip_ramp_s: float = 0.1
+    grip_settle_s: float = 0.1
+    max_squeeze_strain: float = 0.5
+    contact_margin_m: float = 0.005
+    pgs_iterations: int = 60
+    pgs_tolerance_m_s: float = 1e-13
+    max_particles: int = 1500
+
+    def __post_init__(self) -> None:
+        if self.alpha_cm is not None and not (math.isfinite(self.alpha_cm) and self.alpha_cm > 0):
+            raise UsageError(f"alpha_cm must be > 0, got {self.alpha_cm}")
+        if not (math.isfinite(self.dt_s) and 0 < self.dt_s <= 0.05):
+            raise UsageError(f"dt_s must be in (0, 0.05] s, got {self.dt_s}")
+        if not (0 < self.max_squeeze_strain < 1):
+            raise UsageError(f"max_squeeze_strain must be in (0, 1), got {self.max_squeeze_strain}")
+        if self.particles_per_side < 2:
+            raise UsageError(f"particles_per_side must be >= 2, got {self.particles_per_side}")
+        for name in ("palm_mass_kg", "table_mu", "grip_ramp_s", "grip_settle_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise UsageError(f"{name} must be finite and >= 0, got {value}")
+
+    def alpha_m(self, spec: ObjectSpec) -> float:
+        """The lattice spacing used for ``spec``, m."""
+        if self.alpha_cm is not None:
+            return self.alpha_cm * CM
+        return max(spec.size_m) / (self.particles_per_side - 1)
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """A lattice with its palms/table configuration, ready for :func:`run_model`.
+
+    Attributes:
+        lattice: rest geometry.
+        base_x: reference positions, m, ``[n, 3]`` (rest, or resting on the table under gravity).
+        dof_of: DOF of each coordinate, ``[3 n]``; n_dof: DOF count.
+        palm_x_dof, palm_z_dof: palm DOFs (``-1`` when free), ``[2]``; palm_x0: palm x, m, ``[2]``.
+        particle_mass_kg: mass of every particle, kg; dof_mass_kg: ``[n_dof]``.
+        stiffness_n_per_m, damping_ns_per_m: element constants, ``[m]``.
+        a_inv: inverse implicit matrix, 1/kg, ``[n_dof, n_dof]``.
+        row_dof, row_dof2, row_particle, row_type, row_link: contact rows (see kernels);
+        bottom_particles, bottom_row: table contact map (every particle).
+        gravity_m_s2: gravity along -z (0 when off).
+    """
+
+    spec: ObjectSpec
+    settings: SimSettings
+    lattice: Lattice
+    base_x: FloatArray
+    dof_of: IntArray
+    n_dof: int
+    palm_x_dof: IntArray
+    palm_z_dof: IntArray
+    palm_x0: FloatArray
+    palm_stop_m: FloatArray
+    particle_mass_kg: float
+    dof_mass_kg: FloatArray
+    stiffness_n_per_m: FloatArray
+    damping_ns_per_m: FloatArray
+    a_inv: FloatArray
+    row_dof: IntArray
+    row_dof2: IntArray
+    row_particle: IntArray
+    row_type: IntArray
+    row_link: IntArray
+    bottom_particles: IntArray
+    bottom_row: IntArray
+    gravity_m_s2: float
+
+
+@lru_cache(maxsize=16)
+def _lattice_and_scale(size_m: tuple[float, float, float], alpha_m: float) -> tuple[Lattice, float]:
+    lattice = build_lattice(size_m, alpha_m)
+    return lattice, unit_squeeze_stiffness_n_per_m(lattice)
+
+
+def element_constants(
+    spec: ObjectSpec, settings: SimSettings
+) -> tuple[Lattice, FloatArray, FloatArray]:
+    """Lattice and calibrated element stiffness (N/m) and damping (N·s/m), each ``[m]``."""
+    lattice, unit_d = _lattice_and_scale(spec.size_m, settings.alpha_m(spec))
+    if lattice.n_particles > settings.max_particles:
+        raise UsageError(
+            f"alpha {settings.alpha_m(spec) / CM:.3g} cm gives {lattice.n_particles} particles "
+            f"(max_particles={settings.max_particles}); use a larger alpha_cm"
+        )
+    stiffness = lattice.unit_stiffness * (spec.stiffness_n_per_m / unit_d)
+    damping = stiffness * (spec.damping_ns_per_m / spec.stiffness_n_per_m)
+    return lattice, stiffness, damping
+
+
+@lru_cache(maxsize=32)
+def build_model(
+    spec: ObjectSpec,
+    settings: SimSettings,
+    *,
+    gripped: bool,
+    gravity: bool = True,
+    table: bool = True,
+    resting: bool = True,
+    lift_m: float = 0.0,
+) -> Model:
+    """Assemble (and cache) the model of ``spec``.
+
+    Args:
+        gripped: palms bonded to the x faces (squeeze, lift) or a free object.
+        gravity: gravity on (``GRAVITY_M_S2`` along -z) or off.
+        table: table contact at z = 0 on the bottom layer.
+        resting: start from the static rest shape on the table under gravity (else undeformed).
+        lift_m: start height of the bottom layer above the table, m.
+    """
+    lattice, stiffness, damping = element_constants(spec, settings)
+    n = lattice.n_particles
+    particle_mass = spec.mass_kg / n
+    g = GRAVITY_M_S2 if gravity else 0.0
+    if resting and gravity:
+        base_x = resting_positions_m(lattice, stiffness, particle_mass * g)
+    else:
+        base_x = lattice.positions_m.copy()
+    base_x[:, 2] += lift_m
+    dof_of, n_dof, palm_x, palm_z = palm_dof_map(lattice, gripped)
+    dof_mass = np.bincount(dof_of, minlength=n_dof).astype(np.float64) * particle_mass
+    palm_x0 = np.zeros(2)
+    if gripped:
+        dof_mass[palm_x] += settings.palm_mass_kg
+        palm_x0[0] = base_x[lattice.face_mask(0), 0].min()
+        palm_x0[1] = base_x[lattice.face_mask(1), 0].max()
+    dt = settings.dt_s
+    beta_s = spec.retardation_time_s
+    k_q = reduced_stiffness(lattice, stiffness, dof_of, n_dof)
+    a = (dt * beta_s + dt * dt) * k_q
+    a[np.diag_indices(n_dof)] += dof_mass
+    a_inv = scipy.linalg.cho_solve(scipy.linalg.cho_factor(a), np.eye(n_dof))
+    a_inv = np.ascontiguousarray(0.5 * (a_inv + a_inv.T))
+
+    row_dof: list[int] = []
+    row_dof2: list[int] = []
+    row_type: list[int] = []
+    row_link: list[int] = []
+    row_particle: list[int] = []
+    # every particle can touch the table (rows are skipped while far and receding)
+    bottom = np.arange(n, dtype=np.int64) if table else np.zeros(0, dtype=np.int64)
+    on_bottom = lattice.bottom_mask()
+    bottom_row = np.zeros(bottom.size, dtype=np.int64)
+    row_of_dof: dict[int, int] = {}
+    for b, p in enumerate(bottom):
+        d = int(dof_of[3 * p + 2])
+        if d not in row_of_dof:
+            row_of_dof[d] = len(row_dof)
+            row_dof.append(d)
+            row_type.append(0)
+            row_link.append(-1)
+        bottom_row[b] = row_of_dof[d]
+    if table and settings.table_mu > 0:
+        seen: set[int] = set()
+        for b, p in enumerate(bottom):
+            if not on_bottom[p]:
+                continue
+            for axis in (0, 1):
+                d = int(dof_of[3 * p + axis])
+                if d in seen or d in palm_x:
+                    continue
+                seen.add(d)
+                row_dof.append(d)
+                row_type.append(2)
+                row_link.append(int(bottom_row[b]))
+    palm_stop = np.zeros(2)
+    if gripped:
+        for side in (0, 1):
+            row_dof.append(int(palm_z[side]))
+            row_type.append(1)
+            row_link.append(-1)
+        centre = 0.5 * (palm_x0[0] + palm_x0[1])
+        half_dense = 0.5 * (palm_x0[1] - palm_x0[0]) * (1.0 - settings.max_squeeze_strain)
+        palm_stop[:] = (centre - half_dense, centre + half_dense)
+        for side in (0, 1):
+            row_dof.append(int(palm_x[side]))
+            row_type.append(3 + side)
+            row_link.append(-1)
+        # no particle may pass through a palm plane
+        row_dof2 += [-1] * (len(row_dof) - len(row_dof2))
+        row_particle += [-1] * (len(row_dof) - len(row_particle))
+        nx = lattice.shape[0]
+        if nx >= 3:
+            interior = (lattice.grid_index[:, 0] > 0) & (lattice.grid_index[:, 0] < nx - 1)
+            for side in (0, 1):
+                for p in np.flatnonzero(interior):
+                    xd = int(dof_of[3 * p])
+                    row_dof.append(xd if side == 0 else int(palm_x[1]))
+                    row_dof2.append(int(palm_x[0]) if side == 0 else xd)
+                    row_type.append(5 + side)
+                    row_link.append(-1)
+                    row_particle.append(int(p))
+    row_dof2 += [-1] * (len(row_dof) - len(row_dof2))
+    row_particle += [-1] * (len(row_dof) - len(row_particle))
+    return Model(
+        spec=spec,
+        settings=settings,
+        lattice=lattice,
+        base_x=base_x,
+        dof_of=dof_of,
+        n_dof=n_dof,
+        palm_x_dof=palm_x,
+        palm_z_dof=palm_z,
+        palm_x0=palm_x0,
+        palm_stop_m=palm_stop,
+        particle_mass_kg=particle_mass,
+        dof_mass_kg=dof_mass,
+        stiffness_n_per_m=stiffness,
+        damping_ns_per_m=damping,
+        a_inv=a_inv,
+        row_dof=np.asarray(row_dof, dtype=np.int64),
+        row_dof2=np.asarray(row_dof2, dtype=np.int64),
+        row_particle=np.asarray(row_particle, dtype=np.int64),
+        row_type=np.asarray(row_type, dtype=np.int64),
+        row_link=np.asarray(row_link, dtype=np.int64),
+        bottom_particles=bottom.astype(np.int64),
+        bottom_row=bottom_row,
+        gravity_m_s2=g,
+    )
+
+
+def run_model(
+    model: Model,
+    force_cmd_n: FloatArray,
+    palm_vz_m_s: FloatArray,
+    *,
+    q: FloatArray | None = None,
+    v: FloatArray | None = None,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Integrate ``len(force_cmd_n) - 1`` steps.
+
+    Args:
+        force_cmd_n: commanded normal force per palm at each step end, N, ``[n_steps + 1]``
+            (index 0 is the initial time).
+        palm_vz_m_s: palm vertical velocity, m/s, ``[n_steps + 1]``.
+        q, v: initial DOF displacement (m) and velocity (m/s), ``[n_dof]``; zero by default.
+
+    Returns:
+        final q, final v and the record matrix ``[n_steps, kernels.N_REC]``.
+    """
+    s = model.settings
+    n_steps = int(force_cmd_n.shape[0]) - 1
+    q0 = np.zeros(model.n_dof) if q is None else np.asarray(q, dtype=np.float64)
+    v0 = np.zeros(model.n_dof) if v is None else np.asarray(v, dtype=np.float64)
+    lat = model.lattice
+    return kernels.integrate(
+        model.base_x,
+        q0,
+        v0,
+        model.dof_of,
+        model.particle_mass_kg,
+        lat.edges,
+        lat.rest_length_m,
+        lat.direction,
+        model.stiffness_n_per_m,
+        model.damping_ns_per_m,
+        model.a_inv,
+        model.dof_mass_kg,
+        model.gravity_m_s2,
+        model.palm_x_dof,
+        model.palm_z_dof,
+        model.palm_x0,
+        model.palm_stop_m,
+        s.palm_mass_kg,
+        np.ascontiguousarray(force_cmd_n, dtype=np.float64),
+        np.ascontiguousarray(palm_vz_m_s, dtype=np.float64),
+        model.spec.friction_mu,
+        s.table_mu,
+        model.row_dof,
+        model.row_dof2,
+        model.row_type,
+        model.row_link,
+        model.row_particle,
+        model.bottom_particles,
+        model.bottom_row,
+        s.contact_margin_m,
+        s.dt_s,
+        n_steps,
+        s.nonlinear_springs,
+        s.pgs_iterations,
+        s.pgs_tolerance_m_s,
+    )
+
+
+def positions_m(model: Model, q: FloatArray) -> FloatArray:
+    """Particle positions for DOF displacements ``q``, m, ``[n, 3]``."""
+    return np.asarray(model.base_x + q[model.dof_of].reshape(-1, 3))

@@ -1,0 +1,241 @@
+"""Particle lattice of a box, its Kelvin elements, and the stiffness calibration.
+
+The box ``[-sx/2, sx/2] x [-sy/2, sy/2] x [0, sz]`` (m) is sampled by ``n_x x n_y x n_z`` particles
+with ``n_a = max(2, round(s_a / alpha) + 1)``. The spacing along each axis is ``s_a / (n_a - 1)``
+so the lattice spans the box exactly; it equals alpha when alpha divides the size (a deliberate,
+documented deviation from a strictly cubic lattice: the box keeps its catalog size for any alpha).
+
+Kelvin elements join axial neighbours (spacing 1 along one axis) and face-diagonal neighbours. Each
+element gets the *cell-shared* unit stiffness ``w_e``: an axial element inside the body is shared
+by four lattice cells, one on an edge of the box by one; a face diagonal by two cells or one.
+Assembling cell by cell this way gives a uniform material, so boundary layers are not stiffer
+than the interior. The per-element stiffness is ``k_e = kappa * w_e`` with one scale ``kappa``
+(N/m) calibrated so that the lattice's squeeze stiffness between two rigid palms equals the
+object's D exactly, whatever alpha: see :func:`unit_squeeze_stiffness_n_per_m`. Dampers are
+``c_e = k_e * lambda / D`` (damping matrix proportional to the stiffness matrix), which makes the
+lattice an exact Kelvin–Voigt body in the quasi-static limit.
+
+Shapes: ``positions_m [n, 3]``, ``edges [m, 2]`` (int64), ``rest_length_m [m]``,
+``direction [m, 3]`` (unit rest directions i->j), ``unit_stiffness [m]``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+_AXIAL_OFFSETS = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
+_DIAGONAL_OFFSETS = ((1, 1, 0), (1, -1, 0), (1, 0, 1), (1, 0, -1), (0, 1, 1), (0, 1, -1))
+
+
+@dataclass(frozen=True)
+class Lattice:
+    """Rest geometry and unit element pattern of a box lattice.
+
+    Attributes:
+        shape: particles per axis (n_x, n_y, n_z).
+        spacing_m: lattice spacing per axis, m, ``[3]``.
+        positions_m: rest positions, m, ``[n, 3]``; bottom layer at z = 0.
+        grid_index: integer lattice index of each particle, ``[n, 3]``.
+        edges: particle pairs of the Kelvin elements, ``[m, 2]``.
+        rest_length_m: rest length of each element, m, ``[m]``.
+        direction: unit rest direction from ``edges[:, 0]`` to ``edges[:, 1]``, ``[m, 3]``.
+        unit_stiffness: cell-shared stiffness weight of each element, ``[m]`` (dimensionless).
+    """
+
+    shape: tuple[int, int, int]
+    spacing_m: FloatArray
+    positions_m: FloatArray
+    grid_index: IntArray
+    edges: IntArray
+    rest_length_m: FloatArray
+    direction: FloatArray
+    unit_stiffness: FloatArray
+
+    @property
+    def n_particles(self) -> int:
+        """Number of particles n."""
+        return int(self.positions_m.shape[0])
+
+    def face_mask(self, side: int) -> NDArray[np.bool_]:
+        """Particles on the palm face at x-min (``side=0``) or x-max (``side=1``), ``[n]``."""
+        target = 0 if side == 0 else self.shape[0] - 1
+        return np.asarray(self.grid_index[:, 0] == target)
+
+    def bottom_mask(self) -> NDArray[np.bool_]:
+        """Particles of the bottom layer (z = 0 at rest), ``[n]``."""
+        return np.asarray(self.grid_index[:, 2] == 0)
+
+
+def particles_per_axis(size_m: tuple[float, float, float], alpha_m: float) -> tuple[int, int, int]:
+    """Particles along each axis for spacing ``alpha_m``: ``max(2, round(s / alpha) + 1)``."""
+    n = [max(2, round(s / alpha_m) + 1) for s in size_m]
+    return (n[0], n[1], n[2])
+
+
+def build_lattice(size_m: tuple[float, float, float], alpha_m: float) -> Lattice:
+    """Sample the box of ``size_m`` (x, y, z) with spacing about ``alpha_m`` (see module docs)."""
+    shape = particles_per_axis(size_m, alpha_m)
+    nx, ny, nz = shape
+    spacing = np.array([size_m[a] / (shape[a] - 1) for a in range(3)])
+    ix, iy, iz = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
+    grid = np.stack([ix.ravel(), iy.ravel(), iz.ravel()], axis=1).astype(np.int64)
+    origin = np.array([-size_m[0] / 2.0, -size_m[1] / 2.0, 0.0])
+    positions = origin + grid * spacing
+    index = np.arange(nx * ny * nz).reshape(shape)
+
+    edge_list: list[IntArray] = []
+    weight_list: list[FloatArray] = []
+    for offsets, share in ((_AXIAL_OFFSETS, 4.0), (_DIAGONAL_OFFSETS, 2.0)):
+        for off in offsets:
+            lo = [max(0, -o) for o in off]
+            hi = [shape[a] - max(0, off[a]) for a in range(3)]
+            if any(hi[a] <= lo[a] for a in range(3)):
+                continue
+            src = index[lo[0] : hi[0], lo[1] : hi[1], lo[2] : hi[2]]
+            dst = index[
+                lo[0] + off[0] : hi[0] + off[0],
+                lo[1] + off[1] : hi[1] + off[1],
+                lo[2] + off[2] : hi[2] + off[2],
+            ]
+            a_src = grid[src.ravel()]
+            # number of lattice cells containing the element: along every axis the element does
+            # not span, the cell may lie on either side when that side exists.
+            cells = np.ones(src.size)
+            for a in range(3):
+                if off[a] == 0:
+                    below = a_src[:, a] >= 1
+                    above = a_src[:, a] <= shape[a] - 2
+                    cells *= below.astype(float) + above.astype(float)
+            edge_list.append(np.stack([src.ravel(), dst.ravel()], axis=1))
+            weight_list.append(cells / share)
+    edges = np.concatenate(edge_list).astype(np.int64)
+    weights = np.concatenate(weight_list)
+    delta = positions[edges[:, 1]] - positions[edges[:, 0]]
+    rest = np.linalg.norm(delta, axis=1)
+    return Lattice(
+        shape=shape,
+        spacing_m=spacing,
+        positions_m=positions,
+        grid_index=grid,
+        edges=edges,
+        rest_length_m=rest,
+        direction=delta / rest[:, None],
+        unit_stiffness=weights,
+    )
+
+
+def palm_dof_map(lattice: Lattice, gripped: bool) -> tuple[IntArray, int, IntArray, IntArray]:
+    """Map every particle coordinate to a generalised degree of freedom.
+
+    Free object: one DOF per coordinate. Gripped object: the face layer touching each palm shares
+    one x DOF (the palm's position; the palm face is rigid and flat) and one z DOF (the face patch
+    height, which moves with the palm while friction sticks and slides when it slips); the face
+    particles keep their own y.
+
+    Returns:
+        dof_of: DOF index of each coordinate, ``[3 n]`` (coordinate ``3 p + axis``).
+        n_dof: number of DOFs.
+        palm_x_dof: x DOF of the left and right palm, ``[2]`` (``-1`` when free).
+        palm_z_dof: z DOF of the left and right face patch, ``[2]`` (``-1`` when free).
+    """
+    n = lattice.n_particles
+    dof_of = np.full(3 * n, -1, dtype=np.int64)
+    faces = [lattice.face_mask(0), lattice.face_mask(1)] if gripped else []
+    on_face = np.zeros(n, dtype=bool)
+    for mask in faces:
+        on_face |= mask
+    counter = 0
+    for p in range(n):
+        for a in range(3):
+            if on_face[p] and a != 1:
+                continue
+            dof_of[3 * p + a] = counter
+            counter += 1
+    palm_x = np.array([-1, -1], dtype=np.int64)
+    palm_z = np.array([-1, -1], dtype=np.int64)
+    for side, mask in enumerate(faces):
+        idx = np.flatnonzero(mask)
+        palm_x[side] = counter
+        dof_of[3 * idx + 0] = counter
+        palm_z[side] = counter + 1
+        dof_of[3 * idx + 2] = counter + 1
+        counter += 2
+    return dof_of, counter, palm_x, palm_z
+
+
+def reduced_stiffness(
+    lattice: Lattice, stiffness: FloatArray, dof_of: IntArray, n_dof: int
+) -> FloatArray:
+    """Tangent stiffness at rest ``P^T K P`` in generalised coordinates, N/m, ``[n_dof, n_dof]``.
+
+    Args:
+        stiffness: element stiffness, N/m, ``[m]``.
+    """
+    e = lattice.edges
+    d = lattice.direction
+    block = stiffness[:, None, None] * d[:, :, None] * d[:, None, :]  # [m, 3, 3]
+    k = np.zeros((n_dof, n_dof))
+    for a_end, a_sign in ((0, 1.0), (1, -1.0)):
+        for b_end, b_sign in ((0, 1.0), (1, -1.0)):
+            rows = dof_of[3 * e[:, a_end, None] + np.arange(3)]  # [m, 3]
+            cols = dof_of[3 * e[:, b_end, None] + np.arange(3)]
+            np.add.at(
+                k,
+                (rows[:, :, None], cols[:, None, :]),
+                a_sign * b_sign * block,
+            )
+    return k
+
+
+def _regularised_solve(k: FloatArray, mass: FloatArray, load: FloatArray) -> FloatArray:
+    """Solve ``K u = f`` for a self-equilibrated load; rigid modes are removed by ``eps M``."""
+    eps = 1e-10 * float(np.trace(k)) / float(np.sum(mass))
+    a = k + eps * np.diag(mass)
+    return np.asarray(scipy.linalg.solve(a, load, assume_a="pos"))
+
+
+def unit_squeeze_stiffness_n_per_m(lattice: Lattice) -> float:
+    """Squeeze stiffness of the lattice with unit element scale (``k_e = w_e`` N/m).
+
+    Same boundary conditions as the squeeze protocol: each face layer bonded to its rigid palm in
+    x and z (friction sticking, palms fixed in z), free in y; equal and opposite palm forces.
+    Returns force / change of the palm gap.
+    """
+    dof_of, n_dof, px, pz = palm_dof_map(lattice, gripped=True)
+    k = reduced_stiffness(lattice, lattice.unit_stiffness, dof_of, n_dof)
+    keep = np.setdiff1d(np.arange(n_dof), pz)
+    kr = k[np.ix_(keep, keep)]
+    load = np.zeros(n_dof)
+    load[px[0]] = 1.0
+    load[px[1]] = -1.0
+    mass = np.ones(keep.size)
+    u = np.zeros(n_dof)
+    u[keep] = _regularised_solve(kr, mass, load[keep])
+    closing = u[px[0]] - u[px[1]]
+    return 1.0 / closing
+
+
+def resting_positions_m(
+    lattice: Lattice, stiffness: FloatArray, particle_weight_n: float
+) -> FloatArray:
+    """Linear static equilibrium of the object on a frictionless table under gravity, m, ``[n, 3]``.
+
+    The bottom layer is held at z = 0; the rest of the lattice sags under its weight.
+    """
+    n = lattice.n_particles
+    dof_of, n_dof, _, _ = palm_dof_map(lattice, gripped=False)
+    k = reduced_stiffness(lattice, stiffness, dof_of, n_dof)
+    fixed = dof_of[3 * np.flatnonzero(lattice.bottom_mask()) + 2]
+    keep = np.setdiff1d(np.arange(n_dof), fixed)
+    load = np.zeros(n_dof)
+    load[dof_of[3 * np.arange(n) + 2]] = -particle_weight_n
+    u = np.zeros(n_dof)
+    u[keep] = _regularised_solve(k[np.ix_(keep, keep)], np.ones(keep.size), load[keep])
+    return np.asarray(lattice.positions_m + u[dof_of].reshape(n, 3))

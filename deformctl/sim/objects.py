@@ -1,0 +1,140 @@
+"""The simulated object: a box with a weight, a friction coefficient and Kelvin material constants.
+
+The catalog gives sizes in cm, stiffness in N/cm and damping in N·s/cm (the paper's units); the
+spec keeps those edge units in its field names and offers SI properties for the physics.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from deformctl.errors import InputDataError
+from deformctl.units import CM, GRAVITY_M_S2, N_PER_CM, NS_PER_CM
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from deformctl.sim.protocols import LiftProfile
+
+CATALOG_COLUMNS = (
+    "object_id",
+    "size_x_cm",
+    "size_y_cm",
+    "size_z_cm",
+    "weight_n",
+    "friction_mu",
+    "material_stiffness_n_per_cm",
+    "material_damping_ns_per_cm",
+)
+
+
+def _number(row: Mapping[str, object], key: str, object_id: str) -> float:
+    if key not in row:
+        raise InputDataError(f"object {object_id!r}: missing column {key!r}")
+    value = row[key]
+    try:
+        number = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise InputDataError(f"object {object_id!r}: {key} is not a number: {value!r}") from None
+    if not math.isfinite(number):
+        raise InputDataError(f"object {object_id!r}: {key} is missing or not finite ({value!r})")
+    return number
+
+
+@dataclass(frozen=True)
+class ObjectSpec:
+    """One box-shaped deformable object.
+
+    Attributes:
+        object_id: catalog id.
+        size_cm: box size along (x, y, z), cm; x is the squeeze axis, z is up.
+        weight_n: weight W, N (mass W/g).
+        friction_mu: Coulomb friction coefficient between the palms and the object (static =
+            kinetic).
+        stiffness_n_per_cm: the object's squeeze stiffness D between the palms, N/cm.
+        damping_ns_per_cm: the object's squeeze damping lambda between the palms, N·s/cm.
+    """
+
+    object_id: str
+    size_cm: tuple[float, float, float]
+    weight_n: float
+    friction_mu: float
+    stiffness_n_per_cm: float
+    damping_ns_per_cm: float
+
+    def __post_init__(self) -> None:
+        oid = self.object_id
+        size = tuple(float(s) for s in self.size_cm)
+        if len(size) != 3 or not all(math.isfinite(s) and s > 0 for s in size):
+            raise InputDataError(f"object {oid!r}: size must be three positive lengths (cm)")
+        object.__setattr__(self, "size_cm", size)
+        checks = (
+            ("weight_n", self.weight_n, False),
+            ("friction_mu", self.friction_mu, False),
+            ("material_stiffness_n_per_cm", self.stiffness_n_per_cm, False),
+            ("material_damping_ns_per_cm", self.damping_ns_per_cm, True),
+        )
+        for name, value, zero_ok in checks:
+            v = float(value)
+            if not math.isfinite(v) or v < 0 or (v == 0 and not zero_ok):
+                need = ">= 0" if zero_ok else "> 0"
+                raise InputDataError(f"object {oid!r}: {name} must be finite and {need}, got {v}")
+
+    @classmethod
+    def from_catalog_row(cls, row: Mapping[str, object]) -> ObjectSpec:
+        """Build a spec from one catalog row (a dict, a pandas Series, ...).
+
+        Raises:
+            InputDataError: a column is missing, not a number, NaN, or out of range.
+        """
+        if "object_id" not in row:
+            raise InputDataError("catalog row without 'object_id'")
+        oid = str(row["object_id"])
+        return cls(
+            object_id=oid,
+            size_cm=(
+                _number(row, "size_x_cm", oid),
+                _number(row, "size_y_cm", oid),
+                _number(row, "size_z_cm", oid),
+            ),
+            weight_n=_number(row, "weight_n", oid),
+            friction_mu=_number(row, "friction_mu", oid),
+            stiffness_n_per_cm=_number(row, "material_stiffness_n_per_cm", oid),
+            damping_ns_per_cm=_number(row, "material_damping_ns_per_cm", oid),
+        )
+
+    @property
+    def size_m(self) -> tuple[float, float, float]:
+        """Box size (x, y, z), m."""
+        return (self.size_cm[0] * CM, self.size_cm[1] * CM, self.size_cm[2] * CM)
+
+    @property
+    def mass_kg(self) -> float:
+        """Mass W/g, kg."""
+        return self.weight_n / GRAVITY_M_S2
+
+    @property
+    def stiffness_n_per_m(self) -> float:
+        """Squeeze stiffness D, N/m."""
+        return self.stiffness_n_per_cm * N_PER_CM
+
+    @property
+    def damping_ns_per_m(self) -> float:
+        """Squeeze damping lambda, N·s/m."""
+        return self.damping_ns_per_cm * NS_PER_CM
+
+    @property
+    def retardation_time_s(self) -> float:
+        """Kelvin–Voigt retardation time lambda/D, s."""
+        return self.damping_ns_per_cm / self.stiffness_n_per_cm
+
+
+def f_w_n(spec: ObjectSpec) -> float:
+    """Quasi-static lifting force per palm of a rigid object, W/(2 mu), N."""
+    return spec.weight_n / (2.0 * spec.friction_mu)
+
+
+def rigid_lift_force_n(spec: ObjectSpec, profile: LiftProfile) -> float:
+    """Grip force per palm lifting a rigid object through ``profile``: m (g + a_max)/(2 mu), N."""
+    return spec.mass_kg * (GRAVITY_M_S2 + profile.peak_accel_m_s2) / (2.0 * spec.friction_mu)

@@ -1,0 +1,373 @@
+"""The two protocols (force-controlled squeeze, lift attempt) and a free run for validation.
+
+Each protocol builds (or reuses, cached) a :class:`~deformctl.sim.engine.Model`, precomputes its
+palm command schedule as arrays, and runs the whole attempt in one numba call.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from deformctl.errors import SimulationError, UsageError
+from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
+from deformctl.sim import kernels as K
+from deformctl.sim.engine import SimSettings, build_model, run_model
+from deformctl.sim.objects import ObjectSpec
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class LiftProfile:
+    """Palm motion of a lift: an S-curve (jerk-limited) rise, then a hold.
+
+    Acceleration rises from 0 to ``accel_m_s2`` along a half-cosine of ``jerk_time_s``, stays
+    there until the palms reach ``speed_m_s``, falls back to 0 along a half-cosine; the palms
+    cruise, then decelerate with the mirror image and stop after ``height_m``; then they hold
+    still for ``hold_s``. If the height is too short to reach ``speed_m_s`` the cruise speed is
+    lowered (and, if needed, the jerk time shortened) so that the peak acceleration is always
+    ``accel_m_s2``. The acceleration plateau makes the friction demand m (g + a_max) act for a
+    finite time, so the smallest lifting force of a rigid object is sharp.
+
+    Attributes:
+        accel_m_s2: peak acceleration a_max, m/s².
+        speed_m_s: cruise speed, m/s.
+        height_m: rise, m; ``None`` means half the object height (the paper's protocol).
+        hold_s: hold after the rise, s.
+        jerk_time_s: duration of each acceleration ramp, s.
+    """
+
+    accel_m_s2: float = 2.0
+    speed_m_s: float = 0.25
+    height_m: float | None = None
+    hold_s: float = 0.5
+    jerk_time_s: float = 0.05
+
+    def __post_init__(self) -> None:
+        for name in ("accel_m_s2", "speed_m_s", "jerk_time_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise UsageError(f"lift profile {name} must be > 0, got {value}")
+        if not (math.isfinite(self.hold_s) and self.hold_s >= 0):
+            raise UsageError(f"lift profile hold_s must be >= 0, got {self.hold_s}")
+        if self.height_m is not None and not (math.isfinite(self.height_m) and self.height_m > 0):
+            raise UsageError(f"lift profile height_m must be > 0, got {self.height_m}")
+
+    @property
+    def peak_accel_m_s2(self) -> float:
+        """Peak palm acceleration, m/s²."""
+        return self.accel_m_s2
+
+    def rise_m(self, spec: ObjectSpec) -> float:
+        """The rise for ``spec``: ``height_m`` or half the object height, m."""
+        return self.height_m if self.height_m is not None else 0.5 * spec.size_m[2]
+
+    def phases(self, rise_m: float) -> tuple[float, float, float]:
+        """(cruise speed m/s, jerk time s, cruise time s) actually used for ``rise_m``."""
+        a = self.accel_m_s2
+        v = self.speed_m_s
+        tj = min(self.jerk_time_s, v / a)
+        if v * (v / a + tj) > rise_m:
+            v = a * (-tj + math.sqrt(tj * tj + 4.0 * rise_m / a)) / 2.0
+            if v < a * tj:
+                tj = math.sqrt(rise_m / (2.0 * a))
+                v = a * tj
+        cruise = (rise_m - v * (v / a + tj)) / v
+        return v, tj, max(cruise, 0.0)
+
+    def velocity_m_s(self, t_s: FloatArray, rise_m: float) -> FloatArray:
+        """Palm velocity at times ``t_s`` after the start of the rise, m/s, ``[n]``."""
+        a = self.accel_m_s2
+        v, tj, cruise = self.phases(rise_m)
+        t_acc = v / a + tj
+        plateau_end = t_acc - tj
+
+        def ramp_phase(t: FloatArray) -> FloatArray:
+            # velocity during an acceleration phase starting at t = 0, for 0 <= t <= t_acc
+            up = 0.5 * a * (t - tj / np.pi * np.sin(np.pi * t / tj))
+            mid = 0.5 * a * tj + a * (t - tj)
+            down_t = t_acc - t
+            down = v - 0.5 * a * (down_t - tj / np.pi * np.sin(np.pi * down_t / tj))
+            return np.where(t < tj, up, np.where(t < plateau_end, mid, down))
+
+        t = np.asarray(t_s, dtype=np.float64)
+        t_dec = t_acc + cruise
+        out = np.zeros_like(t)
+        out = np.where((t >= 0) & (t < t_acc), ramp_phase(np.clip(t, 0, t_acc)), out)
+        out = np.where((t >= t_acc) & (t < t_dec), v, out)
+        tail = np.clip(t - t_dec, 0, t_acc)
+        out = np.where((t >= t_dec) & (t < t_dec + t_acc), v - ramp_phase(tail), out)
+        return np.asarray(out)
+
+    def rise_time_s(self, rise_m: float) -> float:
+        """Duration of the rise (acceleration, cruise, deceleration), s."""
+        v, tj, cruise = self.phases(rise_m)
+        return 2.0 * (v / self.accel_m_s2 + tj) + cruise
+
+    def as_dict(self) -> dict[str, float | None]:
+        """The profile's parameters, JSON-serialisable (for artifacts' provenance)."""
+        return {
+            "accel_m_s2": self.accel_m_s2,
+            "speed_m_s": self.speed_m_s,
+            "height_m": self.height_m,
+            "hold_s": self.hold_s,
+            "jerk_time_s": self.jerk_time_s,
+        }
+
+
+@dataclass(frozen=True)
+class SlipCriterion:
+    """When a lift attempt counts as slipped.
+
+    Attributes:
+        tolerance_m: allowed slip, m. Default 0.5 mm: a rigid object gripped 1 % below its
+            friction limit slides about this much under the default profile, so the lifting
+            force a search finds is within ~1 % of the friction limit, while genuine drops slide
+            by centimetres.
+        measure: ``"contact"`` (default): the sliding accumulated at the palm contacts from the
+            start of the rise, mean of both palms. ``"shortfall"``: the palms' rise minus the
+            object's centre-of-mass rise at the end of the hold (includes elastic sag).
+    """
+
+    tolerance_m: float = 0.5e-3
+    measure: Literal["contact", "shortfall"] = "contact"
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.tolerance_m) and self.tolerance_m >= 0):
+            raise UsageError(f"slip tolerance_m must be >= 0, got {self.tolerance_m}")
+        if self.measure not in ("contact", "shortfall"):
+            raise UsageError(f"slip measure must be 'contact' or 'shortfall', got {self.measure!r}")
+
+
+def _check_finite(rec: FloatArray, what: str, spec: ObjectSpec) -> None:
+    if not np.all(np.isfinite(rec)):
+        raise SimulationError(f"object {spec.object_id!r}: non-finite state during {what}")
+
+
+def squeeze(
+    spec: ObjectSpec,
+    *,
+    peak_force_n: float,
+    ramp_s: float = 0.25,
+    hold_s: float = 1.0,
+    settings: SimSettings | None = None,
+    squeeze_index: int = 0,
+    gravity: bool = True,
+    noise_force_n: float = 0.0,
+    noise_position_m: float = 0.0,
+    seed: int | None = None,
+) -> SqueezeSeries:
+    """Force-controlled squeeze: both palms push with ``F(t)``, a linear ramp to the peak, a hold.
+
+    The object starts at rest (on the table under gravity, or floating with ``gravity=False``,
+    which also removes the table), the palms touching its x faces. Samples every step, starting
+    with t = 0.
+
+    Args:
+        peak_force_n: commanded normal force of each palm after the ramp, N.
+        ramp_s: ramp duration, s (0: a force step).
+        hold_s: hold duration at the peak, s.
+        noise_force_n, noise_position_m: std of Gaussian sensor noise added to the recorded force
+            and palm positions (0: exact). seed: noise seed (``np.random.default_rng``).
+
+    Returns:
+        the squeeze series (force felt, compression, commanded force, palm x positions).
+    """
+    s = settings or SimSettings()
+    if not (math.isfinite(peak_force_n) and peak_force_n > 0):
+        raise UsageError(f"peak_force_n must be > 0, got {peak_force_n}")
+    if ramp_s < 0 or hold_s < 0 or not math.isfinite(ramp_s + hold_s):
+        raise UsageError("ramp_s and hold_s must be >= 0")
+    model = build_model(spec, s, gripped=True, gravity=gravity, table=gravity)
+    n_steps = max(1, round((ramp_s + hold_s) / s.dt_s))
+    t = np.arange(n_steps + 1, dtype=np.float64) * s.dt_s
+    force = peak_force_n * (np.clip(t / ramp_s, 0.0, 1.0) if ramp_s > 0 else np.ones_like(t))
+    if ramp_s == 0:
+        force[0] = 0.0
+    _, _, rec = run_model(model, force, np.zeros(n_steps + 1))
+    _check_finite(rec, "squeeze", spec)
+    xl = np.concatenate([[model.palm_x0[0]], rec[:, K.REC_PALM_XL]])
+    xr = np.concatenate([[model.palm_x0[1]], rec[:, K.REC_PALM_XR]])
+    felt = np.concatenate([[0.0], 0.5 * (rec[:, K.REC_NORMAL_L] + rec[:, K.REC_NORMAL_R])])
+    if noise_force_n > 0 or noise_position_m > 0:
+        rng = np.random.default_rng(seed)
+        felt = felt + rng.normal(0.0, noise_force_n, felt.shape) if noise_force_n > 0 else felt
+        if noise_position_m > 0:
+            xl = xl + rng.normal(0.0, noise_position_m, xl.shape)
+            xr = xr + rng.normal(0.0, noise_position_m, xr.shape)
+    gap = xr - xl
+    return SqueezeSeries(
+        object_id=spec.object_id,
+        squeeze_index=squeeze_index,
+        time_s=t,
+        force_n=felt,
+        compression_m=gap[0] - gap,
+        commanded_force_n=force,
+        palm_left_x_m=xl,
+        palm_right_x_m=xr,
+    )
+
+
+def squeeze_many(
+    spec: ObjectSpec,
+    n: int,
+    *,
+    peak_force_n: float,
+    force_scales: tuple[float, ...] | None = None,
+    seed: int | None = None,
+    **kwargs: object,
+) -> list[SqueezeSeries]:
+    """``n`` squeezes of ``spec``, each from rest, at peak forces ``peak_force_n * scale_i``.
+
+    Args:
+        force_scales: one factor per squeeze; default ``linspace(0.5, 1, n)`` (``[1]`` for n = 1),
+            so the squeezes probe different force levels.
+        seed: base noise seed; squeeze ``i`` uses ``seed + i`` (when noise is requested).
+        **kwargs: passed to :func:`squeeze` (ramp_s, hold_s, settings, gravity, noise...).
+    """
+    if n < 1:
+        raise UsageError(f"number of squeezes must be >= 1, got {n}")
+    if force_scales is None:
+        scales = tuple(float(x) for x in np.linspace(0.5, 1.0, n)) if n > 1 else (1.0,)
+    else:
+        scales = tuple(force_scales)
+    if len(scales) != n:
+        raise UsageError(f"force_scales has {len(scales)} entries for {n} squeezes")
+    return [
+        squeeze(
+            spec,
+            peak_force_n=peak_force_n * float(scale),
+            squeeze_index=i,
+            seed=None if seed is None else seed + i,
+            **kwargs,  # type: ignore[arg-type]
+        )
+        for i, scale in enumerate(scales)
+    ]
+
+
+def lift_attempt(
+    spec: ObjectSpec,
+    grip_force_n: float,
+    *,
+    profile: LiftProfile | None = None,
+    settings: SimSettings | None = None,
+    criterion: SlipCriterion | None = None,
+) -> TrialOutcome:
+    """Grip ``spec`` with ``grip_force_n`` per palm, raise the palms along ``profile``, hold.
+
+    Phases: the object rests on the table; the grip force ramps from 0 over
+    ``settings.grip_ramp_s`` and settles for ``settings.grip_settle_s``; the palms rise by
+    ``profile.rise_m(spec)`` and hold for ``profile.hold_s``. Slip is counted from the start of
+    the rise. ``lifted`` is true when the slip (``criterion.measure``) is within
+    ``criterion.tolerance_m`` and the object is off the table at the end.
+    """
+    s = settings or SimSettings()
+    p = profile or LiftProfile()
+    c = criterion or SlipCriterion()
+    if not (math.isfinite(grip_force_n) and grip_force_n >= 0):
+        raise UsageError(f"grip_force_n must be finite and >= 0, got {grip_force_n}")
+    model = build_model(spec, s, gripped=True)
+    dt = s.dt_s
+    rise = p.rise_m(spec)
+    n_grip = max(1, round((s.grip_ramp_s + s.grip_settle_s) / dt))
+    n_steps = n_grip + math.ceil(p.rise_time_s(rise) / dt) + round(p.hold_s / dt)
+    t = np.arange(n_steps + 1, dtype=np.float64) * dt
+    if s.grip_ramp_s > 0:
+        force = grip_force_n * np.clip(t / s.grip_ramp_s, 0.0, 1.0)
+    else:
+        force = np.full(n_steps + 1, float(grip_force_n))
+    t_lift = n_grip * dt
+    palm_vz = p.velocity_m_s(t - t_lift, rise)
+    _, _, rec = run_model(model, force, palm_vz)
+    _check_finite(rec, "lift attempt", spec)
+    slip_l = rec[:, K.REC_SLIP_L] - rec[n_grip - 1, K.REC_SLIP_L]
+    slip_r = rec[:, K.REC_SLIP_R] - rec[n_grip - 1, K.REC_SLIP_R]
+    slip = np.where(np.arange(n_steps) >= n_grip - 1, 0.5 * (slip_l + slip_r), 0.0)
+    time = rec[:, K.REC_TIME]
+    palm_z = rec[:, K.REC_PALM_Z]
+    com_z = rec[:, K.REC_COM_Z]
+    friction = rec[:, K.REC_FRICTION_L] + rec[:, K.REC_FRICTION_R]
+    normal = 0.5 * (rec[:, K.REC_NORMAL_L] + rec[:, K.REC_NORMAL_R])
+    shortfall = float(palm_z[-1] - (com_z[-1] - com_z[n_grip - 1]))
+    slip_final = float(slip[-1])
+    measured = slip_final if c.measure == "contact" else shortfall
+    off_table = bool(rec[-1, K.REC_TABLE_N] == 0.0 and rec[-1, K.REC_MIN_Z] > 0.0)
+    lifted = bool(measured <= c.tolerance_m and off_table)
+    series = LiftAttemptSeries(
+        time_s=time,
+        palm_z_m=palm_z,
+        object_com_z_m=com_z,
+        slip_m=slip,
+        friction_force_n=friction,
+        normal_force_n=normal,
+    )
+    details: dict[str, object] = {
+        "slip_left_m": float(slip_l[-1]),
+        "slip_right_m": float(slip_r[-1]),
+        "shortfall_m": shortfall,
+        "peak_friction_n": float(friction.max()),
+        "off_table": off_table,
+        "lift_start_s": t_lift,
+        "rise_m": rise,
+        "profile": p.as_dict(),
+        "slip_measure": c.measure,
+        "min_particle_z_m": float(rec[:, K.REC_MIN_Z].min()),
+        "max_palm_penetration_m": float(rec[:, K.REC_PENETRATION].max()),
+        "max_speed_m_s": float(rec[:, K.REC_MAX_SPEED].max()),
+        "slip_tolerance_m": c.tolerance_m,
+    }
+    return TrialOutcome(
+        grip_force_n=float(grip_force_n),
+        lifted=lifted,
+        slip_m=measured,
+        series=series,
+        details=details,
+    )
+
+
+@dataclass(frozen=True)
+class FreeRunSeries:
+    """A free object (no palms) falling or resting on the table; every step.
+
+    Attributes:
+        time_s: ``[n]``; com_m: centre of mass, m, ``[n, 3]``; table_force_n: table reaction, N,
+        ``[n]``; min_z_m: lowest particle height, m, ``[n]``.
+    """
+
+    time_s: FloatArray
+    com_m: FloatArray
+    table_force_n: FloatArray
+    min_z_m: FloatArray
+    extras: dict[str, float] = field(default_factory=dict)
+
+
+def free_run(
+    spec: ObjectSpec,
+    *,
+    duration_s: float,
+    drop_height_m: float = 0.0,
+    settings: SimSettings | None = None,
+    table: bool = True,
+) -> FreeRunSeries:
+    """Release ``spec`` undeformed and at rest with its bottom ``drop_height_m`` above the table."""
+    s = settings or SimSettings()
+    model = build_model(
+        spec, s, gripped=False, gravity=True, table=table, resting=False, lift_m=drop_height_m
+    )
+    n_steps = max(1, round(duration_s / s.dt_s))
+    zeros = np.zeros(n_steps + 1)
+    _, _, rec = run_model(model, zeros, zeros)
+    _check_finite(rec, "free run", spec)
+    com = np.stack([rec[:, K.REC_COM_X], rec[:, K.REC_COM_Y], rec[:, K.REC_COM_Z]], axis=1)
+    com[:, 2] += float(np.mean(model.base_x[:, 2]))
+    return FreeRunSeries(
+        time_s=rec[:, K.REC_TIME],
+        com_m=com,
+        table_force_n=rec[:, K.REC_TABLE_N],
+        min_z_m=rec[:, K.REC_MIN_Z],
+    )
