@@ -12,6 +12,7 @@ import re
 import shlex
 import sys
 import time
+from collections.abc import Mapping
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -20,11 +21,13 @@ import pytest
 from rich.console import Console
 from typer.testing import CliRunner
 
-from deformctl.artifacts import read_lift_log, read_table, validate_message
+from deformctl.artifacts import read_catalog, read_lift_log, read_table, validate_message
 from deformctl.artifacts.schema import fast_check, json_validator
 from deformctl.cli import app
-from deformctl.errors import SchemaError
+from deformctl.errors import SchemaError, SimulationError
+from deformctl.lift import RunnerFactory, TrialRunner, lift_catalog, select_objects
 from deformctl.rig import parse_rig_response
+from deformctl.series import TrialOutcome
 
 cli = CliRunner()
 REPO = Path(__file__).resolve().parents[1]
@@ -489,3 +492,48 @@ def test_lift_help_ends_with_an_example() -> None:
     result = cli.invoke(app, ["lift", "--help"])
     assert result.exit_code == 0
     assert "Example: deformctl lift " in result.stdout
+
+
+def test_table_to_stdout(catalog: Path, tmp_path: Path) -> None:
+    result = run(catalog, "--rig", rig("threshold_rig.py", 1.0), "-o", "-", "--objects", "anvil")
+    assert result.exit_code == 0, result.stderr
+    (tmp_path / "out.parquet").write_bytes(result.stdout_bytes)  # only the Parquet bytes
+    table = read_table(tmp_path / "out.parquet", "lift_results")
+    assert table["lift_force_n"].tolist() == [40.0]
+
+
+# ------------------------------------------------------------- the library, without a CLI
+
+
+def _threshold_runner(threshold_n: float, fail_for: str | None) -> RunnerFactory:
+    def make(obj: Mapping[str, Any]) -> TrialRunner:
+        def trial(grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
+            if obj["object_id"] == fail_for and attempt_index == 1:
+                raise SimulationError("state went non-finite")
+            return TrialOutcome(grip_force_n, grip_force_n >= threshold_n, 0.0)
+
+        return trial
+
+    def row_fields(obj: Mapping[str, Any]) -> Mapping[str, object]:
+        return {"lift_height_m": obj["size_z_cm"] / 200.0, "slip_criterion": "test"}
+
+    return RunnerFactory("sim", make, row_fields=row_fields, stop_on_failure=False)
+
+
+def test_lift_catalog_runner_failure_without_stop_continues(catalog: Path) -> None:
+    selected = select_objects(read_catalog(catalog), None)
+    run_ = lift_catalog(selected, _threshold_runner(THRESHOLD_N, fail_for="sponge"))
+    table = run_.table.set_index("object_id")
+    assert run_.not_run == ()
+    assert [f.object_id for f in run_.failures] == ["sponge"]
+    assert run_.failures[0].aborted
+    assert table.loc["sponge", "attempts"] == 1  # the attempt before the failure
+    assert table.loc["brick", "converged"]  # later objects ran
+    assert table.loc["anvil", "lift_force_n"] == 40.0
+    assert table.loc["brick", "lift_height_m"] == pytest.approx(0.03)  # runner's own columns
+    assert set(table["runner"]) == {"sim"}
+    assert [a.object_id for a in run_.attempts].count("sponge") == 1
+    message = run_.error_message()
+    assert message is not None
+    assert message.startswith("search aborted, 1 attempt kept: object 'sponge': attempt 1 at 12")
+    assert "state went non-finite" in message
