@@ -46,6 +46,12 @@ blew up), the search raises :class:`SearchAbortedError` (or :class:`RigSearchAbo
 :class:`~deformctl.errors.RigError`), whose ``partial`` attribute is the result so far, so the
 caller can still write every attempt to the log.
 
+Many objects (the ``lift`` stage): :func:`lift_catalog` runs one search per catalog object with a
+runner from a :class:`RunnerFactory` (:func:`rig_runner_factory` for an external rig; the
+simulator adds its own factory) and returns a :class:`CatalogLiftResult`: the lift_results table,
+every attempt (for the lift log) and the failures, which it records instead of raising, so the
+caller can write everything before it decides the exit code.
+
 Example:
     >>> from deformctl.series import TrialOutcome
     >>> def runner(grip_force_n: float, attempt_index: int) -> TrialOutcome:
