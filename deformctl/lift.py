@@ -46,6 +46,12 @@ blew up), the search raises :class:`SearchAbortedError` (or :class:`RigSearchAbo
 :class:`~deformctl.errors.RigError`), whose ``partial`` attribute is the result so far, so the
 caller can still write every attempt to the log.
 
+Many objects (the ``lift`` stage): :func:`lift_catalog` runs one search per catalog object with a
+runner from a :class:`RunnerFactory` (:func:`rig_runner_factory` for an external rig; the
+simulator adds its own factory) and returns a :class:`CatalogLiftResult`: the lift_results table,
+every attempt (for the lift log) and the failures, which it records instead of raising, so the
+caller can write everything before it decides the exit code.
+
 Example:
     >>> from deformctl.series import TrialOutcome
     >>> def runner(grip_force_n: float, attempt_index: int) -> TrialOutcome:
@@ -58,11 +64,19 @@ Example:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Literal, Protocol
+import os
+import shlex
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal, Protocol
 
-from deformctl.errors import DeformctlError, RigError, SearchError, UsageError
-from deformctl.rig import RigAttemptError
+import numpy as np
+import pandas as pd
+
+from deformctl.artifacts.mcaplog import LiftAttempt
+from deformctl.artifacts.schema import validate_frame
+from deformctl.errors import DeformctlError, InputDataError, RigError, SearchError, UsageError
+from deformctl.rig import RigAttemptError, RigRunner
 from deformctl.series import TrialOutcome
 
 SearchProtocol = Literal["refine", "paper"]
@@ -77,13 +91,25 @@ __all__ = [
     "DEFAULT_MAX_ATTEMPTS",
     "DEFAULT_TOLERANCE_REL",
     "PROTOCOLS",
+    "RIG_SLIP_CRITERION",
+    "CatalogLiftResult",
+    "LiftProgress",
     "LiftSearchResult",
+    "ObjectFailure",
     "RigSearchAbortedError",
+    "RunnerFactory",
     "SearchAbortedError",
     "SearchProtocol",
     "TrialRunner",
+    "catalog_records",
+    "check_liftable",
     "find_min_lift_force",
+    "lift_catalog",
+    "rig_object",
+    "rig_runner_factory",
     "rigid_grip_force_n",
+    "select_objects",
+    "validate_search_options",
 ]
 
 
@@ -181,25 +207,55 @@ class LiftSearchResult:
         return (ramp[-2].grip_force_n, ramp[-1].grip_force_n)
 
     def summary(self) -> dict[str, object]:
-        """The scalar fields as a JSON-friendly dict (no trials), e.g. for a table row."""
+        """The scalar fields as a JSON-friendly dict (no trials), keyed like the lift_results table.
+
+        The keys shared with ``schemas/lift_results.columns.json`` come first and carry the same
+        names; ``growth``, ``max_attempts``, ``last_force_n`` and ``message`` follow. Values are
+        the result's own (an unbounded bracket keeps ``inf``); :meth:`table_row` makes a row.
+        """
         return {
             "object_id": self.object_id,
-            "lift_force_n": self.lift_force_n,
-            "f_w_n": self.f_w_n,
-            "f_d_n": self.f_d_n,
-            "attempts": self.attempts,
-            "bracket_low_n": self.bracket_n[0],
-            "bracket_high_n": self.bracket_n[1],
-            "converged": self.converged,
-            "protocol": self.protocol,
-            "tolerance_rel": self.tolerance_rel,
-            "growth": self.growth,
             "weight_n": self.weight_n,
             "friction_mu": self.friction_mu,
+            "f_w_n": self.f_w_n,
+            "lift_force_n": self.lift_force_n,
+            "f_d_n": self.f_d_n,
+            "attempts": self.attempts,
+            "converged": self.converged,
+            "protocol": self.protocol,
+            "bracket_low_n": self.bracket_n[0],
+            "bracket_high_n": self.bracket_n[1],
+            "tolerance_rel": self.tolerance_rel,
+            "growth": self.growth,
             "max_attempts": self.max_attempts,
             "last_force_n": self.last_force_n,
             "message": self.message,
         }
+
+    def table_row(self, *, runner: str, error: str | None = None) -> dict[str, object]:
+        """One row of the lift_results table (``schemas/lift_results.columns.json``).
+
+        Differences from :meth:`summary`: an unbounded ``bracket_high_n`` (nothing lifted) is NaN,
+        as the table holds no infinities; ``tolerance_rel`` is NaN for ``paper``, which does not
+        use it; ``runner`` and ``error`` are added; ``message``, ``growth``, ``max_attempts``
+        and ``last_force_n`` are dropped (the table holds only its spec's columns; the search
+        settings are in the file's provenance).
+
+        Args:
+            runner: the trial runner's name (``"rig"``, ``"sim"``).
+            error: the row's error text; None picks ``message`` when the search did not
+                converge and None when it did.
+        """
+        row = self.summary()
+        for key in ("message", "growth", "max_attempts", "last_force_n"):
+            del row[key]
+        if not math.isfinite(self.bracket_n[1]):
+            row["bracket_high_n"] = math.nan
+        if self.protocol == "paper":
+            row["tolerance_rel"] = math.nan
+        row["runner"] = runner
+        row["error"] = error if error is not None else (None if self.converged else self.message)
+        return row
 
 
 class SearchAbortedError(SearchError):
@@ -224,6 +280,25 @@ def rigid_grip_force_n(weight_n: float, friction_mu: float) -> float:
     return weight_n / (2.0 * friction_mu)
 
 
+def validate_search_options(
+    *, protocol: str, growth: float, tolerance_rel: float, max_attempts: int
+) -> None:
+    """Check the search options that do not depend on the object.
+
+    Raises:
+        UsageError: ``protocol`` unknown, ``growth`` not a finite number > 1, ``tolerance_rel``
+            not in (0, 1), or ``max_attempts`` not an integer >= 1 (exit 2).
+    """
+    if protocol not in PROTOCOLS:
+        raise UsageError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {protocol!r}")
+    if not (math.isfinite(growth) and growth > 1):
+        raise UsageError(f"growth must be a finite number > 1, got {growth!r}")
+    if not (math.isfinite(tolerance_rel) and 0 < tolerance_rel < 1):
+        raise UsageError(f"tolerance must be a relative value in (0, 1), got {tolerance_rel!r}")
+    if isinstance(max_attempts, bool) or not isinstance(max_attempts, int) or max_attempts < 1:
+        raise UsageError(f"max attempts must be an integer >= 1, got {max_attempts!r}")
+
+
 def _validate(
     *,
     weight_n: float,
@@ -239,14 +314,9 @@ def _validate(
         raise UsageError(f"{where}weight must be a finite number > 0 N, got {weight_n!r}")
     if not (math.isfinite(friction_mu) and friction_mu > 0):
         raise UsageError(f"{where}friction mu must be a finite number > 0, got {friction_mu!r}")
-    if protocol not in PROTOCOLS:
-        raise UsageError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {protocol!r}")
-    if not (math.isfinite(growth) and growth > 1):
-        raise UsageError(f"growth must be a finite number > 1, got {growth!r}")
-    if not (math.isfinite(tolerance_rel) and 0 < tolerance_rel < 1):
-        raise UsageError(f"tolerance must be a relative value in (0, 1), got {tolerance_rel!r}")
-    if isinstance(max_attempts, bool) or not isinstance(max_attempts, int) or max_attempts < 1:
-        raise UsageError(f"max attempts must be an integer >= 1, got {max_attempts!r}")
+    validate_search_options(
+        protocol=protocol, growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts
+    )
 
 
 @dataclass
@@ -432,3 +502,365 @@ def _found_message(obj: str, s: _Search) -> str:
         f"{obj}: lifted at L_f = {s.high_n:.6g} N (F_w = {s.f_w_n:.6g} N, "
         f"bracket [{low:.6g}, {s.high_n:.6g}] N) after {len(s.trials)} attempts ({s.protocol})"
     )
+
+
+# ------------------------------------------------------------- many objects: the `lift` stage
+
+LiftProgress = Callable[[str, int, int], None]
+"""``progress(object_id, objects_done, objects_total)``, called after each object of a catalog."""
+
+RIG_SLIP_CRITERION = "rig"  #: ``slip_criterion`` of rows whose outcome the rig reported itself
+_PROFILE_COLUMNS = ("lift_accel_m_s2", "lift_speed_m_s", "lift_height_m", "slip_tolerance_m")
+
+
+def _no_row_fields(obj: Mapping[str, Any]) -> Mapping[str, object]:
+    return {}
+
+
+@dataclass(frozen=True)
+class RunnerFactory:
+    """Builds one trial runner per catalog object: what :func:`lift_catalog` searches with.
+
+    Every runner kind (the external rig now, the built-in simulator next to it) is one factory,
+    so the stage code does not care which one runs the attempts.
+
+    Attributes:
+        name: the runner's name, stored in the table's ``runner`` column (``"rig"``, ``"sim"``).
+        make: ``make(obj) -> TrialRunner`` for one object; ``obj`` is the object's catalog row as
+            a dict (see :func:`catalog_records`: paper units, NaN as None).
+        row_fields: ``row_fields(obj) -> {column: value}``: the table columns this runner fills
+            for the object (lift profile ``lift_accel_m_s2``, ``lift_speed_m_s``,
+            ``lift_height_m``, ``slip_tolerance_m``, ``slip_criterion``).
+        stop_on_failure: when a runner fails for one object (raises a
+            :class:`~deformctl.errors.DeformctlError`), the remaining objects are not run.
+        settings: JSON-serialisable settings of the runner, for the outputs' provenance.
+    """
+
+    name: str
+    make: Callable[[Mapping[str, Any]], TrialRunner]
+    row_fields: Callable[[Mapping[str, Any]], Mapping[str, object]] = _no_row_fields
+    stop_on_failure: bool = True
+    settings: Mapping[str, Any] = field(default_factory=dict)
+
+
+def rig_object(obj: Mapping[str, Any]) -> dict[str, Any]:
+    """The object description a :class:`~deformctl.rig.RigRunner` sends: id, W, mu, size (cm).
+
+    Args:
+        obj: a catalog row (``object_id``, ``weight_n``, ``friction_mu``, ``size_{x,y,z}_cm``).
+    """
+    out: dict[str, Any] = {
+        "object_id": str(obj["object_id"]),
+        "weight_n": float(obj["weight_n"]),
+        "friction_mu": float(obj["friction_mu"]),
+    }
+    size = [obj.get(f"size_{axis}_cm") for axis in "xyz"]
+    if all(isinstance(v, int | float) and math.isfinite(v) for v in size):
+        out["size_cm"] = [float(v) for v in size if v is not None]
+    return out
+
+
+def rig_runner_factory(
+    command: str | Sequence[str],
+    *,
+    timeout_s: float,
+    cwd: str | os.PathLike[str] | None = None,
+) -> RunnerFactory:
+    """A :class:`RunnerFactory` for an external rig command (see :mod:`deformctl.rig`).
+
+    Each object gets its own :class:`~deformctl.rig.RigRunner`; the command runs once per attempt.
+    A rig failure stops the run (``stop_on_failure``): a crashed driver usually means the robot
+    needs attention, so deformctl does not go on commanding it.
+
+    Args:
+        command: the rig command, a string (split like a shell line, never run by a shell) or
+            an argument list.
+        timeout_s: the longest one attempt may take, s (finite, > 0).
+        cwd: the directory the command runs in; the current directory when None.
+
+    Raises:
+        UsageError: an empty or unparsable command (unbalanced quotes), or a bad timeout.
+    """
+    if isinstance(command, str):
+        try:
+            argv = shlex.split(command)
+        except ValueError as err:
+            raise UsageError(f"rig command cannot be parsed ({err}): {command!r}") from None
+    else:
+        argv = [str(a) for a in command]
+    if not argv:
+        raise UsageError("rig command is empty")
+    if isinstance(timeout_s, bool) or not (
+        isinstance(timeout_s, int | float) and math.isfinite(timeout_s) and timeout_s > 0
+    ):
+        raise UsageError(f"rig timeout must be a finite number > 0 s, got {timeout_s!r}")
+
+    def make(obj: Mapping[str, Any]) -> TrialRunner:
+        return RigRunner(argv, timeout_s=float(timeout_s), object=rig_object(obj), cwd=cwd)
+
+    def row_fields(obj: Mapping[str, Any]) -> Mapping[str, object]:
+        fields: dict[str, object] = dict.fromkeys(_PROFILE_COLUMNS, math.nan)
+        fields["slip_criterion"] = RIG_SLIP_CRITERION
+        return fields
+
+    return RunnerFactory(
+        name="rig",
+        make=make,
+        row_fields=row_fields,
+        stop_on_failure=True,
+        settings={"rig_command": argv, "rig_timeout_s": float(timeout_s)},
+    )
+
+
+def catalog_records(catalog: pd.DataFrame) -> list[dict[str, Any]]:
+    """The catalog's rows as plain dicts (Python scalars; NaN and missing values as None)."""
+    records: list[dict[str, Any]] = []
+    for rec in catalog.to_dict("records"):
+        clean: dict[str, Any] = {}
+        for key, value in rec.items():
+            if isinstance(value, np.generic):
+                value = value.item()
+            if value is None or (isinstance(value, float) and math.isnan(value)):
+                value = None
+            clean[str(key)] = value
+        records.append(clean)
+    return records
+
+
+def select_objects(catalog: pd.DataFrame, object_ids: Sequence[str] | None) -> pd.DataFrame:
+    """The catalog rows of ``object_ids``, in that order (all rows when None).
+
+    Repeated ids are taken once.
+
+    Raises:
+        UsageError: an empty list, an empty id, or an id the catalog does not have (exit 2).
+    """
+    if object_ids is None:
+        return catalog.reset_index(drop=True)
+    wanted = list(dict.fromkeys(object_ids))
+    if not wanted:
+        raise UsageError("no object ids given")
+    if any(not oid for oid in wanted):
+        raise UsageError("an object id is empty")
+    known = list(catalog["object_id"])
+    unknown = [oid for oid in wanted if oid not in set(known)]
+    if unknown:
+        shown = ", ".join(known[:10]) + (", ..." if len(known) > 10 else "")
+        raise UsageError(f"unknown object id {unknown[0]!r} (the catalog has: {shown})")
+    position = {oid: i for i, oid in enumerate(known)}
+    return catalog.iloc[[position[oid] for oid in wanted]].reset_index(drop=True)
+
+
+def check_liftable(catalog: pd.DataFrame, *, path: str | None = None) -> None:
+    """Refuse catalog rows a lift cannot use: ``friction_mu`` must be > 0 (F_w = W / (2 mu)).
+
+    The catalog spec allows mu = 0 (a frictionless object can be squeezed), so this is checked
+    here, for the objects about to be lifted. Weight and sizes are already > 0 in a valid catalog.
+
+    Raises:
+        InputDataError: naming the catalog and the object (exit 65).
+    """
+    for oid, mu, weight in zip(
+        catalog["object_id"], catalog["friction_mu"], catalog["weight_n"], strict=True
+    ):
+        if not (math.isfinite(mu) and mu > 0):
+            raise InputDataError(
+                f"object {oid!r}: friction_mu must be > 0 to lift it "
+                f"(F_w = W / (2 mu) is undefined), got {float(mu)!r}",
+                path=path,
+            )
+        if not (math.isfinite(weight) and weight > 0):
+            raise InputDataError(
+                f"object {oid!r}: weight_n must be > 0 to lift it, got {float(weight)!r}",
+                path=path,
+            )
+
+
+@dataclass(frozen=True)
+class ObjectFailure:
+    """An object whose search did not produce a converged L_f.
+
+    Attributes:
+        object_id: the object.
+        message: one line: why (names the object; for a budget that ran out, the last force
+            tried; for a runner failure, the attempt and the force).
+        aborted: True when the runner failed (a rig crash, time-out or bad answer), False when
+            the search ran out of attempts.
+    """
+
+    object_id: str
+    message: str
+    aborted: bool
+
+
+@dataclass(frozen=True)
+class CatalogLiftResult:
+    """What :func:`lift_catalog` found for a set of catalog objects.
+
+    Attributes:
+        table: the lift_results table, one row per object in the order run (validated against
+            ``schemas/lift_results.columns.json``); objects not run after a runner failure have
+            ``attempts = 0`` and an ``error`` starting with ``not run``.
+        attempts: every attempt that completed, in the order run (for the lift log); an aborted
+            search contributes the attempts before the failure.
+        results: the search result of every object that was run (the partial result for an
+            aborted search).
+        objects: the catalog rows of the objects (see :func:`catalog_records`), for the log.
+        failures: the objects that did not converge, in the order run.
+        not_run: ids of the objects skipped after a runner failure.
+    """
+
+    table: pd.DataFrame
+    attempts: tuple[LiftAttempt, ...]
+    results: tuple[LiftSearchResult, ...]
+    objects: tuple[dict[str, Any], ...]
+    failures: tuple[ObjectFailure, ...]
+    not_run: tuple[str, ...]
+
+    @property
+    def ok(self) -> bool:
+        """True when every object's search converged."""
+        return not self.failures and not self.not_run
+
+    def error_message(self) -> str | None:
+        """One line for the exit: the runner failure if any, else the first non-converged object.
+
+        None when :attr:`ok`.
+        """
+        if self.ok:
+            return None
+        aborted = [f for f in self.failures if f.aborted]
+        first = aborted[0] if aborted else self.failures[0]
+        notes = []
+        others = len(self.failures) - 1
+        if others:
+            notes.append(f"{others} more object{'s' if others > 1 else ''} did not converge")
+        if self.not_run:
+            n = len(self.not_run)
+            notes.append(f"{n} later object{'s' if n > 1 else ''} not run")
+        return first.message + (f" ({'; '.join(notes)})" if notes else "")
+
+
+def lift_catalog(
+    catalog: pd.DataFrame,
+    factory: RunnerFactory,
+    *,
+    protocol: SearchProtocol = "refine",
+    growth: float = DEFAULT_GROWTH,
+    tolerance_rel: float = DEFAULT_TOLERANCE_REL,
+    max_attempts: int = DEFAULT_MAX_ATTEMPTS,
+    progress: LiftProgress | None = None,
+    path: str | None = None,
+) -> CatalogLiftResult:
+    """Search the minimum lifting force of every object of a catalog, one after another.
+
+    Each object gets its own runner from ``factory`` and one :func:`find_min_lift_force`
+    search. Failures do not raise; they are recorded so the caller can still write every
+    attempt and a row per object, then decide the exit:
+
+    * a search that runs out of attempts gives a row with ``converged = False`` and the search's
+      message in ``error``; the next object is run.
+    * a runner failure (:class:`SearchAbortedError`) gives a row from the partial result with
+      the failure in ``error``; the attempts before it are kept. When
+      ``factory.stop_on_failure`` (the rig), the remaining objects are not run and get a
+      ``not run`` row.
+
+    Args:
+        catalog: a validated catalog (see :func:`deformctl.artifacts.read_catalog`), already cut
+            to the objects to lift (:func:`select_objects`).
+        factory: builds the runner of each object.
+        protocol: ``"refine"`` or ``"paper"``.
+        growth: ramp factor (> 1).
+        tolerance_rel: ``refine``'s relative bracket width, in (0, 1).
+        max_attempts: attempt budget per object (>= 1).
+        progress: called after each object as ``progress(object_id, done, total)``.
+        path: the catalog's file name, for error messages.
+
+    Returns:
+        A :class:`CatalogLiftResult`.
+
+    Raises:
+        UsageError: a search option out of range (before anything runs; exit 2).
+        InputDataError: an object the lift cannot use, e.g. ``friction_mu = 0`` (before anything
+            runs; exit 65).
+    """
+    validate_search_options(
+        protocol=protocol, growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts
+    )
+    check_liftable(catalog, path=path)
+    records = catalog_records(catalog)
+    rows: list[dict[str, object]] = []
+    attempts: list[LiftAttempt] = []
+    results: list[LiftSearchResult] = []
+    failures: list[ObjectFailure] = []
+    not_run: list[str] = []
+    stopped_at: str | None = None
+    for done, obj in enumerate(records, start=1):
+        oid = str(obj["object_id"])
+        if stopped_at is not None:
+            rows.append(_not_run_row(obj, factory, protocol, tolerance_rel, stopped_at))
+            not_run.append(oid)
+        else:
+            try:
+                result = find_min_lift_force(
+                    factory.make(obj),
+                    weight_n=float(obj["weight_n"]),
+                    friction_mu=float(obj["friction_mu"]),
+                    protocol=protocol,
+                    growth=growth,
+                    tolerance_rel=tolerance_rel,
+                    max_attempts=max_attempts,
+                    object_id=oid,
+                )
+                error = None if result.converged else result.message
+                if error is not None:
+                    failures.append(ObjectFailure(oid, error, aborted=False))
+            except SearchAbortedError as err:
+                result, error = err.partial, str(err)
+                failures.append(ObjectFailure(oid, error, aborted=True))
+                if factory.stop_on_failure:
+                    stopped_at = oid
+            results.append(result)
+            attempts.extend(LiftAttempt(oid, i, t) for i, t in enumerate(result.trials))
+            row = result.table_row(runner=factory.name, error=error)
+            row.update(factory.row_fields(obj))
+            rows.append(row)
+        if progress is not None:
+            progress(oid, done, len(records))
+    table = validate_frame(pd.DataFrame(rows), "lift_results")
+    return CatalogLiftResult(
+        table=table,
+        attempts=tuple(attempts),
+        results=tuple(results),
+        objects=tuple(records),
+        failures=tuple(failures),
+        not_run=tuple(not_run),
+    )
+
+
+def _not_run_row(
+    obj: Mapping[str, Any],
+    factory: RunnerFactory,
+    protocol: SearchProtocol,
+    tolerance_rel: float,
+    stopped_at: str,
+) -> dict[str, object]:
+    weight_n, friction_mu = float(obj["weight_n"]), float(obj["friction_mu"])
+    row: dict[str, object] = {
+        "object_id": str(obj["object_id"]),
+        "weight_n": weight_n,
+        "friction_mu": friction_mu,
+        "f_w_n": rigid_grip_force_n(weight_n, friction_mu),
+        "lift_force_n": math.nan,
+        "f_d_n": math.nan,
+        "attempts": 0,
+        "converged": False,
+        "protocol": protocol,
+        "bracket_low_n": math.nan,
+        "bracket_high_n": math.nan,
+        "tolerance_rel": math.nan if protocol == "paper" else float(tolerance_rel),
+        "runner": factory.name,
+        "error": f"not run: the run stopped at object {stopped_at!r} after a runner failure",
+    }
+    row.update(factory.row_fields(obj))
+    return row

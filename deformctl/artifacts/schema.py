@@ -190,6 +190,7 @@ _TYPE_CHECKS: dict[str, Check] = {
     "integer": _is_integer,
     "boolean": lambda v: isinstance(v, bool),
     "null": lambda v: v is None,
+    "array": lambda v: isinstance(v, list),
 }
 
 
@@ -197,7 +198,8 @@ def _compile(schema: Any) -> Check | None:
     """Compile the small JSON Schema subset deformctl uses into a fast predicate.
 
     Handles ``type`` (a name or a list), ``properties``, ``required``,
-    ``additionalProperties: false``, ``minimum`` and ``minLength``; returns None for a schema
+    ``additionalProperties: false``, ``minimum``, ``exclusiveMinimum``, ``minLength``, ``items``,
+    ``minItems``, ``maxItems``, ``dependentRequired`` and ``anyOf``; returns None for a schema
     using anything else, so the caller falls back to :mod:`jsonschema`. The predicate answers
     only "valid or not"; error messages always come from :mod:`jsonschema`.
     """
@@ -209,7 +211,13 @@ def _compile(schema: Any) -> Check | None:
         "required",
         "additionalProperties",
         "minimum",
+        "exclusiveMinimum",
         "minLength",
+        "items",
+        "minItems",
+        "maxItems",
+        "dependentRequired",
+        "anyOf",
     }
     if set(schema) - known:
         return None
@@ -224,9 +232,38 @@ def _compile(schema: Any) -> Check | None:
     if "minimum" in schema:
         low = schema["minimum"]
         checks.append(lambda v: not _is_number(v) or v >= low)
+    if "exclusiveMinimum" in schema:
+        above = schema["exclusiveMinimum"]
+        checks.append(lambda v: not _is_number(v) or v > above)
     if "minLength" in schema:
         n = schema["minLength"]
         checks.append(lambda v: not isinstance(v, str) or len(v) >= n)
+    if "minItems" in schema:
+        min_items = schema["minItems"]
+        checks.append(lambda v: not isinstance(v, list) or len(v) >= min_items)
+    if "maxItems" in schema:
+        max_items = schema["maxItems"]
+        checks.append(lambda v: not isinstance(v, list) or len(v) <= max_items)
+    if "items" in schema:
+        item_check = _compile(schema["items"])
+        if item_check is None:
+            return None
+        checks.append(lambda v: not isinstance(v, list) or all(item_check(x) for x in v))
+    if "anyOf" in schema:
+        alternatives = [_compile(sub) for sub in schema["anyOf"]]
+        if any(a is None for a in alternatives):
+            return None
+        checks.append(lambda v: any(a(v) for a in alternatives if a is not None))
+    dependent: dict[str, tuple[str, ...]] = {
+        k: tuple(deps) for k, deps in schema.get("dependentRequired", {}).items()
+    }
+    if dependent:
+        checks.append(
+            lambda v: (
+                not isinstance(v, dict)
+                or all(d in v for k, deps in dependent.items() if k in v for d in deps)
+            )
+        )
     props: dict[str, Check] = {}
     for key, sub in schema.get("properties", {}).items():
         compiled = _compile(sub)

@@ -48,7 +48,10 @@ def _root(
 def _register() -> None:
     """Import the subcommand modules in pipeline order; each adds itself to ``app``."""
     # One import per subcommand module, in pipeline order, as each one lands.
+    # isort: off
+    from deformctl.cli import lift  # noqa: F401
     from deformctl.cli import inspect  # noqa: F401  (any artifact; last in the list)
+    # isort: on
 
 
 _register()

@@ -1,0 +1,226 @@
+"""``deformctl lift``: the minimum lifting force of catalog objects, by iterative lifting.
+
+The command checks options and paths, picks the trial runner, and hands the work to
+:func:`deformctl.lift.lift_catalog`; then it writes the lift log (every attempt) and the
+lift_results table, and turns failures into the exit code.
+
+Runners: exactly one must be chosen. Today that is ``--rig "CMD"`` (an external rig command);
+the built-in simulator (``--sim`` with its lift-profile options) plugs in as one more entry in
+:func:`_choose_runner`, each runner kind being a :class:`deformctl.lift.RunnerFactory`.
+
+Failures, decided here:
+
+* bad options (tolerance, growth, max attempts, no runner, unknown ``--objects`` id): exit 2,
+  before any attempt runs and before anything is written;
+* an object with ``friction_mu <= 0`` in the catalog: bad input data, exit 65, nothing run;
+* a search that does not converge, or a rig that crashes, times out or answers garbage: the log
+  (all completed attempts) and the table (a row per object, ``converged = false``, ``error``) are
+  written first, then exit 1 with one line. A rig failure stops the run: the objects after it
+  are not run (rows with ``attempts = 0`` and ``error`` "not run: ..."), since a rig that failed
+  usually needs a person. A search that runs out of attempts does not stop the others.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import cast
+
+import typer
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+)
+
+from deformctl.artifacts import (
+    Provenance,
+    check_output_path,
+    read_catalog,
+    write_lift_log,
+    write_table,
+)
+from deformctl.artifacts.io import is_stdio
+from deformctl.cli import app
+from deformctl.cli._common import translate_errors
+from deformctl.errors import SearchError, UsageError
+from deformctl.lift import (
+    DEFAULT_GROWTH,
+    DEFAULT_MAX_ATTEMPTS,
+    DEFAULT_TOLERANCE_REL,
+    LiftProgress,
+    RunnerFactory,
+    SearchProtocol,
+    lift_catalog,
+    rig_runner_factory,
+    select_objects,
+    validate_search_options,
+)
+
+DEFAULT_RIG_TIMEOUT_S = 60.0
+
+
+def _choose_runner(rig: str | None, rig_timeout_s: float | None) -> RunnerFactory:
+    """The one trial runner the options ask for.
+
+    Raises:
+        UsageError: no runner, more than one, or a runner option without its runner.
+    """
+    chosen: list[RunnerFactory] = []
+    if rig is not None:
+        timeout_s = DEFAULT_RIG_TIMEOUT_S if rig_timeout_s is None else rig_timeout_s
+        chosen.append(rig_runner_factory(rig, timeout_s=timeout_s))
+    elif rig_timeout_s is not None:
+        raise UsageError("--rig-timeout needs --rig")
+    if len(chosen) != 1:
+        raise UsageError(
+            "choose exactly one trial runner: --rig CMD"
+            if not chosen
+            else "choose exactly one trial runner"
+        )
+    return chosen[0]
+
+
+def _parse_objects(objects: str | None) -> list[str] | None:
+    if objects is None:
+        return None
+    ids = [part.strip() for part in objects.split(",")]
+    if not any(ids):
+        raise UsageError("--objects needs at least one object id")
+    if any(not oid for oid in ids):
+        raise UsageError(f"--objects has an empty id: {objects!r}")
+    return ids
+
+
+def _check_outputs(output: str, log: str | None, force: bool) -> None:
+    if log is not None:
+        if is_stdio(output) and is_stdio(log):
+            raise UsageError("-o and --log cannot both be - (stdout)")
+        if not is_stdio(log) and os.path.abspath(log) == os.path.abspath(output):
+            raise UsageError(f"-o and --log are the same file: {log!r}")
+        check_output_path(log, force)
+    check_output_path(output, force)
+
+
+@contextmanager
+def _progress_bar(total: int) -> Iterator[LiftProgress | None]:
+    """A rich progress bar on stderr for a multi-object run; nothing when stderr is no TTY."""
+    console = Console(stderr=True)
+    if total < 2 or not console.is_terminal:
+        yield None
+        return
+    with Progress(
+        TextColumn("lift {task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=console,
+        transient=True,
+    ) as bar:
+        task = bar.add_task("", total=total)
+
+        def advance(object_id: str, done: int, total_objects: int) -> None:
+            bar.update(task, completed=done, description=object_id)
+
+        yield advance
+
+
+@app.command()
+@translate_errors
+def lift(
+    catalog: str = typer.Argument(..., help="Object catalog, CSV or Parquet; - for stdin."),
+    output: str = typer.Option(
+        ..., "-o", "--output", help="Lift results table (Parquet); - for stdout."
+    ),
+    rig: str | None = typer.Option(
+        None,
+        "--rig",
+        help="External rig command, run once per attempt: JSON request on stdin, JSON answer "
+        "on stdout (protocol: docs/rig-protocol.md).",
+    ),
+    rig_timeout: float | None = typer.Option(
+        None,
+        "--rig-timeout",
+        help=f"Seconds one rig attempt may take before it is killed [default: "
+        f"{DEFAULT_RIG_TIMEOUT_S:g}].",
+    ),
+    log: str | None = typer.Option(
+        None, "--log", help="Lift log (MCAP) with every attempt; - for stdout."
+    ),
+    objects: str | None = typer.Option(
+        None, "--objects", help="Comma-separated object ids to lift, in this order [default: all]."
+    ),
+    protocol: str = typer.Option(
+        "refine",
+        "--protocol",
+        help="refine: the paper's ramp, then bisection to --tolerance; paper: the ramp only.",
+    ),
+    growth: float = typer.Option(
+        DEFAULT_GROWTH, "--growth", help="Ramp factor between attempts (> 1; the paper's 1.2)."
+    ),
+    tolerance: float = typer.Option(
+        DEFAULT_TOLERANCE_REL,
+        "--tolerance",
+        help="refine: stop when (high - low) / high <= this, relative, in (0, 1).",
+    ),
+    max_attempts: int = typer.Option(
+        DEFAULT_MAX_ATTEMPTS, "--max-attempts", help="Most attempts per object (>= 1)."
+    ),
+    force: bool = typer.Option(False, "--force", help="Overwrite existing outputs."),
+) -> None:
+    """Find each object's minimum lifting force L_f by iterative lifting.
+
+    Starts at the rigid-object force F_w = W / (2 mu) and raises the grip force by --growth
+    until the object lifts (paper); refine then bisects to --tolerance. Writes one row per
+    object (L_f, F_w, F_d = L_f - F_w, attempts, bracket, converged) and, with --log, every
+    attempt to an MCAP log. Exit 1 when an object does not converge or the rig fails; the
+    outputs are written first, keeping the attempts made so far.
+
+    Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
+    -o lift.parquet --log lift.mcap
+    """
+    factory = _choose_runner(rig, rig_timeout)
+    validate_search_options(
+        protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
+    )
+    object_ids = _parse_objects(objects)
+    _check_outputs(output, log, force)
+    selected = select_objects(read_catalog(catalog), object_ids)
+    provenance = Provenance.from_invocation(
+        [catalog],
+        settings={
+            "runner": factory.name,
+            **factory.settings,
+            "protocol": protocol,
+            "growth": growth,
+            "tolerance_rel": tolerance,
+            "max_attempts": max_attempts,
+            "objects": list(selected["object_id"]),
+        },
+    )
+    with _progress_bar(len(selected)) as progress:
+        run = lift_catalog(
+            selected,
+            factory,
+            protocol=cast(SearchProtocol, protocol),  # checked by validate_search_options
+            growth=growth,
+            tolerance_rel=tolerance,
+            max_attempts=max_attempts,
+            progress=progress,
+            path=catalog,
+        )
+    if log is not None:
+        write_lift_log(log, run.objects, run.attempts, provenance=provenance, force=force)
+    write_table(run.table, output, "lift_results", provenance=provenance, force=force)
+    if not is_stdio(output) and (log is None or not is_stdio(log)):
+        aborted = {f.object_id for f in run.failures if f.aborted}  # their line is the error
+        for result in run.results:
+            if result.object_id not in aborted:
+                typer.echo(result.message)
+    message = run.error_message()
+    if message is not None:
+        raise SearchError(message)

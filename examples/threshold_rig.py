@@ -1,0 +1,44 @@
+#!/usr/bin/env python3
+"""A stand-in rig for ``deformctl lift --rig``: lifts when the grip beats a threshold force.
+
+It follows the rig protocol (docs/rig-protocol.md): one JSON request on stdin, one JSON answer
+on stdout, notes on stderr. Instead of a robot it pretends each object needs
+``F_w + extra`` newtons, where ``F_w = W / (2 mu)`` comes from the request and ``extra``
+(``--extra-n``, default 0.5 N) plays the part of the deformation surplus F_d. So
+``deformctl lift`` should report ``f_d_n`` close to ``extra`` (within the search tolerance).
+
+Usage (deformctl runs it once per attempt):
+    deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py" \\
+        -o lift.parquet --log lift.mcap
+
+Replace the body of ``grip_and_lift`` with your robot driver.
+"""
+
+import argparse
+import json
+import sys
+
+
+def grip_and_lift(request: dict, extra_n: float) -> tuple[bool, float]:
+    """Pretend to grip with request['grip_force_n'] and lift; return (lifted, slip_m)."""
+    f_w_n = request["weight_n"] / (2.0 * request["friction_mu"])
+    lifted = request["grip_force_n"] >= f_w_n + extra_n
+    return lifted, 0.0 if lifted else 0.02  # a slipping object stays 2 cm behind the palms
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--extra-n", type=float, default=0.5, help="F_d the object needs, N")
+    args = parser.parse_args()
+    request = json.load(sys.stdin)
+    lifted, slip_m = grip_and_lift(request, args.extra_n)
+    print(
+        f"object {request['object_id']} attempt {request['attempt_index']}: "
+        f"{request['grip_force_n']:.4g} N -> {'lifted' if lifted else 'slipped'}",
+        file=sys.stderr,
+    )
+    print(json.dumps({"lifted": lifted, "slip_m": slip_m, "message": "threshold stand-in"}))
+
+
+if __name__ == "__main__":
+    main()
