@@ -1,7 +1,11 @@
 """Squeeze logs from real rigs: ROS 2 MCAP bags and CSV exports, as :class:`SqueezeSeries`.
 
-Both readers return ``list[SqueezeSeries]`` in SI units with compression ``d`` as defined in
-:mod:`deformctl.series` (total compression between the palms, positive when squeezed).
+Both readers (:func:`read_ros2_bag`, :func:`read_csv_export`) return a :class:`Recording`:
+the squeezes as ``list[SqueezeSeries]`` in SI units with compression ``d`` as defined in
+:mod:`deformctl.series` (total compression between the palms, positive when squeezed), plus the
+source streams' sample rates, which ``measure`` stores with the object so that ``characterize``
+can widen its differentiation window for slow position topics. :func:`squeeze_from_ros2_bag`
+and :func:`squeeze_from_csv` return the squeezes alone.
 
 **Where the compression comes from.** A position signal is one of:
 

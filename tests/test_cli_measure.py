@@ -360,3 +360,43 @@ def test_csv_columns_syntax(plain_csv: Path, tmp_path: Path) -> None:
         "--columns: expected key=value[,key=value...], got 'force'",
         out,
     )
+
+
+def test_default_window_matters_for_100_hz_positions(bag_run: tuple[Path, Path, Path]) -> None:
+    """The 1 kHz default window (0.2 s) on 100 Hz positions: λ biased low, as documented."""
+    _, log, coef = bag_run
+    out = coef.parent / "w02.parquet"
+    res = runner.invoke(app, ["characterize", str(log), "-o", str(out), "--window-s", "0.2"])
+    assert res.exit_code == 0, res.stderr
+    (row,) = read_table(out, "coefficients").to_dict("records")
+    (default,) = read_table(coef, "coefficients").to_dict("records")
+    err_02 = row["damping_ns_per_cm"] / LAM_TRUE - 1
+    err_default = default["damping_ns_per_cm"] / LAM_TRUE - 1
+    print(f"\nλ error at 100 Hz positions: window 0.2 s {err_02:+.1%}, default {err_default:+.1%}")
+    assert err_02 < -0.10
+    assert abs(err_default) < abs(err_02) / 3
+
+
+def _readme_invocations(command: str) -> list[list[str]]:
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    joined = text.replace("\\\n", " ")
+    out = []
+    for line in joined.splitlines():
+        start = line.find(f"deformctl {command} ")
+        if start >= 0:
+            words = line[start:].split("#")[0].split("|")[0].split(">")[0].split()
+            out.append(words[1:])
+    return out
+
+
+@pytest.mark.parametrize("command", ["measure", "characterize"])
+def test_readme_examples_parse(command: str) -> None:
+    """Every README invocation of the command uses options the command has."""
+    import typer.main
+
+    group = typer.main.get_command(app)
+    invocations = _readme_invocations(command)
+    assert len(invocations) >= 2
+    for args in invocations:
+        cmd = group.commands[args[0]]  # type: ignore[attr-defined]
+        cmd.make_context(command, args[1:])  # raises click.UsageError on an unknown option
