@@ -48,6 +48,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from os import PathLike
 from typing import Literal
 
 import numpy as np
@@ -65,6 +66,8 @@ Profile = Literal["ramp_hold_release", "sine"]
 #: small against squeeze rates of a few mm/s (noise in ``d'`` biases λ low, see ``fit_lsq``), short
 #: enough that a cubic follows a squeeze of a few seconds (cubic smoothing bias < 0.1 % in tests).
 DEFAULT_WINDOW_S = 0.2
+#: Sample rate the default window was chosen for, Hz (see :func:`default_window_s`).
+DEFAULT_WINDOW_RATE_HZ = 1000.0
 #: Default Savitzky–Golay polynomial order (cubic: exact for d through a smooth corner).
 DEFAULT_POLYORDER = 3
 #: Samples with compression below this fraction of the squeeze's peak compression are not used.
@@ -474,6 +477,111 @@ def characterize(
         )
     df = pd.DataFrame(rows, columns=list(COEFFICIENT_COLUMNS))
     return df.astype({"n_samples": "int64", "n_squeezes": "int64"})
+
+
+def default_window_s(position_rate_hz: float | None) -> float:
+    """The Savitzky–Golay window for a log whose positions were sampled at ``position_rate_hz``.
+
+    A squeeze log from a rig may carry positions sampled far more slowly than its forces (a
+    100 Hz pose topic beside a 1 kHz wrench topic); ingestion interpolates them onto the force
+    timestamps, so a window of ``T`` seconds holds only ``N = rate · T`` independent position
+    samples. The noise variance of an SG derivative scales as ``σ² / (N T²) = σ² / (rate T³)``,
+    and that noise biases λ low (see :func:`fit_lsq`). The default keeps it at the level of
+    :data:`DEFAULT_WINDOW_S` at :data:`DEFAULT_WINDOW_RATE_HZ`::
+
+        T = DEFAULT_WINDOW_S · (DEFAULT_WINDOW_RATE_HZ / rate)^(1/3),  never below DEFAULT_WINDOW_S
+
+    (100 Hz → 0.43 s, 500 Hz → 0.25 s, ≥ 1 kHz → 0.2 s). A longer window costs smoothing bias
+    at the corners of the force profile, so squeezes should last several windows.
+
+    Args:
+        position_rate_hz: position sample rate, Hz; None (unknown) gives the default.
+
+    Returns:
+        The window, s.
+    """
+    if position_rate_hz is None or not math.isfinite(position_rate_hz) or position_rate_hz <= 0:
+        return DEFAULT_WINDOW_S
+    scale = (DEFAULT_WINDOW_RATE_HZ / position_rate_hz) ** (1.0 / 3.0)
+    return DEFAULT_WINDOW_S * max(1.0, scale)
+
+
+@dataclass(frozen=True)
+class LogCoefficients:
+    """What :func:`read_and_characterize` found in one squeeze log.
+
+    Attributes:
+        table: one row per object, columns :data:`COEFFICIENT_COLUMNS`, in log order.
+        window_s: object id → the Savitzky–Golay window used, s.
+        position_rate_hz: object id → the position sample rate stored in the log, Hz (None
+            when the log does not say).
+    """
+
+    table: pd.DataFrame
+    window_s: dict[str, float]
+    position_rate_hz: dict[str, float | None]
+
+
+def _stored_rate(obj: Mapping[str, object] | None) -> float | None:
+    value = None if obj is None else obj.get("position_rate_hz")
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        return float(value)
+    return None
+
+
+def read_and_characterize(
+    path: str | PathLike[str],
+    method: Method = "lsq",
+    *,
+    window_s: float | None = None,
+) -> LogCoefficients:
+    """Read a squeeze log (validated), group its squeezes by object and fit each object.
+
+    Args:
+        path: the squeeze-log ``.mcap``, or ``-`` for stdin (read into memory).
+        method: ``"lsq"`` (:func:`fit_lsq`) or ``"paper"`` (:func:`fit_paper`).
+        window_s: Savitzky–Golay window, s, for every object; None picks it per object from
+            the ``position_rate_hz`` the log stores for it (:func:`default_window_s`).
+
+    Returns:
+        The coefficient table and the window used for each object.
+
+    Raises:
+        MissingInputError: the log does not exist (exit 66).
+        InputDataError: a damaged log or one that does not match its schema, no squeezes, or an
+            object whose squeezes cannot be fitted (no compression, too short, ...); the
+            message names the file and the object (exit 65).
+        UsageError: an unknown method or a window that is not > 0 (exit 2).
+    """
+    from deformctl.artifacts.io import display_name
+    from deformctl.artifacts.mcaplog import read_squeeze_log
+
+    if method not in ("lsq", "paper"):
+        raise UsageError(f"unknown method {method!r}; expected 'lsq' or 'paper'")
+    if window_s is not None and not (math.isfinite(window_s) and window_s > 0):
+        raise UsageError(f"window must be a finite number > 0 s, got {window_s}")
+    name = display_name(path)
+    objects, squeezes = read_squeeze_log(path)
+    if not squeezes:
+        raise InputDataError("the squeeze log holds no squeezes", path=name)
+    by_object: dict[str, list[SqueezeSeries]] = {}
+    for s in squeezes:
+        by_object.setdefault(s.object_id, []).append(s)
+    meta = {str(o["object_id"]): o for o in objects}
+    rates = {oid: _stored_rate(meta.get(oid)) for oid in by_object}
+    windows = {
+        oid: window_s if window_s is not None else default_window_s(rates[oid]) for oid in by_object
+    }
+    frames = []
+    for oid, group in by_object.items():
+        try:
+            frames.append(characterize({oid: group}, method, window_s=windows[oid]))
+        except InputDataError as err:
+            if err.path is None:  # the estimators name the object; add the file
+                raise InputDataError(err.message, path=name) from err
+            raise
+    table = pd.concat(frames, ignore_index=True)
+    return LogCoefficients(table=table, window_s=windows, position_rate_hz=rates)
 
 
 # --------------------------------------------------------------------------------------------

@@ -1,7 +1,11 @@
 """Squeeze logs from real rigs: ROS 2 MCAP bags and CSV exports, as :class:`SqueezeSeries`.
 
-Both readers return ``list[SqueezeSeries]`` in SI units with compression ``d`` as defined in
-:mod:`deformctl.series` (total compression between the palms, positive when squeezed).
+Both readers (:func:`read_ros2_bag`, :func:`read_csv_export`) return a :class:`Recording`:
+the squeezes as ``list[SqueezeSeries]`` in SI units with compression ``d`` as defined in
+:mod:`deformctl.series` (total compression between the palms, positive when squeezed), plus the
+source streams' sample rates, which ``measure`` stores with the object so that ``characterize``
+can widen its differentiation window for slow position topics. :func:`squeeze_from_ros2_bag`
+and :func:`squeeze_from_csv` return the squeezes alone.
 
 **Where the compression comes from.** A position signal is one of:
 
@@ -46,6 +50,7 @@ import csv
 import itertools
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
 from typing import Any, Literal
@@ -88,6 +93,30 @@ _UNITS_BY_KEY: dict[str, dict[str, float]] = {
     "compression": LENGTH_UNITS_M,
 }
 _POSITION_KEYS = ("position", "gap", "compression")
+
+
+@dataclass(frozen=True)
+class Recording:
+    """The squeezes read from one recording, with the sample rates of its source streams.
+
+    Attributes:
+        squeezes: the squeezes, in SI, as returned by :func:`squeeze_from_ros2_bag` /
+            :func:`squeeze_from_csv`.
+        force_rate_hz: median sample rate of the (first) force stream, Hz.
+        position_rate_hz: median sample rate of the position stream, Hz. Position is
+            interpolated onto the force timestamps, so a slow position stream carries fewer
+            independent samples than the squeezes have; ``characterize`` widens its
+            differentiation window for it (see :func:`deformctl.characterize.default_window_s`).
+    """
+
+    squeezes: list[SqueezeSeries]
+    force_rate_hz: float
+    position_rate_hz: float
+
+
+def _rate_hz(time_s: FloatArray) -> float:
+    """Median sample rate of increasing timestamps ``[n]`` (n ≥ 2), Hz."""
+    return float(1.0 / np.median(np.diff(time_s)))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -329,7 +358,7 @@ def _extract(
     return float(msg.position[names.index(joint)])
 
 
-def squeeze_from_ros2_bag(
+def read_ros2_bag(
     path: str | PathLike[str],
     *,
     wrench_topics: Sequence[str],
@@ -343,7 +372,7 @@ def squeeze_from_ros2_bag(
     force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
     min_gap_s: float = DEFAULT_MIN_GAP_S,
     min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
-) -> list[SqueezeSeries]:
+) -> Recording:
     """Read the squeezes of one object from a ROS 2 MCAP bag (``ros2msg`` schemas, ``cdr``).
 
     Args:
@@ -361,8 +390,9 @@ def squeeze_from_ros2_bag(
         force_threshold_frac, min_gap_s, min_squeeze_s: segmentation (module docstring).
 
     Returns:
-        The squeezes, time in s from each squeeze's first sample, on the (first) wrench
-        topic's timestamps inside the overlap with the position stream.
+        The squeezes (time in s from each squeeze's first sample, on the (first) wrench
+        topic's timestamps inside the overlap with the position stream) and the median sample
+        rates of the first wrench topic and of the position topic.
 
     Raises:
         MissingInputError: the bag does not exist.
@@ -422,7 +452,7 @@ def squeeze_from_ros2_bag(
     compression_m = _compression(
         position, force_n, position_is, where, force_threshold_frac, compression_zero
     )
-    return _to_squeezes(
+    squeezes = _to_squeezes(
         time_s,
         force_n,
         compression_m,
@@ -433,6 +463,7 @@ def squeeze_from_ros2_bag(
         min_gap_s=min_gap_s,
         min_squeeze_s=min_squeeze_s,
     )
+    return Recording(squeezes, _rate_hz(force_streams[0][0]), _rate_hz(pos_t))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -452,7 +483,7 @@ def _is_number(text: str) -> bool:
     return True
 
 
-def squeeze_from_csv(
+def read_csv_export(
     path: str | PathLike[str],
     *,
     columns: Mapping[str, str],
@@ -464,7 +495,7 @@ def squeeze_from_csv(
     force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
     min_gap_s: float = DEFAULT_MIN_GAP_S,
     min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
-) -> list[SqueezeSeries]:
+) -> Recording:
     """Read squeezes from a CSV export: plain, or names in row one and units in row two.
 
     The file is a two-header-row export when every mapped column's second row is not a number;
@@ -486,7 +517,7 @@ def squeeze_from_csv(
         force_threshold_frac, min_gap_s, min_squeeze_s: segmentation (module docstring).
 
     Returns:
-        The squeezes in SI.
+        The squeezes in SI and the file's median sample rate (for force and position alike).
 
     Raises:
         MissingInputError: the file does not exist.
@@ -578,7 +609,7 @@ def squeeze_from_csv(
     compression_m = _compression(
         arrays[pos_key], arrays["force"], kind, where, force_threshold_frac, compression_zero
     )
-    return _to_squeezes(
+    squeezes = _to_squeezes(
         time_s - time_s[0],
         arrays["force"],
         compression_m,
@@ -589,7 +620,121 @@ def squeeze_from_csv(
         min_gap_s=min_gap_s,
         min_squeeze_s=min_squeeze_s,
     )
+    rate_hz = _rate_hz(time_s)
+    return Recording(squeezes, rate_hz, rate_hz)
 
 
 def _cell(row: Sequence[str], i: int) -> str:
     return row[i] if i < len(row) else ""
+
+
+def squeeze_from_ros2_bag(
+    path: str | PathLike[str],
+    *,
+    wrench_topics: Sequence[str],
+    position_topic: str,
+    object_id: str,
+    axis: Axis = "x",
+    joint: str | None = None,
+    position_is: PositionIs = "palm",
+    compression_zero: CompressionZero = "lead_in",
+    segment: bool = True,
+    force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
+    min_gap_s: float = DEFAULT_MIN_GAP_S,
+    min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
+) -> list[SqueezeSeries]:
+    """The squeezes of :func:`read_ros2_bag` (same arguments and errors), without the rates."""
+    return read_ros2_bag(
+        path,
+        wrench_topics=wrench_topics,
+        position_topic=position_topic,
+        object_id=object_id,
+        axis=axis,
+        joint=joint,
+        position_is=position_is,
+        compression_zero=compression_zero,
+        segment=segment,
+        force_threshold_frac=force_threshold_frac,
+        min_gap_s=min_gap_s,
+        min_squeeze_s=min_squeeze_s,
+    ).squeezes
+
+
+def squeeze_from_csv(
+    path: str | PathLike[str],
+    *,
+    columns: Mapping[str, str],
+    object_id: str,
+    units: Mapping[str, str] | None = None,
+    position_is: PositionIs = "palm",
+    compression_zero: CompressionZero = "first",
+    segment: bool = False,
+    force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
+    min_gap_s: float = DEFAULT_MIN_GAP_S,
+    min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
+) -> list[SqueezeSeries]:
+    """The squeezes of :func:`read_csv_export` (same arguments and errors), without the rate."""
+    return read_csv_export(
+        path,
+        columns=columns,
+        object_id=object_id,
+        units=units,
+        position_is=position_is,
+        compression_zero=compression_zero,
+        segment=segment,
+        force_threshold_frac=force_threshold_frac,
+        min_gap_s=min_gap_s,
+        min_squeeze_s=min_squeeze_s,
+    ).squeezes
+
+
+# ---------------------------------------------------------------------------------------------
+# the object a measurement is of
+# ---------------------------------------------------------------------------------------------
+
+
+def object_record(
+    object_id: str,
+    weight_n: float,
+    *,
+    size_cm: Sequence[float] | None = None,
+    friction_mu: float | None = None,
+    force_rate_hz: float | None = None,
+    position_rate_hz: float | None = None,
+) -> dict[str, object]:
+    """The catalog-like row a squeeze log stores for a measured object.
+
+    Keys: ``object_id``, ``weight_n``; ``size_x_cm``, ``size_y_cm``, ``size_z_cm`` and
+    ``friction_mu`` when given; ``force_rate_hz`` and ``position_rate_hz`` (the source streams'
+    sample rates, which ``characterize`` uses to choose its differentiation window) when known.
+
+    Args:
+        object_id: catalog id, non-empty.
+        weight_n: weight W, N, finite and > 0.
+        size_cm: ``(x, y, z)`` size, cm, each finite and > 0; x is the squeeze axis.
+        friction_mu: palm–object Coulomb friction coefficient, finite and >= 0.
+        force_rate_hz: force stream sample rate, Hz.
+        position_rate_hz: position stream sample rate, Hz.
+
+    Raises:
+        UsageError: an empty id or a value out of range.
+    """
+    if not object_id or not object_id.strip():
+        raise UsageError("object id must not be empty")
+    if not (math.isfinite(weight_n) and weight_n > 0):
+        raise UsageError(f"weight must be a finite number > 0 N, got {weight_n}")
+    row: dict[str, object] = {"object_id": object_id, "weight_n": float(weight_n)}
+    if size_cm is not None:
+        if len(size_cm) != 3 or not all(math.isfinite(v) and v > 0 for v in size_cm):
+            raise UsageError(f"size must be three finite numbers > 0 cm, got {list(size_cm)}")
+        for axis, value in zip("xyz", size_cm, strict=True):
+            row[f"size_{axis}_cm"] = float(value)
+    if friction_mu is not None:
+        if not (math.isfinite(friction_mu) and friction_mu >= 0):
+            raise UsageError(f"friction coefficient must be finite and >= 0, got {friction_mu}")
+        row["friction_mu"] = float(friction_mu)
+    if force_rate_hz is not None:
+        row["force_rate_hz"] = float(force_rate_hz)
+    if position_rate_hz is not None:
+        row["position_rate_hz"] = float(position_rate_hz)
+    return row

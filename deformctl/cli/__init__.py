@@ -9,6 +9,8 @@ its traceback. Typer lists commands in the order they are registered.
 
 from __future__ import annotations
 
+import importlib
+
 import typer
 
 from deformctl import __version__
@@ -47,11 +49,10 @@ def _root(
 
 def _register() -> None:
     """Import the subcommand modules in pipeline order; each adds itself to ``app``."""
-    # One import per subcommand module, in pipeline order, as each one lands.
-    # isort: off
-    from deformctl.cli import lift  # noqa: F401
-    from deformctl.cli import inspect  # noqa: F401  (any artifact; last in the list)
-    # isort: on
+    # One module per subcommand, in pipeline order, as each one lands (imported by name so
+    # that import sorting cannot reorder them); inspect reads any artifact and comes last.
+    for name in ("measure", "characterize", "lift", "inspect"):
+        importlib.import_module(f"deformctl.cli.{name}")
 
 
 _register()
