@@ -47,10 +47,11 @@ blew up), the search raises :class:`SearchAbortedError` (or :class:`RigSearchAbo
 caller can still write every attempt to the log.
 
 Many objects (the ``lift`` stage): :func:`lift_catalog` runs one search per catalog object with a
-runner from a :class:`RunnerFactory` (:func:`rig_runner_factory` for an external rig; the
-simulator adds its own factory) and returns a :class:`CatalogLiftResult`: the lift_results table,
-every attempt (for the lift log) and the failures, which it records instead of raising, so the
-caller can write everything before it decides the exit code.
+runner from a :class:`RunnerFactory` (:func:`rig_runner_factory` for an external rig,
+:func:`deformctl.lift_sim.sim_runner_factory` for the simulator) and returns a
+:class:`CatalogLiftResult`: the lift_results table, every attempt (for the lift log) and the
+failures, which it records instead of raising, so the caller can write everything before it
+decides the exit code.
 
 Example:
     >>> from deformctl.series import TrialOutcome
@@ -534,6 +535,10 @@ class RunnerFactory:
         stop_on_failure: when a runner fails for one object (raises a
             :class:`~deformctl.errors.DeformctlError`), the remaining objects are not run.
         settings: JSON-serialisable settings of the runner, for the outputs' provenance.
+        check: ``check(catalog, path)``: refuse catalog rows this runner cannot run (e.g. the
+            simulator needs material values) by raising a
+            :class:`~deformctl.errors.DeformctlError`; :func:`lift_catalog` calls it before any
+            attempt. None: no runner-specific check.
     """
 
     name: str
@@ -541,6 +546,7 @@ class RunnerFactory:
     row_fields: Callable[[Mapping[str, Any]], Mapping[str, object]] = _no_row_fields
     stop_on_failure: bool = True
     settings: Mapping[str, Any] = field(default_factory=dict)
+    check: Callable[[pd.DataFrame, str | None], None] | None = None
 
 
 def rig_object(obj: Mapping[str, Any]) -> dict[str, Any]:
@@ -781,13 +787,15 @@ def lift_catalog(
 
     Raises:
         UsageError: a search option out of range (before anything runs; exit 2).
-        InputDataError: an object the lift cannot use, e.g. ``friction_mu = 0`` (before anything
-            runs; exit 65).
+        InputDataError: an object the lift cannot use, e.g. ``friction_mu = 0``, or one the
+            runner refuses (``factory.check``) (before anything runs; exit 65).
     """
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts
     )
     check_liftable(catalog, path=path)
+    if factory.check is not None:
+        factory.check(catalog, path)
     records = catalog_records(catalog)
     rows: list[dict[str, object]] = []
     attempts: list[LiftAttempt] = []

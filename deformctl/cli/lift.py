@@ -4,15 +4,16 @@ The command checks options and paths, picks the trial runner, and hands the work
 :func:`deformctl.lift.lift_catalog`; then it writes the lift log (every attempt) and the
 lift_results table, and turns failures into the exit code.
 
-Runners: exactly one must be chosen. Today that is ``--rig "CMD"`` (an external rig command);
-the built-in simulator (``--sim`` with its lift-profile options) plugs in as one more entry in
-:func:`_choose_runner`, each runner kind being a :class:`deformctl.lift.RunnerFactory`.
+Runners: exactly one must be chosen: ``--rig "CMD"`` (an external rig command) or ``--sim``
+(the built-in simulator, with its lift-profile, slip and simulator options, built by
+:func:`_sim_factory`); each runner kind is a :class:`deformctl.lift.RunnerFactory`.
 
 Failures, decided here:
 
 * bad options (tolerance, growth, max attempts, no runner, unknown ``--objects`` id): exit 2,
   before any attempt runs and before anything is written;
-* an object with ``friction_mu <= 0`` in the catalog: bad input data, exit 65, nothing run;
+* an object with ``friction_mu <= 0`` in the catalog, or (``--sim``) without material values:
+  bad input data, exit 65, nothing run;
 * a search that does not converge, or a rig that crashes, times out or answers garbage: the log
   (all completed attempts) and the table (a row per object, ``converged = false``, ``error``) are
   written first, then exit 1 with one line. A rig failure stops the run: the objects after it
@@ -23,9 +24,9 @@ Failures, decided here:
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
-from typing import cast
+from typing import Any, cast
 
 import typer
 from rich.console import Console
@@ -64,8 +65,48 @@ from deformctl.lift import (
 DEFAULT_RIG_TIMEOUT_S = 60.0
 
 
-def _choose_runner(rig: str | None, rig_timeout_s: float | None) -> RunnerFactory:
-    """The one trial runner the options ask for.
+def _sim_factory(sim: bool, options: Mapping[str, Any]) -> RunnerFactory | None:
+    """The simulator runner when ``--sim`` is given (None otherwise).
+
+    Args:
+        sim: ``--sim`` was given.
+        options: the sim options by flag (None: not given, the simulator's default applies).
+
+    Raises:
+        UsageError: a sim option without ``--sim``, or a value out of range.
+    """
+    if not sim:
+        given = [flag for flag, value in options.items() if value is not None]
+        if given:
+            raise UsageError(f"{given[0]} needs --sim")
+        return None
+    from deformctl.lift_sim import sim_runner_factory
+    from deformctl.sim import LiftProfile, SimSettings, SlipCriterion
+
+    def pick(flag: str, default: Any) -> Any:
+        value = options.get(flag)
+        return default if value is None else value
+
+    profile = LiftProfile(
+        accel_m_s2=pick("--lift-accel-m-s2", LiftProfile.accel_m_s2),
+        speed_m_s=pick("--lift-speed-m-s", LiftProfile.speed_m_s),
+        height_m=pick("--lift-height-m", LiftProfile.height_m),
+        hold_s=pick("--hold-s", LiftProfile.hold_s),
+    )
+    criterion = SlipCriterion(
+        tolerance_m=pick("--slip-tolerance-m", SlipCriterion.tolerance_m),
+        measure=pick("--slip-criterion", SlipCriterion.measure),
+    )
+    settings = SimSettings(
+        alpha_cm=pick("--alpha-cm", SimSettings.alpha_cm), dt_s=pick("--dt-s", SimSettings.dt_s)
+    )
+    return sim_runner_factory(profile=profile, settings=settings, criterion=criterion)
+
+
+def _choose_runner(
+    rig: str | None, rig_timeout_s: float | None, sim: RunnerFactory | None = None
+) -> RunnerFactory:
+    """The one trial runner the options ask for (``sim``: the factory of ``--sim``, if given).
 
     Raises:
         UsageError: no runner, more than one, or a runner option without its runner.
@@ -76,11 +117,13 @@ def _choose_runner(rig: str | None, rig_timeout_s: float | None) -> RunnerFactor
         chosen.append(rig_runner_factory(rig, timeout_s=timeout_s))
     elif rig_timeout_s is not None:
         raise UsageError("--rig-timeout needs --rig")
+    if sim is not None:
+        chosen.append(sim)
     if len(chosen) != 1:
         raise UsageError(
-            "choose exactly one trial runner: --rig CMD"
+            "choose exactly one trial runner: --rig CMD or --sim"
             if not chosen
-            else "choose exactly one trial runner"
+            else "choose exactly one trial runner (--rig or --sim)"
         )
     return chosen[0]
 
@@ -148,6 +191,37 @@ def lift(
         help=f"Seconds one rig attempt may take before it is killed [default: "
         f"{DEFAULT_RIG_TIMEOUT_S:g}].",
     ),
+    sim: bool = typer.Option(
+        False, "--sim", help="Run the attempts in the built-in simulator (needs material values)."
+    ),
+    lift_accel_m_s2: float | None = typer.Option(
+        None, "--lift-accel-m-s2", help="Sim: peak lift acceleration a_max, m/s² [default: 2]."
+    ),
+    lift_speed_m_s: float | None = typer.Option(
+        None, "--lift-speed-m-s", help="Sim: lift cruise speed, m/s [default: 0.25]."
+    ),
+    lift_height_m: float | None = typer.Option(
+        None, "--lift-height-m", help="Sim: rise, m [default: half the object's height]."
+    ),
+    hold_s: float | None = typer.Option(
+        None, "--hold-s", help="Sim: hold after the rise, s [default: 0.5]."
+    ),
+    slip_tolerance_m: float | None = typer.Option(
+        None,
+        "--slip-tolerance-m",
+        help="Sim: slip beyond which an attempt fails, m [default: 0.0005].",
+    ),
+    slip_criterion: str | None = typer.Option(
+        None,
+        "--slip-criterion",
+        metavar="contact|shortfall",
+        help="Sim: contact = sliding at the palms since the rise began; shortfall = palm rise "
+        "minus object rise at the end [default: contact].",
+    ),
+    alpha_cm: float | None = typer.Option(
+        None, "--alpha-cm", help="Sim: lattice spacing, cm [default: longest side / 4]."
+    ),
+    dt_s: float | None = typer.Option(None, "--dt-s", help="Sim: time step, s [default: 0.001]."),
     log: str | None = typer.Option(
         None, "--log", help="Lift log (MCAP) with every attempt; - for stdout."
     ),
@@ -180,10 +254,27 @@ def lift(
     attempt to an MCAP log. Exit 1 when an object does not converge or the rig fails; the
     outputs are written first, keeping the attempts made so far.
 
+    With --sim each attempt is simulated: grip, lift along the profile (S-curve to --lift-accel-m-s2
+    and --lift-speed-m-s, rise --lift-height-m, hold --hold-s), judge slip by --slip-criterion
+    against --slip-tolerance-m; every row records the profile and the criterion.
+
     Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
     -o lift.parquet --log lift.mcap
     """
-    factory = _choose_runner(rig, rig_timeout)
+    sim_factory = _sim_factory(
+        sim,
+        {
+            "--lift-accel-m-s2": lift_accel_m_s2,
+            "--lift-speed-m-s": lift_speed_m_s,
+            "--lift-height-m": lift_height_m,
+            "--hold-s": hold_s,
+            "--slip-tolerance-m": slip_tolerance_m,
+            "--slip-criterion": slip_criterion,
+            "--alpha-cm": alpha_cm,
+            "--dt-s": dt_s,
+        },
+    )
+    factory = _choose_runner(rig, rig_timeout, sim_factory)
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
     )

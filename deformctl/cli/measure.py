@@ -1,9 +1,10 @@
-"""``deformctl measure``: squeeze logs from a source (a ROS 2 bag or a CSV export).
+"""``deformctl measure``: squeeze logs from a source (a ROS 2 bag, a CSV export, the simulator).
 
-Exactly one source option is given per run; each source has a reader in :data:`_SOURCES` that
-checks its own options and returns a :class:`~deformctl.measure.Recording`. The command then
-writes the squeezes, the object's catalog-like row and the provenance as one squeeze log. A new
-source (the simulator over a catalog, images) is one more option and one more reader.
+Exactly one source option is given per run; each recording source has a reader in
+:data:`_SOURCES` that checks its own options and returns a :class:`~deformctl.measure.Recording`.
+The command then writes the squeezes, the object's catalog-like row and the provenance as one
+squeeze log. ``--sim`` (the simulator over a catalog, many objects) is handled by
+:func:`_measure_sim` over :func:`deformctl.measure.simulate_squeezes`.
 """
 
 from __future__ import annotations
@@ -14,13 +15,31 @@ from dataclasses import dataclass
 from typing import Any
 
 import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from deformctl.artifacts import Provenance, check_input_path, check_output_path, write_squeeze_log
+from deformctl.artifacts import (
+    Provenance,
+    check_input_path,
+    check_output_path,
+    read_catalog,
+    write_squeeze_log,
+)
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
 from deformctl.errors import UsageError
-from deformctl.measure import Recording, object_record, read_csv_export, read_ros2_bag
+from deformctl.measure import (
+    DEFAULT_SIM_HOLD_S,
+    DEFAULT_SIM_RAMP_S,
+    DEFAULT_SIM_SQUEEZES,
+    DEFAULT_SQUEEZE_STRAIN,
+    Recording,
+    object_record,
+    read_csv_export,
+    read_ros2_bag,
+    simulate_squeezes,
+)
 
 
 @dataclass(frozen=True)
@@ -137,13 +156,128 @@ def _choose_source(given: Mapping[str, str | None]) -> tuple[str, str]:
             if not chosen
             else "several sources (" + ", ".join(f for f, _ in chosen) + ")"
         )
-        raise UsageError(f"{what}: give exactly one of {', '.join(_SOURCES)}")
+        raise UsageError(f"{what}: give exactly one of {', '.join(given)}")
     return chosen[0]
+
+
+@dataclass(frozen=True)
+class _SimOptions:
+    """The ``--sim`` options as given (None: not given, the documented default applies)."""
+
+    squeezes: int | None
+    objects: str | None
+    peak_force_n: float | None
+    strain: float | None
+    ramp_s: float | None
+    hold_s: float | None
+    floating: bool | None
+    alpha_cm: float | None
+    dt_s: float | None
+    seed: int | None
+    noise_force_n: float | None
+    noise_position_m: float | None
+
+    def given(self) -> dict[str, object]:
+        """Option flag → value for the options given on the command line."""
+        return {
+            "--" + name.replace("_", "-"): value
+            for name, value in vars(self).items()
+            if value is not None
+        }
+
+
+def _squeeze_progress_bar(console: Console, total: int) -> Progress | None:
+    if total < 2 or not console.is_terminal:
+        return None
+    return Progress(
+        TextColumn("squeeze {task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=console,
+        transient=True,
+    )
+
+
+def _measure_sim(catalog_path: str, opts: _SimOptions, output: str, force: bool) -> None:
+    """``measure CATALOG --sim``: simulated squeezes of every (selected) catalog object."""
+    from deformctl.lift import select_objects
+    from deformctl.sim import SimSettings
+    from deformctl.simcatalog import settings_dict, sim_specs
+
+    if opts.peak_force_n is not None and opts.strain is not None:
+        raise UsageError("give --peak-force-n or --strain, not both")
+    squeezes = DEFAULT_SIM_SQUEEZES if opts.squeezes is None else opts.squeezes
+    if squeezes < 1:
+        raise UsageError(f"--squeezes must be >= 1, got {squeezes}")
+    settings = SimSettings(
+        alpha_cm=opts.alpha_cm, dt_s=SimSettings.dt_s if opts.dt_s is None else opts.dt_s
+    )
+    ids = None if opts.objects is None else [part.strip() for part in opts.objects.split(",")]
+    check_output_path(output, force)
+    catalog = select_objects(read_catalog(catalog_path), ids)
+    sim_specs(catalog, path=catalog_path)  # refuse rows without material values, before any run
+    seed = 0 if opts.seed is None else opts.seed
+    strain = DEFAULT_SQUEEZE_STRAIN if opts.strain is None else opts.strain
+    kwargs: dict[str, Any] = {
+        "squeezes": squeezes,
+        "peak_force_n": opts.peak_force_n,
+        "strain": strain,
+        "ramp_s": DEFAULT_SIM_RAMP_S if opts.ramp_s is None else opts.ramp_s,
+        "hold_s": DEFAULT_SIM_HOLD_S if opts.hold_s is None else opts.hold_s,
+        "gravity": not opts.floating,
+        "noise_force_n": opts.noise_force_n or 0.0,
+        "noise_position_m": opts.noise_position_m or 0.0,
+    }
+    provenance = Provenance.from_invocation(
+        [catalog_path],
+        seed=seed,
+        settings={
+            "source": "sim",
+            **kwargs,
+            "peak_force_rule": "peak_force_n" if opts.peak_force_n is not None else "strain",
+            "objects": list(catalog["object_id"]),
+            "sim_settings": settings_dict(settings),
+        },
+    )
+    console = Console(stderr=True)
+    total = squeezes * len(catalog)
+    bar = _squeeze_progress_bar(console, total)
+    if bar is None:
+        objects, series = simulate_squeezes(
+            catalog, settings=settings, seed=seed, path=catalog_path, **kwargs
+        )
+    else:
+        with bar:
+            task = bar.add_task("", total=total)
+
+            def advance(object_id: str, done: int, total_squeezes: int) -> None:
+                bar.update(task, completed=done, description=object_id)
+
+            objects, series = simulate_squeezes(
+                catalog, settings=settings, seed=seed, progress=advance, path=catalog_path, **kwargs
+            )
+    write_squeeze_log(output, objects, series, provenance=provenance, force=force)
+    where = "stdout" if is_stdio(output) else output
+    duration_s = sum(float(s.time_s[-1]) for s in series)
+    typer.echo(
+        f"{where}: {len(series)} simulated squeeze(s) of {len(objects)} object(s) "
+        f"({squeezes} each), {duration_s:.1f} s, dt {settings.dt_s:g} s",
+        err=True,
+    )
 
 
 @app.command()
 @translate_errors
 def measure(
+    catalog: str | None = typer.Argument(
+        None,
+        metavar="[CATALOG]",
+        help="--sim: the object catalog (CSV or Parquet, with material values); - for stdin.",
+    ),
+    sim: bool = typer.Option(
+        False, "--sim", help="Source: the simulator, squeezing every object of CATALOG."
+    ),
     bag: str | None = typer.Option(
         None, "--bag", metavar="BAG.mcap", help="Source: a ROS 2 bag, one MCAP file (ros2msg/cdr)."
     ),
@@ -212,22 +346,114 @@ def measure(
         metavar="squeeze.mcap",
         help="The squeeze log to write; - for stdout.",
     ),
+    squeezes: int | None = typer.Option(
+        None,
+        "--squeezes",
+        metavar="X",
+        help=f"Sim: squeezes per object, at 0.5..1 x the peak force [default: "
+        f"{DEFAULT_SIM_SQUEEZES}, the paper's].",
+    ),
+    objects: str | None = typer.Option(
+        None, "--objects", metavar="ID,...", help="Sim: these catalog objects [default: all]."
+    ),
+    peak_force_n: float | None = typer.Option(
+        None,
+        "--peak-force-n",
+        metavar="F",
+        help="Sim: peak force of the largest squeeze, N, for every object [default: the "
+        "strain rule, D x strain x size_x].",
+    ),
+    strain: float | None = typer.Option(
+        None,
+        "--strain",
+        metavar="E",
+        help=f"Sim: the default rule's static strain [default: {DEFAULT_SQUEEZE_STRAIN:g}].",
+    ),
+    ramp_s: float | None = typer.Option(
+        None, "--ramp-s", help=f"Sim: force ramp, s [default: {DEFAULT_SIM_RAMP_S:g}]."
+    ),
+    hold_s: float | None = typer.Option(
+        None, "--hold-s", help=f"Sim: hold at the peak force, s [default: {DEFAULT_SIM_HOLD_S:g}]."
+    ),
+    floating: bool | None = typer.Option(
+        None,
+        "--floating",
+        help="Sim: squeeze without gravity and table (a material test) [default: on the table].",
+    ),
+    alpha_cm: float | None = typer.Option(
+        None,
+        "--alpha-cm",
+        help="Sim: lattice spacing, cm [default: longest side / 4, 5 particles].",
+    ),
+    dt_s: float | None = typer.Option(None, "--dt-s", help="Sim: time step, s [default: 0.001]."),
+    seed: int | None = typer.Option(None, "--seed", help="Sim: noise seed [default: 0]."),
+    noise_force_n: float | None = typer.Option(
+        None, "--noise-force-n", help="Sim: force noise std, N [default: 0]."
+    ),
+    noise_position_m: float | None = typer.Option(
+        None, "--noise-position-m", help="Sim: noise std of each palm position, m [default: 0]."
+    ),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing output."),
 ) -> None:
-    """Turn a rig recording into a squeeze log (MCAP) of one object.
+    """Turn a rig recording, or simulated squeezes of a catalog, into a squeeze log (MCAP).
 
     Force and position are aligned by timestamp (position interpolated onto the force samples),
     the compression d between the palms is formed, and the recording is cut into squeezes. The
     log stores the object's weight (and size, friction when given), the source sample rates,
     and provenance (input sha256, command line, settings).
 
+    With --sim, every catalog object with material values is squeezed --squeezes times in the
+    simulator (force ramp then hold; the largest squeeze's peak force is D x strain x size_x
+    unless --peak-force-n is given), and the log stores each object's catalog row and the
+    simulator settings and seed.
+
     Example:
 
     \b
       deformctl measure --bag run.mcap --wrench-topic /left/wrench \\
         --position-topic /left/palm_pose --object-id sand --weight-n 2.9 -o squeeze.mcap
+      deformctl measure datasets/paper/objects.csv --sim -o squeeze.mcap
     """
-    flag, source = _choose_source({"--bag": bag, "--csv": csv})
+    sim_opts = _SimOptions(
+        squeezes=squeezes,
+        objects=objects,
+        peak_force_n=peak_force_n,
+        strain=strain,
+        ramp_s=ramp_s,
+        hold_s=hold_s,
+        floating=floating,
+        alpha_cm=alpha_cm,
+        dt_s=dt_s,
+        seed=seed,
+        noise_force_n=noise_force_n,
+        noise_position_m=noise_position_m,
+    )
+    if catalog is not None and not sim:
+        raise UsageError(f"a catalog argument ({catalog!r}) needs --sim")
+    flag, source = _choose_source(
+        {"--bag": bag, "--csv": csv, "--sim": (catalog or "") if sim else None}
+    )
+    if flag == "--sim":
+        _refuse(
+            {
+                "--wrench-topic": wrench_topics,
+                "--position-topic": position_topic,
+                "--joint": joint,
+                "--columns": columns,
+                "--units": units,
+                "--segment/--no-segment": segment,
+                "--object-id": object_id,
+                "--weight-n": weight_n,
+                "--size-cm": size_cm,
+                "--friction-mu": friction_mu,
+            },
+            "--sim (the catalog describes the objects)",
+        )
+        if not source:
+            raise UsageError("--sim needs a CATALOG argument (the objects to squeeze)")
+        _measure_sim(source, sim_opts, output, force)
+        return
+    _refuse(sim_opts.given(), flag)
     if object_id is None or weight_n is None:
         raise UsageError(f"{flag} needs --object-id and --weight-n")
     if is_stdio(source):
