@@ -28,6 +28,7 @@ failures part with its type and one-line message and the sweep goes on.
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import hashlib
 import json
@@ -38,7 +39,13 @@ import sys
 import time
 import uuid
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import (
+    FIRST_COMPLETED,
+    Future,
+    ProcessPoolExecutor,
+    ThreadPoolExecutor,
+    wait,
+)
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
@@ -333,14 +340,47 @@ def connect_dask(scheduler: str, connect_timeout_s: float) -> Any:
         raise DeformctlError(f"{prefix}: {reason}") from None
     import distributed
 
-    remaining_s = max(connect_timeout_s - (time.monotonic() - start), 0.5)
+    # distributed.Client can wait forever for the handshake of a peer that accepts connections
+    # but never answers, so ask for the scheduler's identity under a hard deadline first.
+    def remaining_s() -> float:
+        return max(connect_timeout_s - (time.monotonic() - start), 0.5)
+
+    probe_pool = ThreadPoolExecutor(max_workers=1)
+    probe = probe_pool.submit(asyncio.run, _dask_identity(scheduler, remaining_s()))
     try:
-        return distributed.Client(scheduler, timeout=remaining_s, set_as_default=False)
+        identity = probe.result(timeout=remaining_s() + 1.0)
     except Exception as err:
+        detail = "" if isinstance(err, TimeoutError) else f" ({_describe(err)})"
         raise DeformctlError(
-            f"{prefix}: no Dask scheduler answered within {connect_timeout_s:g} s "
-            f"({type(err).__name__}: {_one_line(str(err))[:200]})"
+            f"{prefix}: no Dask scheduler answered within {connect_timeout_s:g} s{detail}"
         ) from None
+    finally:
+        probe_pool.shutdown(wait=False)
+    if not isinstance(identity, Mapping) or identity.get("type") != "Scheduler":
+        raise DeformctlError(f"{prefix}: the peer is not a Dask scheduler")
+    try:
+        return distributed.Client(scheduler, timeout=remaining_s(), set_as_default=False)
+    except Exception as err:
+        raise DeformctlError(f"{prefix}: {_describe(err)}") from None
+
+
+def _describe(err: BaseException) -> str:
+    return f"{type(err).__name__}: {_one_line(str(err))[:200]}"
+
+
+async def _dask_identity(scheduler: str, timeout_s: float) -> Any:
+    """The ``identity`` answer of a Dask server, or TimeoutError after ``timeout_s``."""
+    from distributed.comm import connect
+
+    async def ask() -> Any:
+        comm = await connect(scheduler, timeout=timeout_s)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    return await asyncio.wait_for(ask(), timeout_s)
 
 
 class _DaskBackend:
@@ -357,7 +397,7 @@ class _DaskBackend:
         import distributed
 
         self._client = connect_dask(scheduler, connect_timeout_s)
-        self._ac = distributed.as_completed()
+        self._ac = distributed.as_completed(loop=self._client.loop)
         self._task, self._schema, self._id_column = task, schema, id_column
         self._positions: dict[str, int] = {}
         self._run = uuid.uuid4().hex[:12]
@@ -650,7 +690,7 @@ def run_sweep(
     }
     digest = hashlib.sha256(json.dumps(manifest, sort_keys=True).encode()).hexdigest()[:16]
 
-    # ---- prepare the directory: refuse, clean, or find the parts to keep
+    # ---- read-only checks first: refuse, or find the parts to keep
     kept: dict[int, int] = {}  # part index -> failed objects in it
     if out.exists() and not out.is_dir():
         raise OutputExistsError(out)
@@ -664,21 +704,12 @@ def run_sweep(
         except (OSError, ValueError):
             raise InputDataError(f"cannot resume: unreadable {MANIFEST_NAME}", path=out) from None
         _compare_manifest(old, manifest, out)
-        _clean_temp_files(out)
         for k, part_ids in enumerate(parts):
             n_failed = _valid_part(out, k, part_ids, schema, fail_schema, id_column, digest)
             if n_failed is not None:
                 kept[k] = n_failed
-    elif existing:
-        if not force:
-            raise OutputExistsError(out)
-        _remove_sweep_files(out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / FAILURES_DIR).mkdir(exist_ok=True)
-    if not (resume and existing):
-        atomic_write_bytes(manifest_path, json.dumps(manifest, indent=1).encode())
-
-    # ---- run the missing parts with a bounded window
+    elif existing and not force:
+        raise OutputExistsError(out)
     todo = [
         k * partition_size + j
         for k in range(len(parts))
@@ -686,23 +717,33 @@ def run_sweep(
         for j in range(len(parts[k]))
     ]
     skipped = sum(len(parts[k]) for k in kept)
+
+    # ---- then the executor (an unreachable scheduler leaves the directory untouched)
+    backend: _Backend | None = None
+    if todo:
+        if scheduler is not None:
+            backend = _DaskBackend(scheduler, connect_timeout_s, task, schema, id_column)
+        else:
+            n_workers = workers if workers is not None else _available_cores()
+            backend = _LocalBackend(min(n_workers, len(todo)), task, schema, id_column)
+
     buffers: dict[int, dict[int, _ItemResult]] = {}
     n_done = n_failed = 0
-    bar = _Progress(progress, total=len(ids), completed=skipped)
-
-    def finish_part(k: int) -> None:
-        results = buffers.pop(k)
-        ordered = [results[p] for p in sorted(results)]
-        _commit_part(out, k, parts[k], ordered, schema, fail_schema, id_column, digest, part_writer)
-
-    backend: _Backend | None = None
+    bar: _Progress | None = None
     try:
-        if todo:
-            if scheduler is not None:
-                backend = _DaskBackend(scheduler, connect_timeout_s, task, schema, id_column)
-            else:
-                n_workers = workers if workers is not None else _available_cores()
-                backend = _LocalBackend(min(n_workers, len(todo)), task, schema, id_column)
+        # ---- now write: clean, manifest first
+        if existing and resume:
+            _clean_temp_files(out)
+        elif existing:
+            _remove_sweep_files(out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / FAILURES_DIR).mkdir(exist_ok=True)
+        if not (resume and existing):
+            atomic_write_bytes(manifest_path, json.dumps(manifest, indent=1).encode())
+        bar = _Progress(progress, total=len(ids), completed=skipped)
+
+        # ---- run the missing parts with a bounded window, committing each finished part
+        if backend is not None:
             limit = max_in_flight or backend.capacity
             lookahead = limit + partition_size  # bounds buffered results when one object lags
             unfinished: set[int] = set()  # indices into todo
@@ -724,9 +765,21 @@ def run_sweep(
                     n_failed += not ok
                     bar.advance(ok)
                     if len(buffers[k]) == len(parts[k]):
-                        finish_part(k)
+                        results = buffers.pop(k)
+                        _commit_part(
+                            out,
+                            k,
+                            parts[k],
+                            [results[p] for p in sorted(results)],
+                            schema,
+                            fail_schema,
+                            id_column,
+                            digest,
+                            part_writer,
+                        )
     finally:
-        bar.close()
+        if bar is not None:
+            bar.close()
         if backend is not None:
             backend.close()
     elapsed_s = time.monotonic() - start
