@@ -357,3 +357,16 @@ def test_reading_missing_or_non_parquet_inputs(tmp_path: Path) -> None:
     with pytest.raises(InputDataError, match="no part-"):
         read_dataset(tmp_path / "empty")
     assert issubclass(InputDataError, DeformctlError)
+
+
+def test_progress_bar_only_on_a_terminal(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    sweep(make_items(6), tmp_path / "quiet", workers=1, progress=True)
+    assert capsys.readouterr().err == ""  # stderr is not a TTY under pytest
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    sweep(make_items(8), tmp_path / "tty", workers=1, progress=True)  # obj-07 fails
+    err = capsys.readouterr().err
+    assert "8/8" in err
+    assert "1 failed" in err
+    assert "obj/s" in err
