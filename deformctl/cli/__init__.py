@@ -48,7 +48,14 @@ def _root(
 def _register() -> None:
     """Import the subcommand modules in pipeline order; each adds itself to ``app``."""
     # One import per subcommand module, in pipeline order, as each one lands.
-    from deformctl.cli import inspect  # noqa: F401  (any artifact; last in the list)
+    # isort: off  (pipeline order, not alphabetical)
+    from deformctl.cli import (
+        inspect,  # noqa: F401  (any artifact; last in the list)
+        predict,  # noqa: F401
+        table,  # noqa: F401
+        train,  # noqa: F401
+    )
+    # isort: on
 
 
 _register()
