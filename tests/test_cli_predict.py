@@ -10,6 +10,8 @@ from __future__ import annotations
 import io
 import json
 import os
+import re
+import shlex
 from pathlib import Path
 
 import numpy as np
@@ -242,3 +244,48 @@ def test_existing_output_needs_force(setup: dict[str, Path], tmp_path: Path) -> 
     assert result.exit_code == 0, result.stderr
     assert len(read_table(out, "predictions")) == 1
     assert sorted(os.listdir(tmp_path)) == ["p.parquet"]
+
+
+def _readme_commands() -> list[list[str]]:
+    """The shell commands of the README's table, train and predict sections, split into words."""
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    start, end = text.index("\n## table\n"), text.index("\n## inspect\n")
+    commands: list[list[str]] = []
+    for block in re.findall(r"```sh\n(.*?)```", text[start:end], flags=re.DOTALL):
+        for command in block.replace("\\\n", " ").splitlines():
+            words = shlex.split(command, comments=True)
+            if words:
+                commands.append(words)
+    return commands
+
+
+def test_readme_examples_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Docs are executed: every README command of these sections, in order, in-process."""
+    monkeypatch.chdir(tmp_path)
+    commands = _readme_commands()
+    assert [c[:2] for c in commands[:2]] == [
+        ["python", "examples/synthetic_index.py"],
+        ["deformctl", "table"],
+    ]
+    assert {c[1] for c in commands[1:]} == {"table", "train", "inspect", "predict"}
+    for words in commands:
+        if words[0] == "python":
+            assert load_example().main(words[2:]) == 0
+            continue
+        assert words[0] == "deformctl"
+        redirect = words.index(">") if ">" in words else None
+        args = words[1:redirect] if redirect else words[1:]
+        result = runner.invoke(app, args)
+        assert result.exit_code == 0, (words, result.stderr)
+        if redirect:
+            Path(words[redirect + 1]).write_text(result.stdout)
+    assert sorted(os.listdir(tmp_path / "demo")) == [
+        "coefficients.parquet",
+        "index.parquet",
+        "lift.parquet",
+        "metrics.json",
+        "model.skops",
+        "objects.csv",
+        "predictions.csv",
+        "predictions.parquet",
+    ]
