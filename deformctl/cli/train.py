@@ -100,7 +100,10 @@ def train(
     The model file's metadata records the seed, features, hyper-parameters, training ranges,
     split ids and metrics; the same seed gives identical predictions.
 
-    Example: deformctl train index.parquet -o model.skops --seed 0 --metrics metrics.json
+    Example:
+
+    \b
+      deformctl train index.parquet -o model.skops --seed 0 --metrics metrics.json
     """
     sizes = parse_hidden(hidden)
     if is_stdio(output):
