@@ -3,7 +3,8 @@
 Exactly one source option is given per run; each source has a reader in :data:`_SOURCES` that
 checks its own options and returns a :class:`~deformctl.measure.Recording`. The command then
 writes the squeezes, the object's catalog-like row and the provenance as one squeeze log. A new
-source (the simulator over a catalog, images) is one more option and one more reader.
+source (the simulator over a catalog) is one more option and one more reader. ``--images``
+writes an object-catalog row instead (:mod:`deformctl.cli._measure_images`).
 """
 
 from __future__ import annotations
@@ -268,7 +269,7 @@ def measure(
         "-o",
         "--output",
         metavar="squeeze.mcap",
-        help="The squeeze log to write; - for stdout.",
+        help="The squeeze log to write (with --images: the catalog); - for stdout.",
     ),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing output."),
 ) -> None:
