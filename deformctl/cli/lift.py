@@ -47,6 +47,7 @@ from deformctl.artifacts import (
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
+from deformctl.cli._lift_frames import DEFAULT_SLIP_TOLERANCE_M, frames_judge
 from deformctl.errors import SearchError, UsageError
 from deformctl.lift import (
     DEFAULT_GROWTH,
@@ -60,11 +61,14 @@ from deformctl.lift import (
     select_objects,
     validate_search_options,
 )
+from deformctl.rig import SlipFromFrames
 
 DEFAULT_RIG_TIMEOUT_S = 60.0
 
 
-def _choose_runner(rig: str | None, rig_timeout_s: float | None) -> RunnerFactory:
+def _choose_runner(
+    rig: str | None, rig_timeout_s: float | None, judge: SlipFromFrames | None = None
+) -> RunnerFactory:
     """The one trial runner the options ask for.
 
     Raises:
@@ -73,9 +77,11 @@ def _choose_runner(rig: str | None, rig_timeout_s: float | None) -> RunnerFactor
     chosen: list[RunnerFactory] = []
     if rig is not None:
         timeout_s = DEFAULT_RIG_TIMEOUT_S if rig_timeout_s is None else rig_timeout_s
-        chosen.append(rig_runner_factory(rig, timeout_s=timeout_s))
-    elif rig_timeout_s is not None:
-        raise UsageError("--rig-timeout needs --rig")
+        chosen.append(rig_runner_factory(rig, timeout_s=timeout_s, slip_from_frames=judge))
+    elif rig_timeout_s is not None or judge is not None:
+        raise UsageError(
+            f"{'--rig-timeout' if judge is None else '--slip-from-frames'} needs --rig"
+        )
     if len(chosen) != 1:
         raise UsageError(
             "choose exactly one trial runner: --rig CMD"
@@ -148,6 +154,39 @@ def lift(
         help=f"Seconds one rig attempt may take before it is killed [default: "
         f"{DEFAULT_RIG_TIMEOUT_S:g}].",
     ),
+    slip_from_frames: bool = typer.Option(
+        False,
+        "--slip-from-frames",
+        help="Rig answers with before/after frames: judge lifted/slipped from them (vision).",
+    ),
+    palm_marker_ids: str | None = typer.Option(
+        None, "--palm-marker-ids", metavar="L,R", help="Frames: ids of ArUco markers on the palms."
+    ),
+    palm_regions: str | None = typer.Option(
+        None,
+        "--palm-regions",
+        metavar="x,y,w,h;x,y,w,h",
+        help="Frames: palm rectangles in the before frame, px (each with a distinct palm part).",
+    ),
+    frame_marker_size_cm: float | None = typer.Option(
+        None,
+        "--frame-marker-size-cm",
+        metavar="S",
+        help="Frames: side of the markers in view, cm (the image scale).",
+    ),
+    frame_marker_dict: str | None = typer.Option(
+        None, "--frame-marker-dict", help="Frames: ArUco dictionary [default: DICT_4X4_50]."
+    ),
+    slip_tolerance_m: float | None = typer.Option(
+        None,
+        "--slip-tolerance-m",
+        metavar="T",
+        help=f"Frames: the object may fall behind the palms by this much, m "
+        f"[default: {DEFAULT_SLIP_TOLERANCE_M:g}].",
+    ),
+    debug_dir: str | None = typer.Option(
+        None, "--debug-dir", help="Frames: write the last attempt's annotated frames here."
+    ),
     log: str | None = typer.Option(
         None, "--log", help="Lift log (MCAP) with every attempt; - for stdout."
     ),
@@ -183,7 +222,12 @@ def lift(
     Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
     -o lift.parquet --log lift.mcap
     """
-    factory = _choose_runner(rig, rig_timeout)
+    judge = frames_judge(
+        enabled=slip_from_frames, palm_marker_ids=palm_marker_ids, palm_regions=palm_regions,
+        frame_marker_size_cm=frame_marker_size_cm, slip_tolerance_m=slip_tolerance_m,
+        marker_dict=frame_marker_dict, debug_dir=debug_dir,
+    )  # fmt: skip
+    factory = _choose_runner(rig, rig_timeout, judge)
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
     )

@@ -3,7 +3,8 @@
 Exactly one source option is given per run; each source has a reader in :data:`_SOURCES` that
 checks its own options and returns a :class:`~deformctl.measure.Recording`. The command then
 writes the squeezes, the object's catalog-like row and the provenance as one squeeze log. A new
-source (the simulator over a catalog, images) is one more option and one more reader.
+source (the simulator over a catalog) is one more option and one more reader. ``--images``
+writes an object-catalog row instead (:mod:`deformctl.cli._measure_images`).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from deformctl.artifacts import Provenance, check_input_path, check_output_path,
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
+from deformctl.cli._measure_images import ImageOptions, measure_images
 from deformctl.errors import UsageError
 from deformctl.measure import Recording, object_record, read_csv_export, read_ros2_bag
 
@@ -127,6 +129,8 @@ _SOURCES: dict[str, Callable[[str, _Options], tuple[Recording, dict[str, Any]]]]
     "--bag": _from_bag,
     "--csv": _from_csv,
 }
+#: source options that write a catalog row instead (their own module, not a Recording reader).
+_CATALOG_SOURCES = ("--images",)
 
 
 def _choose_source(given: Mapping[str, str | None]) -> tuple[str, str]:
@@ -137,7 +141,7 @@ def _choose_source(given: Mapping[str, str | None]) -> tuple[str, str]:
             if not chosen
             else "several sources (" + ", ".join(f for f, _ in chosen) + ")"
         )
-        raise UsageError(f"{what}: give exactly one of {', '.join(_SOURCES)}")
+        raise UsageError(f"{what}: give exactly one of {', '.join([*_SOURCES, *_CATALOG_SOURCES])}")
     return chosen[0]
 
 
@@ -152,6 +156,13 @@ def measure(
         "--csv",
         metavar="FILE",
         help="Source: a CSV export, plain or with a units row under the names.",
+    ),
+    images: tuple[str, str] | None = typer.Option(
+        None,
+        "--images",
+        metavar="TOP SIDE",
+        help="Source: a top and a side image with a scale reference; writes a catalog row "
+        "(object size from the images) instead of a squeeze log.",
     ),
     wrench_topics: list[str] = typer.Option(  # noqa: B008
         [],
@@ -193,6 +204,54 @@ def measure(
         "--segment/--no-segment",
         help="Split the recording into squeezes by force (default: yes for bags, no for CSV).",
     ),
+    marker_size_cm: float | None = typer.Option(
+        None,
+        "--marker-size-cm",
+        metavar="S",
+        help="Images: side of the ArUco marker's black square, cm.",
+    ),
+    marker_dict: str | None = typer.Option(
+        None,
+        "--marker-dict",
+        metavar="DICT",
+        help="Images: ArUco dictionary [default: DICT_4X4_50].",
+    ),
+    marker_id: int | None = typer.Option(
+        None,
+        "--marker-id",
+        metavar="N",
+        help="Images: use the marker with this id (others ignored).",
+    ),
+    checkerboard: str | None = typer.Option(
+        None,
+        "--checkerboard",
+        metavar="COLSxROWS",
+        help="Images: a checkerboard (inner corners) instead of a marker.",
+    ),
+    square_size_cm: float | None = typer.Option(
+        None, "--square-size-cm", metavar="S", help="Images: the checkerboard's square side, cm."
+    ),
+    color_range: str | None = typer.Option(
+        None,
+        "--color-range",
+        metavar="H,S,V:H,S,V",
+        help="Images: the object is this HSV range (OpenCV, H 0-179).",
+    ),
+    background: tuple[str, str] | None = typer.Option(
+        None,
+        "--background",
+        metavar="TOP_BG SIDE_BG",
+        help="Images: the empty scenes; the object is what differs.",
+    ),
+    debug_dir: str | None = typer.Option(
+        None,
+        "--debug-dir",
+        metavar="DIR",
+        help="Images: write annotated images (marker, contour, sizes) here.",
+    ),
+    append: bool = typer.Option(
+        False, "--append", help="Images: add the row to the catalog -o (created if missing)."
+    ),
     object_id: str | None = typer.Option(
         None, "--object-id", metavar="ID", help="Id of the squeezed object (required)."
     ),
@@ -210,7 +269,7 @@ def measure(
         "-o",
         "--output",
         metavar="squeeze.mcap",
-        help="The squeeze log to write; - for stdout.",
+        help="The squeeze log to write (with --images: the catalog); - for stdout.",
     ),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing output."),
 ) -> None:
@@ -227,9 +286,30 @@ def measure(
       deformctl measure --bag run.mcap --wrench-topic /left/wrench \\
         --position-topic /left/palm_pose --object-id sand --weight-n 2.9 -o squeeze.mcap
     """
-    flag, source = _choose_source({"--bag": bag, "--csv": csv})
+    image_opts = ImageOptions(
+        marker_size_cm, marker_dict, marker_id, checkerboard, square_size_cm, color_range,
+        background, debug_dir, append,
+    )  # fmt: skip
+    flag, source = _choose_source(
+        {"--bag": bag, "--csv": csv, "--images": images[0] if images else None}
+    )
     if object_id is None or weight_n is None:
         raise UsageError(f"{flag} needs --object-id and --weight-n")
+    if images is not None:
+        _refuse(
+            {
+                "--wrench-topic": wrench_topics, "--position-topic": position_topic,
+                "--joint": joint, "--columns": columns, "--units": units,
+                "--segment/--no-segment": segment, "--size-cm": size_cm,
+            },
+            "--images",
+        )  # fmt: skip
+        measure_images(
+            images, image_opts, object_id=object_id, weight_n=weight_n,
+            friction_mu=friction_mu, output=output, force=force,
+        )  # fmt: skip
+        return
+    _refuse(image_opts.given(), flag)
     if is_stdio(source):
         raise UsageError(f"{flag}: cannot read from stdin; give a file")
     object_record(object_id, weight_n, size_cm=size_cm, friction_mu=friction_mu)  # check early
