@@ -77,7 +77,7 @@ import pandas as pd
 from deformctl.artifacts.mcaplog import LiftAttempt
 from deformctl.artifacts.schema import validate_frame
 from deformctl.errors import DeformctlError, InputDataError, RigError, SearchError, UsageError
-from deformctl.rig import RigAttemptError, RigRunner
+from deformctl.rig import RigAttemptError, RigRunner, SlipFromFrames
 from deformctl.series import TrialOutcome
 
 SearchProtocol = Literal["refine", "paper"]
@@ -511,6 +511,8 @@ LiftProgress = Callable[[str, int, int], None]
 """``progress(object_id, objects_done, objects_total)``, called after each object of a catalog."""
 
 RIG_SLIP_CRITERION = "rig"  #: ``slip_criterion`` of rows whose outcome the rig reported itself
+#: ``slip_criterion`` when deformctl judges rig frames (a rig answering ``lifted`` still decides).
+FRAMES_SLIP_CRITERION = "frames"
 _PROFILE_COLUMNS = ("lift_accel_m_s2", "lift_speed_m_s", "lift_height_m", "slip_tolerance_m")
 
 
@@ -571,6 +573,7 @@ def rig_runner_factory(
     *,
     timeout_s: float,
     cwd: str | os.PathLike[str] | None = None,
+    slip_from_frames: SlipFromFrames | None = None,
 ) -> RunnerFactory:
     """A :class:`RunnerFactory` for an external rig command (see :mod:`deformctl.rig`).
 
@@ -583,6 +586,10 @@ def rig_runner_factory(
             an argument list.
         timeout_s: the longest one attempt may take, s (finite, > 0).
         cwd: the directory the command runs in; the current directory when None.
+        slip_from_frames: judges rig answers that carry frames but no ``lifted`` (e.g.
+            ``functools.partial(deformctl.vision.slip_from_frames, palm_marker_ids=(1, 2),
+            marker_size_cm=2.4)``); its bound keywords go into the settings, its ``tolerance_m``
+            into the rows' ``slip_tolerance_m``.
 
     Raises:
         UsageError: an empty or unparsable command (unbalanced quotes), or a bad timeout.
@@ -602,19 +609,34 @@ def rig_runner_factory(
         raise UsageError(f"rig timeout must be a finite number > 0 s, got {timeout_s!r}")
 
     def make(obj: Mapping[str, Any]) -> TrialRunner:
-        return RigRunner(argv, timeout_s=float(timeout_s), object=rig_object(obj), cwd=cwd)
+        return RigRunner(
+            argv,
+            timeout_s=float(timeout_s),
+            object=rig_object(obj),
+            cwd=cwd,
+            slip_from_frames=slip_from_frames,
+        )
+
+    frame_options = dict(getattr(slip_from_frames, "keywords", None) or {})
 
     def row_fields(obj: Mapping[str, Any]) -> Mapping[str, object]:
         fields: dict[str, object] = dict.fromkeys(_PROFILE_COLUMNS, math.nan)
         fields["slip_criterion"] = RIG_SLIP_CRITERION
+        if slip_from_frames is not None:
+            fields["slip_criterion"] = FRAMES_SLIP_CRITERION
+            fields["slip_tolerance_m"] = float(frame_options.get("tolerance_m", math.nan))
         return fields
+
+    settings: dict[str, Any] = {"rig_command": argv, "rig_timeout_s": float(timeout_s)}
+    if slip_from_frames is not None:
+        settings["slip_from_frames"] = frame_options
 
     return RunnerFactory(
         name="rig",
         make=make,
         row_fields=row_fields,
         stop_on_failure=True,
-        settings={"rig_command": argv, "rig_timeout_s": float(timeout_s)},
+        settings=settings,
     )
 
 

@@ -38,18 +38,7 @@ import numpy as np
 import pandas as pd
 
 from deformctl.errors import UsageError
-
-#: The catalog columns, in order (see the module docstring for units).
-CATALOG_COLUMNS: tuple[str, ...] = (
-    "object_id",
-    "size_x_cm",
-    "size_y_cm",
-    "size_z_cm",
-    "weight_n",
-    "friction_mu",
-    "material_stiffness_n_per_cm",
-    "material_damping_ns_per_cm",
-)
+from deformctl.sim.objects import CATALOG_COLUMNS
 
 #: The paper's population size and split (section V.A).
 PAPER_POPULATION_SIZE = 73

@@ -524,3 +524,123 @@ def predict(model: ScaledTargetRegressor, features: pd.DataFrame) -> Prediction:
     frame["predicted_lift_force_n"] = pred
     frame["outside_training_range"] = outside.any(axis=1)
     return Prediction(frame=frame, warnings=messages)
+
+
+def parse_hidden(text: str) -> tuple[int, ...]:
+    """Hidden layer sizes from ``"2"`` or a comma list such as ``"8,4"``.
+
+    Raises:
+        UsageError: an empty list, an item that is not an integer, or a size < 1.
+    """
+    items = [s.strip() for s in str(text).split(",")]
+    sizes: list[int] = []
+    for item in items:
+        try:
+            size = int(item)
+        except ValueError:
+            raise UsageError(
+                f"hidden layer sizes must be integers like 2 or 8,4; got {text!r}"
+            ) from None
+        if size < 1:
+            raise UsageError(f"hidden layer sizes must be >= 1, got {text!r}")
+        sizes.append(size)
+    return tuple(sizes)
+
+
+def json_safe(value: Any) -> Any:
+    """A copy of ``value`` that strict JSON accepts: NaN/inf -> None, numpy scalars -> Python."""
+    if isinstance(value, dict):
+        return {str(k): json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_safe(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def train_report(result: TrainResult) -> dict[str, Any]:
+    """Everything :func:`train_model` measured, as strict-JSON data (NaN -> null).
+
+    Returns:
+        ``result.metrics`` plus ``split`` (``{"train": [ids], "test": [ids]}``) and
+        ``predictions``: one record per object with ``object_id``, ``split``, ``lift_force_n``,
+        ``predicted_lift_force_n``, ``rel_error``, ``nearest_lift_force_n`` and ``f_w_n``.
+    """
+    cols = [
+        "object_id",
+        "split",
+        TARGET,
+        "predicted_lift_force_n",
+        "rel_error",
+        "nearest_lift_force_n",
+        "f_w_n",
+    ]
+    records = result.predictions[cols].to_dict("records")
+    return json_safe(
+        {
+            **result.metrics,
+            "split": {"train": list(result.split.train), "test": list(result.split.test)},
+            "predictions": records,
+        }
+    )
+
+
+def prediction_inputs(table: pd.DataFrame, catalog: pd.DataFrame | None = None) -> pd.DataFrame:
+    """The :data:`FEATURES` per object from a table, taking ``weight_n`` from ``catalog``.
+
+    The table (an index table, a predictions table or a coefficients table) must have
+    ``deformability_n_per_cm`` and ``damping_ns_per_cm``; ``weight_n`` comes from the table
+    itself or, when ``catalog`` is given, from the catalog row with the same ``object_id``.
+    When both have a weight they must agree (relative 1e-6).
+
+    Args:
+        table: ``[n]`` rows, with ``object_id`` when a catalog is to be joined.
+        catalog: an object catalog (``object_id``, ``weight_n``), or None.
+
+    Returns:
+        ``[n]`` rows in the table's order: ``object_id`` (when the table has it) and
+        :data:`FEATURES`.
+
+    Raises:
+        SchemaError: a feature column is missing and cannot be joined; ``object_id`` missing
+            when a catalog is given.
+        InputDataError: an object missing from the catalog, or a weight that differs between
+            the table and the catalog (the messages name the ids).
+    """
+    frame = table.copy()
+    if catalog is not None:
+        for name, df in (("the input", frame), ("the catalog", catalog)):
+            if "object_id" not in df.columns:
+                raise SchemaError(f"{name} has no column 'object_id' to join on", field="object_id")
+        if "weight_n" not in catalog.columns:
+            raise SchemaError("the catalog has no column 'weight_n'", field="weight_n")
+        weights = dict(
+            zip(
+                catalog["object_id"].astype(str),
+                catalog["weight_n"].to_numpy(dtype=np.float64),
+                strict=True,
+            )
+        )
+        ids = frame["object_id"].astype(str)
+        missing = sorted(set(ids) - set(weights))
+        if missing:
+            raise InputDataError(
+                f"{len(missing)} object(s) are not in the catalog: {format_ids(missing)}"
+            )
+        joined = ids.map(weights).to_numpy(dtype=np.float64)
+        if "weight_n" in frame.columns:
+            own = pd.to_numeric(frame["weight_n"], errors="coerce").to_numpy(dtype=np.float64)
+            bad = ~np.isclose(own, joined, rtol=1e-6, atol=0.0, equal_nan=True)
+            if bad.any():
+                raise InputDataError(
+                    f"weight_n differs between the input and the catalog for {format_ids(ids[bad])}"
+                )
+        frame["weight_n"] = joined
+    for col in FEATURES:
+        if col not in frame.columns:
+            hint = " (pass --catalog to join weights by object_id)" if col == "weight_n" else ""
+            raise SchemaError(f"the input has no column {col!r}{hint}", field=col)
+    keep = (["object_id"] if "object_id" in frame.columns else []) + list(FEATURES)
+    return frame[keep].reset_index(drop=True)

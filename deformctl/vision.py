@@ -150,7 +150,13 @@ def load_image(source: ImageSource, *, name: str = "image") -> NDArray[np.uint8]
     if not path.is_file():
         raise InputDataError(f"{name} is not a file", path=path)
     data = np.fromfile(path, dtype=np.uint8)
-    img = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
+    # A damaged file is reported by our one-line error, not by OpenCV's own warning on stderr.
+    level = cv2.utils.logging.getLogLevel()
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+    try:
+        img = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
+    finally:
+        cv2.utils.logging.setLogLevel(level)
     if img is None:
         raise InputDataError(f"{name} is not a readable image file", path=path)
     return np.asarray(img, dtype=np.uint8)

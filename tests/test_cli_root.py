@@ -39,3 +39,10 @@ def test_python_dash_m_entry_point() -> None:
     )
     assert proc.returncode == 0
     assert proc.stdout.startswith("deformctl ")
+
+
+def test_help_lists_subcommands_in_pipeline_order() -> None:
+    result = runner.invoke(app, ["--help"])
+    order = ["population", "measure", "characterize", "lift", "table", "train", "predict"]
+    positions = [result.stdout.index(f"  {name} ") for name in [*order, "inspect"]]
+    assert positions == sorted(positions)

@@ -10,11 +10,13 @@ reports has passed the same validation the pipeline applies, and returns a JSON-
 from __future__ import annotations
 
 import math
+import tempfile
+from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
-from deformctl.artifacts.io import PathArg, display_name, read_input_bytes
+from deformctl.artifacts.io import PathArg, display_name, is_stdio, read_input_bytes
 from deformctl.artifacts.mcaplog import (
     KIND_LIFT,
     KIND_SQUEEZE,
@@ -27,6 +29,7 @@ from deformctl.artifacts.mcaplog import (
     load_mcap,
     squeezes_from_contents,
 )
+from deformctl.artifacts.provenance import Provenance
 from deformctl.artifacts.schema import (
     TABLE_KINDS,
     load_json_schema,
@@ -39,18 +42,22 @@ from deformctl.artifacts.tables import (
     read_catalog_bytes,
     read_parquet_bytes,
 )
-from deformctl.errors import InputDataError, SchemaError
+from deformctl.errors import DeformctlError, InputDataError, SchemaError
 from deformctl.units import NS_PER_S
 
 GENERIC_MCAP = "mcap"  #: kind of an MCAP file deformctl did not write (e.g. a ROS 2 bag)
+ZIP_MAGIC = b"PK"  #: a skops model file is a zip archive
+KIND_MODEL = "model"  #: kind of a model file written by ``train``
 
 
 def sniff_format(data: bytes) -> str:
-    """``"mcap"``, ``"parquet"`` or ``"csv"`` from a file's first bytes."""
+    """``"mcap"``, ``"parquet"``, ``"skops"`` (a zip archive) or ``"csv"`` from the first bytes."""
     if data.startswith(MCAP_MAGIC):
         return "mcap"
     if data.startswith(PARQUET_MAGIC):
         return "parquet"
+    if data.startswith(ZIP_MAGIC):
+        return "skops"
     return "csv"
 
 
@@ -79,6 +86,9 @@ def _detect(data: bytes, path: PathArg) -> tuple[str, str]:
     fmt = sniff_format(data)
     if fmt == "mcap":
         return fmt, load_mcap(data, path).kind or GENERIC_MCAP
+    if fmt == "skops":
+        _load_model_bytes(data, path)
+        return fmt, KIND_MODEL
     if fmt == "parquet":
         table, meta = read_parquet_bytes(data, path)
         if meta is not None:
@@ -99,7 +109,9 @@ def detect_kind(path: PathArg) -> str:
 
     Returns:
         A table kind (``catalog``, ``coefficients``, ``lift_results``, ``index_table``,
-        ``predictions``), ``squeeze_log``, ``lift_log``, or ``mcap`` for another MCAP file.
+        ``predictions``), ``squeeze_log``, ``lift_log``, ``model`` (a model file, loaded through
+        the allow-list of :func:`~deformctl.artifacts.model.load_model`), or ``mcap`` for
+        another MCAP file.
 
     Raises:
         MissingInputError: ``path`` does not exist (exit 66).
@@ -237,6 +249,80 @@ def _mcap_summary(contents: McapContents) -> dict[str, Any]:
     }
 
 
+def _load_model_bytes(data: bytes, path: PathArg) -> tuple[Any, dict[str, Any]]:
+    """:func:`~deformctl.artifacts.model.load_model` on a path, or on stdin bytes via a temp file.
+
+    The import is deferred: it pulls in scikit-learn, which ``inspect`` on other files never needs.
+    """
+    from deformctl.artifacts.model import load_model
+
+    if not is_stdio(path):
+        return load_model(path)
+    with tempfile.TemporaryDirectory(prefix="deformctl-") as tmpdir:
+        tmp = Path(tmpdir) / "stdin.skops"
+        tmp.write_bytes(data)
+        try:
+            return load_model(tmp)
+        except DeformctlError as err:  # name stdin, not the temporary file
+            raise InputDataError(err.message, path=display_name(path)) from None
+
+
+def _float_pair(lo: Any, hi: Any) -> list[float] | None:
+    try:
+        return [float(lo), float(hi)]
+    except (TypeError, ValueError):
+        return None
+
+
+def _model_summary(data: bytes, path: PathArg) -> dict[str, Any]:
+    """Summary of a model file. Nothing in it is trusted: every field is type-checked here."""
+    model, meta = _load_model_bytes(data, path)
+    name = display_name(path)
+    names = getattr(model, "feature_names_in_", None)
+    feats = meta.get("features")
+    if names is not None and len(names) > 0:
+        features = [str(f) for f in names]
+    elif isinstance(feats, list):
+        features = [str(f) for f in feats]
+    else:
+        features = []
+    lo, hi = getattr(model, "feature_min_", None), getattr(model, "feature_max_", None)
+    training_range: dict[str, list[float] | None] = {}
+    if lo is not None and hi is not None and len(lo) == len(hi) == len(features):
+        training_range = {f: _float_pair(a, b) for f, a, b in zip(features, lo, hi, strict=True)}
+    metrics = {}
+    for key in ("model", "baseline_nearest", "baseline_f_w"):
+        entry = meta.get(key)
+        if isinstance(entry, dict):
+            metrics[key] = {
+                split: {k: v for k, v in entry[split].items() if isinstance(v, int | float)}
+                for split in ("train", "test")
+                if isinstance(entry.get(split), dict)
+            }
+    prov = meta.get("provenance")
+    seed = meta.get("seed")
+    fmt_name, _, fmt_version = str(meta.get("format", "")).rpartition("/")
+    return {
+        "kind": KIND_MODEL,
+        "schema": {
+            "name": fmt_name,
+            "version": int(fmt_version) if fmt_version.isdigit() else fmt_version,
+        },
+        "features": features,
+        "target": meta.get("target") if isinstance(meta.get("target"), str) else None,
+        "training_range": training_range,
+        "seed": seed if isinstance(seed, int) and not isinstance(seed, bool) else None,
+        "hyperparameters": meta.get("hyperparameters")
+        if isinstance(meta.get("hyperparameters"), dict)
+        else None,
+        "n_train": meta.get("n_train") if isinstance(meta.get("n_train"), int) else None,
+        "n_test": meta.get("n_test") if isinstance(meta.get("n_test"), int) else None,
+        "metrics": metrics,
+        "tool_version": str(meta.get("tool_version", "unknown")),
+        "provenance": None if prov is None else Provenance.from_dict(prov, path=name).to_dict(),
+    }
+
+
 def describe(path: PathArg) -> dict[str, Any]:
     """Read, validate and summarise any artifact.
 
@@ -244,7 +330,10 @@ def describe(path: PathArg) -> dict[str, Any]:
         A JSON-serialisable dict: ``path``, ``format``, ``kind``, ``schema`` (name, version),
         ``provenance``; for tables ``rows`` and ``columns`` (name, dtype, unit, required,
         description) and, for a catalog, ``objects``; for MCAP logs ``messages``, ``channels``
-        (topic, schema, message count, fields with units), ``time_range`` and ``objects``.
+        (topic, schema, message count, fields with units), ``time_range`` and ``objects``;
+        for a model file (kind ``model``) ``features``, ``target``, ``training_range``
+        (feature -> [min, max]), ``seed``, ``hyperparameters``, ``n_train``, ``n_test``,
+        ``metrics`` (model and baselines, train and test) and ``tool_version``.
 
     Raises:
         MissingInputError: ``path`` does not exist (exit 66).
@@ -255,6 +344,8 @@ def describe(path: PathArg) -> dict[str, Any]:
     fmt = sniff_format(data)
     if fmt == "mcap":
         summary = _mcap_summary(load_mcap(data, path))
+    elif fmt == "skops":
+        summary = _model_summary(data, path)
     elif fmt == "parquet":
         table, meta = read_parquet_bytes(data, path)
         kind = str(meta["kind"]) if meta else _table_kind_from_columns(table.column_names, name)

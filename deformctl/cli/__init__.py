@@ -51,7 +51,16 @@ def _register() -> None:
     """Import the subcommand modules in pipeline order; each adds itself to ``app``."""
     # One module per subcommand, in pipeline order, as each one lands (imported by name so
     # that import sorting cannot reorder them); inspect reads any artifact and comes last.
-    for name in ("measure", "characterize", "lift", "inspect"):
+    for name in (
+        "population",
+        "measure",
+        "characterize",
+        "lift",
+        "table",
+        "train",
+        "predict",
+        "inspect",
+    ):
         importlib.import_module(f"deformctl.cli.{name}")
 
 

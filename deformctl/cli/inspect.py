@@ -16,6 +16,35 @@ def _unit(unit: object) -> str:
     return str(unit) if unit else "-"
 
 
+def _model_lines(info: dict[str, Any]) -> list[str]:
+    """The model-file part of :func:`render_text`."""
+    lines = [f"tool version: {info['tool_version']}", f"seed: {info['seed']}"]
+    lines.append(f"features: {', '.join(info['features'])} -> {info['target']}")
+    lines.append("training range:")
+    for feat, rng in info["training_range"].items():
+        lines.append(f"  {feat:<24} {rng[0]:.6g} .. {rng[1]:.6g}" if rng else f"  {feat}: -")
+    hp = info.get("hyperparameters") or {}
+    if hp:
+        lines.append(f"hyperparameters: {json.dumps(hp, sort_keys=True)}")
+    lines.append(f"split: {info['n_train']} train / {info['n_test']} test")
+    for key, entry in info["metrics"].items():
+        for split, m in entry.items():
+            lines.append(
+                f"  {key:<17} {split:<5} max rel err {_pct(m.get('max_rel_error'))}, "
+                f"median {_pct(m.get('median_rel_error'))}, MAE {_num(m.get('mae_n'), '.3f')} N, "
+                f"R2 {_num(m.get('r2'), '.4f')}"
+            )
+    return lines
+
+
+def _pct(value: object) -> str:
+    return f"{100.0 * value:.2f} %" if isinstance(value, int | float) else "-"
+
+
+def _num(value: object, fmt: str) -> str:
+    return format(value, fmt) if isinstance(value, int | float) else "-"
+
+
 def render_text(info: dict[str, Any]) -> str:
     """The human-readable form of :func:`deformctl.artifacts.describe` output."""
     lines = [f"file: {info['path']}", f"format: {info['format']}", f"kind: {info['kind']}"]
@@ -43,6 +72,8 @@ def render_text(info: dict[str, Any]) -> str:
             lines.append(f"  {ch['topic']}: {ch['messages']} messages, schema {ch['schema']}")
             for f in ch.get("fields", []):
                 lines.append(f"    {f['name']:<20} {f['type']:<12} {_unit(f['unit'])}")
+    if info["kind"] == "model":
+        lines.extend(_model_lines(info))
     objects = info.get("objects") or []
     if objects:
         ids = ", ".join(str(o.get("object_id")) for o in objects)
@@ -66,7 +97,7 @@ def render_text(info: dict[str, Any]) -> str:
 @translate_errors
 def inspect(
     file: str = typer.Argument(
-        ..., help="Any deformctl artifact (MCAP, Parquet, catalog CSV); - for stdin."
+        ..., help="Any deformctl artifact (MCAP, Parquet, catalog CSV, model file); - for stdin."
     ),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON document instead of text."),
 ) -> None:

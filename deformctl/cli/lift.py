@@ -48,6 +48,7 @@ from deformctl.artifacts import (
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
+from deformctl.cli._lift_frames import DEFAULT_SLIP_TOLERANCE_M, frames_judge
 from deformctl.errors import SearchError, UsageError
 from deformctl.lift import (
     DEFAULT_GROWTH,
@@ -61,6 +62,7 @@ from deformctl.lift import (
     select_objects,
     validate_search_options,
 )
+from deformctl.rig import SlipFromFrames
 
 DEFAULT_RIG_TIMEOUT_S = 60.0
 
@@ -104,7 +106,10 @@ def _sim_factory(sim: bool, options: Mapping[str, Any]) -> RunnerFactory | None:
 
 
 def _choose_runner(
-    rig: str | None, rig_timeout_s: float | None, sim: RunnerFactory | None = None
+    rig: str | None,
+    rig_timeout_s: float | None,
+    judge: SlipFromFrames | None = None,
+    sim: RunnerFactory | None = None,
 ) -> RunnerFactory:
     """The one trial runner the options ask for (``sim``: the factory of ``--sim``, if given).
 
@@ -114,9 +119,11 @@ def _choose_runner(
     chosen: list[RunnerFactory] = []
     if rig is not None:
         timeout_s = DEFAULT_RIG_TIMEOUT_S if rig_timeout_s is None else rig_timeout_s
-        chosen.append(rig_runner_factory(rig, timeout_s=timeout_s))
-    elif rig_timeout_s is not None:
-        raise UsageError("--rig-timeout needs --rig")
+        chosen.append(rig_runner_factory(rig, timeout_s=timeout_s, slip_from_frames=judge))
+    elif rig_timeout_s is not None or judge is not None:
+        raise UsageError(
+            f"{'--rig-timeout' if judge is None else '--slip-from-frames'} needs --rig"
+        )
     if sim is not None:
         chosen.append(sim)
     if len(chosen) != 1:
@@ -206,10 +213,35 @@ def lift(
     hold_s: float | None = typer.Option(
         None, "--hold-s", help="Sim: hold after the rise, s [default: 0.5]."
     ),
+    slip_from_frames: bool = typer.Option(
+        False,
+        "--slip-from-frames",
+        help="Rig answers with before/after frames: judge lifted/slipped from them (vision).",
+    ),
+    palm_marker_ids: str | None = typer.Option(
+        None, "--palm-marker-ids", metavar="L,R", help="Frames: ids of ArUco markers on the palms."
+    ),
+    palm_regions: str | None = typer.Option(
+        None,
+        "--palm-regions",
+        metavar="x,y,w,h;x,y,w,h",
+        help="Frames: palm rectangles in the before frame, px (each with a distinct palm part).",
+    ),
+    frame_marker_size_cm: float | None = typer.Option(
+        None,
+        "--frame-marker-size-cm",
+        metavar="S",
+        help="Frames: side of the markers in view, cm (the image scale).",
+    ),
+    frame_marker_dict: str | None = typer.Option(
+        None, "--frame-marker-dict", help="Frames: ArUco dictionary [default: DICT_4X4_50]."
+    ),
     slip_tolerance_m: float | None = typer.Option(
         None,
         "--slip-tolerance-m",
-        help="Sim: slip beyond which an attempt fails, m [default: 0.0005].",
+        metavar="T",
+        help=f"Slip beyond which an attempt fails, m [default: 0.0005 with --sim (contact "
+        f"slip), {DEFAULT_SLIP_TOLERANCE_M:g} with --slip-from-frames (object behind palms)].",
     ),
     slip_criterion: str | None = typer.Option(
         None,
@@ -222,6 +254,9 @@ def lift(
         None, "--alpha-cm", help="Sim: lattice spacing, cm [default: longest side / 4]."
     ),
     dt_s: float | None = typer.Option(None, "--dt-s", help="Sim: time step, s [default: 0.001]."),
+    debug_dir: str | None = typer.Option(
+        None, "--debug-dir", help="Frames: write the last attempt's annotated frames here."
+    ),
     log: str | None = typer.Option(
         None, "--log", help="Lift log (MCAP) with every attempt; - for stdout."
     ),
@@ -268,13 +303,19 @@ def lift(
             "--lift-speed-m-s": lift_speed_m_s,
             "--lift-height-m": lift_height_m,
             "--hold-s": hold_s,
-            "--slip-tolerance-m": slip_tolerance_m,
+            "--slip-tolerance-m": slip_tolerance_m if sim else None,  # else: frames' option
             "--slip-criterion": slip_criterion,
             "--alpha-cm": alpha_cm,
             "--dt-s": dt_s,
         },
     )
-    factory = _choose_runner(rig, rig_timeout, sim_factory)
+    judge = frames_judge(
+        enabled=slip_from_frames, palm_marker_ids=palm_marker_ids, palm_regions=palm_regions,
+        frame_marker_size_cm=frame_marker_size_cm,
+        slip_tolerance_m=None if sim else slip_tolerance_m,
+        marker_dict=frame_marker_dict, debug_dir=debug_dir,
+    )  # fmt: skip
+    factory = _choose_runner(rig, rig_timeout, judge, sim_factory)
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
     )

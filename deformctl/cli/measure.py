@@ -4,7 +4,8 @@ Exactly one source option is given per run; each recording source has a reader i
 :data:`_SOURCES` that checks its own options and returns a :class:`~deformctl.measure.Recording`.
 The command then writes the squeezes, the object's catalog-like row and the provenance as one
 squeeze log. ``--sim`` (the simulator over a catalog, many objects) is handled by
-:func:`_measure_sim` over :func:`deformctl.measure.simulate_squeezes`.
+:func:`_measure_sim` over :func:`deformctl.measure.simulate_squeezes`. ``--images`` writes an
+object-catalog row instead (:mod:`deformctl.cli._measure_images`).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from deformctl.artifacts import (
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
+from deformctl.cli._measure_images import ImageOptions, measure_images
 from deformctl.errors import UsageError
 from deformctl.measure import (
     DEFAULT_SIM_HOLD_S,
@@ -287,6 +289,13 @@ def measure(
         metavar="FILE",
         help="Source: a CSV export, plain or with a units row under the names.",
     ),
+    images: tuple[str, str] | None = typer.Option(
+        None,
+        "--images",
+        metavar="TOP SIDE",
+        help="Source: a top and a side image with a scale reference; writes a catalog row "
+        "(object size from the images) instead of a squeeze log.",
+    ),
     wrench_topics: list[str] = typer.Option(  # noqa: B008
         [],
         "--wrench-topic",
@@ -327,6 +336,54 @@ def measure(
         "--segment/--no-segment",
         help="Split the recording into squeezes by force (default: yes for bags, no for CSV).",
     ),
+    marker_size_cm: float | None = typer.Option(
+        None,
+        "--marker-size-cm",
+        metavar="S",
+        help="Images: side of the ArUco marker's black square, cm.",
+    ),
+    marker_dict: str | None = typer.Option(
+        None,
+        "--marker-dict",
+        metavar="DICT",
+        help="Images: ArUco dictionary [default: DICT_4X4_50].",
+    ),
+    marker_id: int | None = typer.Option(
+        None,
+        "--marker-id",
+        metavar="N",
+        help="Images: use the marker with this id (others ignored).",
+    ),
+    checkerboard: str | None = typer.Option(
+        None,
+        "--checkerboard",
+        metavar="COLSxROWS",
+        help="Images: a checkerboard (inner corners) instead of a marker.",
+    ),
+    square_size_cm: float | None = typer.Option(
+        None, "--square-size-cm", metavar="S", help="Images: the checkerboard's square side, cm."
+    ),
+    color_range: str | None = typer.Option(
+        None,
+        "--color-range",
+        metavar="H,S,V:H,S,V",
+        help="Images: the object is this HSV range (OpenCV, H 0-179).",
+    ),
+    background: tuple[str, str] | None = typer.Option(
+        None,
+        "--background",
+        metavar="TOP_BG SIDE_BG",
+        help="Images: the empty scenes; the object is what differs.",
+    ),
+    debug_dir: str | None = typer.Option(
+        None,
+        "--debug-dir",
+        metavar="DIR",
+        help="Images: write annotated images (marker, contour, sizes) here.",
+    ),
+    append: bool = typer.Option(
+        False, "--append", help="Images: add the row to the catalog -o (created if missing)."
+    ),
     object_id: str | None = typer.Option(
         None, "--object-id", metavar="ID", help="Id of the squeezed object (required)."
     ),
@@ -344,7 +401,7 @@ def measure(
         "-o",
         "--output",
         metavar="squeeze.mcap",
-        help="The squeeze log to write; - for stdout.",
+        help="The squeeze log to write (with --images: the catalog); - for stdout.",
     ),
     squeezes: int | None = typer.Option(
         None,
@@ -428,10 +485,19 @@ def measure(
         noise_force_n=noise_force_n,
         noise_position_m=noise_position_m,
     )
+    image_opts = ImageOptions(
+        marker_size_cm, marker_dict, marker_id, checkerboard, square_size_cm, color_range,
+        background, debug_dir, append,
+    )  # fmt: skip
     if catalog is not None and not sim:
         raise UsageError(f"a catalog argument ({catalog!r}) needs --sim")
     flag, source = _choose_source(
-        {"--bag": bag, "--csv": csv, "--sim": (catalog or "") if sim else None}
+        {
+            "--bag": bag,
+            "--csv": csv,
+            "--images": images[0] if images else None,
+            "--sim": (catalog or "") if sim else None,
+        }
     )
     if flag == "--sim":
         _refuse(
@@ -446,6 +512,7 @@ def measure(
                 "--weight-n": weight_n,
                 "--size-cm": size_cm,
                 "--friction-mu": friction_mu,
+                **image_opts.given(),
             },
             "--sim (the catalog describes the objects)",
         )
@@ -456,6 +523,21 @@ def measure(
     _refuse(sim_opts.given(), flag)
     if object_id is None or weight_n is None:
         raise UsageError(f"{flag} needs --object-id and --weight-n")
+    if images is not None:
+        _refuse(
+            {
+                "--wrench-topic": wrench_topics, "--position-topic": position_topic,
+                "--joint": joint, "--columns": columns, "--units": units,
+                "--segment/--no-segment": segment, "--size-cm": size_cm,
+            },
+            "--images",
+        )  # fmt: skip
+        measure_images(
+            images, image_opts, object_id=object_id, weight_n=weight_n,
+            friction_mu=friction_mu, output=output, force=force,
+        )  # fmt: skip
+        return
+    _refuse(image_opts.given(), flag)
     if is_stdio(source):
         raise UsageError(f"{flag}: cannot read from stdin; give a file")
     object_record(object_id, weight_n, size_cm=size_cm, friction_mu=friction_mu)  # check early

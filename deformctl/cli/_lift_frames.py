@@ -1,0 +1,111 @@
+"""``lift --rig CMD --slip-from-frames``: judge rig answers that carry camera frames.
+
+A rig that only takes pictures answers ``{"before_frame": ..., "after_frame": ...}``; deformctl
+then decides ``lifted`` and ``slip_m`` with :func:`deformctl.vision.slip_from_frames`, bound
+here to the command-line options with :func:`functools.partial`.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+import re
+from typing import Any
+
+from deformctl.errors import UsageError
+from deformctl.rig import SlipFromFrames
+from deformctl.vision import slip_from_frames
+
+#: Default ``--slip-tolerance-m``: the object may fall behind the palms by this much, m.
+DEFAULT_SLIP_TOLERANCE_M = 0.005
+
+
+def parse_palm_marker_ids(text: str) -> tuple[int, ...]:
+    """Parse ``L,R`` marker ids (integers >= 0, at least one, no repeats).
+
+    Raises:
+        UsageError: a malformed list.
+    """
+    parts = [p.strip() for p in text.split(",")]
+    if not parts or not all(p.isdigit() for p in parts) or len(set(parts)) != len(parts):
+        raise UsageError(f"--palm-marker-ids: expected distinct ids L,R (e.g. 1,2), got {text!r}")
+    return tuple(int(p) for p in parts)
+
+
+def parse_palm_regions(text: str) -> tuple[tuple[int, int, int, int], ...]:
+    """Parse ``x,y,w,h;x,y,w,h`` (px in the before frame, one rectangle per palm).
+
+    Raises:
+        UsageError: a malformed list (sizes and bounds are checked against the frame later).
+    """
+    regions = []
+    for part in text.split(";"):
+        if not re.fullmatch(r"\s*\d+\s*,\s*\d+\s*,\s*\d+\s*,\s*\d+\s*", part):
+            raise UsageError(
+                f"--palm-regions: expected x,y,w,h;x,y,w,h (px, one per palm), got {text!r}"
+            )
+        x, y, w, h = (int(v) for v in part.split(","))
+        regions.append((x, y, w, h))
+    return tuple(regions)
+
+
+def frames_judge(
+    *,
+    enabled: bool,
+    palm_marker_ids: str | None,
+    palm_regions: str | None,
+    frame_marker_size_cm: float | None,
+    slip_tolerance_m: float | None,
+    marker_dict: str | None,
+    debug_dir: str | None,
+) -> SlipFromFrames | None:
+    """The ``(before, after) -> (lifted, slip_m)`` callable the options ask for, or None.
+
+    Raises:
+        UsageError: frame options without ``--slip-from-frames``, neither or both of the palm
+            options, no ``--frame-marker-size-cm``, a bad tolerance or marker size.
+    """
+    given = {
+        "--palm-marker-ids": palm_marker_ids,
+        "--palm-regions": palm_regions,
+        "--frame-marker-size-cm": frame_marker_size_cm,
+        "--slip-tolerance-m": slip_tolerance_m,
+        "--frame-marker-dict": marker_dict,
+        "--debug-dir": debug_dir,
+    }
+    if not enabled:
+        used = [flag for flag, value in given.items() if value is not None]
+        if used:
+            raise UsageError(f"{', '.join(used)} needs --slip-from-frames")
+        return None
+    if (palm_marker_ids is None) == (palm_regions is None):
+        raise UsageError("--slip-from-frames needs one of --palm-marker-ids or --palm-regions")
+    if frame_marker_size_cm is None:
+        raise UsageError(
+            "--slip-from-frames needs --frame-marker-size-cm (the side of the markers in view, "
+            "for the image scale)"
+        )
+    if not (math.isfinite(frame_marker_size_cm) and frame_marker_size_cm > 0):
+        raise UsageError(f"--frame-marker-size-cm must be > 0, got {frame_marker_size_cm:g}")
+    tolerance_m = DEFAULT_SLIP_TOLERANCE_M if slip_tolerance_m is None else slip_tolerance_m
+    if not (math.isfinite(tolerance_m) and tolerance_m > 0):
+        raise UsageError(f"--slip-tolerance-m must be > 0, got {tolerance_m:g}")
+    if debug_dir is not None and os.path.exists(debug_dir) and not os.path.isdir(debug_dir):
+        raise UsageError(f"--debug-dir {debug_dir!r} exists and is not a directory")
+    options: dict[str, Any] = {
+        "marker_size_cm": float(frame_marker_size_cm),
+        "tolerance_m": float(tolerance_m),
+        "marker_dict": marker_dict or "DICT_4X4_50",
+    }
+    if palm_marker_ids is not None:
+        options["palm_marker_ids"] = parse_palm_marker_ids(palm_marker_ids)
+    else:
+        assert palm_regions is not None
+        options["palm_regions"] = parse_palm_regions(palm_regions)
+    if debug_dir is not None:
+        options["debug_dir"] = debug_dir
+    return functools.partial(slip_from_frames, **options)
+
+
+__all__ = ["DEFAULT_SLIP_TOLERANCE_M", "frames_judge", "parse_palm_marker_ids"]

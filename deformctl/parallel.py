@@ -1,0 +1,923 @@
+"""Run one function per object over a population, locally or on a Dask cluster, resumably.
+
+A *sweep* applies a picklable top-level ``task(item)`` to every catalog row (``item``, a dict
+with an id column such as ``object_id``) and streams the rows it returns into a partitioned
+Parquet dataset::
+
+    out_dir/
+      _sweep.json                 manifest, written first: fingerprint, schema, item ids per part
+      part-00000.parquet          rows of the objects 0 .. P-1 that succeeded, in catalog order
+      part-00001.parquet
+      _failures/part-00000.parquet   one row per failed object: id, error_type, error_message
+      part-00000.<ext>            optional per-part artifacts written by a ``part_writer`` hook
+
+Items are split into partitions by position, so the dataset does not depend on the number of
+workers or on the order in which objects finish. A part is written (temporary file, fsync,
+rename) once every object in it has finished, so at most a bounded window of objects is held in
+memory whatever the population size. A part file carries its item ids in its Parquet metadata;
+``resume=True`` keeps the parts that are complete and valid and recomputes the others, which
+gives the same dataset, row for row, as an uninterrupted run.
+
+Executors: ``workers`` local processes (:class:`concurrent.futures.ProcessPoolExecutor`,
+forkserver start method), or an existing ``dask.distributed`` cluster given by its scheduler
+address (``tcp://HOST:PORT``). Dask reschedules the objects of a worker that dies.
+
+A task signals a per-object failure by raising; any :class:`Exception` is recorded in the
+failures part with its type and one-line message and the sweep goes on.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import hashlib
+import json
+import multiprocessing
+import os
+import socket
+import sys
+import time
+import uuid
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from concurrent.futures import (
+    FIRST_COMPLETED,
+    Future,
+    ProcessPoolExecutor,
+    ThreadPoolExecutor,
+    wait,
+)
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
+from urllib.parse import urlsplit
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from deformctl.errors import (
+    EXIT_FAILURE,
+    EXIT_OK,
+    DeformctlError,
+    InputDataError,
+    MissingInputError,
+    OutputExistsError,
+    UsageError,
+)
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+__all__ = [
+    "FAILURES_DIR",
+    "MANIFEST_NAME",
+    "PartPayloads",
+    "SweepSummary",
+    "TaskOutput",
+    "atomic_write_bytes",
+    "failure_schema",
+    "iter_dataset_parts",
+    "read_dataset",
+    "read_failures",
+    "run_sweep",
+]
+
+SWEEP_FORMAT = "deformctl-sweep/1"
+MANIFEST_NAME = "_sweep.json"
+FAILURES_DIR = "_failures"
+PART_GLOB = "part-*.parquet"
+_META_KEY = b"deformctl.sweep"
+_TMP_MARK = ".tmp-"
+
+
+@dataclass(frozen=True)
+class TaskOutput:
+    """What a task may return instead of bare rows: rows plus one payload for the part writer.
+
+    Attributes:
+        rows: the object's result rows (list of dicts, a pandas DataFrame or a pyarrow Table),
+            each with the sweep schema's columns; the id column may be left out.
+        payload: any picklable object (e.g. the MCAP bytes of the object's time series) handed to
+            the sweep's ``part_writer`` together with the other payloads of the same part.
+    """
+
+    rows: Any
+    payload: Any = None
+
+
+@dataclass(frozen=True)
+class PartPayloads:
+    """The payloads of one finished part, in catalog order, handed to a ``part_writer`` hook.
+
+    The hook runs in the client process before the part's Parquet file is committed, so a
+    committed part always has its artifacts (write them with :func:`atomic_write_bytes`).
+    """
+
+    index: int
+    out_dir: Path
+    item_ids: list[Any]
+    payloads: list[tuple[Any, Any]]
+
+    def path(self, suffix: str) -> Path:
+        """The conventional artifact path of this part, e.g. ``path(".mcap")``."""
+        return self.out_dir / f"part-{self.index:05d}{suffix}"
+
+
+@dataclass(frozen=True)
+class SweepSummary:
+    """How a sweep went.
+
+    Attributes:
+        done: objects computed successfully in this run.
+        failed: objects whose task raised in this run.
+        skipped_resumed: objects in parts kept from an earlier run (``resume=True``).
+        failed_total: failed objects in the whole dataset (this run and kept parts).
+        parts: number of parts in the dataset.
+        elapsed_s: wall time of this run, s.
+        rate: objects finished per second in this run (done + failed) / elapsed_s.
+        out_dir: the dataset directory.
+    """
+
+    done: int
+    failed: int
+    skipped_resumed: int
+    failed_total: int
+    parts: int
+    elapsed_s: float
+    rate: float
+    out_dir: Path
+
+    @property
+    def exit_code(self) -> int:
+        """0 when no object of the dataset failed, else 1."""
+        return EXIT_FAILURE if self.failed_total else EXIT_OK
+
+    def line(self) -> str:
+        """A one-line summary for stderr."""
+        return (
+            f"{self.done} done, {self.failed} failed, {self.skipped_resumed} kept from an "
+            f"earlier run ({self.failed_total} failed in total), {self.parts} parts in "
+            f"{self.elapsed_s:.1f} s ({self.rate:.2f} objects/s)"
+        )
+
+
+@dataclass
+class _ItemResult:
+    item_id: Any
+    table: pa.Table | None
+    payload: Any
+    error_type: str | None = None
+    error_message: str | None = None
+
+
+def failure_schema(schema: pa.Schema, id_column: str) -> pa.Schema:
+    """The schema of the failures part: the id column (same type), error type and message."""
+    return pa.schema(
+        [
+            schema.field(id_column),
+            pa.field("error_type", pa.string(), nullable=False),
+            pa.field("error_message", pa.string(), nullable=False),
+        ]
+    )
+
+
+def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file in the same directory and a rename."""
+    target = Path(path)
+    tmp = target.with_name(f".{target.name}{_TMP_MARK}{os.getpid()}-{uuid.uuid4().hex[:8]}")
+    try:
+        with open(tmp, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+# --------------------------------------------------------------------------- worker side
+
+
+def _one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
+def _rows_to_table(rows: Any, schema: pa.Schema, id_column: str, item_id: Any) -> pa.Table:
+    """Convert a task's rows to a table of ``schema``; the id column is filled in if absent."""
+    if isinstance(rows, pa.Table):
+        records = rows.to_pylist()
+    elif hasattr(rows, "to_dict") and hasattr(rows, "columns"):  # pandas DataFrame
+        records = rows.to_dict("records")
+    elif isinstance(rows, Mapping):
+        records = [dict(rows)]
+    else:
+        records = [dict(r) for r in rows]
+    names = set(schema.names)
+    for rec in records:
+        rec.setdefault(id_column, item_id)
+        if rec[id_column] != item_id:
+            raise ValueError(f"row has {id_column}={rec[id_column]!r}, expected {item_id!r}")
+        keys = set(rec)
+        if keys != names:
+            missing = sorted(names - keys)
+            extra = sorted(keys - names)
+            raise ValueError(
+                f"row columns do not match the schema: missing {missing}, extra {extra}"
+            )
+    return pa.Table.from_pylist(records, schema=schema)
+
+
+def _run_item(
+    task: Callable[[dict[str, Any]], Any], item: dict[str, Any], schema: pa.Schema, id_column: str
+) -> _ItemResult:
+    """Run ``task`` on one item in a worker; any exception becomes a failed result."""
+    item_id = item[id_column]
+    try:
+        out = task(item)
+        if isinstance(out, TaskOutput):
+            rows, payload = out.rows, out.payload
+        else:
+            rows, payload = out, None
+        table = _rows_to_table(rows, schema, id_column, item_id)
+    except Exception as err:
+        message = _one_line(str(err)) or type(err).__name__
+        return _ItemResult(item_id, None, None, type(err).__name__, message)
+    return _ItemResult(item_id, table, payload)
+
+
+# --------------------------------------------------------------------------- executors
+
+
+class _Backend(Protocol):
+    capacity: int
+
+    def submit(self, position: int, item: dict[str, Any]) -> None: ...
+
+    def wait_some(self) -> list[tuple[int, _ItemResult]]: ...
+
+    def close(self) -> None: ...
+
+
+class _LocalBackend:
+    """A process pool; forkserver (spawn where unavailable) so workers start from a clean state."""
+
+    def __init__(
+        self, workers: int, task: Callable[..., Any], schema: pa.Schema, id_column: str
+    ) -> None:
+        methods = multiprocessing.get_all_start_methods()
+        ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+        if ctx.get_start_method() == "forkserver":
+            # Workers fork from a server that has imported the task's module once (a no-op when
+            # this process started its fork server already). pyarrow imports pandas lazily when
+            # it converts rows, so pandas is preloaded too. Python 3.11's fork server ignores the
+            # parent's sys.path: a task module must be importable from PYTHONPATH or the cwd.
+            preload = ["deformctl.parallel", "pandas"]
+            module = getattr(task, "__module__", None)
+            if module and module != "__main__" and module in sys.modules:
+                preload.append(module)
+            ctx.set_forkserver_preload(preload)
+        self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+        self._task, self._schema, self._id_column = task, schema, id_column
+        self._futures: dict[Future[_ItemResult], int] = {}
+        self.capacity = 2 * workers
+
+    def submit(self, position: int, item: dict[str, Any]) -> None:
+        fut = self._pool.submit(_run_item, self._task, item, self._schema, self._id_column)
+        self._futures[fut] = position
+
+    def wait_some(self) -> list[tuple[int, _ItemResult]]:
+        done, _ = wait(list(self._futures), return_when=FIRST_COMPLETED)
+        out = []
+        for fut in done:
+            position = self._futures.pop(fut)
+            try:
+                out.append((position, fut.result()))
+            except BrokenProcessPool as err:
+                raise DeformctlError(
+                    "a local worker process died; the parts written so far are kept, "
+                    "rerun with --resume"
+                ) from err
+        return out
+
+    def close(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _check_scheduler_address(scheduler: str) -> tuple[str, int]:
+    parts = urlsplit(scheduler)
+    try:
+        port = parts.port
+    except ValueError:
+        port = None
+    if parts.scheme not in ("tcp", "tls") or not parts.hostname or port is None:
+        raise UsageError(f"scheduler address {scheduler!r} is not of the form tcp://HOST:PORT")
+    return parts.hostname, port
+
+
+def connect_dask(scheduler: str, connect_timeout_s: float) -> Any:
+    """Connect a ``distributed.Client`` to a running scheduler, or raise one clear error.
+
+    Args:
+        scheduler: ``tcp://HOST:PORT`` of a running ``dask scheduler``.
+        connect_timeout_s: total time allowed for the connection, s.
+
+    Raises:
+        UsageError: a malformed address or a non-positive timeout.
+        DeformctlError: nothing answers at the address within the timeout.
+    """
+    host, port = _check_scheduler_address(scheduler)
+    if not connect_timeout_s > 0:
+        raise UsageError(f"connect timeout must be > 0 s, got {connect_timeout_s}")
+    start = time.monotonic()
+    prefix = f"cannot connect to the Dask scheduler at {scheduler}"
+    try:  # a plain TCP probe gives a fast, precise reason (refused, unknown host, timeout)
+        with socket.create_connection((host, port), timeout=connect_timeout_s):
+            pass
+    except TimeoutError:
+        raise DeformctlError(f"{prefix}: no answer within {connect_timeout_s:g} s") from None
+    except OSError as err:
+        reason = err.strerror or str(err) or type(err).__name__
+        raise DeformctlError(f"{prefix}: {reason}") from None
+    import distributed
+
+    # distributed.Client can wait forever for the handshake of a peer that accepts connections
+    # but never answers, so ask for the scheduler's identity under a hard deadline first.
+    def remaining_s() -> float:
+        return max(connect_timeout_s - (time.monotonic() - start), 0.5)
+
+    probe_pool = ThreadPoolExecutor(max_workers=1)
+    probe = probe_pool.submit(asyncio.run, _dask_identity(scheduler, remaining_s()))
+    try:
+        identity = probe.result(timeout=remaining_s() + 1.0)
+    except Exception as err:
+        detail = "" if isinstance(err, TimeoutError) else f" ({_describe(err)})"
+        raise DeformctlError(
+            f"{prefix}: no Dask scheduler answered within {connect_timeout_s:g} s{detail}"
+        ) from None
+    finally:
+        probe_pool.shutdown(wait=False)
+    if not isinstance(identity, Mapping) or identity.get("type") != "Scheduler":
+        raise DeformctlError(f"{prefix}: the peer is not a Dask scheduler")
+    try:
+        return distributed.Client(scheduler, timeout=remaining_s(), set_as_default=False)
+    except Exception as err:
+        raise DeformctlError(f"{prefix}: {_describe(err)}") from None
+
+
+def _describe(err: BaseException) -> str:
+    return f"{type(err).__name__}: {_one_line(str(err))[:200]}"
+
+
+async def _dask_identity(scheduler: str, timeout_s: float) -> Any:
+    """The ``identity`` answer of a Dask server, or TimeoutError after ``timeout_s``."""
+    from distributed.comm import connect
+
+    async def ask() -> Any:
+        comm = await connect(scheduler, timeout=timeout_s)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    return await asyncio.wait_for(ask(), timeout_s)
+
+
+class _DaskBackend:
+    """Futures on an existing cluster; the scheduler reschedules the work of a lost worker."""
+
+    def __init__(
+        self,
+        scheduler: str,
+        connect_timeout_s: float,
+        task: Callable[..., Any],
+        schema: pa.Schema,
+        id_column: str,
+    ) -> None:
+        import distributed
+
+        self._client = connect_dask(scheduler, connect_timeout_s)
+        self._ac = distributed.as_completed(loop=self._client.loop)
+        self._task, self._schema, self._id_column = task, schema, id_column
+        self._positions: dict[str, int] = {}
+        self._run = uuid.uuid4().hex[:12]
+        n_threads = sum(self._client.nthreads().values())
+        self.capacity = max(8, 2 * n_threads)
+
+    def submit(self, position: int, item: dict[str, Any]) -> None:
+        key = f"deformctl-sweep-{self._run}-{position}"
+        fut = self._client.submit(
+            _run_item, self._task, item, self._schema, self._id_column, key=key, pure=False
+        )
+        self._positions[key] = position
+        self._ac.add(fut)
+
+    def wait_some(self) -> list[tuple[int, _ItemResult]]:
+        out = []
+        for fut in self._ac.next_batch(block=True):
+            position = self._positions.pop(fut.key)
+            try:
+                result = fut.result()
+            except Exception as err:
+                raise DeformctlError(
+                    f"the Dask cluster lost object at position {position} "
+                    f"({type(err).__name__}: {_one_line(str(err))[:200]}); the parts written so "
+                    "far are kept, rerun with --resume"
+                ) from None
+            fut.release()
+            out.append((position, result))
+        return out
+
+    def close(self) -> None:
+        with contextlib.suppress(Exception):
+            self._ac.clear()
+        with contextlib.suppress(Exception):
+            self._client.close(timeout=5)
+
+
+# --------------------------------------------------------------------------- dataset files
+
+
+def _schema_spec(schema: pa.Schema) -> list[dict[str, Any]]:
+    return [{"name": f.name, "type": str(f.type), "nullable": f.nullable} for f in schema]
+
+
+def _normalize(obj: Any) -> Any:
+    return json.loads(json.dumps(obj, sort_keys=True, default=str))
+
+
+def _part_name(index: int) -> str:
+    return f"part-{index:05d}.parquet"
+
+
+def _write_table_atomic(table: pa.Table, target: Path) -> None:
+    tmp = target.with_name(f".{target.name}{_TMP_MARK}{os.getpid()}-{uuid.uuid4().hex[:8]}")
+    try:
+        pq.write_table(table, tmp)
+        with open(tmp, "rb") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def _part_metadata(table: pa.Table) -> dict[str, Any] | None:
+    meta = table.schema.metadata or {}
+    raw = meta.get(_META_KEY)
+    return None if raw is None else json.loads(raw)
+
+
+def _valid_part(
+    out_dir: Path,
+    index: int,
+    ids: list[Any],
+    schema: pa.Schema,
+    fail_schema: pa.Schema,
+    id_column: str,
+    digest: str,
+) -> int | None:
+    """Number of failed objects of a complete, valid part; ``None`` when it must be recomputed."""
+    try:
+        rows = pq.read_table(out_dir / _part_name(index))
+        fails = pq.read_table(out_dir / FAILURES_DIR / _part_name(index))
+    except (OSError, pa.ArrowException):
+        return None
+    meta_rows, meta_fails = _part_metadata(rows), _part_metadata(fails)
+    if meta_rows is None or meta_rows != meta_fails:
+        return None
+    if meta_rows.get("digest") != digest or meta_rows.get("item_ids") != ids:
+        return None
+    if not rows.schema.equals(schema, check_metadata=False):
+        return None
+    if not fails.schema.equals(fail_schema, check_metadata=False):
+        return None
+    failed_ids = meta_rows.get("failed_ids", [])
+    if fails.column(id_column).to_pylist() != failed_ids:
+        return None
+    ok_ids = set(ids) - set(failed_ids)
+    if not set(rows.column(id_column).to_pylist()) <= ok_ids:
+        return None
+    return len(failed_ids)
+
+
+def _clean_temp_files(out_dir: Path) -> None:
+    for sub in (out_dir, out_dir / FAILURES_DIR):
+        if sub.is_dir():
+            for p in sub.iterdir():
+                if p.name.startswith(".") and _TMP_MARK in p.name:
+                    p.unlink(missing_ok=True)
+
+
+def _remove_sweep_files(out_dir: Path) -> None:
+    """Remove what a sweep writes (manifest, parts, failures, part artifacts), nothing else."""
+    for p in out_dir.iterdir():
+        if p.is_file() and (
+            p.name == MANIFEST_NAME
+            or p.name.startswith("part-")
+            or (p.name.startswith(".") and _TMP_MARK in p.name)
+        ):
+            p.unlink()
+    fail_dir = out_dir / FAILURES_DIR
+    if fail_dir.is_dir():
+        for p in fail_dir.iterdir():
+            if p.is_file():
+                p.unlink()
+        with contextlib.suppress(OSError):
+            fail_dir.rmdir()
+
+
+def _compare_manifest(old: Mapping[str, Any], new: Mapping[str, Any], out_dir: Path) -> None:
+    if old.get("format") != SWEEP_FORMAT:
+        raise InputDataError(
+            "not a deformctl sweep directory (unknown manifest format)", path=out_dir
+        )
+    if old.get("fingerprint") != new["fingerprint"]:
+        keys = sorted(
+            k
+            for k in set(old.get("fingerprint", {})) | set(new["fingerprint"])
+            if old.get("fingerprint", {}).get(k) != new["fingerprint"].get(k)
+        )
+        raise InputDataError(
+            f"cannot resume: made by a different command or settings (differs in {keys})",
+            path=out_dir,
+        )
+    if old.get("schema") != new["schema"] or old.get("id_column") != new["id_column"]:
+        raise InputDataError("cannot resume: made with a different schema", path=out_dir)
+    if old.get("parts") != new["parts"]:
+        raise InputDataError(
+            "cannot resume: made for a different list of objects or partition size", path=out_dir
+        )
+
+
+# --------------------------------------------------------------------------- progress
+
+
+class _Progress:
+    """One rich bar on stderr (objects done, failed, rate); silent unless stderr is a TTY."""
+
+    def __init__(self, enabled: bool, total: int, completed: int) -> None:
+        self._bar: Any = None
+        self._start = time.monotonic()
+        self._failed = 0
+        self._finished = 0
+        if not (enabled and sys.stderr.isatty()):
+            return
+        from rich.console import Console
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+        self._bar = Progress(
+            TextColumn("sweep"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("{task.fields[failed]} failed  {task.fields[rate]:.2f} obj/s"),
+            console=Console(stderr=True),
+            transient=False,
+        )
+        self._task = self._bar.add_task("sweep", total=total, completed=completed, failed=0, rate=0)
+        self._bar.start()
+
+    def advance(self, ok: bool) -> None:
+        self._finished += 1
+        self._failed += 0 if ok else 1
+        if self._bar is not None:
+            rate = self._finished / max(time.monotonic() - self._start, 1e-9)
+            self._bar.update(self._task, advance=1, failed=self._failed, rate=rate)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.stop()
+
+
+# --------------------------------------------------------------------------- the sweep
+
+
+def _items_as_dicts(items: Any) -> list[dict[str, Any]]:
+    if hasattr(items, "to_dict") and hasattr(items, "columns"):
+        return list(items.to_dict("records"))
+    return [dict(it) for it in items]
+
+
+def run_sweep(
+    task: Callable[[dict[str, Any]], Any],
+    items: Iterable[Mapping[str, Any]] | pd.DataFrame,
+    *,
+    out_dir: str | os.PathLike[str],
+    schema: pa.Schema,
+    fingerprint: Mapping[str, Any],
+    id_column: str = "object_id",
+    workers: int | None = None,
+    scheduler: str | None = None,
+    connect_timeout_s: float = 10.0,
+    partition_size: int = 100,
+    resume: bool = False,
+    force: bool = False,
+    progress: bool = True,
+    part_writer: Callable[[PartPayloads], None] | None = None,
+    max_in_flight: int | None = None,
+) -> SweepSummary:
+    """Apply ``task`` to every item and write a partitioned, resumable Parquet dataset.
+
+    Args:
+        task: a picklable top-level function ``task(item) -> rows | TaskOutput``; rows are a list
+            of dicts, a DataFrame or a pyarrow Table with ``schema``'s columns. Raising marks the
+            object as failed.
+        items: the catalog, ``[n]`` rows (dicts or a DataFrame), each with a unique
+            ``id_column`` value (int or str).
+        out_dir: the dataset directory.
+        schema: the row schema of every part; must contain ``id_column``.
+        fingerprint: JSON-serialisable description of what produced the data (command, settings,
+            seed, tool version); a resume must present the same one.
+        id_column: the item/row column identifying an object.
+        workers: local worker processes; ``None`` uses every available core.
+        scheduler: ``tcp://HOST:PORT`` of a running Dask scheduler instead of local processes.
+        connect_timeout_s: time allowed to reach the scheduler, s.
+        partition_size: objects per part.
+        resume: keep complete, valid parts of an earlier run of the same sweep.
+        force: overwrite the sweep files of an existing directory when not resuming.
+        progress: show a progress bar on stderr (only when stderr is a terminal).
+        part_writer: hook called with each finished part's payloads before the part is committed.
+        max_in_flight: objects submitted but not yet finished (default: 2 per worker thread).
+
+    Returns:
+        The :class:`SweepSummary`; ``summary.exit_code`` is 1 when any object failed.
+
+    Raises:
+        UsageError: ``workers <= 0``, both ``workers`` and ``scheduler``, bad partition size.
+        InputDataError: duplicate or missing ids; a resume directory of another sweep.
+        OutputExistsError: a non-empty ``out_dir`` without ``resume`` or ``force``.
+        DeformctlError: the scheduler cannot be reached, or the executor lost its workers.
+    """
+    start = time.monotonic()
+    if workers is not None and scheduler is not None:
+        raise UsageError("give either --workers (local processes) or --scheduler, not both")
+    if workers is not None and workers <= 0:
+        raise UsageError(f"--workers must be >= 1, got {workers}")
+    if partition_size <= 0:
+        raise UsageError(f"partition size must be >= 1, got {partition_size}")
+    if max_in_flight is not None and max_in_flight <= 0:
+        raise UsageError(f"max in flight must be >= 1, got {max_in_flight}")
+    if scheduler is not None:
+        _check_scheduler_address(scheduler)
+    if id_column not in schema.names:
+        raise ValueError(f"schema has no id column {id_column!r}")
+    out = Path(out_dir)
+
+    rows = _items_as_dicts(items)
+    ids: list[Any] = []
+    for n, row in enumerate(rows):
+        if id_column not in row:
+            raise InputDataError(f"object at position {n} has no {id_column!r}")
+        value = row[id_column]
+        if hasattr(value, "item"):  # numpy scalar from a DataFrame
+            value = value.item()
+            row[id_column] = value
+        if not isinstance(value, str | int) or isinstance(value, bool):
+            raise InputDataError(f"{id_column} {value!r} at position {n} is not a string or int")
+        ids.append(value)
+    if len(set(ids)) != len(ids):
+        dup = next(i for i in ids if ids.count(i) > 1)
+        raise InputDataError(f"duplicate {id_column} {dup!r} in the object list")
+    parts = [ids[i : i + partition_size] for i in range(0, len(ids), partition_size)]
+    fail_schema = failure_schema(schema, id_column)
+    manifest = {
+        "format": SWEEP_FORMAT,
+        "fingerprint": _normalize(dict(fingerprint)),
+        "schema": _schema_spec(schema),
+        "id_column": id_column,
+        "partition_size": partition_size,
+        "n_items": len(ids),
+        "parts": parts,
+    }
+    digest = hashlib.sha256(json.dumps(manifest, sort_keys=True).encode()).hexdigest()[:16]
+
+    # ---- read-only checks first: refuse, or find the parts to keep
+    kept: dict[int, int] = {}  # part index -> failed objects in it
+    if out.exists() and not out.is_dir():
+        raise OutputExistsError(out)
+    existing = out.is_dir() and any(out.iterdir())
+    manifest_path = out / MANIFEST_NAME
+    if existing and resume:
+        if not manifest_path.is_file():
+            raise InputDataError(f"cannot resume: no {MANIFEST_NAME} in the directory", path=out)
+        try:
+            old = json.loads(manifest_path.read_text())
+        except (OSError, ValueError):
+            raise InputDataError(f"cannot resume: unreadable {MANIFEST_NAME}", path=out) from None
+        _compare_manifest(old, manifest, out)
+        for k, part_ids in enumerate(parts):
+            n_failed = _valid_part(out, k, part_ids, schema, fail_schema, id_column, digest)
+            if n_failed is not None:
+                kept[k] = n_failed
+    elif existing and not force:
+        raise OutputExistsError(out)
+    todo = [
+        k * partition_size + j
+        for k in range(len(parts))
+        if k not in kept
+        for j in range(len(parts[k]))
+    ]
+    skipped = sum(len(parts[k]) for k in kept)
+
+    # ---- then the executor (an unreachable scheduler leaves the directory untouched)
+    backend: _Backend | None = None
+    if todo:
+        if scheduler is not None:
+            backend = _DaskBackend(scheduler, connect_timeout_s, task, schema, id_column)
+        else:
+            n_workers = workers if workers is not None else _available_cores()
+            backend = _LocalBackend(min(n_workers, len(todo)), task, schema, id_column)
+
+    buffers: dict[int, dict[int, _ItemResult]] = {}
+    n_done = n_failed = 0
+    bar: _Progress | None = None
+    try:
+        # ---- now write: clean, manifest first
+        if existing and resume:
+            _clean_temp_files(out)
+        elif existing:
+            _remove_sweep_files(out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / FAILURES_DIR).mkdir(exist_ok=True)
+        if not (resume and existing):
+            atomic_write_bytes(manifest_path, json.dumps(manifest, indent=1).encode())
+        bar = _Progress(progress, total=len(ids), completed=skipped)
+
+        # ---- run the missing parts with a bounded window, committing each finished part
+        if backend is not None:
+            limit = max_in_flight or backend.capacity
+            lookahead = limit + partition_size  # bounds buffered results when one object lags
+            unfinished: set[int] = set()  # indices into todo
+            index_of = {position: i for i, position in enumerate(todo)}
+            next_i = low = 0
+            while next_i < len(todo) or unfinished:
+                while low < next_i and low not in unfinished:
+                    low += 1
+                while next_i < len(todo) and len(unfinished) < limit and next_i - low < lookahead:
+                    unfinished.add(next_i)
+                    backend.submit(todo[next_i], rows[todo[next_i]])
+                    next_i += 1
+                for position, result in backend.wait_some():
+                    k = position // partition_size
+                    unfinished.discard(index_of[position])
+                    buffers.setdefault(k, {})[position] = result
+                    ok = result.error_type is None
+                    n_done += ok
+                    n_failed += not ok
+                    bar.advance(ok)
+                    if len(buffers[k]) == len(parts[k]):
+                        results = buffers.pop(k)
+                        _commit_part(
+                            out,
+                            k,
+                            parts[k],
+                            [results[p] for p in sorted(results)],
+                            schema,
+                            fail_schema,
+                            id_column,
+                            digest,
+                            part_writer,
+                        )
+    finally:
+        if bar is not None:
+            bar.close()
+        if backend is not None:
+            backend.close()
+    elapsed_s = time.monotonic() - start
+    return SweepSummary(
+        done=n_done,
+        failed=n_failed,
+        skipped_resumed=skipped,
+        failed_total=n_failed + sum(kept.values()),
+        parts=len(parts),
+        elapsed_s=elapsed_s,
+        rate=(n_done + n_failed) / elapsed_s if elapsed_s > 0 else 0.0,
+        out_dir=out,
+    )
+
+
+def _available_cores() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _commit_part(
+    out_dir: Path,
+    index: int,
+    ids: list[Any],
+    results: Sequence[_ItemResult],
+    schema: pa.Schema,
+    fail_schema: pa.Schema,
+    id_column: str,
+    digest: str,
+    part_writer: Callable[[PartPayloads], None] | None,
+) -> None:
+    """Write one finished part: failures, then the hook's artifacts, then the rows (commit)."""
+    tables = [r.table for r in results if r.table is not None]
+    failed = [r for r in results if r.error_type is not None]
+    meta = json.dumps(
+        {
+            "part": index,
+            "digest": digest,
+            "item_ids": ids,
+            "failed_ids": [r.item_id for r in failed],
+        }
+    ).encode()
+    fail_table = pa.Table.from_pylist(
+        [
+            {id_column: r.item_id, "error_type": r.error_type, "error_message": r.error_message}
+            for r in failed
+        ],
+        schema=fail_schema,
+    ).replace_schema_metadata({_META_KEY: meta})
+    _write_table_atomic(fail_table, out_dir / FAILURES_DIR / _part_name(index))
+    if part_writer is not None:
+        payloads = [(r.item_id, r.payload) for r in results if r.payload is not None]
+        part_writer(PartPayloads(index, out_dir, list(ids), payloads))
+    rows = pa.concat_tables(tables) if tables else schema.empty_table()
+    _write_table_atomic(
+        rows.replace_schema_metadata({_META_KEY: meta}), out_dir / _part_name(index)
+    )
+
+
+# --------------------------------------------------------------------------- readers
+
+
+def _dataset_part_paths(path: Path, sub: str = "") -> list[Path]:
+    """The part files of a sweep directory in part order; refuses an incomplete sweep."""
+    base = path / sub if sub else path
+    files = sorted(base.glob(PART_GLOB)) if base.is_dir() else []
+    manifest_path = path / MANIFEST_NAME
+    if manifest_path.is_file():
+        try:
+            manifest = json.loads(manifest_path.read_text())
+            n_parts = len(manifest["parts"])
+        except (OSError, ValueError, KeyError, TypeError):
+            raise InputDataError(f"unreadable {MANIFEST_NAME}", path=path) from None
+        present = {p.name for p in files}
+        missing = [_part_name(k) for k in range(n_parts) if _part_name(k) not in present]
+        if missing:
+            raise InputDataError(
+                f"incomplete sweep: {len(missing)} of {n_parts} parts missing "
+                f"(first {missing[0]}); rerun the sweep with --resume",
+                path=path,
+            )
+    elif not files:
+        raise InputDataError("no part-*.parquet files and no sweep manifest", path=path)
+    return files
+
+
+def iter_dataset_parts(path: str | os.PathLike[str]) -> Iterator[pa.Table]:
+    """Yield the tables of a Parquet file (one) or of a sweep directory (one per part, in order).
+
+    Raises:
+        MissingInputError: ``path`` does not exist.
+        InputDataError: not Parquet, an incomplete sweep, or parts with different schemas.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise MissingInputError("no such file or directory", path=p)
+    files = _dataset_part_paths(p) if p.is_dir() else [p]
+    first: pa.Schema | None = None
+    for f in files:
+        try:
+            table = pq.read_table(f)
+        except (OSError, pa.ArrowException) as err:
+            raise InputDataError(
+                f"not a readable Parquet file ({_one_line(str(err))[:160]})", path=f
+            ) from None
+        table = table.replace_schema_metadata(None)
+        if first is None:
+            first = table.schema
+        elif not table.schema.equals(first):
+            raise InputDataError("part schema differs from the first part's", path=f)
+        yield table
+
+
+def read_dataset(path: str | os.PathLike[str]) -> pd.DataFrame:
+    """Read a single Parquet file or a sweep directory (parts concatenated in order).
+
+    Returns:
+        The rows as a DataFrame with a fresh RangeIndex.
+    """
+    import pandas as pd
+
+    tables = list(iter_dataset_parts(path))
+    return pa.concat_tables(tables).to_pandas() if tables else pd.DataFrame()
+
+
+def read_failures(path: str | os.PathLike[str]) -> pd.DataFrame:
+    """The failed objects of a sweep directory: id column, ``error_type``, ``error_message``."""
+    p = Path(path)
+    if not p.is_dir():
+        raise MissingInputError("no such sweep directory", path=p)
+    tables = []
+    for f in _dataset_part_paths(p, FAILURES_DIR):
+        try:
+            tables.append(pq.read_table(f).replace_schema_metadata(None))
+        except (OSError, pa.ArrowException) as err:
+            raise InputDataError(
+                f"not a readable Parquet file ({_one_line(str(err))[:160]})", path=f
+            ) from None
+    return pa.concat_tables(tables).to_pandas()

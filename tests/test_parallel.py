@@ -1,0 +1,372 @@
+"""The sweep executor: local processes, partitioned output, failures, resume, bad inputs.
+
+The toy task is a seeded computation per object whose rows are recomputed independently here
+(``expected_rows``), so every dataset is checked against a direct answer, not just against
+another run of the executor.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from deformctl.errors import (
+    EXIT_USAGE,
+    DeformctlError,
+    InputDataError,
+    MissingInputError,
+    OutputExistsError,
+    SearchError,
+    UsageError,
+)
+from deformctl.parallel import (
+    FAILURES_DIR,
+    MANIFEST_NAME,
+    PartPayloads,
+    TaskOutput,
+    atomic_write_bytes,
+    read_dataset,
+    read_failures,
+    run_sweep,
+)
+
+TESTS_DIR = Path(__file__).resolve().parent
+SCHEMA = pa.schema(
+    [
+        pa.field("object_id", pa.string(), nullable=False),
+        pa.field("trial", pa.int64(), nullable=False),
+        pa.field("force_n", pa.float64(), nullable=False),
+    ]
+)
+FINGERPRINT = {"command": "toy", "settings": {"scale": 2.5}, "version": "test"}
+FAILING_ID = "obj-07"
+
+# Worker processes (the fork server of Python 3.11 ignores the parent's sys.path, and Dask
+# workers are separate programs) import this module by name, so put its folder on PYTHONPATH.
+os.environ["PYTHONPATH"] = os.pathsep.join(
+    p for p in (str(TESTS_DIR), os.environ.get("PYTHONPATH", "")) if p
+)
+
+
+def make_items(n: int = 20, sleep_s: float = 0.0) -> list[dict[str, Any]]:
+    """``n`` objects; object i has seed 1000+i and i % 3 rows; ``FAILING_ID`` raises."""
+    return [
+        {"object_id": f"obj-{i:02d}", "seed": 1000 + i, "n_rows": i % 3, "sleep_s": sleep_s}
+        for i in range(n)
+    ]
+
+
+def toy_task(item: dict[str, Any]) -> list[dict[str, Any]]:
+    """Seeded per-object computation; raises a DeformctlError for ``FAILING_ID``."""
+    if item["sleep_s"]:
+        time.sleep(item["sleep_s"])
+    if item["object_id"] == FAILING_ID:
+        raise SearchError(f"lift search for {item['object_id']} did not converge\nafter 9 steps")
+    rng = np.random.default_rng(item["seed"])
+    force_n = 2.5 * rng.normal(size=item["n_rows"])
+    return [{"trial": t, "force_n": float(f)} for t, f in enumerate(force_n)]
+
+
+def toy_task_with_payload(item: dict[str, Any]) -> TaskOutput:
+    """The toy rows plus a bytes payload naming the object (a stand-in for an MCAP log)."""
+    return TaskOutput(toy_task(item), f"log of {item['object_id']}".encode())
+
+
+def bad_rows_task(item: dict[str, Any]) -> list[dict[str, Any]]:
+    """Returns a row with an extra column for one object (a schema mismatch)."""
+    if item["object_id"] == "obj-03":
+        return [{"trial": 0, "force_n": 1.0, "speed_m_per_s": 2.0}]
+    return toy_task(item)
+
+
+def expected_rows(items: list[dict[str, Any]]) -> pd.DataFrame:
+    """The rows computed directly, in catalog order, without the executor."""
+    recs = []
+    for item in items:
+        if item["object_id"] == FAILING_ID:
+            continue
+        rng = np.random.default_rng(item["seed"])
+        for t, f in enumerate(2.5 * rng.normal(size=item["n_rows"])):
+            recs.append({"object_id": item["object_id"], "trial": t, "force_n": float(f)})
+    return pa.Table.from_pylist(recs, schema=SCHEMA).to_pandas()
+
+
+def sweep(items: list[dict[str, Any]], out: Path, **kw: Any) -> Any:
+    kw.setdefault("partition_size", 3)
+    kw.setdefault("progress", False)
+    kw.setdefault("schema", SCHEMA)
+    kw.setdefault("fingerprint", FINGERPRINT)
+    task = kw.pop("task", toy_task)
+    return run_sweep(task, items, out_dir=out, **kw)
+
+
+def snapshot(path: Path) -> dict[str, bytes]:
+    return {
+        str(p.relative_to(path)): p.read_bytes() for p in sorted(path.rglob("*")) if p.is_file()
+    }
+
+
+def _client_main(out_dir: str) -> None:
+    """Entry point of the subprocess the client-kill test SIGKILLs part-way."""
+    sweep(make_items(20, sleep_s=0.15), Path(out_dir), workers=1, partition_size=2)
+
+
+# --------------------------------------------------------------------------- happy paths
+
+
+def test_one_and_two_workers_give_the_direct_rows(tmp_path: Path) -> None:
+    items = make_items()
+    s1 = sweep(items, tmp_path / "w1", workers=1)
+    s2 = sweep(items, tmp_path / "w2", workers=2)
+    want = expected_rows(items)
+    assert len(want) == 18  # sum of i % 3 for i < 20 is 19, minus obj-07's one row
+    for out in (tmp_path / "w1", tmp_path / "w2"):
+        pd.testing.assert_frame_equal(read_dataset(out), want)
+    for s in (s1, s2):
+        assert (s.done, s.failed, s.skipped_resumed, s.failed_total, s.parts) == (19, 1, 0, 1, 7)
+        assert s.exit_code == 1
+        assert "19 done, 1 failed" in s.line()
+    assert snapshot(tmp_path / "w1") == snapshot(tmp_path / "w2")  # byte-identical datasets
+
+
+def test_failed_object_is_recorded_with_type_and_one_line_message(tmp_path: Path) -> None:
+    sweep(make_items(), tmp_path / "o", workers=2)
+    fails = read_failures(tmp_path / "o")
+    assert fails.to_dict("records") == [
+        {
+            "object_id": FAILING_ID,
+            "error_type": "SearchError",
+            "error_message": f"lift search for {FAILING_ID} did not converge after 9 steps",
+        }
+    ]
+    assert pq.read_table(tmp_path / "o" / FAILURES_DIR / "part-00002.parquet").num_rows == 1
+
+
+def test_layout_manifest_and_plain_pyarrow_reading(tmp_path: Path) -> None:
+    items = make_items()
+    out = tmp_path / "o"
+    sweep(items, out, workers=1)
+    names = sorted(p.name for p in out.glob("part-*.parquet"))
+    assert names == [f"part-{k:05d}.parquet" for k in range(7)]
+    manifest = json.loads((out / MANIFEST_NAME).read_text())
+    assert manifest["fingerprint"] == FINGERPRINT
+    assert manifest["parts"][2] == ["obj-06", "obj-07", "obj-08"]
+    assert [c["name"] for c in manifest["schema"]] == SCHEMA.names
+    # every part has the same schema, and plain pyarrow reads the directory (ignores _ files)
+    for p in out.glob("part-*.parquet"):
+        assert pq.read_schema(p).equals(SCHEMA, check_metadata=False)
+    plain = pq.read_table(out).to_pandas()
+    pd.testing.assert_frame_equal(plain, expected_rows(items), check_dtype=False)
+    # a single Parquet file reads the same way
+    single = tmp_path / "single.parquet"
+    pq.write_table(pa.Table.from_pandas(expected_rows(items), preserve_index=False), single)
+    pd.testing.assert_frame_equal(read_dataset(single), read_dataset(out))
+
+
+def test_rows_outside_the_schema_fail_that_object_only(tmp_path: Path) -> None:
+    s = sweep(make_items(), tmp_path / "o", workers=1, task=bad_rows_task)
+    assert (s.done, s.failed) == (18, 2)
+    fails = read_failures(tmp_path / "o").set_index("object_id")
+    assert fails.loc["obj-03", "error_type"] == "ValueError"
+    assert "extra ['speed_m_per_s']" in fails.loc["obj-03", "error_message"]
+
+
+def test_part_writer_gets_each_parts_payloads_in_order(tmp_path: Path) -> None:
+    seen: list[int] = []
+
+    def write_log(part: PartPayloads) -> None:
+        seen.append(part.index)
+        atomic_write_bytes(part.path(".log"), b"\n".join(p for _, p in part.payloads))
+
+    out = tmp_path / "o"
+    sweep(make_items(), out, workers=2, task=toy_task_with_payload, part_writer=write_log)
+    assert sorted(seen) == list(range(7))
+    assert (out / "part-00002.log").read_bytes() == b"log of obj-06\nlog of obj-08"
+    assert (out / "part-00006.log").read_bytes() == b"log of obj-18\nlog of obj-19"
+    pd.testing.assert_frame_equal(read_dataset(out), expected_rows(make_items()))
+
+
+# --------------------------------------------------------------------------- resume
+
+
+def test_resume_recomputes_missing_corrupt_and_partial_parts_only(tmp_path: Path) -> None:
+    items = make_items()
+    out = tmp_path / "o"
+    sweep(items, out, workers=2)
+    reference = snapshot(out)
+    (out / "part-00001.parquet").unlink()  # missing
+    p4 = out / "part-00004.parquet"
+    p4.write_bytes(p4.read_bytes()[:50])  # truncated
+    (out / FAILURES_DIR / "part-00005.parquet").unlink()  # half-committed part
+    (out / ".part-00006.parquet.tmp-1-deadbeef").write_bytes(b"junk")  # leftover temp file
+    kept_inode = (out / "part-00000.parquet").stat().st_ino
+    with pytest.raises(InputDataError, match="incomplete sweep: 1 of 7 parts missing"):
+        read_dataset(out)
+
+    s = sweep(items, out, workers=2, resume=True)
+    assert s.skipped_resumed == 20 - 9  # parts 1, 4, 5 (3 objects each) were recomputed
+    assert (s.done, s.failed, s.failed_total) == (9, 0, 1)  # obj-07 sits in kept part 2
+    assert (out / "part-00000.parquet").stat().st_ino == kept_inode  # kept, not rewritten
+    assert snapshot(out) == reference
+    pd.testing.assert_frame_equal(read_dataset(out), expected_rows(items))
+
+
+def test_resume_after_the_client_is_killed(tmp_path: Path) -> None:
+    out = tmp_path / "o"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(TESTS_DIR), *sys.path])}
+    code = f"from test_parallel import _client_main; _client_main({str(out)!r})"
+    proc = subprocess.Popen([sys.executable, "-c", code], env=env, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 40
+        while len(list(out.glob("part-*.parquet"))) < 3:
+            assert proc.poll() is None, "the sweep ended before it could be killed"
+            assert time.monotonic() < deadline, "no parts written within 40 s"
+            time.sleep(0.05)
+        os.killpg(proc.pid, signal.SIGKILL)  # the client and its pool, mid-sweep
+        proc.wait(timeout=10)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait(timeout=10)
+    written = len(list(out.glob("part-*.parquet")))
+    assert 3 <= written < 10
+    with pytest.raises(InputDataError, match="incomplete sweep"):
+        read_dataset(out)
+
+    items = make_items(20, sleep_s=0.15)
+    s = sweep(items, out, workers=2, partition_size=2, resume=True)
+    assert s.skipped_resumed == 2 * written
+    assert s.done + s.failed == 20 - 2 * written
+    got = read_dataset(out)
+    pd.testing.assert_frame_equal(got, expected_rows(items))
+    assert not got.duplicated(["object_id", "trial"]).any()
+    sweep(make_items(20), tmp_path / "ref", workers=2, partition_size=2)  # same ids, no sleep
+    assert snapshot(out) == snapshot(tmp_path / "ref")
+
+
+def test_resume_into_an_empty_directory_runs_the_whole_sweep(tmp_path: Path) -> None:
+    s = sweep(make_items(6), tmp_path / "new", workers=1, resume=True)
+    assert (s.done, s.skipped_resumed) == (6, 0)
+
+
+# --------------------------------------------------------------------------- bad inputs
+
+
+def test_workers_zero_is_a_usage_error_and_writes_nothing(tmp_path: Path) -> None:
+    with pytest.raises(UsageError) as info:
+        sweep(make_items(), tmp_path / "o", workers=0)
+    assert info.value.exit_code == EXIT_USAGE
+    assert str(info.value) == "--workers must be >= 1, got 0"
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        ({"fingerprint": {**FINGERPRINT, "command": "other"}}, r"different command .*'command'"),
+        (
+            {"schema": SCHEMA.append(pa.field("extra_n", pa.float64()))},
+            "made with a different schema",
+        ),
+        ({"partition_size": 4}, "different list of objects or partition size"),
+    ],
+)
+def test_resume_of_a_different_sweep_is_refused(
+    tmp_path: Path, change: dict[str, Any], match: str
+) -> None:
+    out = tmp_path / "o"
+    sweep(make_items(6), out, workers=1)
+    before = snapshot(out)
+    with pytest.raises(InputDataError, match=match) as info:
+        sweep(make_items(6), out, workers=1, resume=True, **change)
+    assert info.value.exit_code == 65
+    assert "\n" not in str(info.value)
+    assert snapshot(out) == before
+
+
+def test_existing_output_needs_force_or_resume(tmp_path: Path) -> None:
+    out = tmp_path / "o"
+    sweep(make_items(6), out, workers=1)
+    (out / "notes.txt").write_text("mine")
+    before = snapshot(out)
+    with pytest.raises(OutputExistsError):
+        sweep(make_items(6), out, workers=1)
+    assert snapshot(out) == before
+    s = sweep(make_items(4), out, workers=1, force=True)
+    assert s.parts == 2
+    assert (out / "notes.txt").read_text() == "mine"  # only sweep files are replaced
+    assert sorted(p.name for p in out.glob("part-*")) == [
+        "part-00000.parquet",
+        "part-00001.parquet",
+    ]
+
+
+def test_resume_of_a_directory_without_manifest_is_refused(tmp_path: Path) -> None:
+    (tmp_path / "o").mkdir()
+    (tmp_path / "o" / "x.csv").write_text("a\n")
+    with pytest.raises(InputDataError, match=r"no _sweep\.json"):
+        sweep(make_items(3), tmp_path / "o", resume=True, workers=1)
+
+
+@pytest.mark.parametrize(
+    ("items", "match"),
+    [
+        ([{"object_id": "a"}, {"object_id": "a"}], "duplicate object_id 'a'"),
+        ([{"name": "a"}], "object at position 0 has no 'object_id'"),
+        ([{"object_id": 1.5}], "is not a string or int"),
+    ],
+)
+def test_bad_catalog_ids(tmp_path: Path, items: list[dict[str, Any]], match: str) -> None:
+    with pytest.raises(InputDataError, match=match):
+        sweep(items, tmp_path / "o", workers=1)
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("address", ["127.0.0.1:8786", "http://127.0.0.1:8786", "tcp://host"])
+def test_malformed_scheduler_address_is_a_usage_error(tmp_path: Path, address: str) -> None:
+    with pytest.raises(UsageError, match="not of the form tcp://HOST:PORT"):
+        sweep(make_items(3), tmp_path / "o", scheduler=address)
+    assert not (tmp_path / "o").exists()
+
+
+def test_workers_and_scheduler_together_are_refused(tmp_path: Path) -> None:
+    with pytest.raises(UsageError, match="not both"):
+        sweep(make_items(3), tmp_path / "o", workers=2, scheduler="tcp://127.0.0.1:8786")
+
+
+def test_reading_missing_or_non_parquet_inputs(tmp_path: Path) -> None:
+    with pytest.raises(MissingInputError):
+        read_dataset(tmp_path / "nope")
+    bad = tmp_path / "bad.parquet"
+    bad.write_text("not parquet")
+    with pytest.raises(InputDataError, match="not a readable Parquet file"):
+        read_dataset(bad)
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(InputDataError, match="no part-"):
+        read_dataset(tmp_path / "empty")
+    assert issubclass(InputDataError, DeformctlError)
+
+
+def test_progress_bar_only_on_a_terminal(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    sweep(make_items(6), tmp_path / "quiet", workers=1, progress=True)
+    assert capsys.readouterr().err == ""  # stderr is not a TTY under pytest
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    sweep(make_items(8), tmp_path / "tty", workers=1, progress=True)  # obj-07 fails
+    err = capsys.readouterr().err
+    assert "8/8" in err
+    assert "1 failed" in err
+    assert "obj/s" in err
