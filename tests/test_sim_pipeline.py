@@ -435,3 +435,32 @@ def test_usage_errors(tmp_path: Path, args: list[str], message: str) -> None:
     assert res.exit_code == EXIT_USAGE, res.stderr
     assert message in one_line_error(res)
     assert listing(tmp_path) == ["objects.csv"]
+
+
+def test_slip_options_reach_the_rows_and_the_attempts(tmp_path: Path) -> None:
+    catalog = tmp_path / "stiff.csv"
+    catalog.write_text(HEADER + STIFF_ROW, encoding="utf-8")
+    out, log = tmp_path / "lift.parquet", tmp_path / "lift.mcap"
+    res = run("lift", catalog, "--sim", "-o", out, "--log", log, "--protocol", "paper",
+              "--slip-criterion", "shortfall", "--slip-tolerance-m", "0.002",
+              "--lift-height-m", "0.01", "--hold-s", "0.1")  # fmt: skip
+    assert res.exit_code == 0, res.stderr
+    row = read_table(out, "lift_results").iloc[0]
+    assert (row["slip_criterion"], row["slip_tolerance_m"], row["lift_height_m"]) == (
+        "shortfall", 0.002, 0.01,
+    )  # fmt: skip
+    _, attempts = read_lift_log(log)
+    for att in attempts:
+        assert att.outcome.details["slip_measure"] == "shortfall"
+        assert att.outcome.slip_m == pytest.approx(att.outcome.details["shortfall_m"])
+        assert att.outcome.lifted == (
+            att.outcome.slip_m <= 0.002 and att.outcome.details["off_table"]
+        )
+
+
+def test_slip_tolerance_without_a_runner_that_uses_it(tmp_path: Path) -> None:
+    res = run("lift", PAPER_CATALOG, "--rig", "true", "--slip-tolerance-m", "0.002",
+              "-o", tmp_path / "lift.parquet")  # fmt: skip
+    assert res.exit_code == EXIT_USAGE
+    assert "--slip-tolerance-m needs --slip-from-frames" in one_line_error(res)
+    assert listing(tmp_path) == []
