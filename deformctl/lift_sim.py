@@ -30,18 +30,24 @@ import pandas as pd
 from deformctl.lift import RunnerFactory, TrialRunner
 from deformctl.series import TrialOutcome
 from deformctl.sim import LiftProfile, SimSettings, SlipCriterion, lift_attempt
+from deformctl.sim.engine import check_lattice_size
 from deformctl.simcatalog import settings_dict, sim_spec, sim_specs
 
 __all__ = ["check_sim_catalog", "sim_runner_factory"]
 
 
-def check_sim_catalog(catalog: pd.DataFrame, path: str | None = None) -> None:
-    """Refuse rows the simulator cannot lift: no material values, or values out of range.
+def check_sim_catalog(
+    catalog: pd.DataFrame, path: str | None = None, *, settings: SimSettings | None = None
+) -> None:
+    """Refuse catalog rows the simulator cannot run, before any attempt.
 
     Raises:
-        InputDataError: naming the catalog and the first such object (exit 65).
+        InputDataError: a row without material values (or otherwise invalid), naming the catalog
+            and the first such object (exit 65).
+        UsageError: ``settings`` would give an object a lattice above ``max_particles`` (exit 2).
     """
-    sim_specs(catalog, path=path)
+    for spec in sim_specs(catalog, path=path):
+        check_lattice_size(spec, settings or SimSettings())
 
 
 def sim_runner_factory(
@@ -77,6 +83,9 @@ def sim_runner_factory(
 
         return run
 
+    def check(catalog: pd.DataFrame, path: str | None) -> None:
+        check_sim_catalog(catalog, path, settings=s)
+
     def row_fields(obj: Mapping[str, Any]) -> Mapping[str, object]:
         return {
             "lift_accel_m_s2": p.accel_m_s2,
@@ -96,5 +105,5 @@ def sim_runner_factory(
             "lift_profile": p.as_dict(),
             "slip_criterion": {"measure": c.measure, "tolerance_m": c.tolerance_m},
         },
-        check=check_sim_catalog,
+        check=check,
     )

@@ -554,8 +554,13 @@ def read_csv_export(
                 f"units: unknown {k} unit {u!r}; supported: {', '.join(_UNITS_BY_KEY[k])}"
             )
 
-    with p.open(newline="", encoding="utf-8-sig") as fh:
-        rows = [r for r in csv.reader(fh) if any(cell.strip() for cell in r)]
+    try:
+        with p.open(newline="", encoding="utf-8-sig") as fh:
+            rows = [r for r in csv.reader(fh) if any(cell.strip() for cell in r)]
+    except UnicodeDecodeError as err:
+        raise InputDataError(f"not UTF-8 text (byte {err.start})", path=p) from None
+    except csv.Error as err:
+        raise InputDataError(f"not a readable CSV file: {err}", path=p) from None
     if not rows:
         raise InputDataError("empty CSV file", path=p)
     header = [h.strip() for h in rows[0]]

@@ -443,7 +443,7 @@ def measure(
         help="Sim: lattice spacing, cm [default: longest side / 4, 5 particles].",
     ),
     dt_s: float | None = typer.Option(None, "--dt-s", help="Sim: time step, s [default: 0.001]."),
-    seed: int | None = typer.Option(None, "--seed", help="Sim: noise seed [default: 0]."),
+    seed: int | None = typer.Option(None, "--seed", help="Sim: noise seed [default: 0].", min=0),
     noise_force_n: float | None = typer.Option(
         None, "--noise-force-n", help="Sim: force noise std, N [default: 0]."
     ),

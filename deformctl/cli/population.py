@@ -35,7 +35,7 @@ def population(
         ..., "-o", "--output", metavar="catalog.csv", help="Catalog to write (.csv or Parquet)."
     ),
     n: int = typer.Option(PAPER_POPULATION_SIZE, "-n", "--n", help="Number of objects."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the random draws."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the random draws.", min=0),
     weight_n: str = typer.Option("20,60", "--weight-n", metavar="LOW,HIGH", help="W range, N."),
     deformability_n_per_cm: str = typer.Option(
         "30,50", "--deformability-n-per-cm", metavar="LOW,HIGH", help="D range, N/cm."

@@ -86,7 +86,7 @@ def train(
     train_size: int = typer.Option(
         DEFAULT_TRAIN_SIZE, "--train-size", help="Training rows; the rest is the test set."
     ),
-    seed: int = typer.Option(0, "--seed", help="Seeds the split and the initial weights."),
+    seed: int = typer.Option(0, "--seed", help="Seeds the split and the initial weights.", min=0),
     metrics: str | None = typer.Option(
         None, "--metrics", help="Also write the metrics as JSON here (- for stdout)."
     ),

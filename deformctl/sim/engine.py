@@ -56,6 +56,7 @@ from deformctl.sim.lattice import (
     Lattice,
     build_lattice,
     palm_dof_map,
+    particles_per_axis,
     reduced_stiffness,
     resting_positions_m,
     unit_squeeze_stiffness_n_per_m,
@@ -180,16 +181,31 @@ def _lattice_and_scale(size_m: tuple[float, float, float], alpha_m: float) -> tu
     return lattice, unit_squeeze_stiffness_n_per_m(lattice)
 
 
+def check_lattice_size(spec: ObjectSpec, settings: SimSettings) -> None:
+    """Refuse a lattice larger than ``settings.max_particles`` before anything is built.
+
+    The calibration assembles a dense matrix whose size grows with the square of the particle
+    count, so an oversized lattice (a tiny ``alpha_cm``) must be refused up front.
+
+    Raises:
+        UsageError: naming the spacing, the particle count and the limit.
+    """
+    alpha_m = settings.alpha_m(spec)
+    n_particles = math.prod(particles_per_axis(spec.size_m, alpha_m))
+    if n_particles > settings.max_particles:
+        raise UsageError(
+            f"alpha {alpha_m / CM:.3g} cm gives {n_particles} particles for object "
+            f"{spec.object_id!r} (max_particles={settings.max_particles}); use a larger alpha_cm"
+        )
+
+
 def element_constants(
     spec: ObjectSpec, settings: SimSettings
 ) -> tuple[Lattice, FloatArray, FloatArray]:
     """Lattice and calibrated element stiffness (N/m) and damping (N·s/m), each ``[m]``."""
-    lattice, unit_d = _lattice_and_scale(spec.size_m, settings.alpha_m(spec))
-    if lattice.n_particles > settings.max_particles:
-        raise UsageError(
-            f"alpha {settings.alpha_m(spec) / CM:.3g} cm gives {lattice.n_particles} particles "
-            f"(max_particles={settings.max_particles}); use a larger alpha_cm"
-        )
+    check_lattice_size(spec, settings)
+    alpha_m = settings.alpha_m(spec)
+    lattice, unit_d = _lattice_and_scale(spec.size_m, alpha_m)
     stiffness = lattice.unit_stiffness * (spec.stiffness_n_per_m / unit_d)
     damping = stiffness * (spec.damping_ns_per_m / spec.stiffness_n_per_m)
     return lattice, stiffness, damping
