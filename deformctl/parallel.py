@@ -99,10 +99,16 @@ class TaskOutput:
             each with the sweep schema's columns; the id column may be left out.
         payload: any picklable object (e.g. the MCAP bytes of the object's time series) handed to
             the sweep's ``part_writer`` together with the other payloads of the same part.
+        error: a one-line reason when the object failed but still has rows worth keeping (e.g.
+            a lift search that did not converge: its row records the attempts made). The rows
+            are written and the object is also counted and recorded as failed.
+        error_type: the failure's type name in the failures part (with ``error``).
     """
 
     rows: Any
     payload: Any = None
+    error: str | None = None
+    error_type: str = "ObjectFailed"
 
 
 @dataclass(frozen=True)
@@ -234,14 +240,20 @@ def _run_item(
     item_id = item[id_column]
     try:
         out = task(item)
+        error: str | None = None
+        error_type = ""
         if isinstance(out, TaskOutput):
             rows, payload = out.rows, out.payload
+            if out.error is not None:
+                error, error_type = _one_line(out.error) or out.error_type, out.error_type
         else:
             rows, payload = out, None
         table = _rows_to_table(rows, schema, id_column, item_id)
     except Exception as err:
         message = _one_line(str(err)) or type(err).__name__
         return _ItemResult(item_id, None, None, type(err).__name__, message)
+    if error is not None:
+        return _ItemResult(item_id, table, payload, error_type, error)
     return _ItemResult(item_id, table, payload)
 
 
@@ -494,8 +506,9 @@ def _valid_part(
     failed_ids = meta_rows.get("failed_ids", [])
     if fails.column(id_column).to_pylist() != failed_ids:
         return None
-    ok_ids = set(ids) - set(failed_ids)
-    if not set(rows.column(id_column).to_pylist()) <= ok_ids:
+    ok_ids = set(ids) - set(failed_ids)  # failed objects may keep rows (TaskOutput.error)
+    row_ids = set(rows.column(id_column).to_pylist())
+    if not ok_ids <= row_ids <= set(ids):
         return None
     return len(failed_ids)
 
