@@ -270,6 +270,9 @@ class _Backend(Protocol):
     def close(self) -> None: ...
 
 
+_WORKER_DIED = "a local worker process died; the parts written so far are kept, rerun with --resume"
+
+
 class _LocalBackend:
     """A process pool; forkserver (spawn where unavailable) so workers start from a clean state."""
 
@@ -294,7 +297,10 @@ class _LocalBackend:
         self.capacity = 2 * workers
 
     def submit(self, position: int, item: dict[str, Any]) -> None:
-        fut = self._pool.submit(_run_item, self._task, item, self._schema, self._id_column)
+        try:
+            fut = self._pool.submit(_run_item, self._task, item, self._schema, self._id_column)
+        except BrokenProcessPool as err:  # a worker died while results were being collected
+            raise DeformctlError(_WORKER_DIED) from err
         self._futures[fut] = position
 
     def wait_some(self) -> list[tuple[int, _ItemResult]]:
@@ -305,10 +311,7 @@ class _LocalBackend:
             try:
                 out.append((position, fut.result()))
             except BrokenProcessPool as err:
-                raise DeformctlError(
-                    "a local worker process died; the parts written so far are kept, "
-                    "rerun with --resume"
-                ) from err
+                raise DeformctlError(_WORKER_DIED) from err
         return out
 
     def close(self) -> None:
@@ -513,11 +516,19 @@ def _valid_part(
     return len(failed_ids)
 
 
+def _is_temp_file(name: str) -> bool:
+    """A temporary file of a killed run: ours, or a part writer's (``atomic_output``'s
+    ``.part-00000.mcap.<random>.tmp``)."""
+    return name.startswith(".") and (
+        _TMP_MARK in name or (name.startswith(".part-") and name.endswith(".tmp"))
+    )
+
+
 def _clean_temp_files(out_dir: Path) -> None:
     for sub in (out_dir, out_dir / FAILURES_DIR):
         if sub.is_dir():
             for p in sub.iterdir():
-                if p.name.startswith(".") and _TMP_MARK in p.name:
+                if p.is_file() and _is_temp_file(p.name):
                     p.unlink(missing_ok=True)
 
 
@@ -525,9 +536,7 @@ def _remove_sweep_files(out_dir: Path) -> None:
     """Remove what a sweep writes (manifest, parts, failures, part artifacts), nothing else."""
     for p in out_dir.iterdir():
         if p.is_file() and (
-            p.name == MANIFEST_NAME
-            or p.name.startswith("part-")
-            or (p.name.startswith(".") and _TMP_MARK in p.name)
+            p.name == MANIFEST_NAME or p.name.startswith("part-") or _is_temp_file(p.name)
         ):
             p.unlink()
     fail_dir = out_dir / FAILURES_DIR
