@@ -509,9 +509,8 @@ def _valid_part(
     failed_ids = meta_rows.get("failed_ids", [])
     if fails.column(id_column).to_pylist() != failed_ids:
         return None
-    ok_ids = set(ids) - set(failed_ids)  # failed objects may keep rows (TaskOutput.error)
-    row_ids = set(rows.column(id_column).to_pylist())
-    if not ok_ids <= row_ids <= set(ids):
+    # rows only of this part's objects (a failed object may keep rows: TaskOutput.error)
+    if not set(rows.column(id_column).to_pylist()) <= set(ids):
         return None
     return len(failed_ids)
 
