@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install test lint bench clean
+.PHONY: install test lint bench reproduce clean
 
 install: $(STAMP)
 
@@ -24,6 +24,24 @@ lint: install
 
 bench: install
 	$(BIN)/python -m bench
+
+# The paper's experiment end to end with the deformctl command: a seeded 73-object population
+# (40 train / 33 test) and the four Table I objects, into $(RUN)/ (report.md + PNG plots).
+RUN ?= reports
+DC := $(BIN)/deformctl
+reproduce: install
+	rm -rf $(RUN) && mkdir -p $(RUN)
+	$(DC) population -n 73 --seed 0 -o $(RUN)/population.csv
+	$(DC) measure $(RUN)/population.csv --sim --seed 0 -o $(RUN)/squeeze.mcap
+	$(DC) characterize $(RUN)/squeeze.mcap -o $(RUN)/coefficients.parquet > $(RUN)/coefficients.txt
+	$(DC) lift $(RUN)/population.csv --sim -o $(RUN)/lift.parquet --log $(RUN)/lift.mcap > $(RUN)/lift.txt
+	$(DC) table $(RUN)/coefficients.parquet $(RUN)/lift.parquet -o $(RUN)/index.parquet
+	$(DC) train $(RUN)/index.parquet -o $(RUN)/model.skops --hidden 2 --train-size 40 --seed 0 --metrics $(RUN)/metrics.json
+	$(DC) predict $(RUN)/model.skops $(RUN)/index.parquet -o $(RUN)/predictions.parquet
+	$(DC) measure datasets/paper/objects.csv --sim --seed 0 -o $(RUN)/paper_squeeze.mcap
+	$(DC) characterize $(RUN)/paper_squeeze.mcap -o $(RUN)/paper_coefficients.parquet
+	$(DC) lift datasets/paper/objects.csv --sim -o $(RUN)/paper_lift.parquet --log $(RUN)/paper_lift.mcap
+	$(BIN)/python -m deformctl.report $(RUN)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache build *.egg-info

@@ -133,7 +133,7 @@ def _metrics_rows(metrics: dict[str, Any]) -> list[list[str]]:
                     split,
                     _pct(m["max_rel_error"]).lstrip("+"),
                     _pct(m["median_rel_error"]).lstrip("+"),
-                    _fmt(m["mae"]),
+                    _fmt(m["mae_n"]),
                     _fmt(m["r2"], 3),
                 ]
             )
@@ -347,7 +347,8 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
     summary_lines = [
         "Table I objects (ours vs the paper's Table II):",
         *[
-            f"  {r.object_id} {r.interior:<7} D {r.d_ours_n_per_cm:6.2f} N/cm ({_pct(r.d_rel_diff)})"
+            f"  {r.object_id} {r.interior:<7}"
+            f" D {r.d_ours_n_per_cm:6.2f} N/cm ({_pct(r.d_rel_diff)})"
             f"  λ {r.lambda_ours_ns_per_cm:5.2f} N·s/cm ({_pct(r.lambda_rel_diff)})"
             f"  L_f {r.lf_ours_n:6.2f} N vs sim {r.lf_paper_simulation_n:5.2f}"
             f" ({_pct(r.lf_rel_diff_vs_simulation)}), physical {r.lf_paper_physical_n:5.2f}"
