@@ -800,6 +800,7 @@ def simulate_squeezes(
     seed: int = 0,
     progress: SqueezeProgress | None = None,
     path: str | None = None,
+    first_index: int = 0,
 ) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
     """Simulate ``squeezes`` force-controlled squeezes of every catalog object.
 
@@ -825,6 +826,9 @@ def simulate_squeezes(
             ``j`` of it that stream's seed + j. Same inputs and seed give the same bytes.
         progress: called after each squeeze.
         path: the catalog's name, for messages.
+        first_index: the position of ``catalog``'s first row in the whole run's catalog: row
+            ``i`` gets the noise stream of object ``first_index + i``, so squeezing a slice of
+            a catalog (a sweep's one object) gives the bytes of the whole run.
 
     Returns:
         ``(objects, squeezes)``: the objects' catalog rows (NaN as None) plus
@@ -866,7 +870,7 @@ def simulate_squeezes(
     total = squeezes * len(specs)
     for i, (spec, rec) in enumerate(zip(specs, records, strict=True)):
         peak = peak_force_n if peak_force_n is not None else default_peak_force_n(spec, strain)
-        base_seed = _object_seed(seed, i)
+        base_seed = _object_seed(seed, first_index + i)
         for j in range(squeezes):
             out.append(
                 squeeze(

@@ -99,10 +99,16 @@ class TaskOutput:
             each with the sweep schema's columns; the id column may be left out.
         payload: any picklable object (e.g. the MCAP bytes of the object's time series) handed to
             the sweep's ``part_writer`` together with the other payloads of the same part.
+        error: a one-line reason when the object failed but still has rows worth keeping (e.g.
+            a lift search that did not converge: its row records the attempts made). The rows
+            are written and the object is also counted and recorded as failed.
+        error_type: the failure's type name in the failures part (with ``error``).
     """
 
     rows: Any
     payload: Any = None
+    error: str | None = None
+    error_type: str = "ObjectFailed"
 
 
 @dataclass(frozen=True)
@@ -234,14 +240,20 @@ def _run_item(
     item_id = item[id_column]
     try:
         out = task(item)
+        error: str | None = None
+        error_type = ""
         if isinstance(out, TaskOutput):
             rows, payload = out.rows, out.payload
+            if out.error is not None:
+                error, error_type = _one_line(out.error) or out.error_type, out.error_type
         else:
             rows, payload = out, None
         table = _rows_to_table(rows, schema, id_column, item_id)
     except Exception as err:
         message = _one_line(str(err)) or type(err).__name__
         return _ItemResult(item_id, None, None, type(err).__name__, message)
+    if error is not None:
+        return _ItemResult(item_id, table, payload, error_type, error)
     return _ItemResult(item_id, table, payload)
 
 
@@ -256,6 +268,9 @@ class _Backend(Protocol):
     def wait_some(self) -> list[tuple[int, _ItemResult]]: ...
 
     def close(self) -> None: ...
+
+
+_WORKER_DIED = "a local worker process died; the parts written so far are kept, rerun with --resume"
 
 
 class _LocalBackend:
@@ -282,7 +297,10 @@ class _LocalBackend:
         self.capacity = 2 * workers
 
     def submit(self, position: int, item: dict[str, Any]) -> None:
-        fut = self._pool.submit(_run_item, self._task, item, self._schema, self._id_column)
+        try:
+            fut = self._pool.submit(_run_item, self._task, item, self._schema, self._id_column)
+        except BrokenProcessPool as err:  # a worker died while results were being collected
+            raise DeformctlError(_WORKER_DIED) from err
         self._futures[fut] = position
 
     def wait_some(self) -> list[tuple[int, _ItemResult]]:
@@ -293,10 +311,7 @@ class _LocalBackend:
             try:
                 out.append((position, fut.result()))
             except BrokenProcessPool as err:
-                raise DeformctlError(
-                    "a local worker process died; the parts written so far are kept, "
-                    "rerun with --resume"
-                ) from err
+                raise DeformctlError(_WORKER_DIED) from err
         return out
 
     def close(self) -> None:
@@ -494,17 +509,25 @@ def _valid_part(
     failed_ids = meta_rows.get("failed_ids", [])
     if fails.column(id_column).to_pylist() != failed_ids:
         return None
-    ok_ids = set(ids) - set(failed_ids)
-    if not set(rows.column(id_column).to_pylist()) <= ok_ids:
+    # rows only of this part's objects (a failed object may keep rows: TaskOutput.error)
+    if not set(rows.column(id_column).to_pylist()) <= set(ids):
         return None
     return len(failed_ids)
+
+
+def _is_temp_file(name: str) -> bool:
+    """A temporary file of a killed run: ours, or a part writer's (``atomic_output``'s
+    ``.part-00000.mcap.<random>.tmp``)."""
+    return name.startswith(".") and (
+        _TMP_MARK in name or (name.startswith(".part-") and name.endswith(".tmp"))
+    )
 
 
 def _clean_temp_files(out_dir: Path) -> None:
     for sub in (out_dir, out_dir / FAILURES_DIR):
         if sub.is_dir():
             for p in sub.iterdir():
-                if p.name.startswith(".") and _TMP_MARK in p.name:
+                if p.is_file() and _is_temp_file(p.name):
                     p.unlink(missing_ok=True)
 
 
@@ -512,9 +535,7 @@ def _remove_sweep_files(out_dir: Path) -> None:
     """Remove what a sweep writes (manifest, parts, failures, part artifacts), nothing else."""
     for p in out_dir.iterdir():
         if p.is_file() and (
-            p.name == MANIFEST_NAME
-            or p.name.startswith("part-")
-            or (p.name.startswith(".") and _TMP_MARK in p.name)
+            p.name == MANIFEST_NAME or p.name.startswith("part-") or _is_temp_file(p.name)
         ):
             p.unlink()
     fail_dir = out_dir / FAILURES_DIR

@@ -27,11 +27,24 @@ STDIN_HASH = "stdin"  #: recorded instead of a hash for an input read from ``-``
 
 
 def sha256_file(path: PathArg) -> str:
-    """Return the hex sha256 of a file's bytes.
+    """Return the hex sha256 of a file's bytes (of a dataset directory: see below).
+
+    A directory (a sweep dataset) hashes the sorted names and sha256 of its files, those of
+    its subdirectories included (``_failures/part-00000.parquet``), hidden files left out.
 
     Raises:
         MissingInputError: the file cannot be read (exit 66).
     """
+    if os.path.isdir(path):
+        root = os.fspath(path)
+        digest = hashlib.sha256()
+        for dirpath, dirnames, filenames in os.walk(root):
+            dirnames[:] = sorted(d for d in dirnames if not d.startswith("."))
+            for name in sorted(f for f in filenames if not f.startswith(".")):
+                full = os.path.join(dirpath, name)
+                rel = os.path.relpath(full, root).replace(os.sep, "/")
+                digest.update(f"{rel}\0{sha256_file(full)}\n".encode())
+        return digest.hexdigest()
     digest = hashlib.sha256()
     try:
         with open(path, "rb") as fh:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from typing import Any
 
 import typer
@@ -10,6 +11,7 @@ import typer
 from deformctl.artifacts.describe import describe
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
+from deformctl.sweep import describe_dataset
 
 
 def _unit(unit: object) -> str:
@@ -107,8 +109,31 @@ def inspect(
 
     Example: deformctl inspect datasets/paper/objects.csv --json
     """
-    info = describe(file)
+    if os.path.isdir(file):  # a sweep dataset directory
+        info = describe_dataset(file)
+        text = render_dataset(info)
+    else:
+        info = describe(file)
+        text = ""
     if as_json:
         typer.echo(json.dumps(info, indent=2, allow_nan=False))
     else:
-        typer.echo(render_text(info))
+        typer.echo(text or render_text(info))
+
+
+def render_dataset(info: dict[str, Any]) -> str:
+    """Plain-text summary of a dataset directory (see :func:`deformctl.sweep.describe_dataset`)."""
+    state = "complete" if info["complete"] else "INCOMPLETE (rerun with --resume)"
+    lines = [
+        f"{info['path']}: {info['kind']} dataset (written by {info['command']})",
+        f"  parts: {info['parts']} of {info['parts_expected']}, {state}",
+        f"  objects: {info['objects']}, rows: {info['rows']}, failed: {info['failed']}",
+        f"  logs: {info['logs']} part-*.mcap",
+        "  columns: "
+        + ", ".join(
+            f"{c['name']} ({c['unit']})" if c["unit"] else c["name"] for c in info["columns"]
+        ),
+    ]
+    if info.get("seed") is not None:
+        lines.append(f"  seed: {info['seed']}")
+    return "\n".join(lines)

@@ -46,7 +46,7 @@ from deformctl.artifacts import (
     write_table,
 )
 from deformctl.artifacts.io import is_stdio
-from deformctl.cli import app
+from deformctl.cli import _sweep, app
 from deformctl.cli._common import translate_errors
 from deformctl.cli._lift_frames import DEFAULT_SLIP_TOLERANCE_M, frames_judge
 from deformctl.errors import SearchError, UsageError
@@ -83,6 +83,13 @@ def _sim_factory(sim: bool, options: Mapping[str, Any]) -> RunnerFactory | None:
             raise UsageError(f"{given[0]} needs --sim")
         return None
     from deformctl.lift_sim import sim_runner_factory
+
+    profile, settings, criterion = _sim_parts(options)
+    return sim_runner_factory(profile=profile, settings=settings, criterion=criterion)
+
+
+def _sim_parts(options: Mapping[str, Any]) -> tuple[Any, Any, Any]:
+    """The (LiftProfile, SimSettings, SlipCriterion) of the sim options (None: default)."""
     from deformctl.sim import LiftProfile, SimSettings, SlipCriterion
 
     def pick(flag: str, default: Any) -> Any:
@@ -102,7 +109,7 @@ def _sim_factory(sim: bool, options: Mapping[str, Any]) -> RunnerFactory | None:
     settings = SimSettings(
         alpha_cm=pick("--alpha-cm", SimSettings.alpha_cm), dt_s=pick("--dt-s", SimSettings.dt_s)
     )
-    return sim_runner_factory(profile=profile, settings=settings, criterion=criterion)
+    return profile, settings, criterion
 
 
 def _choose_runner(
@@ -280,6 +287,11 @@ def lift(
         DEFAULT_MAX_ATTEMPTS, "--max-attempts", help="Most attempts per object (>= 1)."
     ),
     force: bool = typer.Option(False, "--force", help="Overwrite existing outputs."),
+    workers: int | None = _sweep.workers_option(),
+    scheduler: str | None = _sweep.scheduler_option(),
+    connect_timeout: float | None = _sweep.connect_timeout_option(),
+    partition_size: int | None = _sweep.partition_size_option(),
+    resume: bool = _sweep.resume_option(),
 ) -> None:
     """Find each object's minimum lifting force L_f by iterative lifting.
 
@@ -293,22 +305,27 @@ def lift(
     and --lift-speed-m-s, rise --lift-height-m, hold --hold-s), judge slip by --slip-criterion
     against --slip-tolerance-m; every row records the profile and the criterion.
 
+    With --sim and a dataset directory output (-o DIR/), the objects run in parallel
+    (--workers N local processes, or --scheduler tcp://HOST:PORT of a Dask cluster) into
+    DIR/part-*.parquet with each part's attempts in DIR/part-*.mcap; --resume completes an
+    interrupted run. An object that fails is recorded in DIR/_failures/ and the rest go on.
+
     Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
     -o lift.parquet --log lift.mcap
     """
-    sim_factory = _sim_factory(
-        sim,
-        {
-            "--lift-accel-m-s2": lift_accel_m_s2,
-            "--lift-speed-m-s": lift_speed_m_s,
-            "--lift-height-m": lift_height_m,
-            "--hold-s": hold_s,
-            "--slip-tolerance-m": slip_tolerance_m if sim else None,  # else: frames' option
-            "--slip-criterion": slip_criterion,
-            "--alpha-cm": alpha_cm,
-            "--dt-s": dt_s,
-        },
-    )
+    sweep = _sweep.SweepOptions(workers, scheduler, connect_timeout, partition_size, resume)
+    dataset = sweep.check(output)
+    sim_options = {
+        "--lift-accel-m-s2": lift_accel_m_s2,
+        "--lift-speed-m-s": lift_speed_m_s,
+        "--lift-height-m": lift_height_m,
+        "--hold-s": hold_s,
+        "--slip-tolerance-m": slip_tolerance_m if sim else None,  # else: frames' option
+        "--slip-criterion": slip_criterion,
+        "--alpha-cm": alpha_cm,
+        "--dt-s": dt_s,
+    }
+    sim_factory = _sim_factory(sim, sim_options)
     judge = frames_judge(
         enabled=slip_from_frames, palm_marker_ids=palm_marker_ids, palm_regions=palm_regions,
         frame_marker_size_cm=frame_marker_size_cm,
@@ -320,6 +337,16 @@ def lift(
         protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
     )
     object_ids = _parse_objects(objects)
+    if dataset:
+        if sim_factory is None:
+            raise UsageError("a dataset directory output (-o DIR/) needs --sim")
+        if log is not None:
+            raise UsageError(
+                "--log is not used with a dataset directory output (see DIR/part-*.mcap)"
+            )
+        _lift_sweep(catalog, sim_options, object_ids, protocol, growth, tolerance,
+                    max_attempts, output, force, sweep)  # fmt: skip
+        return
     _check_outputs(output, log, force)
     selected = select_objects(read_catalog(catalog), object_ids)
     provenance = Provenance.from_invocation(
@@ -356,3 +383,48 @@ def lift(
     message = run.error_message()
     if message is not None:
         raise SearchError(message)
+
+
+def _lift_sweep(
+    catalog: str,
+    sim_options: Mapping[str, Any],
+    object_ids: list[str] | None,
+    protocol: str,
+    growth: float,
+    tolerance: float,
+    max_attempts: int,
+    output: str,
+    force: bool,
+    sweep: _sweep.SweepOptions,
+) -> None:
+    """``lift --sim -o DIR/``: one search per object through the sweep executor."""
+    from deformctl.artifacts.provenance import STDIN_HASH, sha256_file
+    from deformctl.lift import catalog_records
+    from deformctl.lift_sim import sim_runner_factory
+    from deformctl.parallel import run_sweep
+    from deformctl.sweep import LiftLogWriter, LiftTask, dataset_fingerprint, table_schema
+
+    profile, settings, criterion = _sim_parts(sim_options)
+    factory = sim_runner_factory(profile=profile, settings=settings, criterion=criterion)
+    selected = select_objects(read_catalog(catalog), object_ids)
+    search: dict[str, Any] = {
+        "protocol": protocol,
+        "growth": growth,
+        "tolerance_rel": tolerance,
+        "max_attempts": max_attempts,
+    }
+    run_settings = {"runner": factory.name, **factory.settings, **search}
+    provenance = Provenance.from_invocation([catalog], settings=run_settings)
+    inputs = {"catalog": STDIN_HASH if is_stdio(catalog) else sha256_file(catalog)}
+    task = LiftTask(profile, settings, criterion, **search)
+    summary = run_sweep(
+        task,
+        catalog_records(selected),
+        out_dir=output,
+        schema=table_schema("lift_results"),
+        fingerprint=dataset_fingerprint("lift", run_settings, inputs),
+        part_writer=LiftLogWriter(provenance),
+        force=force,
+        **sweep.run_kwargs(),
+    )
+    _sweep.finish(summary, "lift")

@@ -30,6 +30,15 @@ from deformctl.artifacts.io import is_stdio
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
 from deformctl.cli._measure_images import ImageOptions, measure_images
+from deformctl.cli._sweep import (
+    SweepOptions,
+    connect_timeout_option,
+    finish,
+    partition_size_option,
+    resume_option,
+    scheduler_option,
+    workers_option,
+)
 from deformctl.errors import UsageError
 from deformctl.measure import (
     DEFAULT_SIM_HOLD_S,
@@ -201,8 +210,17 @@ def _squeeze_progress_bar(console: Console, total: int) -> Progress | None:
     )
 
 
-def _measure_sim(catalog_path: str, opts: _SimOptions, output: str, force: bool) -> None:
-    """``measure CATALOG --sim``: simulated squeezes of every (selected) catalog object."""
+def _measure_sim(
+    catalog_path: str,
+    opts: _SimOptions,
+    output: str,
+    force: bool,
+    sweep: SweepOptions | None = None,
+) -> None:
+    """``measure CATALOG --sim``: simulated squeezes of every (selected) catalog object.
+
+    With a dataset directory output the objects run through the sweep executor (``sweep``).
+    """
     from deformctl.lift import select_objects
     from deformctl.sim import SimSettings
     from deformctl.simcatalog import settings_dict, sim_specs
@@ -216,9 +234,13 @@ def _measure_sim(catalog_path: str, opts: _SimOptions, output: str, force: bool)
         alpha_cm=opts.alpha_cm, dt_s=SimSettings.dt_s if opts.dt_s is None else opts.dt_s
     )
     ids = None if opts.objects is None else [part.strip() for part in opts.objects.split(",")]
-    check_output_path(output, force)
+    sweep = sweep or SweepOptions()
+    dataset = sweep.check(output)
+    if not dataset:
+        check_output_path(output, force)
     catalog = select_objects(read_catalog(catalog_path), ids)
-    sim_specs(catalog, path=catalog_path)  # refuse rows without material values, before any run
+    if not dataset:  # a sweep records such rows as failed objects and goes on
+        sim_specs(catalog, path=catalog_path)  # refuse rows without material values, first
     seed = 0 if opts.seed is None else opts.seed
     strain = DEFAULT_SQUEEZE_STRAIN if opts.strain is None else opts.strain
     kwargs: dict[str, Any] = {
@@ -242,6 +264,10 @@ def _measure_sim(catalog_path: str, opts: _SimOptions, output: str, force: bool)
             "sim_settings": settings_dict(settings),
         },
     )
+    if dataset:
+        _measure_sweep(catalog_path, catalog, kwargs, settings, seed, provenance, output, force,
+                       sweep)  # fmt: skip
+        return
     console = Console(stderr=True)
     total = squeezes * len(catalog)
     bar = _squeeze_progress_bar(console, total)
@@ -267,6 +293,42 @@ def _measure_sim(catalog_path: str, opts: _SimOptions, output: str, force: bool)
         f"({squeezes} each), {duration_s:.1f} s, dt {settings.dt_s:g} s",
         err=True,
     )
+
+
+def _measure_sweep(
+    catalog_path: str,
+    catalog: Any,
+    kwargs: dict[str, Any],
+    settings: Any,
+    seed: int,
+    provenance: Provenance,
+    output: str,
+    force: bool,
+    sweep: SweepOptions,
+) -> None:
+    """``measure --sim -o DIR/``: one object per task; part ``k``'s squeezes in part-k.mcap."""
+    from deformctl.artifacts.provenance import STDIN_HASH, sha256_file
+    from deformctl.lift import catalog_records
+    from deformctl.parallel import run_sweep
+    from deformctl.simcatalog import settings_dict
+    from deformctl.sweep import MEASURE_SCHEMA, MeasureTask, SqueezeLogWriter, dataset_fingerprint
+
+    items = [{**rec, "_position": i} for i, rec in enumerate(catalog_records(catalog))]
+    inputs = {"catalog": STDIN_HASH if is_stdio(catalog_path) else sha256_file(catalog_path)}
+    fingerprint = dataset_fingerprint(
+        "measure", {**kwargs, "sim_settings": settings_dict(settings)}, inputs, seed
+    )
+    summary = run_sweep(
+        MeasureTask(kwargs, settings, seed),
+        items,
+        out_dir=output,
+        schema=MEASURE_SCHEMA,
+        fingerprint=fingerprint,
+        part_writer=SqueezeLogWriter(provenance),
+        force=force,
+        **sweep.run_kwargs(),
+    )
+    finish(summary, "measure")
 
 
 @app.command()
@@ -451,6 +513,11 @@ def measure(
         None, "--noise-position-m", help="Sim: noise std of each palm position, m [default: 0]."
     ),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing output."),
+    workers: int | None = workers_option(),
+    scheduler: str | None = scheduler_option(),
+    connect_timeout: float | None = connect_timeout_option(),
+    partition_size: int | None = partition_size_option(),
+    resume: bool = resume_option(),
 ) -> None:
     """Turn a rig recording, or simulated squeezes of a catalog, into a squeeze log (MCAP).
 
@@ -462,7 +529,9 @@ def measure(
     With --sim, every catalog object with material values is squeezed --squeezes times in the
     simulator (force ramp then hold; the largest squeeze's peak force is D x strain x size_x
     unless --peak-force-n is given), and the log stores each object's catalog row and the
-    simulator settings and seed.
+    simulator settings and seed. With a dataset directory output (-o DIR/) the objects run in
+    parallel (--workers, --scheduler; --resume) into DIR/part-*.mcap squeeze logs and a
+    per-object summary DIR/part-*.parquet; characterize reads DIR/ directly.
 
     Example:
 
@@ -471,6 +540,7 @@ def measure(
         --position-topic /left/palm_pose --object-id sand --weight-n 2.9 -o squeeze.mcap
       deformctl measure datasets/paper/objects.csv --sim -o squeeze.mcap
     """
+    sweep = SweepOptions(workers, scheduler, connect_timeout, partition_size, resume)
     sim_opts = _SimOptions(
         squeezes=squeezes,
         objects=objects,
@@ -518,9 +588,11 @@ def measure(
         )
         if not source:
             raise UsageError("--sim needs a CATALOG argument (the objects to squeeze)")
-        _measure_sim(source, sim_opts, output, force)
+        _measure_sim(source, sim_opts, output, force, sweep)
         return
     _refuse(sim_opts.given(), flag)
+    if sweep.given():
+        raise UsageError(f"{sweep.given()[0]} needs --sim")
     if object_id is None or weight_n is None:
         raise UsageError(f"{flag} needs --object-id and --weight-n")
     if images is not None:

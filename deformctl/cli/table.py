@@ -25,6 +25,7 @@ from deformctl.artifacts import Provenance, check_output_path, read_table, write
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
 from deformctl.errors import UsageError
+from deformctl.sweep import read_table_any
 from deformctl.table import (
     INDEX_COLUMNS,
     LOOKUP_KEYS,
@@ -175,8 +176,8 @@ def table(
     if output in (coefficients_path, lift_path) and output != "-":
         raise UsageError(f"output {output} is also an input")
     check_output_path(output, force)  # fail before reading anything
-    coefficients = read_table(coefficients_path, "coefficients")
-    lift = read_table(lift_path, "lift_results")
+    coefficients = read_table_any(coefficients_path, "coefficients")  # a file or a dataset dir
+    lift = read_table_any(lift_path, "lift_results")
     index = build_index_table(coefficients, lift, allow_unconverged=allow_unconverged)
     provenance = Provenance.from_invocation(
         [coefficients_path, lift_path], settings={"allow_unconverged": allow_unconverged}
