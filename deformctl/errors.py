@@ -18,6 +18,8 @@ Exit codes (documented in the README):
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from os import PathLike
 
 EXIT_OK = 0
@@ -90,3 +92,18 @@ class SearchError(DeformctlError):
 
 class RigError(DeformctlError):
     """An external rig command that crashed, timed out or answered garbage (exit 1)."""
+
+
+@contextmanager
+def error_context(path: str | PathLike[str]) -> Iterator[None]:
+    """Name ``path`` in any :class:`DeformctlError` raised inside that names no file yet.
+
+    For library calls that work on data already read (a join of two tables, a prediction), so
+    the CLI's one line still reads ``error: <file>: <what is wrong>``.
+    """
+    try:
+        yield
+    except DeformctlError as err:
+        if err.path is None:
+            err.path = str(path)
+        raise

@@ -378,10 +378,31 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m deformctl.report RUN_DIR``: write the report and print its summary."""
+    """``python -m deformctl.report RUN_DIR [--require-max-test-error FRACTION]``.
+
+    Writes the report and prints its summary. With ``--require-max-test-error``, exits 1 when
+    the network's maximum relative test error exceeds the fraction (``make reproduce`` passes
+    0.05, the target of issue 6), so a regression of the headline number fails the run.
+    """
     args = list(sys.argv[1:] if argv is None else argv)
+    limit: float | None = None
+    if len(args) == 3 and args[1] == "--require-max-test-error":
+        try:
+            limit = float(args[2])
+        except ValueError:
+            limit = None
+        if limit is None or not 0 < limit < 1:
+            print(
+                f"error: --require-max-test-error takes a fraction, got {args[2]!r}",
+                file=sys.stderr,
+            )
+            return 2
+        args = args[:1]
     if len(args) != 1:
-        print("usage: python -m deformctl.report RUN_DIR", file=sys.stderr)
+        print(
+            "usage: python -m deformctl.report RUN_DIR [--require-max-test-error FRACTION]",
+            file=sys.stderr,
+        )
         return 2
     try:
         summary = write_report(args[0])
@@ -389,6 +410,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"error: {err}", file=sys.stderr)
         return err.exit_code
     print(summary.text)
+    if limit is not None and not summary.model_test_max_rel_error <= limit:
+        print(
+            f"error: the network's max relative test error "
+            f"{100 * summary.model_test_max_rel_error:.2f} % exceeds {100 * limit:.2f} %",
+            file=sys.stderr,
+        )
+        return 1
     return 0
 
 

@@ -401,7 +401,7 @@ def test_readme_lift_example_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatc
         result = cli.invoke(app, argv)
         assert result.exit_code == 0, (command, result.stderr)
     # examples/threshold_rig.py needs F_w + 0.5 N: F_d is 0.5 N to within the 1 % tolerance.
-    table = read_table("lift.parquet", "lift_results")
+    table = read_table("lift-rig.parquet", "lift_results")
     assert table["converged"].all()
     assert len(table) == 4
     assert (table["f_d_n"] >= 0.5 - 1e-12).all()

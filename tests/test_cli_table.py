@@ -158,7 +158,8 @@ def test_missing_objects_on_either_side_are_named(
     )
     msg = _error(result, 65)
     assert msg == (
-        "error: 1 object(s) have no lift result: P07; 1 object(s) have no coefficients: P03"
+        f"error: {coef_path} + {lift_path}: "
+        "1 object(s) have no lift result: P07; 1 object(s) have no coefficients: P03"
     )
     assert sorted(os.listdir(tmp_path)) == before
 
@@ -171,7 +172,8 @@ def test_unconverged_refused_unless_allowed(inputs: tuple[Path, Path], tmp_path:
     out = tmp_path / "i.parquet"
     result = runner.invoke(app, ["table", str(coef_path), str(lift_path), "-o", str(out)])
     assert _error(result, 65) == (
-        "error: 2 object(s) did not converge: P02, P09 (use --allow-unconverged to keep them)"
+        f"error: {coef_path} + {lift_path}: "
+        "2 object(s) did not converge: P02, P09 (use --allow-unconverged to keep them)"
     )
     assert not out.exists()
     result = runner.invoke(

@@ -73,3 +73,18 @@ def test_missing_run_file_is_one_line_error(
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert err.startswith("error: ")
+
+
+def test_required_max_test_error_gates_the_run(
+    run_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    error = write_report(run_dir).model_test_max_rel_error
+    assert (
+        main([str(run_dir), "--require-max-test-error", f"{min(0.99, error * 1.01 + 1e-9)}"]) == 0
+    )
+    capsys.readouterr()
+    assert main([str(run_dir), "--require-max-test-error", f"{error * 0.99}"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("error: the network's max relative test error")
+    assert err.count("\n") == 1
+    assert main([str(run_dir), "--require-max-test-error", "abc"]) == 2

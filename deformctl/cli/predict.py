@@ -19,7 +19,7 @@ from deformctl.artifacts.io import is_stdio
 from deformctl.artifacts.model import load_model
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
-from deformctl.errors import SchemaError, UsageError
+from deformctl.errors import SchemaError, UsageError, error_context
 from deformctl.train import FEATURES, prediction_inputs
 from deformctl.train import predict as predict_lift_force
 
@@ -126,7 +126,10 @@ def predict(
     else:
         frame = _read_features(features, catalog)
         inputs = [model_path, features, *([catalog] if catalog else [])]
-    result = predict_lift_force(model, frame[[c for c in ("object_id", *FEATURES) if c in frame]])
+    with error_context(features if features is not None else "command line"):
+        result = predict_lift_force(
+            model, frame[[c for c in ("object_id", *FEATURES) if c in frame]]
+        )
     for line in result.warnings:
         typer.echo(f"warning: {line}", err=True)
 

@@ -24,7 +24,7 @@ import typer
 from deformctl.artifacts import Provenance, check_output_path, read_table, write_table
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
-from deformctl.errors import UsageError
+from deformctl.errors import UsageError, error_context
 from deformctl.sweep import read_table_any
 from deformctl.table import (
     INDEX_COLUMNS,
@@ -178,7 +178,8 @@ def table(
     check_output_path(output, force)  # fail before reading anything
     coefficients = read_table_any(coefficients_path, "coefficients")  # a file or a dataset dir
     lift = read_table_any(lift_path, "lift_results")
-    index = build_index_table(coefficients, lift, allow_unconverged=allow_unconverged)
+    with error_context(f"{coefficients_path} + {lift_path}"):
+        index = build_index_table(coefficients, lift, allow_unconverged=allow_unconverged)
     provenance = Provenance.from_invocation(
         [coefficients_path, lift_path], settings={"allow_unconverged": allow_unconverged}
     )

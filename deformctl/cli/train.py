@@ -94,8 +94,10 @@ def train(
 ) -> None:
     """Train Pipeline(StandardScaler, MLPRegressor) on (W, D, λ) -> L_f and save it with skops.
 
-    The rows are split by a seeded permutation into --train-size training rows and a test set.
-    Prints max and median relative error, MAE and R² on train and test for the model and for
+    The network learns L_f / W and its output is scaled back by W (inputs stay (W, D, λ)); the
+    best of 8 seeded restarts is picked on the training rows. The rows are split by a seeded
+    permutation into --train-size training rows and a test set. Prints max and median
+    relative error, MAE and R² on train and test for the model and for
     two baselines on the same split: the nearest index-table entry and F_w = W / (2 μ) alone.
     The model file's metadata records the seed, features, hyper-parameters, training ranges,
     split ids and metrics; the same seed gives identical predictions.
