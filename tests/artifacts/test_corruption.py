@@ -1,13 +1,15 @@
 """Property: damaged artifacts end in exit 65 with one line on stderr, never a traceback.
 
 Hypothesis feeds truncations, byte flips, overwritten slices and random bytes of valid artifacts
-(a squeeze log, a lift log, Parquet tables, the catalog CSV) to ``deformctl inspect`` (in-process
-through CliRunner) and to the matching library reader.
+(a squeeze log, a lift log, every Parquet table kind, the catalog CSV, a ``.skops`` model) to
+``deformctl inspect`` (in-process through CliRunner) and to the matching library reader.
 
 MCAP logs carry CRCs over every byte, so every corruption must be refused. Parquet has bytes
 that no reader looks at (statistics, the writer's name, ...): a corrupted table may still be
 accepted, but only when it reads back identical to the original (same columns, values, units and
 provenance) — anything that changes what the reader returns is refused by the content digest.
+A model file is a zip archive with a CRC per member; bytes outside the members (timestamps,
+padding) may change without effect, so it too may be accepted only when it describes identically.
 A CSV catalog has no checksum at all: a corruption may give another valid catalog (exit 0), which
 the library reader must then accept too.
 """
@@ -36,8 +38,11 @@ from deformctl.artifacts import (
     write_table,
 )
 from deformctl.artifacts.describe import describe
+from deformctl.artifacts.model import load_model, save_model
 from deformctl.cli import app
 from deformctl.errors import EXIT_DATAERR, DeformctlError
+from deformctl.population import make_population
+from deformctl.train import train_model
 
 runner = CliRunner()
 OBJECTS = [{"object_id": "A", "weight_n": 0.7, "friction_mu": 0.5}]
@@ -51,13 +56,25 @@ def _artifacts() -> dict[str, tuple[bytes, str, Callable[[Path], Any]]]:
     write_squeeze_log(d / "s.mcap", OBJECTS, make_squeezes(3), provenance=prov)
     write_lift_log(d / "l.mcap", OBJECTS, make_attempts(3), provenance=prov)
     tables = make_tables()
-    write_table(tables["coefficients"], d / "c.parquet", "coefficients", provenance=prov)
-    write_table(tables["catalog"], d / "cat.parquet", "catalog", provenance=prov)
+    parquet = {}
+    for kind in ("coefficients", "catalog", "lift_results", "index_table", "predictions"):
+        write_table(tables[kind], d / f"{kind}.parquet", kind, provenance=prov)
+        reader = read_catalog if kind == "catalog" else read_table
+        parquet[f"{kind}_parquet"] = ((d / f"{kind}.parquet").read_bytes(), "parquet", reader)
+    index = make_population(12, seed=0).rename(
+        columns={
+            "material_stiffness_n_per_cm": "deformability_n_per_cm",
+            "material_damping_ns_per_cm": "damping_ns_per_cm",
+        }
+    )
+    index["lift_force_n"] = index["weight_n"] * (1.2 + 0.01 * index["damping_ns_per_cm"])
+    trained = train_model(index, train_size=8, seed=0, restarts=1)
+    save_model(d / "m.skops", trained.model, metadata={"seed": 0})
     return {
+        **parquet,
+        "model_skops": ((d / "m.skops").read_bytes(), "skops", load_model),
         "squeeze_mcap": ((d / "s.mcap").read_bytes(), "mcap", read_squeeze_log),
         "lift_mcap": ((d / "l.mcap").read_bytes(), "mcap", read_lift_log),
-        "coefficients_parquet": ((d / "c.parquet").read_bytes(), "parquet", read_table),
-        "catalog_parquet": ((d / "cat.parquet").read_bytes(), "parquet", read_catalog),
         "catalog_csv": (PAPER_OBJECTS.read_bytes(), "csv", read_catalog),
     }
 
@@ -132,10 +149,10 @@ def test_corrupted_artifacts_exit_65_with_one_line(
     assert fmt != "mcap", f"{how} of {name} accepted"
     assert how != "random"
     assert library_ok
-    if fmt == "parquet":
+    if fmt in ("parquet", "skops"):
         info = describe(path)
         info.pop("path")
         assert json.dumps(info, sort_keys=True) == _original_description(name)
-        event("parquet: accepted, identical content")
+        event(f"{fmt}: accepted, identical content")
     else:
         event("csv: accepted as another valid catalog")
