@@ -53,7 +53,6 @@ from typing import Literal
 
 import numpy as np
 import pandas as pd
-from scipy.signal import savgol_filter
 
 from deformctl.errors import InputDataError, UsageError
 from deformctl.series import FloatArray, SqueezeSeries
@@ -234,6 +233,8 @@ def _prepare(
             f"{_where(s)}: only {force_n.shape[0]} samples on the uniform grid, need at least "
             f"{2 * wl} for a {wl}-sample Savitzky–Golay window (use a shorter window)"
         )
+    from scipy.signal import savgol_filter  # deferred: ~1 s to import, only fits need it
+
     d_m = savgol_filter(comp_m, wl, polyorder, deriv=0)
     rate = savgol_filter(comp_m, wl, polyorder, deriv=1, delta=dt_s)
     half = wl // 2

@@ -37,8 +37,8 @@ import math
 import numpy as np
 import pandas as pd
 
+from deformctl.catalog import CATALOG_COLUMNS
 from deformctl.errors import UsageError
-from deformctl.sim.objects import CATALOG_COLUMNS
 
 #: The paper's population size and split (section V.A).
 PAPER_POPULATION_SIZE = 73

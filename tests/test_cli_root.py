@@ -46,3 +46,15 @@ def test_help_lists_subcommands_in_pipeline_order() -> None:
     order = ["population", "measure", "characterize", "lift", "table", "train", "predict"]
     positions = [result.stdout.index(f"  {name} ") for name in [*order, "inspect"]]
     assert positions == sorted(positions)
+
+
+def test_cli_start_up_imports_no_heavy_library() -> None:
+    # `deformctl --help` and the light commands must start fast in shell pipelines: OpenCV,
+    # scikit-learn, skops, scipy.signal and numba are imported only by the commands that use them.
+    code = (
+        "import sys, deformctl.cli; "
+        "print(','.join(m for m in ('cv2', 'sklearn', 'skops', 'scipy.signal', 'numba', "
+        "'distributed', 'matplotlib') if m in sys.modules))"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert proc.stdout.strip() == ""

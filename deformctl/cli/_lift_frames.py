@@ -15,7 +15,6 @@ from typing import Any
 
 from deformctl.errors import UsageError
 from deformctl.rig import SlipFromFrames
-from deformctl.vision import slip_from_frames
 
 #: Default ``--slip-tolerance-m``: the object may fall behind the palms by this much, m.
 DEFAULT_SLIP_TOLERANCE_M = 0.005
@@ -105,6 +104,8 @@ def frames_judge(
         options["palm_regions"] = parse_palm_regions(palm_regions)
     if debug_dir is not None:
         options["debug_dir"] = debug_dir
+    from deformctl.vision import slip_from_frames  # deferred: OpenCV
+
     return functools.partial(slip_from_frames, **options)
 
 

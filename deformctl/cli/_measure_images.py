@@ -31,7 +31,6 @@ from deformctl.artifacts import (
 )
 from deformctl.artifacts.io import is_stdio
 from deformctl.errors import DeformctlError, InputDataError, UsageError
-from deformctl.vision import catalog_row, measure_object_size
 
 DEFAULT_MARKER_DICT = "DICT_4X4_50"
 _PARQUET_MAGIC = b"PAR1"
@@ -226,6 +225,8 @@ def measure_images(
         )
     else:
         check_output_path(output, force)
+    from deformctl.vision import catalog_row, measure_object_size  # deferred: OpenCV
+
     size = measure_object_size(
         top,
         side,

@@ -16,12 +16,9 @@ from deformctl.artifacts import (
     write_table,
 )
 from deformctl.artifacts.io import is_stdio
-from deformctl.artifacts.model import load_model
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
 from deformctl.errors import SchemaError, UsageError, error_context
-from deformctl.train import FEATURES, prediction_inputs
-from deformctl.train import predict as predict_lift_force
 
 #: Table kinds ``predict`` reads features from.
 INPUT_KINDS = ("coefficients", "index_table", "predictions")
@@ -48,6 +45,8 @@ def _read_features(path: str, catalog: str | None) -> pd.DataFrame:
         )
     cat = None if catalog is None else read_catalog(catalog)
     try:
+        from deformctl.train import prediction_inputs  # deferred: scikit-learn
+
         return prediction_inputs(table, cat)
     except SchemaError as err:
         raise SchemaError(err.message, path=path) from None
@@ -118,6 +117,10 @@ def predict(
             raise UsageError(f"{FLAGS[key]} must be a finite number, got {value}")
     if output is not None:
         check_output_path(output, force)  # fail before any work
+
+    from deformctl.artifacts.model import load_model  # deferred: skops, scikit-learn
+    from deformctl.train import FEATURES
+    from deformctl.train import predict as predict_lift_force
 
     model, metadata = load_model(model_path)
     if features is None:

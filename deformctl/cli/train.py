@@ -13,16 +13,10 @@ from rich.table import Table
 
 from deformctl.artifacts import Provenance, atomic_output, check_output_path, read_table
 from deformctl.artifacts.io import is_stdio
-from deformctl.artifacts.model import save_model
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
 from deformctl.errors import UsageError
-from deformctl.train import (
-    DEFAULT_TRAIN_SIZE,
-    parse_hidden,
-    train_model,
-    train_report,
-)
+from deformctl.population import PAPER_TRAIN_SIZE as DEFAULT_TRAIN_SIZE
 
 #: Row labels of the printed table, keyed by the metrics entries of :func:`train_model`.
 PREDICTORS = (
@@ -107,6 +101,10 @@ def train(
     \b
       deformctl train index.parquet -o model.skops --seed 0 --metrics metrics.json
     """
+    # deferred: scikit-learn and skops take seconds to import and only training needs them
+    from deformctl.artifacts.model import save_model
+    from deformctl.train import parse_hidden, train_model, train_report
+
     sizes = parse_hidden(hidden)
     if is_stdio(output):
         raise UsageError("the model file cannot be stdout; give a file name with -o")

@@ -17,17 +17,6 @@ from deformctl.units import CM, GRAVITY_M_S2, N_PER_CM, NS_PER_CM
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from deformctl.sim.protocols import LiftProfile
 
-CATALOG_COLUMNS = (
-    "object_id",
-    "size_x_cm",
-    "size_y_cm",
-    "size_z_cm",
-    "weight_n",
-    "friction_mu",
-    "material_stiffness_n_per_cm",
-    "material_damping_ns_per_cm",
-)
-
 
 def _number(row: Mapping[str, object], key: str, object_id: str) -> float:
     if key not in row:
