@@ -220,3 +220,19 @@ def test_existing_output_and_failed_write_leave_nothing(tmp_path: Path) -> None:
     with pytest.raises(InputDataError, match="object 'C' squeeze 0: force_n has non-finite"):
         write_squeeze_log(path, OBJECTS, [*good, bad], provenance=None)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_sample_messages_are_exactly_json_dumps_bytes(tmp_path: Path) -> None:
+    # The writer encodes samples from a template; each message must be the very bytes that
+    # json.dumps gives for its content (compact separators, floats as repr, same key order).
+    path = tmp_path / "s.mcap"
+    series = SqueezeSeries(
+        'A"quoted\\', 0, [0.0, 1e-3, 2.5e-3], [0.1, 1 / 3, 2e-17], [0.0, 1e300, -0.0]
+    )
+    write_squeeze_log(path, [{"object_id": 'A"quoted\\'}], [series], provenance=None)
+    with path.open("rb") as fh:
+        datas = [m.data for _, _, m in make_reader(fh).iter_messages()]
+    assert len(datas) == 3
+    for data in datas:
+        assert data == json.dumps(json.loads(data), separators=(",", ":")).encode()
+    assert json.loads(datas[1])["force_n"] == 1 / 3
