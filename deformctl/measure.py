@@ -640,64 +640,14 @@ def _cell(row: Sequence[str], i: int) -> str:
     return row[i] if i < len(row) else ""
 
 
-def squeeze_from_ros2_bag(
-    path: str | PathLike[str],
-    *,
-    wrench_topics: Sequence[str],
-    position_topic: str,
-    object_id: str,
-    axis: Axis = "x",
-    joint: str | None = None,
-    position_is: PositionIs = "palm",
-    compression_zero: CompressionZero = "lead_in",
-    segment: bool = True,
-    force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
-    min_gap_s: float = DEFAULT_MIN_GAP_S,
-    min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
-) -> list[SqueezeSeries]:
-    """The squeezes of :func:`read_ros2_bag` (same arguments and errors), without the rates."""
-    return read_ros2_bag(
-        path,
-        wrench_topics=wrench_topics,
-        position_topic=position_topic,
-        object_id=object_id,
-        axis=axis,
-        joint=joint,
-        position_is=position_is,
-        compression_zero=compression_zero,
-        segment=segment,
-        force_threshold_frac=force_threshold_frac,
-        min_gap_s=min_gap_s,
-        min_squeeze_s=min_squeeze_s,
-    ).squeezes
+def squeeze_from_ros2_bag(path: str | PathLike[str], **options: Any) -> list[SqueezeSeries]:
+    """The squeezes of :func:`read_ros2_bag` (same keyword arguments and errors), no rates."""
+    return read_ros2_bag(path, **options).squeezes
 
 
-def squeeze_from_csv(
-    path: str | PathLike[str],
-    *,
-    columns: Mapping[str, str],
-    object_id: str,
-    units: Mapping[str, str] | None = None,
-    position_is: PositionIs = "palm",
-    compression_zero: CompressionZero = "first",
-    segment: bool = False,
-    force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
-    min_gap_s: float = DEFAULT_MIN_GAP_S,
-    min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
-) -> list[SqueezeSeries]:
-    """The squeezes of :func:`read_csv_export` (same arguments and errors), without the rate."""
-    return read_csv_export(
-        path,
-        columns=columns,
-        object_id=object_id,
-        units=units,
-        position_is=position_is,
-        compression_zero=compression_zero,
-        segment=segment,
-        force_threshold_frac=force_threshold_frac,
-        min_gap_s=min_gap_s,
-        min_squeeze_s=min_squeeze_s,
-    ).squeezes
+def squeeze_from_csv(path: str | PathLike[str], **options: Any) -> list[SqueezeSeries]:
+    """The squeezes of :func:`read_csv_export` (same keyword arguments and errors), no rates."""
+    return read_csv_export(path, **options).squeezes
 
 
 # ---------------------------------------------------------------------------------------------
