@@ -115,8 +115,12 @@ class TaskOutput:
 class PartPayloads:
     """The payloads of one finished part, in catalog order, handed to a ``part_writer`` hook.
 
-    The hook runs in the client process before the part's Parquet file is committed, so a
-    committed part always has its artifacts (write them with :func:`atomic_write_bytes`).
+    The hook runs before the part's Parquet file is committed, so a committed part always has
+    its artifacts (write them with :func:`atomic_write_bytes`). It runs in the client process,
+    unless it is picklable and has a true ``in_workers`` attribute and the sweep runs on local
+    processes: then it runs as a job of the worker pool (so the client does not serialise the
+    parts' artifact encoding) and the rows are committed after that job has finished. A Dask
+    sweep always runs it in the client (the workers may not share the client's file system).
     """
 
     index: int
@@ -267,6 +271,14 @@ class _Backend(Protocol):
 
     def wait_some(self) -> list[tuple[int, _ItemResult]]: ...
 
+    def submit_part(self, part_writer: Callable[[PartPayloads], None], part: PartPayloads) -> None:
+        """Run ``part_writer(part)`` as a job; :meth:`parts_written` reports its completion."""
+        ...
+
+    def parts_written(self) -> list[int]:
+        """Indices of the part-writer jobs finished since the last call (errors re-raised)."""
+        ...
+
     def close(self) -> None: ...
 
 
@@ -296,6 +308,8 @@ class _LocalBackend:
         )
         self._task, self._schema, self._id_column = task, schema, id_column
         self._futures: dict[Future[_ItemResult], int] = {}
+        self._part_futures: dict[Future[None], int] = {}
+        self._written: list[int] = []
         self.capacity = 2 * workers
 
     def submit(self, position: int, item: dict[str, Any]) -> None:
@@ -305,19 +319,45 @@ class _LocalBackend:
             raise DeformctlError(_WORKER_DIED) from err
         self._futures[fut] = position
 
+    def submit_part(self, part_writer: Callable[[PartPayloads], None], part: PartPayloads) -> None:
+        try:
+            fut = self._pool.submit(_write_part, part_writer, part)
+        except BrokenProcessPool as err:
+            raise DeformctlError(_WORKER_DIED) from err
+        self._part_futures[fut] = part.index
+
     def wait_some(self) -> list[tuple[int, _ItemResult]]:
-        done, _ = wait(list(self._futures), return_when=FIRST_COMPLETED)
+        """Wait for an object or a part-writer job; the objects finished (maybe none)."""
+        pending: list[Future[Any]] = [*self._futures, *self._part_futures]
+        done, _ = wait(pending, return_when=FIRST_COMPLETED)
         out = []
         for fut in done:
-            position = self._futures.pop(fut)
             try:
-                out.append((position, fut.result()))
+                if fut in self._part_futures:
+                    index = self._part_futures.pop(fut)
+                    fut.result()  # a hook's own error propagates, as it does in the client
+                    self._written.append(index)
+                else:
+                    position = self._futures.pop(fut)
+                    out.append((position, fut.result()))
             except BrokenProcessPool as err:
                 raise DeformctlError(_WORKER_DIED) from err
         return out
 
+    def parts_written(self) -> list[int]:
+        written, self._written = self._written, []
+        return written
+
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _write_part(part_writer: Callable[[PartPayloads], None], part: PartPayloads) -> None:
+    """A part-writer job in a worker process."""
+    part_writer(part)
+
+
+_THREAD_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
 
 def _one_blas_thread() -> None:
@@ -325,10 +365,14 @@ def _one_blas_thread() -> None:
 
     Parallelism comes from the processes; a BLAS that also spreads each worker's dense solves
     over every core oversubscribes the machine (measured: one worker already used 1.35 cores,
-    and two workers gained little over one).
+    and two workers gained little over one). The libraries loaded now are limited through
+    threadpoolctl; the environment variables limit those a task loads later (scipy brings its
+    own OpenBLAS, whose idle threads spin: measured +30 % CPU per worker when left at 2).
     """
     from threadpoolctl import threadpool_limits
 
+    for name in _THREAD_ENV:
+        os.environ[name] = "1"
     threadpool_limits(limits=1)
 
 
@@ -456,6 +500,12 @@ class _DaskBackend:
             fut.release()
             out.append((position, result))
         return out
+
+    def submit_part(self, part_writer: Callable[[PartPayloads], None], part: PartPayloads) -> None:
+        raise NotImplementedError("a Dask sweep runs its part writer in the client")
+
+    def parts_written(self) -> list[int]:
+        return []
 
     def close(self) -> None:
         with contextlib.suppress(Exception):
@@ -670,7 +720,9 @@ def run_sweep(
         resume: keep complete, valid parts of an earlier run of the same sweep.
         force: overwrite the sweep files of an existing directory when not resuming.
         progress: show a progress bar on stderr (only when stderr is a terminal).
-        part_writer: hook called with each finished part's payloads before the part is committed.
+        part_writer: hook called with each finished part's payloads before the part is committed;
+            it runs in a worker process when it has a true ``in_workers`` attribute and the
+            sweep runs on local processes (see :class:`PartPayloads`).
         max_in_flight: objects submitted but not yet finished (default: 2 per worker thread).
 
     Returns:
@@ -779,13 +831,24 @@ def run_sweep(
 
         # ---- run the missing parts with a bounded window, committing each finished part
         if backend is not None:
+            offload = (
+                part_writer is not None
+                and bool(getattr(part_writer, "in_workers", False))
+                and isinstance(backend, _LocalBackend)
+            )
             limit = max_in_flight or backend.capacity
-            lookahead = limit + partition_size  # bounds buffered results when one object lags
-            unfinished: set[int] = set()  # indices into todo
+            # bounds the buffered results when one object lags (and, when parts are written by
+            # the workers, while a finished part waits for its writer job)
+            lookahead = limit + (2 if offload else 1) * partition_size
+            unfinished: set[int] = set()  # indices into todo, computing
+            writing: dict[int, tuple[list[_ItemResult], bytes]] = {}  # part -> results, meta
             index_of = {position: i for i, position in enumerate(todo)}
             next_i = low = 0
-            while next_i < len(todo) or unfinished:
+            while next_i < len(todo) or unfinished or writing:
                 while low < next_i and low not in unfinished:
+                    k_low = todo[low] // partition_size
+                    if k_low in writing:  # its results are held until its writer job ends
+                        break
                     low += 1
                 while next_i < len(todo) and len(unfinished) < limit and next_i - low < lookahead:
                     unfinished.add(next_i)
@@ -800,18 +863,21 @@ def run_sweep(
                     n_failed += not ok
                     bar.advance(ok)
                     if len(buffers[k]) == len(parts[k]):
-                        results = buffers.pop(k)
-                        _commit_part(
-                            out,
-                            k,
-                            parts[k],
-                            [results[p] for p in sorted(results)],
-                            schema,
-                            fail_schema,
-                            id_column,
-                            digest,
-                            part_writer,
-                        )
+                        got = buffers.pop(k)
+                        results = [got[p] for p in sorted(got)]
+                        meta = _write_failures(out, k, parts[k], results, fail_schema, id_column,
+                                               digest)  # fmt: skip
+                        part = _part_payloads(out, k, parts[k], results)
+                        if offload and part_writer is not None:
+                            backend.submit_part(part_writer, part)
+                            writing[k] = ([_without_payload(r) for r in results], meta)
+                            continue
+                        if part_writer is not None:
+                            part_writer(part)
+                        _write_rows(out, k, results, schema, meta)
+                for k in backend.parts_written():
+                    results, meta = writing.pop(k)
+                    _write_rows(out, k, results, schema, meta)
     finally:
         if bar is not None:
             bar.close()
@@ -837,19 +903,20 @@ def _available_cores() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _commit_part(
+def _write_failures(
     out_dir: Path,
     index: int,
     ids: list[Any],
     results: Sequence[_ItemResult],
-    schema: pa.Schema,
     fail_schema: pa.Schema,
     id_column: str,
     digest: str,
-    part_writer: Callable[[PartPayloads], None] | None,
-) -> None:
-    """Write one finished part: failures, then the hook's artifacts, then the rows (commit)."""
-    tables = [r.table for r in results if r.table is not None]
+) -> bytes:
+    """Write a finished part's failures file (first step of its commit); the part metadata.
+
+    A part is committed in three atomic steps: this failures file, then the part writer's
+    artifacts, then the rows file (:func:`_write_rows`), which marks the part complete.
+    """
     failed = [r for r in results if r.error_type is not None]
     meta = json.dumps(
         {
@@ -867,9 +934,25 @@ def _commit_part(
         schema=fail_schema,
     ).replace_schema_metadata({_META_KEY: meta})
     _write_table_atomic(fail_table, out_dir / FAILURES_DIR / _part_name(index))
-    if part_writer is not None:
-        payloads = [(r.item_id, r.payload) for r in results if r.payload is not None]
-        part_writer(PartPayloads(index, out_dir, list(ids), payloads))
+    return meta
+
+
+def _part_payloads(
+    out_dir: Path, index: int, ids: list[Any], results: Sequence[_ItemResult]
+) -> PartPayloads:
+    payloads = [(r.item_id, r.payload) for r in results if r.payload is not None]
+    return PartPayloads(index, out_dir, list(ids), payloads)
+
+
+def _without_payload(result: _ItemResult) -> _ItemResult:
+    return _ItemResult(result.item_id, result.table, None, result.error_type, result.error_message)
+
+
+def _write_rows(
+    out_dir: Path, index: int, results: Sequence[_ItemResult], schema: pa.Schema, meta: bytes
+) -> None:
+    """Write a part's rows file: the last step of its commit (after its failures and artifacts)."""
+    tables = [r.table for r in results if r.table is not None]
     rows = pa.concat_tables(tables) if tables else schema.empty_table()
     _write_table_atomic(
         rows.replace_schema_metadata({_META_KEY: meta}), out_dir / _part_name(index)

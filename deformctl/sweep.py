@@ -29,7 +29,7 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import pandas as pd
 import pyarrow as pa
@@ -264,9 +264,14 @@ class LiftTask:
 
 @dataclass(frozen=True)
 class LiftLogWriter:
-    """Part writer of a lift sweep: the part's attempts as one lift log ``part-k.mcap``."""
+    """Part writer of a lift sweep: the part's attempts as one lift log ``part-k.mcap``.
+
+    It runs in a local worker process (``in_workers``): encoding a part's messages is the
+    sweep's largest serial cost when done by the client.
+    """
 
     provenance: Any
+    in_workers: ClassVar[bool] = True
 
     def __call__(self, part: PartPayloads) -> None:
         """Write ``part``'s attempt log atomically."""
@@ -318,9 +323,13 @@ class MeasureTask:
 
 @dataclass(frozen=True)
 class SqueezeLogWriter:
-    """Part writer of a measure sweep: the part's squeezes as one squeeze log ``part-k.mcap``."""
+    """Part writer of a measure sweep: the part's squeezes as one squeeze log ``part-k.mcap``.
+
+    It runs in a local worker process (``in_workers``), as :class:`LiftLogWriter` does.
+    """
 
     provenance: Any
+    in_workers: ClassVar[bool] = True
 
     def __call__(self, part: PartPayloads) -> None:
         """Write ``part``'s squeeze log atomically."""

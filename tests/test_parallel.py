@@ -12,7 +12,9 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -82,6 +84,24 @@ def toy_task(item: dict[str, Any]) -> list[dict[str, Any]]:
 def toy_task_with_payload(item: dict[str, Any]) -> TaskOutput:
     """The toy rows plus a bytes payload naming the object (a stand-in for an MCAP log)."""
     return TaskOutput(toy_task(item), f"log of {item['object_id']}".encode())
+
+
+@dataclass(frozen=True)
+class PidLogWriter:
+    """A part writer run by the workers: writes its pid, whether the part's rows file already
+    existed when it started, and the payloads; it is slow, so a commit race would show."""
+
+    sleep_s: float = 0.1
+    fail_part: int | None = None
+    in_workers = True
+
+    def __call__(self, part: PartPayloads) -> None:
+        if part.index == self.fail_part:
+            raise RuntimeError(f"disk full while writing part {part.index}")
+        rows_before = (part.out_dir / f"part-{part.index:05d}.parquet").exists()
+        time.sleep(self.sleep_s)
+        head = f"pid={os.getpid()} rows_before={rows_before}\n".encode()
+        atomic_write_bytes(part.path(".log"), head + b"\n".join(p for _, p in part.payloads))
 
 
 def bad_rows_task(item: dict[str, Any]) -> list[dict[str, Any]]:
@@ -195,6 +215,69 @@ def test_part_writer_gets_each_parts_payloads_in_order(tmp_path: Path) -> None:
     assert sorted(seen) == list(range(7))
     assert (out / "part-00002.log").read_bytes() == b"log of obj-06\nlog of obj-08"
     assert (out / "part-00006.log").read_bytes() == b"log of obj-18\nlog of obj-19"
+    pd.testing.assert_frame_equal(read_dataset(out), expected_rows(make_items()))
+
+
+def _log_lines(out: Path, k: int) -> list[bytes]:
+    return (out / f"part-{k:05d}.log").read_bytes().split(b"\n")
+
+
+def test_in_workers_part_writer_runs_in_the_workers_and_precedes_the_rows(
+    tmp_path: Path,
+) -> None:
+    out = tmp_path / "o"
+    violations: list[str] = []
+    finished = threading.Event()
+
+    def watch() -> None:  # the invariant, checked while the sweep runs: rows imply the log
+        while not finished.is_set():
+            for rows in out.glob("part-*.parquet"):
+                if not rows.with_suffix(".log").exists():
+                    violations.append(rows.name)
+            time.sleep(0.005)
+
+    watcher = threading.Thread(target=watch)
+    watcher.start()
+    try:
+        items = make_items()
+        sweep(items, out, workers=2, task=toy_task_with_payload, part_writer=PidLogWriter())
+    finally:
+        finished.set()
+        watcher.join()
+    assert violations == []
+    pids = set()
+    for k in range(7):
+        head, *body = _log_lines(out, k)
+        pid, rows_before = head.decode().split()
+        assert rows_before == "rows_before=False"
+        pids.add(int(pid.removeprefix("pid=")))
+        ids = [f"obj-{i:02d}" for i in range(3 * k, min(3 * k + 3, 20)) if i != 7]
+        assert body == [f"log of {i}".encode() for i in ids]
+    assert os.getpid() not in pids
+    assert 1 <= len(pids) <= 2  # the pool's worker processes
+    pd.testing.assert_frame_equal(read_dataset(out), expected_rows(make_items()))
+    # the same dataset and logs (but for the pid line) as a one-worker run
+    one = tmp_path / "one"
+    sweep(make_items(), one, workers=1, task=toy_task_with_payload, part_writer=PidLogWriter(0))
+    strip = {k: v for k, v in snapshot(out).items() if not k.endswith(".log")}
+    assert strip == {k: v for k, v in snapshot(one).items() if not k.endswith(".log")}
+    for k in range(7):
+        assert _log_lines(out, k)[1:] == _log_lines(one, k)[1:]
+
+
+def test_failing_in_workers_part_writer_stops_the_sweep_before_that_parts_rows(
+    tmp_path: Path,
+) -> None:
+    out = tmp_path / "o"
+    writer = PidLogWriter(sleep_s=0.0, fail_part=2)
+    with pytest.raises(RuntimeError, match="disk full while writing part 2"):
+        sweep(make_items(), out, workers=2, task=toy_task_with_payload, part_writer=writer)
+    assert not (out / "part-00002.parquet").exists()
+    assert not (out / "part-00002.log").exists()
+    s = sweep(make_items(), out, workers=2, task=toy_task_with_payload,
+              part_writer=PidLogWriter(sleep_s=0.0), resume=True)  # fmt: skip
+    assert s.done + s.failed + s.skipped_resumed == 20
+    assert (out / "part-00002.log").is_file()
     pd.testing.assert_frame_equal(read_dataset(out), expected_rows(make_items()))
 
 
