@@ -30,6 +30,7 @@ import pandas as pd
 
 from deformctl.artifacts import read_squeeze_log, read_table
 from deformctl.errors import DeformctlError, MissingInputError
+from deformctl.paper import TABLE2_CSV, compare_with_paper
 
 #: The artifacts :func:`write_report` reads from the run directory.
 RUN_FILES = {
@@ -42,7 +43,7 @@ RUN_FILES = {
     "predictions": "predictions.parquet",
 }
 
-DATASETS = Path(__file__).resolve().parent.parent / "datasets" / "paper"
+DATASETS = TABLE2_CSV.parent  #: the bundled paper tables (table2.csv, table3.csv)
 
 
 @dataclass(frozen=True)
@@ -66,16 +67,23 @@ def compare_table2(
 ) -> pd.DataFrame:
     """Our D, λ and L_f for the Table I objects beside the paper's Table II.
 
+    The lifting-force half is :func:`deformctl.paper.compare_with_paper`; this adds the
+    deformability and damping columns.
+
     Returns:
-        One row per paper object with the paper's calculated D and λ, ours, the paper's
-        calculated (physical) and simulated lifting force, ours, and relative differences
-        (ours − paper) / paper; NaN where the paper's value is 0.
+        One row per paper object that was lifted, with the paper's calculated D and λ, ours, the
+        paper's calculated (physical) and simulated lifting force, ours, and relative
+        differences (ours − paper) / paper; NaN where the paper's value is 0.
     """
-    merged = table2.merge(
+    lf = compare_with_paper(lift, table2)
+    merged = lf.merge(
+        table2[["object_id", "deformability_calculated_n_per_cm", "damping_calculated_ns_per_cm"]],
+        on="object_id",
+    ).merge(
         coefficients[["object_id", "deformability_n_per_cm", "damping_ns_per_cm"]],
         on="object_id",
         how="left",
-    ).merge(lift[["object_id", "f_w_n", "lift_force_n"]], on="object_id", how="left")
+    )
     out = pd.DataFrame(
         {
             "object_id": merged["object_id"],
@@ -88,13 +96,13 @@ def compare_table2(
             "lf_paper_simulation_n": merged["lift_force_simulation_n"],
             "lf_ours_n": merged["lift_force_n"],
             "f_w_ours_n": merged["f_w_n"],
+            "lf_rel_diff_vs_simulation": merged["rel_diff_simulation"],
+            "lf_rel_diff_vs_physical": merged["rel_diff_calculated"],
         }
     )
     out["d_rel_diff"] = _rel(out["d_ours_n_per_cm"], out["d_paper_n_per_cm"])
     lam_paper = out["lambda_paper_ns_per_cm"].where(out["lambda_paper_ns_per_cm"] != 0)
     out["lambda_rel_diff"] = _rel(out["lambda_ours_ns_per_cm"], lam_paper)
-    out["lf_rel_diff_vs_simulation"] = _rel(out["lf_ours_n"], out["lf_paper_simulation_n"])
-    out["lf_rel_diff_vs_physical"] = _rel(out["lf_ours_n"], out["lf_paper_physical_n"])
     return out
 
 
