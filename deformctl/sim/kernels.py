@@ -23,6 +23,10 @@ set (an LU of the active rows' ``W`` block, cached while the active set stays th
 check of the complementarity conditions); when that fails, projected Gauss–Seidel on ``W``
 followed by an exact active-set solve (so sticking contacts stick to round-off).
 
+:func:`integrate_iterative` is the same step for the iterative solver (multigrid CG,
+:mod:`deformctl.sim.multigrid`): there the contact rows are an active set of fixed DOFs solved
+together with the free DOFs (see its docstring), since columns of ``A^-1`` would cost a solve each.
+
 Row types: 0 table normal (``v >= -gap/dt``, ``Lambda >= 0``); 1 palm friction on a face-patch z
 DOF (``v = v_palm`` or ``|Lambda| = mu N dt``); 2 table friction on a bottom x/y DOF
 (``|Lambda| <= mu_table Lambda_normal``, a four-sided friction pyramid); 3 and 4 the left and
@@ -1094,7 +1098,7 @@ def integrate_iterative(
     Args:
         h_*: the multigrid hierarchy of ``A`` (:class:`deformctl.sim.multigrid.Hierarchy`;
             level 0 is ``A`` itself).
-        cg_tolerance: CG stops when the residual's 2-norm is at most this, N·s.
+        cg_tolerance: CG stops when the free DOFs' residual 2-norm is at most this, N·s.
         cg_max_iterations: CG iteration limit per solve.
         stats: counters, ``[4]``: solves, CG iterations, active-set rounds, unconverged solves.
         Other arguments: as :func:`integrate`.
@@ -1136,7 +1140,14 @@ def integrate_iterative(
         if row_type[r] == 0:
             table_of_dof[row_dof[r]] = r
     general = np.zeros(nr, dtype=np.int64)
-    ycols = np.empty((0, n_dof))
+    general_slot = np.zeros(nr, dtype=np.int64)
+    yslot = np.full(nr, -1, dtype=np.int64)
+    ystore = np.zeros((0, n_dof))
+    slot_version = np.zeros(0, dtype=np.int64)
+    n_slots = 0
+    fixed_prev = np.zeros(n_dof, dtype=np.int64)
+    n_fixed_prev = -1
+    fixed_version = 0
     unit = np.zeros(n_dof)
     slip = np.zeros(2)
     palm_z_acc = np.zeros(1)
@@ -1206,6 +1217,9 @@ def integrate_iterative(
                     if st == 1:
                         general[n_general] = r
                         n_general += 1
+                        # last impulse as a known one: the Schur step solves for the change
+                        bt[d] += lam[r]
+                        bt[row_dof2[r]] -= lam[r]
                 elif st == 1 and (fixer[d] < 0 or t != 0):
                     fixer[d] = r  # a sticking friction row, not the table row, fixes a patch
             n_fixed = 0
@@ -1216,6 +1230,17 @@ def integrate_iterative(
                     fixed_list[n_fixed] = i
                     n_fixed += 1
                     dv[i] = target[r] - v[i]
+            same_fixed = n_fixed == n_fixed_prev
+            if same_fixed:
+                for f in range(n_fixed):
+                    if fixed_list[f] != fixed_prev[f]:
+                        same_fixed = False
+                        break
+            if not same_fixed:
+                fixed_version += 1
+                for f in range(n_fixed):
+                    fixed_prev[f] = fixed_list[f]
+                n_fixed_prev = n_fixed
             # free solve (the fixed DOFs keep their prescribed change)
             its = pcg(
                 h_n, h_vec_off, h_row_off, h_a_ptr, h_a_idx, h_a_val, h_inv_diag, h_p_row_off,
@@ -1227,23 +1252,43 @@ def integrate_iterative(
             if its > cg_max_iterations:
                 stats[3] += 1
             if n_general > 0:
-                # Schur complement on the two-DOF rows: columns A_FF^-1 J_r^T by CG
-                if ycols.shape[0] < n_general:
-                    ycols = np.empty((max(n_general, 2 * ycols.shape[0]), n_dof))
+                # Schur complement on the two-DOF rows: columns y_r = A_FF^-1 J_r^T by CG, each
+                # warm-started from its last solve. W = J Y is formed from the same columns that
+                # apply the impulses, so the rows hold exactly whatever the columns' accuracy.
                 for g in range(n_general):
                     r = general[g]
+                    if yslot[r] < 0:
+                        if n_slots == ystore.shape[0]:
+                            grown = np.zeros((max(8, 2 * n_slots), n_dof))
+                            grown[:n_slots] = ystore[:n_slots]
+                            ystore = grown
+                            grown_v = np.full(grown.shape[0], -1, dtype=np.int64)
+                            grown_v[:n_slots] = slot_version[:n_slots]
+                            slot_version = grown_v
+                        yslot[r] = n_slots
+                        n_slots += 1
+                    general_slot[g] = yslot[r]
+                    if slot_version[yslot[r]] == fixed_version:
+                        continue  # same free DOFs as when it was solved for
+                    slot_version[yslot[r]] = fixed_version
+                    y = ystore[yslot[r]]
                     for i in range(n_dof):
                         unit[i] = 0.0
-                        ycols[g, i] = 0.0
+                        if fixed[i]:
+                            y[i] = 0.0
                     unit[row_dof[r]] = 1.0
                     if row_dof2[r] >= 0:
                         unit[row_dof2[r]] -= 1.0
-                    pcg(
+                    its_y = pcg(
                         h_n, h_vec_off, h_row_off, h_a_ptr, h_a_idx, h_a_val, h_inv_diag,
                         h_p_row_off, h_p_ptr, h_p_idx, h_p_val, hc_colptr, hc_rowidx,
-                        hc_values, hc_diag, hc_perm, fixed, unit, ycols[g], 1e-6 * cg_tolerance,
-                        4 * cg_max_iterations, work,
+                        hc_values, hc_diag, hc_perm, fixed, unit, y, 1e-8, cg_max_iterations,
+                        work,
                     )  # fmt: skip
+                    stats[0] += 1
+                    stats[1] += min(its_y, cg_max_iterations)
+                    if its_y > cg_max_iterations:
+                        stats[3] += 1
                 wg = np.empty((n_general, n_general))
                 rhs = np.empty(n_general)
                 for g in range(n_general):
@@ -1255,16 +1300,16 @@ def integrate_iterative(
                         vr -= v[b_r] + dv[b_r]
                     rhs[g] = target[r] - vr
                     for h in range(n_general):
-                        val = ycols[h, a_r]
+                        val = ystore[general_slot[h], a_r]
                         if b_r >= 0:
-                            val -= ycols[h, b_r]
+                            val -= ystore[general_slot[h], b_r]
                         wg[g, h] = val
                 lg = np.empty(n_general)
                 if _solve_dense(wg, rhs, lg):
                     for g in range(n_general):
-                        lam[general[g]] = lg[g]
+                        lam[general[g]] += lg[g]
                         for i in range(n_dof):
-                            dv[i] += ycols[g, i] * lg[g]
+                            dv[i] += ystore[general_slot[g], i] * lg[g]
                         # the row's impulse acts on its DOFs: fold it into the right-hand side
                         bt[row_dof[general[g]]] += lg[g]
                         if row_dof2[general[g]] >= 0:
