@@ -24,6 +24,14 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from deformctl.artifacts.dataset import (
+    FAILURES_DIR,
+    MANIFEST_NAME,
+    PartPayloads,
+    read_dataset,
+    read_failures,
+)
+from deformctl.artifacts.io import atomic_write_bytes
 from deformctl.errors import (
     EXIT_USAGE,
     DeformctlError,
@@ -33,16 +41,7 @@ from deformctl.errors import (
     SearchError,
     UsageError,
 )
-from deformctl.parallel import (
-    FAILURES_DIR,
-    MANIFEST_NAME,
-    PartPayloads,
-    TaskOutput,
-    atomic_write_bytes,
-    read_dataset,
-    read_failures,
-    run_sweep,
-)
+from deformctl.parallel import TaskOutput, run_sweep
 
 TESTS_DIR = Path(__file__).resolve().parent
 SCHEMA = pa.schema(
