@@ -104,7 +104,9 @@ def _sim_parts(options: Mapping[str, Any]) -> tuple[Any, Any, Any]:
         measure=pick("--slip-criterion", SlipCriterion.measure),
     )
     settings = SimSettings(
-        alpha_cm=pick("--alpha-cm", SimSettings.alpha_cm), dt_s=pick("--dt-s", SimSettings.dt_s)
+        alpha_cm=pick("--alpha-cm", SimSettings.alpha_cm),
+        dt_s=pick("--dt-s", SimSettings.dt_s),
+        memory_budget_gib=pick("--memory-budget-gib", SimSettings.memory_budget_gib),
     )
     return profile, settings, criterion
 
@@ -258,6 +260,11 @@ def lift(
         None, "--alpha-cm", help="Sim: lattice spacing, cm [default: longest side / 4]."
     ),
     dt_s: float | None = typer.Option(None, "--dt-s", help="Sim: time step, s [default: 0.001]."),
+    memory_budget_gib: float | None = typer.Option(
+        None,
+        "--memory-budget-gib",
+        help="Sim: refuse a lattice whose estimated memory exceeds this, GiB [default: 2].",
+    ),
     debug_dir: str | None = typer.Option(
         None, "--debug-dir", help="Frames: write the last attempt's annotated frames here."
     ),
@@ -321,6 +328,7 @@ def lift(
         "--slip-criterion": slip_criterion,
         "--alpha-cm": alpha_cm,
         "--dt-s": dt_s,
+        "--memory-budget-gib": memory_budget_gib,
     }
     sim_factory = _sim_factory(sim, sim_options)
     judge = frames_judge(

@@ -187,6 +187,7 @@ class _SimOptions:
     floating: bool | None
     alpha_cm: float | None
     dt_s: float | None
+    memory_budget_gib: float | None
     seed: int | None
     noise_force_n: float | None
     noise_position_m: float | None
@@ -232,7 +233,13 @@ def _measure_sim(
     if squeezes < 1:
         raise UsageError(f"--squeezes must be >= 1, got {squeezes}")
     settings = SimSettings(
-        alpha_cm=opts.alpha_cm, dt_s=SimSettings.dt_s if opts.dt_s is None else opts.dt_s
+        alpha_cm=opts.alpha_cm,
+        dt_s=SimSettings.dt_s if opts.dt_s is None else opts.dt_s,
+        memory_budget_gib=(
+            SimSettings.memory_budget_gib
+            if opts.memory_budget_gib is None
+            else opts.memory_budget_gib
+        ),
     )
     ids = None if opts.objects is None else [part.strip() for part in opts.objects.split(",")]
     sweep = sweep or SweepOptions()
@@ -475,6 +482,11 @@ def measure(
         help="Sim: lattice spacing, cm [default: longest side / 4, 5 particles].",
     ),
     dt_s: float | None = typer.Option(None, "--dt-s", help="Sim: time step, s [default: 0.001]."),
+    memory_budget_gib: float | None = typer.Option(
+        None,
+        "--memory-budget-gib",
+        help="Sim: refuse a lattice whose estimated memory exceeds this, GiB [default: 2].",
+    ),
     seed: int | None = typer.Option(None, "--seed", help="Sim: noise seed [default: 0].", min=0),
     noise_force_n: float | None = typer.Option(
         None, "--noise-force-n", help="Sim: force noise std, N [default: 0]."
@@ -521,6 +533,7 @@ def measure(
         floating=floating,
         alpha_cm=alpha_cm,
         dt_s=dt_s,
+        memory_budget_gib=memory_budget_gib,
         seed=seed,
         noise_force_n=noise_force_n,
         noise_position_m=noise_position_m,

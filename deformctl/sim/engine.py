@@ -9,20 +9,24 @@ scale ``m_p / c_e`` is microseconds, so any explicit scheme would need microseco
     (M + dt C + dt^2 K) dv = dt (f(x, v) + f_ext - dt K v) + J^T Lambda
 
 where ``f`` is the exact nonlinear Kelvin element force, ``K`` the lattice stiffness at rest and
-``C = (lambda / D) K`` the damping matrix (dampers are proportional to springs, see
-:mod:`deformctl.sim.lattice`). For the linear small-strain lattice (``nonlinear_springs=False``)
+``C`` the damping matrix at rest, assembled from the element dampers ``c_e`` exactly as ``K`` is
+from the springs ``k_e`` (today ``c_e = k_e lambda / D``, see :mod:`deformctl.sim.lattice`; any
+per-element ``c_e`` works). For the linear small-strain lattice (``nonlinear_springs=False``)
 this *is* backward Euler, unconditionally stable (A-stable, L-stable) for any stiffness, damping
 and step. With the geometrically exact springs (default) it is a one-Newton-iteration backward
 Euler step whose Jacobian error is of the order of the rotations and strains, which stay small in
-the grip. Because the system matrix ``A`` does not change, it is factorised **once per model**
-(we keep ``A^-1``, dense: default lattices have a few hundred DOFs), so a step is one element
-force pass, one dense mat-vec and a small contact solve. The step is chosen for accuracy, not
+the grip. Because the system matrix ``A`` does not change, it is factorised **once per model**:
+a sparse ``L D L^T`` in nested-dissection order (:mod:`deformctl.sim.solver`), so a step is one
+element force pass, one pair of sparse triangular solves and a small contact solve. No dense
+``N x N`` array is built anywhere (the calibration solves are sparse too); the model's memory is
+estimated from the particle counts before anything is built and refused above
+``SimSettings.memory_budget_gib``. The step is chosen for accuracy, not
 stability: the default ``dt = 1 ms`` resolves the lift profile's 50 ms jerk ramps; backward
 Euler's lag of about dt/2 on the retardation time lambda/D is 3 % at lambda/D = 17 ms and
 negligible above. Measured (Table I objects, search to 0.1 %): halving dt to 0.5 ms moves the
 lifting force by 0.0 % (sponge), 0.1 % (cotton), 0.0 % (sand), 0.4 % (undamped water bag);
 doubling it to 2 ms by <= 0.7 %. Halving alpha (9 instead of 5 particles per longest side) moves
-it by 0.0-2.8 % at 10-50x the cost, so the default is 5 particles per longest side.
+it by 0.0-2.8 %, so the default is 5 particles per longest side.
 
 Contacts are velocity-level constraints solved each step (:mod:`deformctl.sim.kernels`): unilateral
 table contact on the bottom layer, and Coulomb friction between each palm and its face patch with
@@ -47,7 +51,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-import scipy.linalg
+import scipy.sparse
 from numpy.typing import NDArray
 
 from deformctl.errors import UsageError
@@ -55,6 +59,7 @@ from deformctl.sim import kernels
 from deformctl.sim.lattice import (
     Lattice,
     build_lattice,
+    lattice_factor,
     palm_dof_map,
     particles_per_axis,
     reduced_stiffness,
@@ -62,6 +67,7 @@ from deformctl.sim.lattice import (
     unit_squeeze_stiffness_n_per_m,
 )
 from deformctl.sim.objects import ObjectSpec
+from deformctl.sim.solver import LDLFactor, estimate_factor_entries, ldl_columns
 from deformctl.units import CM, GRAVITY_M_S2
 
 FloatArray = NDArray[np.float64]
@@ -90,12 +96,11 @@ class SimSettings:
             further force goes into the dense core. The catalog D is a small-strain stiffness;
             without this, a paper-range grip (e.g. W = 60 N, mu = 0.2 needs > 150 N per palm on
             D = 5 N/cm) would squeeze the lattice through itself.
-        contact_margin_m: contact rows farther than this, receding and without impulse are
-            skipped in the contact solve (pure speed-up), m.
         pgs_iterations: maximum projected Gauss–Seidel sweeps per step (an exact active-set
             solve follows).
         pgs_tolerance_m_s: PGS stopping tolerance on the constraint velocity, m/s.
-        max_particles: refuse lattices larger than this (dense implicit solve).
+        memory_budget_gib: refuse a model whose estimated memory (:func:`memory_estimate_bytes`,
+            made before anything is built) exceeds this, GiB.
     """
 
     alpha_cm: float | None = None
@@ -107,10 +112,9 @@ class SimSettings:
     grip_ramp_s: float = 0.1
     grip_settle_s: float = 0.1
     max_squeeze_strain: float = 0.5
-    contact_margin_m: float = 0.005
     pgs_iterations: int = 60
     pgs_tolerance_m_s: float = 1e-13
-    max_particles: int = 1500
+    memory_budget_gib: float = 2.0
 
     def __post_init__(self) -> None:
         if self.alpha_cm is not None and not (math.isfinite(self.alpha_cm) and self.alpha_cm > 0):
@@ -119,6 +123,8 @@ class SimSettings:
             raise UsageError(f"dt_s must be in (0, 0.05] s, got {self.dt_s}")
         if not (0 < self.max_squeeze_strain < 1):
             raise UsageError(f"max_squeeze_strain must be in (0, 1), got {self.max_squeeze_strain}")
+        if not (math.isfinite(self.memory_budget_gib) and self.memory_budget_gib > 0):
+            raise UsageError(f"memory_budget_gib must be > 0, got {self.memory_budget_gib}")
         if self.particles_per_side < 2:
             raise UsageError(f"particles_per_side must be >= 2, got {self.particles_per_side}")
         for name in ("palm_mass_kg", "table_mu", "grip_ramp_s", "grip_settle_s"):
@@ -144,7 +150,9 @@ class Model:
         palm_x_dof, palm_z_dof: palm DOFs (``-1`` when free), ``[2]``; palm_x0: palm x, m, ``[2]``.
         particle_mass_kg: mass of every particle, kg; dof_mass_kg: ``[n_dof]``.
         stiffness_n_per_m, damping_ns_per_m: element constants, ``[m]``.
-        a_inv: inverse implicit matrix, 1/kg, ``[n_dof, n_dof]``.
+        factor: sparse ``L D L^T`` of the implicit matrix ``A = M + dt C + dt^2 K``.
+        contact_cols: ``A^-1 e_d`` for the DOFs of the rows that are live in most steps (palm
+            DOFs, bottom layer), 1/kg, ``[n_cols, n_dof]``; col_of_dof: column of each DOF or -1.
         row_dof, row_dof2, row_particle, row_type, row_link: contact rows (see kernels);
         bottom_particles, bottom_row: table contact map (every particle).
         gravity_m_s2: gravity along -z (0 when off).
@@ -164,7 +172,9 @@ class Model:
     dof_mass_kg: FloatArray
     stiffness_n_per_m: FloatArray
     damping_ns_per_m: FloatArray
-    a_inv: FloatArray
+    factor: LDLFactor
+    contact_cols: FloatArray
+    col_of_dof: IntArray
     row_dof: IntArray
     row_dof2: IntArray
     row_particle: IntArray
@@ -181,21 +191,44 @@ def _lattice_and_scale(size_m: tuple[float, float, float], alpha_m: float) -> tu
     return lattice, unit_squeeze_stiffness_n_per_m(lattice)
 
 
-def check_lattice_size(spec: ObjectSpec, settings: SimSettings) -> None:
-    """Refuse a lattice larger than ``settings.max_particles`` before anything is built.
+GIB = 1024**3
 
-    The calibration assembles a dense matrix whose size grows with the square of the particle
-    count, so an oversized lattice (a tiny ``alpha_cm``) must be refused up front.
+
+def memory_estimate_bytes(spec: ObjectSpec, settings: SimSettings) -> float:
+    """Estimated peak memory of building and running the model of ``spec``, bytes.
+
+    Made from the particle counts alone (nothing is built): the sparse factor of the implicit
+    matrix (``nnz(L)`` from :func:`deformctl.sim.solver.estimate_factor_entries`, 12 bytes per
+    entry, three times over for SuperLU's working copy of ``L`` and ``U`` while factorising),
+    the precomputed contact columns (palm and bottom-layer DOFs, ``n_dof`` doubles each) and the
+    element arrays and their COO assembly (about 2 kB per element). Within a factor of two of the
+    measured peak (``bench/bench_sim.py`` prints both at 21^3).
+    """
+    nx, ny, nz = particles_per_axis(spec.size_m, settings.alpha_m(spec))
+    n = float(nx) * float(ny) * float(nz)
+    n_dof = 3.0 * n
+    n_elements = 9.0 * n
+    entries = float(estimate_factor_entries(int(min(n_dof, 1e15))))
+    factor = 3.0 * 12.0 * entries + 64.0 * n_dof
+    n_cols = float(nx * ny) * (3.0 if settings.table_mu > 0 else 1.0) + 4.0
+    columns = 8.0 * n_cols * n_dof
+    return factor + columns + 2000.0 * n_elements + 50e6
+
+
+def check_lattice_size(spec: ObjectSpec, settings: SimSettings) -> None:
+    """Refuse a model above ``settings.memory_budget_gib`` before anything is built.
 
     Raises:
-        UsageError: naming the spacing, the particle count and the limit.
+        UsageError: one line naming the particle count, the estimate and the budget.
     """
     alpha_m = settings.alpha_m(spec)
     n_particles = math.prod(particles_per_axis(spec.size_m, alpha_m))
-    if n_particles > settings.max_particles:
+    estimate = memory_estimate_bytes(spec, settings)
+    if estimate > settings.memory_budget_gib * GIB:
         raise UsageError(
-            f"alpha {alpha_m / CM:.3g} cm gives {n_particles} particles for object "
-            f"{spec.object_id!r} (max_particles={settings.max_particles}); use a larger alpha_cm"
+            f"object {spec.object_id!r}: alpha {alpha_m / CM:.3g} cm gives {n_particles:,} "
+            f"particles, an estimated {estimate / GIB:.3g} GiB, above the memory budget of "
+            f"{settings.memory_budget_gib:g} GiB; use a larger alpha_cm (or raise the budget)"
         )
 
 
@@ -211,7 +244,7 @@ def element_constants(
     return lattice, stiffness, damping
 
 
-@lru_cache(maxsize=32)
+@lru_cache(maxsize=8)
 def build_model(
     spec: ObjectSpec,
     settings: SimSettings,
@@ -248,12 +281,12 @@ def build_model(
         palm_x0[0] = base_x[lattice.face_mask(0), 0].min()
         palm_x0[1] = base_x[lattice.face_mask(1), 0].max()
     dt = settings.dt_s
-    beta_s = spec.retardation_time_s
-    k_q = reduced_stiffness(lattice, stiffness, dof_of, n_dof)
-    a = (dt * beta_s + dt * dt) * k_q
-    a[np.diag_indices(n_dof)] += dof_mass
-    a_inv = scipy.linalg.cho_solve(scipy.linalg.cho_factor(a), np.eye(n_dof))
-    a_inv = np.ascontiguousarray(0.5 * (a_inv + a_inv.T))
+    # A = M + dt C + dt^2 K, C assembled from the element dampers as K from the springs
+    a = dt * dt * reduced_stiffness(lattice, stiffness, dof_of, n_dof)
+    a = a + dt * reduced_stiffness(lattice, damping, dof_of, n_dof)
+    a = a + scipy.sparse.diags(dof_mass, format="csr")
+    palm_dofs = np.concatenate([palm_x, palm_z])
+    factor = lattice_factor(lattice, a, dof_of, n_dof, last=palm_dofs)
 
     row_dof: list[int] = []
     row_dof2: list[int] = []
@@ -315,6 +348,26 @@ def build_model(
                     row_particle.append(int(p))
     row_dof2 += [-1] * (len(row_dof) - len(row_dof2))
     row_particle += [-1] * (len(row_dof) - len(row_particle))
+    # contact columns for the rows live in most steps: palms, bottom layer (and its friction)
+    col_dofs: list[int] = [int(d) for d in palm_dofs if d >= 0]
+    if table:
+        for p in np.flatnonzero(on_bottom):
+            col_dofs.append(int(dof_of[3 * p + 2]))
+            if settings.table_mu > 0:
+                col_dofs += [int(dof_of[3 * p]), int(dof_of[3 * p + 1])]
+    col_dof_arr = np.unique(np.asarray(col_dofs, dtype=np.int64))
+    contact_cols = np.empty((col_dof_arr.size, n_dof))
+    ldl_columns(
+        factor.colptr,
+        factor.rowidx,
+        factor.values,
+        factor.diag,
+        factor.perm,
+        col_dof_arr,
+        contact_cols,
+    )
+    col_of_dof = np.full(n_dof, -1, dtype=np.int64)
+    col_of_dof[col_dof_arr] = np.arange(col_dof_arr.size)
     return Model(
         spec=spec,
         settings=settings,
@@ -330,7 +383,9 @@ def build_model(
         dof_mass_kg=dof_mass,
         stiffness_n_per_m=stiffness,
         damping_ns_per_m=damping,
-        a_inv=a_inv,
+        factor=factor,
+        contact_cols=contact_cols,
+        col_of_dof=col_of_dof,
         row_dof=np.asarray(row_dof, dtype=np.int64),
         row_dof2=np.asarray(row_dof2, dtype=np.int64),
         row_particle=np.asarray(row_particle, dtype=np.int64),
@@ -377,8 +432,13 @@ def run_model(
         lat.direction,
         model.stiffness_n_per_m,
         model.damping_ns_per_m,
-        model.a_inv,
-        model.dof_mass_kg,
+        model.factor.colptr,
+        model.factor.rowidx,
+        model.factor.values,
+        model.factor.diag,
+        model.factor.perm,
+        model.contact_cols,
+        model.col_of_dof,
         model.gravity_m_s2,
         model.palm_x_dof,
         model.palm_z_dof,
@@ -396,7 +456,6 @@ def run_model(
         model.row_particle,
         model.bottom_particles,
         model.bottom_row,
-        s.contact_margin_m,
         s.dt_s,
         n_steps,
         s.nonlinear_springs,

@@ -10,11 +10,18 @@ Step (linearised backward Euler, tangent frozen at the rest configuration; see
     A dv = dt (f(x, v) + f_ext - dt K v) + J^T Lambda,    A = M + (dt beta + dt^2) K
     v <- v + dv,  x <- x + dt v
 
-``f`` is the exact (geometrically nonlinear) Kelvin element force, ``A^-1`` is precomputed once
-per model, and ``Lambda`` are the contact impulses found by projected Gauss–Seidel on the
-Delassus matrix ``W = J A^-1 J^T`` followed by an exact active-set solve (so sticking contacts
-stick to round-off). Every constraint row ``J_r`` is a unit vector on one DOF, so ``W`` is a
-gather from ``A^-1``.
+``f`` is the exact (geometrically nonlinear) Kelvin element force, ``A = M + dt C + dt^2 K`` is
+factorised once per model (sparse ``L D L^T``, :mod:`deformctl.sim.solver`; the solves run here),
+and ``Lambda`` are the contact impulses. Every constraint row ``J_r`` is a unit vector on one DOF
+(or the difference of two), so the Delassus matrix ``W = J A^-1 J^T`` of the *live* rows is a
+gather from the contact columns ``A^-1 e_d``: precomputed for the palm and bottom-layer DOFs,
+solved for inside the kernel when another row first becomes live. A unilateral row without
+impulse that the free velocity already satisfies is not live; after the solve every such row is
+checked against the final velocity and the solve is repeated with the violated ones, so skipping
+never changes the solution. The contact problem is solved exactly: first with last step's active
+set (an LU of the active rows' ``W`` block, cached while the active set stays the same, and a
+check of the complementarity conditions); when that fails, projected Gauss–Seidel on ``W``
+followed by an exact active-set solve (so sticking contacts stick to round-off).
 
 Row types: 0 table normal (``v >= -gap/dt``, ``Lambda >= 0``); 1 palm friction on a face-patch z
 DOF (``v = v_palm`` or ``|Lambda| = mu N dt``); 2 table friction on a bottom x/y DOF
@@ -29,8 +36,11 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from deformctl.sim.solver import ldl_solve
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+Int32Array = NDArray[np.int32]
 
 # columns of the record matrix returned by integrate()
 REC_TIME = 0
@@ -215,7 +225,11 @@ def _polish(
     row_dof: IntArray,
     live: IntArray,
 ) -> None:
-    """Exact solve on the PGS active set (among ``live`` rows); keeps PGS when inconsistent."""
+    """Exact solve on the PGS active set; keeps PGS when inconsistent.
+
+    ``w`` is the live rows' Delassus matrix (local indices ``0..len(live)``); the other arrays are
+    indexed by global row.
+    """
     nl = live.shape[0]
     active = np.zeros(nl, dtype=np.bool_)
     for i in range(nl):
@@ -245,23 +259,26 @@ def _polish(
     na = 0
     for i in range(nl):
         if active[i]:
-            idx[na] = live[i]
+            idx[na] = i
             na += 1
     a = np.empty((na, na))
     b = np.empty(na)
     for p in range(na):
-        r = idx[p]
+        i = idx[p]
+        r = live[i]
         rhs = target[r] - vrow[r]
         for j in range(nl):
             if not active[j]:
-                rhs -= w[r, live[j]] * lam[live[j]]
+                rhs -= w[i, j] * lam[live[j]]
         b[p] = rhs
         for q in range(na):
-            a[p, q] = w[r, idx[q]]
+            a[p, q] = w[i, idx[q]]
     sol = np.empty(na)
     if not _solve_dense(a, b, sol):
         return
-    trial = lam.copy()
+    trial = np.empty(nl)
+    for i in range(nl):
+        trial[i] = lam[live[i]]
     for p in range(na):
         trial[idx[p]] = sol[p]
     # feasibility: bounds, and non-active unilateral rows must not penetrate
@@ -270,18 +287,234 @@ def _polish(
         t = row_type[r]
         if t == 0 or t >= 3:
             sign = -1.0 if t == 3 else 1.0
-            if sign * trial[r] < 0.0:
+            if sign * trial[i] < 0.0:
                 return
             if not active[i]:
                 vr = vrow[r]
                 for j in range(nl):
-                    vr += w[r, live[j]] * trial[live[j]]
+                    vr += w[i, j] * trial[j]
                 if sign * (vr - target[r]) < -1e-9:
                     return
-        elif trial[r] > hi[r] or trial[r] < lo[r]:
+        elif trial[i] > hi[r] or trial[i] < lo[r]:
             return
     for p in range(na):
-        lam[idx[p]] = trial[idx[p]]
+        lam[live[idx[p]]] = trial[idx[p]]
+
+
+@njit(cache=True)
+def _lu_factor(a: FloatArray, n: int) -> bool:
+    """In-place LU without pivoting of ``a[:n, :n]`` (Delassus matrices: nearly symmetric, SPD)."""
+    for k in range(n):
+        piv = a[k, k]
+        if not piv > 0.0:
+            return False
+        for i in range(k + 1, n):
+            f = a[i, k] / piv
+            a[i, k] = f
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    a[i, j] -= f * a[k, j]
+    return True
+
+
+@njit(cache=True)
+def _lu_solve(a: FloatArray, n: int, b: FloatArray) -> None:
+    """Solve with the factor of :func:`_lu_factor`, in place on ``b[:n]``."""
+    for i in range(n):
+        acc = b[i]
+        for j in range(i):
+            acc -= a[i, j] * b[j]
+        b[i] = acc
+    for i in range(n - 1, -1, -1):
+        acc = b[i]
+        for j in range(i + 1, n):
+            acc -= a[i, j] * b[j]
+        b[i] = acc / a[i, i]
+
+
+@njit(cache=True)
+def _col_value(ci: int, i: int, pre: FloatArray, ext: FloatArray) -> float:
+    """Entry ``i`` of contact column ``ci`` (precomputed columns first, then the lazy ones)."""
+    n_pre = pre.shape[0]
+    if ci < n_pre:
+        return pre[ci, i]
+    return ext[ci - n_pre, i]
+
+
+@njit(cache=True)
+def _ensure_column(
+    d: int,
+    col_idx: IntArray,
+    pre: FloatArray,
+    ext: FloatArray,
+    n_ext: int,
+    colptr: IntArray,
+    rowidx: Int32Array,
+    values: FloatArray,
+    diag: FloatArray,
+    perm: IntArray,
+) -> tuple[FloatArray, int]:
+    """Make sure column ``A^-1 e_d`` exists (solved for when missing); returns ``ext, n_ext``."""
+    if col_idx[d] >= 0:
+        return ext, n_ext
+    n_dof = diag.shape[0]
+    if n_ext == ext.shape[0]:
+        grown = np.empty((max(8, 2 * ext.shape[0]), n_dof))
+        grown[:n_ext] = ext[:n_ext]
+        ext = grown
+    unit = np.zeros(n_dof)
+    unit[d] = 1.0
+    ldl_solve(colptr, rowidx, values, diag, perm, unit, np.empty(n_dof), ext[n_ext])
+    col_idx[d] = pre.shape[0] + n_ext
+    return ext, n_ext + 1
+
+
+@njit(cache=True)
+def _delassus_entry(
+    r: int,
+    s: int,
+    row_dof: IntArray,
+    row_dof2: IntArray,
+    col_idx: IntArray,
+    pre: FloatArray,
+    ext: FloatArray,
+) -> float:
+    """``W[r, s] = J_r A^-1 J_s^T`` (the velocity change of row r per unit impulse on row s)."""
+    a_r = row_dof[r]
+    b_r = row_dof2[r]
+    ca = col_idx[row_dof[s]]
+    val = _col_value(ca, a_r, pre, ext)
+    if b_r >= 0:
+        val -= _col_value(ca, b_r, pre, ext)
+    if row_dof2[s] >= 0:
+        cb = col_idx[row_dof2[s]]
+        val -= _col_value(cb, a_r, pre, ext)
+        if b_r >= 0:
+            val += _col_value(cb, b_r, pre, ext)
+    return val
+
+
+@njit(cache=True)
+def _warm_solve(
+    w: FloatArray,
+    lv: IntArray,
+    vrow: FloatArray,
+    target: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    lam: FloatArray,
+    state: IntArray,
+    row_type: IntArray,
+    fact: FloatArray,
+    fact_rows: IntArray,
+    fact_n: IntArray,
+) -> bool:
+    """Exact solve with last step's active set; True (and ``lam`` set) when it satisfies the KKT
+    conditions, so PGS is not needed.
+
+    ``state[r]``: 0 inactive at zero, 1 active (equality), 2 / -2 friction sliding at ``hi`` /
+    ``lo``, 3 a table row on a face-patch DOF whose friction row is active (its impulse is kept,
+    as :func:`_polish` keeps one of two duplicate rows). The LU factor of the active rows'
+    Delassus block is cached in ``fact`` and reused while the active rows stay the same (the
+    system matrix is constant).
+    """
+    nl = lv.shape[0]
+    na = 0
+    for i in range(nl):
+        if state[lv[i]] == 1:
+            na += 1
+    idx = np.empty(na, dtype=np.int64)
+    na = 0
+    for i in range(nl):
+        if state[lv[i]] == 1:
+            idx[na] = i
+            na += 1
+    trial = np.zeros(nl)
+    for i in range(nl):
+        st = state[lv[i]]
+        if st == 2:
+            trial[i] = hi[lv[i]]
+        elif st == -2:
+            trial[i] = lo[lv[i]]
+        elif st == 3:
+            trial[i] = lam[lv[i]]
+    if na > 0:
+        same = fact_n[0] == na
+        if same:
+            for p in range(na):
+                if fact_rows[p] != lv[idx[p]]:
+                    same = False
+                    break
+        if not same:
+            if na > fact.shape[0]:
+                return False
+            for p in range(na):
+                fact_rows[p] = lv[idx[p]]
+                for q in range(na):
+                    fact[p, q] = w[idx[p], idx[q]]
+            fact_n[0] = -1
+            if not _lu_factor(fact, na):
+                return False
+            fact_n[0] = na
+        b = np.empty(na)
+        for p in range(na):
+            i = idx[p]
+            r = lv[i]
+            rhs = target[r] - vrow[r]
+            for j in range(nl):
+                if trial[j] != 0.0:
+                    rhs -= w[i, j] * trial[j]
+            b[p] = rhs
+        _lu_solve(fact, na, b)
+        for p in range(na):
+            trial[idx[p]] = b[p]
+    # KKT: bounds of the active rows, velocities of the others
+    for i in range(nl):
+        r = lv[i]
+        t = row_type[r]
+        st = state[r]
+        if st == 1:
+            if trial[i] < lo[r] or trial[i] > hi[r]:
+                return False
+            if t == 1 and (trial[i] <= lo[r] or trial[i] >= hi[r]):
+                return False
+            continue
+        vr = vrow[r]
+        for j in range(nl):
+            if trial[j] != 0.0:
+                vr += w[i, j] * trial[j]
+        gap = vr - target[r]
+        if t == 3:
+            gap = -gap
+        if st == 3:
+            # a table row duplicating an active friction row: impulse kept, must stay consistent
+            if gap < -1e-9 or (trial[i] > 0.0 and gap > 1e-9):
+                return False
+            continue
+        if st == 0 and t != 1 and gap < -1e-9:
+            return False
+        if st == 0 and t == 1:
+            return False
+        if st == 2 and gap > 1e-9:
+            return False
+        if st == -2 and gap < -1e-9:
+            return False
+    for i in range(nl):
+        lam[lv[i]] = trial[i]
+    return True
+
+
+@njit(cache=True)
+def _row_state(lam: FloatArray, lo: FloatArray, hi: FloatArray, row_type: IntArray, r: int) -> int:
+    """Active-set state of row ``r`` for the next step's warm solve (see :func:`_warm_solve`)."""
+    t = row_type[r]
+    if t == 1 or t == 2:
+        if lam[r] >= hi[r]:
+            return 2
+        if lam[r] <= lo[r]:
+            return -2
+        return 1
+    return 1 if lam[r] != 0.0 else 0
 
 
 @njit(cache=True)
@@ -296,8 +529,13 @@ def integrate(
     n0: FloatArray,
     k: FloatArray,
     c: FloatArray,
-    a_inv: FloatArray,
-    dof_mass: FloatArray,
+    l_colptr: IntArray,
+    l_rowidx: Int32Array,
+    l_values: FloatArray,
+    l_diag: FloatArray,
+    l_perm: IntArray,
+    cols: FloatArray,
+    col_of_dof: IntArray,
     gravity: float,
     palm_x_dof: IntArray,
     palm_z_dof: IntArray,
@@ -315,7 +553,6 @@ def integrate(
     row_particle: IntArray,
     bottom_particles: IntArray,
     bottom_row: IntArray,
-    contact_margin: float,
     dt: float,
     n_steps: int,
     nonlinear: bool,
@@ -331,8 +568,10 @@ def integrate(
         particle_mass: mass of each particle, kg.
         edges, rest, n0, k, c: elements ``[m, 2]``, rest length m, rest direction ``[m, 3]``,
             stiffness N/m, damping N·s/m.
-        a_inv: inverse of the implicit system matrix, 1/kg, ``[n_dof, n_dof]``.
-        dof_mass: mass of each DOF including palm mass, kg, ``[n_dof]``.
+        l_colptr, l_rowidx, l_values, l_diag, l_perm: sparse ``L D L^T`` factor of the implicit
+            system matrix ``A`` (:class:`deformctl.sim.solver.LDLFactor`).
+        cols: precomputed contact columns ``A^-1 e_d``, ``[n_cols, n_dof]``; col_of_dof: the
+            column of each DOF (``-1``: solved for when its row first becomes live), ``[n_dof]``.
         gravity: gravitational acceleration along -z, m/s².
         palm_x_dof, palm_z_dof: DOFs of the two palms / face patches (``-1`` = no palms), ``[2]``.
         palm_x0: palm x positions when the palm DOFs are zero, m, ``[2]``.
@@ -346,7 +585,6 @@ def integrate(
             ``row_link`` is the normal row of a table-friction row, ``row_particle`` the particle
             of a palm-plane row.
         bottom_particles, bottom_row: particles in table contact and their table normal row.
-        contact_margin: unilateral rows farther than this (m) and without impulse are skipped.
         dt: time step, s. nonlinear: exact spring geometry (else linear small-strain forces).
         pgs_iterations, pgs_tolerance: PGS limits (tolerance in m/s).
 
@@ -363,33 +601,46 @@ def integrate(
     fp = np.empty((n, 3))
     fq = np.empty(n_dof)
     dv = np.empty(n_dof)
+    work = np.empty(n_dof)
+    vfree = np.empty(n_dof)
+    vnew = np.empty(n_dof)
     k_dt = k * dt
     rec = np.zeros((n_steps, N_REC))
-    # Delassus matrix and contact columns of A^-1, gathered once
-    w = np.empty((nr, nr))
-    for r in range(nr):
-        for s in range(nr):
-            a_r = row_dof[r]
-            b_r = row_dof2[r]
-            a_s = row_dof[s]
-            b_s = row_dof2[s]
-            val = a_inv[a_r, a_s]
-            if b_s >= 0:
-                val -= a_inv[a_r, b_s]
-            if b_r >= 0:
-                val -= a_inv[b_r, a_s]
-                if b_s >= 0:
-                    val += a_inv[b_r, b_s]
-            w[r, s] = val
+    # contact columns: precomputed ones, then lazily solved ones
+    col_idx = col_of_dof.copy()
+    ext = np.empty((0, n_dof))
+    n_ext = 0
     skip = np.zeros(nr, dtype=np.bool_)
+    forced = np.zeros(nr, dtype=np.bool_)
     live = np.zeros(nr, dtype=np.int64)
+    prev_live = np.zeros(nr, dtype=np.int64)
+    n_prev = -1
+    w = np.empty((0, 0))
     u = np.zeros(nr)
     lam = np.zeros(nr)
+    state = np.zeros(nr, dtype=np.int64)
     lo = np.zeros(nr)
     hi = np.zeros(nr)
     target = np.zeros(nr)
     vrow = np.zeros(nr)
     gap = np.zeros(nr)
+    fact = np.empty((0, 0))
+    fact_rows = np.zeros(nr, dtype=np.int64)
+    fact_n = np.zeros(1, dtype=np.int64)
+    fact_n[0] = -1
+    # table rows on a face-patch DOF and the friction row of that DOF
+    friction_row_of_dof = np.full(n_dof, -1, dtype=np.int64)
+    for r in range(nr):
+        if row_type[r] == 1:
+            friction_row_of_dof[row_dof[r]] = r
+    friction_of = np.full(nr, -1, dtype=np.int64)
+    for r in range(nr):
+        if row_type[r] == 0:
+            friction_of[r] = friction_row_of_dof[row_dof[r]]
+    has_table_friction = False
+    for r in range(nr):
+        if row_type[r] == 2:
+            has_table_friction = True
     gripped = palm_x_dof[0] >= 0
     slip = np.zeros(2)
     palm_z = 0.0
@@ -416,16 +667,15 @@ def integrate(
             fq[palm_x_dof[1]] -= f_now
         for i in range(n_dof):
             fq[i] *= dt
+        ldl_solve(l_colptr, l_rowidx, l_values, l_diag, l_perm, fq, work, dv)
         for i in range(n_dof):
-            acc = 0.0
-            for j in range(n_dof):
-                acc += a_inv[i, j] * fq[j]
-            dv[i] = acc
-        vfree = v + dv
+            vfree[i] = v[i] + dv[i]
+            vnew[i] = vfree[i]
         # ---- contacts
         if nr > 0:
             for r in range(nr):
                 gap[r] = 1e300
+                forced[r] = False
             for b in range(bottom_particles.shape[0]):
                 r = bottom_row[b]
                 z = x[bottom_particles[b], 2]
@@ -442,12 +692,10 @@ def integrate(
                 if row_dof2[r] >= 0:
                     vrow[r] -= vfree[row_dof2[r]]
                 t = row_type[r]
-                skip[r] = False
                 if t == 0 or t >= 5:
                     target[r] = -gap[r] / dt
                     lo[r] = 0.0
                     hi[r] = 1e300
-                    skip[r] = lam[r] == 0.0 and gap[r] > contact_margin and vrow[r] >= target[r]
                 elif t == 1:
                     target[r] = palm_vz[step + 1]
                     bound = mu * max(f_now, 0.0) * dt
@@ -463,60 +711,174 @@ def integrate(
                     hi[r] = 1e300
                 else:
                     target[r] = 0.0
-            n_live = 0
-            for r in range(nr):
-                if not skip[r]:
-                    live[n_live] = r
-                    n_live += 1
-            lv = live[:n_live]
-            # u = current row velocities J v for the warm-started impulses
-            for i in range(n_live):
-                r = lv[i]
-                acc = vrow[r]
-                for j in range(n_live):
-                    s = lv[j]
-                    if lam[s] != 0.0:
-                        acc += w[r, s] * lam[s]
-                u[r] = acc
-            for _it in range(pgs_iterations):
-                change = 0.0
-                for i in range(n_live):
-                    r = lv[i]
+            # unilateral rows without impulse that the free velocity satisfies are skipped; after
+            # the solve every skipped row is checked and the solve repeated if one is violated,
+            # so skipping never changes the solution
+            for _round in range(nr + 1):
+                for r in range(nr):
                     t = row_type[r]
-                    if t == 2:
-                        bound = mu_table * lam[row_link[r]]
-                        lo[r] = -bound
-                        hi[r] = bound
-                    new = lam[r] - (u[r] - target[r]) / w[r, r]
-                    if new < lo[r]:
-                        new = lo[r]
-                    elif new > hi[r]:
-                        new = hi[r]
-                    delta = new - lam[r]
-                    if delta != 0.0:
-                        lam[r] = new
+                    skip[r] = (
+                        (t == 0 or t >= 5)
+                        and lam[r] == 0.0
+                        and vrow[r] >= target[r]
+                        and not forced[r]
+                    )
+                n_live = 0
+                for r in range(nr):
+                    if not skip[r]:
+                        live[n_live] = r
+                        n_live += 1
+                lv = live[:n_live]
+                changed = n_live != n_prev
+                if not changed:
+                    for i in range(n_live):
+                        if prev_live[i] != lv[i]:
+                            changed = True
+                            break
+                if changed:
+                    # the live rows' Delassus matrix, gathered from the contact columns
+                    for i in range(n_live):
+                        r = lv[i]
+                        ext, n_ext = _ensure_column(
+                            row_dof[r],
+                            col_idx,
+                            cols,
+                            ext,
+                            n_ext,
+                            l_colptr,
+                            l_rowidx,
+                            l_values,
+                            l_diag,
+                            l_perm,
+                        )
+                        if row_dof2[r] >= 0:
+                            ext, n_ext = _ensure_column(
+                                row_dof2[r],
+                                col_idx,
+                                cols,
+                                ext,
+                                n_ext,
+                                l_colptr,
+                                l_rowidx,
+                                l_values,
+                                l_diag,
+                                l_perm,
+                            )
+                    if w.shape[0] < n_live:
+                        w = np.empty((max(n_live, 2 * w.shape[0]), max(n_live, 2 * w.shape[0])))
+                        fact = np.empty((w.shape[0], w.shape[0]))
+                        fact_n[0] = -1
+                    for i in range(n_live):
+                        for j in range(n_live):
+                            w[i, j] = _delassus_entry(
+                                lv[i], lv[j], row_dof, row_dof2, col_idx, cols, ext
+                            )
+                    for i in range(n_live):
+                        prev_live[i] = lv[i]
+                    n_prev = n_live
+                for r in range(nr):
+                    if skip[r]:
+                        lam[r] = 0.0
+                solved = False
+                if not has_table_friction and n_live > 0:
+                    solved = _warm_solve(
+                        w,
+                        lv,
+                        vrow,
+                        target,
+                        lo,
+                        hi,
+                        lam,
+                        state,
+                        row_type,
+                        fact,
+                        fact_rows,
+                        fact_n,
+                    )
+                if not solved and n_live > 0:
+                    for i in range(n_live):
+                        r = lv[i]
+                        if lam[r] < lo[r]:
+                            lam[r] = lo[r]
+                        elif lam[r] > hi[r]:
+                            lam[r] = hi[r]
+                    # u = current row velocities J v for the warm-started impulses
+                    for i in range(n_live):
+                        r = lv[i]
+                        acc = vrow[r]
                         for j in range(n_live):
                             s = lv[j]
-                            u[s] += w[s, r] * delta
-                        if abs(delta) * w[r, r] > change:
-                            change = abs(delta) * w[r, r]
-                if change < pgs_tolerance:
+                            if lam[s] != 0.0:
+                                acc += w[i, j] * lam[s]
+                        u[r] = acc
+                    for _it in range(pgs_iterations):
+                        change = 0.0
+                        for i in range(n_live):
+                            r = lv[i]
+                            t = row_type[r]
+                            if t == 2:
+                                bound = mu_table * lam[row_link[r]]
+                                lo[r] = -bound
+                                hi[r] = bound
+                            new = lam[r] - (u[r] - target[r]) / w[i, i]
+                            if new < lo[r]:
+                                new = lo[r]
+                            elif new > hi[r]:
+                                new = hi[r]
+                            delta = new - lam[r]
+                            if delta != 0.0:
+                                lam[r] = new
+                                for j in range(n_live):
+                                    s = lv[j]
+                                    u[s] += w[j, i] * delta
+                                if abs(delta) * w[i, i] > change:
+                                    change = abs(delta) * w[i, i]
+                        if change < pgs_tolerance:
+                            break
+                    for r in range(nr):
+                        if row_type[r] == 2:
+                            bound = mu_table * lam[row_link[r]]
+                            lo[r] = -bound
+                            hi[r] = bound
+                    _polish(w[:n_live, :n_live], vrow, target, lo, hi, lam, row_type, row_dof, lv)
+                for i in range(n_dof):
+                    vnew[i] = vfree[i]
+                for i in range(n_live):
+                    r = lv[i]
+                    lr = lam[r]
+                    if lr != 0.0:
+                        ca = col_idx[row_dof[r]]
+                        if ca < cols.shape[0]:
+                            for j in range(n_dof):
+                                vnew[j] += cols[ca, j] * lr
+                        else:
+                            for j in range(n_dof):
+                                vnew[j] += ext[ca - cols.shape[0], j] * lr
+                        if row_dof2[r] >= 0:
+                            cb = col_idx[row_dof2[r]]
+                            if cb < cols.shape[0]:
+                                for j in range(n_dof):
+                                    vnew[j] -= cols[cb, j] * lr
+                            else:
+                                for j in range(n_dof):
+                                    vnew[j] -= ext[cb - cols.shape[0], j] * lr
+                violated = False
+                for r in range(nr):
+                    if skip[r]:
+                        vr = vnew[row_dof[r]]
+                        if row_dof2[r] >= 0:
+                            vr -= vnew[row_dof2[r]]
+                        if vr < target[r] - 1e-9:
+                            forced[r] = True
+                            violated = True
+                if not violated:
                     break
             for r in range(nr):
-                if row_type[r] == 2:
-                    bound = mu_table * lam[row_link[r]]
-                    lo[r] = -bound
-                    hi[r] = bound
-            _polish(w, vrow, target, lo, hi, lam, row_type, row_dof, lv)
+                state[r] = _row_state(lam, lo, hi, row_type, r)
             for r in range(nr):
-                if lam[r] != 0.0:
-                    d = row_dof[r]
-                    d2 = row_dof2[r]
-                    for i in range(n_dof):
-                        vfree[i] += a_inv[i, d] * lam[r]
-                    if d2 >= 0:
-                        for i in range(n_dof):
-                            vfree[i] -= a_inv[i, d2] * lam[r]
+                f = friction_of[r]
+                if f >= 0 and state[r] == 1 and state[f] == 1:
+                    state[r] = 3
         # ---- records (palm quantities before the position update use the new velocities)
         table_n = 0.0
         fric_l = 0.0
@@ -531,16 +893,16 @@ def integrate(
                     fric_r += lam[r] / dt
         if gripped:
             vz_palm = palm_vz[step + 1]
-            slip[0] += abs(vfree[palm_z_dof[0]] - vz_palm) * dt
-            slip[1] += abs(vfree[palm_z_dof[1]] - vz_palm) * dt
+            slip[0] += abs(vnew[palm_z_dof[0]] - vz_palm) * dt
+            slip[1] += abs(vnew[palm_z_dof[1]] - vz_palm) * dt
             palm_z += vz_palm * dt
-            acc_l = (vfree[palm_x_dof[0]] - v[palm_x_dof[0]]) / dt
-            acc_r = (vfree[palm_x_dof[1]] - v[palm_x_dof[1]]) / dt
+            acc_l = (vnew[palm_x_dof[0]] - v[palm_x_dof[0]]) / dt
+            acc_r = (vnew[palm_x_dof[1]] - v[palm_x_dof[1]]) / dt
             rec[step, REC_NORMAL_L] = f_now - palm_mass * acc_l
             rec[step, REC_NORMAL_R] = f_now + palm_mass * acc_r
         max_speed = 0.0
         for i in range(n_dof):
-            v[i] = vfree[i]
+            v[i] = vnew[i]
             q[i] += dt * v[i]
             if abs(v[i]) > max_speed:
                 max_speed = abs(v[i])

@@ -24,8 +24,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
+import scipy.sparse
 from numpy.typing import NDArray
+
+from deformctl.sim.solver import LDLFactor, dof_order, ldl_factor, nested_dissection_order
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -172,33 +174,76 @@ def palm_dof_map(lattice: Lattice, gripped: bool) -> tuple[IntArray, int, IntArr
 
 def reduced_stiffness(
     lattice: Lattice, stiffness: FloatArray, dof_of: IntArray, n_dof: int
-) -> FloatArray:
-    """Tangent stiffness at rest ``P^T K P`` in generalised coordinates, N/m, ``[n_dof, n_dof]``.
+) -> scipy.sparse.csr_matrix:
+    """Tangent matrix at rest ``P^T K P`` in generalised coordinates, sparse ``[n_dof, n_dof]``.
+
+    ``K = sum_e k_e (e_i - e_j)(e_i - e_j)^T (x) n_e n_e^T`` (assembled COO -> CSR). With element
+    stiffness (N/m) it is the stiffness matrix; with element dampers (N·s/m), the damping matrix.
 
     Args:
-        stiffness: element stiffness, N/m, ``[m]``.
+        stiffness: element coefficient, ``[m]``.
     """
     e = lattice.edges
     d = lattice.direction
     block = stiffness[:, None, None] * d[:, :, None] * d[:, None, :]  # [m, 3, 3]
-    k = np.zeros((n_dof, n_dof))
+    rows: list[IntArray] = []
+    cols: list[IntArray] = []
+    vals: list[FloatArray] = []
     for a_end, a_sign in ((0, 1.0), (1, -1.0)):
+        r = dof_of[3 * e[:, a_end, None] + np.arange(3)]  # [m, 3]
         for b_end, b_sign in ((0, 1.0), (1, -1.0)):
-            rows = dof_of[3 * e[:, a_end, None] + np.arange(3)]  # [m, 3]
-            cols = dof_of[3 * e[:, b_end, None] + np.arange(3)]
-            np.add.at(
-                k,
-                (rows[:, :, None], cols[:, None, :]),
-                a_sign * b_sign * block,
-            )
+            c = dof_of[3 * e[:, b_end, None] + np.arange(3)]
+            rows.append(np.broadcast_to(r[:, :, None], block.shape).ravel())
+            cols.append(np.broadcast_to(c[:, None, :], block.shape).ravel())
+            vals.append((a_sign * b_sign * block).ravel())
+    k = scipy.sparse.coo_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n_dof, n_dof)
+    ).tocsr()
+    k.sum_duplicates()
     return k
 
 
-def _regularised_solve(k: FloatArray, mass: FloatArray, load: FloatArray) -> FloatArray:
-    """Solve ``K u = f`` for a self-equilibrated load; rigid modes are removed by ``eps M``."""
-    eps = 1e-10 * float(np.trace(k)) / float(np.sum(mass))
-    a = k + eps * np.diag(mass)
-    return np.asarray(scipy.linalg.solve(a, load, assume_a="pos"))
+def lattice_factor(
+    lattice: Lattice,
+    a: scipy.sparse.spmatrix,
+    dof_of: IntArray,
+    n_dof: int,
+    last: IntArray | None = None,
+    keep: IntArray | None = None,
+) -> LDLFactor:
+    """Sparse ``L D L^T`` of an SPD lattice matrix in nested-dissection order (:mod:`.solver`).
+
+    Args:
+        a: the matrix on the DOFs ``keep`` (default: all ``n_dof``).
+        last: DOFs numbered last (the palm DOFs).
+        keep: the DOFs of ``a`` (a principal submatrix of the lattice's DOFs), increasing.
+    """
+    last_dofs = np.zeros(0, dtype=np.int64) if last is None else np.asarray(last, dtype=np.int64)
+    last_dofs = last_dofs[last_dofs >= 0]
+    perm = dof_order(nested_dissection_order(lattice.shape), dof_of, n_dof, last_dofs)
+    if keep is not None:
+        local = np.full(n_dof, -1, dtype=np.int64)
+        local[keep] = np.arange(keep.size)
+        perm = local[perm]
+        perm = perm[perm >= 0]
+    return ldl_factor(a, perm)
+
+
+def _regularised_solve(
+    lattice: Lattice,
+    k: scipy.sparse.csr_matrix,
+    load: FloatArray,
+    dof_of: IntArray,
+    n_dof: int,
+    keep: IntArray,
+    last: IntArray,
+) -> FloatArray:
+    """Solve ``K u = f`` on the DOFs ``keep`` for a self-equilibrated load; rigid modes are removed
+    by ``eps I`` (unit masses)."""
+    eps = 1e-10 * float(k.diagonal().sum()) / float(keep.size)
+    a = k + eps * scipy.sparse.identity(keep.size, format="csr")
+    factor = lattice_factor(lattice, a, dof_of, n_dof, last=last, keep=keep)
+    return factor.solve(load)
 
 
 def unit_squeeze_stiffness_n_per_m(lattice: Lattice) -> float:
@@ -211,13 +256,12 @@ def unit_squeeze_stiffness_n_per_m(lattice: Lattice) -> float:
     dof_of, n_dof, px, pz = palm_dof_map(lattice, gripped=True)
     k = reduced_stiffness(lattice, lattice.unit_stiffness, dof_of, n_dof)
     keep = np.setdiff1d(np.arange(n_dof), pz)
-    kr = k[np.ix_(keep, keep)]
+    kr = k[keep][:, keep]
     load = np.zeros(n_dof)
     load[px[0]] = 1.0
     load[px[1]] = -1.0
-    mass = np.ones(keep.size)
     u = np.zeros(n_dof)
-    u[keep] = _regularised_solve(kr, mass, load[keep])
+    u[keep] = _regularised_solve(lattice, kr, load[keep], dof_of, n_dof, keep, px)
     closing = u[px[0]] - u[px[1]]
     return 1.0 / closing
 
@@ -237,5 +281,8 @@ def resting_positions_m(
     load = np.zeros(n_dof)
     load[dof_of[3 * np.arange(n) + 2]] = -particle_weight_n
     u = np.zeros(n_dof)
-    u[keep] = _regularised_solve(k[np.ix_(keep, keep)], np.ones(keep.size), load[keep])
+    kr = k[keep][:, keep]
+    u[keep] = _regularised_solve(
+        lattice, kr, load[keep], dof_of, n_dof, keep, np.zeros(0, np.int64)
+    )
     return np.asarray(lattice.positions_m + u[dof_of].reshape(n, 3))
