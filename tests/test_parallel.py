@@ -452,3 +452,15 @@ def test_progress_bar_only_on_a_terminal(
     assert "8/8" in err
     assert "1 failed" in err
     assert "obj/s" in err
+
+
+def test_stage_task_modules_do_not_load_the_simulator() -> None:
+    # A local sweep's fork server preloads the task's module; one that has loaded OpenBLAS and
+    # numba forks workers with thread pools they cannot use (a killed worker then hung the pool).
+    code = (
+        "import sys, deformctl.lift.runners.sim, deformctl.measure, deformctl.characterize; "
+        "print(sorted(m for m in ('deformctl.sim', 'numba', 'scipy', 'sklearn', 'cv2') "
+        "if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

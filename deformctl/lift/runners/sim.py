@@ -14,7 +14,10 @@ attempt lifts when it is at most 0.5 mm and the object is off the table at the e
 
 At scale, :class:`LiftTask` is the sweep task of one object and :func:`lift_sweep` runs a whole
 catalog into a dataset directory (:mod:`deformctl.parallel`, :mod:`deformctl.artifacts.dataset`),
-row for row what :func:`~deformctl.lift.stage.lift_catalog` gives serially.
+row for row what :func:`~deformctl.lift.stage.lift_catalog` gives serially. The simulator
+(numba, scipy) is imported inside the functions that run it, not with this module: a sweep's
+fork server preloads the task's module, and a fork server that has loaded OpenBLAS and numba
+hands its workers thread pools they cannot use.
 
 Example:
     >>> import pandas as pd
@@ -29,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
@@ -49,9 +52,10 @@ from deformctl.lift.search import (
 )
 from deformctl.lift.stage import RunnerFactory, lift_catalog
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
-from deformctl.series import TrialOutcome
-from deformctl.sim import LiftProfile, SimSettings, SlipCriterion, lift_attempt
-from deformctl.sim.engine import check_lattice_size
+
+if TYPE_CHECKING:  # pragma: no cover - the simulator is imported where it runs (see below)
+    from deformctl.series import TrialOutcome
+    from deformctl.sim import LiftProfile, SimSettings, SlipCriterion
 
 __all__ = ["LiftTask", "check_sim_objects", "lift_sweep", "sim_runner_factory"]
 
@@ -67,8 +71,11 @@ def check_sim_objects(
     Raises:
         InputDataError: an object without material values (or otherwise invalid), naming the
             catalog and the first such object (exit 65).
-        UsageError: ``settings`` would give an object a lattice above ``max_particles`` (exit 2).
+        UsageError: an object's model would exceed ``settings.memory_budget_gib`` (exit 2).
     """
+    from deformctl.sim import SimSettings
+    from deformctl.sim.engine import check_lattice_size
+
     specs = [obj.to_sim_spec(path=path) for obj in objects]
     for spec in specs:
         check_lattice_size(spec, settings or SimSettings())
@@ -95,6 +102,8 @@ def sim_runner_factory(
         ``slip_tolerance_m`` and ``slip_criterion`` (``"contact"`` or ``"shortfall"``); a
         simulation failure of one object does not stop the others.
     """
+    from deformctl.sim import LiftProfile, SimSettings, SlipCriterion, lift_attempt
+
     p = profile or LiftProfile()
     s = settings or SimSettings()
     c = criterion or SlipCriterion()
