@@ -8,11 +8,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from deformctl.catalog import rigid_grip_force_n
 from deformctl.sim import (
     LiftProfile,
     ObjectSpec,
     SimSettings,
+    f_w_n,
     lift_attempt,
     rigid_lift_force_n,
     squeeze_many,
@@ -35,7 +35,7 @@ def _best_of(fn: Callable[[], object], repeats: int = 5) -> float:
 
 def _bisect(spec: ObjectSpec, rel_tol: float = 0.01) -> tuple[float, int]:
     """Minimal local search: paper ramp from F_w (x1.2) to bracket, then bisection to rel_tol."""
-    lo = hi = rigid_grip_force_n(spec.weight_n, spec.friction_mu)
+    lo = hi = f_w_n(spec)
     attempts = 0
     while True:
         attempts += 1
@@ -80,8 +80,7 @@ def main() -> None:
     print(
         f"one complete object (3 squeezes + search to 1 %, {attempts} attempts): "
         f"{t_object:.3f} s  (target <= 2 s); L_f = {lf:.4f} N, "
-        f"F_w = {rigid_grip_force_n(SPONGE.weight_n, SPONGE.friction_mu):.4f} N, "
-        f"rigid {rigid_lift_force_n(SPONGE, LiftProfile()):.4f} N"
+        f"F_w = {f_w_n(SPONGE):.4f} N, rigid {rigid_lift_force_n(SPONGE, LiftProfile()):.4f} N"
     )
 
     # force kernel throughput on a 10 x 10 x 10 lattice

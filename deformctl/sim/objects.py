@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from deformctl.catalog import rigid_grip_force_n
 from deformctl.errors import InputDataError
 from deformctl.units import CM, GRAVITY_M_S2, N_PER_CM, NS_PER_CM
 
@@ -78,3 +79,11 @@ class ObjectSpec:
     def retardation_time_s(self) -> float:
         """Kelvin–Voigt retardation time lambda/D, s."""
         return self.damping_ns_per_cm / self.stiffness_n_per_cm
+
+
+def f_w_n(spec: ObjectSpec) -> float:
+    """Quasi-static lifting force per palm of a rigid object, W/(2 mu), N.
+
+    :func:`deformctl.catalog.rigid_grip_force_n` of the spec's weight and friction.
+    """
+    return rigid_grip_force_n(spec.weight_n, spec.friction_mu)

@@ -3,8 +3,7 @@ stiffness measured from the force felt and the palm positions."""
 
 from __future__ import annotations
 
-from deformctl.catalog import rigid_grip_force_n
-from deformctl.sim import ObjectSpec, SimSettings, squeeze
+from deformctl.sim import ObjectSpec, SimSettings, f_w_n, squeeze
 
 from ._helpers import min_lift_force_n
 
@@ -14,7 +13,7 @@ SPONGE = ObjectSpec("sponge", (17.8, 19.1, 9.2), 0.7, 0.5, 49.18, 6.47)
 
 
 def test_halving_the_time_step_changes_the_lifting_force_by_less_than_2_percent() -> None:
-    fw = rigid_grip_force_n(WATER.weight_n, WATER.friction_mu)
+    fw = f_w_n(WATER)
     coarse = SimSettings()
     fine = SimSettings(dt_s=coarse.dt_s / 2)
     l_coarse = min_lift_force_n(WATER, fw, 2 * fw, rel_tol=0.002, settings=coarse)

@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from deformctl.catalog import rigid_grip_force_n
 from deformctl.sim import (
     LiftProfile,
     ObjectSpec,
     SlipCriterion,
+    f_w_n,
     lift_attempt,
     rigid_lift_force_n,
 )
@@ -57,7 +57,7 @@ def test_friction_cone_holds_inside_without_creep_and_slips_outside() -> None:
 
 def test_far_below_f_w_the_object_stays_on_the_table() -> None:
     spec = stiff_object(0.5)
-    outcome = lift_attempt(spec, 0.5 * rigid_grip_force_n(spec.weight_n, spec.friction_mu))
+    outcome = lift_attempt(spec, 0.5 * f_w_n(spec))
     assert not outcome.lifted
     assert outcome.details["off_table"] is False
     assert outcome.slip_m == pytest.approx(PROFILE.rise_m(spec), rel=0.02)
@@ -66,7 +66,7 @@ def test_far_below_f_w_the_object_stays_on_the_table() -> None:
 def test_quasi_static_lift_of_a_soft_object_needs_only_f_w() -> None:
     """Lifting force -> W/(2 mu) as the lift acceleration -> 0 (soft, lightly damped object)."""
     spec = ObjectSpec("soft", (15.0, 15.0, 10.0), 10.0, 0.5, 5.0, 0.3)
-    fw = rigid_grip_force_n(spec.weight_n, spec.friction_mu)
+    fw = f_w_n(spec)
     forces = []
     for accel, speed, jerk in ((2.0, 0.25, 0.05), (0.5, 0.1, 0.1), (0.1, 0.05, 0.1)):
         profile = LiftProfile(accel_m_s2=accel, speed_m_s=speed, jerk_time_s=jerk)
