@@ -455,8 +455,8 @@ def test_progress_bar_only_on_a_terminal(
 
 
 def test_stage_task_modules_do_not_load_the_simulator() -> None:
-    # A local sweep's fork server preloads the task's module; one that has loaded OpenBLAS and
-    # numba forks workers with thread pools they cannot use (a killed worker then hung the pool).
+    # A local sweep's fork server preloads the task's module: it must not load the simulator
+    # (numba, OpenBLAS threads) before the workers are forked and limit their BLAS threads.
     code = (
         "import sys, deformctl.lift.runners.sim, deformctl.measure, deformctl.characterize; "
         "print(sorted(m for m in ('deformctl.sim', 'numba', 'scipy', 'sklearn', 'cv2') "
