@@ -41,7 +41,7 @@ reproduce: install
 	$(DC) measure datasets/paper/objects.csv --sim --seed 0 -o $(RUN)/paper_squeeze.mcap
 	$(DC) characterize $(RUN)/paper_squeeze.mcap -o $(RUN)/paper_coefficients.parquet
 	$(DC) lift datasets/paper/objects.csv --sim -o $(RUN)/paper_lift.parquet --log $(RUN)/paper_lift.mcap
-	$(BIN)/python -m deformctl.report $(RUN) --require-max-test-error 0.05
+	$(BIN)/python -m deformctl.repro.report $(RUN) --require-max-test-error 0.05
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache build *.egg-info

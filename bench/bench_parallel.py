@@ -23,7 +23,9 @@ from typing import Any
 
 import pyarrow as pa
 
-from deformctl.parallel import PartPayloads, TaskOutput, atomic_write_bytes, run_sweep
+from deformctl.artifacts.dataset import PartPayloads
+from deformctl.artifacts.io import atomic_write_bytes
+from deformctl.parallel import TaskOutput, run_sweep
 
 CPU_SCHEMA = pa.schema([pa.field("object_id", pa.int64()), pa.field("checksum", pa.int64())])
 MEM_SCHEMA = pa.schema(
@@ -92,7 +94,7 @@ def _throughput(n_iter: int, n_objects: int, workers: int, tmp: Path) -> float:
 
 def memory_sweep(n_objects: int, out_dir: str) -> dict[str, Any]:
     """Run the fast sweep in this (fresh) interpreter; peak RSS of client and workers, KiB."""
-    from deformctl.parallel import read_dataset
+    from deformctl.artifacts.dataset import read_dataset
 
     items = [{"object_id": i} for i in range(n_objects)]
     t0 = time.perf_counter()

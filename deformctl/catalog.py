@@ -1,11 +1,43 @@
-"""The object catalog's columns: the input of ``measure`` and ``lift``, one row per object.
+"""The object catalog: its columns, and one typed, validated :class:`CatalogObject` per row.
 
-Kept in a module of its own, with no heavy imports, because the simulator, the population
-generator and the CLI all name these columns. Units are in the names (cm, N, N/cm, N·s/cm); the
-full column spec with dtypes and descriptions is ``schemas/catalog.columns.json``.
+A catalog is the input of ``measure --sim`` and ``lift``: one row per object, in the paper's units
+(cm, N, N/cm, N·s/cm); the column spec with dtypes and descriptions is
+``schemas/catalog.columns.json`` and :func:`deformctl.artifacts.read_catalog` checks a file
+against it. This module is the only one that reads a row by its column names: everything else
+takes a :class:`CatalogObject` and its typed attributes. Three rules live here and nowhere else:
+
+* parsing a row (a column missing, not a number, not finite): :meth:`CatalogObject.from_row`;
+* lifting needs ``friction_mu > 0``: :meth:`CatalogObject.f_w_n`, and F_w = W / (2 μ) itself is
+  computed by :func:`rigid_grip_force_n` only;
+* simulating needs the *material values* (the simulator's ground truth for D and λ):
+  :meth:`CatalogObject.to_sim_spec`, which turns the row into the simulator's
+  :class:`~deformctl.sim.ObjectSpec` (the simulator never sees catalog column names).
+
+The module imports nothing heavy (the simulator is imported when a spec is built), because the
+population generator, the lift search and the command line all use it.
+
+Example:
+    >>> obj = CatalogObject.from_row({"object_id": "A", "size_x_cm": 17.8, "size_y_cm": 19.1,
+    ...     "size_z_cm": 9.2, "weight_n": 0.7, "friction_mu": 0.5})
+    >>> obj.f_w_n(), obj.has_material
+    (0.7, False)
 """
 
 from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, TypeVar, overload
+
+import numpy as np
+
+from deformctl.errors import InputDataError, UsageError
+
+if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported when used
+    import pandas as pd
+
+    from deformctl.sim import ObjectSpec
 
 #: The catalog columns, in order; the two material columns are the simulator's ground truth.
 CATALOG_COLUMNS: tuple[str, ...] = (
@@ -18,3 +50,336 @@ CATALOG_COLUMNS: tuple[str, ...] = (
     "material_stiffness_n_per_cm",
     "material_damping_ns_per_cm",
 )
+SIZE_COLUMNS: tuple[str, str, str] = ("size_x_cm", "size_y_cm", "size_z_cm")
+MATERIAL_COLUMNS: tuple[str, str] = ("material_stiffness_n_per_cm", "material_damping_ns_per_cm")
+
+__all__ = [
+    "CATALOG_COLUMNS",
+    "MATERIAL_COLUMNS",
+    "SIZE_COLUMNS",
+    "CatalogObject",
+    "catalog_frame",
+    "catalog_objects",
+    "catalog_row",
+    "catalog_weights",
+    "object_record",
+    "rigid_grip_force_n",
+    "select_objects",
+]
+
+Number = TypeVar("Number", float, np.ndarray)
+
+
+@overload
+def rigid_grip_force_n(weight_n: float, friction_mu: float) -> float: ...
+@overload
+def rigid_grip_force_n(weight_n: np.ndarray, friction_mu: np.ndarray | float) -> np.ndarray: ...
+def rigid_grip_force_n(weight_n: Any, friction_mu: Any) -> Any:
+    """F_w = W / (2 μ), N: the force two palms need to hold a rigid object of weight W at rest.
+
+    The one place F_w is computed (the lift search starts at it, the index table and the model's
+    baseline report it). Works elementwise on arrays.
+    """
+    return weight_n / (2.0 * friction_mu)
+
+
+def _plain(value: Any) -> Any:
+    """numpy scalars as Python scalars; NaN and missing values as None."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return None
+    return value
+
+
+def _absent(row: Mapping[str, Any], key: str) -> bool:
+    return key not in row or _plain(row[key]) is None
+
+
+def _number(row: Mapping[str, Any], key: str, object_id: str) -> float:
+    """``row[key]`` as a finite float, or one line naming the object and the column."""
+    if key not in row:
+        raise InputDataError(f"object {object_id!r}: missing column {key!r}")
+    value = row[key]
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise InputDataError(f"object {object_id!r}: {key} is not a number: {value!r}") from None
+    if not math.isfinite(number):
+        raise InputDataError(f"object {object_id!r}: {key} is missing or not finite ({value!r})")
+    return number
+
+
+@dataclass(frozen=True)
+class CatalogObject(Mapping[str, Any]):
+    """One catalog row, parsed once: typed attributes in the catalog's units.
+
+    It is also a read-only mapping of the row as read (every column, extra ones such as ``name``
+    included), so it can be passed wherever a catalog row is expected; :meth:`record` is the
+    row with plain values (what a log stores).
+
+    Attributes:
+        object_id: the object's unique id.
+        size_cm: box size along (x, y, z), cm; x is the squeeze axis, z is up.
+        weight_n: weight W, N.
+        friction_mu: palm/object Coulomb friction coefficient μ (the catalog allows 0; a lift
+            needs it > 0, see :meth:`f_w_n`).
+        material_stiffness_n_per_cm: the simulator's ground-truth D, N/cm, or None (a real
+            object).
+        material_damping_ns_per_cm: the simulator's ground-truth λ, N·s/cm, or None.
+    """
+
+    object_id: str
+    size_cm: tuple[float, float, float]
+    weight_n: float
+    friction_mu: float
+    material_stiffness_n_per_cm: float | None = None
+    material_damping_ns_per_cm: float | None = None
+    row: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    @classmethod
+    def from_row(cls, row: Mapping[str, Any], *, path: str | None = None) -> CatalogObject:
+        """Parse one catalog row (a dict or a pandas Series).
+
+        Args:
+            row: the row, keyed by catalog column (see :data:`CATALOG_COLUMNS`); other columns
+                are kept in :attr:`row`.
+            path: the catalog's name, for the message.
+
+        Raises:
+            InputDataError: no ``object_id``, or a size, weight or friction column that is
+                missing, not a number or not finite; one line naming the object and the column
+                (exit 65). Value ranges are the catalog spec's (checked when a file is read)
+                and each use's (:meth:`f_w_n`, :meth:`to_sim_spec`).
+        """
+        raw = {str(k): v for k, v in row.items()}
+        oid = _plain(raw.get("object_id"))
+        if oid is None or str(oid) == "":
+            raise InputDataError("catalog row without 'object_id'", path=path)
+        object_id = str(oid)
+        try:
+            size = tuple(_number(raw, c, object_id) for c in SIZE_COLUMNS)
+            weight = _number(raw, "weight_n", object_id)
+            mu = _number(raw, "friction_mu", object_id)
+        except InputDataError as err:
+            raise InputDataError(err.message, path=path) from None
+        material = [_plain(raw.get(c)) for c in MATERIAL_COLUMNS]
+        stiffness, damping = (
+            float(v)
+            if isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+            else None
+            for v in material
+        )
+        return cls(
+            object_id=object_id,
+            size_cm=(size[0], size[1], size[2]),
+            weight_n=weight,
+            friction_mu=mu,
+            material_stiffness_n_per_cm=stiffness,
+            material_damping_ns_per_cm=damping,
+            row=raw,
+        )
+
+    # ---- the row as a read-only mapping
+
+    def __getitem__(self, key: str) -> Any:
+        """The value of column ``key`` as read."""
+        return self.row[key]
+
+    def __iter__(self) -> Iterator[str]:
+        """The column names, in the row's order."""
+        return iter(self.row)
+
+    def __len__(self) -> int:
+        """The number of columns of the row."""
+        return len(self.row)
+
+    def record(self) -> dict[str, Any]:
+        """The row with plain values (Python scalars; NaN and missing as None), e.g. for a log."""
+        return {key: _plain(value) for key, value in self.row.items()}
+
+    # ---- the rules of each use
+
+    @property
+    def has_material(self) -> bool:
+        """True when the row has both material values (the object can be simulated)."""
+        return (
+            self.material_stiffness_n_per_cm is not None
+            and self.material_damping_ns_per_cm is not None
+        )
+
+    def f_w_n(self, *, path: str | None = None) -> float:
+        """F_w = W / (2 μ), N, the rigid-object force a lift search starts at.
+
+        Raises:
+            InputDataError: ``friction_mu`` is not > 0 (F_w is undefined), or ``weight_n`` is
+                not > 0; naming the object (exit 65).
+        """
+        if not self.friction_mu > 0:
+            raise InputDataError(
+                f"object {self.object_id!r}: friction_mu must be > 0 to lift it "
+                f"(F_w = W / (2 mu) is undefined), got {self.friction_mu!r}",
+                path=path,
+            )
+        if not self.weight_n > 0:
+            raise InputDataError(
+                f"object {self.object_id!r}: weight_n must be > 0 to lift it, "
+                f"got {self.weight_n!r}",
+                path=path,
+            )
+        return rigid_grip_force_n(self.weight_n, self.friction_mu)
+
+    def to_sim_spec(self, *, path: str | None = None) -> ObjectSpec:
+        """The simulator's object for this row.
+
+        Raises:
+            InputDataError: the row has no material values (a real object: nothing to
+                simulate), one of them is missing or not a number, or a value the simulator
+                cannot use (e.g. ``friction_mu = 0``); naming the object (exit 65).
+        """
+        from deformctl.sim import ObjectSpec  # deferred: numba and scipy
+
+        needs = "--sim needs material_stiffness_n_per_cm and material_damping_ns_per_cm"
+        missing = [c for c in MATERIAL_COLUMNS if _absent(self.row, c)]
+        if len(missing) == len(MATERIAL_COLUMNS):
+            raise InputDataError(
+                f"object {self.object_id!r} has no material values ({', '.join(missing)} "
+                f"empty); {needs}",
+                path=path,
+            )
+        try:
+            stiffness, damping = (_number(self.row, c, self.object_id) for c in MATERIAL_COLUMNS)
+            return ObjectSpec(
+                object_id=self.object_id,
+                size_cm=self.size_cm,
+                weight_n=self.weight_n,
+                friction_mu=self.friction_mu,
+                stiffness_n_per_cm=stiffness,
+                damping_ns_per_cm=damping,
+            )
+        except InputDataError as err:
+            message = err.message if missing == [] else f"{err.message}; {needs}"
+            raise InputDataError(message, path=path) from None
+
+
+def catalog_objects(catalog: pd.DataFrame, *, path: str | None = None) -> list[CatalogObject]:
+    """Every row of a catalog as a :class:`CatalogObject`, in order (all parsed before returning).
+
+    Raises:
+        InputDataError: see :meth:`CatalogObject.from_row`.
+    """
+    return [CatalogObject.from_row(rec, path=path) for rec in catalog.to_dict("records")]
+
+
+def catalog_frame(objects: Sequence[CatalogObject]) -> pd.DataFrame:
+    """The rows of ``objects`` as a DataFrame (the inverse of :func:`catalog_objects`)."""
+    import pandas as pd
+
+    return pd.DataFrame([obj.record() for obj in objects])
+
+
+def catalog_weights(catalog: pd.DataFrame) -> dict[str, float]:
+    """``object_id`` → ``weight_n`` (N) of every row of a validated catalog (to join weights)."""
+    weights = catalog["weight_n"].to_numpy(dtype=np.float64)
+    return dict(zip(catalog["object_id"].astype(str), weights.tolist(), strict=True))
+
+
+def select_objects(catalog: pd.DataFrame, object_ids: Sequence[str] | None) -> pd.DataFrame:
+    """The catalog rows of ``object_ids``, in that order (all rows when None).
+
+    Repeated ids are taken once.
+
+    Raises:
+        UsageError: an empty list, an empty id, or an id the catalog does not have (exit 2).
+    """
+    if object_ids is None:
+        return catalog.reset_index(drop=True)
+    wanted = list(dict.fromkeys(object_ids))
+    if not wanted:
+        raise UsageError("no object ids given")
+    if any(not oid for oid in wanted):
+        raise UsageError("an object id is empty")
+    known = list(catalog["object_id"])
+    unknown = [oid for oid in wanted if oid not in set(known)]
+    if unknown:
+        shown = ", ".join(known[:10]) + (", ..." if len(known) > 10 else "")
+        raise UsageError(f"unknown object id {unknown[0]!r} (the catalog has: {shown})")
+    position = {oid: i for i, oid in enumerate(known)}
+    return catalog.iloc[[position[oid] for oid in wanted]].reset_index(drop=True)
+
+
+def object_record(
+    object_id: str,
+    weight_n: float,
+    *,
+    size_cm: Sequence[float] | None = None,
+    friction_mu: float | None = None,
+    force_rate_hz: float | None = None,
+    position_rate_hz: float | None = None,
+) -> dict[str, object]:
+    """The catalog-like row a squeeze log stores for a measured (not catalogued) object.
+
+    Keys: ``object_id``, ``weight_n``; ``size_x_cm``, ``size_y_cm``, ``size_z_cm`` and
+    ``friction_mu`` when given; ``force_rate_hz`` and ``position_rate_hz`` (the source streams'
+    sample rates, which ``characterize`` uses to choose its differentiation window) when known.
+
+    Args:
+        object_id: catalog id, non-empty.
+        weight_n: weight W, N, finite and > 0.
+        size_cm: ``(x, y, z)`` size, cm, each finite and > 0; x is the squeeze axis.
+        friction_mu: palm–object Coulomb friction coefficient, finite and >= 0.
+        force_rate_hz: force stream sample rate, Hz.
+        position_rate_hz: position stream sample rate, Hz.
+
+    Raises:
+        UsageError: an empty id or a value out of range (these come from command-line flags).
+    """
+    if not object_id or not object_id.strip():
+        raise UsageError("object id must not be empty")
+    if not (math.isfinite(weight_n) and weight_n > 0):
+        raise UsageError(f"weight must be a finite number > 0 N, got {weight_n}")
+    row: dict[str, object] = {"object_id": object_id, "weight_n": float(weight_n)}
+    if size_cm is not None:
+        if len(size_cm) != 3 or not all(math.isfinite(v) and v > 0 for v in size_cm):
+            raise UsageError(f"size must be three finite numbers > 0 cm, got {list(size_cm)}")
+        for column, value in zip(SIZE_COLUMNS, size_cm, strict=True):
+            row[column] = float(value)
+    if friction_mu is not None:
+        if not (math.isfinite(friction_mu) and friction_mu >= 0):
+            raise UsageError(f"friction coefficient must be finite and >= 0, got {friction_mu}")
+        row["friction_mu"] = float(friction_mu)
+    if force_rate_hz is not None:
+        row["force_rate_hz"] = float(force_rate_hz)
+    if position_rate_hz is not None:
+        row["position_rate_hz"] = float(position_rate_hz)
+    return row
+
+
+def catalog_row(
+    object_id: str,
+    size_cm: Sequence[float],
+    weight_n: float,
+    friction_mu: float | None = None,
+) -> dict[str, object]:
+    """A new catalog row for a measured object, in catalog column order (sizes to 0.01 cm).
+
+    Returns:
+        ``{"object_id", "size_x_cm", "size_y_cm", "size_z_cm", "weight_n"}`` plus
+        ``"friction_mu"`` when given.
+
+    Raises:
+        UsageError: an empty id, a weight that is not > 0 or a friction that is not > 0.
+    """
+    if not object_id:
+        raise UsageError("object_id must not be empty")
+    if not (math.isfinite(weight_n) and weight_n > 0):
+        raise UsageError(f"weight_n must be a positive number of newtons, got {weight_n}")
+    row: dict[str, object] = {"object_id": object_id}
+    for column, value in zip(SIZE_COLUMNS, size_cm, strict=True):
+        row[column] = round(float(value), 2)
+    row["weight_n"] = float(weight_n)
+    if friction_mu is not None:
+        if not (math.isfinite(friction_mu) and friction_mu > 0):
+            raise UsageError(f"friction_mu must be positive, got {friction_mu}")
+        row["friction_mu"] = float(friction_mu)
+    return row

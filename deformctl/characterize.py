@@ -38,6 +38,10 @@ Two estimators:
   method carries by construction: ``f/d = D + λ d'/d``, so wherever the object is still moving
   the ratio mixes damping into D.
 
+:func:`read_and_characterize` fits every object of a squeeze log, :func:`characterize_dir` those of
+a ``measure`` dataset directory; at scale, :class:`CharacterizeTask` is the sweep task of one
+object and :func:`characterize_sweep` writes a coefficients dataset directory.
+
 :func:`synthetic_kelvin_voigt_squeeze` generates squeezes with known D and λ (the exact
 Kelvin–Voigt response to a ramp-hold-release or a haversine force, plus seeded noise) for tests
 and examples.
@@ -46,15 +50,28 @@ and examples.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from os import PathLike
-from typing import Literal
+from pathlib import Path
+from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
 
-from deformctl.errors import InputDataError, UsageError
+from deformctl.artifacts.dataset import (
+    MANIFEST_NAME,
+    dataset_fingerprint,
+    dataset_part_paths,
+    iter_dataset_parts,
+    part_name,
+    spec_rows,
+    table_schema,
+)
+from deformctl.artifacts.provenance import sha256_file
+from deformctl.errors import InputDataError, MissingInputError, UsageError
+from deformctl.parallel import SweepOptions, SweepSummary, run_sweep
 from deformctl.series import FloatArray, SqueezeSeries
 from deformctl.units import N_PER_CM, NS_PER_CM
 
@@ -583,6 +600,143 @@ def read_and_characterize(
             raise
     table = pd.concat(frames, ignore_index=True)
     return LogCoefficients(table=table, window_s=windows, position_rate_hz=rates)
+
+
+# --------------------------------------------------------------------------------------------
+# Squeeze-log directories and sweeps (measure --sim -o DIR/, characterize -o DIR/)
+# --------------------------------------------------------------------------------------------
+
+
+def squeeze_log_parts(path: str | PathLike[str]) -> list[Path]:
+    """The squeeze logs ``part-*.mcap`` of a ``measure`` dataset directory, in part order.
+
+    Raises:
+        InputDataError: no logs, or a part of the sweep missing (rerun measure with --resume).
+    """
+    return dataset_part_paths(path, ".mcap", what="squeeze logs", rerun="measure")
+
+
+def characterize_dir(
+    path: str | PathLike[str], method: Method = "lsq", *, window_s: float | None = None
+) -> LogCoefficients:
+    """:func:`read_and_characterize` of every squeeze log of a ``measure`` directory, in order."""
+    parts = [read_and_characterize(p, method, window_s=window_s) for p in squeeze_log_parts(path)]
+    return LogCoefficients(
+        table=pd.concat([p.table for p in parts], ignore_index=True),
+        window_s={k: v for p in parts for k, v in p.window_s.items()},
+        position_rate_hz={k: v for p in parts for k, v in p.position_rate_hz.items()},
+    )
+
+
+def characterize_items(path: str | PathLike[str]) -> list[dict[str, Any]]:
+    """One sweep item per object of a ``measure`` dataset: ``object_id`` and its log's path.
+
+    The objects are those with rows in the dataset (failed objects have no squeezes).
+    """
+    from deformctl.artifacts.mcaplog import read_squeeze_log
+
+    d = Path(path).resolve()
+    logs = squeeze_log_parts(d)
+    items: list[dict[str, Any]] = []
+    if (d / MANIFEST_NAME).is_file() and any(d.glob("part-*.parquet")):
+        for k, table in enumerate(iter_dataset_parts(d)):
+            part_log = str(d / part_name(k, ".mcap"))
+            items.extend(
+                {"object_id": oid, "log_path": part_log} for oid in table["object_id"].to_pylist()
+            )
+        return items
+    for log in logs:  # no manifest: ask each log for its objects
+        objects, _ = read_squeeze_log(log)
+        items.extend({"object_id": str(o["object_id"]), "log_path": str(log)} for o in objects)
+    return items
+
+
+_LOG_CACHE: dict[tuple[str, int], tuple[dict[str, Any], dict[str, list[SqueezeSeries]]]] = {}
+
+
+def _read_log_cached(path: str) -> tuple[dict[str, Any], dict[str, list[SqueezeSeries]]]:
+    """A squeeze log's objects and squeezes by object id; the last log read is kept per process.
+
+    Items arrive in catalog order, so a worker reads each part's log about once.
+    """
+    from deformctl.artifacts.mcaplog import read_squeeze_log
+
+    key = (path, os.stat(path).st_mtime_ns)
+    if key not in _LOG_CACHE:
+        objects, squeezes = read_squeeze_log(path)
+        by_object: dict[str, list[SqueezeSeries]] = {}
+        for s in squeezes:
+            by_object.setdefault(s.object_id, []).append(s)
+        _LOG_CACHE.clear()
+        _LOG_CACHE[key] = ({str(o["object_id"]): o for o in objects}, by_object)
+    return _LOG_CACHE[key]
+
+
+@dataclass(frozen=True)
+class CharacterizeTask:
+    """``characterize`` for one object of a squeeze-log directory (a picklable sweep task)."""
+
+    method: str = "lsq"
+    window_s: float | None = None
+
+    def __call__(self, item: dict[str, Any]) -> Any:
+        """Fit one object; its coefficients row (an Arrow table).
+
+        Raises:
+            InputDataError: the object has no squeezes or cannot be fitted (recorded as failed).
+        """
+        oid, log = str(item["object_id"]), str(item["log_path"])
+        meta, by_object = _read_log_cached(log)
+        group = by_object.get(oid)
+        if not group:
+            raise InputDataError(f"object {oid!r} has no squeezes", path=log)
+        rate_hz = _stored_rate(meta.get(oid))
+        window = self.window_s if self.window_s is not None else default_window_s(rate_hz)
+        try:
+            df = characterize({oid: group}, self.method, window_s=window)  # type: ignore[arg-type]
+        except InputDataError as err:
+            if err.path is None:
+                raise InputDataError(err.message, path=log) from err
+            raise
+        return spec_rows(df, "coefficients")
+
+
+def characterize_sweep(
+    log_dir: str,
+    task: CharacterizeTask,
+    *,
+    output: str,
+    sweep: SweepOptions,
+    force: bool = False,
+) -> SweepSummary:
+    """``characterize DIR -o OUT/``: one fit per object of a squeeze-log directory, in parallel.
+
+    Raises:
+        MissingInputError: ``log_dir`` does not exist (exit 66).
+        UsageError: ``log_dir`` is a file, or the window is not > 0 (exit 2).
+    """
+    if task.window_s is not None and not (math.isfinite(task.window_s) and task.window_s > 0):
+        raise UsageError(f"--window-s must be a finite number > 0 s, got {task.window_s}")
+    if not os.path.isdir(log_dir):
+        if not os.path.exists(log_dir):
+            raise MissingInputError("no such file or directory", path=log_dir)
+        raise UsageError(
+            "a dataset directory output (-o DIR/) needs a squeeze-log directory input "
+            "(measure --sim -o DIR/)"
+        )
+    settings = {"method": task.method, "window_s_option": task.window_s}
+    fingerprint = dataset_fingerprint(
+        "characterize", "coefficients", settings, {"log": sha256_file(log_dir)}
+    )
+    return run_sweep(
+        task,
+        characterize_items(log_dir),
+        out_dir=output,
+        schema=table_schema("coefficients"),
+        fingerprint=fingerprint,
+        force=force,
+        **sweep.run_kwargs(),
+    )
 
 
 # --------------------------------------------------------------------------------------------

@@ -1,7 +1,9 @@
 """Squeeze logs from real rigs (ROS 2 MCAP bags, CSV exports) and the simulator.
 
 :func:`simulate_squeezes` squeezes catalog objects in :mod:`deformctl.sim` (``measure --sim``;
-see its docstring for the default force rule). For real rigs:
+see its docstring for the default force rule); at scale, :class:`SimulateCatalogTask` is the sweep
+task of one object and :func:`simulate_catalog_sweep` runs a catalog into a dataset directory.
+For real rigs:
 
 Both readers (:func:`read_ros2_bag`, :func:`read_csv_export`) return a :class:`Recording`:
 the squeezes as ``list[SqueezeSeries]`` in SI units with compression ``d`` as defined in
@@ -50,6 +52,7 @@ dropped.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -60,13 +63,18 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 
+from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
+from deformctl.artifacts.provenance import Provenance, input_digest
+from deformctl.catalog import catalog_objects
 from deformctl.errors import InputDataError, MissingInputError, UsageError
+from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
 from deformctl.series import FloatArray, SqueezeSeries
+from deformctl.units import NS_PER_S
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported when used
     from deformctl.sim import ObjectSpec, SimSettings
-from deformctl.units import NS_PER_S
 
 Axis = Literal["x", "y", "z"]
 PositionIs = Literal["gap", "palm"]
@@ -651,58 +659,6 @@ def squeeze_from_csv(path: str | PathLike[str], **options: Any) -> list[SqueezeS
 
 
 # ---------------------------------------------------------------------------------------------
-# the object a measurement is of
-# ---------------------------------------------------------------------------------------------
-
-
-def object_record(
-    object_id: str,
-    weight_n: float,
-    *,
-    size_cm: Sequence[float] | None = None,
-    friction_mu: float | None = None,
-    force_rate_hz: float | None = None,
-    position_rate_hz: float | None = None,
-) -> dict[str, object]:
-    """The catalog-like row a squeeze log stores for a measured object.
-
-    Keys: ``object_id``, ``weight_n``; ``size_x_cm``, ``size_y_cm``, ``size_z_cm`` and
-    ``friction_mu`` when given; ``force_rate_hz`` and ``position_rate_hz`` (the source streams'
-    sample rates, which ``characterize`` uses to choose its differentiation window) when known.
-
-    Args:
-        object_id: catalog id, non-empty.
-        weight_n: weight W, N, finite and > 0.
-        size_cm: ``(x, y, z)`` size, cm, each finite and > 0; x is the squeeze axis.
-        friction_mu: palm–object Coulomb friction coefficient, finite and >= 0.
-        force_rate_hz: force stream sample rate, Hz.
-        position_rate_hz: position stream sample rate, Hz.
-
-    Raises:
-        UsageError: an empty id or a value out of range.
-    """
-    if not object_id or not object_id.strip():
-        raise UsageError("object id must not be empty")
-    if not (math.isfinite(weight_n) and weight_n > 0):
-        raise UsageError(f"weight must be a finite number > 0 N, got {weight_n}")
-    row: dict[str, object] = {"object_id": object_id, "weight_n": float(weight_n)}
-    if size_cm is not None:
-        if len(size_cm) != 3 or not all(math.isfinite(v) and v > 0 for v in size_cm):
-            raise UsageError(f"size must be three finite numbers > 0 cm, got {list(size_cm)}")
-        for axis, value in zip("xyz", size_cm, strict=True):
-            row[f"size_{axis}_cm"] = float(value)
-    if friction_mu is not None:
-        if not (math.isfinite(friction_mu) and friction_mu >= 0):
-            raise UsageError(f"friction coefficient must be finite and >= 0, got {friction_mu}")
-        row["friction_mu"] = float(friction_mu)
-    if force_rate_hz is not None:
-        row["force_rate_hz"] = float(force_rate_hz)
-    if position_rate_hz is not None:
-        row["position_rate_hz"] = float(position_rate_hz)
-    return row
-
-
-# ---------------------------------------------------------------------------------------------
 # the simulator (measure --sim)
 # ---------------------------------------------------------------------------------------------
 
@@ -791,9 +747,7 @@ def simulate_squeezes(
         UsageError: an option out of range.
         SimulationError: the simulation produced a non-finite state.
     """
-    from deformctl.lift import catalog_records
     from deformctl.sim import SimSettings, squeeze
-    from deformctl.simcatalog import sim_specs
 
     s = settings or SimSettings()
     if isinstance(squeezes, bool) or not isinstance(squeezes, int) or squeezes < 1:
@@ -812,8 +766,9 @@ def simulate_squeezes(
     for name, value in (("force", noise_force_n), ("position", noise_position_m)):
         if not (math.isfinite(value) and value >= 0):
             raise UsageError(f"{name} noise must be a finite number >= 0, got {value}")
-    specs = sim_specs(catalog, path=path)
-    records = catalog_records(catalog)
+    objects_in = catalog_objects(catalog, path=path)
+    specs = [obj.to_sim_spec(path=path) for obj in objects_in]
+    records = [obj.record() for obj in objects_in]
     rate_hz = 1.0 / s.dt_s
     objects: list[dict[str, Any]] = []
     out: list[SqueezeSeries] = []
@@ -847,3 +802,95 @@ def simulate_squeezes(
 def _force_scale(j: int, n: int) -> float:
     """Squeeze ``j`` of ``n``: the factor on the peak force, ``linspace(0.5, 1, n)[j]``."""
     return 1.0 if n == 1 else float(np.linspace(0.5, 1.0, n)[j])
+
+
+#: Rows of a ``measure --sim`` dataset: one per object squeezed (the series are in the logs).
+MEASURE_SCHEMA = pa.schema(
+    [
+        pa.field("object_id", pa.string(), nullable=False),
+        pa.field("squeezes", pa.int64(), nullable=False),
+        pa.field("samples", pa.int64(), nullable=False),
+        pa.field("duration_s", pa.float64(), nullable=False, metadata={"unit": "s"}),
+        pa.field("peak_force_n", pa.float64(), nullable=False, metadata={"unit": "N"}),
+    ]
+)
+
+
+@dataclass(frozen=True)
+class SimulateCatalogTask:
+    """``measure --sim`` for one catalog object (a picklable sweep task).
+
+    The item carries the object's catalog row and its catalog position under
+    ``"_position"``; the noise stream is derived from (seed, position) as in the serial run.
+
+    Attributes:
+        simulate: the keyword arguments of :func:`simulate_squeezes` (squeezes, peak force or
+            strain, ramp, hold, gravity, noise).
+        settings: the :class:`~deformctl.sim.SimSettings`.
+        seed: the run's noise seed.
+    """
+
+    simulate: Mapping[str, Any]
+    settings: SimSettings
+    seed: int = 0
+
+    def __call__(self, item: dict[str, Any]) -> TaskOutput:
+        """Squeeze one object: its summary row, its (object row, squeezes) as the payload."""
+        row = {k: v for k, v in item.items() if k != "_position"}
+        objects, series = simulate_squeezes(
+            pd.DataFrame([row]),
+            settings=self.settings,
+            seed=self.seed,
+            first_index=int(item["_position"]),
+            **self.simulate,
+        )
+        summary = {
+            "object_id": str(objects[0]["object_id"]),
+            "squeezes": len(series),
+            "samples": int(sum(len(s.time_s) for s in series)),
+            "duration_s": float(sum(float(s.time_s[-1]) for s in series)),
+            "peak_force_n": float(objects[0]["sim_peak_force_n"]),
+        }
+        return TaskOutput(rows=[summary], payload=(objects[0], series))
+
+
+def simulate_catalog_sweep(
+    catalog: pd.DataFrame,
+    task: SimulateCatalogTask,
+    *,
+    catalog_path: str,
+    output: str,
+    provenance: Provenance,
+    sweep: SweepOptions,
+    force: bool = False,
+) -> SweepSummary:
+    """``measure --sim -o DIR/``: one object per task; part ``k``'s squeezes in ``part-k.mcap``.
+
+    The rows of a part are :data:`MEASURE_SCHEMA` summaries; the squeezes are byte for byte
+    those of the serial run (each object's noise stream depends on the seed and its position).
+    A row the simulator refuses fails alone (``DIR/_failures/``).
+
+    Args:
+        catalog: the catalog rows to squeeze (already selected).
+        task: the squeeze and simulator settings and the seed.
+        catalog_path: the catalog's file name (``-`` for stdin), hashed into the fingerprint.
+        output: the dataset directory.
+        provenance: stored in every part log.
+        sweep: where to run (workers, scheduler), partition size, resume.
+        force: overwrite the sweep files of an existing directory.
+    """
+    items = [{**rec, "_position": i} for i, rec in enumerate(catalog.to_dict("records"))]
+    settings = {**task.simulate, "sim_settings": dataclasses.asdict(task.settings)}
+    fingerprint = dataset_fingerprint(
+        "measure", "squeeze_log", settings, {"catalog": input_digest(catalog_path)}, task.seed
+    )
+    return run_sweep(
+        task,
+        items,
+        out_dir=output,
+        schema=MEASURE_SCHEMA,
+        fingerprint=fingerprint,
+        part_writer=LogPartWriter("squeeze_log", provenance),
+        force=force,
+        **sweep.run_kwargs(),
+    )

@@ -2,43 +2,38 @@
 
 A *sweep* applies a picklable top-level ``task(item)`` to every catalog row (``item``, a dict
 with an id column such as ``object_id``) and streams the rows it returns into a partitioned
-Parquet dataset::
-
-    out_dir/
-      _sweep.json                 manifest, written first: fingerprint, schema, item ids per part
-      part-00000.parquet          rows of the objects 0 .. P-1 that succeeded, in catalog order
-      part-00001.parquet
-      _failures/part-00000.parquet   one row per failed object: id, error_type, error_message
-      part-00000.<ext>            optional per-part artifacts written by a ``part_writer`` hook
+Parquet dataset (:mod:`deformctl.artifacts.dataset` owns the directory: manifest, parts,
+failures, part logs, atomic part writes, readers). This module is the executor only: it submits
+objects, keeps a bounded window of them in flight, and hands each finished part to the
+dataset's writer, so at most that window is held in memory whatever the population size.
 
 Items are split into partitions by position, so the dataset does not depend on the number of
-workers or on the order in which objects finish. A part is written (temporary file, fsync,
-rename) once every object in it has finished, so at most a bounded window of objects is held in
-memory whatever the population size. A part file carries its item ids in its Parquet metadata;
-``resume=True`` keeps the parts that are complete and valid and recomputes the others, which
-gives the same dataset, row for row, as an uninterrupted run.
+workers or on the order in which objects finish; ``resume=True`` keeps the parts that are
+complete and valid and recomputes the others, which gives the same dataset, row for row, as an
+uninterrupted run.
 
 Executors: ``workers`` local processes (:class:`concurrent.futures.ProcessPoolExecutor`,
 forkserver start method), or an existing ``dask.distributed`` cluster given by its scheduler
 address (``tcp://HOST:PORT``). Dask reschedules the objects of a worker that dies.
 
 A task signals a per-object failure by raising; any :class:`Exception` is recorded in the
-failures part with its type and one-line message and the sweep goes on.
+failures part with its type and one-line message and the sweep goes on. Each stage module
+exposes its own task (:class:`deformctl.measure.SimulateCatalogTask`,
+:class:`deformctl.characterize.CharacterizeTask`, :class:`deformctl.lift.runners.sim.LiftTask`).
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-import hashlib
-import json
+import math
 import multiprocessing
 import os
 import socket
 import sys
 import time
 import uuid
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures import (
     FIRST_COMPLETED,
     Future,
@@ -53,41 +48,26 @@ from typing import TYPE_CHECKING, Any, Protocol
 from urllib.parse import urlsplit
 
 import pyarrow as pa
-import pyarrow.parquet as pq
 
-from deformctl.errors import (
-    EXIT_FAILURE,
-    EXIT_OK,
-    DeformctlError,
-    InputDataError,
-    MissingInputError,
-    OutputExistsError,
-    UsageError,
+from deformctl.artifacts.dataset import (
+    DatasetWriter,
+    ObjectResult,
+    PartPayloads,
+    is_dataset_output,
+    rows_to_table,
 )
+from deformctl.errors import EXIT_FAILURE, EXIT_OK, DeformctlError, InputDataError, UsageError
 
 if TYPE_CHECKING:
     import pandas as pd
 
 __all__ = [
-    "FAILURES_DIR",
-    "MANIFEST_NAME",
-    "PartPayloads",
+    "SweepOptions",
     "SweepSummary",
     "TaskOutput",
-    "atomic_write_bytes",
-    "failure_schema",
-    "iter_dataset_parts",
-    "read_dataset",
-    "read_failures",
+    "connect_dask",
     "run_sweep",
 ]
-
-SWEEP_FORMAT = "deformctl-sweep/1"
-MANIFEST_NAME = "_sweep.json"
-FAILURES_DIR = "_failures"
-PART_GLOB = "part-*.parquet"
-_META_KEY = b"deformctl.sweep"
-_TMP_MARK = ".tmp-"
 
 
 @dataclass(frozen=True)
@@ -109,28 +89,6 @@ class TaskOutput:
     payload: Any = None
     error: str | None = None
     error_type: str = "ObjectFailed"
-
-
-@dataclass(frozen=True)
-class PartPayloads:
-    """The payloads of one finished part, in catalog order, handed to a ``part_writer`` hook.
-
-    The hook runs before the part's Parquet file is committed, so a committed part always has
-    its artifacts (write them with :func:`atomic_write_bytes`). It runs in the client process,
-    unless it is picklable and has a true ``in_workers`` attribute and the sweep runs on local
-    processes: then it runs as a job of the worker pool (so the client does not serialise the
-    parts' artifact encoding) and the rows are committed after that job has finished. A Dask
-    sweep always runs it in the client (the workers may not share the client's file system).
-    """
-
-    index: int
-    out_dir: Path
-    item_ids: list[Any]
-    payloads: list[tuple[Any, Any]]
-
-    def path(self, suffix: str) -> Path:
-        """The conventional artifact path of this part, e.g. ``path(".mcap")``."""
-        return self.out_dir / f"part-{self.index:05d}{suffix}"
 
 
 @dataclass(frozen=True)
@@ -171,38 +129,74 @@ class SweepSummary:
         )
 
 
-@dataclass
-class _ItemResult:
-    item_id: Any
-    table: pa.Table | None
-    payload: Any
-    error_type: str | None = None
-    error_message: str | None = None
+@dataclass(frozen=True)
+class SweepOptions:
+    """The scale-out flags of a stage command, as given (None: not given).
 
+    Attributes:
+        workers: ``--workers N`` local processes.
+        scheduler: ``--scheduler tcp://HOST:PORT`` of a running Dask scheduler.
+        connect_timeout_s: ``--connect-timeout S``.
+        partition_size: ``--partition-size N`` objects per part.
+        resume: ``--resume``.
+    """
 
-def failure_schema(schema: pa.Schema, id_column: str) -> pa.Schema:
-    """The schema of the failures part: the id column (same type), error type and message."""
-    return pa.schema(
-        [
-            schema.field(id_column),
-            pa.field("error_type", pa.string(), nullable=False),
-            pa.field("error_message", pa.string(), nullable=False),
+    workers: int | None = None
+    scheduler: str | None = None
+    connect_timeout_s: float | None = None
+    partition_size: int | None = None
+    resume: bool = False
+
+    def given(self) -> list[str]:
+        """The flags given on the command line."""
+        flags = [
+            ("--workers", self.workers),
+            ("--scheduler", self.scheduler),
+            ("--connect-timeout", self.connect_timeout_s),
+            ("--partition-size", self.partition_size),
         ]
-    )
+        out = [flag for flag, value in flags if value is not None]
+        return out + (["--resume"] if self.resume else [])
 
+    def check(self, output: str) -> bool:
+        """Check the flags against the output; True when the output is a dataset directory.
 
-def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same directory and a rename."""
-    target = Path(path)
-    tmp = target.with_name(f".{target.name}{_TMP_MARK}{os.getpid()}-{uuid.uuid4().hex[:8]}")
-    try:
-        with open(tmp, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, target)
-    finally:
-        tmp.unlink(missing_ok=True)
+        Raises:
+            UsageError: a sweep flag with a single-file output, ``--workers`` < 1, both
+                ``--workers`` and ``--scheduler``, ``--connect-timeout`` without
+                ``--scheduler`` or <= 0, ``--partition-size`` < 1.
+        """
+        dataset = is_dataset_output(output)
+        if not dataset and self.given():
+            raise UsageError(
+                f"{self.given()[0]} needs a dataset directory output "
+                f"(end -o with /, e.g. -o {output.rstrip('/') or 'out'}/)"
+            )
+        if self.workers is not None and self.workers < 1:
+            raise UsageError(f"--workers must be >= 1, got {self.workers}")
+        if self.workers is not None and self.scheduler is not None:
+            raise UsageError("give either --workers (local processes) or --scheduler, not both")
+        if self.connect_timeout_s is not None:
+            if self.scheduler is None:
+                raise UsageError("--connect-timeout needs --scheduler")
+            if not (math.isfinite(self.connect_timeout_s) and self.connect_timeout_s > 0):
+                raise UsageError(f"--connect-timeout must be > 0 s, got {self.connect_timeout_s}")
+        if self.partition_size is not None and self.partition_size < 1:
+            raise UsageError(f"--partition-size must be >= 1, got {self.partition_size}")
+        return dataset
+
+    def run_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :func:`run_sweep` for these flags."""
+        kwargs: dict[str, Any] = {
+            "workers": self.workers,
+            "scheduler": self.scheduler,
+            "resume": self.resume,
+        }
+        if self.connect_timeout_s is not None:
+            kwargs["connect_timeout_s"] = self.connect_timeout_s
+        if self.partition_size is not None:
+            kwargs["partition_size"] = self.partition_size
+        return kwargs
 
 
 # --------------------------------------------------------------------------- worker side
@@ -212,34 +206,9 @@ def _one_line(text: str) -> str:
     return " ".join(text.split())
 
 
-def _rows_to_table(rows: Any, schema: pa.Schema, id_column: str, item_id: Any) -> pa.Table:
-    """Convert a task's rows to a table of ``schema``; the id column is filled in if absent."""
-    if isinstance(rows, pa.Table):
-        records = rows.to_pylist()
-    elif hasattr(rows, "to_dict") and hasattr(rows, "columns"):  # pandas DataFrame
-        records = rows.to_dict("records")
-    elif isinstance(rows, Mapping):
-        records = [dict(rows)]
-    else:
-        records = [dict(r) for r in rows]
-    names = set(schema.names)
-    for rec in records:
-        rec.setdefault(id_column, item_id)
-        if rec[id_column] != item_id:
-            raise ValueError(f"row has {id_column}={rec[id_column]!r}, expected {item_id!r}")
-        keys = set(rec)
-        if keys != names:
-            missing = sorted(names - keys)
-            extra = sorted(keys - names)
-            raise ValueError(
-                f"row columns do not match the schema: missing {missing}, extra {extra}"
-            )
-    return pa.Table.from_pylist(records, schema=schema)
-
-
 def _run_item(
     task: Callable[[dict[str, Any]], Any], item: dict[str, Any], schema: pa.Schema, id_column: str
-) -> _ItemResult:
+) -> ObjectResult:
     """Run ``task`` on one item in a worker; any exception becomes a failed result."""
     item_id = item[id_column]
     try:
@@ -252,13 +221,13 @@ def _run_item(
                 error, error_type = _one_line(out.error) or out.error_type, out.error_type
         else:
             rows, payload = out, None
-        table = _rows_to_table(rows, schema, id_column, item_id)
+        table = rows_to_table(rows, schema, id_column, item_id)
     except Exception as err:
         message = _one_line(str(err)) or type(err).__name__
-        return _ItemResult(item_id, None, None, type(err).__name__, message)
+        return ObjectResult(item_id, None, None, type(err).__name__, message)
     if error is not None:
-        return _ItemResult(item_id, table, payload, error_type, error)
-    return _ItemResult(item_id, table, payload)
+        return ObjectResult(item_id, table, payload, error_type, error)
+    return ObjectResult(item_id, table, payload)
 
 
 # --------------------------------------------------------------------------- executors
@@ -269,7 +238,7 @@ class _Backend(Protocol):
 
     def submit(self, position: int, item: dict[str, Any]) -> None: ...
 
-    def wait_some(self) -> list[tuple[int, _ItemResult]]: ...
+    def wait_some(self) -> list[tuple[int, ObjectResult]]: ...
 
     def submit_part(self, part_writer: Callable[[PartPayloads], None], part: PartPayloads) -> None:
         """Run ``part_writer(part)`` as a job; :meth:`parts_written` reports its completion."""
@@ -307,7 +276,7 @@ class _LocalBackend:
             max_workers=workers, mp_context=ctx, initializer=_one_blas_thread
         )
         self._task, self._schema, self._id_column = task, schema, id_column
-        self._futures: dict[Future[_ItemResult], int] = {}
+        self._futures: dict[Future[ObjectResult], int] = {}
         self._part_futures: dict[Future[None], int] = {}
         self._written: list[int] = []
         self.capacity = 2 * workers
@@ -326,7 +295,7 @@ class _LocalBackend:
             raise DeformctlError(_WORKER_DIED) from err
         self._part_futures[fut] = part.index
 
-    def wait_some(self) -> list[tuple[int, _ItemResult]]:
+    def wait_some(self) -> list[tuple[int, ObjectResult]]:
         """Wait for an object or a part-writer job; the objects finished (maybe none)."""
         pending: list[Future[Any]] = [*self._futures, *self._part_futures]
         done, _ = wait(pending, return_when=FIRST_COMPLETED)
@@ -485,7 +454,7 @@ class _DaskBackend:
         self._positions[key] = position
         self._ac.add(fut)
 
-    def wait_some(self) -> list[tuple[int, _ItemResult]]:
+    def wait_some(self) -> list[tuple[int, ObjectResult]]:
         out = []
         for fut in self._ac.next_batch(block=True):
             position = self._positions.pop(fut.key)
@@ -512,126 +481,6 @@ class _DaskBackend:
             self._ac.clear()
         with contextlib.suppress(Exception):
             self._client.close(timeout=5)
-
-
-# --------------------------------------------------------------------------- dataset files
-
-
-def _schema_spec(schema: pa.Schema) -> list[dict[str, Any]]:
-    return [{"name": f.name, "type": str(f.type), "nullable": f.nullable} for f in schema]
-
-
-def _normalize(obj: Any) -> Any:
-    return json.loads(json.dumps(obj, sort_keys=True, default=str))
-
-
-def _part_name(index: int) -> str:
-    return f"part-{index:05d}.parquet"
-
-
-def _write_table_atomic(table: pa.Table, target: Path) -> None:
-    tmp = target.with_name(f".{target.name}{_TMP_MARK}{os.getpid()}-{uuid.uuid4().hex[:8]}")
-    try:
-        pq.write_table(table, tmp)
-        with open(tmp, "rb") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp, target)
-    finally:
-        tmp.unlink(missing_ok=True)
-
-
-def _part_metadata(table: pa.Table) -> dict[str, Any] | None:
-    meta = table.schema.metadata or {}
-    raw = meta.get(_META_KEY)
-    return None if raw is None else json.loads(raw)
-
-
-def _valid_part(
-    out_dir: Path,
-    index: int,
-    ids: list[Any],
-    schema: pa.Schema,
-    fail_schema: pa.Schema,
-    id_column: str,
-    digest: str,
-) -> int | None:
-    """Number of failed objects of a complete, valid part; ``None`` when it must be recomputed."""
-    try:
-        rows = pq.read_table(out_dir / _part_name(index))
-        fails = pq.read_table(out_dir / FAILURES_DIR / _part_name(index))
-    except (OSError, pa.ArrowException):
-        return None
-    meta_rows, meta_fails = _part_metadata(rows), _part_metadata(fails)
-    if meta_rows is None or meta_rows != meta_fails:
-        return None
-    if meta_rows.get("digest") != digest or meta_rows.get("item_ids") != ids:
-        return None
-    if not rows.schema.equals(schema, check_metadata=False):
-        return None
-    if not fails.schema.equals(fail_schema, check_metadata=False):
-        return None
-    failed_ids = meta_rows.get("failed_ids", [])
-    if fails.column(id_column).to_pylist() != failed_ids:
-        return None
-    # rows only of this part's objects (a failed object may keep rows: TaskOutput.error)
-    if not set(rows.column(id_column).to_pylist()) <= set(ids):
-        return None
-    return len(failed_ids)
-
-
-def _is_temp_file(name: str) -> bool:
-    """A temporary file of a killed run: ours, or a part writer's (``atomic_output``'s
-    ``.part-00000.mcap.<random>.tmp``)."""
-    return name.startswith(".") and (
-        _TMP_MARK in name or (name.startswith(".part-") and name.endswith(".tmp"))
-    )
-
-
-def _clean_temp_files(out_dir: Path) -> None:
-    for sub in (out_dir, out_dir / FAILURES_DIR):
-        if sub.is_dir():
-            for p in sub.iterdir():
-                if p.is_file() and _is_temp_file(p.name):
-                    p.unlink(missing_ok=True)
-
-
-def _remove_sweep_files(out_dir: Path) -> None:
-    """Remove what a sweep writes (manifest, parts, failures, part artifacts), nothing else."""
-    for p in out_dir.iterdir():
-        if p.is_file() and (
-            p.name == MANIFEST_NAME or p.name.startswith("part-") or _is_temp_file(p.name)
-        ):
-            p.unlink()
-    fail_dir = out_dir / FAILURES_DIR
-    if fail_dir.is_dir():
-        for p in fail_dir.iterdir():
-            if p.is_file():
-                p.unlink()
-        with contextlib.suppress(OSError):
-            fail_dir.rmdir()
-
-
-def _compare_manifest(old: Mapping[str, Any], new: Mapping[str, Any], out_dir: Path) -> None:
-    if old.get("format") != SWEEP_FORMAT:
-        raise InputDataError(
-            "not a deformctl sweep directory (unknown manifest format)", path=out_dir
-        )
-    if old.get("fingerprint") != new["fingerprint"]:
-        keys = sorted(
-            k
-            for k in set(old.get("fingerprint", {})) | set(new["fingerprint"])
-            if old.get("fingerprint", {}).get(k) != new["fingerprint"].get(k)
-        )
-        raise InputDataError(
-            f"cannot resume: made by a different command or settings (differs in {keys})",
-            path=out_dir,
-        )
-    if old.get("schema") != new["schema"] or old.get("id_column") != new["id_column"]:
-        raise InputDataError("cannot resume: made with a different schema", path=out_dir)
-    if old.get("parts") != new["parts"]:
-        raise InputDataError(
-            "cannot resume: made for a different list of objects or partition size", path=out_dir
-        )
 
 
 # --------------------------------------------------------------------------- progress
@@ -747,7 +596,6 @@ def run_sweep(
         _check_scheduler_address(scheduler)
     if id_column not in schema.names:
         raise ValueError(f"schema has no id column {id_column!r}")
-    out = Path(out_dir)
 
     rows = _items_as_dicts(items)
     ids: list[Any] = []
@@ -764,39 +612,18 @@ def run_sweep(
     if len(set(ids)) != len(ids):
         dup = next(i for i in ids if ids.count(i) > 1)
         raise InputDataError(f"duplicate {id_column} {dup!r} in the object list")
-    parts = [ids[i : i + partition_size] for i in range(0, len(ids), partition_size)]
-    fail_schema = failure_schema(schema, id_column)
-    manifest = {
-        "format": SWEEP_FORMAT,
-        "fingerprint": _normalize(dict(fingerprint)),
-        "schema": _schema_spec(schema),
-        "id_column": id_column,
-        "partition_size": partition_size,
-        "n_items": len(ids),
-        "parts": parts,
-    }
-    digest = hashlib.sha256(json.dumps(manifest, sort_keys=True).encode()).hexdigest()[:16]
+    writer = DatasetWriter(
+        out_dir,
+        ids,
+        schema=schema,
+        fingerprint=fingerprint,
+        id_column=id_column,
+        partition_size=partition_size,
+    )
+    parts = writer.parts
 
     # ---- read-only checks first: refuse, or find the parts to keep
-    kept: dict[int, int] = {}  # part index -> failed objects in it
-    if out.exists() and not out.is_dir():
-        raise OutputExistsError(out)
-    existing = out.is_dir() and any(out.iterdir())
-    manifest_path = out / MANIFEST_NAME
-    if existing and resume:
-        if not manifest_path.is_file():
-            raise InputDataError(f"cannot resume: no {MANIFEST_NAME} in the directory", path=out)
-        try:
-            old = json.loads(manifest_path.read_text())
-        except (OSError, ValueError):
-            raise InputDataError(f"cannot resume: unreadable {MANIFEST_NAME}", path=out) from None
-        _compare_manifest(old, manifest, out)
-        for k, part_ids in enumerate(parts):
-            n_failed = _valid_part(out, k, part_ids, schema, fail_schema, id_column, digest)
-            if n_failed is not None:
-                kept[k] = n_failed
-    elif existing and not force:
-        raise OutputExistsError(out)
+    kept = writer.plan(resume=resume, force=force)  # part index -> failed objects in it
     todo = [
         k * partition_size + j
         for k in range(len(parts))
@@ -814,19 +641,11 @@ def run_sweep(
             n_workers = workers if workers is not None else _available_cores()
             backend = _LocalBackend(min(n_workers, len(todo)), task, schema, id_column)
 
-    buffers: dict[int, dict[int, _ItemResult]] = {}
+    buffers: dict[int, dict[int, ObjectResult]] = {}
     n_done = n_failed = 0
     bar: _Progress | None = None
     try:
-        # ---- now write: clean, manifest first
-        if existing and resume:
-            _clean_temp_files(out)
-        elif existing:
-            _remove_sweep_files(out)
-        out.mkdir(parents=True, exist_ok=True)
-        (out / FAILURES_DIR).mkdir(exist_ok=True)
-        if not (resume and existing):
-            atomic_write_bytes(manifest_path, json.dumps(manifest, indent=1).encode())
+        writer.open()  # now write: clean, manifest first
         bar = _Progress(progress, total=len(ids), completed=skipped)
 
         # ---- run the missing parts with a bounded window, committing each finished part
@@ -841,7 +660,7 @@ def run_sweep(
             # the workers, while a finished part waits for its writer job)
             lookahead = limit + (2 if offload else 1) * partition_size
             unfinished: set[int] = set()  # indices into todo, computing
-            writing: dict[int, tuple[list[_ItemResult], bytes]] = {}  # part -> results, meta
+            writing: dict[int, tuple[list[ObjectResult], bytes]] = {}  # part -> results, meta
             index_of = {position: i for i, position in enumerate(todo)}
             next_i = low = 0
             while next_i < len(todo) or unfinished or writing:
@@ -865,19 +684,18 @@ def run_sweep(
                     if len(buffers[k]) == len(parts[k]):
                         got = buffers.pop(k)
                         results = [got[p] for p in sorted(got)]
-                        meta = _write_failures(out, k, parts[k], results, fail_schema, id_column,
-                                               digest)  # fmt: skip
-                        part = _part_payloads(out, k, parts[k], results)
+                        meta = writer.commit_failures(k, results)
+                        part = writer.payloads(k, results)
                         if offload and part_writer is not None:
                             backend.submit_part(part_writer, part)
-                            writing[k] = ([_without_payload(r) for r in results], meta)
+                            writing[k] = ([r.without_payload() for r in results], meta)
                             continue
                         if part_writer is not None:
                             part_writer(part)
-                        _write_rows(out, k, results, schema, meta)
+                        writer.commit_rows(k, results, meta)
                 for k in backend.parts_written():
                     results, meta = writing.pop(k)
-                    _write_rows(out, k, results, schema, meta)
+                    writer.commit_rows(k, results, meta)
     finally:
         if bar is not None:
             bar.close()
@@ -892,7 +710,7 @@ def run_sweep(
         parts=len(parts),
         elapsed_s=elapsed_s,
         rate=(n_done + n_failed) / elapsed_s if elapsed_s > 0 else 0.0,
-        out_dir=out,
+        out_dir=Path(out_dir),
     )
 
 
@@ -901,141 +719,3 @@ def _available_cores() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # not on Linux
         return max(1, os.cpu_count() or 1)
-
-
-def _write_failures(
-    out_dir: Path,
-    index: int,
-    ids: list[Any],
-    results: Sequence[_ItemResult],
-    fail_schema: pa.Schema,
-    id_column: str,
-    digest: str,
-) -> bytes:
-    """Write a finished part's failures file (first step of its commit); the part metadata.
-
-    A part is committed in three atomic steps: this failures file, then the part writer's
-    artifacts, then the rows file (:func:`_write_rows`), which marks the part complete.
-    """
-    failed = [r for r in results if r.error_type is not None]
-    meta = json.dumps(
-        {
-            "part": index,
-            "digest": digest,
-            "item_ids": ids,
-            "failed_ids": [r.item_id for r in failed],
-        }
-    ).encode()
-    fail_table = pa.Table.from_pylist(
-        [
-            {id_column: r.item_id, "error_type": r.error_type, "error_message": r.error_message}
-            for r in failed
-        ],
-        schema=fail_schema,
-    ).replace_schema_metadata({_META_KEY: meta})
-    _write_table_atomic(fail_table, out_dir / FAILURES_DIR / _part_name(index))
-    return meta
-
-
-def _part_payloads(
-    out_dir: Path, index: int, ids: list[Any], results: Sequence[_ItemResult]
-) -> PartPayloads:
-    payloads = [(r.item_id, r.payload) for r in results if r.payload is not None]
-    return PartPayloads(index, out_dir, list(ids), payloads)
-
-
-def _without_payload(result: _ItemResult) -> _ItemResult:
-    return _ItemResult(result.item_id, result.table, None, result.error_type, result.error_message)
-
-
-def _write_rows(
-    out_dir: Path, index: int, results: Sequence[_ItemResult], schema: pa.Schema, meta: bytes
-) -> None:
-    """Write a part's rows file: the last step of its commit (after its failures and artifacts)."""
-    tables = [r.table for r in results if r.table is not None]
-    rows = pa.concat_tables(tables) if tables else schema.empty_table()
-    _write_table_atomic(
-        rows.replace_schema_metadata({_META_KEY: meta}), out_dir / _part_name(index)
-    )
-
-
-# --------------------------------------------------------------------------- readers
-
-
-def _dataset_part_paths(path: Path, sub: str = "") -> list[Path]:
-    """The part files of a sweep directory in part order; refuses an incomplete sweep."""
-    base = path / sub if sub else path
-    files = sorted(base.glob(PART_GLOB)) if base.is_dir() else []
-    manifest_path = path / MANIFEST_NAME
-    if manifest_path.is_file():
-        try:
-            manifest = json.loads(manifest_path.read_text())
-            n_parts = len(manifest["parts"])
-        except (OSError, ValueError, KeyError, TypeError):
-            raise InputDataError(f"unreadable {MANIFEST_NAME}", path=path) from None
-        present = {p.name for p in files}
-        missing = [_part_name(k) for k in range(n_parts) if _part_name(k) not in present]
-        if missing:
-            raise InputDataError(
-                f"incomplete sweep: {len(missing)} of {n_parts} parts missing "
-                f"(first {missing[0]}); rerun the sweep with --resume",
-                path=path,
-            )
-    elif not files:
-        raise InputDataError("no part-*.parquet files and no sweep manifest", path=path)
-    return files
-
-
-def iter_dataset_parts(path: str | os.PathLike[str]) -> Iterator[pa.Table]:
-    """Yield the tables of a Parquet file (one) or of a sweep directory (one per part, in order).
-
-    Raises:
-        MissingInputError: ``path`` does not exist.
-        InputDataError: not Parquet, an incomplete sweep, or parts with different schemas.
-    """
-    p = Path(path)
-    if not p.exists():
-        raise MissingInputError("no such file or directory", path=p)
-    files = _dataset_part_paths(p) if p.is_dir() else [p]
-    first: pa.Schema | None = None
-    for f in files:
-        try:
-            table = pq.read_table(f)
-        except (OSError, pa.ArrowException) as err:
-            raise InputDataError(
-                f"not a readable Parquet file ({_one_line(str(err))[:160]})", path=f
-            ) from None
-        table = table.replace_schema_metadata(None)
-        if first is None:
-            first = table.schema
-        elif not table.schema.equals(first):
-            raise InputDataError("part schema differs from the first part's", path=f)
-        yield table
-
-
-def read_dataset(path: str | os.PathLike[str]) -> pd.DataFrame:
-    """Read a single Parquet file or a sweep directory (parts concatenated in order).
-
-    Returns:
-        The rows as a DataFrame with a fresh RangeIndex.
-    """
-    import pandas as pd
-
-    tables = list(iter_dataset_parts(path))
-    return pa.concat_tables(tables).to_pandas() if tables else pd.DataFrame()
-
-
-def read_failures(path: str | os.PathLike[str]) -> pd.DataFrame:
-    """The failed objects of a sweep directory: id column, ``error_type``, ``error_message``."""
-    p = Path(path)
-    if not p.is_dir():
-        raise MissingInputError("no such sweep directory", path=p)
-    tables = []
-    for f in _dataset_part_paths(p, FAILURES_DIR):
-        try:
-            tables.append(pq.read_table(f).replace_schema_metadata(None))
-        except (OSError, pa.ArrowException) as err:
-            raise InputDataError(
-                f"not a readable Parquet file ({_one_line(str(err))[:160]})", path=f
-            ) from None
-    return pa.concat_tables(tables).to_pandas()

@@ -132,19 +132,8 @@ def make_population(
 
     width = max(2, len(str(n - 1)))
     ids = [f"{id_prefix}{i:0{width}d}" for i in range(n)]
-    return pd.DataFrame(
-        {
-            "object_id": ids,
-            "size_x_cm": sx,
-            "size_y_cm": sy,
-            "size_z_cm": sz,
-            "weight_n": weight,
-            "friction_mu": mu_values,
-            "material_stiffness_n_per_cm": stiffness,
-            "material_damping_ns_per_cm": damping,
-        },
-        columns=list(CATALOG_COLUMNS),
-    )
+    values = (ids, sx, sy, sz, weight, mu_values, stiffness, damping)  # CATALOG_COLUMNS order
+    return pd.DataFrame(dict(zip(CATALOG_COLUMNS, values, strict=True)))
 
 
 def paper_population(seed: int = 0) -> pd.DataFrame:

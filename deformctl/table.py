@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from deformctl.catalog import rigid_grip_force_n
 from deformctl.errors import InputDataError, SchemaError, UsageError
 
 #: The columns of an index table, in order.
@@ -175,7 +176,7 @@ def build_index_table(
     if "f_w_n" in lift.columns or "f_w_n" in coef.columns:
         f_w = _pick("f_w_n", lift, coef, joined).astype(float)
     else:
-        f_w = weight / (2.0 * mu)
+        f_w = rigid_grip_force_n(weight, mu)
 
     table = pd.DataFrame(
         {

@@ -53,6 +53,7 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.utils.validation import check_is_fitted, validate_data
 from threadpoolctl import threadpool_limits
 
+from deformctl.catalog import catalog_weights, rigid_grip_force_n
 from deformctl.errors import InputDataError, SchemaError, UsageError
 from deformctl.table import format_ids, standard_scales, standardized_distances
 
@@ -259,8 +260,9 @@ def _f_w(table: pd.DataFrame) -> np.ndarray:
     if "f_w_n" in table.columns:
         return table["f_w_n"].to_numpy(dtype=np.float64)
     if "friction_mu" in table.columns:
-        return table["weight_n"].to_numpy(dtype=np.float64) / (
-            2.0 * table["friction_mu"].to_numpy(dtype=np.float64)
+        return rigid_grip_force_n(
+            table["weight_n"].to_numpy(dtype=np.float64),
+            table["friction_mu"].to_numpy(dtype=np.float64),
         )
     return np.full(len(table), np.nan)
 
@@ -597,7 +599,7 @@ def prediction_inputs(table: pd.DataFrame, catalog: pd.DataFrame | None = None) 
 
     Args:
         table: ``[n]`` rows, with ``object_id`` when a catalog is to be joined.
-        catalog: an object catalog (``object_id``, ``weight_n``), or None.
+        catalog: a validated object catalog (:func:`deformctl.artifacts.read_catalog`), or None.
 
     Returns:
         ``[n]`` rows in the table's order: ``object_id`` (when the table has it) and
@@ -611,18 +613,9 @@ def prediction_inputs(table: pd.DataFrame, catalog: pd.DataFrame | None = None) 
     """
     frame = table.copy()
     if catalog is not None:
-        for name, df in (("the input", frame), ("the catalog", catalog)):
-            if "object_id" not in df.columns:
-                raise SchemaError(f"{name} has no column 'object_id' to join on", field="object_id")
-        if "weight_n" not in catalog.columns:
-            raise SchemaError("the catalog has no column 'weight_n'", field="weight_n")
-        weights = dict(
-            zip(
-                catalog["object_id"].astype(str),
-                catalog["weight_n"].to_numpy(dtype=np.float64),
-                strict=True,
-            )
-        )
+        if "object_id" not in frame.columns:
+            raise SchemaError("the input has no column 'object_id' to join on", field="object_id")
+        weights = catalog_weights(catalog)
         ids = frame["object_id"].astype(str)
         missing = sorted(set(ids) - set(weights))
         if missing:

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import cv2
 
-from deformctl.vision_synth import box_views
+from deformctl.vision.synth import box_views
 
 
 def main() -> None:

@@ -1,6 +1,6 @@
 """``measure --images`` and ``lift --rig ... --slip-from-frames`` through the CLI, rendered images.
 
-The scenes are rendered here (deformctl.vision_synth) with known geometry: boxes of several sizes
+The scenes are rendered here (deformctl.vision.synth) with known geometry: boxes of several sizes
 and colours, a tilted top camera (up to 15 degrees), Gaussian noise and a lighting gradient.
 Sizes must come back within 3 % or 2 mm, whichever is larger (issue 7). The CLI has no camera
 matrix option, so it assumes a 60-degree horizontal field of view; one case is rendered with a
@@ -26,7 +26,7 @@ from typer.testing import CliRunner
 
 from deformctl.artifacts import read_catalog, read_lift_log, read_table, write_catalog
 from deformctl.cli import app
-from deformctl.vision_synth import (
+from deformctl.vision.synth import (
     Box,
     Gripper,
     Marker,

@@ -26,7 +26,7 @@ from deformctl.artifacts.schema import fast_check, json_validator
 from deformctl.cli import app
 from deformctl.errors import SchemaError, SimulationError
 from deformctl.lift import RunnerFactory, TrialRunner, lift_catalog, select_objects
-from deformctl.rig import parse_rig_response
+from deformctl.lift.runners.rig import parse_rig_response
 from deformctl.series import TrialOutcome
 
 cli = CliRunner()

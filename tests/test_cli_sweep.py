@@ -25,10 +25,9 @@ from test_parallel_dask import Cluster, dask_cluster  # noqa: F401 - the fixture
 from typer.testing import CliRunner
 
 from deformctl.artifacts import read_lift_log, read_squeeze_log, read_table
+from deformctl.artifacts.dataset import read_failures, read_table_any
 from deformctl.cli import app
-from deformctl.parallel import read_failures
 from deformctl.population import make_population
-from deformctl.sweep import read_table_any
 
 FAST_LIFT = [
     "--alpha-cm", "10", "--dt-s", "0.002", "--hold-s", "0.05", "--lift-height-m", "0.01",

@@ -24,6 +24,14 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from deformctl.artifacts.dataset import (
+    FAILURES_DIR,
+    MANIFEST_NAME,
+    PartPayloads,
+    read_dataset,
+    read_failures,
+)
+from deformctl.artifacts.io import atomic_write_bytes
 from deformctl.errors import (
     EXIT_USAGE,
     DeformctlError,
@@ -33,16 +41,7 @@ from deformctl.errors import (
     SearchError,
     UsageError,
 )
-from deformctl.parallel import (
-    FAILURES_DIR,
-    MANIFEST_NAME,
-    PartPayloads,
-    TaskOutput,
-    atomic_write_bytes,
-    read_dataset,
-    read_failures,
-    run_sweep,
-)
+from deformctl.parallel import TaskOutput, run_sweep
 
 TESTS_DIR = Path(__file__).resolve().parent
 SCHEMA = pa.schema(
@@ -453,3 +452,15 @@ def test_progress_bar_only_on_a_terminal(
     assert "8/8" in err
     assert "1 failed" in err
     assert "obj/s" in err
+
+
+def test_stage_task_modules_do_not_load_the_simulator() -> None:
+    # A local sweep's fork server preloads the task's module: it must not load the simulator
+    # (numba, OpenBLAS threads) before the workers are forked and limit their BLAS threads.
+    code = (
+        "import sys, deformctl.lift.runners.sim, deformctl.measure, deformctl.characterize; "
+        "print(sorted(m for m in ('deformctl.sim', 'numba', 'scipy', 'sklearn', 'cv2') "
+        "if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

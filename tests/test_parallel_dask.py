@@ -26,8 +26,8 @@ import pandas as pd
 import pytest
 from test_parallel import expected_rows, make_items, snapshot, sweep
 
+from deformctl.artifacts.dataset import read_dataset, read_failures
 from deformctl.errors import DeformctlError
-from deformctl.parallel import read_dataset, read_failures
 
 START_TIMEOUT_S = 45.0
 

@@ -11,8 +11,8 @@ from typer.testing import CliRunner
 
 from deformctl.cli import app
 from deformctl.errors import MissingInputError
-from deformctl.golden import EXPECTED_PATH
-from deformctl.report import RUN_FILES, main, write_report
+from deformctl.repro.golden import EXPECTED_PATH
+from deformctl.repro.report import RUN_FILES, main, write_report
 
 PAPER = Path(__file__).resolve().parent.parent / "datasets" / "paper"
 runner = CliRunner()

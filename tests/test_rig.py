@@ -14,7 +14,7 @@ import pytest
 
 from deformctl.errors import InputDataError, RigError, SearchError, UsageError
 from deformctl.lift import RigSearchAbortedError, find_min_lift_force
-from deformctl.rig import RigAttemptError, RigRunner, parse_rig_response
+from deformctl.lift.runners.rig import RigAttemptError, RigRunner, parse_rig_response
 from deformctl.series import TrialOutcome
 
 RIGS = Path(__file__).parent / "rigs"

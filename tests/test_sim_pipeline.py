@@ -33,9 +33,10 @@ from typer.testing import CliRunner
 
 from deformctl.artifacts import read_catalog, read_lift_log, read_squeeze_log, read_table
 from deformctl.artifacts.mcaplog import decode_provenance, load_mcap
+from deformctl.catalog import CatalogObject
 from deformctl.cli import app
 from deformctl.errors import EXIT_DATAERR, EXIT_NOINPUT, EXIT_USAGE
-from deformctl.paper import TABLE2_CSV, compare_with_paper
+from deformctl.repro.paper import TABLE2_CSV, compare_with_paper
 from deformctl.sim import LiftProfile, ObjectSpec, SimSettings, lift_attempt, rigid_lift_force_n
 from deformctl.units import GRAVITY_M_S2
 
@@ -309,7 +310,9 @@ def test_every_l_f_at_least_f_w_and_0_97_l_f_slips(lift_runs: dict[str, Any]) ->
     catalog = read_catalog(lift_runs["catalog"]).set_index("object_id")
     for oid, row in table.iterrows():
         assert row["lift_force_n"] >= row["f_w_n"] * (1 - row["tolerance_rel"])
-        spec = ObjectSpec.from_catalog_row({"object_id": oid, **catalog.loc[oid].to_dict()})
+        spec = CatalogObject.from_row(
+            {"object_id": oid, **catalog.loc[oid].to_dict()}
+        ).to_sim_spec()
         below = lift_attempt(spec, 0.97 * row["lift_force_n"], settings=SimSettings())
         assert not below.lifted, (oid, below.slip_m)
 
@@ -344,7 +347,7 @@ def test_compare_with_paper_module_prints_table_ii(lift_runs: dict[str, Any]) ->
          "D": ours["D"] / 11.13 - 1}
     )  # fmt: skip
     proc = subprocess.run(
-        [sys.executable, "-m", "deformctl.paper", str(lift_runs["refine_path"])],
+        [sys.executable, "-m", "deformctl.repro.paper", str(lift_runs["refine_path"])],
         capture_output=True, text=True, check=False, cwd=REPO,
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr
@@ -353,7 +356,7 @@ def test_compare_with_paper_module_prints_table_ii(lift_runs: dict[str, Any]) ->
     assert len(lines) == 5
     assert lines[1].startswith("A (sponge)")
     missing = subprocess.run(
-        [sys.executable, "-m", "deformctl.paper", str(lift_runs["dir"] / "nope.parquet")],
+        [sys.executable, "-m", "deformctl.repro.paper", str(lift_runs["dir"] / "nope.parquet")],
         capture_output=True, text=True, check=False,
     )  # fmt: skip
     assert missing.returncode == EXIT_NOINPUT

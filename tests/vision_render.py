@@ -1,6 +1,6 @@
-"""The scene renderer of the vision tests; it lives in :mod:`deformctl.vision_synth`."""
+"""The scene renderer of the vision tests; it lives in :mod:`deformctl.vision.synth`."""
 
-from deformctl.vision_synth import (
+from deformctl.vision.synth import (
     Box,
     Camera,
     Checkerboard,

@@ -109,7 +109,7 @@ def _umask() -> int:
 
 
 @contextlib.contextmanager
-def atomic_output(path: PathArg, *, force: bool = False) -> Iterator[Path]:
+def atomic_output(path: PathArg, *, force: bool = False, durable: bool = False) -> Iterator[Path]:
     """Yield a temporary path to write to; move it to ``path`` when the block succeeds.
 
     The temporary file lives in the destination's directory (so the final :func:`os.replace` is
@@ -119,6 +119,8 @@ def atomic_output(path: PathArg, *, force: bool = False) -> Iterator[Path]:
     Args:
         path: the destination, or ``-`` for stdout.
         force: overwrite an existing destination.
+        durable: ``fsync`` the file before the rename (a sweep's parts, which a resumed run
+            trusts after a crash).
 
     Yields:
         A path to an empty temporary file that the caller writes.
@@ -149,9 +151,18 @@ def atomic_output(path: PathArg, *, force: bool = False) -> Iterator[Path]:
         yield tmp
         if dest.exists() and not force:
             raise OutputExistsError(dest)
+        if durable:
+            with tmp.open("rb") as fh:
+                os.fsync(fh.fileno())
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, dest)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             tmp.unlink()
         raise
+
+
+def atomic_write_bytes(path: PathArg, data: bytes) -> None:
+    """Write ``data`` to ``path`` (overwriting it) through :func:`atomic_output`, fsynced."""
+    with atomic_output(path, force=True, durable=True) as tmp:
+        tmp.write_bytes(data)

@@ -49,6 +49,7 @@ from deformctl.artifacts.schema import (
     validate_message,
 )
 from deformctl.errors import InputDataError, SchemaError
+from deformctl.lift.search import LiftAttempt
 from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
 from deformctl.units import NS_PER_S
 
@@ -97,22 +98,6 @@ _DECODE_ERRORS = (
     zstandard.ZstdError,
     AttributeError,
 )
-
-
-@dataclass(frozen=True)
-class LiftAttempt:
-    """One lift attempt of one object, as stored in a lift log.
-
-    Attributes:
-        object_id: catalog id of the object.
-        attempt_index: 0-based index of the attempt among the object's attempts.
-        outcome: what the attempt found (``outcome.series`` is the attempt's time series, when
-            recorded; ``outcome.details`` must be JSON-serialisable).
-    """
-
-    object_id: str
-    attempt_index: int
-    outcome: TrialOutcome
 
 
 @dataclass

@@ -26,6 +26,11 @@ TOOL = "deformctl"
 STDIN_HASH = "stdin"  #: recorded instead of a hash for an input read from ``-``
 
 
+def input_digest(path: PathArg) -> str:
+    """What provenance records for an input: :func:`sha256_file`, or ``stdin`` for ``-``."""
+    return STDIN_HASH if is_stdio(path) else sha256_file(path)
+
+
 def sha256_file(path: PathArg) -> str:
     """Return the hex sha256 of a file's bytes (of a dataset directory: see below).
 
@@ -116,10 +121,7 @@ class Provenance:
         if args:
             args[0] = os.path.basename(args[0]) or args[0]
         hashes = {
-            display_name(p) if is_stdio(p) else os.fspath(p): (
-                STDIN_HASH if is_stdio(p) else sha256_file(p)
-            )
-            for p in inputs
+            display_name(p) if is_stdio(p) else os.fspath(p): (input_digest(p)) for p in inputs
         }
         norm = json.loads(to_json(dict(settings or {})))
         return cls(

@@ -14,7 +14,7 @@ import re
 from typing import Any
 
 from deformctl.errors import UsageError
-from deformctl.rig import SlipFromFrames
+from deformctl.lift.runners.rig import SlipFromFrames
 
 #: Default ``--slip-tolerance-m``: the object may fall behind the palms by this much, m.
 DEFAULT_SLIP_TOLERANCE_M = 0.005

@@ -11,8 +11,7 @@ from typing import Any
 
 import typer
 
-from deformctl.parallel import SweepSummary
-from deformctl.sweep import SweepOptions
+from deformctl.parallel import SweepOptions, SweepSummary
 
 __all__ = ["SweepOptions", "finish"]
 

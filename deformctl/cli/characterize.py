@@ -10,7 +10,13 @@ import typer
 
 from deformctl.artifacts import Provenance, check_output_path, write_table
 from deformctl.artifacts.io import is_stdio
-from deformctl.characterize import LogCoefficients, read_and_characterize
+from deformctl.characterize import (
+    CharacterizeTask,
+    LogCoefficients,
+    characterize_dir,
+    characterize_sweep,
+    read_and_characterize,
+)
 from deformctl.cli import _sweep, app
 from deformctl.cli._common import translate_errors
 from deformctl.errors import UsageError
@@ -89,11 +95,13 @@ def characterize(
         raise UsageError(f"--method must be lsq or paper, got {method!r}")
     sweep = _sweep.SweepOptions(workers, scheduler, connect_timeout, partition_size, resume)
     if sweep.check(output):
-        _characterize_sweep(log, method, window_s, output, force, sweep)
+        task = CharacterizeTask(method, window_s)
+        _sweep.finish(characterize_sweep(log, task, output=output, sweep=sweep, force=force),
+                      "characterize")  # fmt: skip
         return
     check_output_path(output, force)
     if os.path.isdir(log):
-        result = _characterize_dir(log, method, window_s)
+        result = characterize_dir(log, method, window_s=window_s)  # type: ignore[arg-type]
     else:
         result = read_and_characterize(log, method, window_s=window_s)  # type: ignore[arg-type]
     provenance = Provenance.from_invocation(
@@ -107,60 +115,3 @@ def characterize(
     )
     write_table(result.table, output, "coefficients", provenance=provenance, force=force)
     typer.echo(render_summary(result), err=is_stdio(output))
-
-
-def _characterize_dir(path: str, method: str, window_s: float | None) -> LogCoefficients:
-    """Characterize every squeeze log ``part-*.mcap`` of a ``measure`` directory, in order."""
-    from deformctl.sweep import squeeze_log_parts
-
-    parts = [
-        read_and_characterize(p, method, window_s=window_s)  # type: ignore[arg-type]
-        for p in squeeze_log_parts(path)
-    ]
-    return LogCoefficients(
-        table=pd.concat([p.table for p in parts], ignore_index=True),
-        window_s={k: v for p in parts for k, v in p.window_s.items()},
-        position_rate_hz={k: v for p in parts for k, v in p.position_rate_hz.items()},
-    )
-
-
-def _characterize_sweep(
-    log: str,
-    method: str,
-    window_s: float | None,
-    output: str,
-    force: bool,
-    sweep: _sweep.SweepOptions,
-) -> None:
-    """``characterize DIR -o OUT/``: one fit per object through the sweep executor."""
-    from deformctl.artifacts.provenance import sha256_file
-    from deformctl.errors import MissingInputError
-    from deformctl.parallel import run_sweep
-    from deformctl.sweep import (
-        CharacterizeTask,
-        characterize_items,
-        dataset_fingerprint,
-        table_schema,
-    )
-
-    if window_s is not None and not (math.isfinite(window_s) and window_s > 0):
-        raise UsageError(f"--window-s must be a finite number > 0 s, got {window_s}")
-    if not os.path.isdir(log):
-        if not os.path.exists(log):
-            raise MissingInputError("no such file or directory", path=log)
-        raise UsageError(
-            "a dataset directory output (-o DIR/) needs a squeeze-log directory input "
-            "(measure --sim -o DIR/)"
-        )
-    items = characterize_items(log)
-    settings = {"method": method, "window_s_option": window_s}
-    summary = run_sweep(
-        CharacterizeTask(method, window_s),
-        items,
-        out_dir=output,
-        schema=table_schema("coefficients"),
-        fingerprint=dataset_fingerprint("characterize", settings, {"log": sha256_file(log)}),
-        force=force,
-        **sweep.run_kwargs(),
-    )
-    _sweep.finish(summary, "characterize")

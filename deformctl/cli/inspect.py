@@ -8,10 +8,10 @@ from typing import Any
 
 import typer
 
+from deformctl.artifacts.dataset import describe_dataset
 from deformctl.artifacts.describe import describe
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
-from deformctl.sweep import describe_dataset
 
 
 def _unit(unit: object) -> str:
@@ -122,7 +122,8 @@ def inspect(
 
 
 def render_dataset(info: dict[str, Any]) -> str:
-    """Plain-text summary of a dataset directory (see :func:`deformctl.sweep.describe_dataset`)."""
+    """Plain-text summary of a dataset directory (see
+    :func:`deformctl.artifacts.dataset.describe_dataset`)."""
     state = "complete" if info["complete"] else "INCOMPLETE (rerun with --resume)"
     lines = [
         f"{info['path']}: {info['kind']} dataset (written by {info['command']})",

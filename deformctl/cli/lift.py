@@ -1,12 +1,12 @@
 """``deformctl lift``: the minimum lifting force of catalog objects, by iterative lifting.
 
 The command checks options and paths, picks the trial runner, and hands the work to
-:func:`deformctl.lift.lift_catalog`; then it writes the lift log (every attempt) and the
+:func:`deformctl.lift.stage.lift_catalog`; then it writes the lift log (every attempt) and the
 lift_results table, and turns failures into the exit code.
 
 Runners: exactly one must be chosen: ``--rig "CMD"`` (an external rig command) or ``--sim``
 (the built-in simulator, with its lift-profile, slip and simulator options, built by
-:func:`_sim_factory`); each runner kind is a :class:`deformctl.lift.RunnerFactory`.
+:func:`_sim_factory`); each runner kind is a :class:`deformctl.lift.stage.RunnerFactory`.
 
 Failures, decided here:
 
@@ -46,23 +46,20 @@ from deformctl.artifacts import (
     write_table,
 )
 from deformctl.artifacts.io import is_stdio
+from deformctl.catalog import select_objects
 from deformctl.cli import _sweep, app
 from deformctl.cli._common import translate_errors
 from deformctl.cli._lift_frames import DEFAULT_SLIP_TOLERANCE_M, frames_judge
 from deformctl.errors import SearchError, UsageError
-from deformctl.lift import (
+from deformctl.lift.runners.rig import SlipFromFrames, rig_runner_factory
+from deformctl.lift.search import (
     DEFAULT_GROWTH,
     DEFAULT_MAX_ATTEMPTS,
     DEFAULT_TOLERANCE_REL,
-    LiftProgress,
-    RunnerFactory,
     SearchProtocol,
-    lift_catalog,
-    rig_runner_factory,
-    select_objects,
     validate_search_options,
 )
-from deformctl.rig import SlipFromFrames
+from deformctl.lift.stage import LiftProgress, RunnerFactory, lift_catalog
 
 DEFAULT_RIG_TIMEOUT_S = 60.0
 
@@ -82,7 +79,7 @@ def _sim_factory(sim: bool, options: Mapping[str, Any]) -> RunnerFactory | None:
         if given:
             raise UsageError(f"{given[0]} needs --sim")
         return None
-    from deformctl.lift_sim import sim_runner_factory
+    from deformctl.lift.runners.sim import sim_runner_factory
 
     profile, settings, criterion = _sim_parts(options)
     return sim_runner_factory(profile=profile, settings=settings, criterion=criterion)
@@ -352,8 +349,13 @@ def lift(
             raise UsageError(
                 "--log is not used with a dataset directory output (see DIR/part-*.mcap)"
             )
-        _lift_sweep(catalog, sim_options, object_ids, protocol, growth, tolerance,
-                    max_attempts, output, force, sweep)  # fmt: skip
+        from deformctl.lift.runners.sim import LiftTask, lift_sweep
+
+        task = LiftTask(*_sim_parts(sim_options), protocol, growth, tolerance, max_attempts)
+        selected = select_objects(read_catalog(catalog), object_ids)
+        summary = lift_sweep(selected, task, catalog_path=catalog, output=output, sweep=sweep,
+                             force=force)  # fmt: skip
+        _sweep.finish(summary, "lift")
         return
     _check_outputs(output, log, force)
     selected = select_objects(read_catalog(catalog), object_ids)
@@ -391,48 +393,3 @@ def lift(
     message = run.error_message()
     if message is not None:
         raise SearchError(message)
-
-
-def _lift_sweep(
-    catalog: str,
-    sim_options: Mapping[str, Any],
-    object_ids: list[str] | None,
-    protocol: str,
-    growth: float,
-    tolerance: float,
-    max_attempts: int,
-    output: str,
-    force: bool,
-    sweep: _sweep.SweepOptions,
-) -> None:
-    """``lift --sim -o DIR/``: one search per object through the sweep executor."""
-    from deformctl.artifacts.provenance import STDIN_HASH, sha256_file
-    from deformctl.lift import catalog_records
-    from deformctl.lift_sim import sim_runner_factory
-    from deformctl.parallel import run_sweep
-    from deformctl.sweep import LiftLogWriter, LiftTask, dataset_fingerprint, table_schema
-
-    profile, settings, criterion = _sim_parts(sim_options)
-    factory = sim_runner_factory(profile=profile, settings=settings, criterion=criterion)
-    selected = select_objects(read_catalog(catalog), object_ids)
-    search: dict[str, Any] = {
-        "protocol": protocol,
-        "growth": growth,
-        "tolerance_rel": tolerance,
-        "max_attempts": max_attempts,
-    }
-    run_settings = {"runner": factory.name, **factory.settings, **search}
-    provenance = Provenance.from_invocation([catalog], settings=run_settings)
-    inputs = {"catalog": STDIN_HASH if is_stdio(catalog) else sha256_file(catalog)}
-    task = LiftTask(profile, settings, criterion, **search)
-    summary = run_sweep(
-        task,
-        catalog_records(selected),
-        out_dir=output,
-        schema=table_schema("lift_results"),
-        fingerprint=dataset_fingerprint("lift", run_settings, inputs),
-        part_writer=LiftLogWriter(provenance),
-        force=force,
-        **sweep.run_kwargs(),
-    )
-    _sweep.finish(summary, "lift")

@@ -10,6 +10,7 @@ object-catalog row instead (:mod:`deformctl.cli._measure_images`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -27,6 +28,7 @@ from deformctl.artifacts import (
     write_squeeze_log,
 )
 from deformctl.artifacts.io import is_stdio
+from deformctl.catalog import catalog_objects, object_record, select_objects
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
 from deformctl.cli._measure_images import ImageOptions, measure_images
@@ -46,9 +48,10 @@ from deformctl.measure import (
     DEFAULT_SIM_SQUEEZES,
     DEFAULT_SQUEEZE_STRAIN,
     Recording,
-    object_record,
+    SimulateCatalogTask,
     read_csv_export,
     read_ros2_bag,
+    simulate_catalog_sweep,
     simulate_squeezes,
 )
 
@@ -222,9 +225,7 @@ def _measure_sim(
 
     With a dataset directory output the objects run through the sweep executor (``sweep``).
     """
-    from deformctl.lift import select_objects
     from deformctl.sim import SimSettings
-    from deformctl.simcatalog import settings_dict, sim_specs
 
     if opts.peak_force_n is not None and opts.strain is not None:
         raise UsageError("give --peak-force-n or --strain, not both")
@@ -247,7 +248,8 @@ def _measure_sim(
         check_output_path(output, force)
     catalog = select_objects(read_catalog(catalog_path), ids)
     if not dataset:  # a sweep records such rows as failed objects and goes on
-        sim_specs(catalog, path=catalog_path)  # refuse rows without material values, first
+        for obj in catalog_objects(catalog, path=catalog_path):  # refuse them first
+            obj.to_sim_spec(path=catalog_path)
     seed = 0 if opts.seed is None else opts.seed
     strain = DEFAULT_SQUEEZE_STRAIN if opts.strain is None else opts.strain
     kwargs: dict[str, Any] = {
@@ -268,12 +270,16 @@ def _measure_sim(
             **kwargs,
             "peak_force_rule": "peak_force_n" if opts.peak_force_n is not None else "strain",
             "objects": list(catalog["object_id"]),
-            "sim_settings": settings_dict(settings),
+            "sim_settings": dataclasses.asdict(settings),
         },
     )
     if dataset:
-        _measure_sweep(catalog_path, catalog, kwargs, settings, seed, provenance, output, force,
-                       sweep)  # fmt: skip
+        sim_task = SimulateCatalogTask(kwargs, settings, seed)
+        summary = simulate_catalog_sweep(
+            catalog, sim_task, catalog_path=catalog_path, output=output, provenance=provenance,
+            sweep=sweep, force=force,
+        )  # fmt: skip
+        finish(summary, "measure")
         return
     console = Console(stderr=True)
     total = squeezes * len(catalog)
@@ -300,42 +306,6 @@ def _measure_sim(
         f"({squeezes} each), {duration_s:.1f} s, dt {settings.dt_s:g} s",
         err=True,
     )
-
-
-def _measure_sweep(
-    catalog_path: str,
-    catalog: Any,
-    kwargs: dict[str, Any],
-    settings: Any,
-    seed: int,
-    provenance: Provenance,
-    output: str,
-    force: bool,
-    sweep: SweepOptions,
-) -> None:
-    """``measure --sim -o DIR/``: one object per task; part ``k``'s squeezes in part-k.mcap."""
-    from deformctl.artifacts.provenance import STDIN_HASH, sha256_file
-    from deformctl.lift import catalog_records
-    from deformctl.parallel import run_sweep
-    from deformctl.simcatalog import settings_dict
-    from deformctl.sweep import MEASURE_SCHEMA, MeasureTask, SqueezeLogWriter, dataset_fingerprint
-
-    items = [{**rec, "_position": i} for i, rec in enumerate(catalog_records(catalog))]
-    inputs = {"catalog": STDIN_HASH if is_stdio(catalog_path) else sha256_file(catalog_path)}
-    fingerprint = dataset_fingerprint(
-        "measure", {**kwargs, "sim_settings": settings_dict(settings)}, inputs, seed
-    )
-    summary = run_sweep(
-        MeasureTask(kwargs, settings, seed),
-        items,
-        out_dir=output,
-        schema=MEASURE_SCHEMA,
-        fingerprint=fingerprint,
-        part_writer=SqueezeLogWriter(provenance),
-        force=force,
-        **sweep.run_kwargs(),
-    )
-    finish(summary, "measure")
 
 
 @app.command()

@@ -22,10 +22,10 @@ from typing import Annotated, Any
 import typer
 
 from deformctl.artifacts import Provenance, check_output_path, read_table, write_table
+from deformctl.artifacts.dataset import read_table_any
 from deformctl.cli import app
 from deformctl.cli._common import translate_errors
 from deformctl.errors import UsageError, error_context
-from deformctl.sweep import read_table_any
 from deformctl.table import (
     INDEX_COLUMNS,
     LOOKUP_KEYS,

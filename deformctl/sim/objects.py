@@ -1,34 +1,19 @@
 """The simulated object: a box with a weight, a friction coefficient and Kelvin material constants.
 
-The catalog gives sizes in cm, stiffness in N/cm and damping in N·s/cm (the paper's units); the
-spec keeps those edge units in its field names and offers SI properties for the physics.
+Sizes are in cm, stiffness in N/cm and damping in N·s/cm (the paper's units at the edge); the
+spec keeps those units in its field names and offers SI properties for the physics. A catalog row
+becomes a spec through :meth:`deformctl.catalog.CatalogObject.to_sim_spec`: the simulator does not
+read catalogs.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
+from deformctl.catalog import rigid_grip_force_n
 from deformctl.errors import InputDataError
 from deformctl.units import CM, GRAVITY_M_S2, N_PER_CM, NS_PER_CM
-
-if TYPE_CHECKING:  # pragma: no cover - typing only
-    from deformctl.sim.protocols import LiftProfile
-
-
-def _number(row: Mapping[str, object], key: str, object_id: str) -> float:
-    if key not in row:
-        raise InputDataError(f"object {object_id!r}: missing column {key!r}")
-    value = row[key]
-    try:
-        number = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise InputDataError(f"object {object_id!r}: {key} is not a number: {value!r}") from None
-    if not math.isfinite(number):
-        raise InputDataError(f"object {object_id!r}: {key} is missing or not finite ({value!r})")
-    return number
 
 
 @dataclass(frozen=True)
@@ -61,37 +46,14 @@ class ObjectSpec:
         checks = (
             ("weight_n", self.weight_n, False),
             ("friction_mu", self.friction_mu, False),
-            ("material_stiffness_n_per_cm", self.stiffness_n_per_cm, False),
-            ("material_damping_ns_per_cm", self.damping_ns_per_cm, True),
+            ("stiffness_n_per_cm", self.stiffness_n_per_cm, False),
+            ("damping_ns_per_cm", self.damping_ns_per_cm, True),
         )
         for name, value, zero_ok in checks:
             v = float(value)
             if not math.isfinite(v) or v < 0 or (v == 0 and not zero_ok):
                 need = ">= 0" if zero_ok else "> 0"
                 raise InputDataError(f"object {oid!r}: {name} must be finite and {need}, got {v}")
-
-    @classmethod
-    def from_catalog_row(cls, row: Mapping[str, object]) -> ObjectSpec:
-        """Build a spec from one catalog row (a dict, a pandas Series, ...).
-
-        Raises:
-            InputDataError: a column is missing, not a number, NaN, or out of range.
-        """
-        if "object_id" not in row:
-            raise InputDataError("catalog row without 'object_id'")
-        oid = str(row["object_id"])
-        return cls(
-            object_id=oid,
-            size_cm=(
-                _number(row, "size_x_cm", oid),
-                _number(row, "size_y_cm", oid),
-                _number(row, "size_z_cm", oid),
-            ),
-            weight_n=_number(row, "weight_n", oid),
-            friction_mu=_number(row, "friction_mu", oid),
-            stiffness_n_per_cm=_number(row, "material_stiffness_n_per_cm", oid),
-            damping_ns_per_cm=_number(row, "material_damping_ns_per_cm", oid),
-        )
 
     @property
     def size_m(self) -> tuple[float, float, float]:
@@ -120,10 +82,8 @@ class ObjectSpec:
 
 
 def f_w_n(spec: ObjectSpec) -> float:
-    """Quasi-static lifting force per palm of a rigid object, W/(2 mu), N."""
-    return spec.weight_n / (2.0 * spec.friction_mu)
+    """Quasi-static lifting force per palm of a rigid object, W/(2 mu), N.
 
-
-def rigid_lift_force_n(spec: ObjectSpec, profile: LiftProfile) -> float:
-    """Grip force per palm lifting a rigid object through ``profile``: m (g + a_max)/(2 mu), N."""
-    return spec.mass_kg * (GRAVITY_M_S2 + profile.peak_accel_m_s2) / (2.0 * spec.friction_mu)
+    :func:`deformctl.catalog.rigid_grip_force_n` of the spec's weight and friction.
+    """
+    return rigid_grip_force_n(spec.weight_n, spec.friction_mu)

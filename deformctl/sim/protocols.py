@@ -18,6 +18,7 @@ from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
 from deformctl.sim import kernels as K
 from deformctl.sim.engine import SimSettings, build_model, run_model
 from deformctl.sim.objects import ObjectSpec
+from deformctl.units import GRAVITY_M_S2
 
 FloatArray = NDArray[np.float64]
 
@@ -371,3 +372,8 @@ def free_run(
         table_force_n=rec[:, K.REC_TABLE_N],
         min_z_m=rec[:, K.REC_MIN_Z],
     )
+
+
+def rigid_lift_force_n(spec: ObjectSpec, profile: LiftProfile) -> float:
+    """Grip force per palm lifting a rigid object through ``profile``: m (g + a_max)/(2 mu), N."""
+    return spec.mass_kg * (GRAVITY_M_S2 + profile.peak_accel_m_s2) / (2.0 * spec.friction_mu)

@@ -2,7 +2,7 @@
 
 Usage: frames_render_rig.py THRESHOLD_N PARTIAL_FROM_N [--regions] [--after-size WxH]
 
-Renders a side view of a box between two palms (deformctl.vision_synth.Gripper) before and after
+Renders a side view of a box between two palms (deformctl.vision.synth.Gripper) before and after
 a 3 cm lift of the palms, to frames/a<attempt>_{before,after}.png in its working directory, and
 answers {"before_frame": ..., "after_frame": ...}. The object's rise depends on the grip force F:
 
@@ -21,7 +21,7 @@ import sys
 
 import cv2
 
-from deformctl.vision_synth import Gripper, gripper_frame
+from deformctl.vision.synth import Gripper, gripper_frame
 
 PALM_RISE_CM = 3.0
 

@@ -1,7 +1,7 @@
 """The reproduction report: our pipeline's numbers beside the paper's Tables II and III.
 
 ``make reproduce`` runs the whole pipeline with the ``deformctl`` command into one run
-directory and then calls :func:`write_report` (``python -m deformctl.report RUN_DIR``), which
+directory and then calls :func:`write_report` (``python -m deformctl.repro.report RUN_DIR``), which
 reads the artifacts back through the validating readers and writes:
 
 * ``report.md``: Table II (deformability, damping, lifting force of the four Table I objects)
@@ -30,7 +30,8 @@ import pandas as pd
 
 from deformctl.artifacts import read_squeeze_log, read_table
 from deformctl.errors import DeformctlError, MissingInputError
-from deformctl.paper import TABLE2_CSV, compare_with_paper
+from deformctl.repro import dataset_path
+from deformctl.repro.paper import compare_with_paper
 
 #: The artifacts :func:`write_report` reads from the run directory.
 RUN_FILES = {
@@ -43,7 +44,7 @@ RUN_FILES = {
     "predictions": "predictions.parquet",
 }
 
-DATASETS = TABLE2_CSV.parent  #: the bundled paper tables (table2.csv, table3.csv)
+DATASETS = dataset_path("paper")  #: the bundled paper tables (table2.csv, table3.csv)
 
 
 @dataclass(frozen=True)
@@ -67,7 +68,7 @@ def compare_table2(
 ) -> pd.DataFrame:
     """Our D, λ and L_f for the Table I objects beside the paper's Table II.
 
-    The lifting-force half is :func:`deformctl.paper.compare_with_paper`; this adds the
+    The lifting-force half is :func:`deformctl.repro.paper.compare_with_paper`; this adds the
     deformability and damping columns.
 
     Returns:
@@ -386,7 +387,7 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m deformctl.report RUN_DIR [--require-max-test-error FRACTION]``.
+    """``python -m deformctl.repro.report RUN_DIR [--require-max-test-error FRACTION]``.
 
     Writes the report and prints its summary. With ``--require-max-test-error``, exits 1 when
     the network's maximum relative test error exceeds the fraction (``make reproduce`` passes
@@ -408,7 +409,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = args[:1]
     if len(args) != 1:
         print(
-            "usage: python -m deformctl.report RUN_DIR [--require-max-test-error FRACTION]",
+            "usage: python -m deformctl.repro.report RUN_DIR [--require-max-test-error FRACTION]",
             file=sys.stderr,
         )
         return 2

@@ -1,8 +1,9 @@
 """Drive an external rig (a real robot's driver, or a stand-in) as a lift trial runner.
 
 :class:`RigRunner` runs a command once per lift attempt, writes one JSON request to its stdin and
-reads one JSON answer from its stdout. It is a :class:`deformctl.lift.TrialRunner`, so
-:func:`deformctl.lift.find_min_lift_force` drives a rig exactly as it drives the simulator.
+reads one JSON answer from its stdout. It is a :class:`deformctl.lift.search.TrialRunner`, so
+:func:`deformctl.lift.search.find_min_lift_force` drives a rig exactly as it drives the
+simulator; :func:`rig_runner_factory` makes one per catalog object for the ``lift`` stage.
 
 Rig protocol, version 1
 -----------------------
@@ -44,7 +45,7 @@ killed with its whole process group), or answers with something that is not one 
 matching the contract above raises :class:`deformctl.errors.RigError` with one line naming the
 object, the attempt, the force and what went wrong (for a non-zero exit: the last non-empty line of
 stderr). The search wraps it so the attempts made so far are kept
-(:class:`deformctl.lift.RigSearchAbortedError`).
+(:class:`deformctl.lift.search.RigSearchAbortedError`).
 """
 
 from __future__ import annotations
@@ -59,7 +60,10 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, TypeGuard
 
+from deformctl.catalog import CatalogObject
 from deformctl.errors import DeformctlError, RigError, UsageError
+from deformctl.lift.search import AttemptError, TrialRunner
+from deformctl.lift.stage import RunnerFactory
 from deformctl.series import TrialOutcome
 
 RIG_PROTOCOL_VERSION = 1
@@ -70,15 +74,25 @@ SlipFromFrames = Callable[[Path, Path], tuple[bool, float]]
 _MAX_SHOWN_CHARS = 120  # how much of a bad answer or stderr line goes into an error message
 
 __all__ = [
+    "FRAMES_SLIP_CRITERION",
     "RIG_PROTOCOL_VERSION",
+    "RIG_SLIP_CRITERION",
     "RigAttemptError",
     "RigRunner",
     "SlipFromFrames",
     "parse_rig_response",
+    "rig_object",
+    "rig_runner_factory",
 ]
 
+RIG_SLIP_CRITERION = "rig"  #: ``slip_criterion`` of rows whose outcome the rig reported itself
+#: ``slip_criterion`` when deformctl judges rig frames (a rig answering ``lifted`` still decides).
+FRAMES_SLIP_CRITERION = "frames"
+#: The lift-profile columns a rig run leaves empty (the rig's own protocol is unknown).
+_PROFILE_COLUMNS = ("lift_accel_m_s2", "lift_speed_m_s", "lift_height_m", "slip_tolerance_m")
 
-class RigAttemptError(RigError):
+
+class RigAttemptError(RigError, AttemptError):
     """One rig attempt failed; the message names the object, the attempt and the force.
 
     Attributes:
@@ -347,3 +361,85 @@ class RigRunner:
         except DeformctlError as err:
             raise self._error(where, f"slip from frames failed: {err}") from err
         return bool(lifted), float(slip_m)
+
+
+def rig_object(obj: CatalogObject) -> dict[str, Any]:
+    """The object description a :class:`RigRunner` sends: id, W, mu and size (cm)."""
+    return {
+        "object_id": obj.object_id,
+        "weight_n": obj.weight_n,
+        "friction_mu": obj.friction_mu,
+        "size_cm": list(obj.size_cm),
+    }
+
+
+def rig_runner_factory(
+    command: str | Sequence[str],
+    *,
+    timeout_s: float,
+    cwd: str | os.PathLike[str] | None = None,
+    slip_from_frames: SlipFromFrames | None = None,
+) -> RunnerFactory:
+    """A :class:`~deformctl.lift.stage.RunnerFactory` for an external rig command (module doc).
+
+    Each object gets its own :class:`RigRunner`; the command runs once per attempt.
+    A rig failure stops the run (``stop_on_failure``): a crashed driver usually means the robot
+    needs attention, so deformctl does not go on commanding it.
+
+    Args:
+        command: the rig command, a string (split like a shell line, never run by a shell) or
+            an argument list.
+        timeout_s: the longest one attempt may take, s (finite, > 0).
+        cwd: the directory the command runs in; the current directory when None.
+        slip_from_frames: judges rig answers that carry frames but no ``lifted`` (e.g.
+            ``functools.partial(deformctl.vision.slip_from_frames, palm_marker_ids=(1, 2),
+            marker_size_cm=2.4)``); its bound keywords go into the settings, its ``tolerance_m``
+            into the rows' ``slip_tolerance_m``.
+
+    Raises:
+        UsageError: an empty or unparsable command (unbalanced quotes), or a bad timeout.
+    """
+    if isinstance(command, str):
+        try:
+            argv = shlex.split(command)
+        except ValueError as err:
+            raise UsageError(f"rig command cannot be parsed ({err}): {command!r}") from None
+    else:
+        argv = [str(a) for a in command]
+    if not argv:
+        raise UsageError("rig command is empty")
+    if isinstance(timeout_s, bool) or not (
+        isinstance(timeout_s, int | float) and math.isfinite(timeout_s) and timeout_s > 0
+    ):
+        raise UsageError(f"rig timeout must be a finite number > 0 s, got {timeout_s!r}")
+
+    def make(obj: CatalogObject) -> TrialRunner:
+        return RigRunner(
+            argv,
+            timeout_s=float(timeout_s),
+            object=rig_object(obj),
+            cwd=cwd,
+            slip_from_frames=slip_from_frames,
+        )
+
+    frame_options = dict(getattr(slip_from_frames, "keywords", None) or {})
+
+    def row_fields(obj: CatalogObject) -> Mapping[str, object]:
+        fields: dict[str, object] = dict.fromkeys(_PROFILE_COLUMNS, math.nan)
+        fields["slip_criterion"] = RIG_SLIP_CRITERION
+        if slip_from_frames is not None:
+            fields["slip_criterion"] = FRAMES_SLIP_CRITERION
+            fields["slip_tolerance_m"] = float(frame_options.get("tolerance_m", math.nan))
+        return fields
+
+    settings: dict[str, Any] = {"rig_command": argv, "rig_timeout_s": float(timeout_s)}
+    if slip_from_frames is not None:
+        settings["slip_from_frames"] = frame_options
+
+    return RunnerFactory(
+        name="rig",
+        make=make,
+        row_fields=row_fields,
+        stop_on_failure=True,
+        settings=settings,
+    )

@@ -10,7 +10,7 @@ protocol relate to the paper's, not a target: the paper gives neither its fricti
 
 Command line (what ``make reproduce`` calls)::
 
-    python -m deformctl.paper lift.parquet [table2.csv]
+    python -m deformctl.repro.paper lift.parquet [table2.csv]
 
 prints the comparison; ``table2.csv`` defaults to the bundled ``datasets/paper/table2.csv``.
 """
@@ -24,9 +24,10 @@ from pathlib import Path
 import pandas as pd
 
 from deformctl.errors import DeformctlError, InputDataError, MissingInputError
+from deformctl.repro import dataset_path
 
-#: The bundled Table II (a checkout's datasets/paper/table2.csv).
-TABLE2_CSV = Path(__file__).resolve().parents[1] / "datasets" / "paper" / "table2.csv"
+#: The bundled Table II (``datasets/paper/table2.csv``, the package data ``deformctl.datasets``).
+TABLE2_CSV = dataset_path("paper", "table2.csv")
 
 TABLE2_COLUMNS = ("object_id", "lift_force_calculated_n", "lift_force_simulation_n")
 COMPARISON_COLUMNS = (
@@ -121,7 +122,7 @@ def render(comparison: pd.DataFrame) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m deformctl.paper LIFT.parquet [TABLE2.csv]``: print the comparison.
+    """``python -m deformctl.repro.paper LIFT.parquet [TABLE2.csv]``: print the comparison.
 
     Returns:
         The exit code: 0, 2 for bad arguments, or the error's code (one line on stderr).
@@ -130,7 +131,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     args = list(sys.argv[1:] if argv is None else argv)
     if not 1 <= len(args) <= 2 or args[0] in ("-h", "--help"):
-        print("usage: python -m deformctl.paper LIFT.parquet [TABLE2.csv]", file=sys.stderr)
+        print("usage: python -m deformctl.repro.paper LIFT.parquet [TABLE2.csv]", file=sys.stderr)
         return 0 if args and args[0] in ("-h", "--help") else 2
     table2_path = Path(args[1]) if len(args) == 2 else TABLE2_CSV
     try:

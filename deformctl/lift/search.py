@@ -7,8 +7,10 @@ The seed paper grips an object of weight ``W`` with the rigid-object force ``F_w
 
 The search here does not care where a trial runs. A *trial runner* (:class:`TrialRunner`) takes a
 grip force and an attempt index and returns a :class:`deformctl.series.TrialOutcome`; the built-in
-simulator and an external rig (:class:`deformctl.rig.RigRunner`) are both runners, so the same code
-drives a simulation and a real robot.
+simulator (:mod:`deformctl.lift.runners.sim`) and an external rig
+(:class:`deformctl.lift.runners.rig.RigRunner`) are both runners, so the same code drives a
+simulation and a real robot. This module knows neither: it holds the protocols, the result types
+(:class:`LiftSearchResult`, and :class:`LiftAttempt`, the unit a lift log stores) and the search.
 
 Two protocols:
 
@@ -46,12 +48,7 @@ blew up), the search raises :class:`SearchAbortedError` (or :class:`RigSearchAbo
 :class:`~deformctl.errors.RigError`), whose ``partial`` attribute is the result so far, so the
 caller can still write every attempt to the log.
 
-Many objects (the ``lift`` stage): :func:`lift_catalog` runs one search per catalog object with a
-runner from a :class:`RunnerFactory` (:func:`rig_runner_factory` for an external rig,
-:func:`deformctl.lift_sim.sim_runner_factory` for the simulator) and returns a
-:class:`CatalogLiftResult`: the lift_results table, every attempt (for the lift log) and the
-failures, which it records instead of raising, so the caller can write everything before it
-decides the exit code.
+Many objects (the ``lift`` stage) are :mod:`deformctl.lift.stage`.
 
 Example:
     >>> from deformctl.series import TrialOutcome
@@ -65,19 +62,11 @@ Example:
 from __future__ import annotations
 
 import math
-import os
-import shlex
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import Any, Literal, Protocol
+from dataclasses import dataclass
+from typing import Literal, Protocol
 
-import numpy as np
-import pandas as pd
-
-from deformctl.artifacts.mcaplog import LiftAttempt
-from deformctl.artifacts.schema import validate_frame
-from deformctl.errors import DeformctlError, InputDataError, RigError, SearchError, UsageError
-from deformctl.rig import RigAttemptError, RigRunner, SlipFromFrames
+from deformctl.catalog import rigid_grip_force_n
+from deformctl.errors import DeformctlError, RigError, SearchError, UsageError
 from deformctl.series import TrialOutcome
 
 SearchProtocol = Literal["refine", "paper"]
@@ -92,24 +81,15 @@ __all__ = [
     "DEFAULT_MAX_ATTEMPTS",
     "DEFAULT_TOLERANCE_REL",
     "PROTOCOLS",
-    "RIG_SLIP_CRITERION",
-    "CatalogLiftResult",
-    "LiftProgress",
+    "AttemptError",
+    "LiftAttempt",
     "LiftSearchResult",
-    "ObjectFailure",
     "RigSearchAbortedError",
-    "RunnerFactory",
     "SearchAbortedError",
     "SearchProtocol",
     "TrialRunner",
-    "catalog_records",
-    "check_liftable",
     "find_min_lift_force",
-    "lift_catalog",
-    "rig_object",
-    "rig_runner_factory",
     "rigid_grip_force_n",
-    "select_objects",
     "validate_search_options",
 ]
 
@@ -135,6 +115,30 @@ class TrialRunner(Protocol):
     def __call__(self, grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
         """Run one attempt at ``grip_force_n`` (N) and report what happened."""
         ...
+
+
+class AttemptError(DeformctlError):
+    """A runner failure whose message already names the object, the attempt and the force.
+
+    The search uses such a message as it is; any other :class:`DeformctlError` of a runner is
+    prefixed with the object, the attempt and the force.
+    """
+
+
+@dataclass(frozen=True)
+class LiftAttempt:
+    """One lift attempt of one object: what a lift log stores per attempt.
+
+    Attributes:
+        object_id: catalog id of the object.
+        attempt_index: 0-based index of the attempt among the object's attempts.
+        outcome: what the attempt found (``outcome.series`` is the attempt's time series, when
+            recorded; ``outcome.details`` must be JSON-serialisable).
+    """
+
+    object_id: str
+    attempt_index: int
+    outcome: TrialOutcome
 
 
 @dataclass(frozen=True)
@@ -274,11 +278,6 @@ class SearchAbortedError(SearchError):
 
 class RigSearchAbortedError(SearchAbortedError, RigError):
     """A search stopped because the external rig failed (crash, time-out, bad answer)."""
-
-
-def rigid_grip_force_n(weight_n: float, friction_mu: float) -> float:
-    """F_w = W / (2 mu), N: the force two palms need to hold a rigid object of weight W at rest."""
-    return weight_n / (2.0 * friction_mu)
 
 
 def validate_search_options(
@@ -427,7 +426,7 @@ def find_min_lift_force(
             outcome = runner(force_n, index)
         except DeformctlError as err:
             kept = f"{index} attempt{'' if index == 1 else 's'} kept"
-            if isinstance(err, RigAttemptError):  # names the object, attempt and force itself
+            if isinstance(err, AttemptError):  # names the object, attempt and force itself
                 detail = str(err)
             else:
                 detail = f"{obj}: attempt {index} at {force_n:.6g} N: {err}"
@@ -503,394 +502,3 @@ def _found_message(obj: str, s: _Search) -> str:
         f"{obj}: lifted at L_f = {s.high_n:.6g} N (F_w = {s.f_w_n:.6g} N, "
         f"bracket [{low:.6g}, {s.high_n:.6g}] N) after {len(s.trials)} attempts ({s.protocol})"
     )
-
-
-# ------------------------------------------------------------- many objects: the `lift` stage
-
-LiftProgress = Callable[[str, int, int], None]
-"""``progress(object_id, objects_done, objects_total)``, called after each object of a catalog."""
-
-RIG_SLIP_CRITERION = "rig"  #: ``slip_criterion`` of rows whose outcome the rig reported itself
-#: ``slip_criterion`` when deformctl judges rig frames (a rig answering ``lifted`` still decides).
-FRAMES_SLIP_CRITERION = "frames"
-_PROFILE_COLUMNS = ("lift_accel_m_s2", "lift_speed_m_s", "lift_height_m", "slip_tolerance_m")
-
-
-def _no_row_fields(obj: Mapping[str, Any]) -> Mapping[str, object]:
-    return {}
-
-
-@dataclass(frozen=True)
-class RunnerFactory:
-    """Builds one trial runner per catalog object: what :func:`lift_catalog` searches with.
-
-    Every runner kind (the external rig now, the built-in simulator next to it) is one factory,
-    so the stage code does not care which one runs the attempts.
-
-    Attributes:
-        name: the runner's name, stored in the table's ``runner`` column (``"rig"``, ``"sim"``).
-        make: ``make(obj) -> TrialRunner`` for one object; ``obj`` is the object's catalog row as
-            a dict (see :func:`catalog_records`: paper units, NaN as None).
-        row_fields: ``row_fields(obj) -> {column: value}``: the table columns this runner fills
-            for the object (lift profile ``lift_accel_m_s2``, ``lift_speed_m_s``,
-            ``lift_height_m``, ``slip_tolerance_m``, ``slip_criterion``).
-        stop_on_failure: when a runner fails for one object (raises a
-            :class:`~deformctl.errors.DeformctlError`), the remaining objects are not run.
-        settings: JSON-serialisable settings of the runner, for the outputs' provenance.
-        check: ``check(catalog, path)``: refuse catalog rows this runner cannot run (e.g. the
-            simulator needs material values) by raising a
-            :class:`~deformctl.errors.DeformctlError`; :func:`lift_catalog` calls it before any
-            attempt. None: no runner-specific check.
-    """
-
-    name: str
-    make: Callable[[Mapping[str, Any]], TrialRunner]
-    row_fields: Callable[[Mapping[str, Any]], Mapping[str, object]] = _no_row_fields
-    stop_on_failure: bool = True
-    settings: Mapping[str, Any] = field(default_factory=dict)
-    check: Callable[[pd.DataFrame, str | None], None] | None = None
-
-
-def rig_object(obj: Mapping[str, Any]) -> dict[str, Any]:
-    """The object description a :class:`~deformctl.rig.RigRunner` sends: id, W, mu, size (cm).
-
-    Args:
-        obj: a catalog row (``object_id``, ``weight_n``, ``friction_mu``, ``size_{x,y,z}_cm``).
-    """
-    out: dict[str, Any] = {
-        "object_id": str(obj["object_id"]),
-        "weight_n": float(obj["weight_n"]),
-        "friction_mu": float(obj["friction_mu"]),
-    }
-    size = [obj.get(f"size_{axis}_cm") for axis in "xyz"]
-    if all(isinstance(v, int | float) and math.isfinite(v) for v in size):
-        out["size_cm"] = [float(v) for v in size if v is not None]
-    return out
-
-
-def rig_runner_factory(
-    command: str | Sequence[str],
-    *,
-    timeout_s: float,
-    cwd: str | os.PathLike[str] | None = None,
-    slip_from_frames: SlipFromFrames | None = None,
-) -> RunnerFactory:
-    """A :class:`RunnerFactory` for an external rig command (see :mod:`deformctl.rig`).
-
-    Each object gets its own :class:`~deformctl.rig.RigRunner`; the command runs once per attempt.
-    A rig failure stops the run (``stop_on_failure``): a crashed driver usually means the robot
-    needs attention, so deformctl does not go on commanding it.
-
-    Args:
-        command: the rig command, a string (split like a shell line, never run by a shell) or
-            an argument list.
-        timeout_s: the longest one attempt may take, s (finite, > 0).
-        cwd: the directory the command runs in; the current directory when None.
-        slip_from_frames: judges rig answers that carry frames but no ``lifted`` (e.g.
-            ``functools.partial(deformctl.vision.slip_from_frames, palm_marker_ids=(1, 2),
-            marker_size_cm=2.4)``); its bound keywords go into the settings, its ``tolerance_m``
-            into the rows' ``slip_tolerance_m``.
-
-    Raises:
-        UsageError: an empty or unparsable command (unbalanced quotes), or a bad timeout.
-    """
-    if isinstance(command, str):
-        try:
-            argv = shlex.split(command)
-        except ValueError as err:
-            raise UsageError(f"rig command cannot be parsed ({err}): {command!r}") from None
-    else:
-        argv = [str(a) for a in command]
-    if not argv:
-        raise UsageError("rig command is empty")
-    if isinstance(timeout_s, bool) or not (
-        isinstance(timeout_s, int | float) and math.isfinite(timeout_s) and timeout_s > 0
-    ):
-        raise UsageError(f"rig timeout must be a finite number > 0 s, got {timeout_s!r}")
-
-    def make(obj: Mapping[str, Any]) -> TrialRunner:
-        return RigRunner(
-            argv,
-            timeout_s=float(timeout_s),
-            object=rig_object(obj),
-            cwd=cwd,
-            slip_from_frames=slip_from_frames,
-        )
-
-    frame_options = dict(getattr(slip_from_frames, "keywords", None) or {})
-
-    def row_fields(obj: Mapping[str, Any]) -> Mapping[str, object]:
-        fields: dict[str, object] = dict.fromkeys(_PROFILE_COLUMNS, math.nan)
-        fields["slip_criterion"] = RIG_SLIP_CRITERION
-        if slip_from_frames is not None:
-            fields["slip_criterion"] = FRAMES_SLIP_CRITERION
-            fields["slip_tolerance_m"] = float(frame_options.get("tolerance_m", math.nan))
-        return fields
-
-    settings: dict[str, Any] = {"rig_command": argv, "rig_timeout_s": float(timeout_s)}
-    if slip_from_frames is not None:
-        settings["slip_from_frames"] = frame_options
-
-    return RunnerFactory(
-        name="rig",
-        make=make,
-        row_fields=row_fields,
-        stop_on_failure=True,
-        settings=settings,
-    )
-
-
-def catalog_records(catalog: pd.DataFrame) -> list[dict[str, Any]]:
-    """The catalog's rows as plain dicts (Python scalars; NaN and missing values as None)."""
-    records: list[dict[str, Any]] = []
-    for rec in catalog.to_dict("records"):
-        clean: dict[str, Any] = {}
-        for key, value in rec.items():
-            if isinstance(value, np.generic):
-                value = value.item()
-            if value is None or (isinstance(value, float) and math.isnan(value)):
-                value = None
-            clean[str(key)] = value
-        records.append(clean)
-    return records
-
-
-def select_objects(catalog: pd.DataFrame, object_ids: Sequence[str] | None) -> pd.DataFrame:
-    """The catalog rows of ``object_ids``, in that order (all rows when None).
-
-    Repeated ids are taken once.
-
-    Raises:
-        UsageError: an empty list, an empty id, or an id the catalog does not have (exit 2).
-    """
-    if object_ids is None:
-        return catalog.reset_index(drop=True)
-    wanted = list(dict.fromkeys(object_ids))
-    if not wanted:
-        raise UsageError("no object ids given")
-    if any(not oid for oid in wanted):
-        raise UsageError("an object id is empty")
-    known = list(catalog["object_id"])
-    unknown = [oid for oid in wanted if oid not in set(known)]
-    if unknown:
-        shown = ", ".join(known[:10]) + (", ..." if len(known) > 10 else "")
-        raise UsageError(f"unknown object id {unknown[0]!r} (the catalog has: {shown})")
-    position = {oid: i for i, oid in enumerate(known)}
-    return catalog.iloc[[position[oid] for oid in wanted]].reset_index(drop=True)
-
-
-def check_liftable(catalog: pd.DataFrame, *, path: str | None = None) -> None:
-    """Refuse catalog rows a lift cannot use: ``friction_mu`` must be > 0 (F_w = W / (2 mu)).
-
-    The catalog spec allows mu = 0 (a frictionless object can be squeezed), so this is checked
-    here, for the objects about to be lifted. Weight and sizes are already > 0 in a valid catalog.
-
-    Raises:
-        InputDataError: naming the catalog and the object (exit 65).
-    """
-    for oid, mu, weight in zip(
-        catalog["object_id"], catalog["friction_mu"], catalog["weight_n"], strict=True
-    ):
-        if not (math.isfinite(mu) and mu > 0):
-            raise InputDataError(
-                f"object {oid!r}: friction_mu must be > 0 to lift it "
-                f"(F_w = W / (2 mu) is undefined), got {float(mu)!r}",
-                path=path,
-            )
-        if not (math.isfinite(weight) and weight > 0):
-            raise InputDataError(
-                f"object {oid!r}: weight_n must be > 0 to lift it, got {float(weight)!r}",
-                path=path,
-            )
-
-
-@dataclass(frozen=True)
-class ObjectFailure:
-    """An object whose search did not produce a converged L_f.
-
-    Attributes:
-        object_id: the object.
-        message: one line: why (names the object; for a budget that ran out, the last force
-            tried; for a runner failure, the attempt and the force).
-        aborted: True when the runner failed (a rig crash, time-out or bad answer), False when
-            the search ran out of attempts.
-    """
-
-    object_id: str
-    message: str
-    aborted: bool
-
-
-@dataclass(frozen=True)
-class CatalogLiftResult:
-    """What :func:`lift_catalog` found for a set of catalog objects.
-
-    Attributes:
-        table: the lift_results table, one row per object in the order run (validated against
-            ``schemas/lift_results.columns.json``); objects not run after a runner failure have
-            ``attempts = 0`` and an ``error`` starting with ``not run``.
-        attempts: every attempt that completed, in the order run (for the lift log); an aborted
-            search contributes the attempts before the failure.
-        results: the search result of every object that was run (the partial result for an
-            aborted search).
-        objects: the catalog rows of the objects (see :func:`catalog_records`), for the log.
-        failures: the objects that did not converge, in the order run.
-        not_run: ids of the objects skipped after a runner failure.
-    """
-
-    table: pd.DataFrame
-    attempts: tuple[LiftAttempt, ...]
-    results: tuple[LiftSearchResult, ...]
-    objects: tuple[dict[str, Any], ...]
-    failures: tuple[ObjectFailure, ...]
-    not_run: tuple[str, ...]
-
-    @property
-    def ok(self) -> bool:
-        """True when every object's search converged."""
-        return not self.failures and not self.not_run
-
-    def error_message(self) -> str | None:
-        """One line for the exit: the runner failure if any, else the first non-converged object.
-
-        None when :attr:`ok`.
-        """
-        if self.ok:
-            return None
-        aborted = [f for f in self.failures if f.aborted]
-        first = aborted[0] if aborted else self.failures[0]
-        notes = []
-        others = len(self.failures) - 1
-        if others:
-            notes.append(f"{others} more object{'s' if others > 1 else ''} did not converge")
-        if self.not_run:
-            n = len(self.not_run)
-            notes.append(f"{n} later object{'s' if n > 1 else ''} not run")
-        return first.message + (f" ({'; '.join(notes)})" if notes else "")
-
-
-def lift_catalog(
-    catalog: pd.DataFrame,
-    factory: RunnerFactory,
-    *,
-    protocol: SearchProtocol = "refine",
-    growth: float = DEFAULT_GROWTH,
-    tolerance_rel: float = DEFAULT_TOLERANCE_REL,
-    max_attempts: int = DEFAULT_MAX_ATTEMPTS,
-    progress: LiftProgress | None = None,
-    path: str | None = None,
-) -> CatalogLiftResult:
-    """Search the minimum lifting force of every object of a catalog, one after another.
-
-    Each object gets its own runner from ``factory`` and one :func:`find_min_lift_force`
-    search. Failures do not raise; they are recorded so the caller can still write every
-    attempt and a row per object, then decide the exit:
-
-    * a search that runs out of attempts gives a row with ``converged = False`` and the search's
-      message in ``error``; the next object is run.
-    * a runner failure (:class:`SearchAbortedError`) gives a row from the partial result with
-      the failure in ``error``; the attempts before it are kept. When
-      ``factory.stop_on_failure`` (the rig), the remaining objects are not run and get a
-      ``not run`` row.
-
-    Args:
-        catalog: a validated catalog (see :func:`deformctl.artifacts.read_catalog`), already cut
-            to the objects to lift (:func:`select_objects`).
-        factory: builds the runner of each object.
-        protocol: ``"refine"`` or ``"paper"``.
-        growth: ramp factor (> 1).
-        tolerance_rel: ``refine``'s relative bracket width, in (0, 1).
-        max_attempts: attempt budget per object (>= 1).
-        progress: called after each object as ``progress(object_id, done, total)``.
-        path: the catalog's file name, for error messages.
-
-    Returns:
-        A :class:`CatalogLiftResult`.
-
-    Raises:
-        UsageError: a search option out of range (before anything runs; exit 2).
-        InputDataError: an object the lift cannot use, e.g. ``friction_mu = 0``, or one the
-            runner refuses (``factory.check``) (before anything runs; exit 65).
-    """
-    validate_search_options(
-        protocol=protocol, growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts
-    )
-    check_liftable(catalog, path=path)
-    if factory.check is not None:
-        factory.check(catalog, path)
-    records = catalog_records(catalog)
-    rows: list[dict[str, object]] = []
-    attempts: list[LiftAttempt] = []
-    results: list[LiftSearchResult] = []
-    failures: list[ObjectFailure] = []
-    not_run: list[str] = []
-    stopped_at: str | None = None
-    for done, obj in enumerate(records, start=1):
-        oid = str(obj["object_id"])
-        if stopped_at is not None:
-            rows.append(_not_run_row(obj, factory, protocol, tolerance_rel, stopped_at))
-            not_run.append(oid)
-        else:
-            try:
-                result = find_min_lift_force(
-                    factory.make(obj),
-                    weight_n=float(obj["weight_n"]),
-                    friction_mu=float(obj["friction_mu"]),
-                    protocol=protocol,
-                    growth=growth,
-                    tolerance_rel=tolerance_rel,
-                    max_attempts=max_attempts,
-                    object_id=oid,
-                )
-                error = None if result.converged else result.message
-                if error is not None:
-                    failures.append(ObjectFailure(oid, error, aborted=False))
-            except SearchAbortedError as err:
-                result, error = err.partial, str(err)
-                failures.append(ObjectFailure(oid, error, aborted=True))
-                if factory.stop_on_failure:
-                    stopped_at = oid
-            results.append(result)
-            attempts.extend(LiftAttempt(oid, i, t) for i, t in enumerate(result.trials))
-            row = result.table_row(runner=factory.name, error=error)
-            row.update(factory.row_fields(obj))
-            rows.append(row)
-        if progress is not None:
-            progress(oid, done, len(records))
-    table = validate_frame(pd.DataFrame(rows), "lift_results")
-    return CatalogLiftResult(
-        table=table,
-        attempts=tuple(attempts),
-        results=tuple(results),
-        objects=tuple(records),
-        failures=tuple(failures),
-        not_run=tuple(not_run),
-    )
-
-
-def _not_run_row(
-    obj: Mapping[str, Any],
-    factory: RunnerFactory,
-    protocol: SearchProtocol,
-    tolerance_rel: float,
-    stopped_at: str,
-) -> dict[str, object]:
-    weight_n, friction_mu = float(obj["weight_n"]), float(obj["friction_mu"])
-    row: dict[str, object] = {
-        "object_id": str(obj["object_id"]),
-        "weight_n": weight_n,
-        "friction_mu": friction_mu,
-        "f_w_n": rigid_grip_force_n(weight_n, friction_mu),
-        "lift_force_n": math.nan,
-        "f_d_n": math.nan,
-        "attempts": 0,
-        "converged": False,
-        "protocol": protocol,
-        "bracket_low_n": math.nan,
-        "bracket_high_n": math.nan,
-        "tolerance_rel": math.nan if protocol == "paper" else float(tolerance_rel),
-        "runner": factory.name,
-        "error": f"not run: the run stopped at object {stopped_at!r} after a runner failure",
-    }
-    row.update(factory.row_fields(obj))
-    return row

@@ -1,0 +1,2 @@
+"""Trial runners of the lifting-force search: an external rig (:mod:`.rig`), the simulator
+(:mod:`.sim`)."""

@@ -1,0 +1,236 @@
+"""The built-in simulator as a trial runner of the lifting-force search (``lift --sim``).
+
+:func:`sim_runner_factory` wraps :func:`deformctl.sim.lift_attempt` in a
+:class:`~deformctl.lift.stage.RunnerFactory`: one runner per catalog object, each attempt a fresh
+simulation from rest (grip ramp and settle, the lift profile's rise, the hold) judged by the slip
+criterion. The lift profile and slip criterion are part of the protocol (the surplus
+F_d = L_f − F_w comes from the lift's dynamics), so each row of the lift_results table records them
+and the provenance records the simulator settings.
+
+Defaults (from :mod:`deformctl.sim.protocols`): an S-curve rise to half the object's height with
+peak acceleration 2 m/s², cruise speed 0.25 m/s, 50 ms jerk ramps, then a 0.5 s hold; slip is the
+sliding accumulated at the palm contacts from the start of the rise (mean of both palms), and an
+attempt lifts when it is at most 0.5 mm and the object is off the table at the end.
+
+At scale, :class:`LiftTask` is the sweep task of one object and :func:`lift_sweep` runs a whole
+catalog into a dataset directory (:mod:`deformctl.parallel`, :mod:`deformctl.artifacts.dataset`),
+row for row what :func:`~deformctl.lift.stage.lift_catalog` gives serially. The simulator
+(numba, scipy) is imported inside the functions that run it, not with this module: a sweep's
+fork server preloads the task's module, and a fork server that has loaded OpenBLAS and numba
+hands its workers thread pools they cannot use.
+
+Example:
+    >>> import pandas as pd
+    >>> from deformctl.lift.stage import lift_catalog
+    >>> catalog = pd.read_csv("datasets/paper/objects.csv")  # doctest: +SKIP
+    >>> run = lift_catalog(catalog, sim_runner_factory())  # doctest: +SKIP
+    >>> run.table[["object_id", "lift_force_n", "f_w_n"]]  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import pandas as pd
+
+from deformctl.artifacts.dataset import (
+    LogPartWriter,
+    dataset_fingerprint,
+    spec_rows,
+    table_schema,
+)
+from deformctl.artifacts.provenance import Provenance, input_digest
+from deformctl.catalog import CatalogObject
+from deformctl.lift.search import (
+    DEFAULT_GROWTH,
+    DEFAULT_MAX_ATTEMPTS,
+    DEFAULT_TOLERANCE_REL,
+    TrialRunner,
+)
+from deformctl.lift.stage import RunnerFactory, lift_catalog
+from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
+
+if TYPE_CHECKING:  # pragma: no cover - the simulator is imported where it runs (see below)
+    from deformctl.series import TrialOutcome
+    from deformctl.sim import LiftProfile, SimSettings, SlipCriterion
+
+__all__ = ["LiftTask", "check_sim_objects", "lift_sweep", "sim_runner_factory"]
+
+
+def check_sim_objects(
+    objects: Sequence[CatalogObject],
+    path: str | None = None,
+    *,
+    settings: SimSettings | None = None,
+) -> None:
+    """Refuse objects the simulator cannot run, before any attempt.
+
+    Raises:
+        InputDataError: an object without material values (or otherwise invalid), naming the
+            catalog and the first such object (exit 65).
+        UsageError: an object's model would exceed ``settings.memory_budget_gib`` (exit 2).
+    """
+    from deformctl.sim import SimSettings
+    from deformctl.sim.engine import check_lattice_size
+
+    specs = [obj.to_sim_spec(path=path) for obj in objects]
+    for spec in specs:
+        check_lattice_size(spec, settings or SimSettings())
+
+
+def sim_runner_factory(
+    *,
+    profile: LiftProfile | None = None,
+    settings: SimSettings | None = None,
+    criterion: SlipCriterion | None = None,
+) -> RunnerFactory:
+    """A :class:`~deformctl.lift.stage.RunnerFactory` whose attempts run in the simulator.
+
+    Args:
+        profile: the lift profile (default :class:`~deformctl.sim.LiftProfile`: 2 m/s², 0.25 m/s,
+            half the object's height, 0.5 s hold).
+        settings: simulator settings (default :class:`~deformctl.sim.SimSettings`).
+        criterion: the slip criterion (default :class:`~deformctl.sim.SlipCriterion`: contact
+            slip <= 0.5 mm).
+
+    Returns:
+        The factory: ``name = "sim"``; each row gets ``lift_accel_m_s2``, ``lift_speed_m_s``
+        (the profile's), ``lift_height_m`` (the rise actually used for that object),
+        ``slip_tolerance_m`` and ``slip_criterion`` (``"contact"`` or ``"shortfall"``); a
+        simulation failure of one object does not stop the others.
+    """
+    from deformctl.sim import LiftProfile, SimSettings, SlipCriterion, lift_attempt
+
+    p = profile or LiftProfile()
+    s = settings or SimSettings()
+    c = criterion or SlipCriterion()
+
+    def make(obj: CatalogObject) -> TrialRunner:
+        spec = obj.to_sim_spec()
+
+        def run(grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
+            return lift_attempt(spec, grip_force_n, profile=p, settings=s, criterion=c)
+
+        return run
+
+    def check(objects: Sequence[CatalogObject], path: str | None) -> None:
+        check_sim_objects(objects, path, settings=s)
+
+    def row_fields(obj: CatalogObject) -> Mapping[str, object]:
+        return {
+            "lift_accel_m_s2": p.accel_m_s2,
+            "lift_speed_m_s": p.speed_m_s,
+            "lift_height_m": p.rise_m(obj.to_sim_spec()),
+            "slip_tolerance_m": c.tolerance_m,
+            "slip_criterion": c.measure,
+        }
+
+    return RunnerFactory(
+        name="sim",
+        make=make,
+        row_fields=row_fields,
+        stop_on_failure=False,
+        settings={
+            "sim_settings": dataclasses.asdict(s),
+            "lift_profile": p.as_dict(),
+            "slip_criterion": {"measure": c.measure, "tolerance_m": c.tolerance_m},
+        },
+        check=check,
+    )
+
+
+@dataclass(frozen=True)
+class LiftTask:
+    """``lift --sim`` for one catalog object (a picklable sweep task).
+
+    Attributes:
+        profile: the :class:`~deformctl.sim.LiftProfile`.
+        settings: the :class:`~deformctl.sim.SimSettings`.
+        criterion: the :class:`~deformctl.sim.SlipCriterion`.
+        protocol, growth, tolerance_rel, max_attempts: the search options.
+    """
+
+    profile: LiftProfile
+    settings: SimSettings
+    criterion: SlipCriterion
+    protocol: str = "refine"
+    growth: float = DEFAULT_GROWTH
+    tolerance_rel: float = DEFAULT_TOLERANCE_REL
+    max_attempts: int = DEFAULT_MAX_ATTEMPTS
+
+    def __call__(self, item: dict[str, Any]) -> TaskOutput:
+        """One object's search: its lift_results row, its attempts as the payload.
+
+        Raises:
+            InputDataError: the object cannot be lifted or simulated (recorded as failed).
+        """
+        factory = sim_runner_factory(
+            profile=self.profile, settings=self.settings, criterion=self.criterion
+        )
+        run = lift_catalog(
+            [CatalogObject.from_row(item)],
+            factory,
+            protocol=self.protocol,  # type: ignore[arg-type]
+            growth=self.growth,
+            tolerance_rel=self.tolerance_rel,
+            max_attempts=self.max_attempts,
+        )
+        error = run.error_message()
+        return TaskOutput(
+            rows=spec_rows(run.table, "lift_results"),
+            payload=(run.objects[0], list(run.attempts)),
+            error=error,
+            error_type="NotConverged" if error else "ObjectFailed",
+        )
+
+
+def lift_sweep(
+    catalog: pd.DataFrame,
+    task: LiftTask,
+    *,
+    catalog_path: str,
+    output: str,
+    sweep: SweepOptions,
+    force: bool = False,
+) -> SweepSummary:
+    """``lift --sim -o DIR/``: one search per object of ``catalog`` through the sweep executor.
+
+    Each part's rows go to ``DIR/part-k.parquet`` and its attempts to the lift log
+    ``DIR/part-k.mcap``; a row the simulator refuses, or a search that does not converge, is
+    recorded in ``DIR/_failures/`` and the others go on.
+
+    Args:
+        catalog: the catalog rows to lift (already selected).
+        task: the simulator and search settings.
+        catalog_path: the catalog's file name (``-`` for stdin), hashed into the fingerprint.
+        output: the dataset directory.
+        sweep: where to run (workers, scheduler), partition size, resume.
+        force: overwrite the sweep files of an existing directory.
+    """
+    factory = sim_runner_factory(
+        profile=task.profile, settings=task.settings, criterion=task.criterion
+    )
+    search = {
+        "protocol": task.protocol,
+        "growth": task.growth,
+        "tolerance_rel": task.tolerance_rel,
+        "max_attempts": task.max_attempts,
+    }
+    run_settings = {"runner": factory.name, **factory.settings, **search}
+    provenance = Provenance.from_invocation([catalog_path], settings=run_settings)
+    fingerprint = dataset_fingerprint(
+        "lift", "lift_results", run_settings, {"catalog": input_digest(catalog_path)}
+    )
+    return run_sweep(
+        task,
+        catalog.to_dict("records"),  # parsed in the workers: a refused row fails alone
+        out_dir=output,
+        schema=table_schema("lift_results"),
+        fingerprint=fingerprint,
+        part_writer=LogPartWriter("lift_log", provenance),
+        force=force,
+        **sweep.run_kwargs(),
+    )

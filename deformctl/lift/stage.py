@@ -1,0 +1,287 @@
+"""The ``lift`` stage: the minimum lifting force of every object of a catalog.
+
+:func:`lift_catalog` runs one :func:`~deformctl.lift.search.find_min_lift_force` search per
+catalog object, each with a runner from a :class:`RunnerFactory`
+(:func:`deformctl.lift.runners.rig.rig_runner_factory` for an external rig,
+:func:`deformctl.lift.runners.sim.sim_runner_factory` for the simulator), and returns a
+:class:`CatalogLiftResult`: the lift_results table, every attempt (for the lift log) and the
+failures, which it records instead of raising, so the caller can write everything before it
+decides the exit code.
+
+Example:
+    >>> from deformctl.catalog import CatalogObject
+    >>> from deformctl.series import TrialOutcome
+    >>> box = CatalogObject.from_row({"object_id": "A", "size_x_cm": 10, "size_y_cm": 10,
+    ...     "size_z_cm": 8, "weight_n": 5.0, "friction_mu": 0.5})
+    >>> def make(obj: CatalogObject) -> TrialRunner:
+    ...     return lambda grip_force_n, attempt_index: TrialOutcome(grip_force_n,
+    ...                                                             grip_force_n >= 7.0, 0.0)
+    >>> run = lift_catalog([box], RunnerFactory("test", make))
+    >>> run.ok, list(run.table["f_w_n"])
+    (True, [5.0])
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import pandas as pd
+
+from deformctl.artifacts.schema import validate_frame
+from deformctl.catalog import CatalogObject, catalog_objects
+from deformctl.lift.search import (
+    DEFAULT_GROWTH,
+    DEFAULT_MAX_ATTEMPTS,
+    DEFAULT_TOLERANCE_REL,
+    LiftAttempt,
+    LiftSearchResult,
+    SearchAbortedError,
+    SearchProtocol,
+    TrialRunner,
+    find_min_lift_force,
+    validate_search_options,
+)
+
+__all__ = [
+    "CatalogLiftResult",
+    "LiftProgress",
+    "ObjectFailure",
+    "RunnerFactory",
+    "lift_catalog",
+]
+
+LiftProgress = Callable[[str, int, int], None]
+"""``progress(object_id, objects_done, objects_total)``, called after each object of a catalog."""
+
+
+def _no_row_fields(obj: CatalogObject) -> Mapping[str, object]:
+    return {}
+
+
+@dataclass(frozen=True)
+class RunnerFactory:
+    """Builds one trial runner per catalog object: what :func:`lift_catalog` searches with.
+
+    Every runner kind (the external rig, the built-in simulator) is one factory, so the stage
+    code does not care which one runs the attempts.
+
+    Attributes:
+        name: the runner's name, stored in the table's ``runner`` column (``"rig"``, ``"sim"``).
+        make: ``make(obj) -> TrialRunner`` for one object; ``obj`` is its
+            :class:`~deformctl.catalog.CatalogObject` (typed attributes, and a read-only mapping
+            of the row).
+        row_fields: ``row_fields(obj) -> {column: value}``: the table columns this runner fills
+            for the object (lift profile ``lift_accel_m_s2``, ``lift_speed_m_s``,
+            ``lift_height_m``, ``slip_tolerance_m``, ``slip_criterion``).
+        stop_on_failure: when a runner fails for one object (raises a
+            :class:`~deformctl.errors.DeformctlError`), the remaining objects are not run.
+        settings: JSON-serialisable settings of the runner, for the outputs' provenance.
+        check: ``check(objects, path)``: refuse objects this runner cannot run (e.g. the
+            simulator needs material values) by raising a
+            :class:`~deformctl.errors.DeformctlError`; :func:`lift_catalog` calls it before any
+            attempt. None: no runner-specific check.
+    """
+
+    name: str
+    make: Callable[[CatalogObject], TrialRunner]
+    row_fields: Callable[[CatalogObject], Mapping[str, object]] = _no_row_fields
+    stop_on_failure: bool = True
+    settings: Mapping[str, Any] = field(default_factory=dict)
+    check: Callable[[Sequence[CatalogObject], str | None], None] | None = None
+
+
+@dataclass(frozen=True)
+class ObjectFailure:
+    """An object whose search did not produce a converged L_f.
+
+    Attributes:
+        object_id: the object.
+        message: one line: why (names the object; for a budget that ran out, the last force
+            tried; for a runner failure, the attempt and the force).
+        aborted: True when the runner failed (a rig crash, time-out or bad answer), False when
+            the search ran out of attempts.
+    """
+
+    object_id: str
+    message: str
+    aborted: bool
+
+
+@dataclass(frozen=True)
+class CatalogLiftResult:
+    """What :func:`lift_catalog` found for a set of catalog objects.
+
+    Attributes:
+        table: the lift_results table, one row per object in the order run (validated against
+            ``schemas/lift_results.columns.json``); objects not run after a runner failure have
+            ``attempts = 0`` and an ``error`` starting with ``not run``.
+        attempts: every attempt that completed, in the order run (for the lift log); an aborted
+            search contributes the attempts before the failure.
+        results: the search result of every object that was run (the partial result for an
+            aborted search).
+        objects: the catalog rows of the objects (:meth:`CatalogObject.record`), for the log.
+        failures: the objects that did not converge, in the order run.
+        not_run: ids of the objects skipped after a runner failure.
+    """
+
+    table: pd.DataFrame
+    attempts: tuple[LiftAttempt, ...]
+    results: tuple[LiftSearchResult, ...]
+    objects: tuple[dict[str, Any], ...]
+    failures: tuple[ObjectFailure, ...]
+    not_run: tuple[str, ...]
+
+    @property
+    def ok(self) -> bool:
+        """True when every object's search converged."""
+        return not self.failures and not self.not_run
+
+    def error_message(self) -> str | None:
+        """One line for the exit: the runner failure if any, else the first non-converged object.
+
+        None when :attr:`ok`.
+        """
+        if self.ok:
+            return None
+        aborted = [f for f in self.failures if f.aborted]
+        first = aborted[0] if aborted else self.failures[0]
+        notes = []
+        others = len(self.failures) - 1
+        if others:
+            notes.append(f"{others} more object{'s' if others > 1 else ''} did not converge")
+        if self.not_run:
+            n = len(self.not_run)
+            notes.append(f"{n} later object{'s' if n > 1 else ''} not run")
+        return first.message + (f" ({'; '.join(notes)})" if notes else "")
+
+
+def lift_catalog(
+    catalog: pd.DataFrame | Sequence[CatalogObject],
+    factory: RunnerFactory,
+    *,
+    protocol: SearchProtocol = "refine",
+    growth: float = DEFAULT_GROWTH,
+    tolerance_rel: float = DEFAULT_TOLERANCE_REL,
+    max_attempts: int = DEFAULT_MAX_ATTEMPTS,
+    progress: LiftProgress | None = None,
+    path: str | None = None,
+) -> CatalogLiftResult:
+    """Search the minimum lifting force of every object of a catalog, one after another.
+
+    Each object gets its own runner from ``factory`` and one :func:`find_min_lift_force`
+    search. Failures do not raise; they are recorded so the caller can still write every
+    attempt and a row per object, then decide the exit:
+
+    * a search that runs out of attempts gives a row with ``converged = False`` and the search's
+      message in ``error``; the next object is run.
+    * a runner failure (:class:`SearchAbortedError`) gives a row from the partial result with
+      the failure in ``error``; the attempts before it are kept. When
+      ``factory.stop_on_failure`` (the rig), the remaining objects are not run and get a
+      ``not run`` row.
+
+    Args:
+        catalog: a validated catalog (see :func:`deformctl.artifacts.read_catalog`), already cut
+            to the objects to lift (:func:`~deformctl.catalog.select_objects`), or its objects.
+        factory: builds the runner of each object.
+        protocol: ``"refine"`` or ``"paper"``.
+        growth: ramp factor (> 1).
+        tolerance_rel: ``refine``'s relative bracket width, in (0, 1).
+        max_attempts: attempt budget per object (>= 1).
+        progress: called after each object as ``progress(object_id, done, total)``.
+        path: the catalog's file name, for error messages.
+
+    Returns:
+        A :class:`CatalogLiftResult`.
+
+    Raises:
+        UsageError: a search option out of range (before anything runs; exit 2).
+        InputDataError: an object the lift cannot use, e.g. ``friction_mu = 0``, or one the
+            runner refuses (``factory.check``) (before anything runs; exit 65).
+    """
+    validate_search_options(
+        protocol=protocol, growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts
+    )
+    objects = (
+        catalog_objects(catalog, path=path) if isinstance(catalog, pd.DataFrame) else list(catalog)
+    )
+    f_w = [obj.f_w_n(path=path) for obj in objects]  # refuses mu <= 0 before any attempt
+    if factory.check is not None:
+        factory.check(objects, path)
+    rows: list[dict[str, object]] = []
+    attempts: list[LiftAttempt] = []
+    results: list[LiftSearchResult] = []
+    failures: list[ObjectFailure] = []
+    not_run: list[str] = []
+    stopped_at: str | None = None
+    for done, (obj, f_w_n) in enumerate(zip(objects, f_w, strict=True), start=1):
+        oid = obj.object_id
+        if stopped_at is not None:
+            rows.append(_not_run_row(obj, f_w_n, factory, protocol, tolerance_rel, stopped_at))
+            not_run.append(oid)
+        else:
+            try:
+                result = find_min_lift_force(
+                    factory.make(obj),
+                    weight_n=obj.weight_n,
+                    friction_mu=obj.friction_mu,
+                    protocol=protocol,
+                    growth=growth,
+                    tolerance_rel=tolerance_rel,
+                    max_attempts=max_attempts,
+                    object_id=oid,
+                )
+                error = None if result.converged else result.message
+                if error is not None:
+                    failures.append(ObjectFailure(oid, error, aborted=False))
+            except SearchAbortedError as err:
+                result, error = err.partial, str(err)
+                failures.append(ObjectFailure(oid, error, aborted=True))
+                if factory.stop_on_failure:
+                    stopped_at = oid
+            results.append(result)
+            attempts.extend(LiftAttempt(oid, i, t) for i, t in enumerate(result.trials))
+            row = result.table_row(runner=factory.name, error=error)
+            row.update(factory.row_fields(obj))
+            rows.append(row)
+        if progress is not None:
+            progress(oid, done, len(objects))
+    table = validate_frame(pd.DataFrame(rows), "lift_results")
+    return CatalogLiftResult(
+        table=table,
+        attempts=tuple(attempts),
+        results=tuple(results),
+        objects=tuple(obj.record() for obj in objects),
+        failures=tuple(failures),
+        not_run=tuple(not_run),
+    )
+
+
+def _not_run_row(
+    obj: CatalogObject,
+    f_w_n: float,
+    factory: RunnerFactory,
+    protocol: SearchProtocol,
+    tolerance_rel: float,
+    stopped_at: str,
+) -> dict[str, object]:
+    row: dict[str, object] = {
+        "object_id": obj.object_id,
+        "weight_n": obj.weight_n,
+        "friction_mu": obj.friction_mu,
+        "f_w_n": f_w_n,
+        "lift_force_n": math.nan,
+        "f_d_n": math.nan,
+        "attempts": 0,
+        "converged": False,
+        "protocol": protocol,
+        "bracket_low_n": math.nan,
+        "bracket_high_n": math.nan,
+        "tolerance_rel": math.nan if protocol == "paper" else float(tolerance_rel),
+        "runner": factory.name,
+        "error": f"not run: the run stopped at object {stopped_at!r} after a runner failure",
+    }
+    row.update(factory.row_fields(obj))
+    return row

@@ -1,0 +1,87 @@
+"""Catalog rows as typed objects: parsing, the lift rule, the simulator's object."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from deformctl.catalog import CatalogObject, rigid_grip_force_n
+from deformctl.errors import InputDataError
+from deformctl.units import GRAVITY_M_S2
+
+ROW = {
+    "object_id": "sponge",
+    "size_x_cm": 17.8,
+    "size_y_cm": 19.1,
+    "size_z_cm": 9.2,
+    "weight_n": 0.7,
+    "friction_mu": 0.5,
+    "material_stiffness_n_per_cm": 49.18,
+    "material_damping_ns_per_cm": 6.47,
+}
+
+
+def test_from_catalog_row_reads_every_column() -> None:
+    spec = CatalogObject.from_row(ROW).to_sim_spec()
+    assert spec.size_cm == (17.8, 19.1, 9.2)
+    assert spec.stiffness_n_per_m == pytest.approx(4918.0)
+    assert spec.damping_ns_per_m == pytest.approx(647.0)
+    assert spec.mass_kg == pytest.approx(0.7 / GRAVITY_M_S2)
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "message"),
+    [
+        ("material_stiffness_n_per_cm", math.nan, "material_stiffness_n_per_cm is missing"),
+        ("material_damping_ns_per_cm", None, "material_damping_ns_per_cm is not a number"),
+        ("friction_mu", 0.0, "friction_mu must be finite and > 0"),
+        ("friction_mu", -0.3, "friction_mu must be finite and > 0"),
+        ("weight_n", 0.0, "weight_n must be finite and > 0"),
+    ],
+)
+def test_bad_rows_raise_one_line_input_errors(column: str, value: object, message: str) -> None:
+    row = dict(ROW, **{column: value})
+    with pytest.raises(InputDataError, match=message) as err:
+        CatalogObject.from_row(row).to_sim_spec()
+    assert "\n" not in str(err.value)
+
+
+def test_missing_column_is_named() -> None:
+    row = {k: v for k, v in ROW.items() if k != "material_damping_ns_per_cm"}
+    with pytest.raises(InputDataError, match="missing column 'material_damping_ns_per_cm'"):
+        CatalogObject.from_row(row).to_sim_spec()
+
+
+def test_a_row_is_parsed_once_into_typed_values_and_kept_as_read() -> None:
+    obj = CatalogObject.from_row({**ROW, "name": "sponge", "weight_n": "0.7"})
+    assert (obj.object_id, obj.weight_n, obj.size_cm) == ("sponge", 0.7, (17.8, 19.1, 9.2))
+    assert obj["name"] == "sponge"  # extra columns stay readable
+    assert obj.f_w_n() == pytest.approx(rigid_grip_force_n(0.7, 0.5)) == pytest.approx(0.7)
+    real = CatalogObject.from_row({**ROW, "material_stiffness_n_per_cm": math.nan,
+                                   "material_damping_ns_per_cm": math.nan})  # fmt: skip
+    assert not real.has_material
+    assert real.record()["material_stiffness_n_per_cm"] is None
+    with pytest.raises(InputDataError, match="'sponge' has no material values"):
+        real.to_sim_spec()
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"object_id": ""}, "catalog row without 'object_id'"),
+        ({"size_y_cm": "wide"}, "object 'sponge': size_y_cm is not a number: 'wide'"),
+        ({"weight_n": math.inf}, "object 'sponge': weight_n is missing or not finite"),
+    ],
+)
+def test_parse_errors_name_the_object_and_the_column(
+    change: dict[str, object], message: str
+) -> None:
+    with pytest.raises(InputDataError, match=message):
+        CatalogObject.from_row({**ROW, **change})
+
+
+def test_lifting_needs_positive_friction() -> None:
+    obj = CatalogObject.from_row({**ROW, "friction_mu": 0.0})
+    with pytest.raises(InputDataError, match=r"friction_mu must be > 0 to lift it \(F_w = W"):
+        obj.f_w_n()
