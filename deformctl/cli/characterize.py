@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+from typing import Any
 
 import pandas as pd
 import typer
@@ -20,6 +21,7 @@ from deformctl.characterize import (
 from deformctl.cli import _sweep, app
 from deformctl.cli._common import translate_errors
 from deformctl.errors import UsageError
+from deformctl.quality import thresholds_help
 
 
 def _pm(value: float, se: float, digits: int) -> str:
@@ -30,7 +32,9 @@ def _pm(value: float, se: float, digits: int) -> str:
 def render_summary(result: LogCoefficients) -> str:
     """A short plain-text table of the coefficients: one line per object."""
     df: pd.DataFrame = result.table
-    rows = [("object", "D (N/cm)", "λ (N·s/cm)", "R²", "samples", "squeezes", "window (s)")]
+    rows = [
+        ("object", "D (N/cm)", "λ (N·s/cm)", "R²", "samples", "squeezes", "quality", "window (s)")
+    ]
     for rec in df.to_dict("records"):
         oid = str(rec["object_id"])
         rows.append(
@@ -41,6 +45,7 @@ def render_summary(result: LogCoefficients) -> str:
                 f"{rec['r2']:.4f}",
                 str(rec["n_samples"]),
                 str(rec["n_squeezes"]),
+                str(rec.get("quality", "")),
                 f"{result.window_s[oid]:.3g}",
             )
         )
@@ -71,6 +76,26 @@ def characterize(
         help="Savitzky-Golay window for d and d', s (default: from the log's position sample "
         "rate, 0.2 s at >= 1 kHz, 0.43 s at 100 Hz).",
     ),
+    preload: str | None = typer.Option(
+        None,
+        "--preload",
+        metavar="fit|zero",
+        help="lsq: fit a contact preload (f = F0 + D d + λ d') or assume none [default: fit for "
+        "rig recordings (measure --bag/--csv), zero for simulated squeezes].",
+    ),
+    constrain_damping: bool = typer.Option(
+        False,
+        "--constrain-damping",
+        help="lsq: fit with λ >= 0 (bounded least squares); the row says when the bound held.",
+    ),
+    strict: bool = typer.Option(
+        False,
+        "--strict",
+        help="Exit 65 (nothing written) if any object is flagged. " + thresholds_help(),
+    ),
+    allow_flagged: bool = typer.Option(
+        False, "--allow-flagged", help="Write objects with negative D (flagged) instead of exit 65."
+    ),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing output."),
     workers: int | None = _sweep.workers_option(),
     scheduler: str | None = _sweep.scheduler_option(),
@@ -84,6 +109,10 @@ def characterize(
     compression between the palms. The table goes to the output; a summary goes to stdout, or
     to stderr when the table itself goes to stdout (-o -).
 
+    Every row carries the fit's diagnostics and a quality column, ok or the flags (see
+    --strict and the README's "When the numbers are doubtful"); each flagged object gives one
+    warning line on stderr.
+
     SQUEEZE.mcap may also be a directory written by measure --sim -o DIR/ (its part-*.mcap
     logs, in order). With a dataset directory output (-o DIR/) the objects are fitted in
     parallel (--workers, --scheduler; --resume) into DIR/part-*.parquet; an object that cannot
@@ -93,17 +122,19 @@ def characterize(
     """
     if method not in ("lsq", "paper"):
         raise UsageError(f"--method must be lsq or paper, got {method!r}")
+    fit: dict[str, Any] = {"preload": preload, "constrain_damping": constrain_damping}
+    policy = {"strict": strict, "allow_flagged": allow_flagged}
     sweep = _sweep.SweepOptions(workers, scheduler, connect_timeout, partition_size, resume)
     if sweep.check(output):
-        task = CharacterizeTask(method, window_s)
+        task = CharacterizeTask(method, window_s, preload, constrain_damping, strict, allow_flagged)
         _sweep.finish(characterize_sweep(log, task, output=output, sweep=sweep, force=force),
                       "characterize")  # fmt: skip
         return
     check_output_path(output, force)
     if os.path.isdir(log):
-        result = characterize_dir(log, method, window_s=window_s)  # type: ignore[arg-type]
+        result = characterize_dir(log, method, window_s=window_s, **fit, **policy)  # type: ignore[arg-type]
     else:
-        result = read_and_characterize(log, method, window_s=window_s)  # type: ignore[arg-type]
+        result = read_and_characterize(log, method, window_s=window_s, **fit, **policy)  # type: ignore[arg-type]
     provenance = Provenance.from_invocation(
         [log],
         settings={
@@ -111,7 +142,12 @@ def characterize(
             "window_s": result.window_s,
             "window_s_option": window_s,
             "position_rate_hz": result.position_rate_hz,
+            "preload": result.preload,
+            "preload_option": preload,
+            "constrain_damping": constrain_damping,
         },
     )
     write_table(result.table, output, "coefficients", provenance=provenance, force=force)
+    for line in result.warnings:
+        typer.echo(f"warning: {line}", err=True)
     typer.echo(render_summary(result), err=is_stdio(output))

@@ -69,6 +69,17 @@ class _Options:
     columns: str | None
     units: str | None
     segment: bool | None
+    phase: str = "all"
+    position_increases_when: str | None = None
+    size_x_cm: float | None = None
+
+    def recording(self) -> dict[str, Any]:
+        """The reader options both rig sources take (phase, position direction, size)."""
+        return {
+            "phase": self.phase,
+            "position_increases_when": self.position_increases_when,
+            "size_x_cm": self.size_x_cm,
+        }
 
 
 def parse_mapping(text: str, option: str) -> dict[str, str]:
@@ -110,6 +121,8 @@ def _from_bag(path: str, opts: _Options) -> tuple[Recording, dict[str, Any]]:
         "axis": opts.axis,
         "position_is": opts.position_is,
         "segment": True if opts.segment is None else opts.segment,
+        "phase": opts.phase,
+        "position_increases_when": opts.position_increases_when,
     }
     rec = read_ros2_bag(
         path,
@@ -120,6 +133,7 @@ def _from_bag(path: str, opts: _Options) -> tuple[Recording, dict[str, Any]]:
         joint=opts.joint,
         position_is=opts.position_is,  # type: ignore[arg-type]
         segment=settings["segment"],
+        **opts.recording(),
     )
     return rec, settings
 
@@ -143,6 +157,8 @@ def _from_csv(path: str, opts: _Options) -> tuple[Recording, dict[str, Any]]:
         "units": units,
         "position_is": opts.position_is,
         "segment": False if opts.segment is None else opts.segment,
+        "phase": opts.phase,
+        "position_increases_when": opts.position_increases_when,
     }
     rec = read_csv_export(
         path,
@@ -151,6 +167,7 @@ def _from_csv(path: str, opts: _Options) -> tuple[Recording, dict[str, Any]]:
         object_id=opts.object_id,
         position_is=opts.position_is,  # type: ignore[arg-type]
         segment=settings["segment"],
+        **opts.recording(),
     )
     return rec, settings
 
@@ -375,6 +392,20 @@ def measure(
         "--segment/--no-segment",
         help="Split the recording into squeezes by force (default: yes for bags, no for CSV).",
     ),
+    phase: str | None = typer.Option(
+        None,
+        "--phase",
+        metavar="loading|unloading|all",
+        help="Bag/CSV: keep each squeeze up to its peak force, from it, or whole [default: all]. "
+        "A squeeze that ruptures is always cut at the rupture (recorded in the log).",
+    ),
+    position_increases_when: str | None = typer.Option(
+        None,
+        "--position-increases-when",
+        metavar="closing|opening",
+        help="Bag/CSV: the position grows as the gripper closes or opens [default: a gap grows "
+        "when opening, a compression when closing, one palm's sign is found].",
+    ),
     marker_size_cm: float | None = typer.Option(
         None,
         "--marker-size-cm",
@@ -561,6 +592,8 @@ def measure(
                 "--columns": columns,
                 "--units": units,
                 "--segment/--no-segment": segment,
+                "--phase": phase,
+                "--position-increases-when": position_increases_when,
                 "--object-id": object_id,
                 "--weight-n": weight_n,
                 "--size-cm": size_cm,
@@ -584,6 +617,7 @@ def measure(
                 "--wrench-topic": wrench_topics, "--position-topic": position_topic,
                 "--joint": joint, "--columns": columns, "--units": units,
                 "--segment/--no-segment": segment, "--size-cm": size_cm,
+                "--phase": phase, "--position-increases-when": position_increases_when,
             },
             "--images",
         )  # fmt: skip
@@ -608,6 +642,9 @@ def measure(
         columns=columns,
         units=units,
         segment=segment,
+        phase="all" if phase is None else phase,
+        position_increases_when=position_increases_when,
+        size_x_cm=None if size_cm is None else size_cm[0],
     )
     rec, settings = _SOURCES[flag](source, opts)
     settings["force_rate_hz"] = rec.force_rate_hz
@@ -621,7 +658,14 @@ def measure(
         position_rate_hz=rec.position_rate_hz,
     )
     provenance = Provenance.from_invocation([source], settings=settings)
+    obj = {**obj, **rec.log_fields()}
     write_squeeze_log(output, [obj], rec.squeezes, provenance=provenance, force=force)
+    for r in rec.ruptures:
+        typer.echo(
+            f"warning: {source}: object {object_id!r}: rupture in {r.describe()}: cut off there "
+            "(recorded in the log)",
+            err=True,
+        )
     duration_s = sum(float(s.time_s[-1]) for s in rec.squeezes)
     where = "stdout" if is_stdio(output) else output
     typer.echo(
