@@ -25,7 +25,9 @@ from deformctl.artifacts import read_catalog, read_lift_log, read_table, validat
 from deformctl.artifacts.schema import fast_check, json_validator
 from deformctl.cli import app
 from deformctl.errors import SchemaError, SimulationError
-from deformctl.lift import RunnerFactory, TrialRunner, lift_catalog, select_objects
+from deformctl.catalog import select_objects
+from deformctl.lift.search import TrialRunner
+from deformctl.lift.stage import RunnerFactory, lift_catalog
 from deformctl.lift.runners.rig import parse_rig_response
 from deformctl.series import TrialOutcome
 

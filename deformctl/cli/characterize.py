@@ -3,23 +3,30 @@
 from __future__ import annotations
 
 import math
-import os
+from typing import Annotated
 
 import pandas as pd
 import typer
 
-from deformctl.artifacts import Provenance, check_output_path, write_table
 from deformctl.artifacts.io import is_stdio
 from deformctl.characterize import (
+    DEFAULT_WINDOW_S,
     CharacterizeTask,
     LogCoefficients,
-    characterize_dir,
+    characterize_file,
     characterize_sweep,
-    read_and_characterize,
 )
-from deformctl.cli import _sweep, app
-from deformctl.cli._common import translate_errors
+from deformctl.cli._common import finish_sweep, translate_errors
+from deformctl.cli._options import (
+    ConnectTimeout,
+    Force,
+    PartitionSize,
+    Resume,
+    Scheduler,
+    Workers,
+)
 from deformctl.errors import UsageError
+from deformctl.parallel import SweepOptions
 
 
 def _pm(value: float, se: float, digits: int) -> str:
@@ -50,33 +57,39 @@ def render_summary(result: LogCoefficients) -> str:
     )
 
 
-@app.command()
 @translate_errors
 def characterize(
-    log: str = typer.Argument(..., metavar="SQUEEZE.mcap", help="A squeeze log; - for stdin."),
-    output: str = typer.Option(
-        ..., "-o", "--output", metavar="coefficients.parquet", help="Table to write; - for stdout."
-    ),
-    method: str = typer.Option(
-        "lsq",
-        "--method",
-        metavar="lsq|paper",
-        help="lsq: joint least-squares fit of f = D d + λ d' with standard errors; "
-        "paper: the paper's per-sample ratios.",
-    ),
-    window_s: float | None = typer.Option(
-        None,
-        "--window-s",
-        metavar="S",
-        help="Savitzky-Golay window for d and d', s (default: from the log's position sample "
-        "rate, 0.2 s at >= 1 kHz, 0.43 s at 100 Hz).",
-    ),
-    force: bool = typer.Option(False, "--force", help="Overwrite an existing output."),
-    workers: int | None = _sweep.workers_option(),
-    scheduler: str | None = _sweep.scheduler_option(),
-    connect_timeout: float | None = _sweep.connect_timeout_option(),
-    partition_size: int | None = _sweep.partition_size_option(),
-    resume: bool = _sweep.resume_option(),
+    log: Annotated[str, typer.Argument(metavar="SQUEEZE.mcap", help="A squeeze log; - for stdin.")],
+    output: Annotated[
+        str,
+        typer.Option(
+            "-o", "--output", metavar="coefficients.parquet", help="Table to write; - for stdout."
+        ),
+    ],
+    method: Annotated[
+        str,
+        typer.Option(
+            "--method",
+            metavar="lsq|paper",
+            help="lsq: joint least-squares fit of f = D d + λ d' with standard errors; "
+            "paper: the paper's per-sample ratios.",
+        ),
+    ] = "lsq",
+    window_s: Annotated[
+        float | None,
+        typer.Option(
+            "--window-s",
+            metavar="S",
+            help="Savitzky-Golay window for d and d', s (default: from the log's position sample "
+            f"rate, {DEFAULT_WINDOW_S:g} s at >= 1 kHz, 0.43 s at 100 Hz).",
+        ),
+    ] = None,
+    force: Force = False,
+    workers: Workers = None,
+    scheduler: Scheduler = None,
+    connect_timeout: ConnectTimeout = None,
+    partition_size: PartitionSize = None,
+    resume: Resume = False,
 ) -> None:
     """Estimate each object's deformability D (N/cm) and damping λ (N·s/cm) from a squeeze log.
 
@@ -93,25 +106,11 @@ def characterize(
     """
     if method not in ("lsq", "paper"):
         raise UsageError(f"--method must be lsq or paper, got {method!r}")
-    sweep = _sweep.SweepOptions(workers, scheduler, connect_timeout, partition_size, resume)
+    sweep = SweepOptions(workers, scheduler, connect_timeout, partition_size, resume)
     if sweep.check(output):
         task = CharacterizeTask(method, window_s)
-        _sweep.finish(characterize_sweep(log, task, output=output, sweep=sweep, force=force),
-                      "characterize")  # fmt: skip
+        summary = characterize_sweep(log, task, output=output, sweep=sweep, force=force)
+        finish_sweep(summary, "characterize")
         return
-    check_output_path(output, force)
-    if os.path.isdir(log):
-        result = characterize_dir(log, method, window_s=window_s)  # type: ignore[arg-type]
-    else:
-        result = read_and_characterize(log, method, window_s=window_s)  # type: ignore[arg-type]
-    provenance = Provenance.from_invocation(
-        [log],
-        settings={
-            "method": method,
-            "window_s": result.window_s,
-            "window_s_option": window_s,
-            "position_rate_hz": result.position_rate_hz,
-        },
-    )
-    write_table(result.table, output, "coefficients", provenance=provenance, force=force)
+    result = characterize_file(log, method, output=output, window_s=window_s, force=force)  # type: ignore[arg-type]
     typer.echo(render_summary(result), err=is_stdio(output))
