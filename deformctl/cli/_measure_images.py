@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 
 import pandas as pd
 import typer
@@ -56,7 +56,7 @@ def measure_images(
         raise UsageError("--append and --force cannot be used together")
     if opts.append and is_stdio(output):
         raise UsageError("--append needs a catalog file, not - (stdout)")
-    _check_row_values({"object_id": object_id, "weight_n": weight_n, "friction_mu": friction_mu})
+    _check_row_values(object_id, weight_n, friction_mu)
     inputs = [top, side, *(opts.background or ())]
     for path in inputs:
         if is_stdio(path):
@@ -106,20 +106,19 @@ def measure_images(
         n_rows = len(write_catalog(pd.DataFrame([row]), output, provenance=provenance, force=force))
     where = "stdout" if is_stdio(output) else output
     typer.echo(
-        f"{where}: {object_id!r} {row['size_x_cm']} x {row['size_y_cm']} x {row['size_z_cm']} cm "
+        f"{where}: {object_id!r} {round(size.size_x_cm, 2)} x {round(size.size_y_cm, 2)} x "
+        f"{round(size.size_z_cm, 2)} cm "
         f"(x, y from the top view, z from the side view; {n_rows} row(s) in the catalog)",
         err=True,
     )
 
 
-def _check_row_values(values: Mapping[str, object]) -> None:
-    weight = values["weight_n"]
-    mu = values["friction_mu"]
-    if not values["object_id"]:
+def _check_row_values(object_id: str, weight: float, mu: float) -> None:
+    if not object_id:
         raise UsageError("--object-id must not be empty")
-    if not (isinstance(weight, float | int) and math.isfinite(weight) and weight > 0):
+    if not (math.isfinite(weight) and weight > 0):
         raise UsageError(f"--weight-n must be a number > 0, got {weight}")
-    if not (isinstance(mu, float | int) and math.isfinite(mu) and mu > 0):
+    if not (math.isfinite(mu) and mu > 0):
         raise UsageError(f"--friction-mu must be a number > 0, got {mu}")
 
 
