@@ -102,3 +102,10 @@ def test_only_the_catalog_module_names_catalog_columns() -> None:
 def test_every_entry_module_imports_first(module: str) -> None:
     # a fresh interpreter per module: an import cycle shows up only for some import orders
     subprocess.run([sys.executable, "-c", f"import {module}"], check=True, capture_output=True)
+
+
+def test_make_examples_runs_every_example() -> None:
+    makefile = (PACKAGE.parent / "Makefile").read_text()
+    recipe = makefile.split("\nexamples: install\n", 1)[1].split("\n\n", 1)[0]
+    for example in sorted((PACKAGE.parent / "examples").glob("*.py")):
+        assert f"examples/{example.name}" in recipe, example.name
