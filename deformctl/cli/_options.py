@@ -7,17 +7,24 @@ restated in :data:`HEAVY_DEFAULTS`, because importing numba or OpenCV costs the 
 a second at start-up; ``tests/test_cli_options.py`` checks each of them against the library
 object it restates, so they cannot drift.
 
-An option whose value is ``None`` was not given; the library default then applies.
+An option whose value is ``None`` was not given; the library default then applies. The five
+sweep options are added to a command by :func:`with_sweep_options`, which hands them to it as
+one :class:`~deformctl.parallel.SweepOptions`.
 """
 
 from __future__ import annotations
 
-from typing import Annotated
+import functools
+import inspect
+from collections.abc import Callable
+from typing import Annotated, Any, TypeVar
 
 import typer
 
 from deformctl.errors import UsageError
-from deformctl.parallel import DEFAULT_CONNECT_TIMEOUT_S, DEFAULT_PARTITION_SIZE
+from deformctl.parallel import DEFAULT_CONNECT_TIMEOUT_S, DEFAULT_PARTITION_SIZE, SweepOptions
+
+R = TypeVar("R")
 
 #: Defaults of the simulator (``SimSettings``, ``LiftProfile``, ``SlipCriterion``) and of the
 #: vision functions (``detect_slip``, ``measure_object_size``), restated for the help texts only.
@@ -139,3 +146,37 @@ Resume = Annotated[
         help="Dataset output: keep the complete parts of an earlier run, compute the rest.",
     ),
 ]
+
+
+#: The sweep options' parameters: (name, alias, default), in the order of ``SweepOptions``.
+_SWEEP_PARAMETERS: tuple[tuple[str, Any, Any], ...] = (
+    ("workers", Workers, None),
+    ("scheduler", Scheduler, None),
+    ("connect_timeout", ConnectTimeout, None),
+    ("partition_size", PartitionSize, None),
+    ("resume", Resume, False),
+)
+#: What a command wrapped by :func:`with_sweep_options` receives when called directly.
+NO_SWEEP = SweepOptions()
+
+
+def with_sweep_options(command: Callable[..., R]) -> Callable[..., R]:
+    """Give ``command`` the options ``--workers`` ... ``--resume`` as one ``sweep`` argument.
+
+    ``command`` takes ``sweep: SweepOptions``; the command line sees the five options instead
+    (declared once, above), and the wrapper builds the :class:`SweepOptions` from them.
+    """
+    signature = inspect.signature(command, eval_str=True)
+    kept = [p for p in signature.parameters.values() if p.name != "sweep"]
+    added = [
+        inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=value, annotation=alias)
+        for name, alias, value in _SWEEP_PARAMETERS
+    ]
+
+    @functools.wraps(command)
+    def wrapper(*args: Any, **kwargs: Any) -> R:
+        values = [kwargs.pop(name, value) for name, _, value in _SWEEP_PARAMETERS]
+        return command(*args, sweep=SweepOptions(*values), **kwargs)
+
+    wrapper.__signature__ = signature.replace(parameters=[*kept, *added])  # type: ignore[attr-defined]
+    return wrapper

@@ -16,15 +16,8 @@ from deformctl.characterize import (
     characterize_file,
     characterize_sweep,
 )
+from deformctl.cli import _options as opt
 from deformctl.cli._common import finish_sweep, translate_errors
-from deformctl.cli._options import (
-    ConnectTimeout,
-    Force,
-    PartitionSize,
-    Resume,
-    Scheduler,
-    Workers,
-)
 from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
 
@@ -58,6 +51,7 @@ def render_summary(result: LogCoefficients) -> str:
 
 
 @translate_errors
+@opt.with_sweep_options
 def characterize(
     log: Annotated[str, typer.Argument(metavar="SQUEEZE.mcap", help="A squeeze log; - for stdin.")],
     output: Annotated[
@@ -84,12 +78,8 @@ def characterize(
             f"rate, {DEFAULT_WINDOW_S:g} s at >= 1 kHz, 0.43 s at 100 Hz).",
         ),
     ] = None,
-    force: Force = False,
-    workers: Workers = None,
-    scheduler: Scheduler = None,
-    connect_timeout: ConnectTimeout = None,
-    partition_size: PartitionSize = None,
-    resume: Resume = False,
+    force: opt.Force = False,
+    sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
     """Estimate each object's deformability D (N/cm) and damping λ (N·s/cm) from a squeeze log.
 
@@ -106,7 +96,6 @@ def characterize(
     """
     if method not in ("lsq", "paper"):
         raise UsageError(f"--method must be lsq or paper, got {method!r}")
-    sweep = SweepOptions(workers, scheduler, connect_timeout, partition_size, resume)
     if sweep.check(output):
         task = CharacterizeTask(method, window_s)
         summary = characterize_sweep(log, task, output=output, sweep=sweep, force=force)

@@ -26,6 +26,7 @@ import typer
 from rich.console import Console
 
 from deformctl.artifacts.io import is_stdio
+from deformctl.cli import _options as opt
 from deformctl.cli._common import finish_sweep, progress_bar, translate_errors
 from deformctl.cli._lift_frames import frames_judge
 from deformctl.cli._lift_runner import (
@@ -45,19 +46,6 @@ from deformctl.cli._lift_runner import (
     choose_runner,
     sim_parts,
 )
-from deformctl.cli._options import (
-    AlphaCm,
-    ConnectTimeout,
-    DtS,
-    Force,
-    MemoryBudgetGib,
-    Objects,
-    PartitionSize,
-    Resume,
-    Scheduler,
-    Workers,
-    parse_object_ids,
-)
 from deformctl.errors import SearchError, UsageError
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
@@ -71,6 +59,7 @@ from deformctl.parallel import SweepOptions
 
 
 @translate_errors
+@opt.with_sweep_options
 def lift(
     catalog: Annotated[str, typer.Argument(help="Object catalog, CSV or Parquet; - for stdin.")],
     output: Annotated[
@@ -109,14 +98,14 @@ def lift(
     frame_marker_dict: FrameMarkerDict = None,
     slip_tolerance_m: SlipToleranceM = None,
     slip_criterion: SlipCriterionOption = None,
-    alpha_cm: AlphaCm = None,
-    dt_s: DtS = None,
-    memory_budget_gib: MemoryBudgetGib = None,
+    alpha_cm: opt.AlphaCm = None,
+    dt_s: opt.DtS = None,
+    memory_budget_gib: opt.MemoryBudgetGib = None,
     debug_dir: DebugDir = None,
     log: Annotated[
         str | None, typer.Option("--log", help="Lift log (MCAP) with every attempt; - for stdout.")
     ] = None,
-    objects: Objects = None,
+    objects: opt.Objects = None,
     protocol: Annotated[
         str,
         typer.Option(
@@ -137,12 +126,8 @@ def lift(
     max_attempts: Annotated[
         int, typer.Option("--max-attempts", help="Most attempts per object (>= 1).")
     ] = DEFAULT_MAX_ATTEMPTS,
-    force: Force = False,
-    workers: Workers = None,
-    scheduler: Scheduler = None,
-    connect_timeout: ConnectTimeout = None,
-    partition_size: PartitionSize = None,
-    resume: Resume = False,
+    force: opt.Force = False,
+    sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
     """Find each object's minimum lifting force L_f by iterative lifting.
 
@@ -164,7 +149,6 @@ def lift(
     Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
     -o lift.parquet --log lift.mcap
     """
-    sweep = SweepOptions(workers, scheduler, connect_timeout, partition_size, resume)
     dataset = sweep.check(output)
     if lift_hold_s is not None and hold_s is not None:
         raise UsageError("give --lift-hold-s (or its old spelling --hold-s), not both")
@@ -194,7 +178,7 @@ def lift(
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
     )
-    object_ids = parse_object_ids(objects)
+    object_ids = opt.parse_object_ids(objects)
     if dataset:
         if parts is None:
             raise UsageError("a dataset directory output (-o DIR/) needs --sim")

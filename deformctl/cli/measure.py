@@ -19,19 +19,8 @@ from deformctl.cli import _image_options as img
 from deformctl.cli import _measure_images, _measure_rig, _measure_sim
 from deformctl.cli import _measure_rig as rec
 from deformctl.cli import _measure_sim as sq
+from deformctl.cli import _options as opt
 from deformctl.cli._common import translate_errors
-from deformctl.cli._options import (
-    AlphaCm,
-    ConnectTimeout,
-    DtS,
-    Force,
-    MemoryBudgetGib,
-    Objects,
-    PartitionSize,
-    Resume,
-    Scheduler,
-    Workers,
-)
 from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
 
@@ -57,6 +46,7 @@ def _refuse_foreign(source: str, given: dict[str, object]) -> None:
 
 
 @translate_errors
+@opt.with_sweep_options
 def measure(
     catalog: Annotated[
         str | None,
@@ -103,24 +93,20 @@ def measure(
         ),
     ] = ...,  # type: ignore[assignment]
     squeezes: sq.Squeezes = None,
-    objects: Objects = None,
+    objects: opt.Objects = None,
     peak_force_n: sq.PeakForceN = None,
     strain: sq.Strain = None,
     ramp_s: sq.RampS = None,
     hold_s: sq.HoldS = None,
     floating: sq.Floating = None,
-    alpha_cm: AlphaCm = None,
-    dt_s: DtS = None,
-    memory_budget_gib: MemoryBudgetGib = None,
+    alpha_cm: opt.AlphaCm = None,
+    dt_s: opt.DtS = None,
+    memory_budget_gib: opt.MemoryBudgetGib = None,
     seed: sq.Seed = None,
     noise_force_n: sq.NoiseForceN = None,
     noise_position_m: sq.NoisePositionM = None,
-    force: Force = False,
-    workers: Workers = None,
-    scheduler: Scheduler = None,
-    connect_timeout: ConnectTimeout = None,
-    partition_size: PartitionSize = None,
-    resume: Resume = False,
+    force: opt.Force = False,
+    sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
     """Turn a rig recording, or simulated squeezes of a catalog, into a squeeze log (MCAP).
 
@@ -143,7 +129,6 @@ def measure(
         --position-topic /left/palm_pose --object-id sand --weight-n 2.9 -o squeeze.mcap
       deformctl measure datasets/paper/objects.csv --sim -o squeeze.mcap
     """
-    sweep = SweepOptions(workers, scheduler, connect_timeout, partition_size, resume)
     sim_opts = _measure_sim.SimOptions(
         squeezes, objects, peak_force_n, strain, ramp_s, hold_s, floating, alpha_cm, dt_s,
         memory_budget_gib, seed, noise_force_n, noise_position_m,

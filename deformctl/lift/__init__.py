@@ -1,9 +1,9 @@
 """Iterative lifting: the minimum lifting force L_f of an object, on any trial runner.
 
 * :mod:`deformctl.lift.search`: the trial-runner protocol, one object's search
-  (:func:`find_min_lift_force`: the paper's ramp and the refined bisection), its result
-  (:class:`LiftSearchResult`) and :class:`LiftAttempt`, the unit a lift log stores. Its names
-  are re-exported here.
+  (``find_min_lift_force``: the paper's ramp and the refined bisection), its result
+  (``LiftSearchResult``) and ``LiftAttempt``, the unit a lift log stores. Its public names are
+  re-exported here.
 * :mod:`deformctl.lift.stage`: the ``lift`` stage over a catalog (``lift_catalog``, one runner
   per object from a ``RunnerFactory``; ``lift_catalog_files`` reads the catalog and writes the
   table and the log).
@@ -11,8 +11,8 @@
   :mod:`deformctl.lift.runners.sim`: the built-in simulator (``sim_runner_factory``), its sweep
   task and ``lift_sweep``.
 
-Only the search is imported with the package: the artifact layer imports :class:`LiftAttempt`
-from here, and the stage and the runners import the artifact layer.
+Only the search is imported with the package: the artifact layer imports ``LiftAttempt`` from
+here, and the stage and the runners import the artifact layer.
 
 Example:
     >>> from deformctl.series import TrialOutcome
@@ -24,36 +24,5 @@ Example:
 
 from __future__ import annotations
 
-from deformctl.lift.search import (
-    DEFAULT_GROWTH,
-    DEFAULT_MAX_ATTEMPTS,
-    DEFAULT_TOLERANCE_REL,
-    PROTOCOLS,
-    AttemptError,
-    LiftAttempt,
-    LiftSearchResult,
-    RigSearchAbortedError,
-    SearchAbortedError,
-    SearchProtocol,
-    TrialRunner,
-    find_min_lift_force,
-    rigid_grip_force_n,
-    validate_search_options,
-)
-
-__all__ = [
-    "DEFAULT_GROWTH",
-    "DEFAULT_MAX_ATTEMPTS",
-    "DEFAULT_TOLERANCE_REL",
-    "PROTOCOLS",
-    "AttemptError",
-    "LiftAttempt",
-    "LiftSearchResult",
-    "RigSearchAbortedError",
-    "SearchAbortedError",
-    "SearchProtocol",
-    "TrialRunner",
-    "find_min_lift_force",
-    "rigid_grip_force_n",
-    "validate_search_options",
-]
+from deformctl.lift.search import *  # noqa: F403 - the package's face is the search
+from deformctl.lift.search import __all__ as __all__
