@@ -1,8 +1,17 @@
 """Simulator speed: one sponge lift attempt, one complete object, force-kernel throughput,
-implicit-step cost relative to one force evaluation. Every ratio is measured in this run."""
+implicit-step cost relative to one force evaluation, and the scaling table of issue 13 (cubes of
+5^3 .. 21^3 particles: model build, one lift attempt, step time, step / one force evaluation, the
+fitted exponent of step time against particle count, peak memory), the damped cube's wall time
+per simulated second (the MuJoCo comparison) and the direct-vs-iterative solver candidates.
+Every ratio is measured in this run; each scaling row runs in a fresh interpreter (its own peak
+memory), best of ``REPEATS`` attempts."""
 
 from __future__ import annotations
 
+import json
+import math
+import subprocess
+import sys
 import time
 from collections.abc import Callable
 
@@ -17,7 +26,7 @@ from deformctl.sim import (
     rigid_lift_force_n,
     squeeze_many,
 )
-from deformctl.sim.engine import build_model, run_model
+from deformctl.sim.engine import build_model, memory_estimate_bytes, run_model
 from deformctl.sim.kernels import spring_forces, spring_forces_numpy
 from deformctl.sim.lattice import build_lattice
 
@@ -79,7 +88,7 @@ def main() -> None:
     t_object = time.perf_counter() - t0
     print(
         f"one complete object (3 squeezes + search to 1 %, {attempts} attempts): "
-        f"{t_object:.3f} s  (target <= 2 s); L_f = {lf:.4f} N, "
+        f"{t_object:.3f} s  (target <= 0.3 s); L_f = {lf:.4f} N, "
         f"F_w = {f_w_n(SPONGE):.4f} N, rigid {rigid_lift_force_n(SPONGE, LiftProfile()):.4f} N"
     )
 
@@ -148,6 +157,155 @@ def main() -> None:
             f"implicit step, {label} ({mdl.n_dof} DOFs, {mdl.row_dof.size} contact rows): "
             f"{t_step * 1e6:.1f} us = {t_step / t_force:.1f} x one force evaluation "
             f"({t_force * 1e6:.2f} us)"
+        )
+
+    scaling()
+
+
+CUBE = ObjectSpec("cube", (10.0, 10.0, 10.0), 5.0, 0.5, 30.0, 1.0)
+#: the issue's MuJoCo comparison: 9 cm cube, 5 N, D 20 N/cm, lambda 1 N·s/cm, 10 N squeeze
+DAMPED = ObjectSpec("damped", (9.0, 9.0, 9.0), 5.0, 0.5, 20.0, 1.0)
+#: MuJoCo 4.0 flex on the same damped cube, wall s per simulated s (issue 13)
+MUJOCO_S_PER_SIM_S = {5: 1.34, 8: 13.3, 11: 69.0}
+SIZES = (5, 8, 11, 16, 21)
+REPEATS = 3
+
+
+def _force_eval_s(model: object) -> float:
+    """Best time of one :func:`spring_forces` pass over ``model``'s elements, s."""
+    from deformctl.sim.engine import Model
+
+    assert isinstance(model, Model)
+    lat = model.lattice
+    out = np.zeros_like(model.base_x)
+    vel = np.zeros_like(model.base_x)
+    reps = max(5, int(2e6 / lat.edges.shape[0]))
+
+    def run() -> None:
+        for _ in range(reps):
+            spring_forces(
+                model.base_x,
+                vel,
+                lat.edges,
+                lat.rest_length_m,
+                model.stiffness_n_per_m,
+                model.damping_ns_per_m,
+                out,
+            )
+
+    return _best_of(run) / reps
+
+
+def scaling_row(n: int, solver: str = "auto") -> dict[str, float | str]:
+    """One row of the scaling table (run in a fresh interpreter by :func:`scaling`)."""
+    import resource
+
+    from deformctl.sim.engine import _lattice_and_scale
+
+    settings = SimSettings(particles_per_side=n, solver=solver)  # type: ignore[arg-type]
+    small = SimSettings(particles_per_side=4, solver=solver)  # type: ignore[arg-type]
+    grip = 1.2 * rigid_lift_force_n(CUBE, LiftProfile())
+    lift_attempt(CUBE, grip, settings=small)  # load the compiled kernels
+    _lattice_and_scale.cache_clear()
+    build_model.cache_clear()
+    t0 = time.perf_counter()
+    model = build_model(CUBE, settings, gripped=True)
+    t_build = time.perf_counter() - t0
+    model.solver_stats[:] = 0
+    t_attempt = _best_of(lambda: lift_attempt(CUBE, grip, settings=settings), REPEATS)
+    outcome = lift_attempt(CUBE, grip, settings=settings)
+    assert outcome.series is not None
+    n_steps = int(outcome.series.time_s.size)
+    stats = model.solver_stats
+    t_force = _force_eval_s(model)
+    # the damped cube, squeezed on the table with 10 N: wall s per simulated s
+    dsettings = SimSettings(particles_per_side=n, solver=solver)  # type: ignore[arg-type]
+    build_model(DAMPED, dsettings, gripped=True)
+    t_damped = _best_of(
+        lambda: squeeze_many(DAMPED, 1, peak_force_n=10.0, ramp_s=0.25, hold_s=0.75,
+                             settings=dsettings),
+        REPEATS,
+    )  # fmt: skip
+    return {
+        "n": n,
+        "particles": model.lattice.n_particles,
+        "dofs": model.n_dof,
+        "solver": "iterative" if model.hierarchy is not None else "direct",
+        "build_s": t_build,
+        "attempt_s": t_attempt,
+        "step_us": t_attempt / n_steps * 1e6,
+        "force_us": t_force * 1e6,
+        "cg_its_per_solve": float(stats[1] / stats[0]) if stats[0] else 0.0,
+        "damped_s_per_sim_s": t_damped / 1.0,
+        "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        "estimate_mib": memory_estimate_bytes(CUBE, settings) / 2**20,
+        "lifted": float(outcome.lifted),
+    }
+
+
+def _row_in_subprocess(n: int, solver: str = "auto") -> dict[str, float | str]:
+    code = (
+        "import json, sys; from bench.bench_sim import scaling_row; "
+        f"print(json.dumps(scaling_row({n}, {solver!r})))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], check=True, capture_output=True, text=True
+    ).stdout
+    return json.loads(out.strip().splitlines()[-1])  # type: ignore[no-any-return]
+
+
+def scaling() -> None:
+    """Issue 13's scaling table, the solver candidates and the MuJoCo comparison."""
+    print(
+        "scaling, 10 cm cube (W 5 N, D 30 N/cm, lambda 1 N·s/cm), gripped at 1.2 x rigid limit, "
+        f"best of {REPEATS}:"
+    )
+    print(
+        f"{'n':>4} {'particles':>9} {'DOFs':>6} {'solver':>9} {'build s':>8} {'attempt s':>9} "
+        f"{'us/step':>8} {'step/force':>10} {'CG its':>6} {'peak MiB':>8} {'est MiB':>8}"
+    )
+    rows = []
+    for n in SIZES:
+        row = _row_in_subprocess(n)
+        rows.append(row)
+        print(
+            f"{n:>3}^3 {row['particles']:>9} {row['dofs']:>6} {row['solver']:>9} "
+            f"{row['build_s']:>8.2f} {row['attempt_s']:>9.3f} {row['step_us']:>8.0f} "
+            f"{float(row['step_us']) / float(row['force_us']):>10.1f} "
+            f"{row['cg_its_per_solve']:>6.2f} {row['peak_rss_mib']:>8.0f} "
+            f"{row['estimate_mib']:>8.0f}",
+            flush=True,
+        )
+    big = [r for r in rows if int(r["n"]) >= 8]
+    x = np.log([float(r["particles"]) for r in big])
+    y = np.log([float(r["step_us"]) for r in big])
+    exponent = float(np.polyfit(x, y, 1)[0])
+    print(
+        f"fitted exponent of step time vs particle count, 8^3..21^3: {exponent:.2f} (target <= 1.3)"
+    )
+    by_n = {int(r["n"]): r for r in rows}
+    print(
+        f"targets: step <= 5 x one force evaluation at every size; 16^3 attempt "
+        f"{by_n[16]['attempt_s']:.2f} s (<= 4 s); 21^3 attempt {by_n[21]['attempt_s']:.2f} s "
+        f"(<= 10 s), build {by_n[21]['build_s']:.2f} s (<= 10 s), peak memory "
+        f"{by_n[21]['peak_rss_mib']:.0f} MiB (<= 2048 MiB)"
+    )
+    print("damped 9 cm cube (5 N, D 20 N/cm, lambda 1 N·s/cm) squeezed with 10 N on the table:")
+    for n in (5, 8, 11):
+        ours = float(by_n[n]["damped_s_per_sim_s"]) if n in by_n else math.nan
+        mj = MUJOCO_S_PER_SIM_S[n]
+        print(
+            f"  {n:>2}^3: {ours:.3f} wall s per simulated s; MuJoCo 4.0 flex {mj} (issue 13): "
+            f"{mj / ours:.1f}x faster (target at 11^3: >= 20x, <= 3.4 s)"
+        )
+    print("solver candidates (same cube, one lift attempt, s):")
+    for n in (5, 8, 11):
+        d = _row_in_subprocess(n, "direct")
+        it = _row_in_subprocess(n, "iterative")
+        print(
+            f"  {n:>2}^3: sparse L D L^T {d['attempt_s']:.3f} (build {d['build_s']:.2f}), "
+            f"multigrid CG {it['attempt_s']:.3f} (build {it['build_s']:.2f}, "
+            f"{it['cg_its_per_solve']:.2f} CG its per solve)"
         )
 
 

@@ -15,12 +15,37 @@ per-element ``c_e`` works). For the linear small-strain lattice (``nonlinear_spr
 this *is* backward Euler, unconditionally stable (A-stable, L-stable) for any stiffness, damping
 and step. With the geometrically exact springs (default) it is a one-Newton-iteration backward
 Euler step whose Jacobian error is of the order of the rotations and strains, which stay small in
-the grip. Because the system matrix ``A`` does not change, it is factorised **once per model**:
-a sparse ``L D L^T`` in nested-dissection order (:mod:`deformctl.sim.solver`), so a step is one
-element force pass, one pair of sparse triangular solves and a small contact solve. No dense
-``N x N`` array is built anywhere (the calibration solves are sparse too); the model's memory is
-estimated from the particle counts before anything is built and refused above
-``SimSettings.memory_budget_gib``. The step is chosen for accuracy, not
+the grip. The system matrix ``A`` does not change, so its solver is built **once per model**.
+No dense ``N x N`` array is built anywhere (the calibration solves are sparse too), and the
+model's memory is estimated from the particle counts before anything is built and refused above
+``SimSettings.memory_budget_gib``.
+
+Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
+    * **direct**, up to ``direct_max_dofs = 1000`` DOFs (the default lattices): ``A = L D L^T``
+      in geometric nested-dissection order (:mod:`deformctl.sim.solver`), a pair of sparse
+      triangular solves per step, contacts from exact columns ``A^-1 e_d``. Exact, and
+      bit-identical to the former dense inverse's results to 1e-12 (tests/sim/
+      test_dense_reference.py). Its fill grows as ``N^1.5`` (21^3 cube: 12.2 M entries, a
+      triangular-solve pair ~25-40 ms against ~0.8 ms for one force evaluation), so it does not
+      scale.
+    * **iterative** above that: CG preconditioned by one geometric-multigrid V-cycle
+      (:mod:`deformctl.sim.multigrid`; convergence ~0.1 per iteration whatever the size),
+      warm-started from the linear extrapolation of the last two steps' velocity changes, to an
+      RMS residual of ``cg_tolerance_m_s = 1e-7`` m/s. Contacts become *fixed DOFs* (an active row
+      prescribes its DOF's velocity exactly, so sticking holds exactly), palm-plane rows a Schur
+      complement on CG-solved columns. Cost per step: one force pass plus ~1-3 CG iterations of
+      ~6 matrix-vector products each, linear in the lattice size. A lift's centre-of-mass path
+      stays within 4e-10 m of the direct solver's (11^3 cube), squeeze D/lambda within 1e-6.
+    * Measured candidates (``bench/bench_sim.py``, 10 cm cube, one lift attempt, 2-core machine
+      under load): SuperLU's MMD ordering fills 2x more than nested dissection (24 M at 21^3),
+      COLAMD 3.4x; CHOLMOD (``scikit-sparse``) has no wheel on PyPI (source only, needs the
+      SuiteSparse headers), so CI could not install it; a banded Cholesky after RCM was not
+      built (its band is a lattice cross-section, so its fill grows as ``N^{5/3}``, more than
+      nested dissection's); float32 multigrid levels gave no speed-up.
+      Multigrid CG beats the factor from about 7^3 particles (7^3: 0.22 s vs 0.31 s per attempt;
+      11^3: 1.3 s vs 2.7 s; 16^3: 5.8 s vs 20 s).
+
+The step is chosen for accuracy, not
 stability: the default ``dt = 1 ms`` resolves the lift profile's 50 ms jerk ramps; backward
 Euler's lag of about dt/2 on the retardation time lambda/D is 3 % at lambda/D = 17 ms and
 negligible above. Measured (Table I objects, search to 0.1 %): halving dt to 0.5 ms moves the
@@ -49,6 +74,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any, Literal
 
 import numpy as np
 import scipy.sparse
@@ -66,6 +92,7 @@ from deformctl.sim.lattice import (
     resting_positions_m,
     unit_squeeze_stiffness_n_per_m,
 )
+from deformctl.sim.multigrid import Hierarchy, build_hierarchy
 from deformctl.sim.objects import ObjectSpec
 from deformctl.sim.solver import LDLFactor, estimate_factor_entries, ldl_columns
 from deformctl.units import CM, GRAVITY_M_S2
@@ -99,6 +126,13 @@ class SimSettings:
         pgs_iterations: maximum projected Gauss–Seidel sweeps per step (an exact active-set
             solve follows).
         pgs_tolerance_m_s: PGS stopping tolerance on the constraint velocity, m/s.
+        solver: ``"direct"`` (sparse factor), ``"iterative"`` (multigrid-preconditioned CG) or
+            ``"auto"`` (default: direct up to ``direct_max_dofs`` DOFs, iterative above).
+        direct_max_dofs: the ``"auto"`` threshold, DOFs.
+        cg_tolerance_m_s: CG stopping tolerance of the iterative solver: RMS residual impulse per
+            DOF over the particle mass, m/s. 1e-7: a lift's centre-of-mass path within 4e-10 m of
+            the direct solver's (11^3 cube), and the energy of a free damped lattice never rises.
+        cg_max_iterations: CG iteration limit per solve.
         memory_budget_gib: refuse a model whose estimated memory (:func:`memory_estimate_bytes`,
             made before anything is built) exceeds this, GiB.
     """
@@ -114,6 +148,10 @@ class SimSettings:
     max_squeeze_strain: float = 0.5
     pgs_iterations: int = 60
     pgs_tolerance_m_s: float = 1e-13
+    solver: Literal["auto", "direct", "iterative"] = "auto"
+    direct_max_dofs: int = 1000
+    cg_tolerance_m_s: float = 1e-7
+    cg_max_iterations: int = 100
     memory_budget_gib: float = 2.0
 
     def __post_init__(self) -> None:
@@ -125,6 +163,10 @@ class SimSettings:
             raise UsageError(f"max_squeeze_strain must be in (0, 1), got {self.max_squeeze_strain}")
         if not (math.isfinite(self.memory_budget_gib) and self.memory_budget_gib > 0):
             raise UsageError(f"memory_budget_gib must be > 0, got {self.memory_budget_gib}")
+        if self.solver not in ("auto", "direct", "iterative"):
+            raise UsageError(f"solver must be auto, direct or iterative, got {self.solver!r}")
+        if not (math.isfinite(self.cg_tolerance_m_s) and self.cg_tolerance_m_s > 0):
+            raise UsageError(f"cg_tolerance_m_s must be > 0, got {self.cg_tolerance_m_s}")
         if self.particles_per_side < 2:
             raise UsageError(f"particles_per_side must be >= 2, got {self.particles_per_side}")
         for name in ("palm_mass_kg", "table_mu", "grip_ramp_s", "grip_settle_s"):
@@ -172,9 +214,11 @@ class Model:
     dof_mass_kg: FloatArray
     stiffness_n_per_m: FloatArray
     damping_ns_per_m: FloatArray
-    factor: LDLFactor
+    factor: LDLFactor | None
     contact_cols: FloatArray
     col_of_dof: IntArray
+    hierarchy: Hierarchy | None
+    solver_stats: IntArray
     row_dof: IntArray
     row_dof2: IntArray
     row_particle: IntArray
@@ -197,22 +241,40 @@ GIB = 1024**3
 def memory_estimate_bytes(spec: ObjectSpec, settings: SimSettings) -> float:
     """Estimated peak memory of building and running the model of ``spec``, bytes.
 
-    Made from the particle counts alone (nothing is built): the sparse factor of the implicit
-    matrix (``nnz(L)`` from :func:`deformctl.sim.solver.estimate_factor_entries`, 12 bytes per
-    entry, three times over for SuperLU's working copy of ``L`` and ``U`` while factorising),
-    the precomputed contact columns (palm and bottom-layer DOFs, ``n_dof`` doubles each) and the
-    element arrays and their COO assembly (about 2 kB per element). Within a factor of two of the
-    measured peak (``bench/bench_sim.py`` prints both at 21^3).
+    Made from the particle counts alone (nothing is built). Direct solver: the sparse factor
+    (``nnz(L)`` from :func:`deformctl.sim.solver.estimate_factor_entries`, 12 bytes per entry,
+    three times over for SuperLU's working copy of ``L`` and ``U`` while factorising) and the
+    precomputed contact columns (palm and bottom-layer DOFs, ``n_dof`` doubles each). Iterative
+    solver: the multigrid levels (about 30 matrix entries of 12 bytes per DOF, twice over for the
+    calibration's own hierarchy). Both: the element arrays and their assembly (about 2 kB per
+    element) and 50 MB of fixed overhead. ``bench/bench_sim.py`` prints it beside the measured
+    peak of the 21^3 run.
     """
     nx, ny, nz = particles_per_axis(spec.size_m, settings.alpha_m(spec))
     n = float(nx) * float(ny) * float(nz)
     n_dof = 3.0 * n
     n_elements = 9.0 * n
+    common = 2000.0 * n_elements + 50e6
+    gripped_dofs = n_dof - 4.0 * float(ny) * float(nz) + 4.0
+    direct = (
+        gripped_dofs <= settings.direct_max_dofs
+        if settings.solver == "auto"
+        else (settings.solver == "direct")
+    )
+    if not direct:
+        return common + 2.0 * 30.0 * 12.0 * n_dof + 400.0 * n_dof
     entries = float(estimate_factor_entries(int(min(n_dof, 1e15))))
     factor = 3.0 * 12.0 * entries + 64.0 * n_dof
     n_cols = float(nx * ny) * (3.0 if settings.table_mu > 0 else 1.0) + 4.0
     columns = 8.0 * n_cols * n_dof
-    return factor + columns + 2000.0 * n_elements + 50e6
+    return factor + columns + common
+
+
+def uses_iterative_solver(settings: SimSettings, n_dof: int) -> bool:
+    """Whether a model of ``n_dof`` DOFs runs the iterative solver under ``settings``."""
+    if settings.solver == "auto":
+        return n_dof > settings.direct_max_dofs
+    return settings.solver == "iterative"
 
 
 def check_lattice_size(spec: ObjectSpec, settings: SimSettings) -> None:
@@ -282,11 +344,13 @@ def build_model(
         palm_x0[1] = base_x[lattice.face_mask(1), 0].max()
     dt = settings.dt_s
     # A = M + dt C + dt^2 K, C assembled from the element dampers as K from the springs
-    a = dt * dt * reduced_stiffness(lattice, stiffness, dof_of, n_dof)
-    a = a + dt * reduced_stiffness(lattice, damping, dof_of, n_dof)
-    a = a + scipy.sparse.diags(dof_mass, format="csr")
+    # (both are sums of element terms with the same pattern: assembled in one pass)
+    a = reduced_stiffness(lattice, dt * dt * stiffness + dt * damping, dof_of, n_dof)
+    a = (a + scipy.sparse.diags(dof_mass, format="csr")).tocsr()
     palm_dofs = np.concatenate([palm_x, palm_z])
-    factor = lattice_factor(lattice, a, dof_of, n_dof, last=palm_dofs)
+    iterative = uses_iterative_solver(settings, n_dof)
+    factor = None if iterative else lattice_factor(lattice, a, dof_of, n_dof, last=palm_dofs)
+    hierarchy = build_hierarchy(lattice.shape, gripped, a) if iterative else None
 
     row_dof: list[int] = []
     row_dof2: list[int] = []
@@ -356,16 +420,19 @@ def build_model(
             if settings.table_mu > 0:
                 col_dofs += [int(dof_of[3 * p]), int(dof_of[3 * p + 1])]
     col_dof_arr = np.unique(np.asarray(col_dofs, dtype=np.int64))
+    if factor is None:  # the iterative solver fixes contact DOFs instead
+        col_dof_arr = col_dof_arr[:0]
     contact_cols = np.empty((col_dof_arr.size, n_dof))
-    ldl_columns(
-        factor.colptr,
-        factor.rowidx,
-        factor.values,
-        factor.diag,
-        factor.perm,
-        col_dof_arr,
-        contact_cols,
-    )
+    if factor is not None:
+        ldl_columns(
+            factor.colptr,
+            factor.rowidx,
+            factor.values,
+            factor.diag,
+            factor.perm,
+            col_dof_arr,
+            contact_cols,
+        )
     col_of_dof = np.full(n_dof, -1, dtype=np.int64)
     col_of_dof[col_dof_arr] = np.arange(col_dof_arr.size)
     return Model(
@@ -386,6 +453,8 @@ def build_model(
         factor=factor,
         contact_cols=contact_cols,
         col_of_dof=col_of_dof,
+        hierarchy=hierarchy,
+        solver_stats=np.zeros(4, dtype=np.int64),
         row_dof=np.asarray(row_dof, dtype=np.int64),
         row_dof2=np.asarray(row_dof2, dtype=np.int64),
         row_particle=np.asarray(row_particle, dtype=np.int64),
@@ -421,7 +490,7 @@ def run_model(
     q0 = np.zeros(model.n_dof) if q is None else np.asarray(q, dtype=np.float64)
     v0 = np.zeros(model.n_dof) if v is None else np.asarray(v, dtype=np.float64)
     lat = model.lattice
-    return kernels.integrate(
+    common_head: tuple[Any, ...] = (
         model.base_x,
         q0,
         v0,
@@ -432,13 +501,8 @@ def run_model(
         lat.direction,
         model.stiffness_n_per_m,
         model.damping_ns_per_m,
-        model.factor.colptr,
-        model.factor.rowidx,
-        model.factor.values,
-        model.factor.diag,
-        model.factor.perm,
-        model.contact_cols,
-        model.col_of_dof,
+    )
+    common_tail: tuple[Any, ...] = (
         model.gravity_m_s2,
         model.palm_x_dof,
         model.palm_z_dof,
@@ -459,9 +523,47 @@ def run_model(
         s.dt_s,
         n_steps,
         s.nonlinear_springs,
-        s.pgs_iterations,
-        s.pgs_tolerance_m_s,
     )
+    if model.hierarchy is not None:
+        h = model.hierarchy
+        c = h.coarse
+        tol = s.cg_tolerance_m_s * model.particle_mass_kg * math.sqrt(model.n_dof)
+        solver_args: tuple[Any, ...] = (
+            h.n,
+            h.vec_off,
+            h.row_off,
+            h.a_ptr,
+            h.a_idx,
+            h.a_val,
+            h.inv_diag,
+            h.p_row_off,
+            h.p_ptr,
+            h.p_idx,
+            h.p_val,
+            c.colptr,
+            c.rowidx,
+            c.values,
+            c.diag,
+            c.perm,
+            tol,
+            s.cg_max_iterations,
+        )
+        return kernels.integrate_iterative(
+            *(common_head + solver_args + common_tail + (model.solver_stats,))
+        )
+    f = model.factor
+    assert f is not None
+    direct_args: tuple[Any, ...] = (
+        f.colptr,
+        f.rowidx,
+        f.values,
+        f.diag,
+        f.perm,
+        model.contact_cols,
+        model.col_of_dof,
+    )
+    pgs: tuple[Any, ...] = (s.pgs_iterations, s.pgs_tolerance_m_s)
+    return kernels.integrate(*(common_head + direct_args + common_tail + pgs))
 
 
 def positions_m(model: Model, q: FloatArray) -> FloatArray:

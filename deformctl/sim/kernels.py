@@ -23,6 +23,10 @@ set (an LU of the active rows' ``W`` block, cached while the active set stays th
 check of the complementarity conditions); when that fails, projected Gauss–Seidel on ``W``
 followed by an exact active-set solve (so sticking contacts stick to round-off).
 
+:func:`integrate_iterative` is the same step for the iterative solver (multigrid CG,
+:mod:`deformctl.sim.multigrid`): there the contact rows are an active set of fixed DOFs solved
+together with the free DOFs (see its docstring), since columns of ``A^-1`` would cost a solve each.
+
 Row types: 0 table normal (``v >= -gap/dt``, ``Lambda >= 0``); 1 palm friction on a face-patch z
 DOF (``v = v_palm`` or ``|Lambda| = mu N dt``); 2 table friction on a bottom x/y DOF
 (``|Lambda| <= mu_table Lambda_normal``, a four-sided friction pyramid); 3 and 4 the left and
@@ -36,6 +40,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from deformctl.sim.multigrid import pcg
 from deformctl.sim.solver import ldl_solve
 
 FloatArray = NDArray[np.float64]
@@ -518,6 +523,140 @@ def _row_state(lam: FloatArray, lo: FloatArray, hi: FloatArray, row_type: IntArr
 
 
 @njit(cache=True)
+def _step_impulse(
+    base_x: FloatArray,
+    q: FloatArray,
+    v: FloatArray,
+    dof_of: IntArray,
+    particle_mass: float,
+    edges: IntArray,
+    rest: FloatArray,
+    n0: FloatArray,
+    k: FloatArray,
+    c: FloatArray,
+    k_dt: FloatArray,
+    nonlinear: bool,
+    gravity: float,
+    palm_x_dof: IntArray,
+    f_now: float,
+    dt: float,
+    x: FloatArray,
+    vel: FloatArray,
+    fp: FloatArray,
+    fq: FloatArray,
+) -> None:
+    """The step's right-hand side ``fq = dt (f(x, v) + f_ext - dt K v)`` in DOFs (also fills the
+    particle positions ``x`` and velocities ``vel``)."""
+    n = base_x.shape[0]
+    for p in range(n):
+        for a in range(3):
+            d = dof_of[3 * p + a]
+            x[p, a] = base_x[p, a] + q[d]
+            vel[p, a] = v[d]
+            fp[p, a] = 0.0
+    _element_rhs(x, vel, edges, rest, n0, k, c, k_dt, nonlinear, fp)
+    fq[:] = 0.0
+    for p in range(n):
+        fp[p, 2] -= particle_mass * gravity
+        for a in range(3):
+            fq[dof_of[3 * p + a]] += fp[p, a]
+    if palm_x_dof[0] >= 0:
+        fq[palm_x_dof[0]] += f_now
+        fq[palm_x_dof[1]] -= f_now
+    for i in range(fq.shape[0]):
+        fq[i] *= dt
+
+
+@njit(cache=True)
+def _record_step(
+    step: int,
+    rec: FloatArray,
+    q: FloatArray,
+    v: FloatArray,
+    vnew: FloatArray,
+    lam: FloatArray,
+    row_type: IntArray,
+    row_dof: IntArray,
+    base_x: FloatArray,
+    dof_of: IntArray,
+    x: FloatArray,
+    palm_x_dof: IntArray,
+    palm_z_dof: IntArray,
+    palm_x0: FloatArray,
+    palm_vz: FloatArray,
+    palm_mass: float,
+    f_now: float,
+    dt: float,
+    slip: FloatArray,
+    palm_z_acc: FloatArray,
+    com_z0: float,
+) -> None:
+    """Record step ``step`` and advance ``v <- vnew``, ``q <- q + dt v`` (palm quantities before
+    the position update use the new velocities)."""
+    n = base_x.shape[0]
+    n_dof = q.shape[0]
+    nr = row_type.shape[0]
+    gripped = palm_x_dof[0] >= 0
+    table_n = 0.0
+    fric_l = 0.0
+    fric_r = 0.0
+    for r in range(nr):
+        if row_type[r] == 0:
+            table_n += lam[r] / dt
+        elif row_type[r] == 1:
+            if row_dof[r] == palm_z_dof[0]:
+                fric_l += lam[r] / dt
+            else:
+                fric_r += lam[r] / dt
+    if gripped:
+        vz_palm = palm_vz[step + 1]
+        slip[0] += abs(vnew[palm_z_dof[0]] - vz_palm) * dt
+        slip[1] += abs(vnew[palm_z_dof[1]] - vz_palm) * dt
+        palm_z_acc[0] += vz_palm * dt
+        acc_l = (vnew[palm_x_dof[0]] - v[palm_x_dof[0]]) / dt
+        acc_r = (vnew[palm_x_dof[1]] - v[palm_x_dof[1]]) / dt
+        rec[step, REC_NORMAL_L] = f_now - palm_mass * acc_l
+        rec[step, REC_NORMAL_R] = f_now + palm_mass * acc_r
+    max_speed = 0.0
+    for i in range(n_dof):
+        v[i] = vnew[i]
+        q[i] += dt * v[i]
+        if abs(v[i]) > max_speed:
+            max_speed = abs(v[i])
+    com = np.zeros(3)
+    min_z = 1e300
+    for p in range(n):
+        for a in range(3):
+            x[p, a] = base_x[p, a] + q[dof_of[3 * p + a]]
+            com[a] += x[p, a]
+        if x[p, 2] < min_z:
+            min_z = x[p, 2]
+    penetration = 0.0
+    if gripped:
+        xl = palm_x0[0] + q[palm_x_dof[0]]
+        xr = palm_x0[1] + q[palm_x_dof[1]]
+        for p in range(n):
+            pen = max(xl - x[p, 0], x[p, 0] - xr)
+            if pen > penetration:
+                penetration = pen
+        rec[step, REC_PALM_XL] = xl
+        rec[step, REC_PALM_XR] = xr
+    rec[step, REC_TIME] = (step + 1) * dt
+    rec[step, REC_PALM_Z] = palm_z_acc[0]
+    rec[step, REC_COM_Z] = com[2] / n - com_z0
+    rec[step, REC_COM_X] = com[0] / n
+    rec[step, REC_COM_Y] = com[1] / n
+    rec[step, REC_SLIP_L] = slip[0]
+    rec[step, REC_SLIP_R] = slip[1]
+    rec[step, REC_FRICTION_L] = fric_l
+    rec[step, REC_FRICTION_R] = fric_r
+    rec[step, REC_TABLE_N] = table_n
+    rec[step, REC_MIN_Z] = min_z
+    rec[step, REC_PENETRATION] = penetration
+    rec[step, REC_MAX_SPEED] = max_speed
+
+
+@njit(cache=True)
 def integrate(
     base_x: FloatArray,
     q: FloatArray,
@@ -641,32 +780,18 @@ def integrate(
     for r in range(nr):
         if row_type[r] == 2:
             has_table_friction = True
-    gripped = palm_x_dof[0] >= 0
     slip = np.zeros(2)
-    palm_z = 0.0
+    palm_z_acc = np.zeros(1)
     com_z0 = 0.0
     for p in range(n):
         com_z0 += base_x[p, 2] + q[dof_of[3 * p + 2]]
     com_z0 /= n
     for step in range(n_steps):
-        for p in range(n):
-            for a in range(3):
-                d = dof_of[3 * p + a]
-                x[p, a] = base_x[p, a] + q[d]
-                vel[p, a] = v[d]
-                fp[p, a] = 0.0
-        _element_rhs(x, vel, edges, rest, n0, k, c, k_dt, nonlinear, fp)
-        fq[:] = 0.0
-        for p in range(n):
-            fp[p, 2] -= particle_mass * gravity
-            for a in range(3):
-                fq[dof_of[3 * p + a]] += fp[p, a]
         f_now = force_cmd[step + 1]
-        if gripped:
-            fq[palm_x_dof[0]] += f_now
-            fq[palm_x_dof[1]] -= f_now
-        for i in range(n_dof):
-            fq[i] *= dt
+        _step_impulse(
+            base_x, q, v, dof_of, particle_mass, edges, rest, n0, k, c, k_dt, nonlinear,
+            gravity, palm_x_dof, f_now, dt, x, vel, fp, fq,
+        )  # fmt: skip
         ldl_solve(l_colptr, l_rowidx, l_values, l_diag, l_perm, fq, work, dv)
         for i in range(n_dof):
             vfree[i] = v[i] + dv[i]
@@ -879,62 +1004,397 @@ def integrate(
                 f = friction_of[r]
                 if f >= 0 and state[r] == 1 and state[f] == 1:
                     state[r] = 3
-        # ---- records (palm quantities before the position update use the new velocities)
-        table_n = 0.0
-        fric_l = 0.0
-        fric_r = 0.0
+        _record_step(
+            step, rec, q, v, vnew, lam, row_type, row_dof, base_x, dof_of, x, palm_x_dof,
+            palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, slip, palm_z_acc, com_z0,
+        )  # fmt: skip
+    return q, v, rec
+
+
+@njit(cache=True)
+def _fixed_residual(
+    a_ptr: IntArray,
+    a_idx: Int32Array,
+    a_val: FloatArray,
+    fixed_list: IntArray,
+    n_fixed: int,
+    dv: FloatArray,
+    b: FloatArray,
+    out: FloatArray,
+) -> None:
+    """``out[d] = (A dv - b)[d]`` for the fixed DOFs ``d`` (the impulse their rows apply)."""
+    for f in range(n_fixed):
+        d = fixed_list[f]
+        acc = -b[d]
+        for kk in range(a_ptr[d], a_ptr[d + 1]):
+            acc += a_val[kk] * dv[a_idx[kk]]
+        out[d] = acc
+
+
+@njit(cache=True)
+def integrate_iterative(
+    base_x: FloatArray,
+    q: FloatArray,
+    v: FloatArray,
+    dof_of: IntArray,
+    particle_mass: float,
+    edges: IntArray,
+    rest: FloatArray,
+    n0: FloatArray,
+    k: FloatArray,
+    c: FloatArray,
+    h_n: IntArray,
+    h_vec_off: IntArray,
+    h_row_off: IntArray,
+    h_a_ptr: IntArray,
+    h_a_idx: Int32Array,
+    h_a_val: FloatArray,
+    h_inv_diag: FloatArray,
+    h_p_row_off: IntArray,
+    h_p_ptr: IntArray,
+    h_p_idx: Int32Array,
+    h_p_val: FloatArray,
+    hc_colptr: IntArray,
+    hc_rowidx: Int32Array,
+    hc_values: FloatArray,
+    hc_diag: FloatArray,
+    hc_perm: IntArray,
+    cg_tolerance: float,
+    cg_max_iterations: int,
+    gravity: float,
+    palm_x_dof: IntArray,
+    palm_z_dof: IntArray,
+    palm_x0: FloatArray,
+    palm_stop: FloatArray,
+    palm_mass: float,
+    force_cmd: FloatArray,
+    palm_vz: FloatArray,
+    mu: float,
+    mu_table: float,
+    row_dof: IntArray,
+    row_dof2: IntArray,
+    row_type: IntArray,
+    row_link: IntArray,
+    row_particle: IntArray,
+    bottom_particles: IntArray,
+    bottom_row: IntArray,
+    dt: float,
+    n_steps: int,
+    nonlinear: bool,
+    stats: IntArray,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """:func:`integrate` with a multigrid-preconditioned CG instead of the factor.
+
+    The contacts are solved as an active set of *fixed DOFs*: a unit row that is active (table
+    contact, sticking palm friction, palm stop, sticking table friction) prescribes its DOF's new
+    velocity exactly (``v = target``), the CG solves the free DOFs, and the row's impulse is the
+    residual ``(A dv - b)`` at its DOF; a sliding friction row adds its bound as a known impulse.
+    Two-DOF rows (palm planes) that are active are added by a Schur complement on CG-solved
+    columns. The active set starts from last step's and is updated (release on a wrong-signed
+    impulse, fix on a violated row, stick/slide on the friction bound and the sliding direction)
+    until it is consistent, so the solution is the same complementarity solution as
+    :func:`integrate`'s, up to the CG tolerance on the free DOFs; fixed rows hold exactly.
+
+    Args:
+        h_*: the multigrid hierarchy of ``A`` (:class:`deformctl.sim.multigrid.Hierarchy`;
+            level 0 is ``A`` itself).
+        cg_tolerance: CG stops when the free DOFs' residual 2-norm is at most this, N·s.
+        cg_max_iterations: CG iteration limit per solve.
+        stats: counters, ``[4]``: solves, CG iterations, active-set rounds, unconverged solves.
+        Other arguments: as :func:`integrate`.
+    """
+    n = base_x.shape[0]
+    n_dof = q.shape[0]
+    nr = row_dof.shape[0]
+    q = q.copy()
+    v = v.copy()
+    x = np.empty((n, 3))
+    vel = np.empty((n, 3))
+    fp = np.empty((n, 3))
+    fq = np.empty(n_dof)
+    bt = np.empty(n_dof)
+    dv = np.zeros(n_dof)
+    dv_prev = np.zeros(n_dof)
+    dv_prev2 = np.zeros(n_dof)
+    vnew = np.empty(n_dof)
+    react = np.zeros(n_dof)
+    k_dt = k * dt
+    rec = np.zeros((n_steps, N_REC))
+    tot = 0
+    for lvl in range(h_n.shape[0]):
+        tot += h_n[lvl]
+    work = np.empty(4 * n_dof + 3 * tot)
+    fixed = np.zeros(n_dof, dtype=np.bool_)
+    fixed_list = np.zeros(n_dof, dtype=np.int64)
+    fixer = np.full(n_dof, -1, dtype=np.int64)
+    lam = np.zeros(nr)
+    state = np.zeros(nr, dtype=np.int64)
+    for r in range(nr):
+        if row_type[r] == 1:
+            state[r] = 1  # palm friction starts sticking
+    target = np.zeros(nr)
+    gap = np.zeros(nr)
+    bound = np.zeros(nr)
+    table_of_dof = np.full(n_dof, -1, dtype=np.int64)
+    for r in range(nr):
+        if row_type[r] == 0:
+            table_of_dof[row_dof[r]] = r
+    general = np.zeros(nr, dtype=np.int64)
+    general_slot = np.zeros(nr, dtype=np.int64)
+    yslot = np.full(nr, -1, dtype=np.int64)
+    ystore = np.zeros((0, n_dof))
+    slot_version = np.zeros(0, dtype=np.int64)
+    n_slots = 0
+    fixed_prev = np.zeros(n_dof, dtype=np.int64)
+    n_fixed_prev = -1
+    fixed_version = 0
+    unit = np.zeros(n_dof)
+    slip = np.zeros(2)
+    palm_z_acc = np.zeros(1)
+    com_z0 = 0.0
+    for p in range(n):
+        com_z0 += base_x[p, 2] + q[dof_of[3 * p + 2]]
+    com_z0 /= n
+    a_ptr0 = h_a_ptr[h_row_off[0] : h_row_off[0] + n_dof + 1]
+    for step in range(n_steps):
+        f_now = force_cmd[step + 1]
+        _step_impulse(
+            base_x, q, v, dof_of, particle_mass, edges, rest, n0, k, c, k_dt, nonlinear,
+            gravity, palm_x_dof, f_now, dt, x, vel, fp, fq,
+        )  # fmt: skip
+        # targets of the rows (as in integrate)
         for r in range(nr):
-            if row_type[r] == 0:
-                table_n += lam[r] / dt
-            elif row_type[r] == 1:
-                if row_dof[r] == palm_z_dof[0]:
-                    fric_l += lam[r] / dt
-                else:
-                    fric_r += lam[r] / dt
-        if gripped:
-            vz_palm = palm_vz[step + 1]
-            slip[0] += abs(vnew[palm_z_dof[0]] - vz_palm) * dt
-            slip[1] += abs(vnew[palm_z_dof[1]] - vz_palm) * dt
-            palm_z += vz_palm * dt
-            acc_l = (vnew[palm_x_dof[0]] - v[palm_x_dof[0]]) / dt
-            acc_r = (vnew[palm_x_dof[1]] - v[palm_x_dof[1]]) / dt
-            rec[step, REC_NORMAL_L] = f_now - palm_mass * acc_l
-            rec[step, REC_NORMAL_R] = f_now + palm_mass * acc_r
-        max_speed = 0.0
+            gap[r] = 1e300
+        for b in range(bottom_particles.shape[0]):
+            r = bottom_row[b]
+            z = x[bottom_particles[b], 2]
+            if z < gap[r]:
+                gap[r] = z
+        for r in range(nr):
+            t = row_type[r]
+            if t == 5:
+                gap[r] = x[row_particle[r], 0] - palm_x0[0] - q[palm_x_dof[0]]
+            elif t == 6:
+                gap[r] = palm_x0[1] + q[palm_x_dof[1]] - x[row_particle[r], 0]
+            if t == 0 or t >= 5:
+                target[r] = -gap[r] / dt
+            elif t == 1:
+                target[r] = palm_vz[step + 1]
+                bound[r] = mu * max(f_now, 0.0) * dt
+            elif t == 3:
+                target[r] = (palm_stop[0] - palm_x0[0] - q[palm_x_dof[0]]) / dt
+            elif t == 4:
+                target[r] = (palm_stop[1] - palm_x0[1] - q[palm_x_dof[1]]) / dt
+            else:
+                target[r] = 0.0
+        # warm start: last step's velocity change
         for i in range(n_dof):
-            v[i] = vnew[i]
-            q[i] += dt * v[i]
-            if abs(v[i]) > max_speed:
-                max_speed = abs(v[i])
-        com = np.zeros(3)
-        min_z = 1e300
-        for p in range(n):
-            for a in range(3):
-                x[p, a] = base_x[p, a] + q[dof_of[3 * p + a]]
-                com[a] += x[p, a]
-            if x[p, 2] < min_z:
-                min_z = x[p, 2]
-        penetration = 0.0
-        if gripped:
-            xl = palm_x0[0] + q[palm_x_dof[0]]
-            xr = palm_x0[1] + q[palm_x_dof[1]]
-            for p in range(n):
-                pen = max(xl - x[p, 0], x[p, 0] - xr)
-                if pen > penetration:
-                    penetration = pen
-            rec[step, REC_PALM_XL] = xl
-            rec[step, REC_PALM_XR] = xr
-        rec[step, REC_TIME] = (step + 1) * dt
-        rec[step, REC_PALM_Z] = palm_z
-        rec[step, REC_COM_Z] = com[2] / n - com_z0
-        rec[step, REC_COM_X] = com[0] / n
-        rec[step, REC_COM_Y] = com[1] / n
-        rec[step, REC_SLIP_L] = slip[0]
-        rec[step, REC_SLIP_R] = slip[1]
-        rec[step, REC_FRICTION_L] = fric_l
-        rec[step, REC_FRICTION_R] = fric_r
-        rec[step, REC_TABLE_N] = table_n
-        rec[step, REC_MIN_Z] = min_z
-        rec[step, REC_PENETRATION] = penetration
-        rec[step, REC_MAX_SPEED] = max_speed
+            dv[i] = 2.0 * dv_prev[i] - dv_prev2[i]
+        for _round in range(64):
+            stats[2] += 1
+            # fixed DOFs and known impulses of the current active set
+            for i in range(n_dof):
+                bt[i] = fq[i]
+                fixed[i] = False
+                fixer[i] = -1
+            n_general = 0
+            for r in range(nr):
+                t = row_type[r]
+                st = state[r]
+                d = row_dof[r]
+                if t == 1:
+                    if st == 1:
+                        fixer[d] = r
+                    elif st != 0:
+                        bt[d] += (1.0 if st > 0 else -1.0) * bound[r]
+                elif t == 2:
+                    bound[r] = mu_table * max(lam[row_link[r]], 0.0)
+                    if st == 1 and bound[r] > 0.0:
+                        fixer[d] = r
+                    elif st == 2 or st == -2:
+                        bt[d] += (1.0 if st > 0 else -1.0) * bound[r]
+                elif t >= 5:
+                    if st == 1:
+                        general[n_general] = r
+                        n_general += 1
+                        # last impulse as a known one: the Schur step solves for the change
+                        bt[d] += lam[r]
+                        bt[row_dof2[r]] -= lam[r]
+                elif st == 1 and (fixer[d] < 0 or t != 0):
+                    fixer[d] = r  # a sticking friction row, not the table row, fixes a patch
+            n_fixed = 0
+            for i in range(n_dof):
+                r = fixer[i]
+                if r >= 0:
+                    fixed[i] = True
+                    fixed_list[n_fixed] = i
+                    n_fixed += 1
+                    dv[i] = target[r] - v[i]
+            same_fixed = n_fixed == n_fixed_prev
+            if same_fixed:
+                for f in range(n_fixed):
+                    if fixed_list[f] != fixed_prev[f]:
+                        same_fixed = False
+                        break
+            if not same_fixed:
+                fixed_version += 1
+                for f in range(n_fixed):
+                    fixed_prev[f] = fixed_list[f]
+                n_fixed_prev = n_fixed
+            # free solve (the fixed DOFs keep their prescribed change)
+            its = pcg(
+                h_n, h_vec_off, h_row_off, h_a_ptr, h_a_idx, h_a_val, h_inv_diag, h_p_row_off,
+                h_p_ptr, h_p_idx, h_p_val, hc_colptr, hc_rowidx, hc_values, hc_diag, hc_perm,
+                fixed, bt, dv, cg_tolerance, cg_max_iterations, work,
+            )  # fmt: skip
+            stats[0] += 1
+            stats[1] += min(its, cg_max_iterations)
+            if its > cg_max_iterations:
+                stats[3] += 1
+            if n_general > 0:
+                # Schur complement on the two-DOF rows: columns y_r = A_FF^-1 J_r^T by CG, each
+                # warm-started from its last solve. W = J Y is formed from the same columns that
+                # apply the impulses, so the rows hold exactly whatever the columns' accuracy.
+                for g in range(n_general):
+                    r = general[g]
+                    if yslot[r] < 0:
+                        if n_slots == ystore.shape[0]:
+                            grown = np.zeros((max(8, 2 * n_slots), n_dof))
+                            grown[:n_slots] = ystore[:n_slots]
+                            ystore = grown
+                            grown_v = np.full(grown.shape[0], -1, dtype=np.int64)
+                            grown_v[:n_slots] = slot_version[:n_slots]
+                            slot_version = grown_v
+                        yslot[r] = n_slots
+                        n_slots += 1
+                    general_slot[g] = yslot[r]
+                    if slot_version[yslot[r]] == fixed_version:
+                        continue  # same free DOFs as when it was solved for
+                    slot_version[yslot[r]] = fixed_version
+                    y = ystore[yslot[r]]
+                    for i in range(n_dof):
+                        unit[i] = 0.0
+                        if fixed[i]:
+                            y[i] = 0.0
+                    unit[row_dof[r]] = 1.0
+                    if row_dof2[r] >= 0:
+                        unit[row_dof2[r]] -= 1.0
+                    its_y = pcg(
+                        h_n, h_vec_off, h_row_off, h_a_ptr, h_a_idx, h_a_val, h_inv_diag,
+                        h_p_row_off, h_p_ptr, h_p_idx, h_p_val, hc_colptr, hc_rowidx,
+                        hc_values, hc_diag, hc_perm, fixed, unit, y, 1e-8, cg_max_iterations,
+                        work,
+                    )  # fmt: skip
+                    stats[0] += 1
+                    stats[1] += min(its_y, cg_max_iterations)
+                    if its_y > cg_max_iterations:
+                        stats[3] += 1
+                wg = np.empty((n_general, n_general))
+                rhs = np.empty(n_general)
+                for g in range(n_general):
+                    r = general[g]
+                    a_r = row_dof[r]
+                    b_r = row_dof2[r]
+                    vr = v[a_r] + dv[a_r]
+                    if b_r >= 0:
+                        vr -= v[b_r] + dv[b_r]
+                    rhs[g] = target[r] - vr
+                    for h in range(n_general):
+                        val = ystore[general_slot[h], a_r]
+                        if b_r >= 0:
+                            val -= ystore[general_slot[h], b_r]
+                        wg[g, h] = val
+                lg = np.empty(n_general)
+                if _solve_dense(wg, rhs, lg):
+                    for g in range(n_general):
+                        lam[general[g]] += lg[g]
+                        for i in range(n_dof):
+                            dv[i] += ystore[general_slot[g], i] * lg[g]
+                        # the row's impulse acts on its DOFs: fold it into the right-hand side
+                        bt[row_dof[general[g]]] += lg[g]
+                        if row_dof2[general[g]] >= 0:
+                            bt[row_dof2[general[g]]] -= lg[g]
+            _fixed_residual(a_ptr0, h_a_idx, h_a_val, fixed_list, n_fixed, dv, bt, react)
+            for i in range(n_dof):
+                vnew[i] = v[i] + dv[i]
+            # impulses of the rows, then the complementarity checks
+            changed = False
+            for r in range(nr):
+                t = row_type[r]
+                st = state[r]
+                d = row_dof[r]
+                vr = vnew[d]
+                if row_dof2[r] >= 0:
+                    vr -= vnew[row_dof2[r]]
+                slack = vr - target[r]
+                if t == 2:
+                    if bound[r] == 0.0:
+                        if st != 0:
+                            state[r] = 0
+                            changed = True
+                        lam[r] = 0.0
+                        continue
+                    if st == 0:
+                        state[r] = 1
+                        changed = True
+                        continue
+                if t == 1 or t == 2:
+                    if st == 1 and fixer[d] == r:
+                        total = react[d]
+                        tr = table_of_dof[d]
+                        if t == 1 and tr >= 0:
+                            # a face patch on the table: the table carries the push, friction
+                            # the pull (as projected Gauss–Seidel's row order resolves it)
+                            if target[r] < target[tr] + 1e-9 and total > 0.0:
+                                lam[tr] = total
+                                state[tr] = 1
+                                total = 0.0
+                            else:
+                                lam[tr] = 0.0
+                                state[tr] = 0
+                        lam[r] = total
+                        if abs(total) > bound[r]:
+                            state[r] = 2 if total > 0.0 else -2
+                            changed = True
+                    elif st == 2 or st == -2:
+                        lam[r] = (1.0 if st > 0 else -1.0) * bound[r]
+                        if (st == 2 and slack > 1e-9) or (st == -2 and slack < -1e-9):
+                            state[r] = 1
+                            changed = True
+                    continue
+                if t >= 5:
+                    if st == 1:
+                        if lam[r] < 0.0:
+                            state[r] = 0
+                            lam[r] = 0.0
+                            changed = True
+                    else:
+                        lam[r] = 0.0
+                        if slack < -1e-9:
+                            state[r] = 1
+                            changed = True
+                    continue
+                if t == 0 and fixer[d] >= 0 and row_type[fixer[d]] == 1:
+                    continue  # under a sticking face patch: set with the friction row
+                sign = -1.0 if t == 3 else 1.0
+                if st == 1:
+                    lam[r] = react[d]
+                    if sign * lam[r] < 0.0:
+                        state[r] = 0
+                        lam[r] = 0.0
+                        changed = True
+                else:
+                    lam[r] = 0.0
+                    if sign * slack < -1e-9:
+                        state[r] = 1
+                        changed = True
+            if not changed:
+                break
+        for i in range(n_dof):
+            dv_prev2[i] = dv_prev[i]
+            dv_prev[i] = dv[i]
+        _record_step(
+            step, rec, q, v, vnew, lam, row_type, row_dof, base_x, dof_of, x, palm_x_dof,
+            palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, slip, palm_z_acc, com_z0,
+        )  # fmt: skip
     return q, v, rec

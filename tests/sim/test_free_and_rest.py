@@ -3,16 +3,23 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from deformctl.sim import ObjectSpec, SimSettings, free_run
 from deformctl.sim.engine import build_model, positions_m, run_model
 from deformctl.units import GRAVITY_M_S2
 
 SPONGE = ObjectSpec("sponge", (17.8, 19.1, 9.2), 0.7, 0.5, 49.18, 6.47)
+# the default lattice (direct solver) and a fine one (11 particles per longest side: iterative)
+LATTICES = [
+    pytest.param(SimSettings(), id="default"),
+    pytest.param(SimSettings(particles_per_side=11), id="fine", marks=pytest.mark.slow),
+]
 
 
-def test_free_fall_accelerates_at_g_before_contact() -> None:
-    run = free_run(SPONGE, duration_s=0.3, drop_height_m=1.0)
+@pytest.mark.parametrize("settings", LATTICES)
+def test_free_fall_accelerates_at_g_before_contact(settings: SimSettings) -> None:
+    run = free_run(SPONGE, duration_s=0.3, drop_height_m=1.0, settings=settings)
     assert run.min_z_m.min() > 0.0  # never touched the table
     assert np.all(run.table_force_n == 0.0)
     coeffs = np.polyfit(run.time_s, run.com_m[:, 2], 2)
@@ -20,8 +27,9 @@ def test_free_fall_accelerates_at_g_before_contact() -> None:
     assert abs(accel + GRAVITY_M_S2) < 0.005 * GRAVITY_M_S2
 
 
-def test_object_settled_on_table_gets_its_weight_and_stays_put() -> None:
-    run = free_run(SPONGE, duration_s=3.0)
+@pytest.mark.parametrize("settings", LATTICES)
+def test_object_settled_on_table_gets_its_weight_and_stays_put(settings: SimSettings) -> None:
+    run = free_run(SPONGE, duration_s=3.0, settings=settings)
     settled = run.time_s >= 1.0
     reaction = run.table_force_n[settled].mean()
     assert abs(reaction - SPONGE.weight_n) < 0.01 * SPONGE.weight_n
@@ -31,10 +39,11 @@ def test_object_settled_on_table_gets_its_weight_and_stays_put() -> None:
     assert run.min_z_m.min() > -1e-9
 
 
-def test_damped_lattice_energy_never_rises_without_external_work() -> None:
+@pytest.mark.parametrize("settings", LATTICES)
+def test_damped_lattice_energy_never_rises_without_external_work(settings: SimSettings) -> None:
     """Gravity off, no table, no palms: kinetic + spring energy is non-increasing."""
     spec = ObjectSpec("cube", (10.0, 10.0, 10.0), 5.0, 0.5, 20.0, 0.5)
-    model = build_model(spec, SimSettings(), gripped=False, gravity=False, table=False)
+    model = build_model(spec, settings, gripped=False, gravity=False, table=False)
     rng = np.random.default_rng(7)
     q = np.zeros(model.n_dof)
     v = rng.normal(0.0, 0.05, model.n_dof)

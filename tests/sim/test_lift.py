@@ -9,6 +9,7 @@ import pytest
 from deformctl.sim import (
     LiftProfile,
     ObjectSpec,
+    SimSettings,
     SlipCriterion,
     f_w_n,
     lift_attempt,
@@ -18,6 +19,13 @@ from deformctl.sim import (
 from ._helpers import min_lift_force_n
 
 PROFILE = LiftProfile()  # default S-curve, a_max = 2 m/s²
+# the default lattice (direct solver) and a fine one (11 particles per longest side: iterative)
+DEFAULT = SimSettings()
+FINE = SimSettings(particles_per_side=11)
+LATTICES = [
+    pytest.param(DEFAULT, id="default"),
+    pytest.param(FINE, id="fine", marks=pytest.mark.slow),
+]
 
 
 def stiff_object(mu: float) -> ObjectSpec:
@@ -25,19 +33,25 @@ def stiff_object(mu: float) -> ObjectSpec:
     return ObjectSpec("stiff", (10.0, 10.0, 10.0), 5.0, mu, 5000.0, 12.5)
 
 
+@pytest.mark.parametrize("settings", LATTICES)
 @pytest.mark.parametrize("mu", [0.3, 0.8])
-def test_rigid_limit_min_lifting_force_is_m_g_plus_a_over_2mu(mu: float) -> None:
+def test_rigid_limit_min_lifting_force_is_m_g_plus_a_over_2mu(
+    mu: float, settings: SimSettings
+) -> None:
     spec = stiff_object(mu)
     expected = rigid_lift_force_n(spec, PROFILE)
-    found = min_lift_force_n(spec, 0.85 * expected, 1.15 * expected, rel_tol=0.002)
+    found = min_lift_force_n(
+        spec, 0.85 * expected, 1.15 * expected, rel_tol=0.002, settings=settings
+    )
     assert abs(found / expected - 1) < 0.03
 
 
-def test_friction_cone_holds_inside_without_creep_and_slips_outside() -> None:
+@pytest.mark.parametrize("settings", LATTICES)
+def test_friction_cone_holds_inside_without_creep_and_slips_outside(settings: SimSettings) -> None:
     spec = stiff_object(0.5)
     profile = LiftProfile(hold_s=2.0)
     limit = rigid_lift_force_n(spec, profile)
-    held = lift_attempt(spec, 1.05 * limit, profile=profile)
+    held = lift_attempt(spec, 1.05 * limit, profile=profile, settings=settings)
     assert held.lifted
     assert held.slip_m < 0.5e-3
     assert held.series is not None
@@ -47,7 +61,7 @@ def test_friction_cone_holds_inside_without_creep_and_slips_outside() -> None:
     assert np.ptp(com) < 1e-6
     # the palms carry the weight through friction while held
     assert held.series.friction_force_n[-1] == pytest.approx(spec.weight_n, rel=1e-3)
-    dropped = lift_attempt(spec, 0.95 * limit, profile=profile)
+    dropped = lift_attempt(spec, 0.95 * limit, profile=profile, settings=settings)
     assert not dropped.lifted
     assert dropped.slip_m > 0.5e-3
     # while sliding the palms carry exactly the kinetic friction 2 mu N
@@ -55,41 +69,51 @@ def test_friction_cone_holds_inside_without_creep_and_slips_outside() -> None:
     assert dropped.details["peak_friction_n"] == pytest.approx(2 * 0.5 * 0.95 * limit, rel=1e-9)
 
 
-def test_far_below_f_w_the_object_stays_on_the_table() -> None:
+@pytest.mark.parametrize("settings", LATTICES)
+def test_far_below_f_w_the_object_stays_on_the_table(settings: SimSettings) -> None:
     spec = stiff_object(0.5)
-    outcome = lift_attempt(spec, 0.5 * f_w_n(spec))
+    outcome = lift_attempt(spec, 0.5 * f_w_n(spec), settings=settings)
     assert not outcome.lifted
     assert outcome.details["off_table"] is False
     assert outcome.slip_m == pytest.approx(PROFILE.rise_m(spec), rel=0.02)
 
 
-def test_quasi_static_lift_of_a_soft_object_needs_only_f_w() -> None:
+@pytest.mark.parametrize("settings", LATTICES)
+def test_quasi_static_lift_of_a_soft_object_needs_only_f_w(settings: SimSettings) -> None:
     """Lifting force -> W/(2 mu) as the lift acceleration -> 0 (soft, lightly damped object)."""
     spec = ObjectSpec("soft", (15.0, 15.0, 10.0), 10.0, 0.5, 5.0, 0.3)
     fw = f_w_n(spec)
     forces = []
     for accel, speed, jerk in ((2.0, 0.25, 0.05), (0.5, 0.1, 0.1), (0.1, 0.05, 0.1)):
         profile = LiftProfile(accel_m_s2=accel, speed_m_s=speed, jerk_time_s=jerk)
-        forces.append(min_lift_force_n(spec, 0.95 * fw, 1.5 * fw, rel_tol=0.003, profile=profile))
+        forces.append(
+            min_lift_force_n(
+                spec, 0.95 * fw, 1.5 * fw, rel_tol=0.003, profile=profile, settings=settings
+            )
+        )
     assert forces[0] > forces[1] > forces[2]
     assert abs(forces[-1] / fw - 1) < 0.05
 
 
-def test_shortfall_measure_includes_elastic_sag() -> None:
+@pytest.mark.parametrize("settings", LATTICES)
+def test_shortfall_measure_includes_elastic_sag(settings: SimSettings) -> None:
     spec = ObjectSpec("soft", (15.0, 15.0, 10.0), 10.0, 0.5, 5.0, 0.3)
     grip = 1.5 * rigid_lift_force_n(spec, PROFILE)
-    contact = lift_attempt(spec, grip)
-    shortfall = lift_attempt(spec, grip, criterion=SlipCriterion(measure="shortfall"))
+    contact = lift_attempt(spec, grip, settings=settings)
+    shortfall = lift_attempt(
+        spec, grip, criterion=SlipCriterion(measure="shortfall"), settings=settings
+    )
     assert contact.lifted
     assert contact.slip_m < 1e-9
     assert shortfall.slip_m == pytest.approx(contact.details["shortfall_m"])
     assert shortfall.slip_m > 1e-3  # the soft body hangs lower than it rested
 
 
-def test_lift_attempt_is_bit_identical_for_the_same_inputs() -> None:
+@pytest.mark.parametrize("settings", LATTICES)
+def test_lift_attempt_is_bit_identical_for_the_same_inputs(settings: SimSettings) -> None:
     spec = ObjectSpec("sponge", (17.8, 19.1, 9.2), 0.7, 0.5, 49.18, 6.47)
-    a = lift_attempt(spec, 0.9)
-    b = lift_attempt(spec, 0.9)
+    a = lift_attempt(spec, 0.9, settings=settings)
+    b = lift_attempt(spec, 0.9, settings=settings)
     assert a.series is not None
     assert b.series is not None
     for name in ("time_s", "palm_z_m", "object_com_z_m", "slip_m", "friction_force_n"):

@@ -9,14 +9,17 @@ from scipy.optimize import curve_fit
 from deformctl.sim import ObjectSpec, SimSettings, squeeze, squeeze_many
 
 SPONGE = ObjectSpec("sponge", (17.8, 19.1, 9.2), 0.7, 0.5, 49.18, 6.47)
+FINE = SimSettings(particles_per_side=11)  # the iterative solver
+CREEP_CASES = [(5.0, 15.0), (49.18, 6.47), (60.0, 1.0), (20.0, 0.5)]
 
 
 @pytest.mark.parametrize(
-    ("stiffness_n_per_cm", "damping_ns_per_cm"),
-    [(5.0, 15.0), (49.18, 6.47), (60.0, 1.0), (20.0, 0.5)],
+    ("stiffness_n_per_cm", "damping_ns_per_cm", "settings"),
+    [(*case, SimSettings()) for case in CREEP_CASES]
+    + [pytest.param(*case, FINE, marks=pytest.mark.slow) for case in CREEP_CASES],
 )
 def test_creep_under_constant_force_follows_kelvin_voigt(
-    stiffness_n_per_cm: float, damping_ns_per_cm: float
+    stiffness_n_per_cm: float, damping_ns_per_cm: float, settings: SimSettings
 ) -> None:
     """Gravity off, force step F: d(t) = F/D (1 - exp(-t D / lambda)).
 
@@ -26,7 +29,14 @@ def test_creep_under_constant_force_follows_kelvin_voigt(
     spec = ObjectSpec("creep", (12.0, 10.0, 8.0), 5.0, 0.5, stiffness_n_per_cm, damping_ns_per_cm)
     tau_s = damping_ns_per_cm / stiffness_n_per_cm
     force_n = spec.stiffness_n_per_m * 0.01 * spec.size_m[0]
-    series = squeeze(spec, peak_force_n=force_n, ramp_s=0.0, hold_s=6.0 * tau_s, gravity=False)
+    series = squeeze(
+        spec,
+        peak_force_n=force_n,
+        ramp_s=0.0,
+        hold_s=6.0 * tau_s,
+        gravity=False,
+        settings=settings,
+    )
     d_inf_m = force_n / spec.stiffness_n_per_m
 
     def kv(t: np.ndarray, d_inf: float, tau: float) -> np.ndarray:
@@ -40,9 +50,12 @@ def test_creep_under_constant_force_follows_kelvin_voigt(
     assert np.allclose(series.force_n[1:], force_n)
 
 
-def test_stiffness_measured_on_the_table_matches_the_catalog() -> None:
+@pytest.mark.parametrize(
+    "settings", [SimSettings(), pytest.param(FINE, marks=pytest.mark.slow)], ids=["default", "fine"]
+)
+def test_stiffness_measured_on_the_table_matches_the_catalog(settings: SimSettings) -> None:
     """Gravity on, object on the table: steady F / d within 5 % of D."""
-    series = squeeze(SPONGE, peak_force_n=8.0, ramp_s=0.2, hold_s=1.5)
+    series = squeeze(SPONGE, peak_force_n=8.0, ramp_s=0.2, hold_s=1.5, settings=settings)
     d_measured = series.force_n[-1] / series.compression_m[-1]
     assert abs(d_measured / SPONGE.stiffness_n_per_m - 1) < 0.05
     assert series.palm_left_x_m is not None

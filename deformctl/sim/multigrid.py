@@ -1,0 +1,457 @@
+"""Geometric multigrid for the lattice's SPD matrices, and a preconditioned CG in numba.
+
+Levels coarsen the box lattice by two along every axis that has more than two particles (keeping
+both end layers, so the palm faces and the bottom layer stay on every level); the interpolation
+is trilinear in the lattice index per coordinate, written in the generalised DOFs of each level
+(a fine face DOF merged into a palm DOF interpolates from the coarse palm DOF). Coarse matrices
+are Galerkin products ``P^T A P``; the coarsest is factorised (:mod:`deformctl.sim.solver`).
+One V-cycle: a forward Gauss–Seidel sweep, restriction of the residual, the coarse correction,
+prolongation, a backward Gauss–Seidel sweep (a symmetric cycle, so it preconditions CG).
+
+DOFs can be *fixed* (a prescribed value, e.g. a contact row held at its target velocity): the CG
+and the finest level's smoothing leave them untouched and the residual ignores them, which solves
+the principal subsystem of the free DOFs exactly as the contact problem needs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse
+from numba import njit
+from numpy.typing import NDArray
+
+from deformctl.sim.lattice import shape_dof_map
+from deformctl.sim.solver import (
+    LDLFactor,
+    dof_order,
+    ldl_factor,
+    ldl_solve,
+    nested_dissection_order,
+)
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+Int32Array = NDArray[np.int32]
+BoolArray = NDArray[np.bool_]
+
+
+@dataclass(frozen=True, eq=False)
+class Hierarchy:
+    """The multigrid levels, flattened for numba.
+
+    Attributes:
+        n: DOFs per level, ``[L]``; vec_off: offset of each level in the level vectors, ``[L]``.
+        a_ptr, a_idx, a_val: every level's matrix in CSR (``a_ptr`` absolute into ``a_idx``/
+            ``a_val``; level ``l``'s rows are ``a_ptr[row_off[l] : row_off[l] + n[l] + 1]``).
+        row_off: offset of each level's rows in ``a_ptr``, ``[L]``.
+        inv_diag: inverse diagonal of every level, concatenated like the vectors.
+        p_ptr, p_idx, p_val, p_row_off: interpolation from level ``l + 1`` to ``l`` (CSR, rows of
+            level ``l``), ``[L - 1]`` segments like the matrices.
+        coarse: factor of the coarsest matrix.
+    """
+
+    n: IntArray
+    vec_off: IntArray
+    row_off: IntArray
+    a_ptr: IntArray
+    a_idx: Int32Array
+    a_val: FloatArray
+    inv_diag: FloatArray
+    p_row_off: IntArray
+    p_ptr: IntArray
+    p_idx: Int32Array
+    p_val: FloatArray
+    coarse: LDLFactor
+
+    @property
+    def levels(self) -> int:
+        """Number of levels."""
+        return int(self.n.shape[0])
+
+    @property
+    def nbytes(self) -> int:
+        """Memory held, bytes."""
+        arrays = (self.a_ptr, self.a_idx, self.a_val, self.inv_diag, self.p_ptr, self.p_idx)
+        return sum(a.nbytes for a in arrays) + self.p_val.nbytes + self.coarse.nbytes
+
+
+def _axis_interpolation(n_fine: int) -> scipy.sparse.csr_matrix:
+    """1-D linear interpolation from the coarse points (every second, both ends) to all points."""
+    if n_fine <= 2:
+        return scipy.sparse.identity(n_fine, format="csr")
+    sel = list(range(0, n_fine, 2))
+    if sel[-1] != n_fine - 1:
+        sel.append(n_fine - 1)
+    rows: list[int] = []
+    cols: list[int] = []
+    vals: list[float] = []
+    for j in range(len(sel) - 1):
+        a, b = sel[j], sel[j + 1]
+        for i in range(a, b):
+            w = (i - a) / (b - a)
+            rows.append(i)
+            cols.append(j)
+            vals.append(1.0 - w)
+            if w > 0:
+                rows.append(i)
+                cols.append(j + 1)
+                vals.append(w)
+    rows.append(n_fine - 1)
+    cols.append(len(sel) - 1)
+    vals.append(1.0)
+    return scipy.sparse.csr_matrix((vals, (rows, cols)), shape=(n_fine, len(sel)))
+
+
+def _coarsen(shape: tuple[int, int, int]) -> tuple[int, int, int]:
+    out = [n if n <= 2 else (n + 1) // 2 + (1 if (n - 1) % 2 else 0) for n in shape]
+    return (out[0], out[1], out[2])
+
+
+def interpolation(
+    shape: tuple[int, int, int], gripped: bool
+) -> tuple[scipy.sparse.csr_matrix, tuple[int, int, int], IntArray]:
+    """Interpolation from the coarse lattice to ``shape`` in generalised DOFs.
+
+    Returns:
+        ``P [n_dof_fine, n_dof_coarse]``, the coarse shape and the coarse ``dof_of``.
+    """
+    px, py, pz = (_axis_interpolation(n) for n in shape)
+    coarse_shape = (px.shape[1], py.shape[1], pz.shape[1])
+    scalar = scipy.sparse.kron(scipy.sparse.kron(px, py), pz).tocoo()
+    dof_f, n_f, _, _ = shape_dof_map(shape, gripped)
+    dof_c, n_c, _, _ = shape_dof_map(coarse_shape, gripped)
+    # one representative coordinate per fine DOF (merged palm DOFs appear many times)
+    first = np.full(n_f, -1, dtype=np.int64)
+    coords = np.arange(dof_f.size)
+    order = np.argsort(dof_f, kind="stable")
+    sorted_dofs = dof_f[order]
+    starts = np.concatenate([[0], np.flatnonzero(np.diff(sorted_dofs)) + 1])
+    first[sorted_dofs[starts]] = coords[order[starts]]
+    representative = np.zeros(dof_f.size, dtype=bool)
+    representative[first] = True
+    rows: list[IntArray] = []
+    cols: list[IntArray] = []
+    vals: list[FloatArray] = []
+    for a in range(3):
+        keep = representative[3 * scalar.row + a]
+        rows.append(dof_f[3 * scalar.row[keep] + a])
+        cols.append(dof_c[3 * scalar.col[keep] + a])
+        vals.append(scalar.data[keep])
+    p = scipy.sparse.coo_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n_f, n_c)
+    ).tocsr()
+    p.sum_duplicates()
+    return p, coarse_shape, dof_c
+
+
+def build_hierarchy(
+    shape: tuple[int, int, int], gripped: bool, a: scipy.sparse.spmatrix, max_coarse: int = 200
+) -> Hierarchy:
+    """Multigrid levels of the lattice matrix ``a`` (generalised DOFs of ``shape``, ``gripped``)."""
+    mats = [scipy.sparse.csr_matrix(a)]
+    interps: list[scipy.sparse.csr_matrix] = []
+    cur = shape
+    dof_c, _, px_c, pz_c = shape_dof_map(shape, gripped)
+    while mats[-1].shape[0] > max_coarse and _coarsen(cur) != cur:
+        p, cur, dof_c = interpolation(cur, gripped)
+        interps.append(p)
+        mats.append(scipy.sparse.csr_matrix(p.T @ mats[-1] @ p))
+    _, n_c, px_c, pz_c = shape_dof_map(cur, gripped)
+    last = np.concatenate([px_c, pz_c])
+    last = last[last >= 0]
+    perm = dof_order(nested_dissection_order(cur), dof_c, n_c, last)
+    coarse = ldl_factor(mats[-1], perm)
+    n = np.array([m.shape[0] for m in mats], dtype=np.int64)
+    vec_off = np.concatenate([[0], np.cumsum(n)[:-1]]).astype(np.int64)
+    a_ptr, a_idx, a_val, row_off = _concat_csr(mats)
+    p_ptr, p_idx, p_val, p_row_off = _concat_csr(interps)
+    inv_diag = np.concatenate([1.0 / m.diagonal() for m in mats])
+    return Hierarchy(
+        n=n,
+        vec_off=vec_off,
+        row_off=row_off,
+        a_ptr=a_ptr,
+        a_idx=a_idx,
+        a_val=a_val,
+        inv_diag=inv_diag,
+        p_row_off=p_row_off,
+        p_ptr=p_ptr,
+        p_idx=p_idx,
+        p_val=p_val,
+        coarse=coarse,
+    )
+
+
+def _concat_csr(
+    mats: list[scipy.sparse.csr_matrix],
+) -> tuple[IntArray, Int32Array, FloatArray, IntArray]:
+    ptrs: list[IntArray] = []
+    idx: list[Int32Array] = []
+    val: list[FloatArray] = []
+    row_off: list[int] = []
+    base = 0
+    rows = 0
+    for m in mats:
+        m = scipy.sparse.csr_matrix(m)
+        m.sort_indices()
+        row_off.append(rows)
+        ptrs.append(m.indptr.astype(np.int64) + base)
+        idx.append(m.indices.astype(np.int32))
+        val.append(m.data.astype(np.float64))
+        base += m.nnz
+        rows += m.shape[0] + 1
+    if not mats:
+        return (
+            np.zeros(1, dtype=np.int64),
+            np.zeros(0, dtype=np.int32),
+            np.zeros(0),
+            np.zeros(0, dtype=np.int64),
+        )
+    return (
+        np.concatenate(ptrs),
+        np.concatenate(idx),
+        np.concatenate(val),
+        np.asarray(row_off, dtype=np.int64),
+    )
+
+
+@njit(cache=True)
+def csr_matvec(
+    ptr: IntArray,
+    idx: Int32Array,
+    val: FloatArray,
+    row0: int,
+    n: int,
+    x: FloatArray,
+    out: FloatArray,
+) -> None:
+    """``out = A x`` for the CSR matrix whose rows start at ``ptr[row0]``."""
+    for i in range(n):
+        acc = 0.0
+        for k in range(ptr[row0 + i], ptr[row0 + i + 1]):
+            acc += val[k] * x[idx[k]]
+        out[i] = acc
+
+
+@njit(cache=True)
+def v_cycle(
+    n: IntArray,
+    vec_off: IntArray,
+    row_off: IntArray,
+    a_ptr: IntArray,
+    a_idx: Int32Array,
+    a_val: FloatArray,
+    inv_diag: FloatArray,
+    p_row_off: IntArray,
+    p_ptr: IntArray,
+    p_idx: Int32Array,
+    p_val: FloatArray,
+    c_colptr: IntArray,
+    c_rowidx: Int32Array,
+    c_values: FloatArray,
+    c_diag: FloatArray,
+    c_perm: IntArray,
+    fixed: BoolArray,
+    b: FloatArray,
+    x: FloatArray,
+    xs: FloatArray,
+    bs: FloatArray,
+    rs: FloatArray,
+) -> None:
+    """``x = M^-1 b``: one V-cycle from zero (finest level: ``b``/``x`` ``[n0]``; ``xs``, ``bs``,
+    ``rs``: scratch for all levels). Fixed DOFs of the finest level get ``x = 0``."""
+    levels = n.shape[0]
+    n0 = n[0]
+    for i in range(n0):
+        bs[i] = 0.0 if fixed[i] else b[i]
+    # down: forward Gauss–Seidel from zero, residual, restriction
+    for lvl in range(levels - 1):
+        off = vec_off[lvl]
+        nl = n[lvl]
+        r0 = row_off[lvl]
+        for i in range(nl):
+            xs[off + i] = 0.0
+        for i in range(nl):
+            if lvl == 0 and fixed[i]:
+                continue
+            acc = bs[off + i]
+            for k in range(a_ptr[r0 + i], a_ptr[r0 + i + 1]):
+                acc -= a_val[k] * xs[off + a_idx[k]]
+            xs[off + i] += acc * inv_diag[off + i]
+        # after a forward sweep from zero, (D + L) x = b, so the residual is -U x: only the
+        # entries right of the diagonal (column indices are sorted)
+        for i in range(nl):
+            if lvl == 0 and fixed[i]:
+                rs[off + i] = 0.0
+                continue
+            acc = 0.0
+            for k in range(a_ptr[r0 + i + 1] - 1, a_ptr[r0 + i] - 1, -1):
+                j = a_idx[k]
+                if j <= i:
+                    break
+                acc -= a_val[k] * xs[off + j]
+            rs[off + i] = acc
+        coff = vec_off[lvl + 1]
+        for i in range(n[lvl + 1]):
+            bs[coff + i] = 0.0
+        p0 = p_row_off[lvl]
+        for i in range(nl):
+            ri = rs[off + i]
+            if ri != 0.0:
+                for k in range(p_ptr[p0 + i], p_ptr[p0 + i + 1]):
+                    bs[coff + p_idx[k]] += p_val[k] * ri
+    # coarsest: direct solve
+    lc = levels - 1
+    off = vec_off[lc]
+    nc = n[lc]
+    ldl_solve(
+        c_colptr,
+        c_rowidx,
+        c_values,
+        c_diag,
+        c_perm,
+        bs[off : off + nc],
+        rs[off : off + nc],
+        xs[off : off + nc],
+    )
+    # up: prolongation, backward Gauss–Seidel
+    for lvl in range(levels - 2, -1, -1):
+        off = vec_off[lvl]
+        coff = vec_off[lvl + 1]
+        nl = n[lvl]
+        r0 = row_off[lvl]
+        p0 = p_row_off[lvl]
+        for i in range(nl):
+            if lvl == 0 and fixed[i]:
+                continue
+            acc = 0.0
+            for k in range(p_ptr[p0 + i], p_ptr[p0 + i + 1]):
+                acc += p_val[k] * xs[coff + p_idx[k]]
+            xs[off + i] += acc
+        for i in range(nl - 1, -1, -1):
+            if lvl == 0 and fixed[i]:
+                continue
+            acc = bs[off + i]
+            for k in range(a_ptr[r0 + i], a_ptr[r0 + i + 1]):
+                acc -= a_val[k] * xs[off + a_idx[k]]
+            xs[off + i] += acc * inv_diag[off + i]
+    for i in range(n0):
+        x[i] = 0.0 if fixed[i] else xs[i]
+
+
+@njit(cache=True)
+def pcg(
+    n: IntArray,
+    vec_off: IntArray,
+    row_off: IntArray,
+    a_ptr: IntArray,
+    a_idx: Int32Array,
+    a_val: FloatArray,
+    inv_diag: FloatArray,
+    p_row_off: IntArray,
+    p_ptr: IntArray,
+    p_idx: Int32Array,
+    p_val: FloatArray,
+    c_colptr: IntArray,
+    c_rowidx: Int32Array,
+    c_values: FloatArray,
+    c_diag: FloatArray,
+    c_perm: IntArray,
+    fixed: BoolArray,
+    b: FloatArray,
+    x: FloatArray,
+    tol: float,
+    max_iter: int,
+    work: FloatArray,
+) -> int:
+    """Multigrid-preconditioned CG on the free DOFs: ``(A x)_i = b_i`` for every free ``i``, the
+    fixed ``x_i`` kept. ``x`` holds the initial guess and receives the solution. Stops when the
+    free residual's 2-norm is at most ``tol``. ``work``: scratch of ``4 n0 + 3 sum(n)``.
+
+    Returns:
+        the number of iterations (``max_iter + 1`` when it did not converge).
+    """
+    n0 = n[0]
+    tot = 0
+    for lvl in range(n.shape[0]):
+        tot += n[lvl]
+    r = work[0:n0]
+    z = work[n0 : 2 * n0]
+    p = work[2 * n0 : 3 * n0]
+    q = work[3 * n0 : 4 * n0]
+    xs = work[4 * n0 : 4 * n0 + tot]
+    bs = work[4 * n0 + tot : 4 * n0 + 2 * tot]
+    rs = work[4 * n0 + 2 * tot : 4 * n0 + 3 * tot]
+    csr_matvec(a_ptr, a_idx, a_val, row_off[0], n0, x, q)
+    rr = 0.0
+    for i in range(n0):
+        r[i] = 0.0 if fixed[i] else b[i] - q[i]
+        rr += r[i] * r[i]
+    if np.sqrt(rr) <= tol:
+        return 0
+    rz = 0.0
+    for it in range(1, max_iter + 1):
+        v_cycle(
+            n, vec_off, row_off, a_ptr, a_idx, a_val, inv_diag, p_row_off, p_ptr, p_idx, p_val,
+            c_colptr, c_rowidx, c_values, c_diag, c_perm, fixed, r, z, xs, bs, rs,
+        )  # fmt: skip
+        rz_new = 0.0
+        for i in range(n0):
+            rz_new += r[i] * z[i]
+        if it == 1:
+            for i in range(n0):
+                p[i] = z[i]
+        else:
+            beta = rz_new / rz
+            for i in range(n0):
+                p[i] = z[i] + beta * p[i]
+        rz = rz_new
+        csr_matvec(a_ptr, a_idx, a_val, row_off[0], n0, p, q)
+        pq = 0.0
+        for i in range(n0):
+            if fixed[i]:
+                q[i] = 0.0
+            pq += p[i] * q[i]
+        alpha = rz / pq
+        rr = 0.0
+        for i in range(n0):
+            x[i] += alpha * p[i]
+            r[i] -= alpha * q[i]
+            rr += r[i] * r[i]
+        if np.sqrt(rr) <= tol:
+            return it
+    return max_iter + 1
+
+
+def solve(
+    hierarchy: Hierarchy,
+    fixed: BoolArray,
+    b: FloatArray,
+    *,
+    rel_tol: float,
+    max_iter: int = 1000,
+    x0: FloatArray | None = None,
+) -> FloatArray:
+    """Solve ``A x = b`` on the free DOFs (``x = x0`` on the fixed ones, default 0) by :func:`pcg`
+    to a residual of ``rel_tol * |b|``.
+
+    Raises:
+        RuntimeError: CG did not converge within ``max_iter`` iterations.
+    """
+    h = hierarchy
+    n0 = int(h.n[0])
+    x = np.zeros(n0) if x0 is None else np.array(x0, dtype=np.float64)
+    work = np.empty(4 * n0 + 3 * int(h.n.sum()))
+    c = h.coarse
+    bb = np.ascontiguousarray(b, dtype=np.float64)
+    tol = rel_tol * float(np.linalg.norm(np.where(fixed, 0.0, bb)))
+    its = pcg(
+        h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.inv_diag, h.p_row_off, h.p_ptr,
+        h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
+        np.ascontiguousarray(fixed, dtype=np.bool_), bb, x, tol, max_iter, work,
+    )  # fmt: skip
+    if its > max_iter:
+        raise RuntimeError(f"multigrid CG did not converge in {max_iter} iterations")
+    return x
