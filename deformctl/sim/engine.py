@@ -42,8 +42,9 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       SuiteSparse headers), so CI could not install it; a banded Cholesky after RCM was not
       built (its band is a lattice cross-section, so its fill grows as ``N^{5/3}``, more than
       nested dissection's); float32 multigrid levels gave no speed-up.
-      Multigrid CG beats the factor from about 7^3 particles (7^3: 0.22 s vs 0.31 s per attempt;
-      11^3: 1.3 s vs 2.7 s; 16^3: 5.8 s vs 20 s).
+      Multigrid CG beats the factor from about 7^3 particles (one lift attempt, same run:
+      5^3 0.066 s vs 0.063 s, 8^3 0.55 s vs 0.44 s, 11^3 2.7 s vs 1.1 s; 16^3 in separate runs
+      20 s vs 5.8 s).
 
 The step is chosen for accuracy, not
 stability: the default ``dt = 1 ms`` resolves the lift profile's 50 ms jerk ramps; backward
