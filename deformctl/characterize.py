@@ -38,9 +38,10 @@ Two estimators:
   method carries by construction: ``f/d = D + λ d'/d``, so wherever the object is still moving
   the ratio mixes damping into D.
 
-:func:`read_and_characterize` fits every object of a squeeze log, :func:`characterize_dir` those of
-a ``measure`` dataset directory; at scale, :class:`CharacterizeTask` is the sweep task of one
-object and :func:`characterize_sweep` writes a coefficients dataset directory.
+:func:`read_and_characterize` fits every object of a squeeze log, :func:`characterize_dir` those
+of a ``measure`` dataset directory, and :func:`characterize_file` writes their table; at scale,
+:class:`CharacterizeTask` is the sweep task of one object and :func:`characterize_sweep` writes a
+coefficients dataset directory.
 
 :func:`synthetic_kelvin_voigt_squeeze` generates squeezes with known D and λ (the exact
 Kelvin–Voigt response to a ramp-hold-release or a haversine force, plus seeded noise) for tests
@@ -61,6 +62,7 @@ from typing import Any, Literal
 import numpy as np
 import pandas as pd
 
+from deformctl.artifacts import check_output_path, write_table
 from deformctl.artifacts.dataset import (
     MANIFEST_NAME,
     dataset_fingerprint,
@@ -70,7 +72,7 @@ from deformctl.artifacts.dataset import (
     spec_rows,
     table_schema,
 )
-from deformctl.artifacts.provenance import sha256_file
+from deformctl.artifacts.provenance import Provenance, sha256_file
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, run_sweep
 from deformctl.phases import Rupture, cut_rupture, ruptures_from_object
@@ -963,6 +965,57 @@ def characterize_dir(
         preload={k: v for p in parts for k, v in p.preload.items()},
         warnings=[line for p in parts for line in p.warnings],
     )
+
+
+def characterize_file(
+    log: str,
+    method: Method = "lsq",
+    *,
+    output: str,
+    window_s: float | None = None,
+    force: bool = False,
+    preload: Preload | None = None,
+    constrain_damping: bool = False,
+    strict: bool = False,
+    allow_flagged: bool = False,
+) -> LogCoefficients:
+    """``characterize LOG -o TABLE``: fit a squeeze log (or a ``measure`` directory's logs).
+
+    The quality policy is applied before anything is written (``strict``, ``allow_flagged``:
+    see :func:`read_and_characterize`); the coefficients table is then written atomically with
+    its provenance (the method, the window and preload used for each object and the position
+    sample rates behind them). The caller prints ``result.warnings``.
+
+    Raises:
+        OutputExistsError: ``output`` exists and ``force`` is false (exit 1).
+        MissingInputError, InputDataError, UsageError: see :func:`read_and_characterize`.
+    """
+    check_output_path(output, force)
+    options: dict[str, Any] = {
+        "window_s": window_s,
+        "preload": preload,
+        "constrain_damping": constrain_damping,
+        "strict": strict,
+        "allow_flagged": allow_flagged,
+    }
+    if os.path.isdir(log):
+        result = characterize_dir(log, method, **options)
+    else:
+        result = read_and_characterize(log, method, **options)
+    provenance = Provenance.from_invocation(
+        [log],
+        settings={
+            "method": method,
+            "window_s": result.window_s,
+            "window_s_option": window_s,
+            "position_rate_hz": result.position_rate_hz,
+            "preload": result.preload,
+            "preload_option": preload,
+            "constrain_damping": constrain_damping,
+        },
+    )
+    write_table(result.table, output, "coefficients", provenance=provenance, force=force)
+    return result
 
 
 def characterize_items(path: str | PathLike[str]) -> list[dict[str, Any]]:

@@ -65,9 +65,10 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
+from deformctl.artifacts import check_output_path, read_catalog, write_squeeze_log
 from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
 from deformctl.artifacts.provenance import Provenance, input_digest
-from deformctl.catalog import catalog_objects
+from deformctl.catalog import catalog_objects, select_objects
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
 from deformctl.phases import PHASES, Phase, Rupture, cut_rupture, phase_slice, slice_squeeze
@@ -1101,14 +1102,71 @@ class SimulateCatalogTask:
         return TaskOutput(rows=[summary], payload=(objects[0], series))
 
 
-def simulate_catalog_sweep(
-    catalog: pd.DataFrame,
+def sim_provenance(
+    catalog_path: str, task: SimulateCatalogTask, object_ids: list[str]
+) -> Provenance:
+    """The provenance of a ``measure --sim`` log: the catalog, the seed and every setting."""
+    return Provenance.from_invocation(
+        [catalog_path],
+        seed=task.seed,
+        settings={
+            "source": "sim",
+            **task.simulate,
+            "peak_force_rule": (
+                "peak_force_n" if task.simulate.get("peak_force_n") is not None else "strain"
+            ),
+            "objects": object_ids,
+            "sim_settings": dataclasses.asdict(task.settings),
+        },
+    )
+
+
+def simulate_catalog_file(
+    catalog_path: str,
     task: SimulateCatalogTask,
     *,
-    catalog_path: str,
     output: str,
-    provenance: Provenance,
+    object_ids: Sequence[str] | None = None,
+    progress: SqueezeProgress | None = None,
+    force: bool = False,
+) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
+    """``measure CATALOG --sim -o LOG``: squeeze every (selected) object into one squeeze log.
+
+    Every row is checked before anything is simulated (a row without material values is
+    refused, naming the object).
+
+    Returns:
+        The objects' rows and the squeezes written (see :func:`simulate_squeezes`).
+
+    Raises:
+        OutputExistsError: ``output`` exists and ``force`` is false (exit 1).
+        UsageError: an unknown object id, or a squeeze option out of range (exit 2).
+        InputDataError: a row the simulator refuses (exit 65).
+    """
+    check_output_path(output, force)
+    catalog = select_objects(read_catalog(catalog_path), object_ids)
+    for obj in catalog_objects(catalog, path=catalog_path):  # refuse bad rows first
+        obj.to_sim_spec(path=catalog_path)
+    provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
+    objects, series = simulate_squeezes(
+        catalog,
+        settings=task.settings,
+        seed=task.seed,
+        progress=progress,
+        path=catalog_path,
+        **task.simulate,
+    )
+    write_squeeze_log(output, objects, series, provenance=provenance, force=force)
+    return objects, series
+
+
+def simulate_catalog_sweep(
+    catalog_path: str,
+    task: SimulateCatalogTask,
+    *,
+    output: str,
     sweep: SweepOptions,
+    object_ids: Sequence[str] | None = None,
     force: bool = False,
 ) -> SweepSummary:
     """``measure --sim -o DIR/``: one object per task; part ``k``'s squeezes in ``part-k.mcap``.
@@ -1118,14 +1176,15 @@ def simulate_catalog_sweep(
     A row the simulator refuses fails alone (``DIR/_failures/``).
 
     Args:
-        catalog: the catalog rows to squeeze (already selected).
+        catalog_path: the catalog (``-`` for stdin), hashed into the fingerprint.
         task: the squeeze and simulator settings and the seed.
-        catalog_path: the catalog's file name (``-`` for stdin), hashed into the fingerprint.
         output: the dataset directory.
-        provenance: stored in every part log.
         sweep: where to run (workers, scheduler), partition size, resume.
+        object_ids: these objects, in this order (None: all).
         force: overwrite the sweep files of an existing directory.
     """
+    catalog = select_objects(read_catalog(catalog_path), object_ids)
+    provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
     items = [{**rec, "_position": i} for i, rec in enumerate(catalog.to_dict("records"))]
     settings = {**task.simulate, "sim_settings": dataclasses.asdict(task.settings)}
     fingerprint = dataset_fingerprint(
@@ -1140,4 +1199,39 @@ def simulate_catalog_sweep(
         part_writer=LogPartWriter("squeeze_log", provenance),
         force=force,
         **sweep.run_kwargs(),
+    )
+
+
+def recording_log(
+    source: str,
+    recording: Recording,
+    obj: Mapping[str, object],
+    settings: Mapping[str, Any],
+    *,
+    output: str,
+    force: bool = False,
+) -> None:
+    """Write a rig recording's squeezes as a squeeze log (``measure --bag`` / ``--csv``).
+
+    Args:
+        source: the recording file (hashed into the provenance).
+        recording: what :func:`read_ros2_bag` or :func:`read_csv_export` read.
+        obj: the object's row (:func:`deformctl.catalog.object_record`); the source sample
+            rates are added, as they are to the provenance's ``settings``, with the source,
+            phase and ruptures (:meth:`Recording.log_fields`).
+        settings: the reader's options.
+        output: the squeeze log (``-`` for stdout).
+        force: overwrite an existing output.
+    """
+    rates = {
+        "force_rate_hz": recording.force_rate_hz,
+        "position_rate_hz": recording.position_rate_hz,
+    }
+    provenance = Provenance.from_invocation([source], settings={**settings, **rates})
+    write_squeeze_log(
+        output,
+        [{**obj, **recording.log_fields()}],
+        recording.squeezes,
+        provenance=provenance,
+        force=force,
     )

@@ -10,7 +10,6 @@ import typer
 
 from deformctl.artifacts.dataset import describe_dataset
 from deformctl.artifacts.describe import describe
-from deformctl.cli import app
 from deformctl.cli._common import translate_errors
 
 
@@ -120,7 +119,6 @@ def render_text(info: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-@app.command()
 @translate_errors
 def inspect(
     file: str = typer.Argument(
