@@ -49,6 +49,10 @@ examples: install
 	rm -rf $(EX) && mkdir -p $(EX)
 	cd $(EX) && ../$(BIN)/python ../examples/render_scene.py scene
 	cd $(EX) && ../$(BIN)/python ../examples/synthetic_index.py demo
+	cd $(EX) && ../$(BIN)/python ../examples/doubtful_exports.py doubtful
+	cd $(EX) && ../$(DC) measure --csv doubtful/utm.csv --columns time=t,force=load,compression=pos \
+	  --units compression=mm --object-id foam --weight-n 0.7 -o doubtful/utm.mcap
+	cd $(EX) && ../$(DC) characterize doubtful/utm.mcap -o doubtful/utm.parquet
 	cd $(EX) && ../$(DC) lift ../datasets/paper/objects.csv \
 	  --rig "../$(BIN)/python ../examples/threshold_rig.py" -o lift-rig.parquet --log lift-rig.mcap
 	@echo "examples ran in $(EX)/"

@@ -813,7 +813,7 @@ def default_preload(obj: Mapping[str, object] | None) -> Preload:
     A rig's palms may already press on the object when its compression zero is taken (a testing
     machine starts at a seating preload); ignored, a preload of 1 % of the peak force raises D by
     1–3 % and one of 5 % by 6–15 % (synthetic Kelvin–Voigt squeezes), while fitting it costs
-    under 0.3 % on squeezes without one. Simulated squeezes start from rest at exactly zero force,
+    at most 0.3 % on squeezes without one. Simulated squeezes start from rest at exactly zero force,
     so their preload is known to be 0 (``zero``): there an intercept would only absorb the
     lattice's departure from Kelvin–Voigt (it moves the simulator's D by −0.3 to −2.2 %). Logs that
     do not say where they came from (written before ``source`` was stored) keep ``zero``.

@@ -397,11 +397,15 @@ def _check_recording_options(phase: str, increases_when: str | None) -> None:
         )
 
 
+#: How the units are spelled in messages (the tables above key them in lower case).
+_UNIT_SPELLING = {"n": "N", "kn": "kN", "mn": "mN"}
+
+
 def _unit_hint(key: str, unit: str | None, what: str) -> str:
     """``did you mean --units key=unit?`` (or a plainer hint when no unit fits)."""
     if unit is None:
         return f"check the unit of {what}"
-    return f"did you mean --units {key}={unit}?"
+    return f"did you mean --units {key}={_UNIT_SPELLING.get(unit, unit)}?"
 
 
 # ---------------------------------------------------------------------------------------------

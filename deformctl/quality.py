@@ -56,9 +56,10 @@ FLAGS: tuple[str, ...] = (
 OK = "ok"
 
 #: ``low_r2`` below this R²: more than 10 % of the force variance is not Kelvin–Voigt. Measured:
-#: clean and 1 %-noise synthetic squeezes ≥ 0.995, the simulator's Table II objects ≥ 0.9997 and a
-#: 73-object population ≥ 0.98, the simulator with 0.01 N + 0.05 mm noise 0.90–0.97; a rupture
-#: fitted whole, swapped force/position columns or a wrong force axis fall far below (0.07 to −45).
+#: clean and 1 %-noise synthetic squeezes ≥ 0.99, the simulator's Table II objects ≥ 0.9997 and a
+#: 73-object population ≥ 0.98, the simulator with 0.01 N + 0.05 mm noise 0.90–0.97; a force that
+#: is mostly sensor noise (a wrong wrench axis: 2 % cross-talk) 0.33, a rupture fitted whole −0.7
+#: to −0.9 (D then falls to a tenth).
 LOW_R2 = 0.9
 #: ``negative_damping`` when λ is below −this (N·s/cm) ... Measured on objects with λ = 0: the
 #: simulator −0.05 ± 0.08 at worst (73 objects), synthetic squeezes −0.03 ± 0.02.
@@ -279,7 +280,8 @@ def thresholds_help() -> str:
         f"-{NEGATIVE_DAMPING_SE_MULT:g} se), damping_at_bound (--constrain-damping held λ at 0), "
         f"damping_unidentifiable (λ = NaN: rate excitation < {DAMPING_EXCITATION_MIN:g} and a "
         f"preload would move λ by > {100 * DAMPING_PRELOAD_SENSITIVITY:g} %, e.g. a "
-        f"constant-rate test; --method paper: a monotonic loading), low_r2 (R² < {LOW_R2:g}), "
+        f"constant-rate test; --method paper: a monotonic loading, the rate of the other sign "
+        f"on < {100 * PAPER_MONOTONIC_FRAC:g} % of its samples), low_r2 (R² < {LOW_R2:g}), "
         f"few_samples (< {FEW_SAMPLES_WINDOWS:g} Savitzky-Golay windows of samples), rupture "
         "(a squeeze ruptured; fitted up to it)."
     )

@@ -9,6 +9,7 @@ tests of each path: the synthetic grid (``test_characterize.py``), the simulator
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -25,13 +26,19 @@ from deformctl.characterize import (
 from deformctl.errors import InputDataError, UsageError
 from deformctl.quality import (
     DAMPING_EXCITATION_MIN,
+    DAMPING_PRELOAD_SENSITIVITY,
+    FEW_SAMPLES_WINDOWS,
     FLAGS,
     LOW_R2,
+    NEGATIVE_DAMPING_ATOL_NS_PER_CM,
+    NEGATIVE_DAMPING_SE_MULT,
+    PAPER_MONOTONIC_FRAC,
     damping_identifiable,
     describe_row,
     enforce,
     parse_quality,
     quality_text,
+    thresholds_help,
 )
 from deformctl.series import SqueezeSeries
 
@@ -243,3 +250,23 @@ def test_quality_text_round_trip() -> None:
     assert parse_quality("ok") == ()
     assert parse_quality(None) == ()
     assert parse_quality(quality_text(FLAGS)) == FLAGS
+
+
+def test_thresholds_are_stated_in_the_readme_and_the_help() -> None:
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    section = readme.split("## When the numbers are doubtful", 1)[1].split("\n## ", 1)[0]
+    stated = {
+        "low_r2": f"R² < {LOW_R2:g}",
+        "negative_damping": f"{NEGATIVE_DAMPING_ATOL_NS_PER_CM:g} N·s/cm",
+        "negative_damping se": f"{NEGATIVE_DAMPING_SE_MULT:g}",
+        "excitation": f"{DAMPING_EXCITATION_MIN:g}",
+        "sensitivity": f"{100 * DAMPING_PRELOAD_SENSITIVITY:g} %",
+        "monotonic": f"{100 * PAPER_MONOTONIC_FRAC:g} %",
+        "few_samples": f"{FEW_SAMPLES_WINDOWS:g}",
+    }
+    for name, text in stated.items():
+        assert text in section, name
+        assert text in thresholds_help(), name
+    for flag in FLAGS:
+        assert f"`{flag}`" in section
+        assert flag in thresholds_help()

@@ -42,8 +42,8 @@ def _pct(value: object) -> str:
     return f"{100.0 * value:.2f} %" if isinstance(value, int | float) else "-"
 
 
-def _num(value: object, fmt: str) -> str:
-    return format(value, fmt) if isinstance(value, int | float) else "-"
+def _num(value: object, fmt: str, missing: str = "-") -> str:
+    return format(value, fmt) if isinstance(value, int | float) else missing
 
 
 def _per_object_lines(info: dict[str, Any]) -> list[str]:
@@ -64,7 +64,7 @@ def _per_object_lines(info: dict[str, Any]) -> list[str]:
     for c in info.get("coefficients") or []:
         lines.append(
             f"  {c['object_id']}: D {_num(c['deformability_n_per_cm'], '.4g')} N/cm, "
-            f"λ {_num(c['damping_ns_per_cm'], '.4g')} N·s/cm, R² {_num(c['r2'], '.4f')}, "
+            f"λ {_num(c['damping_ns_per_cm'], '.4g', 'NaN')} N·s/cm, R² {_num(c['r2'], '.4f')}, "
             f"quality {c['quality'] if c['quality'] is not None else 'not recorded (v1 table)'}"
         )
     return (["per object:", *lines]) if lines else []
