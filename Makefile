@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install test lint bench reproduce clean
+.PHONY: install test lint bench reproduce examples clean
 
 install: $(STAMP)
 
@@ -18,9 +18,9 @@ test: install
 	$(BIN)/python -m pytest -n 2 -q
 
 lint: install
-	$(BIN)/ruff check deformctl tests bench
-	$(BIN)/ruff format --check deformctl tests bench
-	$(BIN)/mypy deformctl
+	$(BIN)/ruff check deformctl tests bench examples
+	$(BIN)/ruff format --check deformctl tests bench examples
+	$(BIN)/mypy deformctl examples
 
 bench: install
 	$(BIN)/python -m bench
@@ -43,5 +43,19 @@ reproduce: install
 	$(DC) lift datasets/paper/objects.csv --sim -o $(RUN)/paper_lift.parquet --log $(RUN)/paper_lift.mcap
 	$(BIN)/python -m deformctl.repro.report $(RUN) --require-max-test-error 0.05
 
+# Every file in examples/, run as its docstring says, in a scratch folder ($(EX)/).
+EX ?= .examples
+examples: install
+	rm -rf $(EX) && mkdir -p $(EX)
+	cd $(EX) && ../$(BIN)/python ../examples/render_scene.py scene
+	cd $(EX) && ../$(BIN)/python ../examples/synthetic_index.py demo
+	cd $(EX) && ../$(BIN)/python ../examples/doubtful_exports.py doubtful
+	cd $(EX) && ../$(DC) measure --csv doubtful/utm.csv --columns time=t,force=load,compression=pos \
+	  --units compression=mm --object-id foam --weight-n 0.7 -o doubtful/utm.mcap
+	cd $(EX) && ../$(DC) characterize doubtful/utm.mcap -o doubtful/utm.parquet
+	cd $(EX) && ../$(DC) lift ../datasets/paper/objects.csv \
+	  --rig "../$(BIN)/python ../examples/threshold_rig.py" -o lift-rig.parquet --log lift-rig.mcap
+	@echo "examples ran in $(EX)/"
+
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache build *.egg-info
+	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache build *.egg-info $(EX)

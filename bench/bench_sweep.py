@@ -1,6 +1,6 @@
 """``lift --sim`` sweeps through the CLI: objects/s with 1 and 2 local workers, and peak memory.
 
-Fast setting (stated, used for every run here): ``--alpha-cm 10 --dt-s 0.002 --hold-s 0.05
+Fast setting (stated, used for every run here): ``--alpha-cm 10 --dt-s 0.002 --lift-hold-s 0.05
 --lift-height-m 0.01 --protocol paper --max-attempts 20`` (a coarse lattice, a 1 cm rise, the
 paper's +20 % ramp: about two simulated attempts per object). The catalog is
 ``make_population(n, seed=0)`` (the paper's ranges).
@@ -36,7 +36,7 @@ from pathlib import Path
 from deformctl.population import make_population
 
 FAST = [
-    "--alpha-cm", "10", "--dt-s", "0.002", "--hold-s", "0.05", "--lift-height-m", "0.01",
+    "--alpha-cm", "10", "--dt-s", "0.002", "--lift-hold-s", "0.05", "--lift-height-m", "0.01",
     "--protocol", "paper", "--max-attempts", "20",
 ]  # fmt: skip
 SPEED_OBJECTS = 160

@@ -1,7 +1,14 @@
 """deformctl: learn the minimum force that lifts a deformable object without slip.
 
-The library is organised by pipeline stage (``measure``, ``characterize``, ``lift``, ``table``,
-``train``); the ``deformctl`` command is a thin layer over it.
+The library is organised by pipeline stage: :mod:`~deformctl.population`,
+:mod:`~deformctl.measure`, :mod:`~deformctl.characterize`, :mod:`deformctl.lift` (search, stage,
+runners), :mod:`~deformctl.table`, :mod:`~deformctl.train`, with :mod:`deformctl.vision` for
+OpenCV measurements. Below the stages: :mod:`~deformctl.catalog` (the typed catalog row),
+:mod:`~deformctl.parallel` (the sweep executor), :mod:`deformctl.artifacts` (every file format,
+the dataset directory), :mod:`deformctl.sim` (physics only) and :mod:`~deformctl.physics` (the
+one F_w). Above them: :mod:`deformctl.repro` (the paper's reproduction and the golden regression
+on the bundled data) and :mod:`deformctl.cli`, the ``deformctl`` command, a thin layer over the
+library. The README's Architecture section says what each package owns.
 """
 
 from __future__ import annotations

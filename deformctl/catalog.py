@@ -28,11 +28,12 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, TypeVar, overload
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from deformctl.errors import InputDataError, UsageError
+from deformctl.physics import rigid_grip_force_n
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported when used
     import pandas as pd
@@ -66,21 +67,6 @@ __all__ = [
     "rigid_grip_force_n",
     "select_objects",
 ]
-
-Number = TypeVar("Number", float, np.ndarray)
-
-
-@overload
-def rigid_grip_force_n(weight_n: float, friction_mu: float) -> float: ...
-@overload
-def rigid_grip_force_n(weight_n: np.ndarray, friction_mu: np.ndarray | float) -> np.ndarray: ...
-def rigid_grip_force_n(weight_n: Any, friction_mu: Any) -> Any:
-    """F_w = W / (2 μ), N: the force two palms need to hold a rigid object of weight W at rest.
-
-    The one place F_w is computed (the lift search starts at it, the index table and the model's
-    baseline report it). Works elementwise on arrays.
-    """
-    return weight_n / (2.0 * friction_mu)
 
 
 def _plain(value: Any) -> Any:

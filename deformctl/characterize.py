@@ -38,9 +38,10 @@ Two estimators:
   method carries by construction: ``f/d = D + λ d'/d``, so wherever the object is still moving
   the ratio mixes damping into D.
 
-:func:`read_and_characterize` fits every object of a squeeze log, :func:`characterize_dir` those of
-a ``measure`` dataset directory; at scale, :class:`CharacterizeTask` is the sweep task of one
-object and :func:`characterize_sweep` writes a coefficients dataset directory.
+:func:`read_and_characterize` fits every object of a squeeze log, :func:`characterize_dir` those
+of a ``measure`` dataset directory, and :func:`characterize_file` writes their table; at scale,
+:class:`CharacterizeTask` is the sweep task of one object and :func:`characterize_sweep` writes a
+coefficients dataset directory.
 
 :func:`synthetic_kelvin_voigt_squeeze` generates squeezes with known D and λ (the exact
 Kelvin–Voigt response to a ramp-hold-release or a haversine force, plus seeded noise) for tests
@@ -49,6 +50,7 @@ and examples.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -60,6 +62,7 @@ from typing import Any, Literal
 import numpy as np
 import pandas as pd
 
+from deformctl.artifacts import check_output_path, write_table
 from deformctl.artifacts.dataset import (
     MANIFEST_NAME,
     dataset_fingerprint,
@@ -69,14 +72,26 @@ from deformctl.artifacts.dataset import (
     spec_rows,
     table_schema,
 )
-from deformctl.artifacts.provenance import sha256_file
+from deformctl.artifacts.provenance import Provenance, sha256_file
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, run_sweep
+from deformctl.phases import Rupture, cut_rupture, ruptures_from_object
+from deformctl.quality import (
+    PAPER_MONOTONIC_FRAC,
+    assess,
+    check_policy,
+    damping_identifiable,
+    enforce,
+    quality_text,
+)
 from deformctl.series import FloatArray, SqueezeSeries
+from deformctl.signals import noise_std, sg_smooth, sg_window_length, uniform_grid
 from deformctl.units import N_PER_CM, NS_PER_CM
 
 Method = Literal["lsq", "paper"]
 Profile = Literal["ramp_hold_release", "sine"]
+Preload = Literal["fit", "zero"]
+PRELOADS: tuple[str, ...] = ("fit", "zero")
 
 #: Default Savitzky–Golay window, s. Long enough that the derivative of 0.05 mm position noise is
 #: small against squeeze rates of a few mm/s (noise in ``d'`` biases λ low, see ``fit_lsq``), short
@@ -98,6 +113,8 @@ NO_COMPRESSION_NOISE_MULT = 6.0
 MIN_SAMPLES = 10
 #: Relative spread of the sampling interval above which a log is resampled to a uniform grid.
 UNIFORM_DT_RTOL = 1e-3
+#: Condition number of ``XᵀX`` of ``[d, d']`` above which D cannot be estimated at all.
+COLLINEAR_COND = 1e12
 
 COEFFICIENT_COLUMNS = (
     "object_id",
@@ -109,6 +126,19 @@ COEFFICIENT_COLUMNS = (
     "r2",
     "n_samples",
     "n_squeezes",
+    "quality",
+    "preload_n",
+    "damping_excitation",
+    "design_condition",
+    "damping_bound_active",
+    "compression_min_cm",
+    "compression_max_cm",
+    "force_min_n",
+    "force_max_n",
+    "window_samples",
+    "ruptures",
+    "rupture_time_s",
+    "rupture_force_n",
 )
 
 
@@ -118,13 +148,23 @@ class CoefficientFit:
 
     Attributes:
         deformability_n_per_cm: D, N/cm.
-        damping_ns_per_cm: λ, N·s/cm.
+        damping_ns_per_cm: λ, N·s/cm (NaN when not identifiable).
         method: ``"lsq"`` or ``"paper"``.
         deformability_se_n_per_cm: standard error of D, N/cm (NaN when not estimable).
         damping_se_ns_per_cm: standard error of λ, N·s/cm (NaN when not estimable).
         r2: coefficient of determination of ``f ≈ D d + λ d'`` on the samples used.
         n_samples: samples used in the fit (after trimming and masking).
         n_squeezes: squeezes contributing.
+        preload_n: the fitted contact preload (intercept), N; NaN when not fitted.
+        damping_excitation: share of the rate's mean square independent of a constant and of d
+            (0..1); λ needs it well above 0 (see :func:`deformctl.quality.damping_identifiable`).
+        design_condition: condition number of the fitted design with unit-RMS columns.
+        damping_bound_active: ``constrain_damping`` held λ at 0.
+        damping_unidentifiable: λ was not identifiable (and is NaN).
+        compression_min_cm, compression_max_cm: range of d over the samples used, cm.
+        force_min_n, force_max_n: range of f over the samples used, N.
+        window_samples: the SG window, samples.
+        ruptures: the ruptures found in the squeezes (each fitted up to its rupture).
     """
 
     deformability_n_per_cm: float
@@ -135,6 +175,17 @@ class CoefficientFit:
     r2: float
     n_samples: int
     n_squeezes: int
+    preload_n: float = math.nan
+    damping_excitation: float = math.nan
+    design_condition: float = math.nan
+    damping_bound_active: bool = False
+    damping_unidentifiable: bool = False
+    compression_min_cm: float = math.nan
+    compression_max_cm: float = math.nan
+    force_min_n: float = math.nan
+    force_max_n: float = math.nan
+    window_samples: int = 0
+    ruptures: tuple[Rupture, ...] = ()
 
     @property
     def stiffness_n_per_m(self) -> float:
@@ -146,18 +197,78 @@ class CoefficientFit:
         """λ in SI, N·s/m."""
         return self.damping_ns_per_cm * NS_PER_CM
 
+    @property
+    def flags(self) -> tuple[str, ...]:
+        """The quality flags of this fit (:func:`deformctl.quality.assess`; empty: ok)."""
+        return assess(
+            deformability_n_per_cm=self.deformability_n_per_cm,
+            damping_ns_per_cm=self.damping_ns_per_cm,
+            damping_se_ns_per_cm=self.damping_se_ns_per_cm,
+            r2=self.r2,
+            n_samples=self.n_samples,
+            window_samples=self.window_samples,
+            damping_unidentifiable=self.damping_unidentifiable,
+            damping_bound_active=self.damping_bound_active,
+            ruptures=len(self.ruptures),
+        )
+
+    @property
+    def quality(self) -> str:
+        """``ok`` or the comma list of :attr:`flags`."""
+        return quality_text(self.flags)
+
+    def with_ranges(self, ranges: Mapping[str, float]) -> CoefficientFit:
+        """This fit with the loading range fields (``compression_min_cm``, ...) set."""
+        return dataclasses.replace(
+            self,
+            compression_min_cm=ranges["compression_min_cm"],
+            compression_max_cm=ranges["compression_max_cm"],
+            force_min_n=ranges["force_min_n"],
+            force_max_n=ranges["force_max_n"],
+        )
+
+    def row(self, object_id: str) -> dict[str, object]:
+        """The coefficients row of this fit (columns :data:`COEFFICIENT_COLUMNS`)."""
+        first = self.ruptures[0] if self.ruptures else None
+        return {
+            "object_id": object_id,
+            "deformability_n_per_cm": self.deformability_n_per_cm,
+            "damping_ns_per_cm": self.damping_ns_per_cm,
+            "method": self.method,
+            "deformability_se_n_per_cm": self.deformability_se_n_per_cm,
+            "damping_se_ns_per_cm": self.damping_se_ns_per_cm,
+            "r2": self.r2,
+            "n_samples": self.n_samples,
+            "n_squeezes": self.n_squeezes,
+            "quality": self.quality,
+            "preload_n": self.preload_n,
+            "damping_excitation": self.damping_excitation,
+            "design_condition": self.design_condition,
+            "damping_bound_active": self.damping_bound_active,
+            "compression_min_cm": self.compression_min_cm,
+            "compression_max_cm": self.compression_max_cm,
+            "force_min_n": self.force_min_n,
+            "force_max_n": self.force_max_n,
+            "window_samples": self.window_samples,
+            "ruptures": len(self.ruptures),
+            "rupture_time_s": math.nan if first is None else first.time_s,
+            "rupture_force_n": math.nan if first is None else first.force_n,
+        }
+
 
 @dataclass(frozen=True)
 class _Prepared:
     """One validated squeeze on a uniform grid with SG-smoothed compression and rate.
 
-    All arrays ``[m]`` after trimming half a window at each end.
+    All arrays ``[m]`` after trimming half a window at each end; ``rupture`` is where the
+    squeeze was cut (None when it did not rupture).
     """
 
     force_n: FloatArray
     compression_m: FloatArray
     rate_m_per_s: FloatArray
     window_samples: int
+    rupture: Rupture | None = None
 
 
 def _where(s: SqueezeSeries) -> str:
@@ -169,7 +280,8 @@ def validate_squeeze(s: SqueezeSeries, *, min_samples: int = MIN_SAMPLES) -> Non
 
     Raises:
         InputDataError: too few samples, NaN/inf samples, timestamps that do not strictly
-            increase, or no compression (peak compression ≤ :data:`NO_COMPRESSION_M`).
+            increase, or no compression (peak compression ≤ :data:`NO_COMPRESSION_M`); a
+            compression that is mostly negative is named as having the wrong sign.
     """
     if len(s) < min_samples:
         raise InputDataError(f"{_where(s)}: only {len(s)} samples, need at least {min_samples}")
@@ -191,6 +303,13 @@ def validate_squeeze(s: SqueezeSeries, *, min_samples: int = MIN_SAMPLES) -> Non
         )
     peak_m = float(np.max(s.compression_m))
     noise_m = _noise_std_m(s.compression_m)
+    low_m = float(np.min(s.compression_m))
+    if -low_m > max(peak_m, NO_COMPRESSION_NOISE_MULT * noise_m, NO_COMPRESSION_M):
+        raise InputDataError(
+            f"{_where(s)}: no compression: it has the wrong sign (down to {low_m:.3g} m, at most "
+            f"{peak_m:.3g} m): it must be positive when squeezed; re-measure with the "
+            "position direction flipped (measure --position-increases-when)"
+        )
     if peak_m <= max(NO_COMPRESSION_M, NO_COMPRESSION_NOISE_MULT * noise_m):
         raise InputDataError(
             f"{_where(s)}: no compression (peak compression {peak_m:.3g} m, position noise "
@@ -199,16 +318,8 @@ def validate_squeeze(s: SqueezeSeries, *, min_samples: int = MIN_SAMPLES) -> Non
         )
 
 
-def _noise_std_m(compression_m: FloatArray) -> float:
-    """Robust white-noise std of a sampled signal from the MAD of its second differences, m.
-
-    For a smooth signal sampled densely the second difference is noise only:
-    ``Δ²e`` has std ``√6 σ``; the median absolute deviation ignores the few corners.
-    """
-    dd = np.diff(compression_m, 2)
-    if dd.size == 0:
-        return 0.0
-    return float(np.median(np.abs(dd - np.median(dd))) / 0.6745 / math.sqrt(6.0))
+#: Robust white-noise std of a sampled signal, m (see :func:`deformctl.signals.noise_std`).
+_noise_std_m = noise_std
 
 
 def _uniform(s: SqueezeSeries) -> tuple[float, FloatArray, FloatArray]:
@@ -217,49 +328,45 @@ def _uniform(s: SqueezeSeries) -> tuple[float, FloatArray, FloatArray]:
     A log whose sampling interval varies by more than :data:`UNIFORM_DT_RTOL` is linearly
     resampled onto the grid ``t0 + k · median(dt)``.
     """
-    t = s.time_s
-    dt = np.diff(t)
-    dt_s = float(np.median(dt))
-    if float(np.max(np.abs(dt - dt_s))) <= UNIFORM_DT_RTOL * dt_s:
-        return dt_s, s.force_n, s.compression_m
-    n = math.floor((t[-1] - t[0]) / dt_s) + 1
-    grid = t[0] + dt_s * np.arange(n)
-    return (
-        dt_s,
-        np.interp(grid, t, s.force_n),
-        np.interp(grid, t, s.compression_m),
-    )
+    dt_s, _, (force_n, comp_m) = uniform_grid(s.time_s, s.force_n, s.compression_m)
+    return dt_s, force_n, comp_m
 
 
-def _window_length(window_s: float, dt_s: float, polyorder: int) -> int:
-    """Odd SG window length in samples closest to ``window_s`` and at least ``polyorder + 2``."""
-    n = round(window_s / dt_s)
-    n = max(n, polyorder + 2)
-    return n if n % 2 == 1 else n + 1
+_window_length = sg_window_length
 
 
 def _prepare(
     s: SqueezeSeries, *, window_s: float, polyorder: int, min_compression_frac: float
 ) -> _Prepared:
-    """Validate, resample, differentiate, trim the edges and mask negligible compression."""
+    """Validate, cut at a rupture, resample, differentiate, trim the edges and mask small d."""
     validate_squeeze(s)
+    s, rupture = cut_rupture(s, window_s=window_s)
     dt_s, force_n, comp_m = _uniform(s)
     wl = _window_length(window_s, dt_s, polyorder)
     if force_n.shape[0] < 2 * wl:
+        rate_hz = 1.0 / dt_s
+        why = (
+            f"; the sample rate {rate_hz:.3g} Hz is implausible: is the time unit right?"
+            if not 1.0 <= rate_hz <= 1e5
+            else f" (cut at a rupture, {rupture.describe()})"
+            if rupture is not None
+            else " (use a shorter window)"
+        )
         raise InputDataError(
             f"{_where(s)}: only {force_n.shape[0]} samples on the uniform grid, need at least "
-            f"{2 * wl} for a {wl}-sample Savitzky–Golay window (use a shorter window)"
+            f"{2 * wl} for a {wl}-sample Savitzky–Golay window{why}"
         )
-    from scipy.signal import savgol_filter  # deferred: ~1 s to import, only fits need it
-
-    d_m = savgol_filter(comp_m, wl, polyorder, deriv=0)
-    rate = savgol_filter(comp_m, wl, polyorder, deriv=1, delta=dt_s)
+    d_m, rate = sg_smooth(comp_m, wl, polyorder, dt_s)
     half = wl // 2
     core = slice(half, force_n.shape[0] - half)
     f, d, v = force_n[core], d_m[core], rate[core]
     keep = d > min_compression_frac * float(np.max(d))
     return _Prepared(
-        force_n=f[keep], compression_m=d[keep], rate_m_per_s=v[keep], window_samples=wl
+        force_n=f[keep],
+        compression_m=d[keep],
+        rate_m_per_s=v[keep],
+        window_samples=wl,
+        rupture=rupture,
     )
 
 
@@ -303,14 +410,88 @@ def _require(squeezes: Sequence[SqueezeSeries]) -> None:
         raise InputDataError(f"squeezes of several objects in one fit: {sorted(ids)}")
 
 
+def _unit_rms(x: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """``x`` with unit-RMS columns, and the column scales (1 for an all-zero column)."""
+    scale = np.sqrt(np.mean(x * x, axis=0))
+    scale = np.where(scale > 0, scale, 1.0)
+    return x / scale, scale
+
+
+def _lstsq(x: FloatArray, f: FloatArray) -> FloatArray:
+    """Least-squares coefficients of ``f ≈ x c`` (columns scaled for conditioning)."""
+    xs, scale = _unit_rms(x)
+    coef, *_ = np.linalg.lstsq(xs, f, rcond=None)
+    return np.asarray(coef / scale, dtype=np.float64)
+
+
+def _hac_cov(x: FloatArray, resid: FloatArray, prepared: Sequence[_Prepared]) -> FloatArray:
+    """Newey–West covariance of the coefficients of ``f ≈ x c``, within each squeeze, ``[p, p]``."""
+    xs, scale = _unit_rms(x)
+    p = x.shape[1]
+    meat = np.zeros((p, p))
+    start = 0
+    for prep in prepared:
+        stop = start + prep.force_n.shape[0]
+        meat += _hac_meat(xs[start:stop], resid[start:stop], prep.window_samples)
+        start = stop
+    n = x.shape[0]
+    bread = np.linalg.pinv(xs.T @ xs)
+    cov = bread @ meat @ bread * (n / max(n - p, 1))
+    return np.asarray(cov / np.outer(scale, scale), dtype=np.float64)
+
+
+def damping_excitation(compression_m: FloatArray, rate_m_per_s: FloatArray) -> float:
+    """Share of the rate's mean square not explained by a constant and by d, in [0, 1].
+
+    ``‖d' − P d'‖² / ‖d'‖²`` with ``P`` the projection onto ``[1, d]``: 0 for a constant rate
+    (``λ d'`` is then a constant force) or a rate that follows d, 1 for a rate independent of
+    both (a load–unload cycle). See :func:`deformctl.quality.damping_identifiable`.
+    """
+    total = float(rate_m_per_s @ rate_m_per_s)
+    if not total > 0:
+        return 0.0
+    a = np.column_stack([np.ones_like(compression_m), compression_m])
+    coef, *_ = np.linalg.lstsq(a, rate_m_per_s, rcond=None)
+    resid = rate_m_per_s - a @ coef
+    return float(min(1.0, (resid @ resid) / total))
+
+
+def _relative_change(a: float, b: float) -> float:
+    big = max(abs(a), abs(b))
+    return abs(a - b) / big if big > 0 else 0.0
+
+
+def _ranges(f: FloatArray, d: FloatArray) -> dict[str, float]:
+    """The loading range used: d (cm) and f (N) extremes, keyed as the row's columns."""
+    return {
+        "compression_min_cm": float(np.min(d)) * 100.0,
+        "compression_max_cm": float(np.max(d)) * 100.0,
+        "force_min_n": float(np.min(f)),
+        "force_max_n": float(np.max(f)),
+    }
+
+
+def _ruptures(prepared: Sequence[_Prepared]) -> tuple[Rupture, ...]:
+    return tuple(p.rupture for p in prepared if p.rupture is not None)
+
+
 def fit_lsq(
     squeezes: Sequence[SqueezeSeries],
     *,
     window_s: float = DEFAULT_WINDOW_S,
     polyorder: int = DEFAULT_POLYORDER,
     min_compression_frac: float = DEFAULT_MIN_COMPRESSION_FRAC,
+    preload: Preload = "zero",
+    constrain_damping: bool = False,
 ) -> CoefficientFit:
-    """Joint least-squares fit of ``f = D d + λ d'`` over all squeezes of one object.
+    """Joint least-squares fit of ``f = D d + λ d'`` (``+ F0`` with a preload) over all squeezes.
+
+    Besides D, λ and their standard errors the fit reports its diagnostics: R², the damping
+    excitation and design condition, the loading range used, and whether λ is identifiable. λ
+    is unidentifiable (NaN, flag ``damping_unidentifiable``) when it cannot be told from a
+    constant force or from D (:func:`deformctl.quality.damping_identifiable`): to judge, the
+    fit is made both with and without the preload intercept. A squeeze that ruptured is fitted
+    up to its rupture (:func:`deformctl.phases.cut_rupture`).
 
     Args:
         squeezes: the object's squeezes (same ``object_id``), each with ``time_s``, ``force_n``
@@ -319,16 +500,22 @@ def fit_lsq(
         polyorder: Savitzky–Golay polynomial order.
         min_compression_frac: drop samples with compression below this fraction of the
             squeeze's peak.
+        preload: ``"zero"`` (the force is 0 at zero compression) or ``"fit"`` (an intercept
+            F0: a contact preload at the start of the squeeze, reported as ``preload_n``).
+        constrain_damping: fit with λ ≥ 0 (bounded least squares, ``scipy.optimize.lsq_linear``);
+            ``damping_bound_active`` says whether the bound held λ at 0.
 
     Returns:
-        The fit in N/cm and N·s/cm with OLS standard errors, R², samples and squeezes used.
+        The fit in N/cm and N·s/cm with Newey–West standard errors and its diagnostics.
 
     Raises:
         InputDataError: a squeeze that fails :func:`validate_squeeze`, is shorter than two
-            filter windows, or a set of samples that cannot separate D from λ.
+            filter windows, or a set of samples that cannot separate D from λ at all.
         UsageError: an invalid option value.
     """
     _check_options(window_s, polyorder, min_compression_frac)
+    if preload not in PRELOADS:
+        raise UsageError(f"preload must be 'fit' or 'zero', got {preload!r}")
     _require(squeezes)
     prepared = [
         _prepare(
@@ -337,44 +524,73 @@ def fit_lsq(
         for s in squeezes
     ]
     f = np.concatenate([p.force_n for p in prepared])
-    x = np.column_stack(
-        [
-            np.concatenate([p.compression_m for p in prepared]),
-            np.concatenate([p.rate_m_per_s for p in prepared]),
-        ]
-    )
+    d = np.concatenate([p.compression_m for p in prepared])
+    v = np.concatenate([p.rate_m_per_s for p in prepared])
     n = f.shape[0]
     if n < 3:
         raise InputDataError(f"object {squeezes[0].object_id!r}: only {n} usable samples")
-    xtx = x.T @ x
-    cond = np.linalg.cond(xtx)
-    if not np.isfinite(cond) or cond > 1e12:
+    x2 = np.column_stack([d, v])
+    cond = np.linalg.cond(x2.T @ x2)
+    if not np.isfinite(cond) or cond > COLLINEAR_COND:
         raise InputDataError(
             f"object {squeezes[0].object_id!r}: compression and its rate are collinear "
             "(the force profile does not excite the damping term); cannot separate D from λ"
         )
-    coef, *_ = np.linalg.lstsq(x, f, rcond=None)
+    x3 = np.column_stack([np.ones(n), d, v])
+    excitation = damping_excitation(d, v)
+    sensitivity = _relative_change(float(_lstsq(x2, f)[1]), float(_lstsq(x3, f)[2]))
+    identifiable = damping_identifiable(excitation, sensitivity)
+    x = x3 if preload == "fit" else x2
+    lam_col = x.shape[1] - 1
+    coef = _lstsq(x, f)
+    bound_active = False
+    if constrain_damping and identifiable:
+        from scipy.optimize import lsq_linear
+
+        xs, scale = _unit_rms(x)
+        lower = np.full(x.shape[1], -np.inf)
+        lower[lam_col] = 0.0
+        res = lsq_linear(xs, f, bounds=(lower, np.inf))
+        coef = np.asarray(res.x / scale, dtype=np.float64)
+        bound_active = bool(res.active_mask[lam_col] != 0)
+    if bound_active:  # λ = 0: the rest is the fit without the damping column
+        x_fit = np.delete(x, lam_col, axis=1)
+        coef_fit = _lstsq(x_fit, f)
+        coef = np.insert(coef_fit, lam_col, 0.0)
+        cov = _hac_cov(x_fit, f - x_fit @ coef_fit, prepared)
+        se = np.insert(np.sqrt(np.diag(cov)), lam_col, math.nan)
+    else:
+        cov = _hac_cov(x, f - x @ coef, prepared)
+        se = np.sqrt(np.diag(cov))
     pred = x @ coef
-    resid = f - pred
-    meat = np.zeros((2, 2))
-    start = 0
-    for p in prepared:
-        stop = start + p.force_n.shape[0]
-        meat += _hac_meat(x[start:stop], resid[start:stop], p.window_samples)
-        start = stop
-    bread = np.linalg.inv(xtx)
-    cov = bread @ meat @ bread * (n / (n - 2))
-    se = np.sqrt(np.diag(cov))
+    lam, lam_se = float(coef[lam_col]), float(se[lam_col])
+    if not identifiable:
+        lam, lam_se = math.nan, math.nan
     return CoefficientFit(
-        deformability_n_per_cm=float(coef[0]) / N_PER_CM,
-        damping_ns_per_cm=float(coef[1]) / NS_PER_CM,
+        deformability_n_per_cm=float(coef[lam_col - 1]) / N_PER_CM,
+        damping_ns_per_cm=lam / NS_PER_CM,
         method="lsq",
-        deformability_se_n_per_cm=float(se[0]) / N_PER_CM,
-        damping_se_ns_per_cm=float(se[1]) / NS_PER_CM,
+        deformability_se_n_per_cm=float(se[lam_col - 1]) / N_PER_CM,
+        damping_se_ns_per_cm=lam_se / NS_PER_CM,
         r2=_r2(f, pred),
         n_samples=n,
         n_squeezes=len(squeezes),
-    )
+        preload_n=float(coef[0]) if preload == "fit" else math.nan,
+        damping_excitation=excitation,
+        design_condition=float(np.linalg.cond(_unit_rms(x)[0])),
+        damping_bound_active=bound_active,
+        damping_unidentifiable=not identifiable,
+        window_samples=max(p.window_samples for p in prepared),
+        ruptures=_ruptures(prepared),
+    ).with_ranges(_ranges(f, d))
+
+
+def _monotonic(rate: FloatArray) -> bool:
+    """Whether the rate has one sign on all but :data:`PAPER_MONOTONIC_FRAC` of its samples."""
+    if rate.size == 0:
+        return True
+    minority = min(float(np.mean(rate > 0)), float(np.mean(rate < 0)))
+    return minority < PAPER_MONOTONIC_FRAC
 
 
 def fit_paper(
@@ -394,6 +610,11 @@ def fit_paper(
     the mean). The object's D and λ are the means over squeezes; their standard errors are the
     squeeze-to-squeeze standard deviations over ``√n`` (NaN for a single squeeze). R² is that of
     ``D d + λ d'`` on the samples used for D. See the module docstring for why this is biased.
+
+    A squeeze whose rate keeps one sign (a monotonic loading, see
+    :data:`deformctl.quality.PAPER_MONOTONIC_FRAC`) gives no λ: its residual ratio is pinned near
+    0 by construction. λ is the mean over the other squeezes, NaN with the flag
+    ``damping_unidentifiable`` when there are none.
 
     Args:
         squeezes: the object's squeezes, arrays ``[n]``.
@@ -420,45 +641,65 @@ def fit_paper(
     d_list: list[float] = []
     lam_list: list[float] = []
     fs: list[FloatArray] = []
+    ds: list[FloatArray] = []
+    vs: list[FloatArray] = []
     preds: list[FloatArray] = []
+    prepared: list[_Prepared] = []
     for s in squeezes:
         p = _prepare(
             s, window_s=window_s, polyorder=polyorder, min_compression_frac=min_compression_frac
         )
         if p.force_n.shape[0] < 3:
             raise InputDataError(f"{_where(s)}: only {p.force_n.shape[0]} usable samples")
+        prepared.append(p)
         d_i = float(agg(p.force_n / p.compression_m))
         abs_rate = np.abs(p.rate_m_per_s)
         moving = abs_rate > min_rate_frac * float(np.max(abs_rate))
         if not np.any(moving):
             raise InputDataError(f"{_where(s)}: compression never changes; no damping estimate")
-        resid = p.force_n[moving] - d_i * p.compression_m[moving]
-        lam_i = float(agg(resid / p.rate_m_per_s[moving]))
+        if _monotonic(p.rate_m_per_s[moving]):
+            lam_i = math.nan
+        else:
+            resid = p.force_n[moving] - d_i * p.compression_m[moving]
+            lam_i = float(agg(resid / p.rate_m_per_s[moving]))
         d_list.append(d_i)
         lam_list.append(lam_i)
         fs.append(p.force_n)
-        preds.append(d_i * p.compression_m + lam_i * p.rate_m_per_s)
+        ds.append(p.compression_m)
+        vs.append(p.rate_m_per_s)
+        lam_pred = 0.0 if math.isnan(lam_i) else lam_i
+        preds.append(d_i * p.compression_m + lam_pred * p.rate_m_per_s)
     d_arr = np.asarray(d_list)
-    lam_arr = np.asarray(lam_list)
-    k = d_arr.shape[0]
+    lam_arr = np.asarray([x for x in lam_list if not math.isnan(x)])
+    k, k_lam = d_arr.shape[0], lam_arr.shape[0]
     se_d = float(np.std(d_arr, ddof=1) / math.sqrt(k)) if k > 1 else float("nan")
-    se_l = float(np.std(lam_arr, ddof=1) / math.sqrt(k)) if k > 1 else float("nan")
-    f_all = np.concatenate(fs)
+    se_l = float(np.std(lam_arr, ddof=1) / math.sqrt(k_lam)) if k_lam > 1 else float("nan")
+    f_all, d_all, v_all = np.concatenate(fs), np.concatenate(ds), np.concatenate(vs)
+    x = np.column_stack([d_all, v_all])
     return CoefficientFit(
         deformability_n_per_cm=float(d_arr.mean()) / N_PER_CM,
-        damping_ns_per_cm=float(lam_arr.mean()) / NS_PER_CM,
+        damping_ns_per_cm=(float(lam_arr.mean()) if k_lam else math.nan) / NS_PER_CM,
         method="paper",
         deformability_se_n_per_cm=se_d / N_PER_CM,
         damping_se_ns_per_cm=se_l / NS_PER_CM,
         r2=_r2(f_all, np.concatenate(preds)),
         n_samples=int(f_all.shape[0]),
         n_squeezes=k,
-    )
+        damping_excitation=damping_excitation(d_all, v_all),
+        design_condition=float(np.linalg.cond(_unit_rms(x)[0])),
+        damping_unidentifiable=k_lam == 0,
+        window_samples=max(p.window_samples for p in prepared),
+        ruptures=_ruptures(prepared),
+    ).with_ranges(_ranges(f_all, d_all))
 
 
 def characterize(
     squeezes_by_object: Mapping[str, Sequence[SqueezeSeries]],
     method: Method = "lsq",
+    *,
+    preload: Preload | Mapping[str, Preload] = "zero",
+    constrain_damping: bool = False,
+    recorded_ruptures: Mapping[str, Sequence[Rupture]] | None = None,
     **options: float,
 ) -> pd.DataFrame:
     """Fit every object's squeezes and return the coefficient table.
@@ -466,35 +707,46 @@ def characterize(
     Args:
         squeezes_by_object: object id → that object's squeezes.
         method: ``"lsq"`` (default, :func:`fit_lsq`) or ``"paper"`` (:func:`fit_paper`).
+        preload: lsq only: ``"zero"`` or ``"fit"``, for every object or per object id.
+        constrain_damping: lsq only: fit with λ ≥ 0.
+        recorded_ruptures: object id → the ruptures ``measure`` cut off (from the log); they
+            count for the ``rupture`` flag and the rupture columns with those found here.
         **options: passed to the estimator (``window_s``, ``polyorder``, ...).
 
     Returns:
-        One row per object, columns :data:`COEFFICIENT_COLUMNS` (coefficients in N/cm, N·s/cm).
+        One row per object, columns :data:`COEFFICIENT_COLUMNS` (coefficients in N/cm, N·s/cm;
+        ``quality`` is ``ok`` or the flags of :mod:`deformctl.quality`).
 
     Raises:
-        UsageError: an unknown method.
+        UsageError: an unknown method, or a preload or damping bound with ``method="paper"``.
         InputDataError: any object whose squeezes cannot be fitted (the message names it).
     """
     if method not in ("lsq", "paper"):
         raise UsageError(f"unknown method {method!r}; expected 'lsq' or 'paper'")
+    if method == "paper" and (preload == "fit" or constrain_damping):
+        raise UsageError("the paper estimator has no preload or damping bound; use --method lsq")
     rows: list[dict[str, object]] = []
     for object_id, squeezes in squeezes_by_object.items():
-        fit = fit_lsq(squeezes, **options) if method == "lsq" else fit_paper(squeezes, **options)  # type: ignore[arg-type]
-        rows.append(
-            {
-                "object_id": object_id,
-                "deformability_n_per_cm": fit.deformability_n_per_cm,
-                "damping_ns_per_cm": fit.damping_ns_per_cm,
-                "method": fit.method,
-                "deformability_se_n_per_cm": fit.deformability_se_n_per_cm,
-                "damping_se_ns_per_cm": fit.damping_se_ns_per_cm,
-                "r2": fit.r2,
-                "n_samples": fit.n_samples,
-                "n_squeezes": fit.n_squeezes,
-            }
-        )
+        if method == "lsq":
+            mode = preload if isinstance(preload, str) else preload.get(object_id, "zero")
+            fit = fit_lsq(squeezes, preload=mode, constrain_damping=constrain_damping, **options)  # type: ignore[arg-type]
+        else:
+            fit = fit_paper(squeezes, **options)  # type: ignore[arg-type]
+        recorded = list((recorded_ruptures or {}).get(object_id, ()))
+        if recorded:
+            merged = sorted([*recorded, *fit.ruptures], key=lambda r: r.squeeze_index)
+            fit = dataclasses.replace(fit, ruptures=tuple(merged))
+        rows.append(fit.row(object_id))
     df = pd.DataFrame(rows, columns=list(COEFFICIENT_COLUMNS))
-    return df.astype({"n_samples": "int64", "n_squeezes": "int64"})
+    return df.astype(
+        {
+            "n_samples": "int64",
+            "n_squeezes": "int64",
+            "window_samples": "int64",
+            "ruptures": "int64",
+            "damping_bound_active": "bool",
+        }
+    )
 
 
 def default_window_s(position_rate_hz: float | None) -> float:
@@ -533,11 +785,15 @@ class LogCoefficients:
         window_s: object id → the Savitzky–Golay window used, s.
         position_rate_hz: object id → the position sample rate stored in the log, Hz (None
             when the log does not say).
+        preload: object id → the preload mode used (``fit`` or ``zero``; lsq only).
+        warnings: one line per flagged object (``<file>: object 'X': <flags>``), for stderr.
     """
 
     table: pd.DataFrame
     window_s: dict[str, float]
     position_rate_hz: dict[str, float | None]
+    preload: dict[str, str] = dataclasses.field(default_factory=dict)
+    warnings: list[str] = dataclasses.field(default_factory=list)
 
 
 def _stored_rate(obj: Mapping[str, object] | None) -> float | None:
@@ -547,11 +803,68 @@ def _stored_rate(obj: Mapping[str, object] | None) -> float | None:
     return None
 
 
+#: The ``source`` a squeeze log's object row carries when ``measure`` read a rig recording.
+RIG_SOURCES = ("ros2_bag", "csv")
+
+
+def default_preload(obj: Mapping[str, object] | None) -> Preload:
+    """The preload mode of an object whose log does not choose one: ``fit`` for rig recordings.
+
+    A rig's palms may already press on the object when its compression zero is taken (a testing
+    machine starts at a seating preload); ignored, a preload of 1 % of the peak force raises D by
+    1–3 % and one of 5 % by 6–15 % (synthetic Kelvin–Voigt squeezes), while fitting it costs
+    at most 0.3 % on squeezes without one. Simulated squeezes start from rest at exactly zero force,
+    so their preload is known to be 0 (``zero``): there an intercept would only absorb the
+    lattice's departure from Kelvin–Voigt (it moves the simulator's D by −0.3 to −2.2 %). Logs that
+    do not say where they came from (written before ``source`` was stored) keep ``zero``.
+    """
+    source = None if obj is None else obj.get("source")
+    return "fit" if source in RIG_SOURCES else "zero"
+
+
+def _check_fit_options(method: str, window_s: float | None, preload: str | None) -> None:
+    if method not in ("lsq", "paper"):
+        raise UsageError(f"unknown method {method!r}; expected 'lsq' or 'paper'")
+    if window_s is not None and not (math.isfinite(window_s) and window_s > 0):
+        raise UsageError(f"window must be a finite number > 0 s, got {window_s}")
+    if preload is not None and preload not in PRELOADS:
+        raise UsageError(f"--preload must be fit or zero, got {preload!r}")
+
+
+def _fit_object(
+    oid: str,
+    group: Sequence[SqueezeSeries],
+    obj: Mapping[str, object] | None,
+    method: str,
+    *,
+    window_s: float,
+    preload: Preload | None,
+    constrain_damping: bool,
+) -> tuple[pd.DataFrame, str]:
+    """One object's coefficients row (a one-row frame) and the preload mode used."""
+    mode: Preload = preload if preload is not None else default_preload(obj)
+    if method == "paper":
+        mode = "zero"
+    df = characterize(
+        {oid: group},
+        method,  # type: ignore[arg-type]
+        preload=mode,
+        constrain_damping=constrain_damping,
+        recorded_ruptures={oid: ruptures_from_object(dict(obj or {}))},
+        window_s=window_s,
+    )
+    return df, mode
+
+
 def read_and_characterize(
     path: str | PathLike[str],
     method: Method = "lsq",
     *,
     window_s: float | None = None,
+    preload: Preload | None = None,
+    constrain_damping: bool = False,
+    strict: bool = False,
+    allow_flagged: bool = False,
 ) -> LogCoefficients:
     """Read a squeeze log (validated), group its squeezes by object and fit each object.
 
@@ -560,24 +873,32 @@ def read_and_characterize(
         method: ``"lsq"`` (:func:`fit_lsq`) or ``"paper"`` (:func:`fit_paper`).
         window_s: Savitzky–Golay window, s, for every object; None picks it per object from
             the ``position_rate_hz`` the log stores for it (:func:`default_window_s`).
+        preload: lsq: ``"fit"`` or ``"zero"`` for every object; None chooses per object
+            (:func:`default_preload`). The paper method never fits a preload.
+        constrain_damping: lsq: fit with λ ≥ 0.
+        strict: any quality flag is an error (:func:`deformctl.quality.enforce`).
+        allow_flagged: keep objects with negative D (flagged) instead of refusing them.
 
     Returns:
-        The coefficient table and the window used for each object.
+        The coefficient table, the window and preload used for each object and the warning
+        lines of the flagged objects.
 
     Raises:
         MissingInputError: the log does not exist (exit 66).
-        InputDataError: a damaged log or one that does not match its schema, no squeezes, or an
-            object whose squeezes cannot be fitted (no compression, too short, ...); the
-            message names the file and the object (exit 65).
-        UsageError: an unknown method or a window that is not > 0 (exit 2).
+        InputDataError: a damaged log or one that does not match its schema, no squeezes, an
+            object whose squeezes cannot be fitted (no compression, too short, ...), an object
+            with negative D (unless ``allow_flagged``) or any flagged object with ``strict``;
+            the message names the file and the object (exit 65).
+        UsageError: an unknown method, a window that is not > 0, ``strict`` with
+            ``allow_flagged``, or a preload or bound with the paper method (exit 2).
     """
     from deformctl.artifacts.io import display_name
     from deformctl.artifacts.mcaplog import read_squeeze_log
 
-    if method not in ("lsq", "paper"):
-        raise UsageError(f"unknown method {method!r}; expected 'lsq' or 'paper'")
-    if window_s is not None and not (math.isfinite(window_s) and window_s > 0):
-        raise UsageError(f"window must be a finite number > 0 s, got {window_s}")
+    _check_fit_options(method, window_s, preload)
+    check_policy(strict, allow_flagged)
+    if method == "paper" and (preload == "fit" or constrain_damping):
+        raise UsageError("the paper estimator has no preload or damping bound; use --method lsq")
     name = display_name(path)
     objects, squeezes = read_squeeze_log(path)
     if not squeezes:
@@ -591,15 +912,28 @@ def read_and_characterize(
         oid: window_s if window_s is not None else default_window_s(rates[oid]) for oid in by_object
     }
     frames = []
+    modes: dict[str, str] = {}
     for oid, group in by_object.items():
         try:
-            frames.append(characterize({oid: group}, method, window_s=windows[oid]))
+            df, modes[oid] = _fit_object(
+                oid,
+                group,
+                meta.get(oid),
+                method,
+                window_s=windows[oid],
+                preload=preload,
+                constrain_damping=constrain_damping,
+            )
         except InputDataError as err:
             if err.path is None:  # the estimators name the object; add the file
                 raise InputDataError(err.message, path=name) from err
             raise
+        frames.append(df)
     table = pd.concat(frames, ignore_index=True)
-    return LogCoefficients(table=table, window_s=windows, position_rate_hz=rates)
+    warnings = enforce(table, strict=strict, allow_flagged=allow_flagged, path=name)
+    return LogCoefficients(
+        table=table, window_s=windows, position_rate_hz=rates, preload=modes, warnings=warnings
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -617,15 +951,71 @@ def squeeze_log_parts(path: str | PathLike[str]) -> list[Path]:
 
 
 def characterize_dir(
-    path: str | PathLike[str], method: Method = "lsq", *, window_s: float | None = None
+    path: str | PathLike[str], method: Method = "lsq", **options: Any
 ) -> LogCoefficients:
-    """:func:`read_and_characterize` of every squeeze log of a ``measure`` directory, in order."""
-    parts = [read_and_characterize(p, method, window_s=window_s) for p in squeeze_log_parts(path)]
+    """:func:`read_and_characterize` of every squeeze log of a ``measure`` directory, in order.
+
+    ``options`` are those of :func:`read_and_characterize` (``window_s``, ``preload``, ...).
+    """
+    parts = [read_and_characterize(p, method, **options) for p in squeeze_log_parts(path)]
     return LogCoefficients(
         table=pd.concat([p.table for p in parts], ignore_index=True),
         window_s={k: v for p in parts for k, v in p.window_s.items()},
         position_rate_hz={k: v for p in parts for k, v in p.position_rate_hz.items()},
+        preload={k: v for p in parts for k, v in p.preload.items()},
+        warnings=[line for p in parts for line in p.warnings],
     )
+
+
+def characterize_file(
+    log: str,
+    method: Method = "lsq",
+    *,
+    output: str,
+    window_s: float | None = None,
+    force: bool = False,
+    preload: Preload | None = None,
+    constrain_damping: bool = False,
+    strict: bool = False,
+    allow_flagged: bool = False,
+) -> LogCoefficients:
+    """``characterize LOG -o TABLE``: fit a squeeze log (or a ``measure`` directory's logs).
+
+    The quality policy is applied before anything is written (``strict``, ``allow_flagged``:
+    see :func:`read_and_characterize`); the coefficients table is then written atomically with
+    its provenance (the method, the window and preload used for each object and the position
+    sample rates behind them). The caller prints ``result.warnings``.
+
+    Raises:
+        OutputExistsError: ``output`` exists and ``force`` is false (exit 1).
+        MissingInputError, InputDataError, UsageError: see :func:`read_and_characterize`.
+    """
+    check_output_path(output, force)
+    options: dict[str, Any] = {
+        "window_s": window_s,
+        "preload": preload,
+        "constrain_damping": constrain_damping,
+        "strict": strict,
+        "allow_flagged": allow_flagged,
+    }
+    if os.path.isdir(log):
+        result = characterize_dir(log, method, **options)
+    else:
+        result = read_and_characterize(log, method, **options)
+    provenance = Provenance.from_invocation(
+        [log],
+        settings={
+            "method": method,
+            "window_s": result.window_s,
+            "window_s_option": window_s,
+            "position_rate_hz": result.position_rate_hz,
+            "preload": result.preload,
+            "preload_option": preload,
+            "constrain_damping": constrain_damping,
+        },
+    )
+    write_table(result.table, output, "coefficients", provenance=provenance, force=force)
+    return result
 
 
 def characterize_items(path: str | PathLike[str]) -> list[dict[str, Any]]:
@@ -674,16 +1064,27 @@ def _read_log_cached(path: str) -> tuple[dict[str, Any], dict[str, list[SqueezeS
 
 @dataclass(frozen=True)
 class CharacterizeTask:
-    """``characterize`` for one object of a squeeze-log directory (a picklable sweep task)."""
+    """``characterize`` for one object of a squeeze-log directory (a picklable sweep task).
+
+    Attributes:
+        method, window_s, preload, constrain_damping: as :func:`read_and_characterize`.
+        strict: a flagged object fails (recorded in ``_failures/``) instead of being written.
+        allow_flagged: write an object with negative D (flagged) instead of failing it.
+    """
 
     method: str = "lsq"
     window_s: float | None = None
+    preload: str | None = None
+    constrain_damping: bool = False
+    strict: bool = False
+    allow_flagged: bool = False
 
     def __call__(self, item: dict[str, Any]) -> Any:
         """Fit one object; its coefficients row (an Arrow table).
 
         Raises:
-            InputDataError: the object has no squeezes or cannot be fitted (recorded as failed).
+            InputDataError: the object has no squeezes, cannot be fitted, or is refused by the
+                quality policy (recorded as failed).
         """
         oid, log = str(item["object_id"]), str(item["log_path"])
         meta, by_object = _read_log_cached(log)
@@ -693,11 +1094,20 @@ class CharacterizeTask:
         rate_hz = _stored_rate(meta.get(oid))
         window = self.window_s if self.window_s is not None else default_window_s(rate_hz)
         try:
-            df = characterize({oid: group}, self.method, window_s=window)  # type: ignore[arg-type]
+            df, _ = _fit_object(
+                oid,
+                group,
+                meta.get(oid),
+                self.method,
+                window_s=window,
+                preload=self.preload,  # type: ignore[arg-type]
+                constrain_damping=self.constrain_damping,
+            )
         except InputDataError as err:
             if err.path is None:
                 raise InputDataError(err.message, path=log) from err
             raise
+        enforce(df, strict=self.strict, allow_flagged=self.allow_flagged, path=log)
         return spec_rows(df, "coefficients")
 
 
@@ -717,6 +1127,8 @@ def characterize_sweep(
     """
     if task.window_s is not None and not (math.isfinite(task.window_s) and task.window_s > 0):
         raise UsageError(f"--window-s must be a finite number > 0 s, got {task.window_s}")
+    _check_fit_options(task.method, task.window_s, task.preload)
+    check_policy(task.strict, task.allow_flagged)
     if not os.path.isdir(log_dir):
         if not os.path.exists(log_dir):
             raise MissingInputError("no such file or directory", path=log_dir)
@@ -724,7 +1136,14 @@ def characterize_sweep(
             "a dataset directory output (-o DIR/) needs a squeeze-log directory input "
             "(measure --sim -o DIR/)"
         )
-    settings = {"method": task.method, "window_s_option": task.window_s}
+    settings = {
+        "method": task.method,
+        "window_s_option": task.window_s,
+        "preload_option": task.preload,
+        "constrain_damping": task.constrain_damping,
+        "strict": task.strict,
+        "allow_flagged": task.allow_flagged,
+    }
     fingerprint = dataset_fingerprint(
         "characterize", "coefficients", settings, {"log": sha256_file(log_dir)}
     )

@@ -65,11 +65,25 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
+from deformctl.artifacts import check_output_path, read_catalog, write_squeeze_log
 from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
 from deformctl.artifacts.provenance import Provenance, input_digest
-from deformctl.catalog import catalog_objects
+from deformctl.catalog import catalog_objects, select_objects
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
+from deformctl.phases import PHASES, Phase, Rupture, cut_rupture, phase_slice, slice_squeeze
+from deformctl.plausibility import (
+    MAX_PEAK_FORCE_N,
+    check_force_axis,
+    check_peak_compression,
+    check_peak_force,
+    check_sample_rate,
+    compression_has_wrong_sign,
+    compression_limit_m,
+    compression_target_m,
+    rate_ok,
+    suggest_unit,
+)
 from deformctl.series import FloatArray, SqueezeSeries
 from deformctl.units import NS_PER_S
 
@@ -79,6 +93,8 @@ if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported w
 Axis = Literal["x", "y", "z"]
 PositionIs = Literal["gap", "palm"]
 CompressionZero = Literal["first", "lead_in"]
+IncreasesWhen = Literal["closing", "opening"]
+INCREASES_WHEN: tuple[str, ...] = ("closing", "opening")
 
 WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
 POSE_TYPE = "geometry_msgs/msg/PoseStamped"
@@ -127,6 +143,29 @@ class Recording:
     squeezes: list[SqueezeSeries]
     force_rate_hz: float
     position_rate_hz: float
+    source: str = ""
+    phase: str = "all"
+    ruptures: tuple[Rupture, ...] = ()
+
+    def log_fields(self) -> dict[str, Any]:
+        """What a squeeze log stores with the object besides its catalog values.
+
+        ``force_rate_hz`` and ``position_rate_hz``; ``source`` (``ros2_bag`` or ``csv``: the
+        log is a rig recording, which ``characterize`` fits with a preload by default),
+        ``phase`` and ``ruptures`` (the points where squeezes were cut, see
+        :class:`deformctl.phases.Rupture`).
+        """
+        out: dict[str, Any] = {
+            "force_rate_hz": self.force_rate_hz,
+            "position_rate_hz": self.position_rate_hz,
+        }
+        if self.source:
+            out["source"] = self.source
+        if self.phase != "all":
+            out["phase"] = self.phase
+        if self.ruptures:
+            out["ruptures"] = [r.to_record() for r in self.ruptures]
+        return out
 
 
 def _rate_hz(time_s: FloatArray) -> float:
@@ -171,6 +210,17 @@ def _unloaded_reference(position: FloatArray, force_n: FloatArray, threshold_fra
     return float(np.median(position[: max(n_lead, 1)]))
 
 
+def _convention(kind: str, increases_when: str | None) -> str | None:
+    """When the position grows for a position kind: ``closing``, ``opening`` or None (auto)."""
+    if increases_when is not None:
+        if increases_when not in INCREASES_WHEN:
+            raise UsageError(
+                f"position_increases_when must be closing or opening, got {increases_when!r}"
+            )
+        return increases_when
+    return {"gap": "opening", "compression": "closing"}.get(kind)
+
+
 def _compression(
     position: FloatArray,
     force_n: FloatArray,
@@ -178,27 +228,47 @@ def _compression(
     path: str,
     threshold_frac: float,
     zero: str,
+    increases_when: str | None = None,
+    what: str = "the position",
 ) -> FloatArray:
-    """Compression ``[n]`` (m) from a gap, a symmetric palm's travel, or a direct compression."""
+    """Compression ``[n]`` (m) from a gap, a symmetric palm's travel, or a direct compression.
+
+    ``increases_when`` says whether the position grows as the gripper closes or opens; None
+    means the kind's convention (a gap grows when opening, a compression when closing) or, for
+    one palm's travel, the sign that makes d positive at the peak force.
+
+    Raises:
+        InputDataError: the position never moves, or d is negative where the object is loaded
+            (the message names the ``--position-increases-when`` that flips it).
+    """
     if zero == "first":
         rel = position - position[0]
     elif zero == "lead_in":
         rel = position - _unloaded_reference(position, force_n, threshold_frac)
     else:
         raise UsageError(f"compression_zero must be 'first' or 'lead_in', got {zero!r}")
-    if kind == "gap":
-        d = -rel
-    elif kind == "palm":
+    if kind not in ("gap", "palm", "compression"):
+        raise UsageError(f"unknown position kind {kind!r}; expected 'gap' or 'palm'")
+    convention = _convention(kind, increases_when)
+    if convention is None:  # one palm, auto: positive at the peak force
         peak = int(np.argmax(force_n))
         sign = 1.0 if rel[peak] >= 0 else -1.0
-        d = 2.0 * sign * rel
-    elif kind == "compression":
-        d = rel
     else:
-        raise UsageError(f"unknown position kind {kind!r}; expected 'gap' or 'palm'")
+        sign = 1.0 if convention == "closing" else -1.0
+    d = (2.0 if kind == "palm" else 1.0) * sign * rel
     if float(np.max(np.abs(d))) <= 0.0:
         raise InputDataError(
             "no compression: the position signal never moves (zero displacement)", path=path
+        )
+    if convention is not None and compression_has_wrong_sign(d, force_n):
+        other = "opening" if convention == "closing" else "closing"
+        loaded = float(np.median(d[force_n >= 0.5 * float(np.max(force_n))]))
+        raise InputDataError(
+            f"compression has the wrong sign: {what} moves the other way as the force rises "
+            f"(compression {loaded:.3g} m where loaded); if it grows as the gripper "
+            f"{'closes' if other == 'closing' else 'opens'}, pass --position-increases-when "
+            f"{other}",
+            path=path,
         )
     return np.asarray(d, dtype=np.float64)
 
@@ -261,7 +331,23 @@ def _to_squeezes(
     force_threshold_frac: float,
     min_gap_s: float,
     min_squeeze_s: float,
-) -> list[SqueezeSeries]:
+    phase: str = "all",
+    window_s: float | None = None,
+) -> tuple[list[SqueezeSeries], list[Rupture]]:
+    """Cut a recording into squeezes, each up to its rupture and reduced to ``phase``.
+
+    Returns:
+        The squeezes and the ruptures found (one per ruptured squeeze, recording times set).
+
+    Raises:
+        InputDataError: no squeeze found, or ``phase="unloading"`` on a squeeze that ruptured.
+        UsageError: an unknown phase.
+    """
+    from deformctl.characterize import DEFAULT_WINDOW_S
+
+    if phase not in PHASES:
+        raise UsageError(f"--phase must be one of {', '.join(PHASES)}, got {phase!r}")
+    window = DEFAULT_WINDOW_S if window_s is None else window_s
     if segment:
         slices = segment_squeezes(
             time_s,
@@ -279,18 +365,47 @@ def _to_squeezes(
     else:
         slices = [slice(0, time_s.shape[0])]
     out = []
+    ruptures: list[Rupture] = []
     for i, sl in enumerate(slices):
         t = time_s[sl]
-        out.append(
-            SqueezeSeries(
-                object_id=object_id,
-                squeeze_index=i,
-                time_s=t - t[0],
-                force_n=force_n[sl],
-                compression_m=compression_m[sl],
-            )
+        whole = SqueezeSeries(
+            object_id=object_id,
+            squeeze_index=i,
+            time_s=t - t[0],
+            force_n=force_n[sl],
+            compression_m=compression_m[sl],
         )
-    return out
+        sq, rupture = cut_rupture(whole, window_s=window, recording_offset_s=float(t[0]))
+        if rupture is not None:
+            ruptures.append(rupture)
+            if phase == "unloading":
+                raise InputDataError(
+                    f"squeeze #{i} ruptured ({rupture.describe()}): it has no unloading phase; "
+                    "use --phase loading or all",
+                    path=path,
+                )
+        out.append(slice_squeeze(sq, phase_slice(sq.time_s, sq.force_n, phase, window_s=window)))
+    return out, ruptures
+
+
+def _check_recording_options(phase: str, increases_when: str | None) -> None:
+    if phase not in PHASES:
+        raise UsageError(f"--phase must be one of {', '.join(PHASES)}, got {phase!r}")
+    if increases_when is not None and increases_when not in INCREASES_WHEN:
+        raise UsageError(
+            f"--position-increases-when must be closing or opening, got {increases_when!r}"
+        )
+
+
+#: How the units are spelled in messages (the tables above key them in lower case).
+_UNIT_SPELLING = {"n": "N", "kn": "kN", "mn": "mN"}
+
+
+def _unit_hint(key: str, unit: str | None, what: str) -> str:
+    """``did you mean --units key=unit?`` (or a plainer hint when no unit fits)."""
+    if unit is None:
+        return f"check the unit of {what}"
+    return f"did you mean --units {key}={_UNIT_SPELLING.get(unit, unit)}?"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -305,8 +420,8 @@ def _stamp_ns(msg: Any) -> int:
 
 def _read_topics(
     path: Path, roles: Mapping[str, tuple[str, ...]], joint: str | None, axis: Axis
-) -> dict[str, tuple[list[int], list[float]]]:
-    """Read ``(stamp_ns list, value list)`` per topic: |force.axis|, position.axis or joint.
+) -> dict[str, tuple[list[int], list[Any]]]:
+    """Read ``(stamp_ns list, value list)`` per topic: the force vector, position.axis or joint.
 
     Args:
         path: the bag.
@@ -319,7 +434,7 @@ def _read_topics(
     from mcap_ros2.decoder import DecoderFactory
 
     topics = list(roles)
-    out: dict[str, tuple[list[int], list[float]]] = {t: ([], []) for t in topics}
+    out: dict[str, tuple[list[int], list[Any]]] = {t: ([], []) for t in topics}
     with path.open("rb") as fh:
         try:
             reader = make_reader(fh, decoder_factories=[DecoderFactory()])
@@ -360,9 +475,10 @@ def _read_topics(
 
 def _extract(
     msg: Any, type_name: str, axis: Axis, joint: str | None, topic: str, path: Path
-) -> float:
+) -> Any:
     if type_name == WRENCH_TYPE:
-        return abs(float(getattr(msg.wrench.force, axis)))
+        force = msg.wrench.force
+        return (float(force.x), float(force.y), float(force.z))
     if type_name == POSE_TYPE:
         return float(getattr(msg.pose.position, axis))
     names = list(msg.name)
@@ -387,8 +503,15 @@ def read_ros2_bag(
     force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
     min_gap_s: float = DEFAULT_MIN_GAP_S,
     min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
+    phase: Phase = "all",
+    position_increases_when: IncreasesWhen | None = None,
+    size_x_cm: float | None = None,
 ) -> Recording:
     """Read the squeezes of one object from a ROS 2 MCAP bag (``ros2msg`` schemas, ``cdr``).
+
+    The recording is checked for plausibility (:mod:`deformctl.plausibility`: sample rates,
+    peak force, the force's axis, the compression's sign and size); every squeeze is cut at a
+    rupture (recorded in the result) and reduced to ``phase`` (:mod:`deformctl.phases`).
 
     Args:
         path: the bag, one ``.mcap`` file.
@@ -403,21 +526,28 @@ def read_ros2_bag(
         compression_zero: ``"lead_in"`` (median over the unloaded lead-in) or ``"first"``.
         segment: split the recording into squeezes (else one squeeze).
         force_threshold_frac, min_gap_s, min_squeeze_s: segmentation (module docstring).
+        phase: ``"all"``, ``"loading"`` (each squeeze up to its peak force) or ``"unloading"``.
+        position_increases_when: ``"closing"`` or ``"opening"``: the direction in which the
+            position grows; None: a gap grows when opening, one palm's sign is automatic.
+        size_x_cm: the object's size along the squeeze axis, when known (a compression larger
+            than it is refused).
 
     Returns:
         The squeezes (time in s from each squeeze's first sample, on the (first) wrench
-        topic's timestamps inside the overlap with the position stream) and the median sample
-        rates of the first wrench topic and of the position topic.
+        topic's timestamps inside the overlap with the position stream), the median sample
+        rates of the first wrench topic and of the position topic, and the ruptures.
 
     Raises:
         MissingInputError: the bag does not exist.
         InputDataError: not an MCAP file, a topic not in the bag (the message lists those that
             are), a topic of the wrong type, a joint not in the JointState, NaN samples,
-            non-monotonic header stamps, streams that do not overlap, no compression, no squeeze.
+            non-monotonic header stamps, streams that do not overlap, no compression, no squeeze,
+            or an implausible recording (the message names the likely cause).
         UsageError: no or more than two wrench topics, an unknown axis or position kind, a
             JointState topic without ``joint``.
     """
     p = Path(path)
+    _check_recording_options(phase, position_increases_when)
     if not p.is_file():
         raise MissingInputError("no such bag file", path=p)
     if not 1 <= len(wrench_topics) <= 2:
@@ -440,8 +570,22 @@ def read_ros2_bag(
         if not stamps:
             raise InputDataError(f"topic {topic!r} has no messages", path=p)
         t_s = (np.asarray(stamps, dtype=np.int64) - t_ref_ns).astype(np.float64) / NS_PER_S
-        v = np.asarray(values, dtype=np.float64)
-        _check_stream(f"topic {topic!r}", t_s, v, where)
+        what = f"topic {topic!r}"
+        if topic == position_topic:
+            v = np.asarray(values, dtype=np.float64)
+            _check_stream(what, t_s, v, where)
+        else:
+            vectors = np.asarray(values, dtype=np.float64).reshape(-1, 3)
+            v = np.abs(vectors[:, "xyz".index(axis)])
+            _check_stream(what, t_s, v, where)
+            check_force_axis(vectors, axis, what=what, path=where)
+            check_peak_force(
+                float(np.max(v)), what=what, path=where, hint="is the wrench in newtons?"
+            )
+        if t_s.shape[0] >= 2:
+            check_sample_rate(
+                _rate_hz(t_s), what=what, path=where, hint="are its header stamps right?"
+            )
         streams.append((t_s, v))
 
     pos_t, pos_v = streams[-1]
@@ -465,9 +609,24 @@ def read_ros2_bag(
     if time_s.shape[0] < 2:
         raise InputDataError("fewer than two force samples inside the overlap", path=p)
     compression_m = _compression(
-        position, force_n, position_is, where, force_threshold_frac, compression_zero
+        position,
+        force_n,
+        position_is,
+        where,
+        force_threshold_frac,
+        compression_zero,
+        position_increases_when,
+        f"topic {position_topic!r}",
     )
-    squeezes = _to_squeezes(
+    check_peak_compression(
+        float(np.max(compression_m)),
+        size_x_cm=size_x_cm,
+        what=f"topic {position_topic!r}",
+        path=where,
+        hint="is the position in metres? (ROS uses metres; convert a joint in mm or rad)",
+    )
+    position_rate_hz = _rate_hz(pos_t)
+    squeezes, ruptures = _to_squeezes(
         time_s,
         force_n,
         compression_m,
@@ -477,8 +636,24 @@ def read_ros2_bag(
         force_threshold_frac=force_threshold_frac,
         min_gap_s=min_gap_s,
         min_squeeze_s=min_squeeze_s,
+        phase=phase,
+        window_s=_detection_window_s(position_rate_hz),
     )
-    return Recording(squeezes, _rate_hz(force_streams[0][0]), _rate_hz(pos_t))
+    return Recording(
+        squeezes,
+        _rate_hz(force_streams[0][0]),
+        position_rate_hz,
+        source="ros2_bag",
+        phase=phase,
+        ruptures=tuple(ruptures),
+    )
+
+
+def _detection_window_s(position_rate_hz: float) -> float:
+    """The SG window rupture and phase detection use: the one ``characterize`` will use."""
+    from deformctl.characterize import default_window_s
+
+    return default_window_s(position_rate_hz)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -510,6 +685,9 @@ def read_csv_export(
     force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
     min_gap_s: float = DEFAULT_MIN_GAP_S,
     min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
+    phase: Phase = "all",
+    position_increases_when: IncreasesWhen | None = None,
+    size_x_cm: float | None = None,
 ) -> Recording:
     """Read squeezes from a CSV export: plain, or names in row one and units in row two.
 
@@ -530,18 +708,25 @@ def read_csv_export(
         compression_zero: ``"first"`` (the first row) or ``"lead_in"`` (module docstring).
         segment: split the file into squeezes (default: one squeeze per file).
         force_threshold_frac, min_gap_s, min_squeeze_s: segmentation (module docstring).
+        phase, position_increases_when, size_x_cm: as :func:`read_ros2_bag` (a compression
+            column grows when closing unless ``position_increases_when="opening"``).
 
     Returns:
-        The squeezes in SI and the file's median sample rate (for force and position alike).
+        The squeezes in SI, the file's median sample rate (for force and position alike) and
+        the ruptures.
 
     Raises:
         MissingInputError: the file does not exist.
         InputDataError: a mapped column missing from the file, an unknown unit in the file,
             file and option units that disagree, non-numeric or NaN cells, non-monotonic time,
-            no compression.
-        UsageError: a bad ``columns`` mapping or an unknown unit in ``units``.
+            no compression, or an implausible recording: a sample rate, peak force or peak
+            compression that a unit mistake explains (the message suggests the ``--units``), a
+            compression of the wrong sign (it names ``--position-increases-when``).
+        UsageError: a bad ``columns`` mapping, a ``units`` key that names no mapped column or an
+            unknown unit in ``units``.
     """
     p = Path(path)
+    _check_recording_options(phase, position_increases_when)
     if not p.is_file():
         raise MissingInputError("no such CSV file", path=p)
     pos_keys = [k for k in _POSITION_KEYS if k in columns]
@@ -555,8 +740,12 @@ def read_csv_export(
     keys = ("time", "force", pos_key)
     opt_units = {k: _norm_unit(v) for k, v in (units or {}).items()}
     for k, u in opt_units.items():
-        if k not in _UNITS_BY_KEY:
-            raise UsageError(f"units: unknown key {k!r}; expected time, force, {pos_key}")
+        if k not in keys:
+            given = ",".join(f"{key}={columns[key]}" for key in keys)
+            raise UsageError(
+                f"--units: {k!r} names no column of --columns ({given}); valid keys: "
+                f"{', '.join(keys)}"
+            )
         if u not in _UNITS_BY_KEY[k]:
             raise UsageError(
                 f"units: unknown {k} unit {u!r}; supported: {', '.join(_UNITS_BY_KEY[k])}"
@@ -604,12 +793,14 @@ def read_csv_export(
                 path=p,
             )
     arrays: dict[str, FloatArray] = {}
+    used: dict[str, str] = {}
     for k in keys:
         u = (
             file_units.get(k)
             or opt_units.get(k)
             or ("s" if k == "time" else "n" if k == "force" else "m")
         )
+        used[k] = u
         vals = np.empty(len(body))
         for i, row in enumerate(body):
             cell = _cell(row, idx[k]).strip()
@@ -625,11 +816,36 @@ def read_csv_export(
     time_s = arrays["time"]
     for k in keys:
         _check_stream(f"column {columns[k]!r}", time_s, arrays[k], where)
+    rate_hz = _rate_hz(time_s)
+    _check_time_and_force(arrays, used, columns, where)
     kind = position_is if pos_key == "position" else pos_key
     compression_m = _compression(
-        arrays[pos_key], arrays["force"], kind, where, force_threshold_frac, compression_zero
+        arrays[pos_key],
+        arrays["force"],
+        kind,
+        where,
+        force_threshold_frac,
+        compression_zero,
+        position_increases_when,
+        f"column {columns[pos_key]!r}",
     )
-    squeezes = _to_squeezes(
+    peak_m = float(np.max(compression_m))
+    factor = _UNITS_BY_KEY[pos_key][used[pos_key]]
+    unit = suggest_unit(
+        peak_m / factor,
+        LENGTH_UNITS_M,
+        to_value=lambda m: m,
+        ok=lambda m: m <= compression_limit_m(size_x_cm),
+        target=compression_target_m(size_x_cm),
+    )
+    check_peak_compression(
+        peak_m,
+        size_x_cm=size_x_cm,
+        what=f"column {columns[pos_key]!r}",
+        path=where,
+        hint=_unit_hint(pos_key, unit, f"column {columns[pos_key]!r}"),
+    )
+    squeezes, ruptures = _to_squeezes(
         time_s - time_s[0],
         arrays["force"],
         compression_m,
@@ -639,9 +855,45 @@ def read_csv_export(
         force_threshold_frac=force_threshold_frac,
         min_gap_s=min_gap_s,
         min_squeeze_s=min_squeeze_s,
+        phase=phase,
+        window_s=_detection_window_s(rate_hz),
     )
-    rate_hz = _rate_hz(time_s)
-    return Recording(squeezes, rate_hz, rate_hz)
+    return Recording(
+        squeezes, rate_hz, rate_hz, source="csv", phase=phase, ruptures=tuple(ruptures)
+    )
+
+
+def _check_time_and_force(
+    arrays: Mapping[str, FloatArray],
+    used: Mapping[str, str],
+    columns: Mapping[str, str],
+    where: str,
+) -> None:
+    """Refuse a CSV whose sample rate or peak force a unit mistake explains (names the unit)."""
+    time_s, force_n = arrays["time"], arrays["force"]
+    dt_s = float(np.median(np.diff(time_s)))
+    rate_hz = 1.0 / dt_s
+    if not rate_ok(rate_hz):
+        unit = suggest_unit(
+            dt_s / TIME_UNITS_S[used["time"]],
+            TIME_UNITS_S,
+            to_value=lambda dt: 1.0 / dt,
+            ok=rate_ok,
+            target=1000.0,
+        )
+        what = f"column {columns['time']!r}"
+        check_sample_rate(rate_hz, what=what, path=where, hint=_unit_hint("time", unit, what))
+    peak_n = float(np.max(np.abs(force_n)))
+    factor = FORCE_UNITS_N[used["force"]]
+    unit = suggest_unit(
+        peak_n / factor,
+        FORCE_UNITS_N,
+        to_value=lambda f: f,
+        ok=lambda f: f <= MAX_PEAK_FORCE_N,
+        target=10.0,
+    )
+    what = f"column {columns['force']!r}"
+    check_peak_force(peak_n, what=what, path=where, hint=_unit_hint("force", unit, what))
 
 
 def _cell(row: Sequence[str], i: int) -> str:
@@ -854,14 +1106,71 @@ class SimulateCatalogTask:
         return TaskOutput(rows=[summary], payload=(objects[0], series))
 
 
-def simulate_catalog_sweep(
-    catalog: pd.DataFrame,
+def sim_provenance(
+    catalog_path: str, task: SimulateCatalogTask, object_ids: list[str]
+) -> Provenance:
+    """The provenance of a ``measure --sim`` log: the catalog, the seed and every setting."""
+    return Provenance.from_invocation(
+        [catalog_path],
+        seed=task.seed,
+        settings={
+            "source": "sim",
+            **task.simulate,
+            "peak_force_rule": (
+                "peak_force_n" if task.simulate.get("peak_force_n") is not None else "strain"
+            ),
+            "objects": object_ids,
+            "sim_settings": dataclasses.asdict(task.settings),
+        },
+    )
+
+
+def simulate_catalog_file(
+    catalog_path: str,
     task: SimulateCatalogTask,
     *,
-    catalog_path: str,
     output: str,
-    provenance: Provenance,
+    object_ids: Sequence[str] | None = None,
+    progress: SqueezeProgress | None = None,
+    force: bool = False,
+) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
+    """``measure CATALOG --sim -o LOG``: squeeze every (selected) object into one squeeze log.
+
+    Every row is checked before anything is simulated (a row without material values is
+    refused, naming the object).
+
+    Returns:
+        The objects' rows and the squeezes written (see :func:`simulate_squeezes`).
+
+    Raises:
+        OutputExistsError: ``output`` exists and ``force`` is false (exit 1).
+        UsageError: an unknown object id, or a squeeze option out of range (exit 2).
+        InputDataError: a row the simulator refuses (exit 65).
+    """
+    check_output_path(output, force)
+    catalog = select_objects(read_catalog(catalog_path), object_ids)
+    for obj in catalog_objects(catalog, path=catalog_path):  # refuse bad rows first
+        obj.to_sim_spec(path=catalog_path)
+    provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
+    objects, series = simulate_squeezes(
+        catalog,
+        settings=task.settings,
+        seed=task.seed,
+        progress=progress,
+        path=catalog_path,
+        **task.simulate,
+    )
+    write_squeeze_log(output, objects, series, provenance=provenance, force=force)
+    return objects, series
+
+
+def simulate_catalog_sweep(
+    catalog_path: str,
+    task: SimulateCatalogTask,
+    *,
+    output: str,
     sweep: SweepOptions,
+    object_ids: Sequence[str] | None = None,
     force: bool = False,
 ) -> SweepSummary:
     """``measure --sim -o DIR/``: one object per task; part ``k``'s squeezes in ``part-k.mcap``.
@@ -871,14 +1180,15 @@ def simulate_catalog_sweep(
     A row the simulator refuses fails alone (``DIR/_failures/``).
 
     Args:
-        catalog: the catalog rows to squeeze (already selected).
+        catalog_path: the catalog (``-`` for stdin), hashed into the fingerprint.
         task: the squeeze and simulator settings and the seed.
-        catalog_path: the catalog's file name (``-`` for stdin), hashed into the fingerprint.
         output: the dataset directory.
-        provenance: stored in every part log.
         sweep: where to run (workers, scheduler), partition size, resume.
+        object_ids: these objects, in this order (None: all).
         force: overwrite the sweep files of an existing directory.
     """
+    catalog = select_objects(read_catalog(catalog_path), object_ids)
+    provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
     items = [{**rec, "_position": i} for i, rec in enumerate(catalog.to_dict("records"))]
     settings = {**task.simulate, "sim_settings": dataclasses.asdict(task.settings)}
     fingerprint = dataset_fingerprint(
@@ -893,4 +1203,39 @@ def simulate_catalog_sweep(
         part_writer=LogPartWriter("squeeze_log", provenance),
         force=force,
         **sweep.run_kwargs(),
+    )
+
+
+def recording_log(
+    source: str,
+    recording: Recording,
+    obj: Mapping[str, object],
+    settings: Mapping[str, Any],
+    *,
+    output: str,
+    force: bool = False,
+) -> None:
+    """Write a rig recording's squeezes as a squeeze log (``measure --bag`` / ``--csv``).
+
+    Args:
+        source: the recording file (hashed into the provenance).
+        recording: what :func:`read_ros2_bag` or :func:`read_csv_export` read.
+        obj: the object's row (:func:`deformctl.catalog.object_record`); the source sample
+            rates are added, as they are to the provenance's ``settings``, with the source,
+            phase and ruptures (:meth:`Recording.log_fields`).
+        settings: the reader's options.
+        output: the squeeze log (``-`` for stdout).
+        force: overwrite an existing output.
+    """
+    rates = {
+        "force_rate_hz": recording.force_rate_hz,
+        "position_rate_hz": recording.position_rate_hz,
+    }
+    provenance = Provenance.from_invocation([source], settings={**settings, **rates})
+    write_squeeze_log(
+        output,
+        [{**obj, **recording.log_fields()}],
+        recording.squeezes,
+        provenance=provenance,
+        force=force,
     )

@@ -62,12 +62,18 @@ if TYPE_CHECKING:
     import pandas as pd
 
 __all__ = [
+    "DEFAULT_CONNECT_TIMEOUT_S",
+    "DEFAULT_PARTITION_SIZE",
     "SweepOptions",
     "SweepSummary",
     "TaskOutput",
     "connect_dask",
     "run_sweep",
 ]
+
+
+DEFAULT_CONNECT_TIMEOUT_S = 10.0  #: time allowed to reach a Dask scheduler, s
+DEFAULT_PARTITION_SIZE = 100  #: objects per part of a dataset directory
 
 
 @dataclass(frozen=True)
@@ -541,8 +547,8 @@ def run_sweep(
     id_column: str = "object_id",
     workers: int | None = None,
     scheduler: str | None = None,
-    connect_timeout_s: float = 10.0,
-    partition_size: int = 100,
+    connect_timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S,
+    partition_size: int = DEFAULT_PARTITION_SIZE,
     resume: bool = False,
     force: bool = False,
     progress: bool = True,

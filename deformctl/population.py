@@ -37,7 +37,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from deformctl.catalog import CATALOG_COLUMNS
+from deformctl.catalog import CATALOG_COLUMNS, SIZE_COLUMNS
 from deformctl.errors import UsageError
 
 #: The paper's population size and split (section V.A).
@@ -112,11 +112,7 @@ def make_population(
         mu = _check_range("friction_mu", (friction_mu, friction_mu), low_bound=0.0, strict=True)
     sizes = [
         _check_range(name, rng_, low_bound=0.0, strict=True)
-        for name, rng_ in (
-            ("size_x_cm", size_x_cm),
-            ("size_y_cm", size_y_cm),
-            ("size_z_cm", size_z_cm),
-        )
+        for name, rng_ in zip(SIZE_COLUMNS, (size_x_cm, size_y_cm, size_z_cm), strict=True)
     ]
 
     rng = np.random.default_rng(seed)

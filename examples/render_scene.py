@@ -32,8 +32,8 @@ def main() -> None:
     args = parser.parse_args()
     size = tuple(args.size_cm)
     setup = {"marker_size_cm": args.marker_size_cm, "tilt_deg": args.tilt_deg, "yaw_deg": 8.0}
-    top, side = box_views(size, (40, 40, 200), seed=args.seed, **setup)  # type: ignore[arg-type]
-    top_bg, side_bg = box_views(size, seed=args.seed + 10, with_box=False, **setup)  # type: ignore[arg-type]
+    top, side = box_views(size, (40, 40, 200), seed=args.seed, **setup)
+    top_bg, side_bg = box_views(size, seed=args.seed + 10, with_box=False, **setup)
     args.outdir.mkdir(parents=True, exist_ok=True)
     for name, img in (("top", top), ("side", side), ("top_bg", top_bg), ("side_bg", side_bg)):
         cv2.imwrite(str(args.outdir / f"{name}.png"), img)

@@ -23,10 +23,12 @@ from typer.testing import CliRunner
 
 from deformctl.artifacts import read_catalog, read_lift_log, read_table, validate_message
 from deformctl.artifacts.schema import fast_check, json_validator
+from deformctl.catalog import select_objects
 from deformctl.cli import app
 from deformctl.errors import SchemaError, SimulationError
-from deformctl.lift import RunnerFactory, TrialRunner, lift_catalog, select_objects
 from deformctl.lift.runners.rig import parse_rig_response
+from deformctl.lift.search import TrialRunner
+from deformctl.lift.stage import RunnerFactory, lift_catalog
 from deformctl.series import TrialOutcome
 
 cli = CliRunner()

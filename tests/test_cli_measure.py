@@ -80,6 +80,7 @@ def test_bag_log_holds_object_rates_and_provenance(bag_run: tuple[Path, Path, Pa
         "size_z_cm": 9.5,
         "force_rate_hz": pytest.approx(1000.0, rel=1e-6),
         "position_rate_hz": pytest.approx(100.0, rel=1e-6),
+        "source": "ros2_bag",  # characterize fits a rig recording with a preload by default
     }
     info = json.loads(runner.invoke(app, ["inspect", str(log), "--json"]).stdout)
     assert info["kind"] == "squeeze_log"
@@ -102,6 +103,8 @@ def test_bag_measure_characterize_recovers_d_and_lambda(bag_run: tuple[Path, Pat
     assert row["n_squeezes"] == 3
     assert row["deformability_n_per_cm"] == pytest.approx(D_TRUE, rel=0.02)
     assert row["damping_ns_per_cm"] == pytest.approx(LAM_TRUE, rel=0.05)
+    assert row["quality"] == "ok"
+    assert abs(row["preload_n"]) < 0.1  # fitted (a rig recording), and small: no preload
     # the window came from the 100 Hz position rate stored by measure
     settings = df.attrs["provenance"].settings
     assert settings["window_s"] == {"sand": pytest.approx(default_window_s(100.0))}
@@ -186,6 +189,8 @@ def test_csv_plain_with_units_through_characterize(plain_csv: Path, tmp_path: Pa
     (row,) = read_table(coef, "coefficients").to_dict("records")
     assert row["deformability_n_per_cm"] == pytest.approx(D_CSV, rel=0.02)
     assert row["damping_ns_per_cm"] == pytest.approx(LAM_CSV, rel=0.05)
+    assert row["quality"] == "ok"
+    assert res.stderr.count("warning:") == 0
     print(
         f"\nCSV → measure → characterize: D {row['deformability_n_per_cm']:.3f} ({D_CSV}), "
         f"λ {row['damping_ns_per_cm']:.3f} ({LAM_CSV})"

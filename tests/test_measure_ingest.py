@@ -114,12 +114,14 @@ def write_bag(
     n_squeezes: int = 3,
     edit_force: Callable[[np.ndarray, np.ndarray], None] | None = None,
     edit_pose: Callable[[np.ndarray, np.ndarray], None] | None = None,
+    wrench_topics: tuple[str, ...] = (LEFT, RIGHT),
 ) -> None:
     """Write a two-palm squeeze recording with known Kelvin–Voigt D and λ.
 
     The left palm starts at x = −0.05 m and moves +x by d/2 (toward the object centre); the
     right palm mirrors it. Pose is the left palm; force.x is +f on the left wrench,
-    −f on the right one. With ``joint_state`` the position topic is a JointState whose joint
+    −f on the right one (``wrench_topics`` names them; one topic: the left palm only). With
+    ``joint_state`` the position topic is a JointState whose joint
     ``gripper_width`` is the gap between the palms.
     """
     knots_t, knots_f = recording(d_n_per_cm, lam_ns_per_cm, n_squeezes)
@@ -141,7 +143,7 @@ def write_bag(
         edit_pose(tp, pos)
     with path.open("wb") as fh, Writer(fh) as w:
         ws = w.register_msgdef("geometry_msgs/msg/WrenchStamped", WRENCH_STAMPED)
-        for topic, values in ((LEFT, fl), (RIGHT, fr)):
+        for topic, values in zip(wrench_topics, (fl, fr), strict=False):
             for ti, fi in zip(tf, values, strict=True):
                 t_ns = EPOCH_NS + round(ti * 1e9)
                 msg = {

@@ -109,8 +109,9 @@ def check_recovery(
         else:
             lam_err = lam / lam_true - 1
             lam_text, lam_ok = f"λ {lam:.4f} ({lam_err:+.2%})", abs(lam_err) <= lambda_rel_tol
-        print(f"  {oid:15s} D {d:7.3f} ({d_err:+.2%})  {lam_text}")
-        if not (abs(d_err) <= D_REL_TOL and lam_ok):
+        quality = coefficients.loc[oid, "quality"]
+        print(f"  {oid:15s} D {d:7.3f} ({d_err:+.2%})  {lam_text}  {quality}")
+        if not (abs(d_err) <= D_REL_TOL and lam_ok and quality == "ok"):
             failures.append(oid)
     assert not failures, failures
 

@@ -38,6 +38,7 @@ import pyarrow.parquet as pq
 from deformctl import __version__
 from deformctl.artifacts.io import atomic_output, atomic_write_bytes
 from deformctl.artifacts.schema import load_table_spec, validate_frame
+from deformctl.artifacts.tables import read_table, table_schema
 from deformctl.errors import InputDataError, MissingInputError, OutputExistsError, SchemaError
 
 if TYPE_CHECKING:
@@ -68,12 +69,6 @@ SWEEP_FORMAT = "deformctl-sweep/1"
 MANIFEST_NAME = "_sweep.json"
 FAILURES_DIR = "_failures"
 _META_KEY = b"deformctl.sweep"
-_ARROW_TYPES = {
-    "string": pa.string(),
-    "float64": pa.float64(),
-    "int64": pa.int64(),
-    "bool": pa.bool_(),
-}
 
 
 def _one_line(text: str) -> str:
@@ -94,21 +89,6 @@ def is_dataset_output(path: str) -> bool:
 
 
 # --------------------------------------------------------------------------- schemas and rows
-
-
-def table_schema(kind: str) -> pa.Schema:
-    """The Arrow schema of a table kind's spec columns, in spec order, with unit metadata."""
-    spec = load_table_spec(kind)
-    return pa.schema(
-        [
-            pa.field(
-                col.name,
-                _ARROW_TYPES[col.dtype],
-                metadata={"unit": col.unit or "", "description": col.description},
-            )
-            for col in spec.columns
-        ]
-    )
 
 
 def spec_rows(df: pd.DataFrame, kind: str) -> pa.Table:
@@ -618,8 +598,6 @@ def read_table_any(path: str, kind: str) -> pd.DataFrame:
         SchemaError: a directory of another kind (exit 65).
         InputDataError: an incomplete or damaged directory (exit 65).
     """
-    from deformctl.artifacts.tables import read_table
-
     if not os.path.isdir(path):
         return read_table(path, kind)
     d = Path(path)

@@ -14,6 +14,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from deformctl.artifacts.io import PathArg, display_name, is_stdio, read_input_bytes
@@ -43,6 +44,8 @@ from deformctl.artifacts.tables import (
     read_parquet_bytes,
 )
 from deformctl.errors import DeformctlError, InputDataError, SchemaError
+from deformctl.phases import ruptures_from_object
+from deformctl.series import SqueezeSeries
 from deformctl.units import NS_PER_S
 
 GENERIC_MCAP = "mcap"  #: kind of an MCAP file deformctl did not write (e.g. a ROS 2 bag)
@@ -171,6 +174,49 @@ def _table_summary(df: pd.DataFrame, kind: str) -> dict[str, Any]:
     }
     if kind == "catalog":
         out["objects"] = df.to_dict("records")
+    if kind == "coefficients":
+        out["coefficients"] = coefficient_rows(df)
+    return out
+
+
+#: The per-object numbers ``inspect`` shows for a coefficients table.
+COEFFICIENT_SUMMARY = ("object_id", "deformability_n_per_cm", "damping_ns_per_cm", "r2", "quality")
+
+
+def coefficient_rows(df: pd.DataFrame) -> list[dict[str, Any]]:
+    """Per object: D, λ, R² and quality (None where a table written before v2 has no column)."""
+    return [{key: row.get(key) for key in COEFFICIENT_SUMMARY} for row in df.to_dict("records")]
+
+
+def squeeze_summaries(
+    objects: list[dict[str, Any]], squeezes: list[SqueezeSeries]
+) -> list[dict[str, Any]]:
+    """Per object of a squeeze log: squeezes, peak force and compression, rates, phase, ruptures.
+
+    The sample rates are those ``measure`` stored (``force_rate_hz``, ``position_rate_hz``), or
+    the squeezes' own median rate when the log does not say.
+    """
+    meta = {str(o.get("object_id")): o for o in objects}
+    by_object: dict[str, list[SqueezeSeries]] = {}
+    for sq in squeezes:
+        by_object.setdefault(sq.object_id, []).append(sq)
+    out = []
+    for oid, group in by_object.items():
+        obj = meta.get(oid, {})
+        steps = np.concatenate([np.diff(s.time_s) for s in group])
+        own_rate = float(1.0 / np.median(steps)) if steps.size else None
+        out.append(
+            {
+                "object_id": oid,
+                "squeezes": len(group),
+                "peak_force_n": max(float(np.max(s.force_n)) for s in group),
+                "peak_compression_m": max(float(np.max(s.compression_m)) for s in group),
+                "force_rate_hz": obj.get("force_rate_hz", own_rate),
+                "position_rate_hz": obj.get("position_rate_hz", own_rate),
+                "phase": obj.get("phase", "all"),
+                "ruptures": [r.to_record() for r in ruptures_from_object(obj)],
+            }
+        )
     return out
 
 
@@ -200,7 +246,11 @@ def _mcap_summary(contents: McapContents) -> dict[str, Any]:
         per_object: dict[str, int] = {}
         for sq in squeezes:
             per_object[sq.object_id] = per_object.get(sq.object_id, 0) + 1
-        extra = {"squeezes": len(squeezes), "squeezes_per_object": per_object}
+        extra = {
+            "squeezes": len(squeezes),
+            "squeezes_per_object": per_object,
+            "squeeze_summary": squeeze_summaries(decode_objects(contents), squeezes),
+        }
     elif kind == KIND_LIFT:
         attempts = lift_attempts_from_contents(contents)
         per_object = {}
@@ -331,9 +381,11 @@ def describe(path: PathArg) -> dict[str, Any]:
         ``provenance``; for tables ``rows`` and ``columns`` (name, dtype, unit, required,
         description) and, for a catalog, ``objects``; for MCAP logs ``messages``, ``channels``
         (topic, schema, message count, fields with units), ``time_range`` and ``objects``;
-        for a model file (kind ``model``) ``features``, ``target``, ``training_range``
-        (feature -> [min, max]), ``seed``, ``hyperparameters``, ``n_train``, ``n_test``,
-        ``metrics`` (model and baselines, train and test) and ``tool_version``.
+        for a squeeze log ``squeeze_summary`` (per object: squeezes, peak force and compression,
+        sample rates, phase, ruptures); for a coefficients table ``coefficients`` (per object: D,
+        λ, R², quality); for a model file (kind ``model``) ``features``, ``target``,
+        ``training_range`` (feature -> [min, max]), ``seed``, ``hyperparameters``, ``n_train``,
+        ``n_test``, ``metrics`` (model and baselines, train and test) and ``tool_version``.
 
     Raises:
         MissingInputError: ``path`` does not exist (exit 66).

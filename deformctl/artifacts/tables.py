@@ -40,8 +40,9 @@ from deformctl.artifacts.schema import TABLE_KINDS, load_table_spec, validate_fr
 from deformctl.errors import InputDataError, SchemaError
 
 META_KEY = b"deformctl"
+#: Arrow type of each column-spec dtype.
 PARQUET_MAGIC = b"PAR1"
-_ARROW_TYPES = {
+ARROW_TYPES = {
     "string": pa.string(),
     "float64": pa.float64(),
     "int64": pa.int64(),
@@ -95,13 +96,28 @@ def _to_arrow(df: pd.DataFrame, kind: str) -> pa.Table:
             arr = pa.array(df[name].to_numpy(), from_pandas=True)
             fields.append(pa.field(str(name), arr.type))
         else:
-            typ = _ARROW_TYPES[col.dtype]
+            typ = ARROW_TYPES[col.dtype]
             values = df[name].to_numpy()
             arr = pa.array(list(values) if col.dtype == "string" else values, type=typ)
             meta = {"unit": col.unit or "", "description": col.description}
             fields.append(pa.field(col.name, typ, metadata=meta))
         arrays.append(arr)
     return pa.Table.from_arrays(arrays, schema=pa.schema(fields))
+
+
+def table_schema(kind: str) -> pa.Schema:
+    """The Arrow schema of a table kind's spec columns, in spec order, with unit metadata."""
+    spec = load_table_spec(kind)
+    return pa.schema(
+        [
+            pa.field(
+                col.name,
+                ARROW_TYPES[col.dtype],
+                metadata={"unit": col.unit or "", "description": col.description},
+            )
+            for col in spec.columns
+        ]
+    )
 
 
 def table_metadata(kind: str, provenance: Provenance | None) -> dict[str, Any]:
@@ -421,3 +437,33 @@ def write_catalog(
     if len(df) == 0:
         raise InputDataError("empty catalog: no objects", path=path)
     return write_table(df, path, "catalog", provenance=provenance, force=force)
+
+
+def append_catalog_row(
+    path: PathArg, row: dict[str, object], existing: pd.DataFrame, *, provenance: Provenance | None
+) -> int:
+    """Rewrite the catalog at ``path`` with ``row`` added, atomically, in the file's own format.
+
+    Args:
+        path: the catalog file (CSV or Parquet, sniffed from its bytes).
+        row: the new row (catalog columns; others are kept as extra columns).
+        existing: the catalog as read (:func:`read_catalog`), extra columns kept.
+        provenance: stored when the catalog is Parquet.
+
+    Returns:
+        The number of rows written.
+
+    Raises:
+        SchemaError: the new catalog is not valid (e.g. a repeated ``object_id``); nothing is
+            written.
+    """
+    table = pd.concat([existing, pd.DataFrame([dict(row)])], ignore_index=True)
+    table.attrs = {}
+    with open(path, "rb") as fh:
+        parquet = fh.read(4) == PARQUET_MAGIC
+    if parquet:
+        return len(write_table(table, path, "catalog", provenance=provenance, force=True))
+    norm = validate_frame(table, "catalog", path=path)
+    with atomic_output(path, force=True) as tmp:
+        norm.to_csv(tmp, index=False)
+    return len(norm)

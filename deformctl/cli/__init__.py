@@ -1,19 +1,28 @@
-"""The ``deformctl`` command: one module per subcommand, registered in pipeline order.
+"""The ``deformctl`` command: one module per subcommand, registered here in pipeline order.
 
-Commands translate: they check paths and options, call one library function and write its
+Commands translate: they check paths and options, call one library function and report its
 result. Each command is wrapped by :func:`deformctl.cli._common.translate_errors`, so a
 :class:`~deformctl.errors.DeformctlError` becomes one line on stderr,
 ``error: <file>: <what is wrong>``, and the error's exit code; anything else is a bug and keeps
-its traceback. Typer lists commands in the order they are registered.
+its traceback. The options several commands share are declared once in
+:mod:`deformctl.cli._options`. Typer lists commands in the order they are registered.
 """
 
 from __future__ import annotations
 
-import importlib
-
 import typer
 
 from deformctl import __version__
+from deformctl.cli import (
+    characterize,
+    inspect,
+    lift,
+    measure,
+    population,
+    predict,
+    table,
+    train,
+)
 
 app = typer.Typer(
     name="deformctl",
@@ -47,24 +56,19 @@ def _root(
     """
 
 
-def _register() -> None:
-    """Import the subcommand modules in pipeline order; each adds itself to ``app``."""
-    # One module per subcommand, in pipeline order, as each one lands (imported by name so
-    # that import sorting cannot reorder them); inspect reads any artifact and comes last.
-    for name in (
-        "population",
-        "measure",
-        "characterize",
-        "lift",
-        "table",
-        "train",
-        "predict",
-        "inspect",
-    ):
-        importlib.import_module(f"deformctl.cli.{name}")
-
-
-_register()
+#: The subcommands in pipeline order; ``inspect`` reads any artifact and comes last.
+COMMANDS = (
+    population.population,
+    measure.measure,
+    characterize.characterize,
+    lift.lift,
+    table.table,
+    train.train,
+    predict.predict,
+    inspect.inspect,
+)
+for _command in COMMANDS:
+    app.command()(_command)
 
 
 def main() -> None:

@@ -13,11 +13,13 @@ import os
 import re
 from typing import Any
 
+from deformctl.cli._options import HEAVY_DEFAULTS
 from deformctl.errors import UsageError
 from deformctl.lift.runners.rig import SlipFromFrames
 
-#: Default ``--slip-tolerance-m``: the object may fall behind the palms by this much, m.
-DEFAULT_SLIP_TOLERANCE_M = 0.005
+#: Default ``--slip-tolerance-m`` (``detect_slip``'s): the object may fall behind the palms so
+#: far, m.
+DEFAULT_SLIP_TOLERANCE_M = float(str(HEAVY_DEFAULTS["detect_slip.tolerance_m"]))
 
 
 def parse_palm_marker_ids(text: str) -> tuple[int, ...]:
@@ -95,7 +97,7 @@ def frames_judge(
     options: dict[str, Any] = {
         "marker_size_cm": float(frame_marker_size_cm),
         "tolerance_m": float(tolerance_m),
-        "marker_dict": marker_dict or "DICT_4X4_50",
+        "marker_dict": marker_dict or str(HEAVY_DEFAULTS["detect_slip.marker_dict"]),
     }
     if palm_marker_ids is not None:
         options["palm_marker_ids"] = parse_palm_marker_ids(palm_marker_ids)

@@ -3,23 +3,54 @@
 from __future__ import annotations
 
 import math
-import os
+from typing import Annotated, Any
 
 import pandas as pd
 import typer
 
-from deformctl.artifacts import Provenance, check_output_path, write_table
 from deformctl.artifacts.io import is_stdio
 from deformctl.characterize import (
+    DEFAULT_WINDOW_S,
     CharacterizeTask,
     LogCoefficients,
-    characterize_dir,
+    characterize_file,
     characterize_sweep,
-    read_and_characterize,
 )
-from deformctl.cli import _sweep, app
-from deformctl.cli._common import translate_errors
+from deformctl.cli import _options as opt
+from deformctl.cli._common import finish_sweep, translate_errors
 from deformctl.errors import UsageError
+from deformctl.parallel import SweepOptions
+from deformctl.quality import thresholds_help
+
+Preload = Annotated[
+    str | None,
+    typer.Option(
+        "--preload",
+        metavar="fit|zero",
+        help="lsq: fit a contact preload (f = F0 + D d + λ d') or assume none [default: fit for "
+        "rig recordings (measure --bag/--csv), zero for simulated squeezes].",
+    ),
+]
+ConstrainDamping = Annotated[
+    bool,
+    typer.Option(
+        "--constrain-damping",
+        help="lsq: fit with λ >= 0 (bounded least squares); the row says when the bound held.",
+    ),
+]
+Strict = Annotated[
+    bool,
+    typer.Option(
+        "--strict",
+        help="Exit 65 (nothing written) if any object is flagged. " + thresholds_help(),
+    ),
+]
+AllowFlagged = Annotated[
+    bool,
+    typer.Option(
+        "--allow-flagged", help="Write objects with negative D (flagged) instead of exit 65."
+    ),
+]
 
 
 def _pm(value: float, se: float, digits: int) -> str:
@@ -30,7 +61,9 @@ def _pm(value: float, se: float, digits: int) -> str:
 def render_summary(result: LogCoefficients) -> str:
     """A short plain-text table of the coefficients: one line per object."""
     df: pd.DataFrame = result.table
-    rows = [("object", "D (N/cm)", "λ (N·s/cm)", "R²", "samples", "squeezes", "window (s)")]
+    rows = [
+        ("object", "D (N/cm)", "λ (N·s/cm)", "R²", "samples", "squeezes", "quality", "window (s)")
+    ]
     for rec in df.to_dict("records"):
         oid = str(rec["object_id"])
         rows.append(
@@ -41,6 +74,7 @@ def render_summary(result: LogCoefficients) -> str:
                 f"{rec['r2']:.4f}",
                 str(rec["n_samples"]),
                 str(rec["n_squeezes"]),
+                str(rec.get("quality", "")),
                 f"{result.window_s[oid]:.3g}",
             )
         )
@@ -50,39 +84,50 @@ def render_summary(result: LogCoefficients) -> str:
     )
 
 
-@app.command()
 @translate_errors
+@opt.with_sweep_options
 def characterize(
-    log: str = typer.Argument(..., metavar="SQUEEZE.mcap", help="A squeeze log; - for stdin."),
-    output: str = typer.Option(
-        ..., "-o", "--output", metavar="coefficients.parquet", help="Table to write; - for stdout."
-    ),
-    method: str = typer.Option(
-        "lsq",
-        "--method",
-        metavar="lsq|paper",
-        help="lsq: joint least-squares fit of f = D d + λ d' with standard errors; "
-        "paper: the paper's per-sample ratios.",
-    ),
-    window_s: float | None = typer.Option(
-        None,
-        "--window-s",
-        metavar="S",
-        help="Savitzky-Golay window for d and d', s (default: from the log's position sample "
-        "rate, 0.2 s at >= 1 kHz, 0.43 s at 100 Hz).",
-    ),
-    force: bool = typer.Option(False, "--force", help="Overwrite an existing output."),
-    workers: int | None = _sweep.workers_option(),
-    scheduler: str | None = _sweep.scheduler_option(),
-    connect_timeout: float | None = _sweep.connect_timeout_option(),
-    partition_size: int | None = _sweep.partition_size_option(),
-    resume: bool = _sweep.resume_option(),
+    log: Annotated[str, typer.Argument(metavar="SQUEEZE.mcap", help="A squeeze log; - for stdin.")],
+    output: Annotated[
+        str,
+        typer.Option(
+            "-o", "--output", metavar="coefficients.parquet", help="Table to write; - for stdout."
+        ),
+    ],
+    method: Annotated[
+        str,
+        typer.Option(
+            "--method",
+            metavar="lsq|paper",
+            help="lsq: joint least-squares fit of f = D d + λ d' with standard errors; "
+            "paper: the paper's per-sample ratios.",
+        ),
+    ] = "lsq",
+    window_s: Annotated[
+        float | None,
+        typer.Option(
+            "--window-s",
+            metavar="S",
+            help="Savitzky-Golay window for d and d', s (default: from the log's position sample "
+            f"rate, {DEFAULT_WINDOW_S:g} s at >= 1 kHz, 0.43 s at 100 Hz).",
+        ),
+    ] = None,
+    preload: Preload = None,
+    constrain_damping: ConstrainDamping = False,
+    strict: Strict = False,
+    allow_flagged: AllowFlagged = False,
+    force: opt.Force = False,
+    sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
     """Estimate each object's deformability D (N/cm) and damping λ (N·s/cm) from a squeeze log.
 
     The squeezes are grouped by object and fitted to f = D·d + λ·d', with d the total
     compression between the palms. The table goes to the output; a summary goes to stdout, or
     to stderr when the table itself goes to stdout (-o -).
+
+    Every row carries the fit's diagnostics and a quality column, ok or the flags (see
+    --strict and the README's "When the numbers are doubtful"); each flagged object gives one
+    warning line on stderr.
 
     SQUEEZE.mcap may also be a directory written by measure --sim -o DIR/ (its part-*.mcap
     logs, in order). With a dataset directory output (-o DIR/) the objects are fitted in
@@ -93,25 +138,19 @@ def characterize(
     """
     if method not in ("lsq", "paper"):
         raise UsageError(f"--method must be lsq or paper, got {method!r}")
-    sweep = _sweep.SweepOptions(workers, scheduler, connect_timeout, partition_size, resume)
+    options: dict[str, Any] = {
+        "preload": preload,
+        "constrain_damping": constrain_damping,
+        "strict": strict,
+        "allow_flagged": allow_flagged,
+    }
     if sweep.check(output):
-        task = CharacterizeTask(method, window_s)
-        _sweep.finish(characterize_sweep(log, task, output=output, sweep=sweep, force=force),
-                      "characterize")  # fmt: skip
+        task = CharacterizeTask(method, window_s, **options)
+        summary = characterize_sweep(log, task, output=output, sweep=sweep, force=force)
+        finish_sweep(summary, "characterize")
         return
-    check_output_path(output, force)
-    if os.path.isdir(log):
-        result = characterize_dir(log, method, window_s=window_s)  # type: ignore[arg-type]
-    else:
-        result = read_and_characterize(log, method, window_s=window_s)  # type: ignore[arg-type]
-    provenance = Provenance.from_invocation(
-        [log],
-        settings={
-            "method": method,
-            "window_s": result.window_s,
-            "window_s_option": window_s,
-            "position_rate_hz": result.position_rate_hz,
-        },
-    )
-    write_table(result.table, output, "coefficients", provenance=provenance, force=force)
+    result = characterize_file(log, method, output=output, window_s=window_s, force=force,  # type: ignore[arg-type]
+                               **options)  # fmt: skip
+    for line in result.warnings:
+        typer.echo(f"warning: {line}", err=True)
     typer.echo(render_summary(result), err=is_stdio(output))

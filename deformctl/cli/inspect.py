@@ -10,7 +10,6 @@ import typer
 
 from deformctl.artifacts.dataset import describe_dataset
 from deformctl.artifacts.describe import describe
-from deformctl.cli import app
 from deformctl.cli._common import translate_errors
 
 
@@ -43,8 +42,32 @@ def _pct(value: object) -> str:
     return f"{100.0 * value:.2f} %" if isinstance(value, int | float) else "-"
 
 
-def _num(value: object, fmt: str) -> str:
-    return format(value, fmt) if isinstance(value, int | float) else "-"
+def _num(value: object, fmt: str, missing: str = "-") -> str:
+    return format(value, fmt) if isinstance(value, int | float) else missing
+
+
+def _per_object_lines(info: dict[str, Any]) -> list[str]:
+    """The data part of :func:`render_text`: a squeeze log's or a coefficients table's objects."""
+    lines = []
+    for o in info.get("squeeze_summary") or []:
+        rupt = "; ".join(
+            f"rupture in squeeze #{r['squeeze_index']} at {r['time_s']:.3g} s, {r['force_n']:.3g} N"
+            for r in o["ruptures"]
+        )
+        lines.append(
+            f"  {o['object_id']}: {o['squeezes']} squeeze(s), peak force "
+            f"{_num(o['peak_force_n'], '.4g')} N, peak compression "
+            f"{_num(o['peak_compression_m'], '.4g')} m, force {_num(o['force_rate_hz'], '.4g')} "
+            f"Hz, position {_num(o['position_rate_hz'], '.4g')} Hz, phase {o['phase']}"
+            + (f"; {rupt}" if rupt else "")
+        )
+    for c in info.get("coefficients") or []:
+        lines.append(
+            f"  {c['object_id']}: D {_num(c['deformability_n_per_cm'], '.4g')} N/cm, "
+            f"λ {_num(c['damping_ns_per_cm'], '.4g', 'NaN')} N·s/cm, R² {_num(c['r2'], '.4f')}, "
+            f"quality {c['quality'] if c['quality'] is not None else 'not recorded (v1 table)'}"
+        )
+    return (["per object:", *lines]) if lines else []
 
 
 def render_text(info: dict[str, Any]) -> str:
@@ -76,6 +99,7 @@ def render_text(info: dict[str, Any]) -> str:
                 lines.append(f"    {f['name']:<20} {f['type']:<12} {_unit(f['unit'])}")
     if info["kind"] == "model":
         lines.extend(_model_lines(info))
+    lines.extend(_per_object_lines(info))
     objects = info.get("objects") or []
     if objects:
         ids = ", ".join(str(o.get("object_id")) for o in objects)
@@ -95,7 +119,6 @@ def render_text(info: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-@app.command()
 @translate_errors
 def inspect(
     file: str = typer.Argument(

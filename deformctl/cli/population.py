@@ -5,8 +5,8 @@ from __future__ import annotations
 import typer
 
 from deformctl.artifacts import Provenance, write_catalog
-from deformctl.cli import app
 from deformctl.cli._common import translate_errors
+from deformctl.cli._options import Force
 from deformctl.errors import UsageError
 from deformctl.population import (
     DEFAULT_FRICTION_MU,
@@ -28,7 +28,6 @@ def parse_range(option: str, text: str) -> tuple[float, float]:
     return (low, high)
 
 
-@app.command()
 @translate_errors
 def population(
     output: str = typer.Option(
@@ -53,7 +52,7 @@ def population(
     golden: bool = typer.Option(
         False, "--golden", help="Write the fixed 8-object golden population (ignores the ranges)."
     ),
-    force: bool = typer.Option(False, "--force", help="Overwrite an existing output."),
+    force: Force = False,
 ) -> None:
     """Write a seeded catalog of objects with W, D, λ drawn uniformly from stated ranges.
 

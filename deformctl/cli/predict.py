@@ -16,8 +16,8 @@ from deformctl.artifacts import (
     write_table,
 )
 from deformctl.artifacts.io import is_stdio
-from deformctl.cli import app
 from deformctl.cli._common import translate_errors
+from deformctl.cli._options import Force
 from deformctl.errors import SchemaError, UsageError, error_context
 
 #: Table kinds ``predict`` reads features from.
@@ -52,7 +52,6 @@ def _read_features(path: str, catalog: str | None) -> pd.DataFrame:
         raise SchemaError(err.message, path=path) from None
 
 
-@app.command()
 @translate_errors
 def predict(
     model_path: str = typer.Argument(..., metavar="MODEL", help="A model file from `train`."),
@@ -77,7 +76,7 @@ def predict(
     output: str | None = typer.Option(
         None, "-o", "--output", help="Write a predictions table (Parquet; - for stdout)."
     ),
-    force: bool = typer.Option(False, "--force", help="Overwrite an existing output."),
+    force: Force = False,
 ) -> None:
     """Predict the minimum lifting force L_f (N) from weight, deformability and damping.
 

@@ -23,7 +23,6 @@ import typer
 
 from deformctl.artifacts import Provenance, check_output_path, read_table, write_table
 from deformctl.artifacts.dataset import read_table_any
-from deformctl.cli import app
 from deformctl.cli._common import translate_errors
 from deformctl.errors import UsageError, error_context
 from deformctl.table import (
@@ -118,7 +117,6 @@ def _lookup(path: str, text: str, interpolate_k: int | None, as_json: bool) -> N
     typer.echo("\n".join(lines))
 
 
-@app.command()
 @translate_errors
 def table(
     inputs: Annotated[

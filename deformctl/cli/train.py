@@ -13,8 +13,8 @@ from rich.table import Table
 
 from deformctl.artifacts import Provenance, atomic_output, check_output_path, read_table
 from deformctl.artifacts.io import is_stdio
-from deformctl.cli import app
 from deformctl.cli._common import translate_errors
+from deformctl.cli._options import Force
 from deformctl.errors import UsageError
 from deformctl.population import PAPER_TRAIN_SIZE as DEFAULT_TRAIN_SIZE
 
@@ -69,7 +69,6 @@ def metrics_table(report: dict[str, Any]) -> Table:
     return out
 
 
-@app.command()
 @translate_errors
 def train(
     index: str = typer.Argument(..., help="The index table (Parquet) written by `table`."),
@@ -84,7 +83,7 @@ def train(
     metrics: str | None = typer.Option(
         None, "--metrics", help="Also write the metrics as JSON here (- for stdout)."
     ),
-    force: bool = typer.Option(False, "--force", help="Overwrite existing outputs."),
+    force: Force = False,
 ) -> None:
     """Train Pipeline(StandardScaler, MLPRegressor) on (W, D, λ) -> L_f and save it with skops.
 

@@ -6,7 +6,9 @@ catalog object, each with a runner from a :class:`RunnerFactory`
 :func:`deformctl.lift.runners.sim.sim_runner_factory` for the simulator), and returns a
 :class:`CatalogLiftResult`: the lift_results table, every attempt (for the lift log) and the
 failures, which it records instead of raising, so the caller can write everything before it
-decides the exit code.
+decides the exit code. :func:`lift_catalog_files` is the same from a catalog file to the table
+and the log files (what ``deformctl lift`` runs; a dataset directory output is
+:func:`deformctl.lift.runners.sim.lift_sweep`).
 
 Example:
     >>> from deformctl.catalog import CatalogObject
@@ -24,14 +26,24 @@ Example:
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import pandas as pd
 
-from deformctl.artifacts.schema import validate_frame
-from deformctl.catalog import CatalogObject, catalog_objects
+from deformctl.artifacts import (
+    Provenance,
+    check_output_path,
+    read_catalog,
+    validate_frame,
+    write_lift_log,
+    write_table,
+)
+from deformctl.artifacts.io import is_stdio
+from deformctl.catalog import CatalogObject, catalog_objects, select_objects
+from deformctl.errors import UsageError
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
     DEFAULT_MAX_ATTEMPTS,
@@ -51,6 +63,7 @@ __all__ = [
     "ObjectFailure",
     "RunnerFactory",
     "lift_catalog",
+    "lift_catalog_files",
 ]
 
 LiftProgress = Callable[[str, int, int], None]
@@ -257,6 +270,76 @@ def lift_catalog(
         failures=tuple(failures),
         not_run=tuple(not_run),
     )
+
+
+def lift_catalog_files(
+    catalog_path: str,
+    factory: RunnerFactory,
+    *,
+    output: str,
+    log: str | None = None,
+    object_ids: Sequence[str] | None = None,
+    protocol: SearchProtocol = "refine",
+    growth: float = DEFAULT_GROWTH,
+    tolerance_rel: float = DEFAULT_TOLERANCE_REL,
+    max_attempts: int = DEFAULT_MAX_ATTEMPTS,
+    progress: LiftProgress | None = None,
+    force: bool = False,
+) -> CatalogLiftResult:
+    """:func:`lift_catalog` from a catalog file: the lift_results table and the lift log written.
+
+    Both are written (atomically, with provenance) before the caller decides the exit code, so
+    a failed run keeps every attempt it made.
+
+    Args:
+        catalog_path: the catalog (CSV or Parquet; ``-`` for stdin).
+        factory: builds the runner of each object.
+        output: the lift_results table (``-`` for stdout).
+        log: the lift log with every attempt (``-`` for stdout), or None.
+        object_ids: these objects, in this order (None: all).
+        protocol, growth, tolerance_rel, max_attempts, progress: as for :func:`lift_catalog`.
+        force: overwrite existing outputs.
+
+    Raises:
+        UsageError: ``output`` and ``log`` are the same file, or both stdout (exit 2).
+        OutputExistsError: an output exists and ``force`` is false (exit 1).
+        MissingInputError, InputDataError: see :func:`~deformctl.artifacts.read_catalog` and
+            :func:`lift_catalog`.
+    """
+    if log is not None:
+        if is_stdio(output) and is_stdio(log):
+            raise UsageError("-o and --log cannot both be - (stdout)")
+        if not is_stdio(log) and os.path.abspath(log) == os.path.abspath(output):
+            raise UsageError(f"-o and --log are the same file: {log!r}")
+        check_output_path(log, force)
+    check_output_path(output, force)
+    selected = select_objects(read_catalog(catalog_path), object_ids)
+    provenance = Provenance.from_invocation(
+        [catalog_path],
+        settings={
+            "runner": factory.name,
+            **factory.settings,
+            "protocol": protocol,
+            "growth": growth,
+            "tolerance_rel": tolerance_rel,
+            "max_attempts": max_attempts,
+            "objects": list(selected["object_id"]),
+        },
+    )
+    run = lift_catalog(
+        selected,
+        factory,
+        protocol=protocol,
+        growth=growth,
+        tolerance_rel=tolerance_rel,
+        max_attempts=max_attempts,
+        progress=progress,
+        path=catalog_path,
+    )
+    if log is not None:
+        write_lift_log(log, run.objects, run.attempts, provenance=provenance, force=force)
+    write_table(run.table, output, "lift_results", provenance=provenance, force=force)
+    return run
 
 
 def _not_run_row(

@@ -11,8 +11,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from deformctl.catalog import rigid_grip_force_n
 from deformctl.errors import InputDataError
+from deformctl.physics import rigid_grip_force_n
 from deformctl.units import CM, GRAVITY_M_S2, N_PER_CM, NS_PER_CM
 
 
@@ -84,6 +84,6 @@ class ObjectSpec:
 def f_w_n(spec: ObjectSpec) -> float:
     """Quasi-static lifting force per palm of a rigid object, W/(2 mu), N.
 
-    :func:`deformctl.catalog.rigid_grip_force_n` of the spec's weight and friction.
+    :func:`deformctl.physics.rigid_grip_force_n` of the spec's weight and friction.
     """
     return rigid_grip_force_n(spec.weight_n, spec.friction_mu)

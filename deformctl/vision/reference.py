@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal
+from typing import Literal, Protocol
 
 import cv2
 import numpy as np
@@ -22,12 +22,34 @@ from numpy.typing import NDArray
 
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 
-if TYPE_CHECKING:  # pragma: no cover - typing only
-    from deformctl.vision.size import ViewMeasurement
-
 ImageSource = str | PathLike[str] | NDArray[np.uint8]
 FloatArray = NDArray[np.float64]
 ViewName = Literal["top", "side"]
+
+
+class MeasuredView(Protocol):
+    """What the debug drawing needs of a :class:`~deformctl.vision.size.ViewMeasurement`."""
+
+    @property
+    def view(self) -> str:
+        """``top`` or ``side``."""
+
+    @property
+    def reference_outline_px(self) -> FloatArray:
+        """The scale reference's outline, px."""
+
+    @property
+    def contour_px(self) -> FloatArray:
+        """The object's contour, px."""
+
+    @property
+    def homography_img_to_plane(self) -> FloatArray:
+        """Image to reference plane (cm)."""
+
+    @property
+    def rect_corners_cm(self) -> FloatArray:
+        """The measured rectangle in the reference plane, cm."""
+
 
 #: Marker quad grown by this factor (about its centre, in the marker plane) before it is removed
 #: from the foreground; covers a white margin of up to 15 % of the marker side on each side.
@@ -482,7 +504,7 @@ class _Debug:
     def write_mask(self, name: str, mask: NDArray[np.uint8]) -> None:
         self._write(name, mask)
 
-    def write_view(self, view: ViewMeasurement, img: NDArray[np.uint8], text: str) -> None:
+    def write_view(self, view: MeasuredView, img: NDArray[np.uint8], text: str) -> None:
         out = img.copy()
         cv2.polylines(out, [np.round(view.reference_outline_px).astype(np.int32)], True,
                       (255, 0, 0), 2)  # fmt: skip

@@ -74,6 +74,7 @@ SlipFromFrames = Callable[[Path, Path], tuple[bool, float]]
 _MAX_SHOWN_CHARS = 120  # how much of a bad answer or stderr line goes into an error message
 
 __all__ = [
+    "DEFAULT_RIG_TIMEOUT_S",
     "FRAMES_SLIP_CRITERION",
     "RIG_PROTOCOL_VERSION",
     "RIG_SLIP_CRITERION",
@@ -85,6 +86,7 @@ __all__ = [
     "rig_runner_factory",
 ]
 
+DEFAULT_RIG_TIMEOUT_S = 60.0  #: the longest one rig attempt may take, s (``lift --rig-timeout``)
 RIG_SLIP_CRITERION = "rig"  #: ``slip_criterion`` of rows whose outcome the rig reported itself
 #: ``slip_criterion`` when deformctl judges rig frames (a rig answering ``lifted`` still decides).
 FRAMES_SLIP_CRITERION = "frames"

@@ -34,8 +34,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-import pandas as pd
-
+from deformctl.artifacts import read_catalog
 from deformctl.artifacts.dataset import (
     LogPartWriter,
     dataset_fingerprint,
@@ -43,7 +42,7 @@ from deformctl.artifacts.dataset import (
     table_schema,
 )
 from deformctl.artifacts.provenance import Provenance, input_digest
-from deformctl.catalog import CatalogObject
+from deformctl.catalog import CatalogObject, select_objects
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
     DEFAULT_MAX_ATTEMPTS,
@@ -188,31 +187,33 @@ class LiftTask:
 
 
 def lift_sweep(
-    catalog: pd.DataFrame,
+    catalog_path: str,
     task: LiftTask,
     *,
-    catalog_path: str,
     output: str,
     sweep: SweepOptions,
+    object_ids: Sequence[str] | None = None,
     force: bool = False,
 ) -> SweepSummary:
-    """``lift --sim -o DIR/``: one search per object of ``catalog`` through the sweep executor.
+    """``lift --sim -o DIR/``: one search per catalog object through the sweep executor.
 
     Each part's rows go to ``DIR/part-k.parquet`` and its attempts to the lift log
     ``DIR/part-k.mcap``; a row the simulator refuses, or a search that does not converge, is
-    recorded in ``DIR/_failures/`` and the others go on.
+    recorded in ``DIR/_failures/`` and the others go on. The rows are those of
+    :func:`~deformctl.lift.stage.lift_catalog_files`, row for row.
 
     Args:
-        catalog: the catalog rows to lift (already selected).
+        catalog_path: the catalog (``-`` for stdin), hashed into the fingerprint.
         task: the simulator and search settings.
-        catalog_path: the catalog's file name (``-`` for stdin), hashed into the fingerprint.
         output: the dataset directory.
         sweep: where to run (workers, scheduler), partition size, resume.
+        object_ids: these objects, in this order (None: all).
         force: overwrite the sweep files of an existing directory.
     """
     factory = sim_runner_factory(
         profile=task.profile, settings=task.settings, criterion=task.criterion
     )
+    catalog = select_objects(read_catalog(catalog_path), object_ids)
     search = {
         "protocol": task.protocol,
         "growth": task.growth,

@@ -1,0 +1,179 @@
+"""``deformctl measure CATALOG --sim``: simulated squeezes of every (selected) catalog object.
+
+The options become a :class:`deformctl.measure.SimulateCatalogTask`; one library function runs
+it: :func:`deformctl.measure.simulate_catalog_file` (one squeeze log) or, for a dataset directory
+output, :func:`deformctl.measure.simulate_catalog_sweep`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+
+from deformctl.artifacts.io import is_stdio
+from deformctl.cli._common import finish_sweep, progress_bar
+from deformctl.cli._options import parse_object_ids
+from deformctl.errors import UsageError
+from deformctl.measure import (
+    DEFAULT_SIM_HOLD_S,
+    DEFAULT_SIM_RAMP_S,
+    DEFAULT_SIM_SQUEEZES,
+    DEFAULT_SQUEEZE_STRAIN,
+    SimulateCatalogTask,
+    simulate_catalog_file,
+    simulate_catalog_sweep,
+)
+from deformctl.parallel import SweepOptions
+
+Squeezes = Annotated[
+    int | None,
+    typer.Option(
+        "--squeezes",
+        metavar="X",
+        help="Sim: squeezes per object, at 0.5..1 x the peak force [default: "
+        f"{DEFAULT_SIM_SQUEEZES}, the paper's].",
+    ),
+]
+PeakForceN = Annotated[
+    float | None,
+    typer.Option(
+        "--peak-force-n",
+        metavar="F",
+        help="Sim: peak force of the largest squeeze, N, for every object [default: the "
+        "strain rule, D x strain x size_x].",
+    ),
+]
+Strain = Annotated[
+    float | None,
+    typer.Option(
+        "--strain",
+        metavar="E",
+        help=f"Sim: the default rule's static strain [default: {DEFAULT_SQUEEZE_STRAIN:g}].",
+    ),
+]
+RampS = Annotated[
+    float | None,
+    typer.Option("--ramp-s", help=f"Sim: force ramp, s [default: {DEFAULT_SIM_RAMP_S:g}]."),
+]
+HoldS = Annotated[
+    float | None,
+    typer.Option(
+        "--hold-s", help=f"Sim: hold at the peak force, s [default: {DEFAULT_SIM_HOLD_S:g}]."
+    ),
+]
+Floating = Annotated[
+    bool | None,
+    typer.Option(
+        "--floating",
+        help="Sim: squeeze without gravity and table (a material test) [default: on the table].",
+    ),
+]
+Seed = Annotated[int | None, typer.Option("--seed", help="Sim: noise seed [default: 0].", min=0)]
+NoiseForceN = Annotated[
+    float | None, typer.Option("--noise-force-n", help="Sim: force noise std, N [default: 0].")
+]
+NoisePositionM = Annotated[
+    float | None,
+    typer.Option(
+        "--noise-position-m", help="Sim: noise std of each palm position, m [default: 0]."
+    ),
+]
+
+
+@dataclass(frozen=True)
+class SimOptions:
+    """The ``--sim`` options as given (None: not given, the documented default applies)."""
+
+    squeezes: int | None
+    objects: str | None
+    peak_force_n: float | None
+    strain: float | None
+    ramp_s: float | None
+    hold_s: float | None
+    floating: bool | None
+    alpha_cm: float | None
+    dt_s: float | None
+    memory_budget_gib: float | None
+    seed: int | None
+    noise_force_n: float | None
+    noise_position_m: float | None
+
+    def given(self) -> dict[str, object]:
+        """Option flag → value for the options given on the command line."""
+        return {
+            "--" + name.replace("_", "-"): value
+            for name, value in vars(self).items()
+            if value is not None
+        }
+
+    def task(self) -> SimulateCatalogTask:
+        """The squeezes, simulator settings and seed these options ask for.
+
+        Raises:
+            UsageError: both ``--peak-force-n`` and ``--strain``, or ``--squeezes`` < 1.
+        """
+        from deformctl.sim import SimSettings
+
+        if self.peak_force_n is not None and self.strain is not None:
+            raise UsageError("give --peak-force-n or --strain, not both")
+        squeezes = DEFAULT_SIM_SQUEEZES if self.squeezes is None else self.squeezes
+        if squeezes < 1:
+            raise UsageError(f"--squeezes must be >= 1, got {squeezes}")
+        settings = SimSettings(
+            alpha_cm=self.alpha_cm,
+            **{
+                name: getattr(self, name)
+                for name in ("dt_s", "memory_budget_gib")
+                if getattr(self, name) is not None
+            },
+        )
+        simulate: dict[str, Any] = {
+            "squeezes": squeezes,
+            "peak_force_n": self.peak_force_n,
+            "strain": DEFAULT_SQUEEZE_STRAIN if self.strain is None else self.strain,
+            "ramp_s": DEFAULT_SIM_RAMP_S if self.ramp_s is None else self.ramp_s,
+            "hold_s": DEFAULT_SIM_HOLD_S if self.hold_s is None else self.hold_s,
+            "gravity": not self.floating,
+            "noise_force_n": self.noise_force_n or 0.0,
+            "noise_position_m": self.noise_position_m or 0.0,
+        }
+        return SimulateCatalogTask(simulate, settings, 0 if self.seed is None else self.seed)
+
+
+#: The flags of :class:`SimOptions` (only ``--sim`` takes them).
+FLAGS = tuple("--" + f.name.replace("_", "-") for f in dataclasses.fields(SimOptions))
+
+
+def run(
+    catalog: str, opts: SimOptions, output: str, force: bool, sweep: SweepOptions, console: Console
+) -> None:
+    """Squeeze the objects of ``catalog`` into ``output`` (a squeeze log or a dataset directory).
+
+    Raises:
+        UsageError: no catalog, or a bad option (see :meth:`SimOptions.task`).
+    """
+    if not catalog:
+        raise UsageError("--sim needs a CATALOG argument (the objects to squeeze)")
+    task = opts.task()
+    object_ids = parse_object_ids(opts.objects)
+    if sweep.check(output):
+        summary = simulate_catalog_sweep(
+            catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
+        )
+        finish_sweep(summary, "measure")
+        return
+    with progress_bar(console, "squeeze") as progress:
+        objects, series = simulate_catalog_file(
+            catalog, task, output=output, object_ids=object_ids, progress=progress, force=force
+        )
+    where = "stdout" if is_stdio(output) else output
+    duration_s = sum(float(s.time_s[-1]) for s in series)
+    typer.echo(
+        f"{where}: {len(series)} simulated squeeze(s) of {len(objects)} object(s) "
+        f"({task.simulate['squeezes']} each), {duration_s:.1f} s, dt {task.settings.dt_s:g} s",
+        err=True,
+    )

@@ -1,0 +1,182 @@
+"""The options more than one command takes, declared once as ``Annotated`` aliases.
+
+Help texts state defaults taken from the library, not typed in: the search
+(:mod:`deformctl.lift.search`), the sweep executor (:mod:`deformctl.parallel`), the squeeze
+protocol (:mod:`deformctl.measure`) and the rig runner. The simulator's and OpenCV's defaults are
+restated in :data:`HEAVY_DEFAULTS`, because importing numba or OpenCV costs the command line half
+a second at start-up; ``tests/test_cli_options.py`` checks each of them against the library
+object it restates, so they cannot drift.
+
+An option whose value is ``None`` was not given; the library default then applies. The five
+sweep options are added to a command by :func:`with_sweep_options`, which hands them to it as
+one :class:`~deformctl.parallel.SweepOptions`.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+from collections.abc import Callable
+from typing import Annotated, Any, TypeVar
+
+import typer
+
+from deformctl.errors import UsageError
+from deformctl.parallel import DEFAULT_CONNECT_TIMEOUT_S, DEFAULT_PARTITION_SIZE, SweepOptions
+
+R = TypeVar("R")
+
+#: Defaults of the simulator (``SimSettings``, ``LiftProfile``, ``SlipCriterion``) and of the
+#: vision functions (``detect_slip``, ``measure_object_size``), restated for the help texts only.
+HEAVY_DEFAULTS: dict[str, object] = {
+    "SimSettings.dt_s": 1e-3,
+    "SimSettings.particles_per_side": 5,
+    "SimSettings.memory_budget_gib": 2.0,
+    "LiftProfile.accel_m_s2": 2.0,
+    "LiftProfile.speed_m_s": 0.25,
+    "LiftProfile.hold_s": 0.5,
+    "SlipCriterion.tolerance_m": 0.5e-3,
+    "SlipCriterion.measure": "contact",
+    "detect_slip.tolerance_m": 0.005,
+    "detect_slip.marker_dict": "DICT_4X4_50",
+    "measure_object_size.marker_dict": "DICT_4X4_50",
+}
+
+
+def default(name: str) -> str:
+    """``[default: X]`` for a restated default (``name`` as in :data:`HEAVY_DEFAULTS`)."""
+    value = HEAVY_DEFAULTS[name]
+    return f"[default: {value:g}]" if isinstance(value, float) else f"[default: {value}]"
+
+
+_PARTICLES = int(str(HEAVY_DEFAULTS["SimSettings.particles_per_side"]))
+
+
+# ---------------------------------------------------------------------------- every writer
+
+Force = Annotated[bool, typer.Option("--force", help="Overwrite existing outputs.")]
+
+# ---------------------------------------------------------------------------- the simulator
+
+AlphaCm = Annotated[
+    float | None,
+    typer.Option(
+        "--alpha-cm",
+        metavar="CM",
+        help=f"Sim: lattice spacing, cm [default: the longest side / {_PARTICLES - 1}, "
+        f"{_PARTICLES} particles].",
+    ),
+]
+DtS = Annotated[
+    float | None,
+    typer.Option("--dt-s", metavar="S", help=f"Sim: time step, s {default('SimSettings.dt_s')}."),
+]
+MemoryBudgetGib = Annotated[
+    float | None,
+    typer.Option(
+        "--memory-budget-gib",
+        metavar="GIB",
+        help="Sim: refuse a lattice whose estimated memory exceeds this, GiB "
+        f"{default('SimSettings.memory_budget_gib')}.",
+    ),
+]
+Objects = Annotated[
+    str | None,
+    typer.Option(
+        "--objects", metavar="ID,...", help="These catalog objects, in this order [default: all]."
+    ),
+]
+
+
+def parse_object_ids(text: str | None) -> list[str] | None:
+    """``--objects A,C``: the ids, in order; None when the option was not given.
+
+    Raises:
+        UsageError: no id, or an empty one.
+    """
+    if text is None:
+        return None
+    ids = [part.strip() for part in text.split(",")]
+    if not any(ids):
+        raise UsageError("--objects needs at least one object id")
+    if any(not oid for oid in ids):
+        raise UsageError(f"--objects has an empty id: {text!r}")
+    return ids
+
+
+# ---------------------------------------------------------------------------- sweeps
+
+Workers = Annotated[
+    int | None,
+    typer.Option(
+        "--workers",
+        metavar="N",
+        help="Dataset output: local worker processes [default: every core].",
+    ),
+]
+Scheduler = Annotated[
+    str | None,
+    typer.Option(
+        "--scheduler",
+        metavar="tcp://HOST:PORT",
+        help="Dataset output: run on this running Dask scheduler, tcp://HOST:PORT.",
+    ),
+]
+ConnectTimeout = Annotated[
+    float | None,
+    typer.Option(
+        "--connect-timeout",
+        metavar="S",
+        help="With --scheduler: seconds allowed to reach the scheduler "
+        f"[default: {DEFAULT_CONNECT_TIMEOUT_S:g}].",
+    ),
+]
+PartitionSize = Annotated[
+    int | None,
+    typer.Option(
+        "--partition-size",
+        metavar="N",
+        help=f"Dataset output: objects per part file [default: {DEFAULT_PARTITION_SIZE}].",
+    ),
+]
+Resume = Annotated[
+    bool,
+    typer.Option(
+        "--resume",
+        help="Dataset output: keep the complete parts of an earlier run, compute the rest.",
+    ),
+]
+
+
+#: The sweep options' parameters: (name, alias, default), in the order of ``SweepOptions``.
+_SWEEP_PARAMETERS: tuple[tuple[str, Any, Any], ...] = (
+    ("workers", Workers, None),
+    ("scheduler", Scheduler, None),
+    ("connect_timeout", ConnectTimeout, None),
+    ("partition_size", PartitionSize, None),
+    ("resume", Resume, False),
+)
+#: What a command wrapped by :func:`with_sweep_options` receives when called directly.
+NO_SWEEP = SweepOptions()
+
+
+def with_sweep_options(command: Callable[..., R]) -> Callable[..., R]:
+    """Give ``command`` the options ``--workers`` ... ``--resume`` as one ``sweep`` argument.
+
+    ``command`` takes ``sweep: SweepOptions``; the command line sees the five options instead
+    (declared once, above), and the wrapper builds the :class:`SweepOptions` from them.
+    """
+    signature = inspect.signature(command, eval_str=True)
+    kept = [p for p in signature.parameters.values() if p.name != "sweep"]
+    added = [
+        inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=value, annotation=alias)
+        for name, alias, value in _SWEEP_PARAMETERS
+    ]
+
+    @functools.wraps(command)
+    def wrapper(*args: Any, **kwargs: Any) -> R:
+        values = [kwargs.pop(name, value) for name, _, value in _SWEEP_PARAMETERS]
+        return command(*args, sweep=SweepOptions(*values), **kwargs)
+
+    wrapper.__signature__ = signature.replace(parameters=[*kept, *added])  # type: ignore[attr-defined]
+    return wrapper

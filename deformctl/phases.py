@@ -1,0 +1,250 @@
+"""Where a squeeze stops being a Kelvin–Voigt squeeze: rupture, and the loading/unloading phases.
+
+**Rupture.** A soft natural object squeezed too hard gives way: the force collapses while the
+gripper keeps closing. Fitted whole, such a squeeze halves D and flips the sign of λ.
+:func:`find_rupture` finds the point where it happened; ``measure`` cuts every squeeze there and
+records the point in the log, ``characterize`` does the same for logs that were not cut and flags
+the object (``rupture``). A rupture is a sample ``i`` after the running force peak ``p`` where
+
+1. the force has fallen by more than :data:`RUPTURE_DROP_FRAC` of the peak,
+   ``f[i] < (1 − RUPTURE_DROP_FRAC) · f[p]`` (with ``f[p]`` at least
+   :data:`RUPTURE_MIN_PEAK_FRAC` of the squeeze's peak force, so noise before contact is not a
+   peak, and a drop of more than :data:`RUPTURE_NOISE_MULT` force-noise standard deviations);
+2. the compression still grows: the smoothed compression at ``i`` exceeds the one at ``p`` by more
+   than three position-noise standard deviations;
+3. the drop is not the object's own Kelvin–Voigt response: the force is more than
+   ``RUPTURE_DROP_FRAC · f[p]`` below ``D̂ d[i] + λ̂ d'[i]``, with ``D̂, λ̂ ≥ 0`` fitted to the loading
+   before the peak. Conditions 1 and 2 alone also hold for a heavily damped object after its
+   force peak: with ``λ/D`` long against the squeeze, the compression lags the force and still
+   grows while the force falls by half (measured on the synthetic squeezes of
+   ``tests/test_characterize.py``, λ/D ≥ 0.5 s: 25 of 240 squeezes). With condition 3 none of
+   them, and none of the simulator's squeezes, is a rupture; a force collapse to 30–69 % of the
+   peak with the gripper still closing is found within 6–155 ms (``tests/test_phases.py``).
+
+A force drop while the compression stops (a testing machine that holds its crosshead, a load–
+unload cycle) is not a rupture.
+
+**Phases.** ``loading`` is a squeeze up to its peak force, ``unloading`` from its peak force to
+its end, ``all`` the whole squeeze. The peak is a plateau when the force is held, so it is
+judged on the SG-smoothed force: loading ends at the first sample within
+:data:`PHASE_PEAK_TOL` of the smoothed maximum, unloading starts at the last one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from deformctl.errors import UsageError
+from deformctl.series import FloatArray, SqueezeSeries
+from deformctl.signals import noise_std, sg_smooth, sg_window_length, uniform_grid
+
+Phase = Literal["loading", "unloading", "all"]
+PHASES: tuple[str, ...] = ("loading", "unloading", "all")
+
+#: A rupture is a force drop of more than this fraction of the running peak force while the
+#: compression still grows (and that the Kelvin–Voigt fit of the loading does not predict).
+RUPTURE_DROP_FRAC = 0.3
+#: Only peaks of at least this fraction of the squeeze's peak force can rupture (noise before
+#: contact makes many small running peaks).
+RUPTURE_MIN_PEAK_FRAC = 0.25
+#: ... and the drop must exceed this many force-noise standard deviations (a force that is
+#: mostly sensor noise, e.g. a wrong wrench axis, has noise "peaks" that fall by 30 %).
+RUPTURE_NOISE_MULT = 5.0
+#: SG polynomial order of the smoothing used for rupture and phase detection.
+_POLYORDER = 3
+#: The most candidate peaks examined per squeeze (each costs one small bounded fit).
+_MAX_PEAKS = 20
+#: Phases: the force peak is the stretch within this fraction of the smoothed maximum force.
+PHASE_PEAK_TOL = 0.01
+
+
+@dataclass(frozen=True)
+class Rupture:
+    """Where a squeeze ruptured: its force peak before the collapse.
+
+    Attributes:
+        squeeze_index: the squeeze.
+        time_s: time of the peak since the start of the squeeze, s.
+        force_n: the force at the peak, N (the force the object could bear).
+        compression_m: the compression at the peak, m.
+        recording_time_s: time of the peak in the source recording, s (None when not known).
+    """
+
+    squeeze_index: int
+    time_s: float
+    force_n: float
+    compression_m: float
+    recording_time_s: float | None = None
+
+    def to_record(self) -> dict[str, Any]:
+        """The JSON record stored in a squeeze log's object row (key ``ruptures``)."""
+        rec: dict[str, Any] = {
+            "squeeze_index": self.squeeze_index,
+            "time_s": self.time_s,
+            "force_n": self.force_n,
+            "compression_m": self.compression_m,
+        }
+        if self.recording_time_s is not None:
+            rec["recording_time_s"] = self.recording_time_s
+        return rec
+
+    @classmethod
+    def from_record(cls, rec: Any) -> Rupture | None:
+        """A rupture from a stored record; None when the record is not one."""
+        if not isinstance(rec, dict):
+            return None
+        try:
+            rt = rec.get("recording_time_s")
+            return cls(
+                squeeze_index=int(rec["squeeze_index"]),
+                time_s=float(rec["time_s"]),
+                force_n=float(rec["force_n"]),
+                compression_m=float(rec["compression_m"]),
+                recording_time_s=None if rt is None else float(rt),
+            )
+        except (KeyError, TypeError, ValueError):
+            return None
+
+    def describe(self) -> str:
+        """``squeeze #1 at 2.00 s, 10.1 N``."""
+        return f"squeeze #{self.squeeze_index} at {self.time_s:.3g} s, {self.force_n:.3g} N"
+
+
+def ruptures_from_object(obj: Any) -> list[Rupture]:
+    """The ruptures a squeeze log's object row records (``ruptures``), in squeeze order."""
+    raw = obj.get("ruptures") if isinstance(obj, dict) else None
+    if not isinstance(raw, list):
+        return []
+    out = [r for r in (Rupture.from_record(x) for x in raw) if r is not None]
+    return sorted(out, key=lambda r: r.squeeze_index)
+
+
+def _running_peak_index(force_n: FloatArray) -> np.ndarray:
+    """For each sample, the index of the largest force so far (the latest one on ties)."""
+    idx = np.arange(force_n.shape[0])
+    running = np.maximum.accumulate(force_n)
+    return np.asarray(np.maximum.accumulate(np.where(force_n >= running, idx, 0)))
+
+
+def _kv_loading_fit(d: FloatArray, v: FloatArray, f: FloatArray) -> tuple[float, float] | None:
+    """``(k, c) ≥ 0`` of ``f ≈ k d + c d'`` on the loading samples (bounded least squares)."""
+    from scipy.optimize import lsq_linear
+
+    x = np.column_stack([d, v])
+    scale = np.sqrt(np.mean(x * x, axis=0))
+    if not np.all(scale > 0):
+        return None
+    res = lsq_linear(x / scale, f, bounds=(0.0, np.inf))
+    k, c = (res.x / scale).tolist()
+    return float(k), float(c)
+
+
+def find_rupture_index(
+    time_s: FloatArray, force_n: FloatArray, compression_m: FloatArray, *, window_s: float
+) -> int | None:
+    """Index (into the input arrays) of the force peak at which the squeeze ruptured, or None.
+
+    See the module docstring for the criterion. The input may be non-uniformly sampled; it is
+    judged on a uniform grid (``window_s`` is the SG window used to smooth ``d`` and ``d'``).
+    """
+    n_in = force_n.shape[0]
+    if n_in < 10:
+        return None
+    dt_s, grid, (f, comp) = uniform_grid(time_s, force_n, compression_m)
+    n = f.shape[0]
+    wl = sg_window_length(window_s, dt_s, _POLYORDER)
+    if n < 4 * wl:
+        return None
+    d, v = sg_smooth(comp, wl, _POLYORDER, dt_s)
+    peak_idx = _running_peak_index(f)
+    running = f[peak_idx]
+    sigma = noise_std(comp)
+    floor = max(
+        RUPTURE_MIN_PEAK_FRAC * float(np.max(f)),
+        RUPTURE_NOISE_MULT * noise_std(f) / RUPTURE_DROP_FRAC,
+    )
+    dropped = (f < (1.0 - RUPTURE_DROP_FRAC) * running) & (running >= floor)
+    growing = d > d[peak_idx] + 3.0 * sigma
+    half = wl // 2
+    tried: set[int] = set()
+    for i in np.flatnonzero(dropped & growing):
+        p = int(peak_idx[i])
+        if p in tried:
+            continue
+        if len(tried) >= _MAX_PEAKS:
+            break
+        tried.add(p)
+        lo, hi = half, p - half
+        if hi - lo < wl:  # too little loading before the peak to judge
+            continue
+        kc = _kv_loading_fit(d[lo:hi], v[lo:hi], f[lo:hi])
+        if kc is None:
+            continue
+        after = slice(p, n)
+        predicted = kc[0] * d[after] + kc[1] * v[after]
+        shortfall = predicted - f[after] > RUPTURE_DROP_FRAC * f[p]
+        if np.any(shortfall & dropped[after] & (d[after] > d[p] + 3.0 * sigma)):
+            # back to the input's samples: the last one at or before the peak's time
+            return int(np.searchsorted(time_s, grid[p], side="right") - 1)
+    return None
+
+
+def cut_rupture(
+    s: SqueezeSeries, *, window_s: float, recording_offset_s: float | None = None
+) -> tuple[SqueezeSeries, Rupture | None]:
+    """The squeeze up to its rupture (inclusive) and the rupture; the squeeze itself if none."""
+    i = find_rupture_index(s.time_s, s.force_n, s.compression_m, window_s=window_s)
+    if i is None:
+        return s, None
+    rupture = Rupture(
+        squeeze_index=s.squeeze_index,
+        time_s=float(s.time_s[i]),
+        force_n=float(s.force_n[i]),
+        compression_m=float(s.compression_m[i]),
+        recording_time_s=None
+        if recording_offset_s is None
+        else float(recording_offset_s + s.time_s[i]),
+    )
+    return slice_squeeze(s, slice(0, i + 1)), rupture
+
+
+def slice_squeeze(s: SqueezeSeries, sl: slice) -> SqueezeSeries:
+    """Samples ``sl`` of a squeeze, its time restarting at 0 (compression keeps its zero)."""
+    t = s.time_s[sl]
+    opt = {
+        name: None if getattr(s, name) is None else getattr(s, name)[sl]
+        for name in ("commanded_force_n", "palm_left_x_m", "palm_right_x_m")
+    }
+    return SqueezeSeries(
+        object_id=s.object_id,
+        squeeze_index=s.squeeze_index,
+        time_s=t - t[0],
+        force_n=s.force_n[sl],
+        compression_m=s.compression_m[sl],
+        **opt,
+    )
+
+
+def phase_slice(time_s: FloatArray, force_n: FloatArray, phase: str, *, window_s: float) -> slice:
+    """The samples of ``phase`` (``loading``, ``unloading`` or ``all``) of one squeeze.
+
+    Raises:
+        UsageError: an unknown phase.
+    """
+    if phase not in PHASES:
+        raise UsageError(f"phase must be one of {', '.join(PHASES)}, got {phase!r}")
+    n = force_n.shape[0]
+    if phase == "all" or n < 3:
+        return slice(0, n)
+    dt_s, grid, (f,) = uniform_grid(time_s, force_n)
+    wl = min(sg_window_length(window_s, dt_s, _POLYORDER), f.shape[0] - (1 - f.shape[0] % 2))
+    smooth = sg_smooth(f, wl, _POLYORDER, dt_s)[0] if wl > _POLYORDER + 1 else f
+    top = np.flatnonzero(smooth >= (1.0 - PHASE_PEAK_TOL) * float(np.max(smooth)))
+    if phase == "loading":
+        end_t = grid[int(top[0])]
+        return slice(0, int(np.searchsorted(time_s, end_t, side="right")))
+    start_t = grid[int(top[-1])]
+    return slice(max(int(np.searchsorted(time_s, start_t, side="left")), 0), n)

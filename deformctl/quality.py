@@ -1,0 +1,287 @@
+"""When D and λ are doubtful: the quality flags of a coefficients row and what is done about them.
+
+A coefficient a robot will act on must be either right or visibly doubtful. Every fit
+(:mod:`deformctl.characterize`) carries its diagnostics (R², standard errors, samples, loading
+range, the damping excitation and design condition) and a ``quality`` column: ``ok``, or a comma
+list of the flags below, in this order. The thresholds are product decisions, chosen by
+measurement on synthetic logs (clean, noisy, with preload, constant-rate, rupture, swapped columns,
+wrong sign, wrong units; numbers in each constant's docstring) and stated here once; the README's
+"When the numbers are doubtful" section and ``characterize --help`` quote them from here.
+
+================================ ==============================================================
+``negative_stiffness``           D ≤ 0: always an error unless ``--allow-flagged``
+``negative_damping``             λ below −:data:`NEGATIVE_DAMPING_ATOL_NS_PER_CM` and below
+                                 −:data:`NEGATIVE_DAMPING_SE_MULT` standard errors
+``damping_at_bound``             ``--constrain-damping`` held λ at 0 (the free fit was negative)
+``damping_unidentifiable``       λ cannot be told from a constant force or from D (λ = NaN);
+                                 see :func:`damping_identifiable`; ``--method paper``: monotonic
+                                 loading (:data:`PAPER_MONOTONIC_FRAC`)
+``low_r2``                       R² below :data:`LOW_R2`
+``few_samples``                  fewer than :data:`FEW_SAMPLES_WINDOWS` SG windows of samples
+``rupture``                      a squeeze ruptured (it is fitted up to the rupture only)
+================================ ==============================================================
+
+Policy (:func:`enforce`): each flagged object gives one warning line naming the flags and their
+numbers; ``strict`` turns any flag into an error (exit 65, nothing written); negative D is an
+error unless ``allow_flagged``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import pandas as pd
+
+from deformctl.errors import InputDataError, UsageError
+
+NEGATIVE_STIFFNESS = "negative_stiffness"
+NEGATIVE_DAMPING = "negative_damping"
+DAMPING_AT_BOUND = "damping_at_bound"
+DAMPING_UNIDENTIFIABLE = "damping_unidentifiable"
+LOW_R2_FLAG = "low_r2"
+FEW_SAMPLES = "few_samples"
+RUPTURE = "rupture"
+#: Every flag, in the order ``quality`` lists them.
+FLAGS: tuple[str, ...] = (
+    NEGATIVE_STIFFNESS,
+    NEGATIVE_DAMPING,
+    DAMPING_AT_BOUND,
+    DAMPING_UNIDENTIFIABLE,
+    LOW_R2_FLAG,
+    FEW_SAMPLES,
+    RUPTURE,
+)
+OK = "ok"
+
+#: ``low_r2`` below this R²: more than 10 % of the force variance is not Kelvin–Voigt. Measured:
+#: clean and 1 %-noise synthetic squeezes ≥ 0.99, the simulator's Table II objects ≥ 0.9997 and a
+#: 73-object population ≥ 0.98, the simulator with 0.01 N + 0.05 mm noise 0.90–0.97; a force that
+#: is mostly sensor noise (a wrong wrench axis: 2 % cross-talk) 0.33, a rupture fitted whole −0.7
+#: to −0.9 (D then falls to a tenth).
+LOW_R2 = 0.9
+#: ``negative_damping`` when λ is below −this (N·s/cm) ... Measured on objects with λ = 0: the
+#: simulator −0.05 ± 0.08 at worst (73 objects), synthetic squeezes −0.03 ± 0.02.
+NEGATIVE_DAMPING_ATOL_NS_PER_CM = 0.1
+#: ... and more than this many standard errors below 0 (both must hold).
+NEGATIVE_DAMPING_SE_MULT = 2.0
+#: ``damping_unidentifiable`` when less than this share of the rate's mean square is independent
+#: of a constant force and of d (``damping_excitation``) ... Measured: constant-rate loadings of a
+#: testing machine 0.000–0.043 (even with a 2 s acceleration ramp), a force ramp without a hold
+#: 0.0004–0.05; the simulator ≥ 0.076 (its most damped object, λ/D = 3 s), synthetic squeezes
+#: ≥ 0.39, a load–unload cycle 1.0.
+DAMPING_EXCITATION_MIN = 0.05
+#: ... and allowing a preload (an intercept) moves λ by more than this fraction. Guards the slow,
+#: heavily damped squeezes whose rate is nearly constant but whose λ is well determined (a 1 s ramp
+#: and hold at λ/D = 3 s: excitation 0.04, λ moves 1.8 %); on constant-rate loadings λ moves
+#: 55–133 %.
+DAMPING_PRELOAD_SENSITIVITY = 0.1
+#: ``--method paper``: a squeeze whose rate has the other sign on fewer than this share of its
+#: damping samples is a monotonic loading; there the residual ratio ``(f − D d)/d'`` has the sign
+#: of ``f/d − D``, whose median is D by construction, so λ is pinned near 0 (λ = 0.000 on the
+#: simulator's force ramps of its most damped objects). Its λ is not used.
+PAPER_MONOTONIC_FRAC = 0.05
+#: ``few_samples`` below this many SG windows of samples: with fewer independent windows the fit
+#: is dominated by smoothing bias (measured, one haversine squeeze at 1 kHz: 1.5 windows λ +7 %
+#: = 10 standard errors, 2.5 windows +1.6 %, 4 windows +0.3 %, under one standard error).
+FEW_SAMPLES_WINDOWS = 4.0
+
+
+def damping_identifiable(excitation: float, preload_sensitivity: float) -> bool:
+    """Whether λ can be told from a constant force and from D.
+
+    A constant rate (a testing machine's crosshead) makes ``λ d'`` a constant force,
+    indistinguishable from a preload; a rate that follows ``d`` (pure creep) makes it part of
+    ``D d`` and the preload. λ is unidentifiable when the rate's share independent of a constant
+    and of d (``excitation``) is below :data:`DAMPING_EXCITATION_MIN` and allowing a preload moves
+    λ by more than :data:`DAMPING_PRELOAD_SENSITIVITY` (relative).
+    """
+    if not math.isfinite(excitation):
+        return False
+    return not (
+        excitation < DAMPING_EXCITATION_MIN
+        and not preload_sensitivity <= DAMPING_PRELOAD_SENSITIVITY
+    )
+
+
+def assess(
+    *,
+    deformability_n_per_cm: float,
+    damping_ns_per_cm: float,
+    damping_se_ns_per_cm: float,
+    r2: float,
+    n_samples: int,
+    window_samples: int,
+    damping_unidentifiable: bool = False,
+    damping_bound_active: bool = False,
+    ruptures: int = 0,
+) -> tuple[str, ...]:
+    """The flags of one fit, in :data:`FLAGS` order (empty: ok)."""
+    flags: list[str] = []
+    if not deformability_n_per_cm > 0:
+        flags.append(NEGATIVE_STIFFNESS)
+    lam, se = damping_ns_per_cm, damping_se_ns_per_cm
+    if (
+        math.isfinite(lam)
+        and lam < -NEGATIVE_DAMPING_ATOL_NS_PER_CM
+        and not (math.isfinite(se) and lam + NEGATIVE_DAMPING_SE_MULT * se >= 0)
+    ):
+        flags.append(NEGATIVE_DAMPING)
+    if damping_bound_active:
+        flags.append(DAMPING_AT_BOUND)
+    if damping_unidentifiable:
+        flags.append(DAMPING_UNIDENTIFIABLE)
+    if not r2 >= LOW_R2:
+        flags.append(LOW_R2_FLAG)
+    if n_samples < FEW_SAMPLES_WINDOWS * window_samples:
+        flags.append(FEW_SAMPLES)
+    if ruptures > 0:
+        flags.append(RUPTURE)
+    return tuple(flags)
+
+
+def quality_text(flags: Sequence[str]) -> str:
+    """The ``quality`` column: ``ok`` or the flags joined by commas."""
+    return ",".join(flags) if flags else OK
+
+
+def parse_quality(text: object) -> tuple[str, ...]:
+    """The flags of a ``quality`` value (``ok``, missing or empty: none)."""
+    if not isinstance(text, str) or text.strip() in ("", OK):
+        return ()
+    return tuple(part.strip() for part in text.split(",") if part.strip())
+
+
+def _num(value: Any, fmt: str) -> str:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return "?"
+    return format(v, fmt) if math.isfinite(v) else "NaN"
+
+
+def _pm(value: Any, se: Any) -> str:
+    text = _num(value, ".3g")
+    try:
+        ok = math.isfinite(float(se))
+    except (TypeError, ValueError):
+        ok = False
+    return f"{text} ± {_num(se, '.2g')}" if ok else text
+
+
+def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
+    """One flag with the numbers behind it, e.g. ``low_r2 (R² = 0.41 < 0.9)``."""
+    if flag == NEGATIVE_STIFFNESS:
+        return f"{flag} (D = {_num(row.get('deformability_n_per_cm'), '.3g')} N/cm ≤ 0)"
+    if flag == NEGATIVE_DAMPING:
+        lam = _pm(row.get("damping_ns_per_cm"), row.get("damping_se_ns_per_cm"))
+        return f"{flag} (λ = {lam} N·s/cm < 0)"
+    if flag == DAMPING_AT_BOUND:
+        return f"{flag} (λ held at 0 by --constrain-damping; the free fit is negative)"
+    if flag == DAMPING_UNIDENTIFIABLE:
+        if row.get("method") == "paper":
+            return f"{flag} (not identifiable by the paper estimator: monotonic loading)"
+        exc = _num(row.get("damping_excitation"), ".2g")
+        return (
+            f"{flag} (λ cannot be told from a preload or from D: rate excitation {exc} < "
+            f"{DAMPING_EXCITATION_MIN:g}; a constant-rate or creep-only test)"
+        )
+    if flag == LOW_R2_FLAG:
+        return f"{flag} (R² = {_num(row.get('r2'), '.3g')} < {LOW_R2:g})"
+    if flag == FEW_SAMPLES:
+        return (
+            f"{flag} ({row.get('n_samples')} samples < {FEW_SAMPLES_WINDOWS:g} windows of "
+            f"{row.get('window_samples')})"
+        )
+    if flag == RUPTURE:
+        count = row.get("ruptures")
+        return (
+            f"{flag} ({count} squeeze(s); first at {_num(row.get('rupture_time_s'), '.3g')} s, "
+            f"{_num(row.get('rupture_force_n'), '.3g')} N; fitted up to it)"
+        )
+    return flag
+
+
+def describe_row(row: Mapping[str, Any]) -> str:
+    """Every flag of a coefficients row with its numbers, comma-separated ('' when ok)."""
+    return ", ".join(describe_flag(f, row) for f in parse_quality(row.get("quality")))
+
+
+def check_policy(strict: bool, allow_flagged: bool) -> None:
+    """Refuse ``--strict`` with ``--allow-flagged`` (one fails on any flag, one writes them).
+
+    Raises:
+        UsageError: both given (exit 2).
+    """
+    if strict and allow_flagged:
+        raise UsageError("give --strict or --allow-flagged, not both")
+
+
+def enforce(
+    table: pd.DataFrame,
+    *,
+    strict: bool = False,
+    allow_flagged: bool = False,
+    path: str | None = None,
+) -> list[str]:
+    """Apply the policy to a coefficients table; the warning lines of its flagged objects.
+
+    Args:
+        table: coefficients rows with ``object_id`` and ``quality`` (and the numbers the flags
+            name); rows without ``quality`` (tables written before it existed) are not judged.
+        strict: any flag is an error.
+        allow_flagged: write objects with negative D (flagged) instead of refusing them.
+        path: the squeeze log, named in every line.
+
+    Returns:
+        One line per flagged object, ``<path>: object 'X': <flags with numbers>``.
+
+    Raises:
+        InputDataError: ``strict`` and an object is flagged, or an object has negative D and not
+            ``allow_flagged`` (exit 65); the message names the first such object.
+        UsageError: both ``strict`` and ``allow_flagged``.
+    """
+    check_policy(strict, allow_flagged)
+    if "quality" not in table.columns:
+        return []
+    lines: list[str] = []
+    flagged: list[tuple[str, str]] = []
+    negative: list[tuple[str, str]] = []
+    for row in table.to_dict("records"):
+        flags = parse_quality(row.get("quality"))
+        if not flags:
+            continue
+        oid, text = str(row["object_id"]), describe_row(row)
+        flagged.append((oid, text))
+        if NEGATIVE_STIFFNESS in flags:
+            negative.append((oid, text))
+        lines.append(f"{path}: object {oid!r}: {text}" if path else f"object {oid!r}: {text}")
+    if strict and flagged:
+        oid, text = flagged[0]
+        more = f"; {len(flagged) - 1} more flagged object(s)" if len(flagged) > 1 else ""
+        raise InputDataError(f"--strict: object {oid!r} is flagged: {text}{more}", path=path)
+    if negative and not allow_flagged:
+        oid, text = negative[0]
+        more = f"; {len(negative) - 1} more" if len(negative) > 1 else ""
+        raise InputDataError(
+            f"object {oid!r}: {text}: the force or the compression has the wrong sign "
+            f"(pass --allow-flagged to write it anyway){more}",
+            path=path,
+        )
+    return lines
+
+
+def thresholds_help() -> str:
+    """The flags and thresholds in one paragraph (``characterize --help``)."""
+    return (
+        f"Quality flags: negative_stiffness (D <= 0; exit 65 unless --allow-flagged), "
+        f"negative_damping (λ < -{NEGATIVE_DAMPING_ATOL_NS_PER_CM:g} N·s/cm and < "
+        f"-{NEGATIVE_DAMPING_SE_MULT:g} se), damping_at_bound (--constrain-damping held λ at 0), "
+        f"damping_unidentifiable (λ = NaN: rate excitation < {DAMPING_EXCITATION_MIN:g} and a "
+        f"preload would move λ by > {100 * DAMPING_PRELOAD_SENSITIVITY:g} %, e.g. a "
+        f"constant-rate test; --method paper: a monotonic loading, the rate of the other sign "
+        f"on < {100 * PAPER_MONOTONIC_FRAC:g} % of its samples), low_r2 (R² < {LOW_R2:g}), "
+        f"few_samples (< {FEW_SAMPLES_WINDOWS:g} Savitzky-Golay windows of samples), rupture "
+        "(a squeeze ruptured; fitted up to it)."
+    )
