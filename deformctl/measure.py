@@ -1078,13 +1078,15 @@ class SimulateCatalogTask:
     Attributes:
         simulate: the keyword arguments of :func:`simulate_squeezes` (squeezes, peak force or
             strain, ramp, hold, gravity, noise).
-        settings: the :class:`~deformctl.sim.SimSettings`.
+        settings: the :class:`~deformctl.sim.SimSettings` (a preset's object model).
         seed: the run's noise seed.
+        sim_preset: the name of the preset ``settings`` came from (recorded in the log).
     """
 
     simulate: Mapping[str, Any]
     settings: SimSettings
     seed: int = 0
+    sim_preset: str | None = None
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """Squeeze one object: its summary row, its (object row, squeezes) as the payload."""
@@ -1120,6 +1122,7 @@ def sim_provenance(
                 "peak_force_n" if task.simulate.get("peak_force_n") is not None else "strain"
             ),
             "objects": object_ids,
+            "sim_preset": task.sim_preset,
             "sim_settings": dataclasses.asdict(task.settings),
         },
     )

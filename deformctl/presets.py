@@ -148,7 +148,7 @@ def check_preset_name(name: str) -> PresetName:
     """``name`` if it is a preset's (exit 2 otherwise)."""
     if name not in PRESET_NAMES:
         raise UsageError(f"unknown sim preset {name!r}: choose {' or '.join(PRESET_NAMES)}")
-    return name  # type: ignore[return-value]
+    return name
 
 
 @lru_cache(maxsize=1)
@@ -166,7 +166,9 @@ def paper_calibration() -> dict[str, Any]:
     for key, (low, high) in CALIBRATED_PARAMETERS.items():
         value = fitted.get(key)
         if not (isinstance(value, int | float) and math.isfinite(value) and low <= value <= high):
-            raise InputDataError(f"fitted {key} {value!r} is not in [{low}, {high}]", path=str(path))
+            raise InputDataError(
+                f"fitted {key} {value!r} is not in [{low}, {high}]", path=str(path)
+            )
     return data
 
 

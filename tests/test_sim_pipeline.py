@@ -243,7 +243,8 @@ def test_explicit_peak_force_and_progress_bar(
 
 @pytest.fixture(scope="module")
 def lift_runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
-    """refine (with a log) and paper over the stiff object and the Table I objects."""
+    """refine (with a log) and paper over the stiff object and the Table I objects, under the
+    table preset (the lift from the table, whose rigid limit these tests check)."""
     tmp = tmp_path_factory.mktemp("lift")
     catalog = tmp / "objects.csv"
     # the paper catalog's extra columns (name, interior) are not needed here
@@ -252,7 +253,8 @@ def lift_runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     out = {"catalog": catalog, "dir": tmp}
     for protocol in ("refine", "paper"):
         table, log = tmp / f"{protocol}.parquet", tmp / f"{protocol}.mcap"
-        res = run("lift", catalog, "--sim", "--protocol", protocol, "-o", table, "--log", log)
+        res = run("lift", catalog, "--sim", "--sim-preset", "table", "--protocol", protocol,
+                  "-o", table, "--log", log)  # fmt: skip
         assert res.exit_code == 0, res.stderr
         out[protocol] = read_table(table, "lift_results").set_index("object_id")
         out[f"{protocol}_log"] = log
@@ -275,8 +277,8 @@ def test_rigid_limit_follows_the_lift_acceleration_option(tmp_path: Path) -> Non
     catalog = tmp_path / "stiff.csv"
     catalog.write_text(HEADER + STIFF_ROW, encoding="utf-8")
     out = tmp_path / "lift.parquet"
-    res = run("lift", catalog, "--sim", "-o", out, "--lift-accel-m-s2", "5",
-              "--lift-speed-m-s", "0.4", "--hold-s", "0.3")  # fmt: skip
+    res = run("lift", catalog, "--sim", "--sim-preset", "table", "-o", out, "--lift-accel-m-s2",
+              "5", "--lift-speed-m-s", "0.4", "--hold-s", "0.3")  # fmt: skip
     assert res.exit_code == 0, res.stderr
     row = read_table(out, "lift_results").iloc[0]
     expected = (5.0 / GRAVITY_M_S2) * (GRAVITY_M_S2 + 5.0) / (2 * 0.5)

@@ -67,8 +67,8 @@ FRICTION_MU = 0.5
 #: Relative bracket width of each calibration search (finer than ``lift``'s default).
 SEARCH_TOLERANCE = 0.002
 #: The default grid: r log-spaced, a evenly spaced, over the bounds.
-GRID_R = tuple(float(x) for x in np.geomspace(0.03, 0.3, 7))
-GRID_A = (0.4, 0.7, 1.0, 1.3, 1.6)
+GRID_R = tuple(round(float(x), 5) for x in np.geomspace(0.03, 0.3, 5))
+GRID_A = (0.4, 0.8, 1.2, 1.6)
 
 
 @dataclass(frozen=True)
@@ -105,7 +105,9 @@ def published_points(density_g_cm3: float = CUBE_DENSITY_G_CM3) -> list[Point]:
         obj = CatalogObject.from_row(row)
         spec = obj.to_sim_spec()
         name = str(row.get("name", obj.object_id))
-        points.append(Point(name, spec, float(table2.loc[obj.object_id, "lift_force_simulation_n"])))
+        points.append(
+            Point(name, spec, float(table2.loc[obj.object_id, "lift_force_simulation_n"]))
+        )
     table3 = pd.read_csv(dataset_path("paper", "table3.csv"))
     for i, row in enumerate(table3.to_dict("records"), start=1):
         side = cube_side_cm(float(row["weight_n"]), density_g_cm3)
@@ -225,12 +227,13 @@ def fit_minimax(
     log_r = np.log(np.asarray(grid_r))
     method = "cubic" if min(len(grid_r), len(grid_a)) >= 4 else "linear"
     interps = [
-        RegularGridInterpolator((log_r, np.asarray(grid_a)), ratios[i], method=method)
-        for i in use
+        RegularGridInterpolator((log_r, np.asarray(grid_a)), ratios[i], method=method) for i in use
     ]
 
     def worst(x: np.ndarray) -> float:
-        xy = np.array([[min(max(x[0], log_r[0]), log_r[-1]), min(max(x[1], grid_a[0]), grid_a[-1])]])
+        xy = np.array(
+            [[min(max(x[0], log_r[0]), log_r[-1]), min(max(x[1], grid_a[0]), grid_a[-1])]]
+        )
         return float(max(abs(float(f(xy)[0]) - 1.0) for f in interps))
 
     # dense scan of the box, then Nelder-Mead from the best node (the max is not smooth)
@@ -275,7 +278,9 @@ def calibrate(
     fit = fit_minimax(ratios, grid_r, grid_a, everyone)
     say(f"fit: r = {fit.shear_damping_ratio:.4f}, a = {fit.lift_accel_m_s2:.4f} m/s^2 "
         f"(worst interpolated error {fit.worst_interpolated:.1%})")  # fmt: skip
-    loo_fits = [fit_minimax(ratios, grid_r, grid_a, [j for j in everyone if j != i]) for i in everyone]
+    loo_fits = [
+        fit_minimax(ratios, grid_r, grid_a, [j for j in everyone if j != i]) for i in everyone
+    ]
     preset = preset_for(fit.shear_damping_ratio, fit.lift_accel_m_s2)
     jobs = [(p.spec, preset) for p in points]
     jobs += [
@@ -333,12 +338,12 @@ def calibrate(
             }
         )
     record["worst_error"] = max(abs(q["error"]) for q in record["points"])
-    record["leave_one_out"]["worst"] = max(abs(q["error"]) for q in record["leave_one_out"]["points"])
+    record["leave_one_out"]["worst"] = max(
+        abs(q["error"]) for q in record["leave_one_out"]["points"]
+    )
     record["density_check"] = {
         "density_g_cm3": ALT_DENSITY_G_CM3,
-        "moves": {
-            points[i].label: round(alt[k] / ours[i] - 1.0, 4) for k, i in enumerate(cubes)
-        },
+        "moves": {points[i].label: round(alt[k] / ours[i] - 1.0, 4) for k, i in enumerate(cubes)},
     }
     record["density_check"]["worst_move"] = max(
         (abs(v) for v in record["density_check"]["moves"].values()), default=0.0
@@ -386,8 +391,8 @@ def format_record(record: dict[str, Any]) -> str:
                  f"{record['leave_one_out']['worst']:.1%}")  # fmt: skip
     dc = record["density_check"]
     lines.append(
-        f"Table III cubes at {dc['density_g_cm3']} g/cm^3 instead of {record['cube_density_g_cm3']}:"
-        f" worst move {dc['worst_move']:.1%}"
+        f"Table III cubes at {dc['density_g_cm3']} g/cm^3 instead of "
+        f"{record['cube_density_g_cm3']}: worst move {dc['worst_move']:.1%}"
     )
     if "convergence" in record:
         c = record["convergence"]

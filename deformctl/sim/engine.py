@@ -394,7 +394,9 @@ def build_model(
         base_x = lattice.positions_m.copy()
     base_x[:, 2] += lift_m
     dof_of, n_dof, palm_x, palm_z = palm_dof_map(lattice, gripped)
-    dof_mass = np.bincount(dof_of, weights=np.repeat(masses, 3), minlength=n_dof)
+    dof_mass: FloatArray = np.bincount(
+        dof_of, weights=np.repeat(masses, 3), minlength=n_dof
+    ).astype(np.float64)
     palm_x0 = np.zeros(2)
     if gripped:
         dof_mass[palm_x] += settings.palm_mass_kg
@@ -545,6 +547,8 @@ def run_model(
     palm_vz_m_s: FloatArray,
     *,
     gravity_scale: FloatArray | None = None,
+    stop_slip_m: float | None = None,
+    stop_from_step: int = 0,
     q: FloatArray | None = None,
     v: FloatArray | None = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -560,10 +564,13 @@ def run_model(
         gravity_scale: the fraction of the model's gravity acting at each step end, ``[n_steps +
             1]`` (1 throughout by default). A support that carries part of every particle's
             weight is modelled this way (see :func:`deformctl.sim.protocols.lift_attempt`).
+        stop_slip_m: stop early once the mean palm slip accumulated since the step before
+            ``stop_from_step`` exceeds this, m (None: run every step).
         q, v: initial DOF displacement (m) and velocity (m/s), ``[n_dof]``; zero by default.
 
     Returns:
-        final q, final v and the record matrix ``[n_steps, kernels.N_REC]``.
+        final q, final v and the record matrix ``[n_run, kernels.N_REC]`` (``n_run`` is
+        ``n_steps`` unless the run stopped early).
     """
     s = model.settings
     n_steps = int(force_cmd_n.shape[0]) - 1
@@ -608,6 +615,8 @@ def run_model(
         n_steps,
         s.nonlinear_springs,
         s.integrator == "bdf2",
+        -1.0 if stop_slip_m is None else float(stop_slip_m),
+        int(stop_from_step),
     )
     if model.hierarchy is not None:
         h = model.hierarchy

@@ -576,6 +576,18 @@ def _step_impulse(
 
 
 @njit(cache=True)
+def _slipped_past(rec: FloatArray, step: int, stop_slip: float, stop_from: int) -> bool:
+    """Whether the mean palm slip since step ``stop_from - 1`` exceeds ``stop_slip`` (m) at
+    ``step`` (never when ``stop_slip < 0``): the attempt's verdict can no longer change, since
+    the accumulated slip only grows."""
+    if stop_slip < 0.0 or step < stop_from:
+        return False
+    base_l = rec[stop_from - 1, REC_SLIP_L] if stop_from >= 1 else 0.0
+    base_r = rec[stop_from - 1, REC_SLIP_R] if stop_from >= 1 else 0.0
+    return 0.5 * (rec[step, REC_SLIP_L] - base_l + rec[step, REC_SLIP_R] - base_r) > stop_slip
+
+
+@njit(cache=True)
 def _predict(
     q: FloatArray,
     v: FloatArray,
@@ -744,6 +756,8 @@ def integrate(
     n_steps: int,
     nonlinear: bool,
     bdf2: bool,
+    stop_slip: float,
+    stop_from: int,
     pgs_iterations: int,
     pgs_tolerance: float,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -1067,6 +1081,8 @@ def integrate(
             palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, h_step, v_last, particle_mass,
             total_mass, slip, palm_z_acc, com_z0,
         )  # fmt: skip
+        if _slipped_past(rec, step, stop_slip, stop_from):
+            return q, v, rec[: step + 1]
     return q, v, rec
 
 
@@ -1143,6 +1159,8 @@ def integrate_iterative(
     n_steps: int,
     nonlinear: bool,
     bdf2: bool,
+    stop_slip: float,
+    stop_from: int,
     stats: IntArray,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """:func:`integrate` with a multigrid-preconditioned CG instead of the factor.
@@ -1469,4 +1487,6 @@ def integrate_iterative(
             palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, h_step, v_last, particle_mass,
             total_mass, slip, palm_z_acc, com_z0,
         )  # fmt: skip
+        if _slipped_past(rec, step, stop_slip, stop_from):
+            return q, v, rec[: step + 1]
     return q, v, rec

@@ -305,6 +305,7 @@ def lift_attempt(
     settings: SimSettings | None = None,
     criterion: SlipCriterion | None = None,
     release: SupportRelease | None = None,
+    stop_when_slipped: bool = True,
 ) -> TrialOutcome:
     """Grip ``spec`` with ``grip_force_n`` per palm, raise the palms along ``profile``, hold.
 
@@ -314,6 +315,10 @@ def lift_attempt(
     support gives way as the rise starts) and hold for ``profile.hold_s``. Slip is counted from
     the start of the rise. ``lifted`` is true when the slip (``criterion.measure``) is within
     ``criterion.tolerance_m`` and the object is off the table at the end.
+
+    With ``stop_when_slipped`` (default) and the contact slip measure, the attempt stops as soon
+    as its slip exceeds the tolerance: the verdict is then final (the accumulated slip only grows),
+    and the recorded series ends there.
     """
     s = settings or SimSettings()
     p = profile or LiftProfile()
@@ -327,6 +332,7 @@ def lift_attempt(
     rise = p.rise_m(spec)
     n_grip = max(1, round((s.grip_ramp_s + s.grip_settle_s) / dt))
     n_steps = n_grip + math.ceil(p.rise_time_s(rise) / dt) + round(p.hold_s / dt)
+    n_planned = n_steps
     t = np.arange(n_steps + 1, dtype=np.float64) * dt
     if s.grip_ramp_s > 0:
         force = grip_force_n * np.clip(t / s.grip_ramp_s, 0.0, 1.0)
@@ -334,8 +340,17 @@ def lift_attempt(
         force = np.full(n_steps + 1, float(grip_force_n))
     t_lift = n_grip * dt
     palm_vz = p.velocity_m_s(t - t_lift, rise)
-    _, _, rec = run_model(model, force, palm_vz, gravity_scale=r.gravity_scale(t, t_lift))
+    stop = c.tolerance_m if stop_when_slipped and c.measure == "contact" else None
+    _, _, rec = run_model(
+        model,
+        force,
+        palm_vz,
+        gravity_scale=r.gravity_scale(t, t_lift),
+        stop_slip_m=stop,
+        stop_from_step=n_grip,
+    )
     _check_finite(rec, "lift attempt", spec)
+    n_steps = rec.shape[0]
     slip_l = rec[:, K.REC_SLIP_L] - rec[n_grip - 1, K.REC_SLIP_L]
     slip_r = rec[:, K.REC_SLIP_R] - rec[n_grip - 1, K.REC_SLIP_R]
     slip = np.where(np.arange(n_steps) >= n_grip - 1, 0.5 * (slip_l + slip_r), 0.0)
@@ -367,6 +382,7 @@ def lift_attempt(
         "rise_m": rise,
         "profile": p.as_dict(),
         "release": r.as_dict(),
+        "stopped_early": n_steps < n_planned,
         "slip_measure": c.measure,
         "min_particle_z_m": float(rec[:, K.REC_MIN_Z].min()),
         "max_palm_penetration_m": float(rec[:, K.REC_PENETRATION].max()),
