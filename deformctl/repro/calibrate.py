@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import multiprocessing
 import os
 import sys
@@ -54,7 +53,7 @@ import pandas as pd
 from deformctl import __version__
 from deformctl.catalog import CatalogObject
 from deformctl.errors import DeformctlError
-from deformctl.physics import rigid_grip_force_n
+from deformctl.physics import damping_ratio, rigid_grip_force_n
 from deformctl.presets import CALIBRATED_PARAMETERS, PAPER_FIXED, SimPreset, paper_preset
 from deformctl.repro import dataset_path
 from deformctl.sim.objects import ObjectSpec
@@ -86,14 +85,40 @@ class Point:
 
     @property
     def zeta(self) -> float:
-        """The lumped damping ratio lambda / (2 sqrt(D m)) (SI units, m = W / g)."""
-        m = self.spec.weight_n / GRAVITY_M_S2
-        return self.spec.damping_ns_per_m / (2.0 * math.sqrt(self.spec.stiffness_n_per_m * m))
+        """The lumped damping ratio (:func:`deformctl.physics.damping_ratio`)."""
+        s = self.spec
+        return float(damping_ratio(s.weight_n, s.stiffness_n_per_cm, s.damping_ns_per_cm))
 
 
 def cube_side_cm(weight_n: float, density_g_cm3: float) -> float:
     """Side of a cube of weight W and the given density, cm."""
     return float((weight_n / GRAVITY_M_S2 * 1000.0 / density_g_cm3) ** (1.0 / 3.0))
+
+
+def table3_cube_catalog(density_g_cm3: float = CUBE_DENSITY_G_CM3) -> pd.DataFrame:
+    """Table III's nine (W, D, λ) inputs as an object catalog: cubes of ``density_g_cm3``, μ 0.5.
+
+    ``datasets/paper/table3_cubes.csv`` is this catalog at 1 g/cm³ (checked by a test), so
+    ``make reproduce`` can run Table III's inputs through ``deformctl lift --sim``.
+    """
+    table3 = pd.read_csv(dataset_path("paper", "table3.csv"))
+    rows = []
+    for i, row in enumerate(table3.to_dict("records"), start=1):
+        side = round(cube_side_cm(float(row["weight_n"]), density_g_cm3), 4)
+        rows.append(
+            {
+                "object_id": f"T3-{i}",
+                "name": f"Table III row {i}",
+                "size_x_cm": side,
+                "size_y_cm": side,
+                "size_z_cm": side,
+                "weight_n": float(row["weight_n"]),
+                "friction_mu": FRICTION_MU,
+                "material_stiffness_n_per_cm": float(row["deformability_n_per_cm"]),
+                "material_damping_ns_per_cm": float(row["damping_ns_per_cm"]),
+            }
+        )
+    return pd.DataFrame(rows)
 
 
 def published_points(density_g_cm3: float = CUBE_DENSITY_G_CM3) -> list[Point]:
@@ -109,17 +134,10 @@ def published_points(density_g_cm3: float = CUBE_DENSITY_G_CM3) -> list[Point]:
             Point(name, spec, float(table2.loc[obj.object_id, "lift_force_simulation_n"]))
         )
     table3 = pd.read_csv(dataset_path("paper", "table3.csv"))
-    for i, row in enumerate(table3.to_dict("records"), start=1):
-        side = cube_side_cm(float(row["weight_n"]), density_g_cm3)
-        spec = ObjectSpec(
-            object_id=f"T3-{i}",
-            size_cm=(side, side, side),
-            weight_n=float(row["weight_n"]),
-            friction_mu=FRICTION_MU,
-            stiffness_n_per_cm=float(row["deformability_n_per_cm"]),
-            damping_ns_per_cm=float(row["damping_ns_per_cm"]),
-        )
-        points.append(Point(f"T3-{i}", spec, float(row["lift_force_expected_n"])))
+    cubes = table3_cube_catalog(density_g_cm3)
+    for row, cube in zip(table3.to_dict("records"), cubes.to_dict("records"), strict=True):
+        spec = CatalogObject.from_row(cube).to_sim_spec()
+        points.append(Point(spec.object_id, spec, float(row["lift_force_expected_n"])))
     return points
 
 

@@ -192,9 +192,12 @@ def test_an_attempt_stops_once_it_has_slipped_with_the_same_verdict() -> None:
     kw = {"profile": PROFILE, "settings": MODEL, "criterion": STRICT, "release": STEP}
     short = lift_attempt(SAND, 1.1 * fw, **kw)  # type: ignore[arg-type]
     full = lift_attempt(SAND, 1.1 * fw, stop_when_slipped=False, **kw)  # type: ignore[arg-type]
-    assert not short.lifted and not full.lifted
-    assert short.details["stopped_early"] and not full.details["stopped_early"]
-    assert short.series is not None and full.series is not None
+    assert not short.lifted
+    assert not full.lifted
+    assert short.details["stopped_early"]
+    assert not full.details["stopped_early"]
+    assert short.series is not None
+    assert full.series is not None
     n = short.series.time_s.size
     assert n < full.series.time_s.size
     assert np.array_equal(short.series.slip_m, full.series.slip_m[:n])
@@ -205,7 +208,8 @@ def test_attempts_are_bit_identical() -> None:
     kw = {"profile": PROFILE, "settings": MODEL, "criterion": STRICT, "release": STEP}
     a = lift_attempt(SAND, 1.5 * f_w_n(SAND), **kw)  # type: ignore[arg-type]
     b = lift_attempt(SAND, 1.5 * f_w_n(SAND), **kw)  # type: ignore[arg-type]
-    assert a.series is not None and b.series is not None
+    assert a.series is not None
+    assert b.series is not None
     assert np.array_equal(a.series.friction_force_n, b.series.friction_force_n)
     assert np.array_equal(a.series.object_com_z_m, b.series.object_com_z_m)
 
