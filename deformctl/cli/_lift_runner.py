@@ -8,15 +8,18 @@ chosen are refused by name.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from deformctl.cli._common import finish_sweep
 from deformctl.cli._options import HEAVY_DEFAULTS, default
 from deformctl.errors import UsageError
 from deformctl.lift.runners.rig import DEFAULT_RIG_TIMEOUT_S, SlipFromFrames, rig_runner_factory
+from deformctl.lift.search import LiftSearch
 from deformctl.lift.stage import RunnerFactory
+from deformctl.parallel import SweepOptions
 
 if TYPE_CHECKING:  # pragma: no cover - the simulator is imported when --sim is given
     from deformctl.presets import SimPreset
@@ -184,3 +187,34 @@ def choose_runner(
             else "choose exactly one trial runner (--rig or --sim)"
         )
     return chosen[0]
+
+
+def lift_dataset(
+    catalog: str,
+    output: str,
+    search: LiftSearch,
+    *,
+    parts: SimPreset | None,
+    log: str | None,
+    sweep: SweepOptions,
+    object_ids: Sequence[str] | None,
+    force: bool,
+) -> None:
+    """``lift --sim -o DIR/``: the sweep (:func:`deformctl.lift.runners.sim.lift_sweep`).
+
+    Raises:
+        UsageError: no ``--sim``, or ``--log`` (each part has its log).
+    """
+    if parts is None:
+        raise UsageError("a dataset directory output (-o DIR/) needs --sim")
+    if log is not None:
+        raise UsageError("--log is not used with a dataset directory output (see DIR/part-*.mcap)")
+    from deformctl.lift.runners.sim import LiftTask, lift_sweep
+
+    task = LiftTask(
+        parts, search.protocol, search.growth, search.tolerance_rel, search.max_attempts
+    )
+    summary = lift_sweep(
+        catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
+    )
+    finish_sweep(summary, "lift")

@@ -27,7 +27,7 @@ from rich.console import Console
 
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli import _options as opt
-from deformctl.cli._common import finish_sweep, progress_bar, translate_errors
+from deformctl.cli._common import progress_bar, translate_errors
 from deformctl.cli._lift_frames import frames_judge
 from deformctl.cli._lift_runner import (
     DebugDir,
@@ -44,13 +44,25 @@ from deformctl.cli._lift_runner import (
     SlipCriterionOption,
     SlipToleranceM,
     choose_runner,
+    lift_dataset,
     sim_parts,
 )
-from deformctl.errors import SearchError, UsageError
+from deformctl.cli._lift_start import (
+    Coefficients,
+    StartInterpolate,
+    StartMargin,
+    StartModel,
+    StartTable,
+    report_run,
+    start_seed,
+    warn,
+)
+from deformctl.errors import UsageError
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
     DEFAULT_MAX_ATTEMPTS,
     DEFAULT_TOLERANCE_REL,
+    LiftSearch,
     SearchProtocol,
     validate_search_options,
 )
@@ -127,6 +139,11 @@ def lift(
     max_attempts: Annotated[
         int, typer.Option("--max-attempts", help="Most attempts per object (>= 1).")
     ] = DEFAULT_MAX_ATTEMPTS,
+    start_model: StartModel = None,
+    start_table: StartTable = None,
+    start_interpolate: StartInterpolate = None,
+    start_margin: StartMargin = None,
+    coefficients: Coefficients = None,
     force: opt.Force = False,
     sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
@@ -148,6 +165,11 @@ def lift(
     (--workers N local processes, or --scheduler tcp://HOST:PORT of a Dask cluster) into
     DIR/part-*.parquet with each part's attempts in DIR/part-*.mcap; --resume completes an
     interrupted run. An object that fails is recorded in DIR/_failures/ and the rest go on.
+
+    With --start-model MODEL (or --start-table INDEX) each search starts at the predicted L_f ×
+    --start-margin instead of at F_w, goes down (or up by --growth) until the outcome flips and
+    bisects to --tolerance: the same L_f as refine in fewer attempts. D and λ come from
+    --coefficients (or the catalog); an object outside the training range starts at F_w.
 
     Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
     -o lift.parquet --log lift.mcap
@@ -183,32 +205,18 @@ def lift(
         protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
     )
     object_ids = opt.parse_object_ids(objects)
+    seed = start_seed(start_model, start_table, start_interpolate, start_margin, coefficients,
+                      protocol=protocol, dataset=dataset)  # fmt: skip
     if dataset:
-        if parts is None:
-            raise UsageError("a dataset directory output (-o DIR/) needs --sim")
-        if log is not None:
-            raise UsageError(
-                "--log is not used with a dataset directory output (see DIR/part-*.mcap)"
-            )
-        from deformctl.lift.runners.sim import LiftTask, lift_sweep
-
-        task = LiftTask(parts, protocol, growth, tolerance, max_attempts)
-        summary = lift_sweep(catalog, task, output=output, sweep=sweep, object_ids=object_ids,
-                             force=force)  # fmt: skip
-        finish_sweep(summary, "lift")
+        search = LiftSearch(protocol, growth, tolerance, max_attempts)
+        lift_dataset(catalog, output, search, parts=parts, log=log, sweep=sweep,
+                     object_ids=object_ids, force=force)  # fmt: skip
         return
     with progress_bar(Console(stderr=True), "lift") as progress:
         run = lift_catalog_files(
             catalog, factory, output=output, log=log, object_ids=object_ids,
             protocol=cast(SearchProtocol, protocol),  # checked by validate_search_options
             growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts,
-            progress=progress, force=force,
+            progress=progress, force=force, seed=seed, warn=warn,
         )  # fmt: skip
-    if not is_stdio(output) and (log is None or not is_stdio(log)):
-        aborted = {f.object_id for f in run.failures if f.aborted}  # their line is the error
-        for result in run.results:
-            if result.object_id not in aborted:
-                typer.echo(result.message)
-    message = run.error_message()
-    if message is not None:
-        raise SearchError(message)
+    report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)))

@@ -29,6 +29,16 @@ Two protocols:
 Both start at ``F_w``; the search never tries a force below it (the paper defines ``L_f >= F_w``).
 If ``F_w`` itself lifts, ``L_f = F_w`` with bracket ``(F_w, F_w)`` and ``converged = True``.
 
+A third protocol starts from a *predicted* L_f instead (the paper's closing proposal: use the
+trained network's answer and lift only to correct its error):
+
+``seeded`` (:func:`find_min_lift_force_seeded`; ``lift --start-model`` / ``--start-table``)
+    First attempt at ``max(F_w, prediction * margin)``; if it lifts, step down (first to
+    ``prediction / margin``) until one slips, never below ``F_w``; if it slips, step up until
+    one lifts; the steps grow from ``margin**2`` to ``growth`` (then the paper's ramp); then
+    bisect exactly as ``refine`` does. Same tolerance, same rule for what is reported, so its
+    L_f agrees with ``refine``'s within ``tolerance_rel``; only the number of attempts differs.
+
 Rule for a search that runs out of attempts (``max_attempts`` counts every trial, bracketing and
 bisection alike):
 
@@ -62,35 +72,44 @@ Example:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Literal, Protocol
+from dataclasses import dataclass, field
+from typing import Any, Literal, Protocol
 
 from deformctl.catalog import rigid_grip_force_n
 from deformctl.errors import DeformctlError, RigError, SearchError, UsageError
 from deformctl.series import TrialOutcome
 
-SearchProtocol = Literal["refine", "paper"]
+SearchProtocol = Literal["refine", "paper", "seeded"]
+#: The protocols ``lift --protocol`` chooses from; ``seeded`` is chosen by a start force
+#: (:func:`find_min_lift_force_seeded`, ``lift --start-model`` / ``--start-table``).
 PROTOCOLS: tuple[SearchProtocol, ...] = ("refine", "paper")
 
 DEFAULT_GROWTH = 1.2  #: the paper's +20 % per attempt
 DEFAULT_TOLERANCE_REL = 0.005  #: refine stops when (high - low) / high <= 0.5 %
 DEFAULT_MAX_ATTEMPTS = 50  #: covers F_w * 1.2**40 (about 1500 x F_w) plus the bisection
+#: seeded: the first attempt is at the predicted L_f times this (chosen by measurement:
+#: ``bench/bench_seeded.py``, README "Starting from the model's prediction").
+DEFAULT_START_MARGIN = 1.005
 
 __all__ = [
     "DEFAULT_GROWTH",
     "DEFAULT_MAX_ATTEMPTS",
+    "DEFAULT_START_MARGIN",
     "DEFAULT_TOLERANCE_REL",
     "PROTOCOLS",
     "AttemptError",
     "LiftAttempt",
+    "LiftSearch",
     "LiftSearchResult",
     "RigSearchAbortedError",
     "SearchAbortedError",
     "SearchProtocol",
     "TrialRunner",
     "find_min_lift_force",
+    "find_min_lift_force_seeded",
     "rigid_grip_force_n",
     "validate_search_options",
+    "validate_start_margin",
 ]
 
 
@@ -115,6 +134,17 @@ class TrialRunner(Protocol):
     def __call__(self, grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
         """Run one attempt at ``grip_force_n`` (N) and report what happened."""
         ...
+
+
+@dataclass(frozen=True)
+class LiftSearch:
+    """The search options that do not depend on the object (checked by
+    :func:`validate_search_options`)."""
+
+    protocol: str = "refine"
+    growth: float = DEFAULT_GROWTH
+    tolerance_rel: float = DEFAULT_TOLERANCE_REL
+    max_attempts: int = DEFAULT_MAX_ATTEMPTS
 
 
 class AttemptError(DeformctlError):
@@ -166,7 +196,16 @@ class LiftSearchResult:
         weight_n: the object's weight W, N.
         friction_mu: the palm/object friction coefficient mu.
         max_attempts: the attempt budget the search had.
-        ramp_attempts: how many of ``trials`` belong to the paper ramp (the rest are bisection).
+        ramp_attempts: how many of ``trials`` belong to the paper ramp (the rest are bisection);
+            for ``seeded``, the attempts before the bisection (the start, then down or up).
+        predicted_lift_force_n: the L_f a model or an index table predicted, N, when the search
+            was given a start (``seeded``, or a fallback to F_w); NaN otherwise.
+        start_force_n: the force of the first attempt, N, when a start was given:
+            ``max(F_w, predicted * margin)``, or F_w after a fallback; NaN otherwise.
+        start_in_training_range: whether the object's (W, D, λ) lay inside the model's training
+            range (or the table's attribute range); False means the search fell back to the
+            ``refine`` ramp from F_w. None when no start was given.
+        start_source: ``"model"`` or ``"table"`` when a start was given, else None.
     """
 
     object_id: str
@@ -185,6 +224,16 @@ class LiftSearchResult:
     friction_mu: float = math.nan
     max_attempts: int = DEFAULT_MAX_ATTEMPTS
     ramp_attempts: int = 0
+    predicted_lift_force_n: float = math.nan
+    start_force_n: float = math.nan
+    start_in_training_range: bool | None = None
+    start_source: str | None = None
+
+    @property
+    def seeded(self) -> bool:
+        """True when the search was given a start (a model's or a table's L_f), even one that
+        fell back to F_w (``start_in_training_range = False``)."""
+        return self.start_source is not None
 
     @property
     def lifted(self) -> bool:
@@ -215,8 +264,10 @@ class LiftSearchResult:
         """The scalar fields as a JSON-friendly dict (no trials), keyed like the lift_results table.
 
         The keys shared with ``schemas/lift_results.columns.json`` come first and carry the same
-        names; ``growth``, ``max_attempts``, ``last_force_n`` and ``message`` follow. Values are
-        the result's own (an unbounded bracket keeps ``inf``); :meth:`table_row` makes a row.
+        names; ``growth``, ``max_attempts``, ``last_force_n`` and ``message`` follow, then, for a
+        search given a start (:attr:`seeded`), ``predicted_lift_force_n``, ``start_force_n``,
+        ``start_in_training_range`` and ``start_source``. Values are the result's own (an
+        unbounded bracket keeps ``inf``); :meth:`table_row` makes a row.
         """
         return {
             "object_id": self.object_id,
@@ -235,6 +286,16 @@ class LiftSearchResult:
             "max_attempts": self.max_attempts,
             "last_force_n": self.last_force_n,
             "message": self.message,
+            **(
+                {
+                    "predicted_lift_force_n": self.predicted_lift_force_n,
+                    "start_force_n": self.start_force_n,
+                    "start_in_training_range": self.start_in_training_range,
+                    "start_source": self.start_source,
+                }
+                if self.seeded
+                else {}
+            ),
         }
 
     def table_row(self, *, runner: str, error: str | None = None) -> dict[str, object]:
@@ -335,6 +396,15 @@ class _Search:
     ramp_attempts: int = 0
     low_n: float = math.nan  # largest force that slipped below high_n
     high_n: float = math.nan  # smallest force that lifted
+    seed: dict[str, Any] = field(default_factory=dict)  # the result's start_* fields
+
+    @property
+    def obj(self) -> str:
+        return f"object {self.object_id!r}"
+
+    @property
+    def out_of_attempts(self) -> bool:
+        return len(self.trials) >= self.max_attempts
 
     def result(self, *, converged: bool, message: str) -> LiftSearchResult:
         lifted = math.isfinite(self.high_n)
@@ -361,7 +431,91 @@ class _Search:
             friction_mu=self.friction_mu,
             max_attempts=self.max_attempts,
             ramp_attempts=self.ramp_attempts,
+            **self.seed,
         )
+
+    def attempt(self, runner: TrialRunner, force_n: float) -> bool:
+        """Run one trial at ``force_n`` and book it; True when it lifted."""
+        index = len(self.trials)
+        try:
+            outcome = runner(force_n, index)
+        except DeformctlError as err:
+            kept = f"{index} attempt{'' if index == 1 else 's'} kept"
+            if isinstance(err, AttemptError):  # names the object, attempt and force itself
+                detail = str(err)
+            else:
+                detail = f"{self.obj}: attempt {index} at {force_n:.6g} N: {err}"
+            why = f"search aborted, {kept}: {detail}"
+            partial = self.result(converged=False, message=why)
+            cls = RigSearchAbortedError if isinstance(err, RigError) else SearchAbortedError
+            raise cls(why, partial=partial) from err
+        if not isinstance(outcome, TrialOutcome):
+            raise TypeError(f"trial runner returned {type(outcome).__name__}, not TrialOutcome")
+        self.trials.append(outcome)
+        if outcome.lifted:
+            self.high_n = force_n if not math.isfinite(self.high_n) else min(self.high_n, force_n)
+        elif not math.isfinite(self.low_n) or force_n > self.low_n:
+            self.low_n = force_n
+        return bool(outcome.lifted)
+
+    def ramp_up(self, runner: TrialRunner, start_n: float) -> LiftSearchResult | None:
+        """The paper's ramp ``start * growth**k``, k = 0, 1, ... until a force lifts.
+
+        Returns None when a force lifted, else the (unconverged) result to return.
+        """
+        k = 0
+        while True:
+            try:
+                force_n = start_n * self.growth**k
+            except OverflowError:
+                force_n = math.inf
+            if not math.isfinite(force_n):  # only with a huge budget and growth
+                return self.result(
+                    converged=False,
+                    message=(
+                        f"{self.obj}: did not lift; the ramp overflowed after "
+                        f"{len(self.trials)} attempts"
+                    ),
+                )
+            lifted = self.attempt(runner, force_n)
+            self.ramp_attempts = len(self.trials)
+            if lifted:
+                return None
+            if self.out_of_attempts:
+                return self.result(
+                    converged=False,
+                    message=(
+                        f"{self.obj}: did not lift within {self.max_attempts} attempts; "
+                        f"last force tried {force_n:.6g} N slipped (F_w = {self.f_w_n:.6g} N)"
+                    ),
+                )
+            k += 1
+
+    def bisect(self, runner: TrialRunner) -> LiftSearchResult:
+        """Bisect (low slipped, high lifted) until ``(high - low) / high <= tolerance_rel``."""
+        if not math.isfinite(self.low_n):  # F_w lifted: nothing below it to try
+            return self.result(converged=True, message=_found_message(self))
+        while (self.high_n - self.low_n) / self.high_n > self.tolerance_rel:
+            if self.out_of_attempts:
+                return self.result(
+                    converged=False,
+                    message=(
+                        f"{self.obj}: bracket [{self.low_n:.6g}, {self.high_n:.6g}] N did not "
+                        f"reach tolerance {self.tolerance_rel:g} within {self.max_attempts} "
+                        f"attempts; smallest force that lifted {self.high_n:.6g} N"
+                    ),
+                )
+            mid_n = 0.5 * (self.low_n + self.high_n)
+            if not self.low_n < mid_n < self.high_n:  # the bracket is as narrow as floats allow
+                return self.result(
+                    converged=False,
+                    message=(
+                        f"{self.obj}: tolerance {self.tolerance_rel:g} is below floating-point "
+                        f"resolution at {self.high_n:.6g} N"
+                    ),
+                )
+            self.attempt(runner, mid_n)
+        return self.result(converged=True, message=_found_message(self))
 
 
 def find_min_lift_force(
@@ -407,7 +561,156 @@ def find_min_lift_force(
         max_attempts=max_attempts,
         object_id=object_id,
     )
-    s = _Search(
+    s = _new_search(object_id, weight_n, friction_mu, protocol, growth, tolerance_rel, max_attempts)
+    # Phase 1: the paper's ramp F_w * growth**k until a force lifts.
+    failed = s.ramp_up(runner, s.f_w_n)
+    if failed is not None:
+        return failed
+    if s.protocol == "paper":
+        return s.result(converged=True, message=_found_message(s))
+    # Phase 2 (refine): bisect the last ramp bracket (low slipped, high lifted).
+    return s.bisect(runner)
+
+
+def validate_start_margin(margin: float) -> None:
+    """Check a seeded search's start margin.
+
+    Raises:
+        UsageError: ``margin`` is not a finite number >= 1 (exit 2).
+    """
+    if isinstance(margin, bool) or not (
+        isinstance(margin, int | float) and math.isfinite(margin) and margin >= 1
+    ):
+        raise UsageError(f"start margin must be a finite number >= 1, got {margin!r}")
+
+
+def find_min_lift_force_seeded(
+    runner: TrialRunner,
+    *,
+    weight_n: float,
+    friction_mu: float,
+    predicted_lift_force_n: float,
+    margin: float = DEFAULT_START_MARGIN,
+    growth: float = DEFAULT_GROWTH,
+    tolerance_rel: float = DEFAULT_TOLERANCE_REL,
+    max_attempts: int = DEFAULT_MAX_ATTEMPTS,
+    object_id: str = "object",
+    source: str = "model",
+) -> LiftSearchResult:
+    """The minimum lifting force, searched from a predicted L_f instead of from F_w.
+
+    The paper's closing proposal: use the learnt L_f and keep iterative lifting only to correct
+    its error. With ``P = predicted_lift_force_n`` and ``m = margin``:
+
+    1. the first attempt is at ``S = max(F_w, P * m)``: a little above the prediction, so a good
+       prediction lifts at once;
+    2. if ``S`` lifts, the search goes **down** until one slips, never below F_w (if F_w lifts,
+       ``L_f = F_w`` as in the other protocols); if ``S`` slips, it goes **up** until one lifts.
+       The first step is ``m**2`` (down: to ``P / m``, the other edge of the band the margin
+       puts around the prediction), and each further step squares the last one, up to
+       ``growth``: ``m**2, m**4, m**8, ...`` then ``÷ growth`` / ``× growth`` as the paper's
+       ramp (the first step is at least one tolerance, ``1 / (1 - tolerance_rel)``, a hair less). A
+       prediction just outside the band so costs one step more, not a 20 % bracket; one far
+       off is found about as fast as by the paper's ramp;
+    3. then it bisects the bracket exactly as ``refine`` does, to ``tolerance_rel``, and reports
+       the smallest force that was tried and lifted.
+
+    So with the same tolerance the answer agrees with ``refine``'s within ``tolerance_rel`` (both
+    brackets hold the threshold), and when the prediction is within the margin the search costs
+    2 attempts plus ``ceil(log2((1 - m**-2) / tolerance_rel))`` bisections instead of the ramp
+    from F_w plus ``log2((growth - 1) / tolerance_rel)``. The result is a
+    :class:`LiftSearchResult` with ``protocol = "seeded"``, ``predicted_lift_force_n``,
+    ``start_force_n``, ``start_in_training_range = True`` and ``start_source``; the rule for a
+    search that runs out of attempts is the module's. The runner sees only grip forces.
+
+    Args:
+        runner, weight_n, friction_mu, growth, tolerance_rel, max_attempts, object_id: as for
+            :func:`find_min_lift_force`.
+        predicted_lift_force_n: the predicted L_f, N (finite, > 0).
+        margin: the first attempt is at the prediction times this (>= 1).
+        source: what predicted it (``"model"``, ``"table"``), recorded as ``start_source``.
+
+    Raises:
+        UsageError: a parameter out of range (one-line message).
+        SearchAbortedError: as for :func:`find_min_lift_force`.
+
+    Example:
+        >>> from deformctl.series import TrialOutcome
+        >>> def runner(grip_force_n: float, attempt_index: int) -> TrialOutcome:
+        ...     return TrialOutcome(grip_force_n, grip_force_n >= 7.0, 0.0)
+        >>> r = find_min_lift_force_seeded(runner, weight_n=5.0, friction_mu=0.5,
+        ...                                predicted_lift_force_n=7.05, margin=1.02)
+        >>> r.attempts, r.converged, 7.0 <= r.lift_force_n <= 7.0 / (1 - 0.005)
+        (5, True, True)
+    """
+    _validate(
+        weight_n=weight_n,
+        friction_mu=friction_mu,
+        protocol="refine",
+        growth=growth,
+        tolerance_rel=tolerance_rel,
+        max_attempts=max_attempts,
+        object_id=object_id,
+    )
+    validate_start_margin(margin)
+    where = f"object {object_id!r}: "
+    if isinstance(predicted_lift_force_n, bool) or not (
+        isinstance(predicted_lift_force_n, int | float)
+        and math.isfinite(predicted_lift_force_n)
+        and predicted_lift_force_n > 0
+    ):
+        raise UsageError(
+            f"{where}predicted lifting force must be a finite number > 0 N, "
+            f"got {predicted_lift_force_n!r}"
+        )
+    s = _new_search(object_id, weight_n, friction_mu, "seeded", growth, tolerance_rel, max_attempts)
+    start_n = max(s.f_w_n, float(predicted_lift_force_n) * float(margin))
+    s.seed = {
+        "predicted_lift_force_n": float(predicted_lift_force_n),
+        "start_force_n": start_n,
+        "start_in_training_range": True,
+        "start_source": source,
+    }
+    s.attempt(runner, start_n)
+    # the smallest step: one that leaves a bracket within the tolerance (with room for rounding)
+    step = min(s.growth, max(float(margin) ** 2, 1 / (1 - 0.999 * s.tolerance_rel)))
+    # Down while it lifts (never below F_w), or up while it slips, until the outcome flips.
+    while not (math.isfinite(s.low_n) and math.isfinite(s.high_n)):
+        going_down = math.isfinite(s.high_n)
+        if going_down and s.high_n <= s.f_w_n:  # F_w lifted: L_f = F_w
+            break
+        force_n = max(s.f_w_n, s.high_n / step) if going_down else s.low_n * step
+        if s.out_of_attempts or not math.isfinite(force_n):
+            last = s.trials[-1].grip_force_n
+            why = (
+                f"every force down to {s.high_n:.6g} N lifted; no bracket yet"
+                if going_down
+                else f"did not lift; last force tried {last:.6g} N slipped"
+            )
+            return s.result(
+                converged=False,
+                message=(
+                    f"{s.obj}: {why} after {len(s.trials)} attempts (of {max_attempts}; "
+                    f"F_w = {s.f_w_n:.6g} N)"
+                ),
+            )
+        s.attempt(runner, force_n)
+        s.ramp_attempts = len(s.trials)
+        step = min(s.growth, step * step)
+    s.ramp_attempts = len(s.trials)
+    return s.bisect(runner)
+
+
+def _new_search(
+    object_id: str,
+    weight_n: float,
+    friction_mu: float,
+    protocol: SearchProtocol,
+    growth: float,
+    tolerance_rel: float,
+    max_attempts: int,
+) -> _Search:
+    return _Search(
         object_id=object_id,
         weight_n=float(weight_n),
         friction_mu=float(friction_mu),
@@ -418,87 +721,18 @@ def find_min_lift_force(
         max_attempts=max_attempts,
         trials=[],
     )
-    obj = f"object {object_id!r}"
-
-    def attempt(force_n: float) -> bool:
-        index = len(s.trials)
-        try:
-            outcome = runner(force_n, index)
-        except DeformctlError as err:
-            kept = f"{index} attempt{'' if index == 1 else 's'} kept"
-            if isinstance(err, AttemptError):  # names the object, attempt and force itself
-                detail = str(err)
-            else:
-                detail = f"{obj}: attempt {index} at {force_n:.6g} N: {err}"
-            why = f"search aborted, {kept}: {detail}"
-            partial = s.result(converged=False, message=why)
-            cls = RigSearchAbortedError if isinstance(err, RigError) else SearchAbortedError
-            raise cls(why, partial=partial) from err
-        if not isinstance(outcome, TrialOutcome):
-            raise TypeError(f"trial runner returned {type(outcome).__name__}, not TrialOutcome")
-        s.trials.append(outcome)
-        if outcome.lifted:
-            s.high_n = force_n if not math.isfinite(s.high_n) else min(s.high_n, force_n)
-        elif not math.isfinite(s.low_n) or force_n > s.low_n:
-            s.low_n = force_n
-        return bool(outcome.lifted)
-
-    # Phase 1: the paper's ramp F_w * growth**k until a force lifts.
-    k = 0
-    while True:
-        try:
-            force_n = s.f_w_n * s.growth**k
-        except OverflowError:
-            force_n = math.inf
-        if not math.isfinite(force_n):  # only with a huge budget and growth
-            return s.result(
-                converged=False,
-                message=f"{obj}: did not lift; the ramp overflowed after {len(s.trials)} attempts",
-            )
-        lifted = attempt(force_n)
-        s.ramp_attempts = len(s.trials)
-        if lifted:
-            break
-        if len(s.trials) >= max_attempts:
-            return s.result(
-                converged=False,
-                message=(
-                    f"{obj}: did not lift within {max_attempts} attempts; "
-                    f"last force tried {force_n:.6g} N slipped (F_w = {s.f_w_n:.6g} N)"
-                ),
-            )
-        k += 1
-
-    if s.protocol == "paper" or len(s.trials) == 1:
-        return s.result(converged=True, message=_found_message(obj, s))
-
-    # Phase 2 (refine): bisect the last ramp bracket (low slipped, high lifted).
-    while (s.high_n - s.low_n) / s.high_n > s.tolerance_rel:
-        if len(s.trials) >= max_attempts:
-            return s.result(
-                converged=False,
-                message=(
-                    f"{obj}: bracket [{s.low_n:.6g}, {s.high_n:.6g}] N did not reach "
-                    f"tolerance {s.tolerance_rel:g} within {max_attempts} attempts; "
-                    f"smallest force that lifted {s.high_n:.6g} N"
-                ),
-            )
-        mid_n = 0.5 * (s.low_n + s.high_n)
-        if not s.low_n < mid_n < s.high_n:  # the bracket is as narrow as floats allow
-            return s.result(
-                converged=False,
-                message=(
-                    f"{obj}: tolerance {s.tolerance_rel:g} is below floating-point resolution "
-                    f"at {s.high_n:.6g} N"
-                ),
-            )
-        attempt(mid_n)
-    return s.result(converged=True, message=_found_message(obj, s))
 
 
-def _found_message(obj: str, s: _Search) -> str:
+def _found_message(s: _Search) -> str:
     low = s.low_n if math.isfinite(s.low_n) else s.high_n
+    seeded = ""
+    if s.protocol == "seeded":
+        seeded = (
+            f" from the {s.seed['start_source']}'s {s.seed['predicted_lift_force_n']:.6g} N, "
+            f"first attempt {s.seed['start_force_n']:.6g} N"
+        )
     return (
-        f"{obj}: lifted at L_f = {s.high_n:.6g} N (F_w = {s.f_w_n:.6g} N, "
-        f"bracket [{low:.6g}, {s.high_n:.6g}] N) after {len(s.trials)} attempts ({s.protocol})"
+        f"{s.obj}: lifted at L_f = {s.high_n:.6g} N (F_w = {s.f_w_n:.6g} N, "
+        f"bracket [{low:.6g}, {s.high_n:.6g}] N) after {len(s.trials)} attempts "
+        f"({s.protocol}{seeded})"
     )

@@ -25,11 +25,12 @@ Example:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
@@ -54,8 +55,12 @@ from deformctl.lift.search import (
     SearchProtocol,
     TrialRunner,
     find_min_lift_force,
+    find_min_lift_force_seeded,
     validate_search_options,
 )
+
+if TYPE_CHECKING:  # pragma: no cover - typing only; the seed sources import sklearn when used
+    from deformctl.lift.seeded import StartEstimate, StartSeed
 
 __all__ = [
     "CatalogLiftResult",
@@ -68,6 +73,8 @@ __all__ = [
 
 LiftProgress = Callable[[str, int, int], None]
 """``progress(object_id, objects_done, objects_total)``, called after each object of a catalog."""
+Warn = Callable[[str], None]
+"""``warn(line)``: one warning line (no ``warning:`` prefix), e.g. a start that fell back to F_w."""
 
 
 def _no_row_fields(obj: CatalogObject) -> Mapping[str, object]:
@@ -96,6 +103,9 @@ class RunnerFactory:
             simulator needs material values) by raising a
             :class:`~deformctl.errors.DeformctlError`; :func:`lift_catalog` calls it before any
             attempt. None: no runner-specific check.
+        material_features: the catalog's material values are this runner's ground truth for
+            D and λ (the simulator), so a seeded search may predict its start from them when
+            no measured D and λ are given (:func:`deformctl.lift.seeded.object_features`).
     """
 
     name: str
@@ -104,6 +114,7 @@ class RunnerFactory:
     stop_on_failure: bool = True
     settings: Mapping[str, Any] = field(default_factory=dict)
     check: Callable[[Sequence[CatalogObject], str | None], None] | None = None
+    material_features: bool = False
 
 
 @dataclass(frozen=True)
@@ -181,6 +192,8 @@ def lift_catalog(
     max_attempts: int = DEFAULT_MAX_ATTEMPTS,
     progress: LiftProgress | None = None,
     path: str | None = None,
+    seed: StartSeed | None = None,
+    warn: Warn | None = None,
 ) -> CatalogLiftResult:
     """Search the minimum lifting force of every object of a catalog, one after another.
 
@@ -205,24 +218,43 @@ def lift_catalog(
         max_attempts: attempt budget per object (>= 1).
         progress: called after each object as ``progress(object_id, done, total)``.
         path: the catalog's file name, for error messages.
+        seed: start each search from a predicted L_f (a model or an index table,
+            :mod:`deformctl.lift.seeded`) with
+            :func:`~deformctl.lift.search.find_min_lift_force_seeded`; an object outside the
+            seed's range is searched by ``protocol`` from F_w instead, and ``warn`` gets one line
+            for it before any attempt. Every row then has ``predicted_lift_force_n``,
+            ``start_force_n``, ``start_in_training_range`` and ``start_source``.
+        warn: receives warning lines (None: they are dropped).
 
     Returns:
         A :class:`CatalogLiftResult`.
 
     Raises:
         UsageError: a search option out of range (before anything runs; exit 2).
-        InputDataError: an object the lift cannot use, e.g. ``friction_mu = 0``, or one the
-            runner refuses (``factory.check``) (before anything runs; exit 65).
+        InputDataError: an object the lift cannot use, e.g. ``friction_mu = 0``, one the
+            runner refuses (``factory.check``), or (``seed``) one without D and λ (before
+            anything runs; exit 65).
     """
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts
     )
+    if seed is not None and protocol == "paper":
+        raise UsageError(
+            "a seeded search bisects to the tolerance as refine does; protocol 'paper' "
+            "cannot start from a prediction"
+        )
     objects = (
         catalog_objects(catalog, path=path) if isinstance(catalog, pd.DataFrame) else list(catalog)
     )
     f_w = [obj.f_w_n(path=path) for obj in objects]  # refuses mu <= 0 before any attempt
     if factory.check is not None:
         factory.check(objects, path)
+    starts: dict[str, StartEstimate] = {}
+    if seed is not None:
+        starts = seed.starts(objects, use_material=factory.material_features, path=path)
+        for estimate in starts.values():
+            if estimate.warning is not None and warn is not None:
+                warn(estimate.warning)
     rows: list[dict[str, object]] = []
     attempts: list[LiftAttempt] = []
     results: list[LiftSearchResult] = []
@@ -231,26 +263,22 @@ def lift_catalog(
     stopped_at: str | None = None
     for done, (obj, f_w_n) in enumerate(zip(objects, f_w, strict=True), start=1):
         oid = obj.object_id
+        start = starts.get(oid)
         if stopped_at is not None:
-            rows.append(_not_run_row(obj, f_w_n, factory, protocol, tolerance_rel, stopped_at))
+            row = _not_run_row(obj, f_w_n, factory, protocol, tolerance_rel, stopped_at)
+            rows.append({**row, **_start_columns(start, math.nan)})
             not_run.append(oid)
         else:
             try:
-                result = find_min_lift_force(
-                    factory.make(obj),
-                    weight_n=obj.weight_n,
-                    friction_mu=obj.friction_mu,
-                    protocol=protocol,
-                    growth=growth,
-                    tolerance_rel=tolerance_rel,
-                    max_attempts=max_attempts,
-                    object_id=oid,
-                )
+                result = _search(
+                    factory.make(obj), obj, start, seed, protocol, growth, tolerance_rel,
+                    max_attempts,
+                )  # fmt: skip
                 error = None if result.converged else result.message
                 if error is not None:
                     failures.append(ObjectFailure(oid, error, aborted=False))
             except SearchAbortedError as err:
-                result, error = err.partial, str(err)
+                result, error = _fallback(err.partial, start), str(err)
                 failures.append(ObjectFailure(oid, error, aborted=True))
                 if factory.stop_on_failure:
                     stopped_at = oid
@@ -285,6 +313,8 @@ def lift_catalog_files(
     max_attempts: int = DEFAULT_MAX_ATTEMPTS,
     progress: LiftProgress | None = None,
     force: bool = False,
+    seed: StartSeed | None = None,
+    warn: Warn | None = None,
 ) -> CatalogLiftResult:
     """:func:`lift_catalog` from a catalog file: the lift_results table and the lift log written.
 
@@ -297,7 +327,8 @@ def lift_catalog_files(
         output: the lift_results table (``-`` for stdout).
         log: the lift log with every attempt (``-`` for stdout), or None.
         object_ids: these objects, in this order (None: all).
-        protocol, growth, tolerance_rel, max_attempts, progress: as for :func:`lift_catalog`.
+        protocol, growth, tolerance_rel, max_attempts, progress, seed, warn: as for
+            :func:`lift_catalog`.
         force: overwrite existing outputs.
 
     Raises:
@@ -315,7 +346,7 @@ def lift_catalog_files(
     check_output_path(output, force)
     selected = select_objects(read_catalog(catalog_path), object_ids)
     provenance = Provenance.from_invocation(
-        [catalog_path],
+        [catalog_path, *(seed.inputs if seed is not None else ())],
         settings={
             "runner": factory.name,
             **factory.settings,
@@ -324,6 +355,7 @@ def lift_catalog_files(
             "tolerance_rel": tolerance_rel,
             "max_attempts": max_attempts,
             "objects": list(selected["object_id"]),
+            **({"start": {"source": seed.source, **seed.settings}} if seed is not None else {}),
         },
     )
     run = lift_catalog(
@@ -335,6 +367,8 @@ def lift_catalog_files(
         max_attempts=max_attempts,
         progress=progress,
         path=catalog_path,
+        seed=seed,
+        warn=warn,
     )
     if log is not None:
         write_lift_log(log, run.objects, run.attempts, provenance=provenance, force=force)
@@ -368,3 +402,66 @@ def _not_run_row(
     }
     row.update(factory.row_fields(obj))
     return row
+
+
+def _fallback(result: LiftSearchResult, start: StartEstimate | None) -> LiftSearchResult:
+    """A search from F_w that had a start it could not use: record the prediction with it."""
+    if start is None or result.seeded:
+        return result
+    return dataclasses.replace(
+        result,
+        predicted_lift_force_n=start.predicted_lift_force_n,
+        start_force_n=result.f_w_n,
+        start_in_training_range=start.in_range,
+        start_source=start.source,
+    )
+
+
+def _start_columns(start: StartEstimate | None, start_force_n: float) -> dict[str, object]:
+    """The start columns of a row that was not run (nothing when the run was not seeded)."""
+    if start is None:
+        return {}
+    return {
+        **({"protocol": "seeded"} if start.in_range else {}),
+        "predicted_lift_force_n": start.predicted_lift_force_n,
+        "start_force_n": start_force_n,
+        "start_in_training_range": start.in_range,
+        "start_source": start.source,
+    }
+
+
+def _search(
+    runner: TrialRunner,
+    obj: CatalogObject,
+    start: StartEstimate | None,
+    seed: StartSeed | None,
+    protocol: SearchProtocol,
+    growth: float,
+    tolerance_rel: float,
+    max_attempts: int,
+) -> LiftSearchResult:
+    """One object's search: from its start when it has a usable one, else ``protocol``."""
+    if start is not None and start.in_range and seed is not None:
+        return find_min_lift_force_seeded(
+            runner,
+            weight_n=obj.weight_n,
+            friction_mu=obj.friction_mu,
+            predicted_lift_force_n=start.predicted_lift_force_n,
+            margin=seed.margin,
+            growth=growth,
+            tolerance_rel=tolerance_rel,
+            max_attempts=max_attempts,
+            object_id=obj.object_id,
+            source=start.source,
+        )
+    result = find_min_lift_force(
+        runner,
+        weight_n=obj.weight_n,
+        friction_mu=obj.friction_mu,
+        protocol=protocol,
+        growth=growth,
+        tolerance_rel=tolerance_rel,
+        max_attempts=max_attempts,
+        object_id=obj.object_id,
+    )
+    return _fallback(result, start)

@@ -148,6 +148,7 @@ def sim_runner_factory(
             "support_release": r.as_dict(),
         },
         check=check,
+        material_features=True,
     )
 
 

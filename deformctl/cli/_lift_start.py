@@ -1,0 +1,132 @@
+"""``deformctl lift``: the options that start the search from a prediction; the run's report.
+
+``--start-model MODEL`` or ``--start-table INDEX`` (with ``--start-interpolate K``), the first
+attempt at the prediction × ``--start-margin``; the objects' D and λ from ``--coefficients`` (or
+the catalog, see :mod:`deformctl.lift.seeded`). :func:`start_seed` turns them into the
+library's :class:`~deformctl.lift.seeded.StartSeed`.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from deformctl.errors import SearchError, UsageError
+from deformctl.lift.search import DEFAULT_START_MARGIN, validate_start_margin
+
+if TYPE_CHECKING:  # pragma: no cover - the seed sources import scikit-learn when used
+    from deformctl.lift.seeded import StartSeed
+    from deformctl.lift.stage import CatalogLiftResult
+
+StartModel = Annotated[
+    str | None,
+    typer.Option(
+        "--start-model",
+        metavar="MODEL.skops",
+        help="Start each search at this model's predicted L_f (× --start-margin), then go down "
+        "or up and bisect to --tolerance; outside its training range: from F_w, with a warning.",
+    ),
+]
+StartTable = Annotated[
+    str | None,
+    typer.Option(
+        "--start-table",
+        metavar="INDEX.parquet",
+        help="Start each search at the nearest index-table entry's L_f/F_w × this object's F_w "
+        "(or --start-interpolate K entries'); outside the table's range: from F_w.",
+    ),
+]
+StartInterpolate = Annotated[
+    int | None,
+    typer.Option(
+        "--start-interpolate",
+        metavar="K",
+        help="With --start-table: inverse-distance weighted mean of the K nearest entries "
+        "[default: the nearest entry].",
+    ),
+]
+StartMargin = Annotated[
+    float | None,
+    typer.Option(
+        "--start-margin",
+        metavar="M",
+        help="With --start-model/--start-table: the first attempt is at the prediction × M "
+        f"(>= 1) [default: {DEFAULT_START_MARGIN:g}, measured by bench/bench_seeded.py].",
+    ),
+]
+Coefficients = Annotated[
+    str | None,
+    typer.Option(
+        "--coefficients",
+        metavar="COEFFICIENTS.parquet",
+        help="With --start-model/--start-table: the objects' D and λ (from characterize) "
+        "[default: the catalog's deformability_n_per_cm / damping_ns_per_cm columns; with "
+        "--sim, its material values].",
+    ),
+]
+
+
+def start_seed(
+    model: str | None,
+    table: str | None,
+    interpolate: int | None,
+    margin: float | None,
+    coefficients: str | None,
+    *,
+    protocol: str,
+    dataset: bool,
+) -> StartSeed | None:
+    """The seed the start options ask for, or None without ``--start-model``/``--start-table``.
+
+    Raises:
+        UsageError: both sources, a start option without a source, ``--start-interpolate``
+            without ``--start-table``, ``--protocol paper``, a dataset output, or a margin < 1.
+        MissingInputError, InputDataError: see :mod:`deformctl.lift.seeded`.
+    """
+    if model is not None and table is not None:
+        raise UsageError("give --start-model or --start-table, not both")
+    if interpolate is not None and table is None:
+        raise UsageError("--start-interpolate needs --start-table")
+    if model is None and table is None:
+        for flag, value in (("--start-margin", margin), ("--coefficients", coefficients)):
+            if value is not None:
+                raise UsageError(f"{flag} needs --start-model or --start-table")
+        return None
+    flag = "--start-model" if model is not None else "--start-table"
+    if protocol == "paper":
+        raise UsageError(f"{flag} bisects to --tolerance as refine does; drop --protocol paper")
+    if dataset:
+        raise UsageError(f"{flag} writes a table file, not a dataset directory output (-o DIR/)")
+    chosen = DEFAULT_START_MARGIN if margin is None else margin
+    try:
+        validate_start_margin(chosen)
+    except UsageError:
+        raise UsageError(f"--start-margin must be a finite number >= 1, got {margin}") from None
+    from deformctl.lift.seeded import load_start_model, load_start_table
+
+    if model is not None:
+        return load_start_model(model, margin=chosen, coefficients=coefficients)
+    assert table is not None
+    return load_start_table(table, margin=chosen, k=interpolate, coefficients=coefficients)
+
+
+def warn(line: str) -> None:
+    """One ``warning: ...`` line on stderr."""
+    typer.echo(f"warning: {line}", err=True)
+
+
+def report_run(run: CatalogLiftResult, *, quiet: bool) -> None:
+    """Each object's line on stdout (unless an output is stdout), then the exit.
+
+    Raises:
+        SearchError: an object did not converge or the runner failed (exit 1; one line).
+    """
+    if not quiet:
+        aborted = {f.object_id for f in run.failures if f.aborted}  # their line is the error
+        for result in run.results:
+            if result.object_id not in aborted:
+                typer.echo(result.message)
+    message = run.error_message()
+    if message is not None:
+        raise SearchError(message)
