@@ -314,7 +314,7 @@ def calibrate(
     record: dict[str, Any] = {
         "what": "the paper simulator preset's fitted parameters (deformctl.presets)",
         "command": "make calibrate (python -m deformctl.repro.calibrate --write "
-        "datasets/calibration/paper.json)",
+        "datasets/calibration/paper.json --convergence)",
         "deformctl_version": __version__,
         "fitted": {
             "shear_damping_ratio": round(fit.shear_damping_ratio, 5),
