@@ -235,7 +235,8 @@ def _plots(
         label="ours, same 13 objects", zorder=3,
     )  # fmt: skip
     ax.axhline(1.0, color="k", lw=1, ls="--")
-    ax.set_xscale("symlog", linthresh=0.05)
+    ax.set_xscale("symlog", linthresh=0.05)  # linear near zeta = 0 (the water bag), log above
+    ax.set_xlim(left=0.0)
     ax.set_xlabel("damping ratio ζ = λ / (2 √(D m))")
     ax.set_ylabel("L_f / F_w")
     ax.set_title("Lifting force over the rigid-object force")
