@@ -144,7 +144,7 @@ def sim_runner_factory(
             "sim_preset": chosen.name,
             "sim_settings": dataclasses.asdict(s),
             "lift_profile": p.as_dict(),
-            "slip_criterion": {"measure": c.measure, "tolerance_m": c.tolerance_m},
+            "slip_criterion": dataclasses.asdict(c),
             "support_release": r.as_dict(),
         },
         check=check,
