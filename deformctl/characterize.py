@@ -1018,6 +1018,22 @@ def characterize_file(
     return result
 
 
+def sweep_warnings(out_dir: str | PathLike[str]) -> list[str]:
+    """One warning line per flagged object of a coefficients dataset directory (parts in order).
+
+    Returns an empty list when the directory's parts cannot be read (an interrupted sweep).
+    """
+    from deformctl.errors import DeformctlError
+
+    lines: list[str] = []
+    try:
+        for table in iter_dataset_parts(out_dir):
+            lines.extend(enforce(table.to_pandas(), path=str(out_dir)))
+    except DeformctlError:
+        return []
+    return lines
+
+
 def characterize_items(path: str | PathLike[str]) -> list[dict[str, Any]]:
     """One sweep item per object of a ``measure`` dataset: ``object_id`` and its log's path.
 
