@@ -1173,7 +1173,7 @@ def simulate_catalog_sweep(
     object_ids: Sequence[str] | None = None,
     force: bool = False,
 ) -> SweepSummary:
-    """``measure --sim -o DIR/``: one object per task; part ``k``'s squeezes in ``part-k.mcap``.
+    """``measure --sim -o DIR/``: one object per task; part ``k``'s squeezes in ``DIR/_logs/``.
 
     The rows of a part are :data:`MEASURE_SCHEMA` summaries; the squeezes are byte for byte
     those of the serial run (each object's noise stream depends on the seed and its position).

@@ -152,7 +152,7 @@ def render_dataset(info: dict[str, Any]) -> str:
         f"{info['path']}: {info['kind']} dataset (written by {info['command']})",
         f"  parts: {info['parts']} of {info['parts_expected']}, {state}",
         f"  objects: {info['objects']}, rows: {info['rows']}, failed: {info['failed']}",
-        f"  logs: {info['logs']} part-*.mcap",
+        f"  logs: {info['logs']} _logs/part-*.mcap",
         "  columns: "
         + ", ".join(
             f"{c['name']} ({c['unit']})" if c["unit"] else c["name"] for c in info["columns"]

@@ -143,7 +143,7 @@ def lift(
 
     With --sim and a dataset directory output (-o DIR/), the objects run in parallel
     (--workers N local processes, or --scheduler tcp://HOST:PORT of a Dask cluster) into
-    DIR/part-*.parquet with each part's attempts in DIR/part-*.mcap; --resume completes an
+    DIR/part-*.parquet with each part's attempts in DIR/_logs/; --resume completes an
     interrupted run. An object that fails is recorded in DIR/_failures/ and the rest go on.
 
     Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
@@ -184,7 +184,7 @@ def lift(
             raise UsageError("a dataset directory output (-o DIR/) needs --sim")
         if log is not None:
             raise UsageError(
-                "--log is not used with a dataset directory output (see DIR/part-*.mcap)"
+                "--log is not used with a dataset directory output (see DIR/_logs/part-*.mcap)"
             )
         from deformctl.lift.runners.sim import LiftTask, lift_sweep
 

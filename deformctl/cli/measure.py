@@ -121,7 +121,7 @@ def measure(
     simulator (force ramp then hold; the largest squeeze's peak force is D x strain x size_x
     unless --peak-force-n is given), and the log stores each object's catalog row and the
     simulator settings and seed. With a dataset directory output (-o DIR/) the objects run in
-    parallel (--workers, --scheduler; --resume) into DIR/part-*.mcap squeeze logs and a
+    parallel (--workers, --scheduler; --resume) into DIR/_logs/part-*.mcap squeeze logs and a
     per-object summary DIR/part-*.parquet; characterize reads DIR/ directly.
 
     Example:
