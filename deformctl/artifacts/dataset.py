@@ -250,6 +250,7 @@ class LogPartWriter:
 
     kind: str
     provenance: Any
+    epoch_ns: int | None = None  #: where the log begins (None: the writers' default)
     in_workers: ClassVar[bool] = True
 
     def __call__(self, part: PartPayloads) -> None:
@@ -259,10 +260,9 @@ class LogPartWriter:
         objects = [p[0] for _, p in part.payloads]
         items = [item for _, p in part.payloads for item in p[1]]
         path = part.path(".mcap")
-        if self.kind == "squeeze_log":
-            write_squeeze_log(path, objects, items, provenance=self.provenance, force=True)
-        else:
-            write_lift_log(path, objects, items, provenance=self.provenance, force=True)
+        epoch = {} if self.epoch_ns is None else {"epoch_ns": self.epoch_ns}
+        write = write_squeeze_log if self.kind == "squeeze_log" else write_lift_log
+        write(path, objects, items, provenance=self.provenance, force=True, **epoch)
 
 
 # --------------------------------------------------------------------------- writing
