@@ -58,6 +58,31 @@ from deformctl.lift.stage import lift_catalog_files
 from deformctl.parallel import SweepOptions
 
 
+def _sweep(
+    catalog: str,
+    parts: tuple[object, ...] | None,
+    log: str | None,
+    search: tuple[object, ...],
+    output: str,
+    sweep: SweepOptions,
+    object_ids: list[str] | None,
+    force: bool,
+) -> None:
+    """``lift --sim -o DIR/``: the search of every object through the sweep executor."""
+    if parts is None:
+        raise UsageError("a dataset directory output (-o DIR/) needs --sim")
+    if log is not None:
+        raise UsageError(
+            "--log is not used with a dataset directory output (see DIR/_logs/part-*.mcap)"
+        )
+    from deformctl.lift.runners.sim import LiftTask, lift_sweep
+
+    task = LiftTask(*parts, *search)  # type: ignore[arg-type]
+    summary = lift_sweep(catalog, task, output=output, sweep=sweep, object_ids=object_ids,
+                         force=force)  # fmt: skip
+    finish_sweep(summary, "lift")
+
+
 @translate_errors
 @opt.with_sweep_options
 def lift(
@@ -126,6 +151,7 @@ def lift(
     max_attempts: Annotated[
         int, typer.Option("--max-attempts", help="Most attempts per object (>= 1).")
     ] = DEFAULT_MAX_ATTEMPTS,
+    log_epoch: opt.LogEpoch = None,
     force: opt.Force = False,
     sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
@@ -166,6 +192,7 @@ def lift(
             "--alpha-cm": alpha_cm,
             "--dt-s": dt_s,
             "--memory-budget-gib": memory_budget_gib,
+            "--log-epoch": log_epoch,
         },
     )
     judge = frames_judge(
@@ -180,25 +207,15 @@ def lift(
     )
     object_ids = opt.parse_object_ids(objects)
     if dataset:
-        if parts is None:
-            raise UsageError("a dataset directory output (-o DIR/) needs --sim")
-        if log is not None:
-            raise UsageError(
-                "--log is not used with a dataset directory output (see DIR/_logs/part-*.mcap)"
-            )
-        from deformctl.lift.runners.sim import LiftTask, lift_sweep
-
-        task = LiftTask(*parts, protocol, growth, tolerance, max_attempts)
-        summary = lift_sweep(catalog, task, output=output, sweep=sweep, object_ids=object_ids,
-                             force=force)  # fmt: skip
-        finish_sweep(summary, "lift")
+        search = (protocol, growth, tolerance, max_attempts, opt.parse_log_epoch(log_epoch))
+        _sweep(catalog, parts, log, search, output, sweep, object_ids, force)
         return
     with progress_bar(Console(stderr=True), "lift") as progress:
         run = lift_catalog_files(
             catalog, factory, output=output, log=log, object_ids=object_ids,
             protocol=cast(SearchProtocol, protocol),  # checked by validate_search_options
             growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts,
-            progress=progress, force=force,
+            progress=progress, force=force, log_epoch_ns=opt.parse_log_epoch(log_epoch),
         )  # fmt: skip
     if not is_stdio(output) and (log is None or not is_stdio(log)):
         aborted = {f.object_id for f in run.failures if f.aborted}  # their line is the error

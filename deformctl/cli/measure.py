@@ -107,6 +107,7 @@ def measure(
     seed: sq.Seed = None,
     noise_force_n: sq.NoiseForceN = None,
     noise_position_m: sq.NoisePositionM = None,
+    log_epoch: opt.LogEpoch = None,
     force: opt.Force = False,
     sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
@@ -133,7 +134,7 @@ def measure(
     """
     sim_opts = _measure_sim.SimOptions(
         squeezes, objects, peak_force_n, strain, ramp_s, hold_s, floating, alpha_cm, dt_s,
-        memory_budget_gib, seed, noise_force_n, noise_position_m,
+        memory_budget_gib, seed, noise_force_n, noise_position_m, log_epoch,
     )  # fmt: skip
     image_opts = img.ImageOptions(
         marker_size_cm, marker_dict, marker_id, checkerboard, square_size_cm, color_range,
