@@ -38,6 +38,13 @@ Two estimators:
   method carries by construction: ``f/d = D + λ d'/d``, so wherever the object is still moving
   the ratio mixes damping into D.
 
+Every fit carries its diagnostics (R², standard errors, samples, the loading range, the damping
+excitation and design condition, the preload) and quality flags (:mod:`deformctl.quality`):
+λ is NaN when it cannot be told from a constant force or from D, a squeeze that ruptured is
+fitted up to its rupture (:mod:`deformctl.phases`), and the policy (warnings, ``strict``,
+negative D) is applied before a table is written. ``preload="fit"`` adds an intercept F0 (a
+contact preload) to the model; ``constrain_damping`` bounds λ ≥ 0 (``scipy.optimize.lsq_linear``).
+
 :func:`read_and_characterize` fits every object of a squeeze log, :func:`characterize_dir` those
 of a ``measure`` dataset directory, and :func:`characterize_file` writes their table; at scale,
 :class:`CharacterizeTask` is the sweep task of one object and :func:`characterize_sweep` writes a
@@ -66,9 +73,9 @@ from deformctl.artifacts import check_output_path, write_table
 from deformctl.artifacts.dataset import (
     MANIFEST_NAME,
     dataset_fingerprint,
-    dataset_part_paths,
+    dataset_log_paths,
     iter_dataset_parts,
-    part_name,
+    part_log_path,
     spec_rows,
     table_schema,
 )
@@ -942,12 +949,12 @@ def read_and_characterize(
 
 
 def squeeze_log_parts(path: str | PathLike[str]) -> list[Path]:
-    """The squeeze logs ``part-*.mcap`` of a ``measure`` dataset directory, in part order.
+    """The squeeze logs ``_logs/part-*.mcap`` of a ``measure`` dataset directory, in part order.
 
     Raises:
         InputDataError: no logs, or a part of the sweep missing (rerun measure with --resume).
     """
-    return dataset_part_paths(path, ".mcap", what="squeeze logs", rerun="measure")
+    return dataset_log_paths(path, ".mcap", what="squeeze logs", rerun="measure")
 
 
 def characterize_dir(
@@ -1018,6 +1025,22 @@ def characterize_file(
     return result
 
 
+def sweep_warnings(out_dir: str | PathLike[str]) -> list[str]:
+    """One warning line per flagged object of a coefficients dataset directory (parts in order).
+
+    Returns an empty list when the directory's parts cannot be read (an interrupted sweep).
+    """
+    from deformctl.errors import DeformctlError
+
+    lines: list[str] = []
+    try:
+        for table in iter_dataset_parts(out_dir):
+            lines.extend(enforce(table.to_pandas(), path=str(out_dir)))
+    except DeformctlError:
+        return []
+    return lines
+
+
 def characterize_items(path: str | PathLike[str]) -> list[dict[str, Any]]:
     """One sweep item per object of a ``measure`` dataset: ``object_id`` and its log's path.
 
@@ -1030,7 +1053,7 @@ def characterize_items(path: str | PathLike[str]) -> list[dict[str, Any]]:
     items: list[dict[str, Any]] = []
     if (d / MANIFEST_NAME).is_file() and any(d.glob("part-*.parquet")):
         for k, table in enumerate(iter_dataset_parts(d)):
-            part_log = str(d / part_name(k, ".mcap"))
+            part_log = str(part_log_path(d, k))
             items.extend(
                 {"object_id": oid, "log_path": part_log} for oid in table["object_id"].to_pylist()
             )

@@ -47,6 +47,12 @@ magnitudes, the second palm interpolated onto the first palm's timestamps.
 **Alignment.** Streams are aligned by their header stamps; position is linearly interpolated
 onto the force timestamps inside the overlap of the two streams. Samples outside the overlap are
 dropped.
+
+**Checks and cuts.** A recording whose sample rate, peak force, peak compression, force axis or
+compression sign a unit, axis or sign mistake explains is refused with the likely fix
+(:mod:`deformctl.plausibility`). Every squeeze is then cut at a rupture and reduced to the
+``phase`` asked for (:mod:`deformctl.phases`); the :class:`Recording` carries the ruptures, which
+the log stores with the object (:meth:`Recording.log_fields`).
 """
 
 from __future__ import annotations
@@ -67,6 +73,7 @@ import pyarrow as pa
 
 from deformctl.artifacts import check_output_path, read_catalog, write_squeeze_log
 from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
+from deformctl.artifacts.mcaplog import LOG_EPOCH_NS
 from deformctl.artifacts.provenance import Provenance, input_digest
 from deformctl.catalog import catalog_objects, select_objects
 from deformctl.errors import InputDataError, MissingInputError, UsageError
@@ -124,6 +131,9 @@ _UNITS_BY_KEY: dict[str, dict[str, float]] = {
     "compression": LENGTH_UNITS_M,
 }
 _POSITION_KEYS = ("position", "gap", "compression")
+#: A CSV time column whose first value (in s, after ``--units``) is at least this is Unix time
+#: (2000-01-01T00:00:00Z): the squeeze log keeps those times as its ``log_time``.
+ABSOLUTE_TIME_MIN_S = 946_684_800.0
 
 
 @dataclass(frozen=True)
@@ -333,8 +343,12 @@ def _to_squeezes(
     min_squeeze_s: float,
     phase: str = "all",
     window_s: float | None = None,
+    clock_origin_ns: int | None = None,
 ) -> tuple[list[SqueezeSeries], list[Rupture]]:
     """Cut a recording into squeezes, each up to its rupture and reduced to ``phase``.
+
+    ``clock_origin_ns`` is the source's clock at ``time_s = 0`` (ns since the Unix epoch) when
+    the recording has one: each squeeze then carries its first sample's ``start_time_ns``.
 
     Returns:
         The squeezes and the ruptures found (one per ruptured squeeze, recording times set).
@@ -374,6 +388,9 @@ def _to_squeezes(
             time_s=t - t[0],
             force_n=force_n[sl],
             compression_m=compression_m[sl],
+            start_time_ns=None
+            if clock_origin_ns is None
+            else clock_origin_ns + round(float(t[0]) * NS_PER_S),
         )
         sq, rupture = cut_rupture(whole, window_s=window, recording_offset_s=float(t[0]))
         if rupture is not None:
@@ -401,11 +418,14 @@ def _check_recording_options(phase: str, increases_when: str | None) -> None:
 _UNIT_SPELLING = {"n": "N", "kn": "kN", "mn": "mN"}
 
 
-def _unit_hint(key: str, unit: str | None, what: str) -> str:
-    """``did you mean --units key=unit?`` (or a plainer hint when no unit fits)."""
+def _unit_hint(key: str, unit: str | None, what: str, stated: str | None = None) -> str:
+    """``did you mean --units key=unit?``; ``stated``: the unit the file's units row gives."""
     if unit is None:
         return f"check the unit of {what}"
-    return f"did you mean --units {key}={_UNIT_SPELLING.get(unit, unit)}?"
+    spelled = _UNIT_SPELLING.get(unit, unit)
+    if stated is not None:
+        return f"the file's units row says {stated!r}; is {what} in {spelled}?"
+    return f"did you mean --units {key}={spelled}?"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -638,6 +658,7 @@ def read_ros2_bag(
         min_squeeze_s=min_squeeze_s,
         phase=phase,
         window_s=_detection_window_s(position_rate_hz),
+        clock_origin_ns=t_ref_ns,
     )
     return Recording(
         squeezes,
@@ -817,7 +838,7 @@ def read_csv_export(
     for k in keys:
         _check_stream(f"column {columns[k]!r}", time_s, arrays[k], where)
     rate_hz = _rate_hz(time_s)
-    _check_time_and_force(arrays, used, columns, where)
+    _check_time_and_force(arrays, used, columns, where, file_units)
     kind = position_is if pos_key == "position" else pos_key
     compression_m = _compression(
         arrays[pos_key],
@@ -843,8 +864,9 @@ def read_csv_export(
         size_x_cm=size_x_cm,
         what=f"column {columns[pos_key]!r}",
         path=where,
-        hint=_unit_hint(pos_key, unit, f"column {columns[pos_key]!r}"),
+        hint=_unit_hint(pos_key, unit, f"column {columns[pos_key]!r}", file_units.get(pos_key)),
     )
+    absolute = float(time_s[0]) >= ABSOLUTE_TIME_MIN_S
     squeezes, ruptures = _to_squeezes(
         time_s - time_s[0],
         arrays["force"],
@@ -857,6 +879,7 @@ def read_csv_export(
         min_squeeze_s=min_squeeze_s,
         phase=phase,
         window_s=_detection_window_s(rate_hz),
+        clock_origin_ns=round(float(time_s[0]) * NS_PER_S) if absolute else None,
     )
     return Recording(
         squeezes, rate_hz, rate_hz, source="csv", phase=phase, ruptures=tuple(ruptures)
@@ -868,8 +891,12 @@ def _check_time_and_force(
     used: Mapping[str, str],
     columns: Mapping[str, str],
     where: str,
+    stated: Mapping[str, str],
 ) -> None:
-    """Refuse a CSV whose sample rate or peak force a unit mistake explains (names the unit)."""
+    """Refuse a CSV whose sample rate or peak force a unit mistake explains (names the unit).
+
+    ``stated``: the units the file's units row gives (the hint then questions the file).
+    """
     time_s, force_n = arrays["time"], arrays["force"]
     dt_s = float(np.median(np.diff(time_s)))
     rate_hz = 1.0 / dt_s
@@ -882,7 +909,8 @@ def _check_time_and_force(
             target=1000.0,
         )
         what = f"column {columns['time']!r}"
-        check_sample_rate(rate_hz, what=what, path=where, hint=_unit_hint("time", unit, what))
+        hint = _unit_hint("time", unit, what, stated.get("time"))
+        check_sample_rate(rate_hz, what=what, path=where, hint=hint)
     peak_n = float(np.max(np.abs(force_n)))
     factor = FORCE_UNITS_N[used["force"]]
     unit = suggest_unit(
@@ -893,7 +921,8 @@ def _check_time_and_force(
         target=10.0,
     )
     what = f"column {columns['force']!r}"
-    check_peak_force(peak_n, what=what, path=where, hint=_unit_hint("force", unit, what))
+    hint = _unit_hint("force", unit, what, stated.get("force"))
+    check_peak_force(peak_n, what=what, path=where, hint=hint)
 
 
 def _cell(row: Sequence[str], i: int) -> str:
@@ -1081,12 +1110,15 @@ class SimulateCatalogTask:
         settings: the :class:`~deformctl.sim.SimSettings` (a preset's object model).
         seed: the run's noise seed.
         sim_preset: the name of the preset ``settings`` came from (recorded in the log).
+        log_epoch_ns: where the log's squeezes begin, ns since the Unix epoch (they are laid
+            end to end from there).
     """
 
     simulate: Mapping[str, Any]
     settings: SimSettings
     seed: int = 0
     sim_preset: str | None = None
+    log_epoch_ns: int = LOG_EPOCH_NS
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """Squeeze one object: its summary row, its (object row, squeezes) as the payload."""
@@ -1124,6 +1156,7 @@ def sim_provenance(
             "objects": object_ids,
             "sim_preset": task.sim_preset,
             "sim_settings": dataclasses.asdict(task.settings),
+            "log_epoch_ns": task.log_epoch_ns,
         },
     )
 
@@ -1163,7 +1196,9 @@ def simulate_catalog_file(
         path=catalog_path,
         **task.simulate,
     )
-    write_squeeze_log(output, objects, series, provenance=provenance, force=force)
+    write_squeeze_log(
+        output, objects, series, provenance=provenance, force=force, epoch_ns=task.log_epoch_ns
+    )
     return objects, series
 
 
@@ -1176,7 +1211,7 @@ def simulate_catalog_sweep(
     object_ids: Sequence[str] | None = None,
     force: bool = False,
 ) -> SweepSummary:
-    """``measure --sim -o DIR/``: one object per task; part ``k``'s squeezes in ``part-k.mcap``.
+    """``measure --sim -o DIR/``: one object per task; part ``k``'s squeezes in ``DIR/_logs/``.
 
     The rows of a part are :data:`MEASURE_SCHEMA` summaries; the squeezes are byte for byte
     those of the serial run (each object's noise stream depends on the seed and its position).
@@ -1194,6 +1229,8 @@ def simulate_catalog_sweep(
     provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
     items = [{**rec, "_position": i} for i, rec in enumerate(catalog.to_dict("records"))]
     settings = {**task.simulate, "sim_settings": dataclasses.asdict(task.settings)}
+    if task.log_epoch_ns != LOG_EPOCH_NS:  # (the default keeps older directories resumable)
+        settings["log_epoch_ns"] = task.log_epoch_ns
     fingerprint = dataset_fingerprint(
         "measure", "squeeze_log", settings, {"catalog": input_digest(catalog_path)}, task.seed
     )
@@ -1203,7 +1240,7 @@ def simulate_catalog_sweep(
         out_dir=output,
         schema=MEASURE_SCHEMA,
         fingerprint=fingerprint,
-        part_writer=LogPartWriter("squeeze_log", provenance),
+        part_writer=LogPartWriter("squeeze_log", provenance, task.log_epoch_ns),
         force=force,
         **sweep.run_kwargs(),
     )

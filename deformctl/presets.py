@@ -31,7 +31,8 @@ log and squeeze log records the preset's name and its full settings.
     Fixed, not fitted: 7 particles along the longest side with massless palm surface layers,
     linear (small-strain) springs, BDF2 with dt = 1 ms, a 0.2 ms floor on the lattice dampers'
     retardation time (an undamped object would otherwise ring in its lattice-scale modes forever),
-    cruise speed 0.25 m/s, a 0.3 s hold, and slip judged strictly (1 µm of contact sliding).
+    cruise speed 0.25 m/s, a 0.3 s hold, and slip judged strictly (1 µm of contact sliding; an
+    attempt ends as soon as it has slid that much).
 
 ``table``
     deformctl's first simulator: the object rests on the table, the palms lift it through a
@@ -83,6 +84,7 @@ PAPER_FIXED: dict[str, Any] = {
     "lift_jerk_time_s": 0.0,
     "lift_hold_s": 0.3,
     "slip_tolerance_m": 1e-6,
+    "slip_stop_early": True,
 }
 
 
@@ -110,7 +112,7 @@ class SimPreset:
             "name": self.name,
             "settings": dataclasses.asdict(self.settings),
             "profile": self.profile.as_dict(),
-            "slip": {"tolerance_m": self.criterion.tolerance_m, "measure": self.criterion.measure},
+            "slip": dataclasses.asdict(self.criterion),
             "release": self.release.as_dict(),
         }
 
@@ -202,7 +204,9 @@ def paper_preset(
             jerk_time_s=f["lift_jerk_time_s"],
             hold_s=f["lift_hold_s"],
         ),
-        criterion=SlipCriterion(tolerance_m=f["slip_tolerance_m"], measure="contact"),
+        criterion=SlipCriterion(
+            tolerance_m=f["slip_tolerance_m"], measure="contact", stop_early=f["slip_stop_early"]
+        ),
         release=SupportRelease(mode="support", release_time_s=0.0),
     )
 

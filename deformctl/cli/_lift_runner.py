@@ -17,7 +17,6 @@ from deformctl.cli._common import finish_sweep
 from deformctl.cli._options import HEAVY_DEFAULTS, default
 from deformctl.errors import UsageError
 from deformctl.lift.runners.rig import DEFAULT_RIG_TIMEOUT_S, SlipFromFrames, rig_runner_factory
-from deformctl.lift.search import LiftSearch
 from deformctl.lift.stage import RunnerFactory
 from deformctl.parallel import SweepOptions
 
@@ -191,16 +190,18 @@ def choose_runner(
 
 def lift_dataset(
     catalog: str,
-    output: str,
-    search: LiftSearch,
-    *,
     parts: SimPreset | None,
     log: str | None,
+    search: tuple[object, ...],
+    output: str,
     sweep: SweepOptions,
     object_ids: Sequence[str] | None,
     force: bool,
 ) -> None:
-    """``lift --sim -o DIR/``: the sweep (:func:`deformctl.lift.runners.sim.lift_sweep`).
+    """``lift --sim -o DIR/``: the search of every object through the sweep executor.
+
+    ``search`` is (protocol, growth, tolerance, max_attempts, log_epoch_ns), as
+    :class:`~deformctl.lift.runners.sim.LiftTask` takes them.
 
     Raises:
         UsageError: no ``--sim``, or ``--log`` (each part has its log).
@@ -208,12 +209,12 @@ def lift_dataset(
     if parts is None:
         raise UsageError("a dataset directory output (-o DIR/) needs --sim")
     if log is not None:
-        raise UsageError("--log is not used with a dataset directory output (see DIR/part-*.mcap)")
+        raise UsageError(
+            "--log is not used with a dataset directory output (see DIR/_logs/part-*.mcap)"
+        )
     from deformctl.lift.runners.sim import LiftTask, lift_sweep
 
-    task = LiftTask(
-        parts, search.protocol, search.growth, search.tolerance_rel, search.max_attempts
-    )
+    task = LiftTask(parts, *search)  # type: ignore[arg-type]
     summary = lift_sweep(
         catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
     )

@@ -16,7 +16,7 @@ from rich.console import Console
 
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli._common import finish_sweep, progress_bar
-from deformctl.cli._options import parse_object_ids
+from deformctl.cli._options import parse_log_epoch, parse_object_ids
 from deformctl.errors import UsageError
 from deformctl.measure import (
     DEFAULT_SIM_HOLD_S,
@@ -102,6 +102,7 @@ class SimOptions:
     seed: int | None
     noise_force_n: float | None
     noise_position_m: float | None
+    log_epoch: str | None = None
 
     def given(self) -> dict[str, object]:
         """Option flag → value for the options given on the command line."""
@@ -141,8 +142,13 @@ class SimOptions:
             "noise_force_n": self.noise_force_n or 0.0,
             "noise_position_m": self.noise_position_m or 0.0,
         }
+        epoch_ns = parse_log_epoch(self.log_epoch)
         return SimulateCatalogTask(
-            simulate, preset.settings, 0 if self.seed is None else self.seed, preset.name
+            simulate,
+            preset.settings,
+            0 if self.seed is None else self.seed,
+            preset.name,
+            **({} if epoch_ns is None else {"log_epoch_ns": epoch_ns}),
         )
 
 

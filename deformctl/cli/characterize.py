@@ -15,6 +15,7 @@ from deformctl.characterize import (
     LogCoefficients,
     characterize_file,
     characterize_sweep,
+    sweep_warnings,
 )
 from deformctl.cli import _options as opt
 from deformctl.cli._common import finish_sweep, translate_errors
@@ -129,7 +130,7 @@ def characterize(
     --strict and the README's "When the numbers are doubtful"); each flagged object gives one
     warning line on stderr.
 
-    SQUEEZE.mcap may also be a directory written by measure --sim -o DIR/ (its part-*.mcap
+    SQUEEZE.mcap may also be a directory written by measure --sim -o DIR/ (its _logs/part-*.mcap
     logs, in order). With a dataset directory output (-o DIR/) the objects are fitted in
     parallel (--workers, --scheduler; --resume) into DIR/part-*.parquet; an object that cannot
     be fitted is recorded in DIR/_failures/ and the others go on.
@@ -147,6 +148,8 @@ def characterize(
     if sweep.check(output):
         task = CharacterizeTask(method, window_s, **options)
         summary = characterize_sweep(log, task, output=output, sweep=sweep, force=force)
+        for line in sweep_warnings(summary.out_dir):
+            typer.echo(f"warning: {line}", err=True)
         finish_sweep(summary, "characterize")
         return
     result = characterize_file(log, method, output=output, window_s=window_s, force=force,  # type: ignore[arg-type]

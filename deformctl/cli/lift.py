@@ -62,7 +62,6 @@ from deformctl.lift.search import (
     DEFAULT_GROWTH,
     DEFAULT_MAX_ATTEMPTS,
     DEFAULT_TOLERANCE_REL,
-    LiftSearch,
     SearchProtocol,
     validate_search_options,
 )
@@ -139,6 +138,7 @@ def lift(
     max_attempts: Annotated[
         int, typer.Option("--max-attempts", help="Most attempts per object (>= 1).")
     ] = DEFAULT_MAX_ATTEMPTS,
+    log_epoch: opt.LogEpoch = None,
     start_model: StartModel = None,
     start_table: StartTable = None,
     start_interpolate: StartInterpolate = None,
@@ -163,7 +163,7 @@ def lift(
 
     With --sim and a dataset directory output (-o DIR/), the objects run in parallel
     (--workers N local processes, or --scheduler tcp://HOST:PORT of a Dask cluster) into
-    DIR/part-*.parquet with each part's attempts in DIR/part-*.mcap; --resume completes an
+    DIR/part-*.parquet with each part's attempts in DIR/_logs/; --resume completes an
     interrupted run. An object that fails is recorded in DIR/_failures/ and the rest go on.
 
     With --start-model MODEL (or --start-table INDEX) each search starts at the predicted L_f ×
@@ -192,6 +192,7 @@ def lift(
             "--alpha-cm": alpha_cm,
             "--dt-s": dt_s,
             "--memory-budget-gib": memory_budget_gib,
+            "--log-epoch": log_epoch,
         },
     )
     judge = frames_judge(
@@ -208,15 +209,15 @@ def lift(
     seed = start_seed(start_model, start_table, start_interpolate, start_margin, coefficients,
                       protocol=protocol, dataset=dataset)  # fmt: skip
     if dataset:
-        search = LiftSearch(protocol, growth, tolerance, max_attempts)
-        lift_dataset(catalog, output, search, parts=parts, log=log, sweep=sweep,
-                     object_ids=object_ids, force=force)  # fmt: skip
+        search = (protocol, growth, tolerance, max_attempts, opt.parse_log_epoch(log_epoch))
+        lift_dataset(catalog, parts, log, search, output, sweep, object_ids, force)
         return
     with progress_bar(Console(stderr=True), "lift") as progress:
         run = lift_catalog_files(
             catalog, factory, output=output, log=log, object_ids=object_ids,
             protocol=cast(SearchProtocol, protocol),  # checked by validate_search_options
             growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts,
-            progress=progress, force=force, seed=seed, warn=warn,
+            progress=progress, force=force, log_epoch_ns=opt.parse_log_epoch(log_epoch),
+            seed=seed, warn=warn,
         )  # fmt: skip
     report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)))

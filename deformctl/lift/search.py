@@ -99,7 +99,6 @@ __all__ = [
     "PROTOCOLS",
     "AttemptError",
     "LiftAttempt",
-    "LiftSearch",
     "LiftSearchResult",
     "RigSearchAbortedError",
     "SearchAbortedError",
@@ -134,17 +133,6 @@ class TrialRunner(Protocol):
     def __call__(self, grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
         """Run one attempt at ``grip_force_n`` (N) and report what happened."""
         ...
-
-
-@dataclass(frozen=True)
-class LiftSearch:
-    """The search options that do not depend on the object (checked by
-    :func:`validate_search_options`)."""
-
-    protocol: str = "refine"
-    growth: float = DEFAULT_GROWTH
-    tolerance_rel: float = DEFAULT_TOLERANCE_REL
-    max_attempts: int = DEFAULT_MAX_ATTEMPTS
 
 
 class AttemptError(DeformctlError):

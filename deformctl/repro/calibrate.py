@@ -51,7 +51,7 @@ import numpy as np
 import pandas as pd
 
 from deformctl import __version__
-from deformctl.catalog import CatalogObject
+from deformctl.catalog import CATALOG_COLUMNS, CatalogObject
 from deformctl.errors import DeformctlError
 from deformctl.physics import damping_ratio, rigid_grip_force_n
 from deformctl.presets import CALIBRATED_PARAMETERS, PAPER_FIXED, SimPreset, paper_preset
@@ -105,20 +105,11 @@ def table3_cube_catalog(density_g_cm3: float = CUBE_DENSITY_G_CM3) -> pd.DataFra
     rows = []
     for i, row in enumerate(table3.to_dict("records"), start=1):
         side = round(cube_side_cm(float(row["weight_n"]), density_g_cm3), 4)
-        rows.append(
-            {
-                "object_id": f"T3-{i}",
-                "name": f"Table III row {i}",
-                "size_x_cm": side,
-                "size_y_cm": side,
-                "size_z_cm": side,
-                "weight_n": float(row["weight_n"]),
-                "friction_mu": FRICTION_MU,
-                "material_stiffness_n_per_cm": float(row["deformability_n_per_cm"]),
-                "material_damping_ns_per_cm": float(row["damping_ns_per_cm"]),
-            }
-        )
-    return pd.DataFrame(rows)
+        rows.append(  # in CATALOG_COLUMNS order: id, sizes x y z, weight, mu, D, lambda
+            (f"T3-{i}", side, side, side, float(row["weight_n"]), FRICTION_MU,
+             float(row["deformability_n_per_cm"]), float(row["damping_ns_per_cm"]))
+        )  # fmt: skip
+    return pd.DataFrame(rows, columns=list(CATALOG_COLUMNS))
 
 
 def published_points(density_g_cm3: float = CUBE_DENSITY_G_CM3) -> list[Point]:
@@ -314,7 +305,7 @@ def calibrate(
     record: dict[str, Any] = {
         "what": "the paper simulator preset's fitted parameters (deformctl.presets)",
         "command": "make calibrate (python -m deformctl.repro.calibrate --write "
-        "datasets/calibration/paper.json)",
+        "datasets/calibration/paper.json --convergence)",
         "deformctl_version": __version__,
         "fitted": {
             "shear_damping_ratio": round(fit.shear_damping_ratio, 5),

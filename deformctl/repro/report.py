@@ -35,6 +35,7 @@ import numpy as np
 import pandas as pd
 
 from deformctl.artifacts import read_squeeze_log, read_table
+from deformctl.catalog import catalog_objects
 from deformctl.errors import DeformctlError, MissingInputError
 from deformctl.physics import damping_ratio, rigid_grip_force_n
 from deformctl.repro import dataset_path
@@ -235,7 +236,8 @@ def _plots(
         label="ours, same 13 objects", zorder=3,
     )  # fmt: skip
     ax.axhline(1.0, color="k", lw=1, ls="--")
-    ax.set_xscale("symlog", linthresh=0.05)
+    ax.set_xscale("symlog", linthresh=0.05)  # linear near zeta = 0 (the water bag), log above
+    ax.set_xlim(left=0.0)
     ax.set_xlabel("damping ratio ζ = λ / (2 √(D m))")
     ax.set_ylabel("L_f / F_w")
     ax.set_title("Lifting force over the rigid-object force")
@@ -277,16 +279,17 @@ def compare_landscape(
         paper's NN output (Table III only), ``lift_force_ours_n`` (NaN when that object was not
         lifted), ``ratio_paper``, ``ratio_ours`` and ``error`` (ours / paper − 1).
     """
-    objects = pd.read_csv(dataset_path("paper", "objects.csv")).set_index("object_id")
+    catalog = pd.read_csv(dataset_path("paper", "objects.csv"))
+    names = dict(zip(catalog["object_id"], catalog["name"], strict=True))
+    specs = {o.object_id: o.to_sim_spec() for o in catalog_objects(catalog)}
     ours2 = paper_lift.set_index("object_id")["lift_force_n"]
     ours3 = table3_lift.set_index("object_id")["lift_force_n"]
     rows = []
     for r in table2.itertuples():
-        o = objects.loc[r.object_id]
+        o = specs[str(r.object_id)]
         rows.append(
-            (str(o["name"]), float(o["weight_n"]), float(o["material_stiffness_n_per_cm"]),
-             float(o["material_damping_ns_per_cm"]), float(r.lift_force_simulation_n), np.nan,
-             float(ours2.get(r.object_id, np.nan)))
+            (str(names[r.object_id]), o.weight_n, o.stiffness_n_per_cm, o.damping_ns_per_cm,
+             float(r.lift_force_simulation_n), np.nan, float(ours2.get(r.object_id, np.nan)))
         )  # fmt: skip
     for i, r in enumerate(table3.itertuples(), start=1):
         rows.append(

@@ -139,10 +139,16 @@ class SlipCriterion:
         measure: ``"contact"`` (default): the sliding accumulated at the palm contacts from the
             start of the rise, mean of both palms. ``"shortfall"``: the palms' rise minus the
             object's centre-of-mass rise at the end of the hold (includes elastic sag).
+        stop_early: end an attempt as soon as its contact slip exceeds ``tolerance_m`` (the
+            verdict is final then: the accumulated slip only grows) instead of simulating the
+            rest of the rise and the hold. Saves most of a slipped attempt's cost; its recorded
+            series ends there. Only with ``measure = "contact"``. Default off (the ``paper``
+            preset turns it on).
     """
 
     tolerance_m: float = 0.5e-3
     measure: Literal["contact", "shortfall"] = "contact"
+    stop_early: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.tolerance_m) and self.tolerance_m >= 0):
@@ -305,7 +311,7 @@ def lift_attempt(
     settings: SimSettings | None = None,
     criterion: SlipCriterion | None = None,
     release: SupportRelease | None = None,
-    stop_when_slipped: bool = True,
+    stop_when_slipped: bool | None = None,
 ) -> TrialOutcome:
     """Grip ``spec`` with ``grip_force_n`` per palm, raise the palms along ``profile``, hold.
 
@@ -316,9 +322,9 @@ def lift_attempt(
     the start of the rise. ``lifted`` is true when the slip (``criterion.measure``) is within
     ``criterion.tolerance_m`` and the object is off the table at the end.
 
-    With ``stop_when_slipped`` (default) and the contact slip measure, the attempt stops as soon
-    as its slip exceeds the tolerance: the verdict is then final (the accumulated slip only grows),
-    and the recorded series ends there.
+    With ``stop_when_slipped`` (default: ``criterion.stop_early``) and the contact slip measure,
+    the attempt stops as soon as its slip exceeds the tolerance: the verdict is then final (the
+    accumulated slip only grows), and the recorded series ends there.
     """
     s = settings or SimSettings()
     p = profile or LiftProfile()
@@ -340,7 +346,8 @@ def lift_attempt(
         force = np.full(n_steps + 1, float(grip_force_n))
     t_lift = n_grip * dt
     palm_vz = p.velocity_m_s(t - t_lift, rise)
-    stop = c.tolerance_m if stop_when_slipped and c.measure == "contact" else None
+    early = c.stop_early if stop_when_slipped is None else stop_when_slipped
+    stop = c.tolerance_m if early and c.measure == "contact" else None
     _, _, rec = run_model(
         model,
         force,

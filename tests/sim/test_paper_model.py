@@ -11,6 +11,7 @@ and a here are round numbers near the calibrated ones; the closed-form answers h
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -44,7 +45,7 @@ MODEL = SimSettings(
 )
 STEP = SupportRelease(mode="support")
 PROFILE = LiftProfile(accel_m_s2=0.8, speed_m_s=0.25, jerk_time_s=0.0, hold_s=0.3)
-STRICT = SlipCriterion(tolerance_m=1e-6)
+STRICT = SlipCriterion(tolerance_m=1e-6, stop_early=True)  # the paper preset's judgement
 SAND = ObjectSpec("sand", (11.4, 11.4, 9.5), 2.9, 0.5, 30.02, 0.47)
 
 
@@ -196,6 +197,10 @@ def test_an_attempt_stops_once_it_has_slipped_with_the_same_verdict() -> None:
     assert not full.lifted
     assert short.details["stopped_early"]
     assert not full.details["stopped_early"]
+    # without stop_early in the criterion (the table preset's) the attempt runs to its end
+    patient = replace(STRICT, stop_early=False)
+    kw_patient = {**kw, "criterion": patient}
+    assert not lift_attempt(SAND, 1.1 * fw, **kw_patient).details["stopped_early"]  # type: ignore[arg-type]
     assert short.series is not None
     assert full.series is not None
     n = short.series.time_s.size

@@ -144,7 +144,7 @@ def sim_runner_factory(
             "sim_preset": chosen.name,
             "sim_settings": dataclasses.asdict(s),
             "lift_profile": p.as_dict(),
-            "slip_criterion": {"measure": c.measure, "tolerance_m": c.tolerance_m},
+            "slip_criterion": dataclasses.asdict(c),
             "support_release": r.as_dict(),
         },
         check=check,
@@ -159,6 +159,8 @@ class LiftTask:
     Attributes:
         preset: the :class:`~deformctl.presets.SimPreset` (model, profile, slip, release).
         protocol, growth, tolerance_rel, max_attempts: the search options.
+        log_epoch_ns: where each part's lift log begins, ns since the Unix epoch (None: the
+            log writer's fixed epoch, 2000-01-01).
     """
 
     preset: SimPreset
@@ -166,6 +168,7 @@ class LiftTask:
     growth: float = DEFAULT_GROWTH
     tolerance_rel: float = DEFAULT_TOLERANCE_REL
     max_attempts: int = DEFAULT_MAX_ATTEMPTS
+    log_epoch_ns: int | None = None
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """One object's search: its lift_results row, its attempts as the payload.
@@ -203,7 +206,7 @@ def lift_sweep(
     """``lift --sim -o DIR/``: one search per catalog object through the sweep executor.
 
     Each part's rows go to ``DIR/part-k.parquet`` and its attempts to the lift log
-    ``DIR/part-k.mcap``; a row the simulator refuses, or a search that does not converge, is
+    ``DIR/_logs/part-k.mcap``; a row the simulator refuses, or a search that does not converge, is
     recorded in ``DIR/_failures/`` and the others go on. The rows are those of
     :func:`~deformctl.lift.stage.lift_catalog_files`, row for row.
 
@@ -224,6 +227,8 @@ def lift_sweep(
         "max_attempts": task.max_attempts,
     }
     run_settings = {"runner": factory.name, **factory.settings, **search}
+    if task.log_epoch_ns is not None:
+        run_settings["log_epoch_ns"] = task.log_epoch_ns
     provenance = Provenance.from_invocation([catalog_path], settings=run_settings)
     fingerprint = dataset_fingerprint(
         "lift", "lift_results", run_settings, {"catalog": input_digest(catalog_path)}
@@ -234,7 +239,7 @@ def lift_sweep(
         out_dir=output,
         schema=table_schema("lift_results"),
         fingerprint=fingerprint,
-        part_writer=LogPartWriter("lift_log", provenance),
+        part_writer=LogPartWriter("lift_log", provenance, task.log_epoch_ns),
         force=force,
         **sweep.run_kwargs(),
     )
