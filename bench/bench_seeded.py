@@ -16,8 +16,10 @@ brackets without simulating, the attempts the seeded search would take at other 
 (the measurement behind ``DEFAULT_START_MARGIN``).
 
 ``python -m bench.bench_seeded [RUN_DIR]``: with a ``make reproduce`` folder (``reports/``) it
-reuses that folder's pipeline outputs instead of building its own in a temp dir (about 3 minutes
-on 2 cores either way is dominated by the simulator).
+reuses that folder's pipeline outputs instead of building its own in a temp dir. The simulator
+is the cost: the pipeline is ``make reproduce``'s (about 2.5 minutes on 2 idle cores) and the
+three lifts of the test objects run side by side (about 320 attempts in all); on a shared
+machine at load 9 the whole run took 17 minutes.
 """
 
 from __future__ import annotations
@@ -41,7 +43,8 @@ from deformctl.lift import (
     find_min_lift_force,
     find_min_lift_force_seeded,
 )
-from deformctl.lift.seeded import load_start_model, load_start_table
+from deformctl.lift.search import TrialRunner
+from deformctl.lift.seeded import StartEstimate, load_start_model, load_start_table
 from deformctl.series import TrialOutcome
 
 MARGINS = (1.0, 1.0025, 1.005, 1.01, 1.02, 1.05)
@@ -50,10 +53,12 @@ MARGINS = (1.0, 1.0025, 1.005, 1.01, 1.02, 1.05)
 def _dc(*args: object, cwd: Path) -> float:
     """Run ``deformctl ARGS`` in ``cwd``; wall seconds."""
     t0 = time.perf_counter()
-    subprocess.run(
+    done = subprocess.run(
         [sys.executable, "-m", "deformctl", *map(str, args)],
-        cwd=cwd, check=True, stdout=subprocess.DEVNULL,
+        cwd=cwd, capture_output=True, text=True,
     )  # fmt: skip
+    if done.returncode != 0:
+        raise SystemExit(f"deformctl {args[0]} failed: {done.stderr.strip()}")
     return time.perf_counter() - t0
 
 
@@ -80,12 +85,12 @@ def _quartiles(values: np.ndarray) -> str:
     )
 
 
-def _threshold(t_n: float) -> object:
+def _threshold(t_n: float) -> TrialRunner:
     return lambda f, _i: TrialOutcome(f, f >= t_n, 0.0)
 
 
 def margin_sweep(
-    refine: pd.DataFrame, catalog: pd.DataFrame, starts: dict[str, dict[str, object]]
+    refine: pd.DataFrame, catalog: pd.DataFrame, starts: dict[str, dict[str, StartEstimate]]
 ) -> None:
     """Seeded attempts at other margins, replayed on a threshold inside each refine bracket."""
     objects = {o.object_id: o for o in catalog_objects(catalog)}
@@ -97,14 +102,15 @@ def margin_sweep(
             for oid, row in refine.iterrows():
                 obj, start = objects[str(oid)], est[str(oid)]
                 runner = _threshold(0.5 * (row.bracket_low_n + row.bracket_high_n))
-                kw = {"weight_n": obj.weight_n, "friction_mu": obj.friction_mu}
-                if start.in_range:  # type: ignore[attr-defined]
+                if start.in_range:
                     r = find_min_lift_force_seeded(
-                        runner, predicted_lift_force_n=start.predicted_lift_force_n,  # type: ignore[attr-defined]
-                        margin=margin, **kw,
+                        runner, weight_n=obj.weight_n, friction_mu=obj.friction_mu,
+                        predicted_lift_force_n=start.predicted_lift_force_n, margin=margin,
                     )  # fmt: skip
                 else:
-                    r = find_min_lift_force(runner, **kw)  # type: ignore[arg-type]
+                    r = find_min_lift_force(
+                        runner, weight_n=obj.weight_n, friction_mu=obj.friction_mu
+                    )
                 n.append(r.attempts)
             a = np.array(n, dtype=float)
             q1, q2, q3 = np.percentile(a, [25, 50, 75])
@@ -221,7 +227,7 @@ def main(argv: list[str] | None = None) -> None:
                 str(train_index), margin=1.0, coefficients=str(coefficients)
             ).starts(objects),
         }
-        margin_sweep(refine, cat, estimates)  # type: ignore[arg-type]
+        margin_sweep(refine, cat, estimates)
         if not math.isfinite(med["model"]):
             raise SystemExit("no model-seeded result")
 
