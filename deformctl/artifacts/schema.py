@@ -373,6 +373,8 @@ def _check_column(df: pd.DataFrame, col: ColumnSpec, kind: str, path: PathArg | 
         boxed = s.dtype == object and all(isinstance(v, bool | np.bool_) for v in s)
         if native or boxed:
             out = s.astype(bool)
+        elif col.nullable and all(isinstance(v, bool | np.bool_) or pd.isna(v) for v in s):
+            out = s.astype("boolean")  # pandas' nullable bool: True, False, <NA>
         else:
             raise fail(f"expected bool ({kind} spec), got {s.dtype}")
     else:  # string
