@@ -374,7 +374,8 @@ def _check_column(df: pd.DataFrame, col: ColumnSpec, kind: str, path: PathArg | 
         if native or boxed:
             out = s.astype(bool)
         elif col.nullable and all(isinstance(v, bool | np.bool_) or pd.isna(v) for v in s):
-            out = s.astype("boolean")  # pandas' nullable bool: True, False, <NA>
+            values = [None if pd.isna(v) else bool(v) for v in s]  # True, False, None
+            out = pd.Series(values, index=s.index, name=col.name, dtype=object)
         else:
             raise fail(f"expected bool ({kind} spec), got {s.dtype}")
     else:  # string

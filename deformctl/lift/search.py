@@ -252,10 +252,11 @@ class LiftSearchResult:
         """The scalar fields as a JSON-friendly dict (no trials), keyed like the lift_results table.
 
         The keys shared with ``schemas/lift_results.columns.json`` come first and carry the same
-        names; ``growth``, ``max_attempts``, ``last_force_n`` and ``message`` follow, then, for a
-        search given a start (:attr:`seeded`), ``predicted_lift_force_n``, ``start_force_n``,
-        ``start_in_training_range`` and ``start_source``. Values are the result's own (an
-        unbounded bracket keeps ``inf``); :meth:`table_row` makes a row.
+        names; ``growth``, ``max_attempts``, ``last_force_n`` and ``message`` follow, then
+        ``predicted_lift_force_n``, ``start_force_n``, ``start_in_training_range`` and
+        ``start_source`` (NaN / None unless the search was given a start, :attr:`seeded`; every
+        row has them, so a table's columns do not depend on how it was run). Values are the
+        result's own (an unbounded bracket keeps ``inf``); :meth:`table_row` makes a row.
         """
         return {
             "object_id": self.object_id,
@@ -274,16 +275,10 @@ class LiftSearchResult:
             "max_attempts": self.max_attempts,
             "last_force_n": self.last_force_n,
             "message": self.message,
-            **(
-                {
-                    "predicted_lift_force_n": self.predicted_lift_force_n,
-                    "start_force_n": self.start_force_n,
-                    "start_in_training_range": self.start_in_training_range,
-                    "start_source": self.start_source,
-                }
-                if self.seeded
-                else {}
-            ),
+            "predicted_lift_force_n": self.predicted_lift_force_n,
+            "start_force_n": self.start_force_n,
+            "start_in_training_range": self.start_in_training_range,
+            "start_source": self.start_source,
         }
 
     def table_row(self, *, runner: str, error: str | None = None) -> dict[str, object]:

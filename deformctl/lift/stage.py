@@ -222,8 +222,8 @@ def lift_catalog(
             :mod:`deformctl.lift.seeded`) with
             :func:`~deformctl.lift.search.find_min_lift_force_seeded`; an object outside the
             seed's range is searched by ``protocol`` from F_w instead, and ``warn`` gets one line
-            for it before any attempt. Every row then has ``predicted_lift_force_n``,
-            ``start_force_n``, ``start_in_training_range`` and ``start_source``.
+            for it before any attempt. The rows' ``predicted_lift_force_n``, ``start_force_n``,
+            ``start_in_training_range`` and ``start_source`` are filled (null without a seed).
         warn: receives warning lines (None: they are dropped).
 
     Returns:
