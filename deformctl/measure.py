@@ -1107,8 +1107,9 @@ class SimulateCatalogTask:
     Attributes:
         simulate: the keyword arguments of :func:`simulate_squeezes` (squeezes, peak force or
             strain, ramp, hold, gravity, noise).
-        settings: the :class:`~deformctl.sim.SimSettings`.
+        settings: the :class:`~deformctl.sim.SimSettings` (a preset's object model).
         seed: the run's noise seed.
+        sim_preset: the name of the preset ``settings`` came from (recorded in the log).
         log_epoch_ns: where the log's squeezes begin, ns since the Unix epoch (they are laid
             end to end from there).
     """
@@ -1116,6 +1117,7 @@ class SimulateCatalogTask:
     simulate: Mapping[str, Any]
     settings: SimSettings
     seed: int = 0
+    sim_preset: str | None = None
     log_epoch_ns: int = LOG_EPOCH_NS
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
@@ -1152,6 +1154,7 @@ def sim_provenance(
                 "peak_force_n" if task.simulate.get("peak_force_n") is not None else "strain"
             ),
             "objects": object_ids,
+            "sim_preset": task.sim_preset,
             "sim_settings": dataclasses.asdict(task.settings),
             "log_epoch_ns": task.log_epoch_ns,
         },

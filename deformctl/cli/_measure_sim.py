@@ -89,6 +89,7 @@ class SimOptions:
     """The ``--sim`` options as given (None: not given, the documented default applies)."""
 
     squeezes: int | None
+    sim_preset: str | None
     objects: str | None
     peak_force_n: float | None
     strain: float | None
@@ -117,20 +118,19 @@ class SimOptions:
         Raises:
             UsageError: both ``--peak-force-n`` and ``--strain``, or ``--squeezes`` < 1.
         """
-        from deformctl.sim import SimSettings
+        from deformctl.presets import DEFAULT_PRESET, sim_preset
 
         if self.peak_force_n is not None and self.strain is not None:
             raise UsageError("give --peak-force-n or --strain, not both")
         squeezes = DEFAULT_SIM_SQUEEZES if self.squeezes is None else self.squeezes
         if squeezes < 1:
             raise UsageError(f"--squeezes must be >= 1, got {squeezes}")
-        settings = SimSettings(
-            alpha_cm=self.alpha_cm,
-            **{
-                name: getattr(self, name)
-                for name in ("dt_s", "memory_budget_gib")
-                if getattr(self, name) is not None
-            },
+        preset = sim_preset(self.sim_preset or DEFAULT_PRESET).replace(
+            settings={
+                "alpha_cm": self.alpha_cm,
+                "dt_s": self.dt_s,
+                "memory_budget_gib": self.memory_budget_gib,
+            }
         )
         simulate: dict[str, Any] = {
             "squeezes": squeezes,
@@ -145,8 +145,9 @@ class SimOptions:
         epoch_ns = parse_log_epoch(self.log_epoch)
         return SimulateCatalogTask(
             simulate,
-            settings,
+            preset.settings,
             0 if self.seed is None else self.seed,
+            preset.name,
             **({} if epoch_ns is None else {"log_epoch_ns": epoch_ns}),
         )
 

@@ -50,6 +50,7 @@ def default(name: str) -> str:
 
 
 _PARTICLES = int(str(HEAVY_DEFAULTS["SimSettings.particles_per_side"]))
+_PAPER_PARTICLES = 7  #: deformctl.presets.PAPER_FIXED["particles_per_side"] (checked by a test)
 
 
 # ---------------------------------------------------------------------------- every writer
@@ -107,13 +108,26 @@ def parse_log_epoch(text: str | None) -> int | None:
 
 # ---------------------------------------------------------------------------- the simulator
 
+SimPresetName = Annotated[
+    str | None,
+    typer.Option(
+        "--sim-preset",
+        metavar="paper|table",
+        help="Sim: the simulator preset, the object model and lift protocol every simulated "
+        "force depends on [default: paper, calibrated to the seed paper's simulation; table: the "
+        "lift from the table, kept for comparison]. Single --sim options override its values; "
+        "every row and log records the preset.",
+    ),
+]
+
 AlphaCm = Annotated[
     float | None,
     typer.Option(
         "--alpha-cm",
         metavar="CM",
-        help=f"Sim: lattice spacing, cm [default: the longest side / {_PARTICLES - 1}, "
-        f"{_PARTICLES} particles].",
+        help="Sim: lattice spacing, cm [default: the preset's, the longest side / "
+        f"{_PAPER_PARTICLES - 1} ({_PAPER_PARTICLES} particles) for paper, / {_PARTICLES - 1} for "
+        "table].",
     ),
 ]
 DtS = Annotated[

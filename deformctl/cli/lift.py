@@ -20,7 +20,7 @@ Failures, decided here:
 
 from __future__ import annotations
 
-from typing import Annotated, cast
+from typing import TYPE_CHECKING, Annotated, cast
 
 import typer
 from rich.console import Console
@@ -57,10 +57,13 @@ from deformctl.lift.search import (
 from deformctl.lift.stage import lift_catalog_files
 from deformctl.parallel import SweepOptions
 
+if TYPE_CHECKING:  # pragma: no cover
+    from deformctl.presets import SimPreset
+
 
 def _sweep(
     catalog: str,
-    parts: tuple[object, ...] | None,
+    parts: SimPreset | None,
     log: str | None,
     search: tuple[object, ...],
     output: str,
@@ -77,7 +80,7 @@ def _sweep(
         )
     from deformctl.lift.runners.sim import LiftTask, lift_sweep
 
-    task = LiftTask(*parts, *search)  # type: ignore[arg-type]
+    task = LiftTask(parts, *search)  # type: ignore[arg-type]
     summary = lift_sweep(catalog, task, output=output, sweep=sweep, object_ids=object_ids,
                          force=force)  # fmt: skip
     finish_sweep(summary, "lift")
@@ -105,6 +108,7 @@ def lift(
             "--sim", help="Run the attempts in the built-in simulator (needs material values)."
         ),
     ] = False,
+    sim_preset: opt.SimPresetName = None,
     lift_accel_m_s2: LiftAccel = None,
     lift_speed_m_s: LiftSpeed = None,
     lift_height_m: LiftHeight = None,
@@ -163,9 +167,11 @@ def lift(
     attempt to an MCAP log. Exit 1 when an object does not converge or the rig fails; the
     outputs are written first, keeping the attempts made so far.
 
-    With --sim each attempt is simulated: grip, lift along the profile (S-curve to --lift-accel-m-s2
-    and --lift-speed-m-s, rise --lift-height-m, hold --lift-hold-s), judge slip by --slip-criterion
-    against --slip-tolerance-m; every row records the profile and the criterion.
+    With --sim each attempt is simulated under --sim-preset (paper by default: the object starts
+    stress-free on a support that gives way as the palms accelerate; table: lifted from the
+    table along an S-curve): grip, rise (--lift-accel-m-s2, --lift-speed-m-s, --lift-height-m,
+    hold --lift-hold-s), judge slip by --slip-criterion against --slip-tolerance-m; every row
+    records the preset, the profile and the criterion.
 
     With --sim and a dataset directory output (-o DIR/), the objects run in parallel
     (--workers N local processes, or --scheduler tcp://HOST:PORT of a Dask cluster) into
@@ -189,6 +195,7 @@ def lift(
             ),
             "--slip-tolerance-m": slip_tolerance_m if sim else None,  # else: frames' option
             "--slip-criterion": slip_criterion,
+            "--sim-preset": sim_preset,
             "--alpha-cm": alpha_cm,
             "--dt-s": dt_s,
             "--memory-budget-gib": memory_budget_gib,

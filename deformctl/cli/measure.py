@@ -96,6 +96,7 @@ def measure(
         ),
     ] = ...,  # type: ignore[assignment]
     squeezes: sq.Squeezes = None,
+    sim_preset: opt.SimPresetName = None,
     objects: opt.Objects = None,
     peak_force_n: sq.PeakForceN = None,
     strain: sq.Strain = None,
@@ -134,8 +135,8 @@ def measure(
       deformctl measure datasets/paper/objects.csv --sim -o squeeze.mcap
     """
     sim_opts = _measure_sim.SimOptions(
-        squeezes, objects, peak_force_n, strain, ramp_s, hold_s, floating, alpha_cm, dt_s,
-        memory_budget_gib, seed, noise_force_n, noise_position_m, log_epoch,
+        squeezes, sim_preset, objects, peak_force_n, strain, ramp_s, hold_s, floating, alpha_cm,
+        dt_s, memory_budget_gib, seed, noise_force_n, noise_position_m, log_epoch,
     )  # fmt: skip
     image_opts = img.ImageOptions(
         marker_size_cm, marker_dict, marker_id, checkerboard, square_size_cm, color_range,
