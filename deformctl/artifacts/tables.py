@@ -196,7 +196,12 @@ def read_parquet_bytes(data: bytes, path: PathArg) -> tuple[pa.Table, dict[str, 
     if len(data) < 12 or data[:4] != PARQUET_MAGIC or data[-4:] != PARQUET_MAGIC:
         raise InputDataError("not a Parquet file (bad magic bytes)", path=name)
     try:
-        pf = pq.ParquetFile(io.BytesIO(data))
+        # An Arrow buffer, never a Python file object: Arrow's I/O threads read a Python file
+        # through the GIL (PyReadableFile::ReadAt), and a read still queued when the interpreter
+        # exits after an error takes the GIL during finalization, which ends that std::thread with
+        # pthread_exit and aborts the process ("terminate called without an active exception",
+        # exit -6). A BufferReader is read without the interpreter.
+        pf = pq.ParquetFile(pa.BufferReader(data))
         created_by = str(pf.metadata.created_by or "")
         kv_keys = set((pf.metadata.metadata or {}).keys())
         table = pf.read()

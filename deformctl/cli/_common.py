@@ -3,15 +3,19 @@
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Iterator
+import sys
+import warnings
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import ParamSpec, TypeVar
+from typing import Any, ParamSpec, TypeVar
 
+from typer._click import exceptions as click_exc  # typer vendors click: its exceptions
 import typer
+from typer.core import TyperGroup
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from deformctl.errors import DeformctlError, UsageError
+from deformctl.errors import EXIT_FAILURE, EXIT_USAGE, DeformctlError, UsageError
 from deformctl.parallel import SweepSummary
 
 P = ParamSpec("P")
@@ -21,21 +25,95 @@ Advance = Callable[[str, int, int], None]
 """``advance(object_id, done, total)``: what the library's progress hooks call."""
 
 
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def _warning_text(caught: Sequence[warnings.WarningMessage]) -> str:
+    """The distinct warnings raised during a command, as one clause (first three, then a count)."""
+    texts = list(
+        dict.fromkeys(f"{w.category.__name__}: {_one_line(str(w.message))}" for w in caught)
+    )
+    more = f" (+{len(texts) - 3} more)" if len(texts) > 3 else ""
+    return "; ".join(texts[:3]) + more
+
+
 def translate_errors(func: Callable[P, R]) -> Callable[P, R]:
     """Turn a :class:`DeformctlError` raised by ``func`` into one stderr line and its exit code.
 
-    ``functools.wraps`` keeps the signature typer reads.
+    Warnings that numpy, scipy or scikit-learn raise on the way (overflow, an ill-conditioned
+    matrix) are collected rather than printed: with an error they are folded into its one line
+    (``error: <file>: <what is wrong> (while: RuntimeWarning: overflow ...)``); after a
+    success each distinct one is printed as one ``warning:`` line. ``functools.wraps`` keeps the
+    signature typer reads.
     """
 
     @functools.wraps(func)
     def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
-        try:
-            return func(*args, **kwargs)
-        except DeformctlError as err:
-            typer.echo(f"error: {err}", err=True)
-            raise typer.Exit(err.exit_code) from None
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("default")
+            try:
+                result = func(*args, **kwargs)
+            except DeformctlError as err:
+                folded = f" (while: {_warning_text(caught)})" if caught else ""
+                typer.echo(f"error: {err}{folded}", err=True)
+                raise typer.Exit(err.exit_code) from None
+        for text in dict.fromkeys(_one_line(str(w.message)) for w in caught):
+            typer.echo(f"warning: {text}", err=True)
+        return result
 
     return wrapper
+
+
+class OneLineErrorGroup(TyperGroup):
+    """The root command group: every click usage error becomes one ``error: ...`` line, exit 2.
+
+    Click prints a usage error (an unknown command or option, ``--seed abc``, a missing argument)
+    as a three-line box; shell pipelines and CI want the project's one-line form, so the group
+    runs click in non-standalone mode and formats what it raises itself. ``--help`` and the
+    help printed for a bare ``deformctl`` are unchanged.
+    """
+
+    def main(  # type: ignore[override]
+        self,
+        args: Sequence[str] | None = None,
+        prog_name: str | None = None,
+        complete_var: str | None = None,
+        standalone_mode: bool = True,
+        **extra: Any,
+    ) -> Any:
+        """Run the command; in standalone mode exit with its code, errors as one line."""
+        try:
+            result = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click_exc.NoArgsIsHelpError as err:
+            if not standalone_mode:
+                raise
+            typer.echo(err.ctx.get_help() if err.ctx is not None else "")
+            sys.exit(EXIT_USAGE)
+        except click_exc.ClickException as err:
+            if not standalone_mode:
+                raise
+            sys.exit(_report_click_error(err))
+        except click_exc.Abort:
+            if not standalone_mode:
+                raise
+            typer.echo("error: aborted", err=True)
+            sys.exit(EXIT_FAILURE)
+        if not standalone_mode:
+            return result
+        sys.exit(result if isinstance(result, int) else 0)
+
+
+def _report_click_error(err: click_exc.ClickException) -> int:
+    """Print ``err`` as the project's one line; return its exit code (2 for usage errors)."""
+    message = _one_line(err.format_message()).rstrip(".")
+    if isinstance(err, click_exc.UsageError):
+        where = f"{err.ctx.command_path}: " if err.ctx is not None else ""
+        hint = f" (see '{err.ctx.command_path} --help')" if err.ctx is not None else ""
+        typer.echo(f"error: {where}{message[:1].lower()}{message[1:]}{hint}", err=True)
+        return EXIT_USAGE
+    typer.echo(f"error: {message}", err=True)
+    return err.exit_code
 
 
 @contextmanager
