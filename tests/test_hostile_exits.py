@@ -73,7 +73,7 @@ def test_numeric_warnings_are_folded_into_the_error_line(
         warnings.warn("overflow encountered in multiply", RuntimeWarning, stacklevel=1)
         raise InputDataError("samples are not finite", path="x.mcap")
 
-    with pytest.raises(Exception, match="65|Exit"):
+    with pytest.raises(Exception, match=r"65|Exit"):
         command()
     err = capsys.readouterr().err
     _one_error_line(err)
@@ -120,7 +120,7 @@ def _bad_inputs(tmp: Path, command: str) -> list[str]:
     index, model = str(demo / "index.parquet"), str(demo / "model.skops")
     runner.invoke(
         app,
-        ["table", str(demo / "coefficients.parquet"), str(demo / "lift.parquet")] + ["-o", index],
+        ["table", str(demo / "coefficients.parquet"), str(demo / "lift.parquet"), "-o", index],
     )
     assert runner.invoke(app, ["train", index, "-o", model]).exit_code == 0
     bad = tmp / "bad_meta.parquet"

@@ -9,11 +9,11 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any, ParamSpec, TypeVar
 
-from typer._click import exceptions as click_exc  # typer vendors click: its exceptions
 import typer
-from typer.core import TyperGroup
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from typer._click import exceptions as click_exc  # typer vendors click: its exceptions
+from typer.core import TyperGroup
 
 from deformctl.errors import EXIT_FAILURE, EXIT_USAGE, DeformctlError, UsageError
 from deformctl.parallel import SweepSummary
