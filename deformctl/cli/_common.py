@@ -94,7 +94,7 @@ class OneLineErrorGroup(TyperGroup):
             if not standalone_mode:
                 raise
             sys.exit(_report_click_error(err))
-        except click_exc.Abort:
+        except typer.Abort:
             if not standalone_mode:
                 raise
             typer.echo("error: aborted", err=True)
