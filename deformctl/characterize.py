@@ -38,6 +38,13 @@ Two estimators:
   method carries by construction: ``f/d = D + λ d'/d``, so wherever the object is still moving
   the ratio mixes damping into D.
 
+Every fit carries its diagnostics (R², standard errors, samples, the loading range, the damping
+excitation and design condition, the preload) and quality flags (:mod:`deformctl.quality`):
+λ is NaN when it cannot be told from a constant force or from D, a squeeze that ruptured is
+fitted up to its rupture (:mod:`deformctl.phases`), and the policy (warnings, ``strict``,
+negative D) is applied before a table is written. ``preload="fit"`` adds an intercept F0 (a
+contact preload) to the model; ``constrain_damping`` bounds λ ≥ 0 (``scipy.optimize.lsq_linear``).
+
 :func:`read_and_characterize` fits every object of a squeeze log, :func:`characterize_dir` those
 of a ``measure`` dataset directory, and :func:`characterize_file` writes their table; at scale,
 :class:`CharacterizeTask` is the sweep task of one object and :func:`characterize_sweep` writes a
@@ -1016,6 +1023,22 @@ def characterize_file(
     )
     write_table(result.table, output, "coefficients", provenance=provenance, force=force)
     return result
+
+
+def sweep_warnings(out_dir: str | PathLike[str]) -> list[str]:
+    """One warning line per flagged object of a coefficients dataset directory (parts in order).
+
+    Returns an empty list when the directory's parts cannot be read (an interrupted sweep).
+    """
+    from deformctl.errors import DeformctlError
+
+    lines: list[str] = []
+    try:
+        for table in iter_dataset_parts(out_dir):
+            lines.extend(enforce(table.to_pandas(), path=str(out_dir)))
+    except DeformctlError:
+        return []
+    return lines
 
 
 def characterize_items(path: str | PathLike[str]) -> list[dict[str, Any]]:

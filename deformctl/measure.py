@@ -47,6 +47,12 @@ magnitudes, the second palm interpolated onto the first palm's timestamps.
 **Alignment.** Streams are aligned by their header stamps; position is linearly interpolated
 onto the force timestamps inside the overlap of the two streams. Samples outside the overlap are
 dropped.
+
+**Checks and cuts.** A recording whose sample rate, peak force, peak compression, force axis or
+compression sign a unit, axis or sign mistake explains is refused with the likely fix
+(:mod:`deformctl.plausibility`). Every squeeze is then cut at a rupture and reduced to the
+``phase`` asked for (:mod:`deformctl.phases`); the :class:`Recording` carries the ruptures, which
+the log stores with the object (:meth:`Recording.log_fields`).
 """
 
 from __future__ import annotations
@@ -401,11 +407,14 @@ def _check_recording_options(phase: str, increases_when: str | None) -> None:
 _UNIT_SPELLING = {"n": "N", "kn": "kN", "mn": "mN"}
 
 
-def _unit_hint(key: str, unit: str | None, what: str) -> str:
-    """``did you mean --units key=unit?`` (or a plainer hint when no unit fits)."""
+def _unit_hint(key: str, unit: str | None, what: str, stated: str | None = None) -> str:
+    """``did you mean --units key=unit?``; ``stated``: the unit the file's units row gives."""
     if unit is None:
         return f"check the unit of {what}"
-    return f"did you mean --units {key}={_UNIT_SPELLING.get(unit, unit)}?"
+    spelled = _UNIT_SPELLING.get(unit, unit)
+    if stated is not None:
+        return f"the file's units row says {stated!r}; is {what} in {spelled}?"
+    return f"did you mean --units {key}={spelled}?"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -817,7 +826,7 @@ def read_csv_export(
     for k in keys:
         _check_stream(f"column {columns[k]!r}", time_s, arrays[k], where)
     rate_hz = _rate_hz(time_s)
-    _check_time_and_force(arrays, used, columns, where)
+    _check_time_and_force(arrays, used, columns, where, file_units)
     kind = position_is if pos_key == "position" else pos_key
     compression_m = _compression(
         arrays[pos_key],
@@ -843,7 +852,7 @@ def read_csv_export(
         size_x_cm=size_x_cm,
         what=f"column {columns[pos_key]!r}",
         path=where,
-        hint=_unit_hint(pos_key, unit, f"column {columns[pos_key]!r}"),
+        hint=_unit_hint(pos_key, unit, f"column {columns[pos_key]!r}", file_units.get(pos_key)),
     )
     squeezes, ruptures = _to_squeezes(
         time_s - time_s[0],
@@ -868,8 +877,12 @@ def _check_time_and_force(
     used: Mapping[str, str],
     columns: Mapping[str, str],
     where: str,
+    stated: Mapping[str, str],
 ) -> None:
-    """Refuse a CSV whose sample rate or peak force a unit mistake explains (names the unit)."""
+    """Refuse a CSV whose sample rate or peak force a unit mistake explains (names the unit).
+
+    ``stated``: the units the file's units row gives (the hint then questions the file).
+    """
     time_s, force_n = arrays["time"], arrays["force"]
     dt_s = float(np.median(np.diff(time_s)))
     rate_hz = 1.0 / dt_s
@@ -882,7 +895,8 @@ def _check_time_and_force(
             target=1000.0,
         )
         what = f"column {columns['time']!r}"
-        check_sample_rate(rate_hz, what=what, path=where, hint=_unit_hint("time", unit, what))
+        hint = _unit_hint("time", unit, what, stated.get("time"))
+        check_sample_rate(rate_hz, what=what, path=where, hint=hint)
     peak_n = float(np.max(np.abs(force_n)))
     factor = FORCE_UNITS_N[used["force"]]
     unit = suggest_unit(
@@ -893,7 +907,8 @@ def _check_time_and_force(
         target=10.0,
     )
     what = f"column {columns['force']!r}"
-    check_peak_force(peak_n, what=what, path=where, hint=_unit_hint("force", unit, what))
+    hint = _unit_hint("force", unit, what, stated.get("force"))
+    check_peak_force(peak_n, what=what, path=where, hint=hint)
 
 
 def _cell(row: Sequence[str], i: int) -> str:

@@ -20,6 +20,7 @@ from typer.testing import CliRunner
 
 from deformctl.artifacts import read_table, write_squeeze_log, write_table
 from deformctl.artifacts import tables as tables_module
+from deformctl.artifacts.dataset import read_dataset, read_failures
 from deformctl.characterize import synthetic_kelvin_voigt_squeeze
 from deformctl.cli import app
 from deformctl.errors import EXIT_DATAERR, EXIT_USAGE
@@ -241,3 +242,25 @@ def test_coefficients_v1_files_are_still_read(
         }
     )
     assert build_index_table(df, lift)["damping_ns_per_cm"].tolist() == [6.5]
+
+
+def test_sweep_writes_flagged_rows_warns_and_strict_fails_them(tmp_path: Path) -> None:
+    logs = tmp_path / "squeeze"
+    logs.mkdir()
+    _log(logs / "part-00000.mcap", CASES["negative_damping"][0]())
+    out = tmp_path / "coef"
+    res = runner.invoke(app, ["characterize", str(logs), "-o", f"{out}/", "--workers", "1"])
+    assert res.exit_code == 0, res.stderr
+    warnings = [ln for ln in res.stderr.splitlines() if ln.startswith("warning: ")]
+    assert len(warnings) == 1
+    assert "object 'bad': negative_damping (λ = -2" in warnings[0]
+    df = read_dataset(out).set_index("object_id")
+    assert df.loc["bad", "quality"] == "negative_damping"
+    strict = tmp_path / "strict"
+    res = runner.invoke(
+        app, ["characterize", str(logs), "-o", f"{strict}/", "--workers", "1", "--strict"]
+    )
+    assert res.exit_code == 1  # a sweep records the refused object as failed and goes on
+    assert list(read_dataset(strict)["object_id"]) == ["good"]
+    (failure,) = read_failures(strict).to_dict("records")
+    assert "--strict: object 'bad' is flagged: negative_damping" in str(failure)

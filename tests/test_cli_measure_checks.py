@@ -270,3 +270,20 @@ def test_clean_bag_and_csv_give_no_warning(tmp_path: Path) -> None:
     objects, _ = read_squeeze_log(out)
     assert objects[0]["source"] == "ros2_bag"
     assert "ruptures" not in objects[0]
+
+
+def test_a_unit_stated_by_the_file_is_questioned(tmp_path: Path) -> None:
+    csv = _in(tmp_path) / "machine.csv"
+    t, f, gap = _kv_csv_rows(noise=False, rate_hz=200.0)
+    rows = "".join(
+        f"{a:.4f},{b:.6f},{(gap[0] - c) * 1e3:.6f}\n" for a, b, c in zip(t, f, gap, strict=True)
+    )
+    csv.write_text("t,load,Pos\ns,N,m\n" + rows)  # the units row says m; the numbers are mm
+    out = tmp_path / "o.mcap"
+    msg = _fails(
+        csv_args(csv, out, "time=t,force=load,compression=Pos"),
+        EXIT_DATAERR,
+        "peak compression 5",
+        out,
+    )
+    assert msg.endswith("the file's units row says 'm'; is column 'Pos' in mm?")

@@ -270,3 +270,14 @@ def test_thresholds_are_stated_in_the_readme_and_the_help() -> None:
     for flag in FLAGS:
         assert f"`{flag}`" in section
         assert flag in thresholds_help()
+
+
+def test_swapped_force_and_position_columns_are_flagged_when_damped() -> None:
+    # an export read with force and position swapped (mm as N, N as mm): the damping term turns
+    # negative and the fit poor. (A nearly elastic object swapped is just another elastic object,
+    # D' = 1/D in those units: no flag can tell, only the units and size checks of measure.)
+    s = synthetic_kelvin_voigt_squeeze(5.0, 6.47, seed=1, profile="sine")
+    swapped = SqueezeSeries("obj", 0, s.time_s, s.compression_m * 1e3, s.force_n * 1e-3)
+    fit = fit_lsq([swapped])
+    assert fit.r2 < 0
+    assert fit.flags == ("negative_damping", "low_r2")

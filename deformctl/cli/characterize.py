@@ -15,6 +15,7 @@ from deformctl.characterize import (
     LogCoefficients,
     characterize_file,
     characterize_sweep,
+    sweep_warnings,
 )
 from deformctl.cli import _options as opt
 from deformctl.cli._common import finish_sweep, translate_errors
@@ -147,6 +148,8 @@ def characterize(
     if sweep.check(output):
         task = CharacterizeTask(method, window_s, **options)
         summary = characterize_sweep(log, task, output=output, sweep=sweep, force=force)
+        for line in sweep_warnings(summary.out_dir):
+            typer.echo(f"warning: {line}", err=True)
         finish_sweep(summary, "characterize")
         return
     result = characterize_file(log, method, output=output, window_s=window_s, force=force,  # type: ignore[arg-type]
