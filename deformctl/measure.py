@@ -74,7 +74,7 @@ import pyarrow as pa
 from deformctl.artifacts import check_output_path, read_catalog, write_squeeze_log
 from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
 from deformctl.artifacts.provenance import Provenance, input_digest
-from deformctl.catalog import catalog_objects, select_objects
+from deformctl.catalog import CatalogObject, catalog_objects, select_objects
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
 from deformctl.phases import PHASES, Phase, Rupture, cut_rupture, phase_slice, slice_squeeze
@@ -1140,6 +1140,55 @@ def sim_provenance(
     )
 
 
+#: Bytes one sample of a squeeze log held in memory costs: the series arrays and the JSON message
+#: built from them before the log is written.
+LOG_SAMPLE_BYTES = 400
+
+
+def _check_budgets(
+    catalog: pd.DataFrame, task: SimulateCatalogTask, path: str, *, single_log: bool
+) -> None:
+    """Refuse, before simulating, a run above the memory budget (``--memory-budget-gib``).
+
+    Each object's squeeze (its model plus the recorded steps, see
+    :func:`deformctl.sim.engine.check_run_steps`) must fit; a single-file squeeze log, built in
+    memory (MCAP's summary comes at the end), must fit as a whole. A dataset directory is written
+    part by part and has no whole-log limit. With ``single_log`` a bad row is refused first
+    (exit 65); in a dataset it is skipped here and fails alone in its worker.
+
+    Raises:
+        InputDataError: ``single_log`` and a row the simulator refuses (exit 65).
+        UsageError: one line naming the estimate, the budget and the option (exit 2).
+    """
+    from deformctl.sim.engine import GIB, check_run_steps
+
+    settings = task.settings
+    squeezes = int(task.simulate.get("squeezes", DEFAULT_SIM_SQUEEZES))
+    ramp = task.simulate.get("ramp_s")
+    hold = task.simulate.get("hold_s")
+    duration_s = float(DEFAULT_SIM_RAMP_S if ramp is None else ramp) + float(
+        DEFAULT_SIM_HOLD_S if hold is None else hold
+    )
+    steps = duration_s / settings.dt_s + 1.0
+    for record in catalog.to_dict("records"):
+        try:
+            spec = CatalogObject.from_row(record).to_sim_spec(path=path)
+        except InputDataError:
+            if single_log:
+                raise
+            continue  # a dataset's bad row fails alone, in its worker
+        check_run_steps(spec, settings, steps, "squeeze")
+    samples = len(catalog) * squeezes * steps
+    estimate = samples * LOG_SAMPLE_BYTES
+    if single_log and estimate > settings.memory_budget_gib * GIB:
+        raise UsageError(
+            f"one squeeze log of {len(catalog):,} objects x {squeezes} squeezes is {samples:.3g} "
+            f"samples, an estimated {estimate / GIB:.3g} GiB in memory, above the memory budget "
+            f"of {settings.memory_budget_gib:g} GiB; write a dataset directory (-o DIR/) or "
+            "raise --memory-budget-gib"
+        )
+
+
 def simulate_catalog_file(
     catalog_path: str,
     task: SimulateCatalogTask,
@@ -1164,8 +1213,7 @@ def simulate_catalog_file(
     """
     check_output_path(output, force)
     catalog = select_objects(read_catalog(catalog_path), object_ids)
-    for obj in catalog_objects(catalog, path=catalog_path):  # refuse bad rows first
-        obj.to_sim_spec(path=catalog_path)
+    _check_budgets(catalog, task, catalog_path, single_log=True)  # bad rows first
     provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
     objects, series = simulate_squeezes(
         catalog,
@@ -1203,6 +1251,7 @@ def simulate_catalog_sweep(
         force: overwrite the sweep files of an existing directory.
     """
     catalog = select_objects(read_catalog(catalog_path), object_ids)
+    _check_budgets(catalog, task, catalog_path, single_log=False)
     provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
     items = [{**rec, "_position": i} for i, rec in enumerate(catalog.to_dict("records"))]
     settings = {**task.simulate, "sim_settings": dataclasses.asdict(task.settings)}

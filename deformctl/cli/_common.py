@@ -45,7 +45,8 @@ def translate_errors(func: Callable[P, R]) -> Callable[P, R]:
     matrix) are collected rather than printed: with an error they are folded into its one line
     (``error: <file>: <what is wrong> (while: RuntimeWarning: overflow ...)``); after a
     success each distinct one is printed as one ``warning:`` line. ``functools.wraps`` keeps the
-    signature typer reads.
+    signature typer reads. A :class:`MemoryError` (an allocation beyond the machine, once a
+    budget check was passed by raising the budget) is one line with exit 1.
     """
 
     @functools.wraps(func)
@@ -58,6 +59,14 @@ def translate_errors(func: Callable[P, R]) -> Callable[P, R]:
                 folded = f" (while: {_warning_text(caught)})" if caught else ""
                 typer.echo(f"error: {err}{folded}", err=True)
                 raise typer.Exit(err.exit_code) from None
+            except MemoryError as err:  # a budget raised beyond what the machine has
+                detail = f": {_one_line(str(err))}" if str(err) else ""
+                typer.echo(
+                    f"error: out of memory{detail}; lower the problem size (or the "
+                    "--memory-budget-gib you raised)",
+                    err=True,
+                )
+                raise typer.Exit(EXIT_FAILURE) from None
         for text in dict.fromkeys(_one_line(str(w.message)) for w in caught):
             typer.echo(f"warning: {text}", err=True)
         return result

@@ -83,6 +83,9 @@ def train(
     metrics: str | None = typer.Option(
         None, "--metrics", help="Also write the metrics as JSON here (- for stdout)."
     ),
+    max_parameters: int = typer.Option(
+        100_000, "--max-parameters", min=1, help="Refuse a network with more weights than this."
+    ),
     force: Force = False,
 ) -> None:
     """Train Pipeline(StandardScaler, MLPRegressor) on (W, D, λ) -> L_f and save it with skops.
@@ -104,7 +107,7 @@ def train(
     from deformctl.artifacts.model import save_model
     from deformctl.train import parse_hidden, train_model, train_report
 
-    sizes = parse_hidden(hidden)
+    sizes = parse_hidden(hidden, max_parameters=max_parameters)
     if is_stdio(output):
         raise UsageError("the model file cannot be stdout; give a file name with -o")
     if metrics is not None and not is_stdio(metrics) and Path(metrics) == Path(output):
