@@ -313,8 +313,10 @@ def check_run_steps(spec: ObjectSpec, settings: SimSettings, n_steps: float, wha
     ``dt_s``; a float, so an absurd duration is an estimate, not an overflow).
 
     Raises:
-        UsageError: one line naming the steps, the estimate and the budget (exit 2).
+        UsageError: one line naming the steps, the estimate and the budget (exit 2); a model
+            too large by itself is named as :func:`check_lattice_size` does.
     """
+    check_lattice_size(spec, settings)
     estimate = memory_estimate_bytes(spec, settings) + float(n_steps) * STEP_BYTES
     if not estimate <= settings.memory_budget_gib * GIB:  # also refuses inf / nan
         raise UsageError(
