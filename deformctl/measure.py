@@ -57,8 +57,10 @@ the log stores with the object (:meth:`Recording.log_fields`).
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import dataclasses
+import io
 import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -422,15 +424,92 @@ def _unit_hint(key: str, unit: str | None, what: str, stated: str | None = None)
 # ---------------------------------------------------------------------------------------------
 
 
-def _stamp_ns(msg: Any) -> int:
-    stamp = msg.header.stamp
-    return int(stamp.sec) * NS_PER_S + int(stamp.nanosec)
+#: The fields each message type must have for the reader (dotted paths).
+_REQUIRED_FIELDS: dict[str, tuple[str, ...]] = {
+    WRENCH_TYPE: ("header.stamp.sec", "header.stamp.nanosec", "wrench.force"),
+    POSE_TYPE: ("header.stamp.sec", "header.stamp.nanosec", "pose.position"),
+    JOINT_STATE_TYPE: ("header.stamp.sec", "header.stamp.nanosec", "name", "position"),
+}
+
+#: The first two bytes of a ROS 2 CDR payload (the encapsulation kind): plain CDR, big or little
+#: endian.
+_CDR_KINDS = (b"\x00\x00", b"\x00\x01")
+
+_MISSING = object()
+
+
+def _field(msg: Any, dotted: str, where: str, path: Path) -> Any:
+    """``msg.<dotted>``, or a one-line error naming the field the message definition lacks."""
+    value = msg
+    for part in dotted.split("."):
+        value = getattr(value, part, _MISSING)
+        if value is _MISSING:
+            raise InputDataError(
+                f"{where}: the message has no field {dotted!r} (its message definition does not "
+                "match its type name)",
+                path=path,
+            )
+    return value
+
+
+def _number(value: Any, dotted: str, where: str, path: Path) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise InputDataError(
+            f"{where}: field {dotted!r} is a {type(value).__name__}, not a number", path=path
+        )
+    return float(value)
+
+
+def _stamp_ns(msg: Any, where: str, path: Path) -> int:
+    sec = _field(msg, "header.stamp.sec", where, path)
+    nanosec = _field(msg, "header.stamp.nanosec", where, path)
+    if not all(isinstance(v, int) and not isinstance(v, bool) for v in (sec, nanosec)):
+        raise InputDataError(f"{where}: header.stamp is not (sec, nanosec) integers", path=path)
+    return int(sec) * NS_PER_S + int(nanosec)
+
+
+def _decoder(factory: Any, schema: Any, channel: Any, where: str, path: Path) -> Any:
+    """The CDR decoder of ``channel``'s message definition, or a one-line error (exit 65)."""
+    if channel.message_encoding != "cdr" or schema is None or schema.encoding != "ros2msg":
+        got = f"{channel.message_encoding}/{getattr(schema, 'encoding', None)}"
+        raise InputDataError(f"{where}: encoding {got}, expected cdr/ros2msg", path=path)
+    try:  # the msgdef parser also prints its complaint to stderr: keep that to the one line
+        with contextlib.redirect_stderr(io.StringIO()):
+            return factory.decoder_for(channel.message_encoding, schema)
+    except Exception as err:  # the msgdef parser raises many kinds of error on bad text
+        raise InputDataError(
+            f"{where}: unparseable message definition ({type(err).__name__}: "
+            f"{' '.join(str(err).split())[:200]})",
+            path=path,
+        ) from None
+
+
+def _decode(decode: Any, data: bytes, index: int, where: str, path: Path) -> Any:
+    """One CDR payload decoded, or a one-line error naming the message (exit 65)."""
+    if len(data) < 4 or bytes(data[:2]) not in _CDR_KINDS:
+        raise InputDataError(
+            f"{where}: message {index} has no CDR encapsulation header "
+            f"(first bytes {bytes(data[:4]).hex() or 'none'})",
+            path=path,
+        )
+    try:
+        return decode(data)
+    except Exception as err:  # a truncated payload raises struct, index, unicode... errors
+        raise InputDataError(
+            f"{where}: message {index} does not decode with its message definition "
+            f"({type(err).__name__}: {' '.join(str(err).split())[:200]})",
+            path=path,
+        ) from None
 
 
 def _read_topics(
     path: Path, roles: Mapping[str, tuple[str, ...]], joint: str | None, axis: Axis
 ) -> dict[str, tuple[list[int], list[Any]]]:
     """Read ``(stamp_ns list, value list)`` per topic: the force vector, position.axis or joint.
+
+    Each channel's encoding, message definition and every decoded message are checked against
+    the fields the reader needs (:data:`_REQUIRED_FIELDS`) before use; a mismatch names the
+    topic, the type and the field (exit 65).
 
     Args:
         path: the bag.
@@ -446,7 +525,7 @@ def _read_topics(
     out: dict[str, tuple[list[int], list[Any]]] = {t: ([], []) for t in topics}
     with path.open("rb") as fh:
         try:
-            reader = make_reader(fh, decoder_factories=[DecoderFactory()])
+            reader = make_reader(fh)
             summary = reader.get_summary()
         except (McapError, ValueError, OSError) as err:
             raise InputDataError(f"not a readable MCAP file ({err})", path=path) from err
@@ -472,30 +551,55 @@ def _read_topics(
                 )
             if want == JOINT_STATE_TYPE and joint is None:
                 raise UsageError(f"topic {topic!r} is {JOINT_STATE_TYPE}: pass a joint name")
+        factory = DecoderFactory()
+        decoders: dict[int, Any] = {}
+        counts = dict.fromkeys(topics, 0)
         try:
-            for _schema, channel, _message, msg in reader.iter_decoded_messages(topics=topics):
+            for schema, channel, message in reader.iter_messages(topics=topics):
+                where = f"topic {channel.topic!r} ({types[channel.topic]})"
+                if channel.id not in decoders:
+                    decoders[channel.id] = _decoder(factory, schema, channel, where, path)
+                index = counts[channel.topic]
+                counts[channel.topic] += 1
+                msg = _decode(decoders[channel.id], message.data, index, where, path)
                 stamps, values = out[channel.topic]
-                stamps.append(_stamp_ns(msg))
-                values.append(_extract(msg, types[channel.topic], axis, joint, channel.topic, path))
+                stamps.append(_stamp_ns(msg, where, path))
+                values.append(_extract(msg, types[channel.topic], axis, joint, where, path))
         except McapError as err:
             raise InputDataError(f"cannot decode bag ({err})", path=path) from err
     return out
 
 
 def _extract(
-    msg: Any, type_name: str, axis: Axis, joint: str | None, topic: str, path: Path
+    msg: Any, type_name: str, axis: Axis, joint: str | None, where: str, path: Path
 ) -> Any:
+    for dotted in _REQUIRED_FIELDS[type_name]:
+        _field(msg, dotted, where, path)
     if type_name == WRENCH_TYPE:
         force = msg.wrench.force
-        return (float(force.x), float(force.y), float(force.z))
+        return tuple(
+            _number(_field(force, a, where, path), f"wrench.force.{a}", where, path) for a in "xyz"
+        )
     if type_name == POSE_TYPE:
-        return float(getattr(msg.pose.position, axis))
-    names = list(msg.name)
+        position = msg.pose.position
+        return _number(_field(position, axis, where, path), f"pose.position.{axis}", where, path)
+    try:
+        names = [str(n) for n in msg.name]
+        positions = list(msg.position)
+    except TypeError:
+        raise InputDataError(f"{where}: name and position must be arrays", path=path) from None
     if joint not in names:
         raise InputDataError(
-            f"topic {topic!r}: joint {joint!r} not in the JointState names {names}", path=path
+            f"{where}: joint {joint!r} not in the JointState names {names}", path=path
         )
-    return float(msg.position[names.index(joint)])
+    i = names.index(joint)
+    if i >= len(positions):
+        raise InputDataError(
+            f"{where}: joint {joint!r} has no position ({len(positions)} positions for "
+            f"{len(names)} names)",
+            path=path,
+        )
+    return _number(positions[i], "position", where, path)
 
 
 def read_ros2_bag(
