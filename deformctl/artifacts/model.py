@@ -36,10 +36,18 @@ from importlib.metadata import version as _dist_version
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import skops.io as sio
+from sklearn.neural_network import MLPRegressor
+from sklearn.pipeline import Pipeline
+from sklearn.preprocessing import StandardScaler
 
+from deformctl import jsonsafe
 from deformctl.errors import InputDataError, MissingInputError, OutputExistsError, UsageError
-from deformctl.train import ScaledTargetRegressor
+from deformctl.train import FEATURES, ScaledTargetRegressor
+
+#: The hidden-layer activations of scikit-learn's MLP.
+ACTIVATIONS = frozenset({"identity", "logistic", "tanh", "relu"})
 
 #: The ``format`` tag of a deformctl model file.
 MODEL_FORMAT = "deformctl-lift-force-model/1"
@@ -120,7 +128,7 @@ def inspect_types(path: str | os.PathLike[str]) -> tuple[set[str], set[str]]:
         raise MissingInputError("model file not found", path=p)
     try:
         with zipfile.ZipFile(p) as archive:
-            schema = json.loads(archive.read("schema.json"))
+            schema = jsonsafe.loads(archive.read("schema.json"))
     except zipfile.BadZipFile:
         raise InputDataError(
             "not a skops model file (truncated or not a zip archive)", path=p
@@ -245,9 +253,94 @@ def load_model(path: str | os.PathLike[str]) -> tuple[ScaledTargetRegressor, dic
         )
     raw = payload.get("metadata_json")
     try:
-        metadata = json.loads(raw) if isinstance(raw, str) else None
-    except ValueError:
-        metadata = None
+        metadata = jsonsafe.loads(raw, allow_nan=True) if isinstance(raw, str) else None
+    except ValueError as err:
+        raise InputDataError(
+            f"the model file's metadata is not usable JSON ({err})", path=p
+        ) from None
     if not isinstance(metadata, dict):
         raise InputDataError("the model file's metadata is not a JSON object", path=p)
+    check_structure(model, path=p)
     return model, metadata
+
+
+def _finite_array(value: Any, shape: tuple[int, ...], what: str) -> str | None:
+    """None when ``value`` is a finite float array of ``shape``; else what is wrong."""
+    if not isinstance(value, np.ndarray) or value.dtype.kind not in "fi":
+        return f"{what} is not a numeric array"
+    if value.shape != shape:
+        return f"{what} has shape {value.shape}, expected {shape}"
+    if not np.all(np.isfinite(value)):
+        return f"{what} has non-finite values"
+    return None
+
+
+def _structure_problem(model: ScaledTargetRegressor) -> str | None:
+    """What is wrong with a loaded model's structure (None: it can predict)."""
+    n = len(FEATURES)
+    attrs = vars(model)
+    if attrs.get("n_features_in_") != n:
+        return f"the model takes {attrs.get('n_features_in_')!r} features, expected {n}"
+    names = attrs.get("feature_names_in_")
+    if names is not None and [str(x) for x in names] != list(FEATURES):
+        return f"the model's features are {[str(x) for x in names]}, expected {list(FEATURES)}"
+    index = attrs.get("scale_index")
+    if index is not None and not (isinstance(index, int) and 0 <= index < n):
+        return f"scale_index {index!r} is out of range (0..{n - 1})"
+    for key in ("feature_min_", "feature_max_"):
+        problem = _finite_array(attrs.get(key), (n,), key)
+        if problem:
+            return problem
+    pipe = attrs.get("regressor_")
+    if not isinstance(pipe, Pipeline):
+        return f"the regressor is a {type(pipe).__name__}, not a fitted Pipeline"
+    steps = [step for _, step in pipe.steps] if isinstance(pipe.steps, list) else []
+    if len(steps) != 2 or not isinstance(steps[0], StandardScaler):
+        return "the pipeline is not (StandardScaler, MLPRegressor)"
+    scaler, mlp = steps
+    if not isinstance(mlp, MLPRegressor):
+        return f"the pipeline's last step is a {type(mlp).__name__}, not an MLPRegressor"
+    for key in ("mean_", "scale_"):
+        problem = _finite_array(vars(scaler).get(key), (n,), f"the scaler's {key}")
+        if problem:
+            return problem
+    if not np.all(scaler.scale_ > 0):
+        return "the scaler's scale_ is not > 0"
+    coefs, intercepts = vars(mlp).get("coefs_"), vars(mlp).get("intercepts_")
+    if not isinstance(coefs, list) or not isinstance(intercepts, list) or not coefs:
+        return "the MLPRegressor is not fitted (no coefs_ / intercepts_)"
+    if len(intercepts) != len(coefs) or vars(mlp).get("n_layers_") != len(coefs) + 1:
+        return "the MLPRegressor's layers do not match (coefs_, intercepts_, n_layers_)"
+    width = n
+    for i, (w, b) in enumerate(zip(coefs, intercepts, strict=True)):
+        out = w.shape[1] if isinstance(w, np.ndarray) and w.ndim == 2 else -1
+        problem = _finite_array(w, (width, out), f"layer {i}'s weights") or _finite_array(
+            b, (out,), f"layer {i}'s biases"
+        )
+        if problem:
+            return problem
+        width = out
+    if width != 1:
+        return f"the network has {width} outputs, expected 1"
+    if mlp.activation not in ACTIVATIONS or vars(mlp).get("out_activation_") != "identity":
+        return f"the network's activations ({mlp.activation!r}) are not a regressor's"
+    if vars(mlp).get("n_outputs_") != 1:
+        return "the MLPRegressor is not fitted for one output"
+    return None
+
+
+def check_structure(model: ScaledTargetRegressor, *, path: str | os.PathLike[str]) -> None:
+    """Refuse a model whose structure cannot predict (the allow-list checks only the types).
+
+    Checks: ``n_features_in_`` is 3 (and the feature names are :data:`~deformctl.train.FEATURES`),
+    ``scale_index`` in range, the training range finite; the wrapped regressor is a fitted
+    ``Pipeline(StandardScaler, MLPRegressor)``: the scaler's ``mean_`` / ``scale_`` of 3 finite
+    values, the network's weights and biases finite and chained 3 → ... → 1, a regressor's
+    activations.
+
+    Raises:
+        InputDataError: one line naming what is wrong (exit 65).
+    """
+    problem = _structure_problem(model)
+    if problem is not None:
+        raise InputDataError(f"not a usable lifting-force model: {problem}", path=path)

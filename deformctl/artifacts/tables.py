@@ -18,10 +18,12 @@ written by other tools, which are accepted when their columns match the spec).
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import io
 import json
 import struct
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -29,6 +31,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from deformctl import jsonsafe
 from deformctl.artifacts.io import (
     PathArg,
     atomic_output,
@@ -172,7 +175,7 @@ def _parse_meta(raw: bytes | None, path: PathArg) -> dict[str, Any] | None:
     if raw is None:
         return None
     try:
-        meta = json.loads(raw.decode("utf-8"))
+        meta = jsonsafe.loads(raw, allow_nan=True)
     except ValueError as err:
         raise SchemaError(
             f"metadata is not valid JSON ({err})", path=path, field="deformctl"
@@ -266,6 +269,7 @@ def _frame_from_arrow(
 ) -> pd.DataFrame:
     """Validate an Arrow table as ``kind`` and attach kind/units/provenance as ``df.attrs``."""
     name = display_name(path)
+    _refuse_duplicates(table.column_names, name)
     spec = load_table_spec(kind)
     provenance = None
     if meta is not None:
@@ -365,6 +369,16 @@ def read_catalog_bytes(data: bytes, path: PathArg) -> pd.DataFrame:
     return df
 
 
+def _refuse_duplicates(columns: Sequence[str], name: str) -> None:
+    """A column named twice is refused, never silently renamed (pandas reads ``x.1``)."""
+    seen: set[str] = set()
+    for column in columns:
+        key = str(column).strip()
+        if key in seen:
+            raise SchemaError("column named twice in the header", path=name, field=key)
+        seen.add(key)
+
+
 def _parse_catalog_csv(data: bytes, name: str) -> pd.DataFrame:
     if not data.strip():
         raise InputDataError("empty catalog: the file is empty", path=name)
@@ -374,6 +388,11 @@ def _parse_catalog_csv(data: bytes, name: str) -> pd.DataFrame:
         raise InputDataError(f"not UTF-8 text (byte {err.start})", path=name) from None
     if "\x00" in text:
         raise InputDataError("not a CSV file (contains NUL bytes)", path=name)
+    try:
+        header = next(csv.reader(io.StringIO(text)), [])
+    except csv.Error as err:
+        raise InputDataError(f"not a valid CSV catalog ({_short(err)})", path=name) from None
+    _refuse_duplicates(header, name)
     try:
         raw = pd.read_csv(
             io.StringIO(text),

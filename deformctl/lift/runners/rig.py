@@ -60,6 +60,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, TypeGuard
 
+from deformctl import jsonsafe
 from deformctl.catalog import CatalogObject
 from deformctl.errors import DeformctlError, RigError, UsageError
 from deformctl.lift.search import AttemptError, TrialRunner
@@ -130,10 +131,6 @@ def _shorten(text: str) -> str:
     return text if len(text) <= _MAX_SHOWN_CHARS else text[: _MAX_SHOWN_CHARS - 3] + "..."
 
 
-def _reject_constant(name: str) -> float:
-    raise ValueError(f"non-standard JSON constant {name}")
-
-
 def parse_rig_response(text: str) -> dict[str, Any]:
     """Parse and check one rig answer; return it as a dict.
 
@@ -150,7 +147,7 @@ def parse_rig_response(text: str) -> dict[str, Any]:
     if not text.strip():
         raise ValueError("empty answer on stdout (expected one JSON object)")
     try:
-        answer = json.loads(text, parse_constant=_reject_constant)
+        answer = jsonsafe.loads(text)
     except ValueError as err:
         raise ValueError(f"answer is not valid JSON ({err}): {_shorten(text)!r}") from None
     if not isinstance(answer, dict):
