@@ -73,9 +73,9 @@ from deformctl.artifacts import check_output_path, write_table
 from deformctl.artifacts.dataset import (
     MANIFEST_NAME,
     dataset_fingerprint,
-    dataset_part_paths,
+    dataset_log_paths,
     iter_dataset_parts,
-    part_name,
+    part_log_path,
     spec_rows,
     table_schema,
 )
@@ -949,12 +949,12 @@ def read_and_characterize(
 
 
 def squeeze_log_parts(path: str | PathLike[str]) -> list[Path]:
-    """The squeeze logs ``part-*.mcap`` of a ``measure`` dataset directory, in part order.
+    """The squeeze logs ``_logs/part-*.mcap`` of a ``measure`` dataset directory, in part order.
 
     Raises:
         InputDataError: no logs, or a part of the sweep missing (rerun measure with --resume).
     """
-    return dataset_part_paths(path, ".mcap", what="squeeze logs", rerun="measure")
+    return dataset_log_paths(path, ".mcap", what="squeeze logs", rerun="measure")
 
 
 def characterize_dir(
@@ -1053,7 +1053,7 @@ def characterize_items(path: str | PathLike[str]) -> list[dict[str, Any]]:
     items: list[dict[str, Any]] = []
     if (d / MANIFEST_NAME).is_file() and any(d.glob("part-*.parquet")):
         for k, table in enumerate(iter_dataset_parts(d)):
-            part_log = str(d / part_name(k, ".mcap"))
+            part_log = str(part_log_path(d, k))
             items.extend(
                 {"object_id": oid, "log_path": part_log} for oid in table["object_id"].to_pylist()
             )

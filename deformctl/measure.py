@@ -75,6 +75,7 @@ import pyarrow as pa
 
 from deformctl.artifacts import check_output_path, read_catalog, write_squeeze_log
 from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
+from deformctl.artifacts.mcaplog import LOG_EPOCH_NS
 from deformctl.artifacts.provenance import Provenance, input_digest
 from deformctl.catalog import CatalogObject, catalog_objects, select_objects
 from deformctl.errors import InputDataError, MissingInputError, UsageError
@@ -132,6 +133,9 @@ _UNITS_BY_KEY: dict[str, dict[str, float]] = {
     "compression": LENGTH_UNITS_M,
 }
 _POSITION_KEYS = ("position", "gap", "compression")
+#: A CSV time column whose first value (in s, after ``--units``) is at least this is Unix time
+#: (2000-01-01T00:00:00Z): the squeeze log keeps those times as its ``log_time``.
+ABSOLUTE_TIME_MIN_S = 946_684_800.0
 
 
 @dataclass(frozen=True)
@@ -341,8 +345,12 @@ def _to_squeezes(
     min_squeeze_s: float,
     phase: str = "all",
     window_s: float | None = None,
+    clock_origin_ns: int | None = None,
 ) -> tuple[list[SqueezeSeries], list[Rupture]]:
     """Cut a recording into squeezes, each up to its rupture and reduced to ``phase``.
+
+    ``clock_origin_ns`` is the source's clock at ``time_s = 0`` (ns since the Unix epoch) when
+    the recording has one: each squeeze then carries its first sample's ``start_time_ns``.
 
     Returns:
         The squeezes and the ruptures found (one per ruptured squeeze, recording times set).
@@ -382,6 +390,9 @@ def _to_squeezes(
             time_s=t - t[0],
             force_n=force_n[sl],
             compression_m=compression_m[sl],
+            start_time_ns=None
+            if clock_origin_ns is None
+            else clock_origin_ns + round(float(t[0]) * NS_PER_S),
         )
         sq, rupture = cut_rupture(whole, window_s=window, recording_offset_s=float(t[0]))
         if rupture is not None:
@@ -751,6 +762,7 @@ def read_ros2_bag(
         min_squeeze_s=min_squeeze_s,
         phase=phase,
         window_s=_detection_window_s(position_rate_hz),
+        clock_origin_ns=t_ref_ns,
     )
     return Recording(
         squeezes,
@@ -958,6 +970,7 @@ def read_csv_export(
         path=where,
         hint=_unit_hint(pos_key, unit, f"column {columns[pos_key]!r}", file_units.get(pos_key)),
     )
+    absolute = float(time_s[0]) >= ABSOLUTE_TIME_MIN_S
     squeezes, ruptures = _to_squeezes(
         time_s - time_s[0],
         arrays["force"],
@@ -970,6 +983,7 @@ def read_csv_export(
         min_squeeze_s=min_squeeze_s,
         phase=phase,
         window_s=_detection_window_s(rate_hz),
+        clock_origin_ns=round(float(time_s[0]) * NS_PER_S) if absolute else None,
     )
     return Recording(
         squeezes, rate_hz, rate_hz, source="csv", phase=phase, ruptures=tuple(ruptures)
@@ -1197,13 +1211,18 @@ class SimulateCatalogTask:
     Attributes:
         simulate: the keyword arguments of :func:`simulate_squeezes` (squeezes, peak force or
             strain, ramp, hold, gravity, noise).
-        settings: the :class:`~deformctl.sim.SimSettings`.
+        settings: the :class:`~deformctl.sim.SimSettings` (a preset's object model).
         seed: the run's noise seed.
+        sim_preset: the name of the preset ``settings`` came from (recorded in the log).
+        log_epoch_ns: where the log's squeezes begin, ns since the Unix epoch (they are laid
+            end to end from there).
     """
 
     simulate: Mapping[str, Any]
     settings: SimSettings
     seed: int = 0
+    sim_preset: str | None = None
+    log_epoch_ns: int = LOG_EPOCH_NS
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """Squeeze one object: its summary row, its (object row, squeezes) as the payload."""
@@ -1239,7 +1258,9 @@ def sim_provenance(
                 "peak_force_n" if task.simulate.get("peak_force_n") is not None else "strain"
             ),
             "objects": object_ids,
+            "sim_preset": task.sim_preset,
             "sim_settings": dataclasses.asdict(task.settings),
+            "log_epoch_ns": task.log_epoch_ns,
         },
     )
 
@@ -1327,7 +1348,9 @@ def simulate_catalog_file(
         path=catalog_path,
         **task.simulate,
     )
-    write_squeeze_log(output, objects, series, provenance=provenance, force=force)
+    write_squeeze_log(
+        output, objects, series, provenance=provenance, force=force, epoch_ns=task.log_epoch_ns
+    )
     return objects, series
 
 
@@ -1340,7 +1363,7 @@ def simulate_catalog_sweep(
     object_ids: Sequence[str] | None = None,
     force: bool = False,
 ) -> SweepSummary:
-    """``measure --sim -o DIR/``: one object per task; part ``k``'s squeezes in ``part-k.mcap``.
+    """``measure --sim -o DIR/``: one object per task; part ``k``'s squeezes in ``DIR/_logs/``.
 
     The rows of a part are :data:`MEASURE_SCHEMA` summaries; the squeezes are byte for byte
     those of the serial run (each object's noise stream depends on the seed and its position).
@@ -1359,6 +1382,8 @@ def simulate_catalog_sweep(
     provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
     items = [{**rec, "_position": i} for i, rec in enumerate(catalog.to_dict("records"))]
     settings = {**task.simulate, "sim_settings": dataclasses.asdict(task.settings)}
+    if task.log_epoch_ns != LOG_EPOCH_NS:  # (the default keeps older directories resumable)
+        settings["log_epoch_ns"] = task.log_epoch_ns
     fingerprint = dataset_fingerprint(
         "measure", "squeeze_log", settings, {"catalog": input_digest(catalog_path)}, task.seed
     )
@@ -1368,7 +1393,7 @@ def simulate_catalog_sweep(
         out_dir=output,
         schema=MEASURE_SCHEMA,
         fingerprint=fingerprint,
-        part_writer=LogPartWriter("squeeze_log", provenance),
+        part_writer=LogPartWriter("squeeze_log", provenance, task.log_epoch_ns),
         force=force,
         **sweep.run_kwargs(),
     )

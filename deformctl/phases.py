@@ -40,6 +40,7 @@ import numpy as np
 from deformctl.errors import UsageError
 from deformctl.series import FloatArray, SqueezeSeries
 from deformctl.signals import noise_std, sg_smooth, sg_window_length, uniform_grid
+from deformctl.units import NS_PER_S
 
 Phase = Literal["loading", "unloading", "all"]
 PHASES: tuple[str, ...] = ("loading", "unloading", "all")
@@ -212,18 +213,23 @@ def cut_rupture(
 
 
 def slice_squeeze(s: SqueezeSeries, sl: slice) -> SqueezeSeries:
-    """Samples ``sl`` of a squeeze, its time restarting at 0 (compression keeps its zero)."""
+    """Samples ``sl`` of a squeeze, its time restarting at 0 (compression keeps its zero; the
+    source clock, when known, moves to the first kept sample)."""
     t = s.time_s[sl]
     opt = {
         name: None if getattr(s, name) is None else getattr(s, name)[sl]
         for name in ("commanded_force_n", "palm_left_x_m", "palm_right_x_m")
     }
+    start_ns = s.start_time_ns
+    if start_ns is not None and t.size:
+        start_ns += round(float(t[0] - s.time_s[0]) * NS_PER_S)
     return SqueezeSeries(
         object_id=s.object_id,
         squeeze_index=s.squeeze_index,
         time_s=t - t[0],
         force_n=s.force_n[sl],
         compression_m=s.compression_m[sl],
+        start_time_ns=start_ns,
         **opt,
     )
 

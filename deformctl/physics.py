@@ -10,7 +10,9 @@ from typing import Any, overload
 
 import numpy as np
 
-__all__ = ["rigid_grip_force_n"]
+from deformctl.units import GRAVITY_M_S2
+
+__all__ = ["damping_ratio", "rigid_grip_force_n"]
 
 
 @overload
@@ -25,3 +27,17 @@ def rigid_grip_force_n(weight_n: Any, friction_mu: Any) -> Any:
     arrays.
     """
     return weight_n / (2.0 * friction_mu)
+
+
+def damping_ratio(weight_n: Any, stiffness_n_per_cm: Any, damping_ns_per_cm: Any) -> Any:
+    """ζ = λ / (2 √(D m)) with m = W / g: the lumped object's damping ratio (dimensionless).
+
+    The axis of the paper's landscape: L_f / F_w falls from about 2 (an undamped object, whose
+    hanging mode overshoots twice the static sag) towards ``1 + a/g`` as ζ grows. Computed in SI
+    (D and λ given in the paper's N/cm and N·s/cm). Works elementwise on arrays.
+    """
+    mass_kg = np.asarray(weight_n, dtype=np.float64) / GRAVITY_M_S2
+    d_n_per_m = np.asarray(stiffness_n_per_cm, dtype=np.float64) * 100.0
+    lam_ns_per_m = np.asarray(damping_ns_per_cm, dtype=np.float64) * 100.0
+    zeta = lam_ns_per_m / (2.0 * np.sqrt(d_n_per_m * mass_kg))
+    return float(zeta) if np.ndim(zeta) == 0 else zeta

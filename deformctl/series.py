@@ -42,6 +42,9 @@ class SqueezeSeries:
         compression_m: total compression between the palms (see module docstring), m, ``[n]``.
         commanded_force_n: the commanded palm force, N, ``[n]``, when known.
         palm_left_x_m, palm_right_x_m: palm positions along the squeeze axis, m, when known.
+        start_time_ns: the source's clock at the first sample, ns since the Unix epoch, when
+            the recording has one (a ROS 2 bag's header stamps, a CSV export's absolute times);
+            a squeeze log places the squeeze there. None for a simulated squeeze.
     """
 
     object_id: str
@@ -52,6 +55,7 @@ class SqueezeSeries:
     commanded_force_n: FloatArray | None = None
     palm_left_x_m: FloatArray | None = None
     palm_right_x_m: FloatArray | None = None
+    start_time_ns: int | None = None
 
     def __post_init__(self) -> None:
         t = _as_1d("time_s", self.time_s, None)
@@ -109,6 +113,9 @@ class TrialOutcome:
         slip_m: the slip distance the runner measured, m (NaN when the runner cannot tell).
         series: the attempt's time series, when the runner records one.
         details: runner-specific extras (e.g. camera frame paths from a rig), JSON-serialisable.
+        start_time_ns: the wall clock when the attempt started, ns since the Unix epoch, for a
+            runner that acts in real time (a rig); a lift log places the attempt there. None
+            for a simulated attempt.
     """
 
     grip_force_n: float
@@ -116,3 +123,4 @@ class TrialOutcome:
     slip_m: float
     series: LiftAttemptSeries | None = None
     details: dict[str, object] = field(default_factory=dict)
+    start_time_ns: int | None = None

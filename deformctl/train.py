@@ -30,10 +30,12 @@ sorted by ``object_id``) and the restarts' initial weights, so the same table an
 bit-identical predictions.
 
 Metrics (:func:`regression_metrics`) are fractions, not percent: ``max_rel_error``,
-``median_rel_error`` (of ``|pred - true| / |true|``), ``mae_n`` (N) and ``r2``. Two baselines are
-scored on the same split: ``nearest`` (the nearest *training* row of the index table in
-standardized units, see :mod:`deformctl.table`; for training rows leave-one-out) and ``f_w``
-(``F_w = W / (2 μ)`` alone).
+``median_rel_error`` (of ``|pred - true| / |true|``), ``mae_n`` (N) and ``r2``. Three baselines
+are scored on the same split: ``nearest`` (the nearest *training* row of the index table in
+standardized units, see :mod:`deformctl.table`; for training rows leave-one-out), ``f_w``
+(``F_w = W / (2 μ)`` alone) and ``constant_ratio`` (``F_w`` times the median of ``L_f / F_w`` over
+the training rows: what a model that ignores D and λ can do; a network is only worth having
+when it beats this one).
 """
 
 from __future__ import annotations
@@ -268,6 +270,13 @@ def _f_w(table: pd.DataFrame) -> np.ndarray:
     return np.full(len(table), np.nan)
 
 
+def constant_ratio(lift_force_n: np.ndarray, f_w_n: np.ndarray) -> float:
+    """The median of ``L_f / F_w`` over the rows where both are finite (NaN when there are none)."""
+    ratio = np.asarray(lift_force_n, dtype=np.float64) / np.asarray(f_w_n, dtype=np.float64)
+    ratio = ratio[np.isfinite(ratio)]
+    return float(np.median(ratio)) if ratio.size else math.nan
+
+
 def _nearest_baseline(train: pd.DataFrame, test: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     """Nearest training row's L_f for test rows, and leave-one-out for training rows."""
     scales = standard_scales(train)
@@ -394,6 +403,8 @@ def train_model(
         pred_test = best.predict(X_test)
     nn_train, nn_test = _nearest_baseline(train, test)
     fw_train, fw_test = _f_w(train), _f_w(test)
+    ratio = constant_ratio(y_train, fw_train)
+    cr_train, cr_test = ratio * fw_train, ratio * fw_test
 
     def both(p_train: np.ndarray, p_test: np.ndarray) -> dict[str, dict[str, float]] | None:
         if not (np.isfinite(p_train).all() and np.isfinite(p_test).all()):
@@ -424,12 +435,14 @@ def train_model(
         "model": both(pred_train, pred_test),
         "baseline_nearest": both(nn_train, nn_test),
         "baseline_f_w": both(fw_train, fw_test),
+        "baseline_constant_ratio": both(cr_train, cr_test),
+        "constant_ratio": None if not math.isfinite(ratio) else ratio,
     }
 
     frames = []
-    for name, part, pred, nn, fw in (
-        ("train", train, pred_train, nn_train, fw_train),
-        ("test", test, pred_test, nn_test, fw_test),
+    for name, part, pred, nn, fw, cr in (
+        ("train", train, pred_train, nn_train, fw_train, cr_train),
+        ("test", test, pred_test, nn_test, fw_test, cr_test),
     ):
         y = part[TARGET].to_numpy(dtype=np.float64)
         frames.append(
@@ -443,6 +456,7 @@ def train_model(
                     "rel_error": np.abs(pred - y) / y,
                     "nearest_lift_force_n": nn,
                     "f_w_n": fw,
+                    "constant_ratio_lift_force_n": cr,
                 }
             )
         )
@@ -588,7 +602,8 @@ def train_report(result: TrainResult) -> dict[str, Any]:
     Returns:
         ``result.metrics`` plus ``split`` (``{"train": [ids], "test": [ids]}``) and
         ``predictions``: one record per object with ``object_id``, ``split``, ``lift_force_n``,
-        ``predicted_lift_force_n``, ``rel_error``, ``nearest_lift_force_n`` and ``f_w_n``.
+        ``predicted_lift_force_n``, ``rel_error``, ``nearest_lift_force_n``, ``f_w_n`` and
+        ``constant_ratio_lift_force_n``.
     """
     cols = [
         "object_id",
@@ -598,6 +613,7 @@ def train_report(result: TrainResult) -> dict[str, Any]:
         "rel_error",
         "nearest_lift_force_n",
         "f_w_n",
+        "constant_ratio_lift_force_n",
     ]
     records = result.predictions[cols].to_dict("records")
     return json_safe(

@@ -27,7 +27,7 @@ from deformctl.catalog import select_objects
 from deformctl.cli import app
 from deformctl.errors import SchemaError, SimulationError
 from deformctl.lift.runners.rig import parse_rig_response
-from deformctl.lift.search import TrialRunner
+from deformctl.lift.search import DEFAULT_TOLERANCE_REL, TrialRunner
 from deformctl.lift.stage import RunnerFactory, lift_catalog
 from deformctl.series import TrialOutcome
 
@@ -88,7 +88,7 @@ def test_refine_rows_and_log_match_the_threshold(catalog: Path, tmp_path: Path) 
     assert set(table["runner"]) == {"rig"}
     assert set(table["slip_criterion"]) == {"rig"}
     assert table["error"].isna().all()
-    assert (table["tolerance_rel"] == 0.01).all()
+    assert (table["tolerance_rel"] == DEFAULT_TOLERANCE_REL).all()
     for row in table.itertuples():
         f_w = F_W_N[row.object_id]
         assert row.f_w_n == pytest.approx(f_w, rel=1e-12)
@@ -97,9 +97,10 @@ def test_refine_rows_and_log_match_the_threshold(catalog: Path, tmp_path: Path) 
             assert (row.lift_force_n, row.attempts) == (f_w, 1)
             assert row.bracket_low_n == row.bracket_high_n == f_w
             continue
-        # the threshold lies in the bracket, the bracket meets 1 %, L_f is its top
+        # the threshold lies in the bracket, the bracket meets the 0.5 % default, L_f is its top
         assert row.bracket_low_n < THRESHOLD_N <= row.bracket_high_n == row.lift_force_n
-        assert (row.bracket_high_n - row.bracket_low_n) / row.bracket_high_n <= 0.01
+        width = (row.bracket_high_n - row.bracket_low_n) / row.bracket_high_n
+        assert width <= DEFAULT_TOLERANCE_REL
         # refine's answer lies inside the paper protocol's last bracket
         assert PAPER_LOW_N[row.object_id] < row.lift_force_n <= PAPER_L_F_N[row.object_id]
 

@@ -19,14 +19,18 @@ import sys
 import time
 from pathlib import Path
 
+import duckdb
 import pandas as pd
+import pyarrow as pa
+import pyarrow.dataset as pads
 import pytest
 from test_parallel_dask import Cluster, dask_cluster  # noqa: F401 - the fixture
 from typer.testing import CliRunner
 
 from deformctl.artifacts import read_lift_log, read_squeeze_log, read_table
-from deformctl.artifacts.dataset import read_failures, read_table_any
+from deformctl.artifacts.dataset import read_dataset, read_failures, read_table_any, table_schema
 from deformctl.cli import app
+from deformctl.measure import MEASURE_SCHEMA
 from deformctl.population import make_population
 
 FAST_LIFT = [
@@ -52,6 +56,27 @@ def _cli(*args: object) -> object:
 
 def _ok(result: object) -> None:
     assert result.exit_code == 0, result.stderr  # type: ignore[attr-defined]
+
+
+def _parquet_readers_see_the_rows(path: Path, schema: pa.Schema, expected: pd.DataFrame) -> None:
+    """pandas, pyarrow.dataset and DuckDB open the dataset folder itself: every row, in part
+    order, with the declared schema (the logs, manifest and failures are skipped)."""
+    columns = list(schema.names)
+    ds = pads.dataset(path, format="parquet")
+    assert ds.schema.remove_metadata().equals(schema.remove_metadata()), ds.schema
+    by_arrow = ds.to_table().to_pandas()
+    by_pandas = pd.read_parquet(path)
+    by_duckdb = duckdb.sql(
+        f"SELECT * FROM read_parquet('{path}/*.parquet', filename = true) ORDER BY filename"
+    ).df()
+
+    def plain(df: pd.DataFrame) -> pd.DataFrame:  # one missing value (None) for every dtype
+        df = df[columns].reset_index(drop=True).astype(object)
+        return df.where(df.notna(), None)
+
+    for got in (by_arrow, by_pandas, by_duckdb):
+        assert list(got["object_id"]) == list(expected["object_id"])
+        pd.testing.assert_frame_equal(plain(got), plain(expected))
 
 
 def _one_line_error(result: object, code: int, text: str) -> None:
@@ -94,10 +119,11 @@ def test_dask_cluster_gives_the_local_and_serial_rows(
     assert expected["converged"].all()
     pd.testing.assert_frame_equal(got_dask, expected)
     pd.testing.assert_frame_equal(got_local, expected)
+    _parquet_readers_see_the_rows(local, table_schema("lift_results"), expected)
     # the attempt logs of the parts hold every attempt of every object, once
     objects, attempts = [], []
     for k in range(4):
-        o, a = read_lift_log(on_dask / f"part-{k:05d}.mcap")
+        o, a = read_lift_log(on_dask / "_logs" / f"part-{k:05d}.mcap")
         objects += [x["object_id"] for x in o]
         attempts += [(x.object_id, x.attempt_index) for x in a]
     assert objects == list(expected["object_id"])
@@ -220,7 +246,7 @@ def test_measure_and_characterize_sweeps_equal_the_serial_files(tmp_path: Path) 
     _ok(_cli("measure", cat, "--sim", "-o", f"{sq}/", *FAST_SQUEEZE, "--seed", 5,
              "--partition-size", 4, "--workers", 2))  # fmt: skip
     objs, serial = read_squeeze_log(tmp_path / "sq.mcap")
-    swept = [s for k in range(2) for s in read_squeeze_log(sq / f"part-{k:05d}.mcap")[1]]
+    swept = [s for k in range(2) for s in read_squeeze_log(sq / "_logs" / f"part-{k:05d}.mcap")[1]]
     assert len(serial) == len(swept) == 12
     for a, b in zip(serial, swept, strict=True):  # same noise streams: seed and catalog position
         assert (a.object_id, a.squeeze_index) == (b.object_id, b.squeeze_index)
@@ -236,6 +262,27 @@ def test_measure_and_characterize_sweeps_equal_the_serial_files(tmp_path: Path) 
     pd.testing.assert_frame_equal(read_table(tmp_path / "c2.parquet", "coefficients"), expected)
     assert len(expected) == 6
     assert len(objs) == 6
+    _parquet_readers_see_the_rows(tmp_path / "cd", table_schema("coefficients"), expected)
+    _parquet_readers_see_the_rows(sq, MEASURE_SCHEMA, read_dataset(sq))
+
+
+def test_dataset_folders_of_the_first_layout_are_read_and_resumed(tmp_path: Path) -> None:
+    cat = _catalog(tmp_path, 3)
+    sq = tmp_path / "sq"
+    args = ["measure", cat, "--sim", "-o", f"{sq}/", *FAST_SQUEEZE, "--partition-size", 2]
+    _ok(_cli(*args, "--workers", 1))
+    _ok(_cli("characterize", sq, "-o", tmp_path / "c.parquet", "--window-s", 0.03))
+    logs = sorted((sq / "_logs").iterdir())
+    for log in logs:  # the first layout: logs beside the rows
+        log.rename(sq / log.name)
+    (sq / "_logs").rmdir()
+    _ok(_cli("characterize", sq, "-o", tmp_path / "old.parquet", "--window-s", 0.03))
+    pd.testing.assert_frame_equal(read_table(tmp_path / "old.parquet", "coefficients"),
+                                  read_table(tmp_path / "c.parquet", "coefficients"))  # fmt: skip
+    result = _cli(*args, "--workers", 1, "--resume")  # keeps every part, moves the logs
+    _ok(result)
+    assert sorted(p.name for p in (sq / "_logs").iterdir()) == [p.name for p in logs]
+    assert not list(sq.glob("part-*.mcap"))
 
 
 def _snapshot(path: Path) -> dict[str, bytes]:

@@ -69,17 +69,23 @@ def test_squeeze_log(tmp_path: Path) -> None:
     assert info["messages"] == 9
     assert info["squeezes"] == 3
     (channel,) = info["channels"]
-    assert channel["topic"] == "/squeeze"
+    assert channel["topic"] == "/squeeze/A"
     assert channel["messages"] == 9
     assert channel["schema"] == "deformctl.SqueezeSample"
     fields = {f["name"]: f["unit"] for f in channel["fields"]}
     assert fields["force_n"] == "N"
     assert fields["compression_m"] == "m"
-    # Three 1 s squeezes with 1 s gaps: 0 .. 5 s.
-    assert info["time_range"] == {"start_ns": 0, "end_ns": 5_000_000_000, "duration_s": 5.0}
+    # Three 1 s squeezes with 1 s gaps, from 2000-01-01: 0 .. 5 s.
+    epoch = 946_684_800_000_000_000
+    assert info["time_range"] == {
+        "start_ns": epoch,
+        "end_ns": epoch + 5_000_000_000,
+        "duration_s": 5.0,
+    }
     assert info["provenance"]["seed"] == 11
     text = runner.invoke(app, ["inspect", str(path)]).stdout
-    assert "/squeeze: 9 messages" in text
+    assert "/squeeze/A: 9 messages" in text
+    assert "time range: 2000-01-01T00:00:00.000000000Z .. 2000-01-01T00:00:05.000000000Z" in text
 
 
 def test_parquet_table_and_stdin(tmp_path: Path) -> None:

@@ -21,6 +21,7 @@ from deformctl.errors import (
     UsageError,
 )
 from deformctl.lift import (
+    DEFAULT_TOLERANCE_REL,
     LiftSearchResult,
     RigSearchAbortedError,
     SearchAbortedError,
@@ -84,13 +85,14 @@ def test_refine_reproduces_paper_ramp_then_bisects_to_tolerance() -> None:
     assert _forces(refine)[:4] == _forces(paper)
     assert refine.ramp_attempts == 4
     assert refine.paper_bracket_n == pytest.approx(paper.bracket_n)
-    # The bracket [14.4, 17.28] (2.88 N wide) halves per step; 1 % of L_f (~17 N) is ~0.17 N:
-    # 2.88 / 16 = 0.18 > 0.17 and 2.88 / 32 = 0.09 <= 0.17, so exactly 5 bisection steps.
-    assert refine.attempts == 4 + 5
+    # The bracket [14.4, 17.28] (2.88 N wide) halves per step; the default 0.5 % of L_f (~17 N)
+    # is ~0.085 N: 2.88 / 32 = 0.09 > 0.085 and 2.88 / 64 = 0.045 <= 0.085, so 6 bisection steps.
+    assert DEFAULT_TOLERANCE_REL == 0.005
+    assert refine.attempts == 4 + 6
     low, high = refine.bracket_n
-    assert (high - low) / high <= 0.01
+    assert (high - low) / high <= 0.005
     assert high == refine.lift_force_n
-    assert T_N <= refine.lift_force_n <= T_N / (1 - 0.01)
+    assert T_N <= refine.lift_force_n <= T_N / (1 - 0.005)
     assert 14.4 < refine.lift_force_n <= 17.28
     assert paper.lift_force_n <= 1.2 * refine.lift_force_n
     assert refine.converged
@@ -138,7 +140,7 @@ def test_refine_out_of_attempts_during_bisection_reports_tried_upper_bound() -> 
     assert not r.converged
     assert r.lifted
     low, high = r.bracket_n
-    assert (high - low) / high > 0.01
+    assert (high - low) / high > DEFAULT_TOLERANCE_REL
     assert r.lift_force_n == high >= T_N
     assert any(t.lifted and t.grip_force_n == high for t in r.trials)
     assert "tolerance" in r.message

@@ -115,6 +115,7 @@ def write_bag(
     edit_force: Callable[[np.ndarray, np.ndarray], None] | None = None,
     edit_pose: Callable[[np.ndarray, np.ndarray], None] | None = None,
     wrench_topics: tuple[str, ...] = (LEFT, RIGHT),
+    receive_delay_s: float = 0.0,
 ) -> None:
     """Write a two-palm squeeze recording with known Kelvin–Voigt D and λ.
 
@@ -122,7 +123,8 @@ def write_bag(
     right palm mirrors it. Pose is the left palm; force.x is +f on the left wrench,
     −f on the right one (``wrench_topics`` names them; one topic: the left palm only). With
     ``joint_state`` the position topic is a JointState whose joint
-    ``gripper_width`` is the gap between the palms.
+    ``gripper_width`` is the gap between the palms. Each message is logged ``receive_delay_s``
+    after its header stamp (its MCAP ``log_time``, the recorder's receive time).
     """
     knots_t, knots_f = recording(d_n_per_cm, lam_ns_per_cm, n_squeezes)
     rng = np.random.default_rng(seed)
@@ -141,6 +143,7 @@ def write_bag(
         edit_force(tf, fl)
     if edit_pose is not None:
         edit_pose(tp, pos)
+    delay_ns = round(receive_delay_s * 1e9)
     with path.open("wb") as fh, Writer(fh) as w:
         ws = w.register_msgdef("geometry_msgs/msg/WrenchStamped", WRENCH_STAMPED)
         for topic, values in zip(wrench_topics, (fl, fr), strict=False):
@@ -150,7 +153,7 @@ def write_bag(
                     "header": {"stamp": _stamp(t_ns), "frame_id": topic},
                     "wrench": {"force": {"x": fi, "y": 0.1, "z": -0.2}, "torque": {}},
                 }
-                w.write_message(topic, ws, msg, log_time=t_ns)
+                w.write_message(topic, ws, msg, log_time=t_ns + delay_ns)
         if joint_state:
             js = w.register_msgdef("sensor_msgs/msg/JointState", JOINT_STATE)
             for ti, pi in zip(tp, pos, strict=True):
@@ -162,7 +165,7 @@ def write_bag(
                     "velocity": [],
                     "effort": [],
                 }
-                w.write_message(JOINTS, js, msg, log_time=t_ns)
+                w.write_message(JOINTS, js, msg, log_time=t_ns + delay_ns)
         else:
             ps = w.register_msgdef("geometry_msgs/msg/PoseStamped", POSE_STAMPED)
             for ti, pi in zip(tp, pos, strict=True):
@@ -171,7 +174,7 @@ def write_bag(
                     "header": {"stamp": _stamp(t_ns), "frame_id": "world"},
                     "pose": {"position": {"x": pi, "y": 0.0, "z": 0.2}, "orientation": {"w": 1.0}},
                 }
-                w.write_message(POSE, ps, msg, log_time=t_ns)
+                w.write_message(POSE, ps, msg, log_time=t_ns + delay_ns)
 
 
 @pytest.fixture(scope="module")

@@ -26,6 +26,7 @@ import pytest
 
 from deformctl.artifacts.dataset import (
     FAILURES_DIR,
+    LOGS_DIR,
     MANIFEST_NAME,
     PartPayloads,
     read_dataset,
@@ -212,13 +213,13 @@ def test_part_writer_gets_each_parts_payloads_in_order(tmp_path: Path) -> None:
     out = tmp_path / "o"
     sweep(make_items(), out, workers=2, task=toy_task_with_payload, part_writer=write_log)
     assert sorted(seen) == list(range(7))
-    assert (out / "part-00002.log").read_bytes() == b"log of obj-06\nlog of obj-08"
-    assert (out / "part-00006.log").read_bytes() == b"log of obj-18\nlog of obj-19"
+    assert (out / LOGS_DIR / "part-00002.log").read_bytes() == b"log of obj-06\nlog of obj-08"
+    assert (out / LOGS_DIR / "part-00006.log").read_bytes() == b"log of obj-18\nlog of obj-19"
     pd.testing.assert_frame_equal(read_dataset(out), expected_rows(make_items()))
 
 
 def _log_lines(out: Path, k: int) -> list[bytes]:
-    return (out / f"part-{k:05d}.log").read_bytes().split(b"\n")
+    return (out / LOGS_DIR / f"part-{k:05d}.log").read_bytes().split(b"\n")
 
 
 def test_in_workers_part_writer_runs_in_the_workers_and_precedes_the_rows(
@@ -231,7 +232,7 @@ def test_in_workers_part_writer_runs_in_the_workers_and_precedes_the_rows(
     def watch() -> None:  # the invariant, checked while the sweep runs: rows imply the log
         while not finished.is_set():
             for rows in out.glob("part-*.parquet"):
-                if not rows.with_suffix(".log").exists():
+                if not (out / LOGS_DIR / rows.with_suffix(".log").name).exists():
                     violations.append(rows.name)
             time.sleep(0.005)
 
@@ -272,11 +273,11 @@ def test_failing_in_workers_part_writer_stops_the_sweep_before_that_parts_rows(
     with pytest.raises(RuntimeError, match="disk full while writing part 2"):
         sweep(make_items(), out, workers=2, task=toy_task_with_payload, part_writer=writer)
     assert not (out / "part-00002.parquet").exists()
-    assert not (out / "part-00002.log").exists()
+    assert not (out / LOGS_DIR / "part-00002.log").exists()
     s = sweep(make_items(), out, workers=2, task=toy_task_with_payload,
               part_writer=PidLogWriter(sleep_s=0.0), resume=True)  # fmt: skip
     assert s.done + s.failed + s.skipped_resumed == 20
-    assert (out / "part-00002.log").is_file()
+    assert (out / LOGS_DIR / "part-00002.log").is_file()
     pd.testing.assert_frame_equal(read_dataset(out), expected_rows(make_items()))
 
 

@@ -11,8 +11,16 @@ from typer.testing import CliRunner
 
 from deformctl.cli import app
 from deformctl.errors import MissingInputError
+from deformctl.repro.calibrate import cube_side_cm, table3_cube_catalog
 from deformctl.repro.golden import EXPECTED_PATH
-from deformctl.repro.report import RUN_FILES, main, write_report
+from deformctl.repro.report import (
+    RUN_FILES,
+    ReportSummary,
+    compare_landscape,
+    gate_failures,
+    main,
+    write_report,
+)
 
 PAPER = Path(__file__).resolve().parent.parent / "datasets" / "paper"
 runner = CliRunner()
@@ -41,14 +49,25 @@ def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     _run("measure", paper, "--sim", "-o", f"{r}/paper_squeeze.mcap")
     _run("characterize", f"{r}/paper_squeeze.mcap", "-o", f"{r}/paper_coefficients.parquet")
     _run("lift", paper, "--sim", "-o", f"{r}/paper_lift.parquet")
+    # two of Table III's nine cubes keep the test short; the report shows the others as n/a
+    cubes = pd.read_csv(PAPER / "table3_cubes.csv").iloc[[0, 1]]
+    cubes.to_csv(run / "table3_cubes.csv", index=False)
+    _run("lift", f"{r}/table3_cubes.csv", "--sim", "-o", f"{r}/table3_lift.parquet")
     return run
 
 
 def test_report_has_tables_and_plots(run_dir: Path) -> None:
     summary = write_report(run_dir)
     text = summary.report_path.read_text()
-    for heading in ("## Table II", "## Table III", "## Model metrics", "## Plots"):
+    for heading in ("## Table II", "## Table III", "## The landscape", "## Model metrics"):
         assert heading in text
+    assert "## Plots" in text
+    assert "median L_f/F_w × F_w" in text  # the constant-ratio baseline sits beside the network
+    assert "| T3-1 |" in text
+    assert "| T3-9 |" in text
+    assert [p.name for p in summary.plots][-1] == "lf_over_fw_vs_zeta.png"
+    assert summary.ratio_min <= summary.ratio_max
+    assert -1.0 <= summary.ratio_zeta_spearman <= 1.0
     for oid, name in (("A", "sponge"), ("B", "cotton"), ("C", "sand"), ("D", "water")):
         assert f"| {oid} {name} |" in text
     assert len(summary.plots) == 3
@@ -88,3 +107,58 @@ def test_required_max_test_error_gates_the_run(
     assert err.startswith("error: the network's max relative test error")
     assert err.count("\n") == 1
     assert main([str(run_dir), "--require-max-test-error", "abc"]) == 2
+
+
+def test_table3_cube_catalog_is_the_checked_in_file() -> None:
+    checked_in = pd.read_csv(PAPER / "table3_cubes.csv")
+    pd.testing.assert_frame_equal(checked_in, table3_cube_catalog(), check_exact=False, rtol=1e-9)
+    # a cube of W = 9.80665 N at 1 g/cm³ is 1 kg, a 10 cm cube
+    assert cube_side_cm(9.80665, 1.0) == pytest.approx(10.0)
+
+
+def test_landscape_compares_the_13_points(run_dir: Path) -> None:
+    landscape = compare_landscape(
+        pd.read_csv(PAPER / "table2.csv"),
+        pd.read_parquet(run_dir / "paper_lift.parquet"),
+        pd.read_csv(PAPER / "table3.csv"),
+        pd.read_parquet(run_dir / "table3_lift.parquet"),
+    )
+    assert len(landscape) == 13
+    # the paper's own ratios at mu = 0.5 (F_w = W): sponge 1.00, water 2.27
+    by_point = landscape.set_index("point")
+    assert by_point.loc["sponge", "ratio_paper"] == pytest.approx(1.0)
+    assert by_point.loc["water", "ratio_paper"] == pytest.approx(2.27, abs=0.01)
+    assert by_point.loc["water", "zeta"] == 0.0
+    assert landscape["lift_force_ours_n"].notna().sum() == 4 + 2  # the cubes not run are NaN
+
+
+def _summary(**numbers: float) -> ReportSummary:
+    base = {
+        "model_test_max_rel_error": 0.03, "model_test_median_rel_error": 0.01,
+        "constant_ratio_test_max_rel_error": 0.20, "constant_ratio_test_median_rel_error": 0.06,
+        "ratio_min": 1.1, "ratio_max": 1.9, "ratio_zeta_spearman": -0.8,
+    }  # fmt: skip
+    base.update(numbers)
+    return ReportSummary(Path("r.md"), (), pd.DataFrame(), text="", **base)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("numbers", "expected"),
+    [
+        ({}, []),
+        ({"model_test_max_rel_error": 0.06}, ["exceeds 5.00 %"]),
+        ({"model_test_max_rel_error": 0.045, "constant_ratio_test_max_rel_error": 0.08},
+         ["more than half"]),
+        ({"model_test_median_rel_error": 0.021}, ["more than a third"]),
+        ({"ratio_max": 1.6}, ["spans 1.100 to 1.600"]),
+        ({"ratio_min": 1.25}, ["spans 1.250"]),
+        ({"ratio_zeta_spearman": 0.1}, ["does not fall with zeta"]),
+    ],
+)  # fmt: skip
+def test_reproduce_gates(numbers: dict[str, float], expected: list[str]) -> None:
+    failures = gate_failures(
+        _summary(**numbers), max_test_error=0.05, beat_constant_ratio=True, ratio_span=(1.2, 1.7)
+    )
+    assert len(failures) == len(expected)
+    for message, fragment in zip(failures, expected, strict=True):
+        assert fragment in message

@@ -72,8 +72,12 @@ def test_command_string_is_shlex_split_and_size_is_optional(tmp_path: Path) -> N
     log = tmp_path / "requests with space.jsonl"
     command = shlex.join(rig("threshold_rig.py", THRESHOLD_N, log))
     obj = {"object_id": "cube", "weight_n": 1.0, "friction_mu": 0.25, "colour": "red"}
+    before_ns = time.time_ns()
     outcome = RigRunner(command, timeout_s=30, object=obj)(20.0, 0)
-    assert outcome == TrialOutcome(20.0, True, 0.0, None, outcome.details)
+    started = outcome.start_time_ns  # the wall clock when the attempt began (the lift log's)
+    assert started is not None
+    assert before_ns <= started <= time.time_ns()
+    assert outcome == TrialOutcome(20.0, True, 0.0, None, outcome.details, start_time_ns=started)
     assert json.loads(log.read_text()) == {
         "object_id": "cube",
         "attempt_index": 0,

@@ -6,8 +6,15 @@ catalog position::
     out_dir/
       _sweep.json                    manifest, written first: fingerprint, schema, ids per part
       part-00000.parquet             rows of the objects of part 0 that have rows, in order
-      part-00000.mcap                the part's log (a squeeze or lift log), when the stage has one
+      _logs/part-00000.mcap          the part's log (a squeeze or lift log), when the stage has one
       _failures/part-00000.parquet   one row per failed object: id, error_type, error_message
+
+Only the rows are Parquet files at the top level and everything else has a ``_`` name, which
+Parquet readers skip (pyarrow, pandas, Spark, Polars), so ``pandas.read_parquet(out_dir)``,
+``pyarrow.dataset.dataset(out_dir)`` and DuckDB's ``read_parquet('out_dir/*.parquet')`` see
+exactly the rows, with the declared schema. Directories of the first layout, with the logs
+``part-00000.mcap`` beside the rows, are still read, and a ``--resume`` moves their logs into
+``_logs/``.
 
 A part is committed in three atomic steps (temporary file + rename, through
 :func:`deformctl.artifacts.io.atomic_output`): its failures file, its log (a ``part_writer``
@@ -46,17 +53,20 @@ if TYPE_CHECKING:
 
 __all__ = [
     "FAILURES_DIR",
+    "LOGS_DIR",
     "MANIFEST_NAME",
     "DatasetWriter",
     "LogPartWriter",
     "ObjectResult",
     "PartPayloads",
     "dataset_fingerprint",
+    "dataset_log_paths",
     "dataset_part_paths",
     "describe_dataset",
     "failure_schema",
     "is_dataset_output",
     "iter_dataset_parts",
+    "part_log_path",
     "read_dataset",
     "read_failures",
     "read_table_any",
@@ -68,6 +78,7 @@ __all__ = [
 SWEEP_FORMAT = "deformctl-sweep/1"
 MANIFEST_NAME = "_sweep.json"
 FAILURES_DIR = "_failures"
+LOGS_DIR = "_logs"  #: the parts' logs (any part artifact that is not its rows)
 _META_KEY = b"deformctl.sweep"
 
 
@@ -219,8 +230,12 @@ class PartPayloads:
     payloads: list[tuple[Any, Any]]
 
     def path(self, suffix: str) -> Path:
-        """The conventional artifact path of this part, e.g. ``path(".mcap")``."""
-        return self.out_dir / part_name(self.index, suffix)
+        """The conventional artifact path of this part, e.g. ``path(".mcap")``:
+        ``out_dir/_logs/part-NNNNN<suffix>`` (only the rows are at the top level; the folder
+        is created on first use)."""
+        logs = self.out_dir / LOGS_DIR
+        logs.mkdir(exist_ok=True)
+        return logs / part_name(self.index, suffix)
 
 
 @dataclass(frozen=True)
@@ -235,6 +250,7 @@ class LogPartWriter:
 
     kind: str
     provenance: Any
+    epoch_ns: int | None = None  #: where the log begins (None: the writers' default)
     in_workers: ClassVar[bool] = True
 
     def __call__(self, part: PartPayloads) -> None:
@@ -244,10 +260,9 @@ class LogPartWriter:
         objects = [p[0] for _, p in part.payloads]
         items = [item for _, p in part.payloads for item in p[1]]
         path = part.path(".mcap")
-        if self.kind == "squeeze_log":
-            write_squeeze_log(path, objects, items, provenance=self.provenance, force=True)
-        else:
-            write_lift_log(path, objects, items, provenance=self.provenance, force=True)
+        epoch = {} if self.epoch_ns is None else {"epoch_ns": self.epoch_ns}
+        write = write_squeeze_log if self.kind == "squeeze_log" else write_lift_log
+        write(path, objects, items, provenance=self.provenance, force=True, **epoch)
 
 
 # --------------------------------------------------------------------------- writing
@@ -367,6 +382,8 @@ class DatasetWriter:
             self._remove_sweep_files()
         self.out.mkdir(parents=True, exist_ok=True)
         (self.out / FAILURES_DIR).mkdir(exist_ok=True)
+        if self._existing and self._resume:
+            self._move_old_layout_logs()
         if not (self._resume and self._existing):
             atomic_write_bytes(self.manifest_path, json.dumps(self.manifest, indent=1).encode())
 
@@ -457,8 +474,15 @@ class DatasetWriter:
                 "cannot resume: made for a different list of objects or partition size", path=out
             )
 
+    def _move_old_layout_logs(self) -> None:
+        """Move the logs of a first-layout directory (``part-00000.mcap``) into ``_logs/``."""
+        for p in self.out.glob("part-*"):
+            if p.is_file() and p.suffix != ".parquet":
+                (self.out / LOGS_DIR).mkdir(exist_ok=True)
+                os.replace(p, self.out / LOGS_DIR / p.name)
+
     def _clean_temp_files(self) -> None:
-        for sub in (self.out, self.out / FAILURES_DIR):
+        for sub in (self.out, self.out / FAILURES_DIR, self.out / LOGS_DIR):
             if sub.is_dir():
                 for p in sub.iterdir():
                     if p.is_file() and _is_temp_file(p.name):
@@ -471,13 +495,14 @@ class DatasetWriter:
                 p.name == MANIFEST_NAME or p.name.startswith("part-") or _is_temp_file(p.name)
             ):
                 p.unlink()
-        fail_dir = self.out / FAILURES_DIR
-        if fail_dir.is_dir():
-            for p in fail_dir.iterdir():
-                if p.is_file():
-                    p.unlink()
-            with contextlib.suppress(OSError):
-                fail_dir.rmdir()
+        for sub in (FAILURES_DIR, LOGS_DIR):
+            sub_dir = self.out / sub
+            if sub_dir.is_dir():
+                for p in sub_dir.iterdir():
+                    if p.is_file():
+                        p.unlink()
+                with contextlib.suppress(OSError):
+                    sub_dir.rmdir()
 
 
 # --------------------------------------------------------------------------- reading
@@ -537,6 +562,38 @@ def dataset_part_paths(
         else:
             raise InputDataError(f"no part-*{suffix} {what} in the directory", path=d)
     return files
+
+
+def _logs_base(path: Path) -> str:
+    """Where a directory's part logs are: ``_logs/``, or beside the rows (first layout)."""
+    if (path / LOGS_DIR).is_dir() or not any(path.glob("part-*.mcap")):
+        return LOGS_DIR
+    return ""
+
+
+def dataset_log_paths(
+    path: str | os.PathLike[str],
+    suffix: str = ".mcap",
+    *,
+    what: str = "logs",
+    rerun: str = "the sweep",
+) -> list[Path]:
+    """The part logs ``_logs/part-*<suffix>`` of a dataset directory, in part order.
+
+    A directory of the first layout (logs beside the rows) gives its top-level logs.
+
+    Raises:
+        InputDataError: see :func:`dataset_part_paths`.
+    """
+    d = Path(path)
+    return dataset_part_paths(d, suffix, sub=_logs_base(d), what=what, rerun=rerun)
+
+
+def part_log_path(path: str | os.PathLike[str], index: int, suffix: str = ".mcap") -> Path:
+    """The log of part ``index`` of a dataset directory (either layout)."""
+    d = Path(path)
+    base = _logs_base(d)
+    return (d / base if base else d) / part_name(index, suffix)
 
 
 def iter_dataset_parts(path: str | os.PathLike[str]) -> Iterator[pa.Table]:
@@ -645,7 +702,7 @@ def describe_dataset(path: str | os.PathLike[str]) -> dict[str, Any]:
         "objects": (manifest or {}).get("n_items"),
         "rows": rows,
         "failed": failed,
-        "logs": len(list(d.glob("part-*.mcap"))),
+        "logs": len(list((d / _logs_base(d)).glob("part-*.mcap"))),
         "columns": columns,
         "settings": fingerprint.get("settings"),
         "seed": fingerprint.get("seed"),

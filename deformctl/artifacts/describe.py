@@ -22,13 +22,13 @@ from deformctl.artifacts.mcaplog import (
     KIND_LIFT,
     KIND_SQUEEZE,
     MCAP_MAGIC,
-    TOPIC_SCHEMAS,
     McapContents,
     decode_objects,
     decode_provenance,
     lift_attempts_from_contents,
     load_mcap,
     squeezes_from_contents,
+    topic_schema,
 )
 from deformctl.artifacts.provenance import Provenance
 from deformctl.artifacts.schema import (
@@ -273,8 +273,9 @@ def _mcap_summary(contents: McapContents) -> dict[str, Any]:
             "schema_encoding": None if schema is None else schema.encoding,
             "messages": counts.get(channel.topic, 0),
         }
-        if kind != GENERIC_MCAP and channel.topic in TOPIC_SCHEMAS:
-            name = TOPIC_SCHEMAS[channel.topic]
+        found = topic_schema(channel.topic)
+        if kind != GENERIC_MCAP and found is not None:
+            name = found[0]
             entry["schema_version"] = schema_version(load_json_schema(name))
             entry["fields"] = _fields(name)
         channels.append(entry)

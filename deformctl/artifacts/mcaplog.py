@@ -5,13 +5,21 @@ Layout of a log written here (it opens in Foxglove):
 * metadata record ``deformctl``: ``kind`` (``squeeze_log`` or ``lift_log``) and ``format_version``;
 * metadata record ``provenance`` (see :class:`~deformctl.artifacts.provenance.Provenance`);
 * one metadata record ``object`` per object: its catalog row, each value JSON-encoded;
-* channels, message encoding ``json``, schema encoding ``jsonschema`` with the schema files of
-  ``schemas/``: ``/squeeze`` (``squeeze_sample``) in a squeeze log; ``/lift/attempt_sample``
-  (``lift_attempt_sample``) and ``/lift/attempt_result`` (``lift_attempt_result``) in a lift log.
+* one channel per object, message encoding ``json``, schema encoding ``jsonschema`` with the
+  schema files of ``schemas/``: ``/squeeze/<object_id>`` (``squeeze_sample``) in a squeeze log;
+  ``/lift/<object_id>/attempt_sample`` (``lift_attempt_sample``) and
+  ``/lift/<object_id>/attempt_result`` (``lift_attempt_result``) in a lift log. Logs of the first
+  layout, every object on ``/squeeze`` or ``/lift/attempt_sample`` and ``/lift/attempt_result``,
+  are still read; the readers go by each message's ``object_id``.
 
-``log_time`` (ns) lays the squeezes / attempts end to end on one time line, in write order, with
-:data:`GAP_S` between them, so a plot shows them one after another; the per-squeeze time
-``time_s`` is a message field and is what the readers return.
+``log_time`` (ns since the Unix epoch) never decreases through a file. A squeeze or attempt
+that carries its source's clock (``SqueezeSeries.start_time_ns``: a bag's header stamps or a
+CSV's absolute times; ``TrialOutcome.start_time_ns``: a rig attempt's wall clock) is placed
+there. The others (simulated ones) are laid end to end from a fixed epoch, :data:`LOG_EPOCH_NS`
+(2000-01-01T00:00:00Z, or the writer's ``epoch_ns``), in write order with :data:`GAP_S` between
+them, so the same inputs give the same bytes and a plot shows them one after another. The time
+since the squeeze or attempt began, ``time_s``, is a message field and is what the readers
+return.
 
 Integrity: the writer enables the chunk CRCs, the data-section CRC and the summary CRC. Before the
 mcap library parses anything, :func:`load_mcap` checks the closing magic, the footer and both
@@ -58,20 +66,52 @@ KIND_SQUEEZE = "squeeze_log"
 KIND_LIFT = "lift_log"
 MCAP_KINDS = (KIND_SQUEEZE, KIND_LIFT)
 FORMAT_VERSION = "1"
-SQUEEZE_TOPIC = "/squeeze"
-LIFT_SAMPLE_TOPIC = "/lift/attempt_sample"
-LIFT_RESULT_TOPIC = "/lift/attempt_result"
-#: topic → JSON Schema name, for every topic deformctl writes
+SQUEEZE_TOPIC = "/squeeze"  #: every object's squeezes in a first-layout log
+LIFT_SAMPLE_TOPIC = "/lift/attempt_sample"  #: every object's samples in a first-layout log
+LIFT_RESULT_TOPIC = "/lift/attempt_result"  #: every object's results in a first-layout log
+SQUEEZE_SAMPLE = "squeeze_sample"
+LIFT_SAMPLE = "lift_attempt_sample"
+LIFT_RESULT = "lift_attempt_result"
+#: first-layout topic → JSON Schema name
 TOPIC_SCHEMAS = {
-    SQUEEZE_TOPIC: "squeeze_sample",
-    LIFT_SAMPLE_TOPIC: "lift_attempt_sample",
-    LIFT_RESULT_TOPIC: "lift_attempt_result",
+    SQUEEZE_TOPIC: SQUEEZE_SAMPLE,
+    LIFT_SAMPLE_TOPIC: LIFT_SAMPLE,
+    LIFT_RESULT_TOPIC: LIFT_RESULT,
 }
-KIND_TOPICS = {
-    KIND_SQUEEZE: (SQUEEZE_TOPIC,),
-    KIND_LIFT: (LIFT_SAMPLE_TOPIC, LIFT_RESULT_TOPIC),
+KIND_SCHEMAS = {
+    KIND_SQUEEZE: (SQUEEZE_SAMPLE,),
+    KIND_LIFT: (LIFT_SAMPLE, LIFT_RESULT),
 }
-GAP_S = 1.0  #: log-time gap between consecutive squeezes / attempts, s
+GAP_S = 1.0  #: log-time gap between consecutive squeezes / attempts laid end to end, s
+LOG_EPOCH_NS = 946_684_800 * NS_PER_S  #: 2000-01-01T00:00:00Z: where simulated logs begin
+
+
+def squeeze_topic(object_id: str) -> str:
+    """``/squeeze/<object_id>``: the channel of one object's squeeze samples."""
+    return f"{SQUEEZE_TOPIC}/{object_id}"
+
+
+def lift_topic(object_id: str, schema_name: str) -> str:
+    """``/lift/<object_id>/attempt_sample`` or ``.../attempt_result`` of one object."""
+    return f"/lift/{object_id}/{schema_name.removeprefix('lift_')}"
+
+
+def topic_schema(topic: str) -> tuple[str, str | None] | None:
+    """``(JSON Schema name, object id or None)`` of a topic deformctl writes; None otherwise.
+
+    The object id is None for the first layout's shared topics.
+    """
+    if topic in TOPIC_SCHEMAS:
+        return TOPIC_SCHEMAS[topic], None
+    if topic.startswith(SQUEEZE_TOPIC + "/") and len(topic) > len(SQUEEZE_TOPIC) + 1:
+        return SQUEEZE_SAMPLE, topic[len(SQUEEZE_TOPIC) + 1 :]
+    for name in (LIFT_SAMPLE, LIFT_RESULT):
+        suffix = "/" + name.removeprefix("lift_")
+        if topic.startswith("/lift/") and topic.endswith(suffix) and len(topic) > 6 + len(suffix):
+            return name, topic[6 : -len(suffix)]
+    return None
+
+
 _FOOTER_LEN = 1 + 8 + 20  # opcode, record length, summary_start, summary_offset_start, crc
 _DATA_END_LEN = 1 + 8 + 4  # opcode, record length, data_section_crc
 _SQUEEZE_OPTIONAL = (
@@ -132,9 +172,10 @@ class McapContents:
         records = self.metadata_named("deformctl")
         if records:
             return records[0].get("kind")
-        topics = {c.topic for c in self.channels.values()}
-        for kind, kind_topics in KIND_TOPICS.items():
-            if topics and topics <= set(kind_topics) | {""}:
+        found = {topic_schema(c.topic) for c in self.channels.values() if c.topic}
+        names = {f[0] if f else None for f in found}
+        for kind, kind_schemas in KIND_SCHEMAS.items():
+            if names and names <= set(kind_schemas):
                 return kind
         return None
 
@@ -253,14 +294,16 @@ def _check_kind(contents: McapContents, kind: str) -> None:
         raise SchemaError("written without CRCs; cannot be trusted", path=name, field="crc")
 
 
-def _check_channels(contents: McapContents) -> dict[int, str]:
-    """Map channel id → JSON Schema name for deformctl topics, checking encodings and versions."""
+def _check_channels(contents: McapContents) -> dict[int, tuple[str, str | None]]:
+    """Map channel id → (JSON Schema name, object id or None) for deformctl topics, checking
+    encodings and versions."""
     name = contents.path
-    out: dict[int, str] = {}
+    out: dict[int, tuple[str, str | None]] = {}
     for cid, channel in contents.channels.items():
-        schema_name = TOPIC_SCHEMAS.get(channel.topic)
-        if schema_name is None:
+        found = topic_schema(channel.topic)
+        if found is None:
             continue
+        schema_name = found[0]
         ours = load_json_schema(schema_name)
         schema = contents.schemas.get(channel.schema_id)
         if channel.message_encoding != "json":
@@ -293,18 +336,24 @@ def _check_channels(contents: McapContents) -> dict[int, str]:
                 path=name,
                 field=channel.topic,
             )
-        out[cid] = schema_name
+        out[cid] = found
     return out
 
 
-def _decoded_messages(contents: McapContents, topic: str) -> list[dict[str, Any]]:
-    """Parse and JSON-Schema-validate every message on ``topic``, in file order."""
-    schema_ids = _check_channels(contents)
+def _decoded_messages(contents: McapContents, schema_name: str) -> list[dict[str, Any]]:
+    """Parse and JSON-Schema-validate every message of ``schema_name``, in file order.
+
+    A message on an object's own channel must name that object.
+    """
+    channels = {
+        cid: found for cid, found in _check_channels(contents).items() if found[0] == schema_name
+    }
     out: list[dict[str, Any]] = []
     for i, msg in enumerate(contents.messages):
-        channel = contents.channels[msg.channel_id]
-        if channel.topic != topic:
+        found = channels.get(msg.channel_id)
+        if found is None:
             continue
+        topic = contents.channels[msg.channel_id].topic
         where = f"message {i} on {topic}"
         try:
             obj = jsonsafe.loads(msg.data)
@@ -312,7 +361,13 @@ def _decoded_messages(contents: McapContents, topic: str) -> list[dict[str, Any]
             raise SchemaError(
                 f"{where}: not valid JSON ({_short(err)})", path=contents.path, field=topic
             ) from None
-        validate_message(schema_ids[msg.channel_id], obj, path=contents.path, where=where)
+        validate_message(schema_name, obj, path=contents.path, where=where)
+        if found[1] is not None and obj["object_id"] != found[1]:
+            raise SchemaError(
+                f"{where}: object_id {obj['object_id']!r} on the channel of {found[1]!r}",
+                path=contents.path,
+                field="object_id",
+            )
         out.append(obj)
     return out
 
@@ -369,7 +424,7 @@ def _check_time(t: np.ndarray, label: str, path: str) -> None:
 def squeezes_from_contents(contents: McapContents) -> list[SqueezeSeries]:
     """Rebuild the squeezes of a verified squeeze log (see :func:`read_squeeze_log`)."""
     _check_kind(contents, KIND_SQUEEZE)
-    messages = _decoded_messages(contents, SQUEEZE_TOPIC)
+    messages = _decoded_messages(contents, SQUEEZE_SAMPLE)
     out: list[SqueezeSeries] = []
     for (oid, idx), samples in _group(messages, "squeeze_index").items():
         label = f"object {oid!r} squeeze {idx}"
@@ -424,8 +479,8 @@ def read_squeeze_log(path: PathArg) -> tuple[list[dict[str, Any]], list[SqueezeS
 def lift_attempts_from_contents(contents: McapContents) -> list[LiftAttempt]:
     """Rebuild the attempts of a verified lift log (see :func:`read_lift_log`)."""
     _check_kind(contents, KIND_LIFT)
-    samples_by_key = _group(_decoded_messages(contents, LIFT_SAMPLE_TOPIC), "attempt_index")
-    results = _decoded_messages(contents, LIFT_RESULT_TOPIC)
+    samples_by_key = _group(_decoded_messages(contents, LIFT_SAMPLE), "attempt_index")
+    results = _decoded_messages(contents, LIFT_RESULT)
     out: list[LiftAttempt] = []
     seen: set[tuple[str, int]] = set()
     for res in results:
@@ -492,7 +547,9 @@ def read_lift_log(path: PathArg) -> tuple[list[dict[str, Any]], list[LiftAttempt
 class _LogWriter:
     """A thin layer over :class:`mcap.writer.Writer` with deformctl's records and time line."""
 
-    def __init__(self, fh: io.BufferedWriter, kind: str, provenance: Provenance | None) -> None:
+    def __init__(
+        self, fh: io.BufferedWriter, kind: str, provenance: Provenance | None, epoch_ns: int
+    ) -> None:
         self._w = Writer(
             fh,
             compression=CompressionType.ZSTD,
@@ -503,9 +560,24 @@ class _LogWriter:
         self._w.add_metadata("deformctl", {"kind": kind, "format_version": FORMAT_VERSION})
         if provenance is not None:
             self._w.add_metadata("provenance", provenance.to_mcap_metadata())
+        self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}
         self._sequence: dict[str, int] = {}
-        self.offset_ns = 0
+        self._epoch_ns = epoch_ns
+        self._next_ns: int | None = None  # where the next item laid end to end starts
+        self._floor_ns: int | None = None  # no message may be logged before this
+
+    def start_ns(self, source_ns: int | None) -> int:
+        """Where the next squeeze / attempt begins: at its source clock when it has one (never
+        before the previous message), else end to end after the previous one (the epoch)."""
+        if source_ns is not None:
+            return source_ns if self._floor_ns is None else max(source_ns, self._floor_ns)
+        return self._epoch_ns if self._next_ns is None else self._next_ns
+
+    def ended(self, last_ns: int) -> None:
+        """The squeeze / attempt just written ended at ``last_ns``."""
+        self._floor_ns = last_ns
+        self._next_ns = last_ns + round(GAP_S * NS_PER_S)
 
     def add_objects(self, objects: Iterable[Mapping[str, Any]], path: str) -> None:
         for obj in objects:
@@ -517,12 +589,16 @@ class _LogWriter:
 
     def channel(self, topic: str) -> int:
         if topic not in self._channels:
-            name = TOPIC_SCHEMAS[topic]
-            sid = self._w.register_schema(
-                name=load_json_schema(name)["title"],
-                encoding="jsonschema",
-                data=json_schema_bytes(name),
-            )
+            found = topic_schema(topic)
+            assert found is not None, topic
+            name = found[0]
+            if name not in self._schemas:
+                self._schemas[name] = self._w.register_schema(
+                    name=load_json_schema(name)["title"],
+                    encoding="jsonschema",
+                    data=json_schema_bytes(name),
+                )
+            sid = self._schemas[name]
             self._channels[topic] = self._w.register_channel(
                 topic=topic, message_encoding="json", schema_id=sid
             )
@@ -596,6 +672,7 @@ def write_squeeze_log(
     *,
     provenance: Provenance | None,
     force: bool = False,
+    epoch_ns: int = LOG_EPOCH_NS,
 ) -> None:
     """Write a squeeze log atomically (see the module docstring for the layout).
 
@@ -606,6 +683,7 @@ def write_squeeze_log(
         squeezes: the squeezes, written in this order, one ``/squeeze`` message per sample.
         provenance: stored as the ``provenance`` metadata record.
         force: overwrite an existing file.
+        epoch_ns: where squeezes without a source clock begin, ns since the Unix epoch.
 
     Raises:
         InputDataError: a non-finite sample value or time going backwards (nothing is written).
@@ -613,9 +691,8 @@ def write_squeeze_log(
     """
     name = display_name(path)
     with atomic_output(path, force=force) as tmp, tmp.open("wb") as fh:
-        log = _LogWriter(fh, KIND_SQUEEZE, provenance)
+        log = _LogWriter(fh, KIND_SQUEEZE, provenance, epoch_ns)
         log.add_objects(objects, name)
-        log.channel(SQUEEZE_TOPIC)
         for sq in squeezes:
             label = f"object {sq.object_id!r} squeeze {sq.squeeze_index}"
             _check_ids(sq.object_id, sq.squeeze_index, label, name)
@@ -629,11 +706,11 @@ def write_squeeze_log(
                 arr = getattr(sq, key)
                 if arr is not None:
                     columns[key] = _finite(label, key, arr, name)
-            times = _time_line_ns(sq.time_s, log.offset_ns)
+            times = _time_line_ns(sq.time_s, log.start_ns(sq.start_time_ns))
             base = {"object_id": sq.object_id, "squeeze_index": int(sq.squeeze_index)}
-            log.add_samples(SQUEEZE_TOPIC, times, base, columns)
+            log.add_samples(squeeze_topic(sq.object_id), times, base, columns)
             if times:
-                log.offset_ns = times[-1] + round(GAP_S * NS_PER_S)
+                log.ended(times[-1])
         log.finish()
 
 
@@ -644,6 +721,7 @@ def write_lift_log(
     *,
     provenance: Provenance | None,
     force: bool = False,
+    epoch_ns: int = LOG_EPOCH_NS,
 ) -> None:
     """Write a lift log atomically: each attempt's samples, then its result message.
 
@@ -654,6 +732,7 @@ def write_lift_log(
             records no time series), ``outcome.slip_m`` may be NaN (stored as null).
         provenance: stored as the ``provenance`` metadata record.
         force: overwrite an existing file.
+        epoch_ns: where attempts without a wall clock begin, ns since the Unix epoch.
 
     Raises:
         InputDataError: non-finite samples, or details that are not JSON (nothing is written).
@@ -661,10 +740,8 @@ def write_lift_log(
     """
     name = display_name(path)
     with atomic_output(path, force=force) as tmp, tmp.open("wb") as fh:
-        log = _LogWriter(fh, KIND_LIFT, provenance)
+        log = _LogWriter(fh, KIND_LIFT, provenance, epoch_ns)
         log.add_objects(objects, name)
-        log.channel(LIFT_SAMPLE_TOPIC)
-        log.channel(LIFT_RESULT_TOPIC)
         for att in attempts:
             label = f"object {att.object_id!r} attempt {att.attempt_index}"
             _check_ids(att.object_id, att.attempt_index, label, name)
@@ -677,15 +754,15 @@ def write_lift_log(
                 "attempt_index": int(att.attempt_index),
                 "grip_force_n": grip,
             }
-            end_ns = log.offset_ns
+            end_ns = log.start_ns(out.start_time_ns)
             if out.series is not None:
                 s = out.series
                 _check_time(s.time_s, label, name)
                 columns = {"time_s": _finite(label, "time_s", s.time_s, name)}
                 for key in _LIFT_FIELDS:
                     columns[key] = _finite(label, key, getattr(s, key), name)
-                times = _time_line_ns(s.time_s, log.offset_ns)
-                log.add_samples(LIFT_SAMPLE_TOPIC, times, base, columns)
+                times = _time_line_ns(s.time_s, end_ns)
+                log.add_samples(lift_topic(att.object_id, LIFT_SAMPLE), times, base, columns)
                 if times:
                     end_ns = times[-1]
             slip = float(out.slip_m)
@@ -703,6 +780,6 @@ def write_lift_log(
                     "details": details,
                 }
             )
-            log.add(LIFT_RESULT_TOPIC, end_ns, result)
-            log.offset_ns = end_ns + round(GAP_S * NS_PER_S)
+            log.add(lift_topic(att.object_id, LIFT_RESULT), end_ns, result)
+            log.ended(end_ns)
         log.finish()

@@ -19,9 +19,7 @@ from deformctl.lift.runners.rig import DEFAULT_RIG_TIMEOUT_S, SlipFromFrames, ri
 from deformctl.lift.stage import RunnerFactory
 
 if TYPE_CHECKING:  # pragma: no cover - the simulator is imported when --sim is given
-    from deformctl.sim import LiftProfile, SimSettings, SlipCriterion
-
-    SimParts = tuple[LiftProfile, SimSettings, SlipCriterion]
+    from deformctl.presets import SimPreset
 
 RigTimeout = Annotated[
     float | None,
@@ -35,7 +33,8 @@ LiftAccel = Annotated[
     float | None,
     typer.Option(
         "--lift-accel-m-s2",
-        help=f"Sim: peak lift acceleration a_max, m/s² {default('LiftProfile.accel_m_s2')}.",
+        help="Sim: peak lift acceleration a_max, m/s² [default: the preset's; paper: calibrated "
+        f"(datasets/calibration/paper.json), table: {HEAVY_DEFAULTS['LiftProfile.accel_m_s2']:g}].",
     ),
 ]
 LiftSpeed = Annotated[
@@ -51,7 +50,9 @@ LiftHeight = Annotated[
 LiftHoldS = Annotated[
     float | None,
     typer.Option(
-        "--lift-hold-s", help=f"Sim: hold after the rise, s {default('LiftProfile.hold_s')}."
+        "--lift-hold-s",
+        help="Sim: hold after the rise, s [default: the preset's; paper 0.3, table "
+        f"{HEAVY_DEFAULTS['LiftProfile.hold_s']:g}].",
     ),
 ]
 #: The old spelling of ``--lift-hold-s`` (``measure``'s ``--hold-s`` is the squeeze hold).
@@ -92,8 +93,8 @@ SlipToleranceM = Annotated[
     typer.Option(
         "--slip-tolerance-m",
         metavar="T",
-        help=f"Slip beyond which an attempt fails, m [default: "
-        f"{HEAVY_DEFAULTS['SlipCriterion.tolerance_m']:g} with --sim (contact slip), "
+        help="Slip beyond which an attempt fails, m [default with --sim: the preset's, paper "
+        f"1e-06 (any slip), table {HEAVY_DEFAULTS['SlipCriterion.tolerance_m']:g} (contact slip); "
         f"{HEAVY_DEFAULTS['detect_slip.tolerance_m']:g} with --slip-from-frames (object "
         "behind palms)].",
     ),
@@ -113,53 +114,51 @@ DebugDir = Annotated[
 ]
 
 
-def sim_parts(sim: bool, options: Mapping[str, Any]) -> SimParts | None:
-    """The (LiftProfile, SimSettings, SlipCriterion) of ``--sim`` (None without ``--sim``).
+def sim_parts(sim: bool, options: Mapping[str, Any]) -> SimPreset | None:
+    """The simulator preset of ``--sim``, with the single options applied (None without ``--sim``).
 
     Args:
         sim: ``--sim`` was given.
-        options: the sim options by flag (None: not given, the simulator's default applies).
+        options: the sim options by flag (None: not given, the preset's value applies);
+            ``--sim-preset`` names the preset (default :data:`deformctl.presets.DEFAULT_PRESET`).
 
     Raises:
-        UsageError: a sim option without ``--sim``, or a value out of range.
+        UsageError: a sim option without ``--sim``, an unknown preset, or a value out of range.
     """
     if not sim:
         given = [flag for flag, value in options.items() if value is not None]
         if given:
             raise UsageError(f"{given[0]} needs --sim")
         return None
-    from deformctl.sim import LiftProfile, SimSettings, SlipCriterion
+    from deformctl.presets import DEFAULT_PRESET, sim_preset
 
     values = dict(options)
     hold = values.get("--lift-hold-s", values.get("--hold-s"))
-
-    def pick(flag: str, fallback: Any) -> Any:
-        value = hold if flag == "--lift-hold-s" else values.get(flag)
-        return fallback if value is None else value
-
-    profile = LiftProfile(
-        accel_m_s2=pick("--lift-accel-m-s2", LiftProfile.accel_m_s2),
-        speed_m_s=pick("--lift-speed-m-s", LiftProfile.speed_m_s),
-        height_m=pick("--lift-height-m", LiftProfile.height_m),
-        hold_s=pick("--lift-hold-s", LiftProfile.hold_s),
+    preset = sim_preset(values.get("--sim-preset") or DEFAULT_PRESET)
+    return preset.replace(
+        profile={
+            "accel_m_s2": values.get("--lift-accel-m-s2"),
+            "speed_m_s": values.get("--lift-speed-m-s"),
+            "height_m": values.get("--lift-height-m"),
+            "hold_s": hold,
+        },
+        criterion={
+            "tolerance_m": values.get("--slip-tolerance-m"),
+            "measure": values.get("--slip-criterion"),
+        },
+        settings={
+            "alpha_cm": values.get("--alpha-cm"),
+            "dt_s": values.get("--dt-s"),
+            "memory_budget_gib": values.get("--memory-budget-gib"),
+        },
     )
-    criterion = SlipCriterion(
-        tolerance_m=pick("--slip-tolerance-m", SlipCriterion.tolerance_m),
-        measure=pick("--slip-criterion", SlipCriterion.measure),
-    )
-    settings = SimSettings(
-        alpha_cm=pick("--alpha-cm", SimSettings.alpha_cm),
-        dt_s=pick("--dt-s", SimSettings.dt_s),
-        memory_budget_gib=pick("--memory-budget-gib", SimSettings.memory_budget_gib),
-    )
-    return profile, settings, criterion
 
 
 def choose_runner(
     rig: str | None,
     rig_timeout_s: float | None,
     judge: SlipFromFrames | None,
-    sim: SimParts | None,
+    sim: SimPreset | None,
 ) -> RunnerFactory:
     """The one trial runner the options ask for (``sim``: the parts of ``--sim``, if given).
 
@@ -177,8 +176,7 @@ def choose_runner(
     if sim is not None:
         from deformctl.lift.runners.sim import sim_runner_factory
 
-        profile, settings, criterion = sim
-        chosen.append(sim_runner_factory(profile=profile, settings=settings, criterion=criterion))
+        chosen.append(sim_runner_factory(preset=sim))
     if len(chosen) != 1:
         raise UsageError(
             "choose exactly one trial runner: --rig CMD or --sim"

@@ -17,7 +17,7 @@ from rich.console import Console
 
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli._common import finish_sweep, progress_bar
-from deformctl.cli._options import parse_object_ids
+from deformctl.cli._options import parse_log_epoch, parse_object_ids
 from deformctl.errors import UsageError
 from deformctl.measure import (
     DEFAULT_SIM_HOLD_S,
@@ -90,6 +90,7 @@ class SimOptions:
     """The ``--sim`` options as given (None: not given, the documented default applies)."""
 
     squeezes: int | None
+    sim_preset: str | None
     objects: str | None
     peak_force_n: float | None
     strain: float | None
@@ -102,6 +103,7 @@ class SimOptions:
     seed: int | None
     noise_force_n: float | None
     noise_position_m: float | None
+    log_epoch: str | None = None
 
     def given(self) -> dict[str, object]:
         """Option flag → value for the options given on the command line."""
@@ -117,7 +119,7 @@ class SimOptions:
         Raises:
             UsageError: both ``--peak-force-n`` and ``--strain``, or ``--squeezes`` < 1.
         """
-        from deformctl.sim import SimSettings
+        from deformctl.presets import DEFAULT_PRESET, sim_preset
 
         if self.peak_force_n is not None and self.strain is not None:
             raise UsageError("give --peak-force-n or --strain, not both")
@@ -133,13 +135,12 @@ class SimOptions:
         squeezes = DEFAULT_SIM_SQUEEZES if self.squeezes is None else self.squeezes
         if squeezes < 1:
             raise UsageError(f"--squeezes must be >= 1, got {squeezes}")
-        settings = SimSettings(
-            alpha_cm=self.alpha_cm,
-            **{
-                name: getattr(self, name)
-                for name in ("dt_s", "memory_budget_gib")
-                if getattr(self, name) is not None
-            },
+        preset = sim_preset(self.sim_preset or DEFAULT_PRESET).replace(
+            settings={
+                "alpha_cm": self.alpha_cm,
+                "dt_s": self.dt_s,
+                "memory_budget_gib": self.memory_budget_gib,
+            }
         )
         simulate: dict[str, Any] = {
             "squeezes": squeezes,
@@ -151,7 +152,14 @@ class SimOptions:
             "noise_force_n": self.noise_force_n or 0.0,
             "noise_position_m": self.noise_position_m or 0.0,
         }
-        return SimulateCatalogTask(simulate, settings, 0 if self.seed is None else self.seed)
+        epoch_ns = parse_log_epoch(self.log_epoch)
+        return SimulateCatalogTask(
+            simulate,
+            preset.settings,
+            0 if self.seed is None else self.seed,
+            preset.name,
+            **({} if epoch_ns is None else {"log_epoch_ns": epoch_ns}),
+        )
 
 
 #: The flags of :class:`SimOptions` (only ``--sim`` takes them).

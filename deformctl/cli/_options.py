@@ -50,21 +50,84 @@ def default(name: str) -> str:
 
 
 _PARTICLES = int(str(HEAVY_DEFAULTS["SimSettings.particles_per_side"]))
+_PAPER_PARTICLES = 7  #: deformctl.presets.PAPER_FIXED["particles_per_side"] (checked by a test)
 
 
 # ---------------------------------------------------------------------------- every writer
 
 Force = Annotated[bool, typer.Option("--force", help="Overwrite existing outputs.")]
+LogEpoch = Annotated[
+    str | None,
+    typer.Option(
+        "--log-epoch",
+        metavar="TIME",
+        help="Where the log's simulated squeezes or attempts begin, laid end to end from there: "
+        "ISO 8601 (2024-05-01T12:00:00Z; no zone: UTC) or seconds since 1970 "
+        "[default: 2000-01-01T00:00:00Z]. Recordings keep their own clock (a bag's header "
+        "stamps, a CSV's Unix times) and rig attempts the wall clock.",
+    ),
+]
+#: 2500-01-01T00:00:00Z: the latest epoch accepted (MCAP log times are unsigned 64-bit ns, which
+#: end in 2554, and a log laid end to end from the epoch must still fit)
+_LAST_EPOCH_S = 16_725_225_600
+
+
+def parse_log_epoch(text: str | None) -> int | None:
+    """``--log-epoch`` in ns since the Unix epoch (None: not given).
+
+    Raises:
+        UsageError: neither a number of seconds nor an ISO 8601 time, or a time before 1970
+            or too late for a log's unsigned 64-bit nanoseconds.
+    """
+    import datetime
+    import math
+
+    if text is None:
+        return None
+    try:
+        seconds = float(text)
+    except ValueError:
+        try:
+            stamp = datetime.datetime.fromisoformat(text)
+        except ValueError:
+            raise UsageError(
+                f"--log-epoch must be an ISO 8601 time or seconds since 1970, got {text!r}"
+            ) from None
+        if stamp.tzinfo is None:
+            stamp = stamp.replace(tzinfo=datetime.UTC)
+        delta = stamp - datetime.datetime(1970, 1, 1, tzinfo=datetime.UTC)
+        ns = (delta.days * 86_400 + delta.seconds) * 1_000_000_000 + delta.microseconds * 1_000
+    else:
+        if not math.isfinite(seconds):
+            raise UsageError(f"--log-epoch must be a finite time, got {text!r}")
+        ns = round(seconds * 1_000_000_000)
+    if not 0 <= ns <= _LAST_EPOCH_S * 1_000_000_000:
+        raise UsageError(f"--log-epoch must lie between 1970 and 2500, got {text!r}")
+    return ns
+
 
 # ---------------------------------------------------------------------------- the simulator
+
+SimPresetName = Annotated[
+    str | None,
+    typer.Option(
+        "--sim-preset",
+        metavar="paper|table",
+        help="Sim: the simulator preset, the object model and lift protocol every simulated "
+        "force depends on [default: paper, calibrated to the seed paper's simulation; table: the "
+        "lift from the table, kept for comparison]. Single --sim options override its values; "
+        "every row and log records the preset.",
+    ),
+]
 
 AlphaCm = Annotated[
     float | None,
     typer.Option(
         "--alpha-cm",
         metavar="CM",
-        help=f"Sim: lattice spacing, cm [default: the longest side / {_PARTICLES - 1}, "
-        f"{_PARTICLES} particles].",
+        help="Sim: lattice spacing, cm [default: the preset's, the longest side / "
+        f"{_PAPER_PARTICLES - 1} ({_PAPER_PARTICLES} particles) for paper, / {_PARTICLES - 1} for "
+        "table].",
     ),
 ]
 DtS = Annotated[

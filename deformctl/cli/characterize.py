@@ -130,7 +130,7 @@ def characterize(
     --strict and the README's "When the numbers are doubtful"); each flagged object gives one
     warning line on stderr.
 
-    SQUEEZE.mcap may also be a directory written by measure --sim -o DIR/ (its part-*.mcap
+    SQUEEZE.mcap may also be a directory written by measure --sim -o DIR/ (its _logs/part-*.mcap
     logs, in order). With a dataset directory output (-o DIR/) the objects are fitted in
     parallel (--workers, --scheduler; --resume) into DIR/part-*.parquet; an object that cannot
     be fitted is recorded in DIR/_failures/ and the others go on.

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import datetime
 import json
 import os
 from typing import Any
@@ -11,6 +12,13 @@ import typer
 from deformctl.artifacts.dataset import describe_dataset
 from deformctl.artifacts.describe import describe
 from deformctl.cli._common import translate_errors
+
+
+def _utc(ns: int) -> str:
+    """A log time (ns since the Unix epoch) in ISO 8601 UTC, to the nanosecond."""
+    seconds, frac = divmod(ns, 1_000_000_000)
+    stamp = datetime.datetime.fromtimestamp(seconds, datetime.UTC)
+    return f"{stamp:%Y-%m-%dT%H:%M:%S}.{frac:09d}Z"
 
 
 def _unit(unit: object) -> str:
@@ -86,17 +94,21 @@ def render_text(info: dict[str, Any]) -> str:
         lines.append(f"messages: {info['messages']}")
         rng = info.get("time_range")
         if rng:
-            lines.append(
-                f"time range: {rng['start_ns']} .. {rng['end_ns']} ns ({rng['duration_s']:.3f} s)"
-            )
+            lines.append(f"time range: {_utc(rng['start_ns'])} .. {_utc(rng['end_ns'])} "
+                         f"({rng['duration_s']:.3f} s)")  # fmt: skip
         for key in ("squeezes", "attempts", "lifted"):
             if key in info:
                 lines.append(f"{key}: {info[key]}")
         lines.append("channels:")
+        fields: dict[str, list[dict[str, str]]] = {}
         for ch in info["channels"]:
             lines.append(f"  {ch['topic']}: {ch['messages']} messages, schema {ch['schema']}")
-            for f in ch.get("fields", []):
-                lines.append(f"    {f['name']:<20} {f['type']:<12} {_unit(f['unit'])}")
+            fields.setdefault(ch["schema"], ch.get("fields", []))
+        for schema, schema_fields in fields.items():
+            if schema_fields:
+                lines.append(f"fields of {schema}:")
+            for f in schema_fields:
+                lines.append(f"  {f['name']:<20} {f['type']:<12} {_unit(f['unit'])}")
     if info["kind"] == "model":
         lines.extend(_model_lines(info))
     lines.extend(_per_object_lines(info))
@@ -152,7 +164,7 @@ def render_dataset(info: dict[str, Any]) -> str:
         f"{info['path']}: {info['kind']} dataset (written by {info['command']})",
         f"  parts: {info['parts']} of {info['parts_expected']}, {state}",
         f"  objects: {info['objects']}, rows: {info['rows']}, failed: {info['failed']}",
-        f"  logs: {info['logs']} part-*.mcap",
+        f"  logs: {info['logs']} _logs/part-*.mcap",
         "  columns: "
         + ", ".join(
             f"{c['name']} ({c['unit']})" if c["unit"] else c["name"] for c in info["columns"]

@@ -20,7 +20,7 @@ Failures, decided here:
 
 from __future__ import annotations
 
-from typing import Annotated, cast
+from typing import TYPE_CHECKING, Annotated, cast
 
 import typer
 from rich.console import Console
@@ -57,6 +57,34 @@ from deformctl.lift.search import (
 from deformctl.lift.stage import lift_catalog_files
 from deformctl.parallel import SweepOptions
 
+if TYPE_CHECKING:  # pragma: no cover
+    from deformctl.presets import SimPreset
+
+
+def _sweep(
+    catalog: str,
+    parts: SimPreset | None,
+    log: str | None,
+    search: tuple[object, ...],
+    output: str,
+    sweep: SweepOptions,
+    object_ids: list[str] | None,
+    force: bool,
+) -> None:
+    """``lift --sim -o DIR/``: the search of every object through the sweep executor."""
+    if parts is None:
+        raise UsageError("a dataset directory output (-o DIR/) needs --sim")
+    if log is not None:
+        raise UsageError(
+            "--log is not used with a dataset directory output (see DIR/_logs/part-*.mcap)"
+        )
+    from deformctl.lift.runners.sim import LiftTask, lift_sweep
+
+    task = LiftTask(parts, *search)  # type: ignore[arg-type]
+    summary = lift_sweep(catalog, task, output=output, sweep=sweep, object_ids=object_ids,
+                         force=force)  # fmt: skip
+    finish_sweep(summary, "lift")
+
 
 @translate_errors
 @opt.with_sweep_options
@@ -80,6 +108,7 @@ def lift(
             "--sim", help="Run the attempts in the built-in simulator (needs material values)."
         ),
     ] = False,
+    sim_preset: opt.SimPresetName = None,
     lift_accel_m_s2: LiftAccel = None,
     lift_speed_m_s: LiftSpeed = None,
     lift_height_m: LiftHeight = None,
@@ -126,6 +155,7 @@ def lift(
     max_attempts: Annotated[
         int, typer.Option("--max-attempts", help="Most attempts per object (>= 1).")
     ] = DEFAULT_MAX_ATTEMPTS,
+    log_epoch: opt.LogEpoch = None,
     force: opt.Force = False,
     sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
@@ -137,13 +167,15 @@ def lift(
     attempt to an MCAP log. Exit 1 when an object does not converge or the rig fails; the
     outputs are written first, keeping the attempts made so far.
 
-    With --sim each attempt is simulated: grip, lift along the profile (S-curve to --lift-accel-m-s2
-    and --lift-speed-m-s, rise --lift-height-m, hold --lift-hold-s), judge slip by --slip-criterion
-    against --slip-tolerance-m; every row records the profile and the criterion.
+    With --sim each attempt is simulated under --sim-preset (paper by default: the object starts
+    stress-free on a support that gives way as the palms accelerate; table: lifted from the
+    table along an S-curve): grip, rise (--lift-accel-m-s2, --lift-speed-m-s, --lift-height-m,
+    hold --lift-hold-s), judge slip by --slip-criterion against --slip-tolerance-m; every row
+    records the preset, the profile and the criterion.
 
     With --sim and a dataset directory output (-o DIR/), the objects run in parallel
     (--workers N local processes, or --scheduler tcp://HOST:PORT of a Dask cluster) into
-    DIR/part-*.parquet with each part's attempts in DIR/part-*.mcap; --resume completes an
+    DIR/part-*.parquet with each part's attempts in DIR/_logs/; --resume completes an
     interrupted run. An object that fails is recorded in DIR/_failures/ and the rest go on.
 
     Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
@@ -163,9 +195,11 @@ def lift(
             ),
             "--slip-tolerance-m": slip_tolerance_m if sim else None,  # else: frames' option
             "--slip-criterion": slip_criterion,
+            "--sim-preset": sim_preset,
             "--alpha-cm": alpha_cm,
             "--dt-s": dt_s,
             "--memory-budget-gib": memory_budget_gib,
+            "--log-epoch": log_epoch,
         },
     )
     judge = frames_judge(
@@ -180,25 +214,15 @@ def lift(
     )
     object_ids = opt.parse_object_ids(objects)
     if dataset:
-        if parts is None:
-            raise UsageError("a dataset directory output (-o DIR/) needs --sim")
-        if log is not None:
-            raise UsageError(
-                "--log is not used with a dataset directory output (see DIR/part-*.mcap)"
-            )
-        from deformctl.lift.runners.sim import LiftTask, lift_sweep
-
-        task = LiftTask(*parts, protocol, growth, tolerance, max_attempts)
-        summary = lift_sweep(catalog, task, output=output, sweep=sweep, object_ids=object_ids,
-                             force=force)  # fmt: skip
-        finish_sweep(summary, "lift")
+        search = (protocol, growth, tolerance, max_attempts, opt.parse_log_epoch(log_epoch))
+        _sweep(catalog, parts, log, search, output, sweep, object_ids, force)
         return
     with progress_bar(Console(stderr=True), "lift") as progress:
         run = lift_catalog_files(
             catalog, factory, output=output, log=log, object_ids=object_ids,
             protocol=cast(SearchProtocol, protocol),  # checked by validate_search_options
             growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts,
-            progress=progress, force=force,
+            progress=progress, force=force, log_epoch_ns=opt.parse_log_epoch(log_epoch),
         )  # fmt: skip
     if not is_stdio(output) and (log is None or not is_stdio(log)):
         aborted = {f.object_id for f in run.failures if f.aborted}  # their line is the error

@@ -95,6 +95,7 @@ def measure(
         ),
     ] = ...,  # type: ignore[assignment]
     squeezes: sq.Squeezes = None,
+    sim_preset: opt.SimPresetName = None,
     objects: opt.Objects = None,
     peak_force_n: sq.PeakForceN = None,
     strain: sq.Strain = None,
@@ -107,6 +108,7 @@ def measure(
     seed: sq.Seed = None,
     noise_force_n: sq.NoiseForceN = None,
     noise_position_m: sq.NoisePositionM = None,
+    log_epoch: opt.LogEpoch = None,
     force: opt.Force = False,
     sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
@@ -121,7 +123,7 @@ def measure(
     simulator (force ramp then hold; the largest squeeze's peak force is D x strain x size_x
     unless --peak-force-n is given), and the log stores each object's catalog row and the
     simulator settings and seed. With a dataset directory output (-o DIR/) the objects run in
-    parallel (--workers, --scheduler; --resume) into DIR/part-*.mcap squeeze logs and a
+    parallel (--workers, --scheduler; --resume) into DIR/_logs/part-*.mcap squeeze logs and a
     per-object summary DIR/part-*.parquet; characterize reads DIR/ directly.
 
     Example:
@@ -132,8 +134,8 @@ def measure(
       deformctl measure datasets/paper/objects.csv --sim -o squeeze.mcap
     """
     sim_opts = _measure_sim.SimOptions(
-        squeezes, objects, peak_force_n, strain, ramp_s, hold_s, floating, alpha_cm, dt_s,
-        memory_budget_gib, seed, noise_force_n, noise_position_m,
+        squeezes, sim_preset, objects, peak_force_n, strain, ramp_s, hold_s, floating, alpha_cm,
+        dt_s, memory_budget_gib, seed, noise_force_n, noise_position_m, log_epoch,
     )  # fmt: skip
     image_opts = img.ImageOptions(
         marker_size_cm, marker_dict, marker_id, checkerboard, square_size_cm, color_range,

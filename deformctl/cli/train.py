@@ -23,6 +23,7 @@ PREDICTORS = (
     ("model", "model"),
     ("baseline_nearest", "nearest entry"),
     ("baseline_f_w", "F_w alone"),
+    ("baseline_constant_ratio", "median L_f/F_w x F_w"),
 )
 
 
@@ -94,7 +95,8 @@ def train(
     best of 8 seeded restarts is picked on the training rows. The rows are split by a seeded
     permutation into --train-size training rows and a test set. Prints max and median
     relative error, MAE and R² on train and test for the model and for
-    two baselines on the same split: the nearest index-table entry and F_w = W / (2 μ) alone.
+    three baselines on the same split: the nearest index-table entry, F_w = W / (2 μ) alone, and
+    the constant ratio (the training rows' median L_f / F_w times F_w).
     The model file's metadata records the seed, features, hyper-parameters, training ranges,
     split ids and metrics; the same seed gives identical predictions.
 

@@ -73,7 +73,7 @@ SearchProtocol = Literal["refine", "paper"]
 PROTOCOLS: tuple[SearchProtocol, ...] = ("refine", "paper")
 
 DEFAULT_GROWTH = 1.2  #: the paper's +20 % per attempt
-DEFAULT_TOLERANCE_REL = 0.01  #: refine stops when (high - low) / high <= 1 %
+DEFAULT_TOLERANCE_REL = 0.005  #: refine stops when (high - low) / high <= 0.5 %
 DEFAULT_MAX_ATTEMPTS = 50  #: covers F_w * 1.2**40 (about 1500 x F_w) plus the bisection
 
 __all__ = [

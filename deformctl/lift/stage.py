@@ -285,6 +285,7 @@ def lift_catalog_files(
     max_attempts: int = DEFAULT_MAX_ATTEMPTS,
     progress: LiftProgress | None = None,
     force: bool = False,
+    log_epoch_ns: int | None = None,
 ) -> CatalogLiftResult:
     """:func:`lift_catalog` from a catalog file: the lift_results table and the lift log written.
 
@@ -299,6 +300,8 @@ def lift_catalog_files(
         object_ids: these objects, in this order (None: all).
         protocol, growth, tolerance_rel, max_attempts, progress: as for :func:`lift_catalog`.
         force: overwrite existing outputs.
+        log_epoch_ns: where the log's attempts without a wall clock (simulated ones) begin, ns
+            since the Unix epoch (None: the log writer's fixed epoch, 2000-01-01).
 
     Raises:
         UsageError: ``output`` and ``log`` are the same file, or both stdout (exit 2).
@@ -337,7 +340,8 @@ def lift_catalog_files(
         path=catalog_path,
     )
     if log is not None:
-        write_lift_log(log, run.objects, run.attempts, provenance=provenance, force=force)
+        epoch = {} if log_epoch_ns is None else {"epoch_ns": log_epoch_ns}
+        write_lift_log(log, run.objects, run.attempts, provenance=provenance, force=force, **epoch)
     write_table(run.table, output, "lift_results", provenance=provenance, force=force)
     return run
 

@@ -41,6 +41,8 @@ EXPECTED_PATH = dataset_path("golden", "expected.json")
 #: Training split of the golden run: 6 objects train, 2 test.
 GOLDEN_TRAIN_SIZE = 6
 GOLDEN_SEED = 0
+#: The simulator preset of the golden run (the product's default, ``--sim-preset paper``).
+GOLDEN_PRESET = "paper"
 
 #: Relative tolerance per quantity (see the module docstring for why these values).
 TOLERANCES = {
@@ -59,13 +61,16 @@ def compute_golden() -> dict[str, Any]:
         ``{"objects": {id: {deformability_n_per_cm, damping_ns_per_cm, lift_force_n, f_w_n,
         attempts}}, "model": {train_max_rel_error, test_max_rel_error, test_mae_n}}``.
     """
+    from deformctl.presets import sim_preset
+
+    preset = sim_preset(GOLDEN_PRESET)
     catalog = golden_population()
-    _, squeezes = simulate_squeezes(catalog, seed=GOLDEN_SEED)
+    _, squeezes = simulate_squeezes(catalog, settings=preset.settings, seed=GOLDEN_SEED)
     by_object: dict[str, list[SqueezeSeries]] = {}
     for s in squeezes:
         by_object.setdefault(s.object_id, []).append(s)
     coefficients = characterize(by_object, "lsq")
-    lift = lift_catalog(catalog, sim_runner_factory()).table
+    lift = lift_catalog(catalog, sim_runner_factory(preset=preset)).table
     index = build_index_table(coefficients, lift)
     result = train_model(index, train_size=GOLDEN_TRAIN_SIZE, seed=GOLDEN_SEED, hidden=(2,))
     model = result.metrics["model"]

@@ -7,10 +7,16 @@ reads the artifacts back through the validating readers and writes:
 * ``report.md``: Table II (deformability, damping, lifting force of the four Table I objects)
   with the paper's calculated and simulated values beside ours and the relative differences;
   Table III (network inputs, expected and predicted lifting force) for the paper's rows and a
-  sample of our test rows; the model's metrics on train and test with both baselines.
+  sample of our test rows; Table III's nine inputs run through our simulator (cubes of
+  1 g/cm³, ``datasets/paper/table3_cubes.csv``) beside the paper's expected and NN columns; the
+  model's metrics on train and test beside three baselines (nearest entry, F_w alone, and the
+  constant ratio: the training rows' median L_f / F_w times F_w); the landscape: the span of
+  L_f / F_w over the population and its rank correlation with ζ.
 * ``predicted_vs_measured.png``: our network's L_f against the simulated L_f, train and test.
 * ``force_compression.png``: force felt against compression for the four Table I objects.
-* ``lf_over_fw_vs_damping.png``: L_f / F_w against damping over the population.
+* ``lf_over_fw_vs_zeta.png``: L_f / F_w against the damping ratio ζ = λ / (2 √(D m)) over the
+  population, with the paper's 13 simulated points (Table II and III, F_w at μ = 0.5) and ours
+  for the same 13 objects overlaid.
 
 The run directory holds the files the Makefile names (see :data:`RUN_FILES`). Nothing here is
 tuned to the paper: differences are reported as they are.
@@ -29,7 +35,9 @@ import numpy as np
 import pandas as pd
 
 from deformctl.artifacts import read_squeeze_log, read_table
+from deformctl.catalog import catalog_objects
 from deformctl.errors import DeformctlError, MissingInputError
+from deformctl.physics import damping_ratio, rigid_grip_force_n
 from deformctl.repro import dataset_path
 from deformctl.repro.paper import compare_with_paper
 
@@ -42,6 +50,7 @@ RUN_FILES = {
     "index": "index.parquet",
     "metrics": "metrics.json",
     "predictions": "predictions.parquet",
+    "table3_lift": "table3_lift.parquet",
 }
 
 DATASETS = dataset_path("paper")  #: the bundled paper tables (table2.csv, table3.csv)
@@ -57,6 +66,11 @@ class ReportSummary:
     model_test_max_rel_error: float
     model_test_median_rel_error: float
     text: str
+    constant_ratio_test_max_rel_error: float = float("nan")
+    constant_ratio_test_median_rel_error: float = float("nan")
+    ratio_min: float = float("nan")  #: the population's smallest L_f / F_w
+    ratio_max: float = float("nan")  #: the population's largest L_f / F_w
+    ratio_zeta_spearman: float = float("nan")  #: rank correlation of L_f / F_w with ζ
 
 
 def _rel(ours: pd.Series, theirs: pd.Series) -> pd.Series:
@@ -130,6 +144,7 @@ def _metrics_rows(metrics: dict[str, Any]) -> list[list[str]]:
         ("model", "network 3-2-1"),
         ("baseline_nearest", "nearest index entry"),
         ("baseline_f_w", "F_w = W/(2μ)"),
+        ("baseline_constant_ratio", "median L_f/F_w × F_w"),
     ):
         block = metrics.get(key)
         if not block:
@@ -161,6 +176,7 @@ def _plots(
     index: pd.DataFrame,
     squeezes_by_object: dict[str, list[Any]],
     names: dict[str, str],
+    landscape: pd.DataFrame,
 ) -> tuple[Path, ...]:
     import matplotlib
 
@@ -205,19 +221,97 @@ def _plots(
     fig.savefig(paths[-1], dpi=120)
     plt.close(fig)
 
-    fig, ax = plt.subplots(figsize=(6, 4.5))
-    ratio = index["lift_force_n"] / index["f_w_n"]
-    sc = ax.scatter(index["damping_ns_per_cm"], ratio, c=index["weight_n"], s=18, cmap="viridis")
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    sc = ax.scatter(
+        population_zeta(index), index["lift_force_n"] / index["f_w_n"], c=index["weight_n"],
+        s=16, cmap="viridis", label="our population",
+    )  # fmt: skip
     fig.colorbar(sc, ax=ax, label="weight W (N)")
+    ax.scatter(
+        landscape["zeta"], landscape["ratio_paper"], marker="*", s=90, color="C3",
+        edgecolor="k", label="paper (Tables II, III)", zorder=3,
+    )  # fmt: skip
+    ax.scatter(
+        landscape["zeta"], landscape["ratio_ours"], marker="x", s=50, color="k",
+        label="ours, same 13 objects", zorder=3,
+    )  # fmt: skip
     ax.axhline(1.0, color="k", lw=1, ls="--")
-    ax.set_xlabel("damping λ (N·s/cm)")
+    ax.set_xscale("symlog", linthresh=0.05)  # linear near zeta = 0 (the water bag), log above
+    ax.set_xlim(left=0.0)
+    ax.set_xlabel("damping ratio ζ = λ / (2 √(D m))")
     ax.set_ylabel("L_f / F_w")
     ax.set_title("Lifting force over the rigid-object force")
+    ax.legend(fontsize=8)
     fig.tight_layout()
-    paths.append(out_dir / "lf_over_fw_vs_damping.png")
+    paths.append(out_dir / "lf_over_fw_vs_zeta.png")
     fig.savefig(paths[-1], dpi=120)
     plt.close(fig)
     return tuple(paths)
+
+
+def population_zeta(index: pd.DataFrame) -> pd.Series:
+    """ζ of each index-table row, from its measured D and λ (see ``damping_ratio``)."""
+    return pd.Series(
+        damping_ratio(
+            index["weight_n"].to_numpy(dtype=np.float64),
+            index["deformability_n_per_cm"].to_numpy(dtype=np.float64),
+            index["damping_ns_per_cm"].to_numpy(dtype=np.float64),
+        ),
+        index=index.index,
+    )
+
+
+def compare_landscape(
+    table2: pd.DataFrame,
+    paper_lift: pd.DataFrame,
+    table3: pd.DataFrame,
+    table3_lift: pd.DataFrame,
+    friction_mu: float = 0.5,
+) -> pd.DataFrame:
+    """The paper's 13 simulated points beside our L_f for the same objects.
+
+    Table II's four bags (ours from ``paper_lift``) and Table III's nine inputs (ours from
+    ``table3_lift``, object ids ``T3-1`` … ``T3-9`` as in ``datasets/paper/table3_cubes.csv``).
+    The paper's F_w is taken at ``friction_mu`` (the catalog's assumption; the paper gives none).
+
+    Returns:
+        One row per point: ``point``, ``weight_n``, D, λ, ``zeta``, ``lift_force_paper_n``, the
+        paper's NN output (Table III only), ``lift_force_ours_n`` (NaN when that object was not
+        lifted), ``ratio_paper``, ``ratio_ours`` and ``error`` (ours / paper − 1).
+    """
+    catalog = pd.read_csv(dataset_path("paper", "objects.csv"))
+    names = dict(zip(catalog["object_id"], catalog["name"], strict=True))
+    specs = {o.object_id: o.to_sim_spec() for o in catalog_objects(catalog)}
+    ours2 = paper_lift.set_index("object_id")["lift_force_n"]
+    ours3 = table3_lift.set_index("object_id")["lift_force_n"]
+    rows = []
+    for r in table2.itertuples():
+        o = specs[str(r.object_id)]
+        rows.append(
+            (str(names[r.object_id]), o.weight_n, o.stiffness_n_per_cm, o.damping_ns_per_cm,
+             float(r.lift_force_simulation_n), np.nan, float(ours2.get(r.object_id, np.nan)))
+        )  # fmt: skip
+    for i, r in enumerate(table3.itertuples(), start=1):
+        rows.append(
+            (f"T3-{i}", float(r.weight_n), float(r.deformability_n_per_cm),
+             float(r.damping_ns_per_cm), float(r.lift_force_expected_n),
+             float(r.lift_force_nn_output_n), float(ours3.get(f"T3-{i}", np.nan)))
+        )  # fmt: skip
+    out = pd.DataFrame(
+        rows,
+        columns=[
+            "point", "weight_n", "deformability_n_per_cm", "damping_ns_per_cm",
+            "lift_force_paper_n", "lift_force_paper_nn_n", "lift_force_ours_n",
+        ],
+    )  # fmt: skip
+    out["zeta"] = damping_ratio(
+        out["weight_n"], out["deformability_n_per_cm"], out["damping_ns_per_cm"]
+    )
+    f_w = rigid_grip_force_n(out["weight_n"].to_numpy(dtype=np.float64), friction_mu)
+    out["ratio_paper"] = out["lift_force_paper_n"] / f_w
+    out["ratio_ours"] = out["lift_force_ours_n"] / f_w
+    out["error"] = out["lift_force_ours_n"] / out["lift_force_paper_n"] - 1.0
+    return out
 
 
 def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) -> ReportSummary:
@@ -242,6 +336,8 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
     predictions = read_table(files["predictions"], "predictions")
     metrics = json.loads(files["metrics"].read_text())
     objects, squeezes = read_squeeze_log(files["paper_squeeze"])
+    table3_lift = read_table(files["table3_lift"], "lift_results")
+    landscape = compare_landscape(table2, paper_lift, table3, table3_lift)
 
     t2 = compare_table2(paper_coeffs, paper_lift, table2)
     predictions = predictions.merge(index[["object_id", "lift_force_n", "f_w_n"]], on="object_id")
@@ -255,7 +351,7 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
     for s in squeezes:
         by_object.setdefault(s.object_id, []).append(s)
     names = {str(o.get("object_id")): str(o.get("interior", o.get("name", ""))) for o in objects}
-    plots = _plots(run, predictions, index, by_object, names)
+    plots = _plots(run, predictions, index, by_object, names, landscape)
 
     t2_rows = [
         [
@@ -323,6 +419,29 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
             for r in sample.itertuples()
         ],
     )
+    t3_sim = markdown_table(
+        ["input", "W (N)", "D (N/cm)", "λ (N·s/cm)", "ζ", "expected L_f (N)", "NN L_f (N)",
+         "our simulated L_f (N)", "ours vs expected"],
+        [
+            [r.point, _fmt(r.weight_n), _fmt(r.deformability_n_per_cm),
+             _fmt(r.damping_ns_per_cm), _fmt(r.zeta, 3), _fmt(r.lift_force_paper_n),
+             _fmt(r.lift_force_paper_nn_n), _fmt(r.lift_force_ours_n), _pct(r.error)]
+            for r in landscape[landscape["point"].str.startswith("T3-")].itertuples()
+        ],
+    )  # fmt: skip
+    ratio = index["lift_force_n"] / index["f_w_n"]
+    zeta = population_zeta(index)
+    ratio_min, ratio_max = float(ratio.min()), float(ratio.max())
+    spearman = float(ratio.rank().corr(zeta.rank())) if len(index) > 2 else float("nan")
+    worst = landscape["error"].abs().max()
+    landscape_md = markdown_table(
+        ["point", "ζ", "L_f paper (N)", "L_f ours (N)", "paper L_f/F_w", "ours L_f/F_w", "Δ"],
+        [
+            [r.point, _fmt(r.zeta, 3), _fmt(r.lift_force_paper_n), _fmt(r.lift_force_ours_n),
+             _fmt(r.ratio_paper, 3), _fmt(r.ratio_ours, 3), _pct(r.error)]
+            for r in landscape.itertuples()
+        ],
+    )  # fmt: skip
     metrics_md = markdown_table(
         ["predictor", "split", "max rel. error", "median rel. error", "MAE (N)", "R²"],
         _metrics_rows(metrics),
@@ -342,6 +461,14 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
             t3_paper,
             f"Ours (the first {len(sample)} of {len(test)} test objects):",
             t3_ours,
+            "Table III's nine inputs through our simulator (cubes of 1 g/cm³, μ = 0.5; "
+            "`datasets/paper/table3_cubes.csv`):",
+            t3_sim,
+            "## The landscape: L_f / F_w against the damping ratio ζ",
+            f"Over the population L_f / F_w spans {ratio_min:.3f} to {ratio_max:.3f}; its rank "
+            f"correlation with ζ is {spearman:+.2f} (negative: it falls as damping grows). The "
+            f"paper's 13 simulated points beside ours (worst {_pct(worst)}):",
+            landscape_md,
             "## Model metrics (same split for every predictor)",
             f"Population: {len(lift)} objects, {converged} converged lifting-force searches; "
             f"{metrics.get('n_train')} train / {metrics.get('n_test')} test, "
@@ -367,7 +494,16 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
         f"Network 3-2-1 on {len(test)} test objects: max relative error "
         f"{100 * test_max:.2f} %, median {100 * test_median:.2f} % (paper: max < 14.8 %)",
     ]
-    for key, label in (("baseline_nearest", "nearest entry"), ("baseline_f_w", "F_w alone")):
+    summary_lines.append(
+        f"Landscape: L_f/F_w spans {ratio_min:.3f} to {ratio_max:.3f} over {len(index)} objects "
+        f"(rank correlation with zeta {spearman:+.2f}); the 13 paper points: worst "
+        f"{_pct(worst)}"
+    )
+    for key, label in (
+        ("baseline_nearest", "nearest entry"),
+        ("baseline_f_w", "F_w alone"),
+        ("baseline_constant_ratio", "constant ratio (median L_f/F_w x F_w)"),
+    ):
         block = metrics.get(key)
         if block:
             m = block["test"]
@@ -383,50 +519,106 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
         model_test_max_rel_error=test_max,
         model_test_median_rel_error=test_median,
         text="\n".join(summary_lines),
+        constant_ratio_test_max_rel_error=_test_metric(metrics, "max_rel_error"),
+        constant_ratio_test_median_rel_error=_test_metric(metrics, "median_rel_error"),
+        ratio_min=ratio_min,
+        ratio_max=ratio_max,
+        ratio_zeta_spearman=spearman,
     )
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m deformctl.repro.report RUN_DIR [--require-max-test-error FRACTION]``.
+def _test_metric(metrics: dict[str, Any], name: str) -> float:
+    block = metrics.get("baseline_constant_ratio")
+    return float(block["test"][name]) if block else float("nan")
 
-    Writes the report and prints its summary. With ``--require-max-test-error``, exits 1 when
-    the network's maximum relative test error exceeds the fraction (``make reproduce`` passes
-    0.05, the target of issue 6), so a regression of the headline number fails the run.
+
+def gate_failures(
+    summary: ReportSummary,
+    *,
+    max_test_error: float | None = None,
+    beat_constant_ratio: bool = False,
+    ratio_span: tuple[float, float] | None = None,
+) -> list[str]:
+    """The acceptance checks ``make reproduce`` asks for that the run fails, one message each.
+
+    Args:
+        max_test_error: the network's max relative test error must be at most this fraction.
+        beat_constant_ratio: the network's max test error must be at most half the
+            constant-ratio baseline's, and its median at most a third of the baseline's median.
+        ratio_span: ``(low, high)``: the population's L_f / F_w must reach down to ``low`` and up
+            to ``high``, and fall with ζ (negative rank correlation).
     """
-    args = list(sys.argv[1:] if argv is None else argv)
-    limit: float | None = None
-    if len(args) == 3 and args[1] == "--require-max-test-error":
-        try:
-            limit = float(args[2])
-        except ValueError:
-            limit = None
-        if limit is None or not 0 < limit < 1:
-            print(
-                f"error: --require-max-test-error takes a fraction, got {args[2]!r}",
-                file=sys.stderr,
-            )
-            return 2
-        args = args[:1]
-    if len(args) != 1:
-        print(
-            "usage: python -m deformctl.repro.report RUN_DIR [--require-max-test-error FRACTION]",
-            file=sys.stderr,
+    failures = []
+    s = summary
+    if max_test_error is not None and not s.model_test_max_rel_error <= max_test_error:
+        failures.append(
+            f"the network's max relative test error {100 * s.model_test_max_rel_error:.2f} % "
+            f"exceeds {100 * max_test_error:.2f} %"
         )
+    if beat_constant_ratio:
+        if not s.model_test_max_rel_error <= 0.5 * s.constant_ratio_test_max_rel_error:
+            failures.append(
+                f"the network's max test error {100 * s.model_test_max_rel_error:.2f} % is more "
+                f"than half the constant-ratio baseline's "
+                f"{100 * s.constant_ratio_test_max_rel_error:.2f} %"
+            )
+        if not s.model_test_median_rel_error <= s.constant_ratio_test_median_rel_error / 3.0:
+            failures.append(
+                f"the network's median test error {100 * s.model_test_median_rel_error:.2f} % is "
+                f"more than a third of the constant-ratio baseline's "
+                f"{100 * s.constant_ratio_test_median_rel_error:.2f} %"
+            )
+    if ratio_span is not None:
+        low, high = ratio_span
+        if not (s.ratio_min <= low and s.ratio_max >= high):
+            failures.append(
+                f"L_f/F_w spans {s.ratio_min:.3f} to {s.ratio_max:.3f}, not {low} to {high}"
+            )
+        if not s.ratio_zeta_spearman < 0:
+            failures.append(
+                f"L_f/F_w does not fall with zeta (rank correlation {s.ratio_zeta_spearman:+.2f})"
+            )
+    return failures
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m deformctl.repro.report RUN_DIR [gates]``: write the report, print its summary.
+
+    Gates (each failing one prints an ``error:`` line and the exit code is 1, so a regression of a
+    headline number fails ``make reproduce``): ``--require-max-test-error FRACTION``,
+    ``--require-beat-constant-ratio`` and ``--require-ratio-span LOW HIGH`` (see
+    :func:`gate_failures`).
+    """
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m deformctl.repro.report")
+    parser.add_argument("run_dir", metavar="RUN_DIR")
+    parser.add_argument("--require-max-test-error", type=float, metavar="FRACTION")
+    parser.add_argument("--require-beat-constant-ratio", action="store_true")
+    parser.add_argument("--require-ratio-span", type=float, nargs=2, metavar=("LOW", "HIGH"))
+    try:
+        args = parser.parse_args(list(sys.argv[1:] if argv is None else argv))
+    except SystemExit as exc:  # argparse printed its usage line
+        return 2 if exc.code else 0
+    limit = args.require_max_test_error
+    if limit is not None and not 0 < limit < 1:
+        print(f"error: --require-max-test-error takes a fraction, got {limit!r}", file=sys.stderr)
         return 2
     try:
-        summary = write_report(args[0])
+        summary = write_report(args.run_dir)
     except DeformctlError as err:
         print(f"error: {err}", file=sys.stderr)
         return err.exit_code
     print(summary.text)
-    if limit is not None and not summary.model_test_max_rel_error <= limit:
-        print(
-            f"error: the network's max relative test error "
-            f"{100 * summary.model_test_max_rel_error:.2f} % exceeds {100 * limit:.2f} %",
-            file=sys.stderr,
-        )
-        return 1
-    return 0
+    failures = gate_failures(
+        summary,
+        max_test_error=limit,
+        beat_constant_ratio=args.require_beat_constant_ratio,
+        ratio_span=tuple(args.require_ratio_span) if args.require_ratio_span else None,
+    )
+    for message in failures:
+        print(f"error: {message}", file=sys.stderr)
+    return 1 if failures else 0
 
 
 if __name__ == "__main__":

@@ -528,7 +528,7 @@ def _step_impulse(
     q: FloatArray,
     v: FloatArray,
     dof_of: IntArray,
-    particle_mass: float,
+    particle_mass: FloatArray,
     edges: IntArray,
     rest: FloatArray,
     n0: FloatArray,
@@ -539,14 +539,21 @@ def _step_impulse(
     gravity: float,
     palm_x_dof: IntArray,
     f_now: float,
+    width_damping: float,
     dt: float,
     x: FloatArray,
     vel: FloatArray,
     fp: FloatArray,
     fq: FloatArray,
 ) -> None:
-    """The step's right-hand side ``fq = dt (f(x, v) + f_ext - dt K v)`` in DOFs (also fills the
-    particle positions ``x`` and velocities ``vel``)."""
+    """The step's right-hand side ``fq = h (f(x, v) + f_ext - h K v)`` in DOFs (also fills the
+    particle positions ``x`` and velocities ``vel``).
+
+    ``q, v`` are the step's base state (the BDF2 predictor, or the last state for backward Euler)
+    and ``dt`` the implicit step ``h`` (``2 dt / 3`` for BDF2); ``particle_mass`` is ``[n]`` and
+    ``gravity`` the acceleration acting now. ``width_damping`` (N·s/m) is the damper across the
+    gripped width, between the two palm x DOFs.
+    """
     n = base_x.shape[0]
     for p in range(n):
         for a in range(3):
@@ -557,14 +564,56 @@ def _step_impulse(
     _element_rhs(x, vel, edges, rest, n0, k, c, k_dt, nonlinear, fp)
     fq[:] = 0.0
     for p in range(n):
-        fp[p, 2] -= particle_mass * gravity
+        fp[p, 2] -= particle_mass[p] * gravity
         for a in range(3):
             fq[dof_of[3 * p + a]] += fp[p, a]
     if palm_x_dof[0] >= 0:
-        fq[palm_x_dof[0]] += f_now
-        fq[palm_x_dof[1]] -= f_now
+        fw = width_damping * (v[palm_x_dof[1]] - v[palm_x_dof[0]])
+        fq[palm_x_dof[0]] += f_now + fw
+        fq[palm_x_dof[1]] -= f_now + fw
     for i in range(fq.shape[0]):
         fq[i] *= dt
+
+
+@njit(cache=True)
+def _slipped_past(rec: FloatArray, step: int, stop_slip: float, stop_from: int) -> bool:
+    """Whether the mean palm slip since step ``stop_from - 1`` exceeds ``stop_slip`` (m) at
+    ``step`` (never when ``stop_slip < 0``): the attempt's verdict can no longer change, since
+    the accumulated slip only grows."""
+    if stop_slip < 0.0 or step < stop_from:
+        return False
+    base_l = rec[stop_from - 1, REC_SLIP_L] if stop_from >= 1 else 0.0
+    base_r = rec[stop_from - 1, REC_SLIP_R] if stop_from >= 1 else 0.0
+    return 0.5 * (rec[step, REC_SLIP_L] - base_l + rec[step, REC_SLIP_R] - base_r) > stop_slip
+
+
+@njit(cache=True)
+def _predict(
+    q: FloatArray,
+    v: FloatArray,
+    q_last: FloatArray,
+    v_last: FloatArray,
+    q_prev: FloatArray,
+    v_prev: FloatArray,
+    bdf2: bool,
+) -> None:
+    """Shift the history and turn ``q, v`` into the step's base state.
+
+    On entry ``q, v`` are the state at the start of the step and ``q_last, v_last`` the one a step
+    earlier; on exit ``q_prev, v_prev`` hold that earlier state, ``q_last, v_last`` the start of
+    this step, and ``q, v`` the base of the implicit update: unchanged for backward Euler, the
+    BDF2 predictor ``(4 x_n - x_{n-1}) / 3`` otherwise (a run starts from rest, so the first
+    step's history is the start state itself).
+    """
+    for i in range(q.shape[0]):
+        q_prev[i] = q_last[i]
+        v_prev[i] = v_last[i]
+        q_last[i] = q[i]
+        v_last[i] = v[i]
+    if bdf2:
+        for i in range(q.shape[0]):
+            q[i] = (4.0 * q_last[i] - q_prev[i]) / 3.0
+            v[i] = (4.0 * v_last[i] - v_prev[i]) / 3.0
 
 
 @njit(cache=True)
@@ -587,12 +636,21 @@ def _record_step(
     palm_mass: float,
     f_now: float,
     dt: float,
+    h: float,
+    v_last: FloatArray,
+    particle_mass: FloatArray,
+    total_mass: float,
     slip: FloatArray,
     palm_z_acc: FloatArray,
     com_z0: float,
 ) -> None:
-    """Record step ``step`` and advance ``v <- vnew``, ``q <- q + dt v`` (palm quantities before
-    the position update use the new velocities)."""
+    """Record step ``step`` and advance ``v <- vnew``, ``q <- q + h v`` (palm quantities before
+    the position update use the new velocities).
+
+    ``q, v`` hold the step's base state (for BDF2 the predictor, see :func:`integrate`), ``h`` is
+    the implicit step (impulses are ``h`` times the force) and ``v_last`` the velocity at the
+    start of the step (for the palm's acceleration). The centre of mass is mass-weighted.
+    """
     n = base_x.shape[0]
     n_dof = q.shape[0]
     nr = row_type.shape[0]
@@ -602,25 +660,25 @@ def _record_step(
     fric_r = 0.0
     for r in range(nr):
         if row_type[r] == 0:
-            table_n += lam[r] / dt
+            table_n += lam[r] / h
         elif row_type[r] == 1:
             if row_dof[r] == palm_z_dof[0]:
-                fric_l += lam[r] / dt
+                fric_l += lam[r] / h
             else:
-                fric_r += lam[r] / dt
+                fric_r += lam[r] / h
     if gripped:
         vz_palm = palm_vz[step + 1]
         slip[0] += abs(vnew[palm_z_dof[0]] - vz_palm) * dt
         slip[1] += abs(vnew[palm_z_dof[1]] - vz_palm) * dt
         palm_z_acc[0] += vz_palm * dt
-        acc_l = (vnew[palm_x_dof[0]] - v[palm_x_dof[0]]) / dt
-        acc_r = (vnew[palm_x_dof[1]] - v[palm_x_dof[1]]) / dt
+        acc_l = (vnew[palm_x_dof[0]] - v_last[palm_x_dof[0]]) / dt
+        acc_r = (vnew[palm_x_dof[1]] - v_last[palm_x_dof[1]]) / dt
         rec[step, REC_NORMAL_L] = f_now - palm_mass * acc_l
         rec[step, REC_NORMAL_R] = f_now + palm_mass * acc_r
     max_speed = 0.0
     for i in range(n_dof):
         v[i] = vnew[i]
-        q[i] += dt * v[i]
+        q[i] += h * v[i]
         if abs(v[i]) > max_speed:
             max_speed = abs(v[i])
     com = np.zeros(3)
@@ -628,7 +686,7 @@ def _record_step(
     for p in range(n):
         for a in range(3):
             x[p, a] = base_x[p, a] + q[dof_of[3 * p + a]]
-            com[a] += x[p, a]
+            com[a] += particle_mass[p] * x[p, a]
         if x[p, 2] < min_z:
             min_z = x[p, 2]
     penetration = 0.0
@@ -643,9 +701,9 @@ def _record_step(
         rec[step, REC_PALM_XR] = xr
     rec[step, REC_TIME] = (step + 1) * dt
     rec[step, REC_PALM_Z] = palm_z_acc[0]
-    rec[step, REC_COM_Z] = com[2] / n - com_z0
-    rec[step, REC_COM_X] = com[0] / n
-    rec[step, REC_COM_Y] = com[1] / n
+    rec[step, REC_COM_Z] = com[2] / total_mass - com_z0
+    rec[step, REC_COM_X] = com[0] / total_mass
+    rec[step, REC_COM_Y] = com[1] / total_mass
     rec[step, REC_SLIP_L] = slip[0]
     rec[step, REC_SLIP_R] = slip[1]
     rec[step, REC_FRICTION_L] = fric_l
@@ -662,7 +720,7 @@ def integrate(
     q: FloatArray,
     v: FloatArray,
     dof_of: IntArray,
-    particle_mass: float,
+    particle_mass: FloatArray,
     edges: IntArray,
     rest: FloatArray,
     n0: FloatArray,
@@ -681,8 +739,10 @@ def integrate(
     palm_x0: FloatArray,
     palm_stop: FloatArray,
     palm_mass: float,
+    width_damping: float,
     force_cmd: FloatArray,
     palm_vz: FloatArray,
+    gravity_scale: FloatArray,
     mu: float,
     mu_table: float,
     row_dof: IntArray,
@@ -695,6 +755,9 @@ def integrate(
     dt: float,
     n_steps: int,
     nonlinear: bool,
+    bdf2: bool,
+    stop_slip: float,
+    stop_from: int,
     pgs_iterations: int,
     pgs_tolerance: float,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -743,7 +806,12 @@ def integrate(
     work = np.empty(n_dof)
     vfree = np.empty(n_dof)
     vnew = np.empty(n_dof)
-    k_dt = k * dt
+    h_step = 2.0 * dt / 3.0 if bdf2 else dt
+    k_dt = k * h_step
+    q_prev = q.copy()
+    v_prev = v.copy()
+    q_last = q.copy()
+    v_last = v.copy()
     rec = np.zeros((n_steps, N_REC))
     # contact columns: precomputed ones, then lazily solved ones
     col_idx = col_of_dof.copy()
@@ -782,15 +850,19 @@ def integrate(
             has_table_friction = True
     slip = np.zeros(2)
     palm_z_acc = np.zeros(1)
+    total_mass = 0.0
     com_z0 = 0.0
     for p in range(n):
-        com_z0 += base_x[p, 2] + q[dof_of[3 * p + 2]]
-    com_z0 /= n
+        total_mass += particle_mass[p]
+        com_z0 += particle_mass[p] * (base_x[p, 2] + q[dof_of[3 * p + 2]])
+    com_z0 /= total_mass
     for step in range(n_steps):
         f_now = force_cmd[step + 1]
+        _predict(q, v, q_last, v_last, q_prev, v_prev, bdf2)
         _step_impulse(
             base_x, q, v, dof_of, particle_mass, edges, rest, n0, k, c, k_dt, nonlinear,
-            gravity, palm_x_dof, f_now, dt, x, vel, fp, fq,
+            gravity * gravity_scale[step + 1], palm_x_dof, f_now, width_damping, h_step, x, vel, fp,
+            fq,
         )  # fmt: skip
         ldl_solve(l_colptr, l_rowidx, l_values, l_diag, l_perm, fq, work, dv)
         for i in range(n_dof):
@@ -818,20 +890,20 @@ def integrate(
                     vrow[r] -= vfree[row_dof2[r]]
                 t = row_type[r]
                 if t == 0 or t >= 5:
-                    target[r] = -gap[r] / dt
+                    target[r] = -gap[r] / h_step
                     lo[r] = 0.0
                     hi[r] = 1e300
                 elif t == 1:
                     target[r] = palm_vz[step + 1]
-                    bound = mu * max(f_now, 0.0) * dt
+                    bound = mu * max(f_now, 0.0) * h_step
                     lo[r] = -bound
                     hi[r] = bound
                 elif t == 3:
-                    target[r] = (palm_stop[0] - palm_x0[0] - q[palm_x_dof[0]]) / dt
+                    target[r] = (palm_stop[0] - palm_x0[0] - q[palm_x_dof[0]]) / h_step
                     lo[r] = -1e300
                     hi[r] = 0.0
                 elif t == 4:
-                    target[r] = (palm_stop[1] - palm_x0[1] - q[palm_x_dof[1]]) / dt
+                    target[r] = (palm_stop[1] - palm_x0[1] - q[palm_x_dof[1]]) / h_step
                     lo[r] = 0.0
                     hi[r] = 1e300
                 else:
@@ -1006,8 +1078,11 @@ def integrate(
                     state[r] = 3
         _record_step(
             step, rec, q, v, vnew, lam, row_type, row_dof, base_x, dof_of, x, palm_x_dof,
-            palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, slip, palm_z_acc, com_z0,
+            palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, h_step, v_last, particle_mass,
+            total_mass, slip, palm_z_acc, com_z0,
         )  # fmt: skip
+        if _slipped_past(rec, step, stop_slip, stop_from):
+            return q, v, rec[: step + 1]
     return q, v, rec
 
 
@@ -1037,7 +1112,7 @@ def integrate_iterative(
     q: FloatArray,
     v: FloatArray,
     dof_of: IntArray,
-    particle_mass: float,
+    particle_mass: FloatArray,
     edges: IntArray,
     rest: FloatArray,
     n0: FloatArray,
@@ -1067,8 +1142,10 @@ def integrate_iterative(
     palm_x0: FloatArray,
     palm_stop: FloatArray,
     palm_mass: float,
+    width_damping: float,
     force_cmd: FloatArray,
     palm_vz: FloatArray,
+    gravity_scale: FloatArray,
     mu: float,
     mu_table: float,
     row_dof: IntArray,
@@ -1081,6 +1158,9 @@ def integrate_iterative(
     dt: float,
     n_steps: int,
     nonlinear: bool,
+    bdf2: bool,
+    stop_slip: float,
+    stop_from: int,
     stats: IntArray,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """:func:`integrate` with a multigrid-preconditioned CG instead of the factor.
@@ -1118,7 +1198,12 @@ def integrate_iterative(
     dv_prev2 = np.zeros(n_dof)
     vnew = np.empty(n_dof)
     react = np.zeros(n_dof)
-    k_dt = k * dt
+    h_step = 2.0 * dt / 3.0 if bdf2 else dt
+    k_dt = k * h_step
+    q_prev = q.copy()
+    v_prev = v.copy()
+    q_last = q.copy()
+    v_last = v.copy()
     rec = np.zeros((n_steps, N_REC))
     tot = 0
     for lvl in range(h_n.shape[0]):
@@ -1151,16 +1236,20 @@ def integrate_iterative(
     unit = np.zeros(n_dof)
     slip = np.zeros(2)
     palm_z_acc = np.zeros(1)
+    total_mass = 0.0
     com_z0 = 0.0
     for p in range(n):
-        com_z0 += base_x[p, 2] + q[dof_of[3 * p + 2]]
-    com_z0 /= n
+        total_mass += particle_mass[p]
+        com_z0 += particle_mass[p] * (base_x[p, 2] + q[dof_of[3 * p + 2]])
+    com_z0 /= total_mass
     a_ptr0 = h_a_ptr[h_row_off[0] : h_row_off[0] + n_dof + 1]
     for step in range(n_steps):
         f_now = force_cmd[step + 1]
+        _predict(q, v, q_last, v_last, q_prev, v_prev, bdf2)
         _step_impulse(
             base_x, q, v, dof_of, particle_mass, edges, rest, n0, k, c, k_dt, nonlinear,
-            gravity, palm_x_dof, f_now, dt, x, vel, fp, fq,
+            gravity * gravity_scale[step + 1], palm_x_dof, f_now, width_damping, h_step, x, vel, fp,
+            fq,
         )  # fmt: skip
         # targets of the rows (as in integrate)
         for r in range(nr):
@@ -1177,14 +1266,14 @@ def integrate_iterative(
             elif t == 6:
                 gap[r] = palm_x0[1] + q[palm_x_dof[1]] - x[row_particle[r], 0]
             if t == 0 or t >= 5:
-                target[r] = -gap[r] / dt
+                target[r] = -gap[r] / h_step
             elif t == 1:
                 target[r] = palm_vz[step + 1]
-                bound[r] = mu * max(f_now, 0.0) * dt
+                bound[r] = mu * max(f_now, 0.0) * h_step
             elif t == 3:
-                target[r] = (palm_stop[0] - palm_x0[0] - q[palm_x_dof[0]]) / dt
+                target[r] = (palm_stop[0] - palm_x0[0] - q[palm_x_dof[0]]) / h_step
             elif t == 4:
-                target[r] = (palm_stop[1] - palm_x0[1] - q[palm_x_dof[1]]) / dt
+                target[r] = (palm_stop[1] - palm_x0[1] - q[palm_x_dof[1]]) / h_step
             else:
                 target[r] = 0.0
         # warm start: last step's velocity change
@@ -1395,6 +1484,9 @@ def integrate_iterative(
             dv_prev[i] = dv[i]
         _record_step(
             step, rec, q, v, vnew, lam, row_type, row_dof, base_x, dof_of, x, palm_x_dof,
-            palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, slip, palm_z_acc, com_z0,
+            palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, h_step, v_last, particle_mass,
+            total_mass, slip, palm_z_acc, com_z0,
         )  # fmt: skip
+        if _slipped_past(rec, step, stop_slip, stop_from):
+            return q, v, rec[: step + 1]
     return q, v, rec

@@ -33,14 +33,16 @@ class LiftProfile:
     still for ``hold_s``. If the height is too short to reach ``speed_m_s`` the cruise speed is
     lowered (and, if needed, the jerk time shortened) so that the peak acceleration is always
     ``accel_m_s2``. The acceleration plateau makes the friction demand m (g + a_max) act for a
-    finite time, so the smallest lifting force of a rigid object is sharp.
+    finite time, so the smallest lifting force of a rigid object is sharp. ``jerk_time_s = 0``
+    gives the trapezoidal velocity profile: the acceleration steps to ``accel_m_s2`` at the start
+    of the rise (a constant-acceleration lift).
 
     Attributes:
         accel_m_s2: peak acceleration a_max, m/s².
         speed_m_s: cruise speed, m/s.
         height_m: rise, m; ``None`` means half the object height (the paper's protocol).
         hold_s: hold after the rise, s.
-        jerk_time_s: duration of each acceleration ramp, s.
+        jerk_time_s: duration of each acceleration ramp, s (0: acceleration steps).
     """
 
     accel_m_s2: float = 2.0
@@ -50,10 +52,12 @@ class LiftProfile:
     jerk_time_s: float = 0.05
 
     def __post_init__(self) -> None:
-        for name in ("accel_m_s2", "speed_m_s", "jerk_time_s"):
+        for name in ("accel_m_s2", "speed_m_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise UsageError(f"lift profile {name} must be > 0, got {value}")
+        if not (math.isfinite(self.jerk_time_s) and self.jerk_time_s >= 0):
+            raise UsageError(f"lift profile jerk_time_s must be >= 0, got {self.jerk_time_s}")
         if not (math.isfinite(self.hold_s) and self.hold_s >= 0):
             raise UsageError(f"lift profile hold_s must be >= 0, got {self.hold_s}")
         if self.height_m is not None and not (math.isfinite(self.height_m) and self.height_m > 0):
@@ -90,6 +94,8 @@ class LiftProfile:
 
         def ramp_phase(t: FloatArray) -> FloatArray:
             # velocity during an acceleration phase starting at t = 0, for 0 <= t <= t_acc
+            if tj <= 0.0:
+                return np.asarray(np.minimum(a * t, v))
             up = 0.5 * a * (t - tj / np.pi * np.sin(np.pi * t / tj))
             mid = 0.5 * a * tj + a * (t - tj)
             down_t = t_acc - t
@@ -133,16 +139,62 @@ class SlipCriterion:
         measure: ``"contact"`` (default): the sliding accumulated at the palm contacts from the
             start of the rise, mean of both palms. ``"shortfall"``: the palms' rise minus the
             object's centre-of-mass rise at the end of the hold (includes elastic sag).
+        stop_early: end an attempt as soon as its contact slip exceeds ``tolerance_m`` (the
+            verdict is final then: the accumulated slip only grows) instead of simulating the
+            rest of the rise and the hold. Saves most of a slipped attempt's cost; its recorded
+            series ends there. Only with ``measure = "contact"``. Default off (the ``paper``
+            preset turns it on).
     """
 
     tolerance_m: float = 0.5e-3
     measure: Literal["contact", "shortfall"] = "contact"
+    stop_early: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.tolerance_m) and self.tolerance_m >= 0):
             raise UsageError(f"slip tolerance_m must be >= 0, got {self.tolerance_m}")
         if self.measure not in ("contact", "shortfall"):
             raise UsageError(f"slip measure must be 'contact' or 'shortfall', got {self.measure!r}")
+
+
+@dataclass(frozen=True)
+class SupportRelease:
+    """How the object's weight passes from its support to the grip in a lift attempt.
+
+    Attributes:
+        mode: ``"table"`` (default): the object rests on the table under its own weight and stays
+            on it while the grip force ramps; the table stays, and the weight leaves it as the
+            palms rise, over the time the rise needs to stretch the gripped body by its sag.
+            ``"support"``: until the rise starts, a support carries every particle's weight, so
+            the gripped object is stress-free (the paper's object "initially in an equilibrium
+            state"); at the start of the rise the support gives way over ``release_time_s`` and
+            the whole weight passes into the grip as a step load on the hanging body. There is
+            no table in this mode.
+        release_time_s: how long the support takes to give way (``"support"`` only), s: the
+            weight rises along a half-cosine from 0 to W over this time; 0: at once.
+    """
+
+    mode: Literal["table", "support"] = "table"
+    release_time_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.mode not in ("table", "support"):
+            raise UsageError(f"support release mode must be table or support, got {self.mode!r}")
+        if not (math.isfinite(self.release_time_s) and self.release_time_s >= 0):
+            raise UsageError(f"release_time_s must be >= 0, got {self.release_time_s}")
+
+    def gravity_scale(self, t_s: FloatArray, t_release_s: float) -> FloatArray | None:
+        """The fraction of the weight acting at times ``t_s`` (None: all of it, always)."""
+        if self.mode == "table":
+            return None
+        if self.release_time_s == 0.0:
+            return np.asarray(np.where(t_s > t_release_s, 1.0, 0.0))
+        phase = np.clip((t_s - t_release_s) / self.release_time_s, 0.0, 1.0)
+        return np.asarray(0.5 - 0.5 * np.cos(np.pi * phase))
+
+    def as_dict(self) -> dict[str, object]:
+        """JSON-serialisable parameters (for artifacts' provenance and attempt details)."""
+        return {"mode": self.mode, "release_time_s": self.release_time_s}
 
 
 def _check_finite(rec: FloatArray, what: str, spec: ObjectSpec) -> None:
@@ -259,26 +311,36 @@ def lift_attempt(
     profile: LiftProfile | None = None,
     settings: SimSettings | None = None,
     criterion: SlipCriterion | None = None,
+    release: SupportRelease | None = None,
+    stop_when_slipped: bool | None = None,
 ) -> TrialOutcome:
     """Grip ``spec`` with ``grip_force_n`` per palm, raise the palms along ``profile``, hold.
 
-    Phases: the object rests on the table; the grip force ramps from 0 over
-    ``settings.grip_ramp_s`` and settles for ``settings.grip_settle_s``; the palms rise by
-    ``profile.rise_m(spec)`` and hold for ``profile.hold_s``. Slip is counted from the start of
-    the rise. ``lifted`` is true when the slip (``criterion.measure``) is within
+    Phases: the object rests on the table (or, with ``release.mode == "support"``, is held
+    stress-free by a support); the grip force ramps from 0 over ``settings.grip_ramp_s`` and
+    settles for ``settings.grip_settle_s``; the palms rise by ``profile.rise_m(spec)`` (the
+    support gives way as the rise starts) and hold for ``profile.hold_s``. Slip is counted from
+    the start of the rise. ``lifted`` is true when the slip (``criterion.measure``) is within
     ``criterion.tolerance_m`` and the object is off the table at the end.
+
+    With ``stop_when_slipped`` (default: ``criterion.stop_early``) and the contact slip measure,
+    the attempt stops as soon as its slip exceeds the tolerance: the verdict is then final (the
+    accumulated slip only grows), and the recorded series ends there.
     """
     s = settings or SimSettings()
     p = profile or LiftProfile()
     c = criterion or SlipCriterion()
+    r = release or SupportRelease()
     if not (math.isfinite(grip_force_n) and grip_force_n >= 0):
         raise UsageError(f"grip_force_n must be finite and >= 0, got {grip_force_n}")
-    model = build_model(spec, s, gripped=True)
+    on_table = r.mode == "table"
+    model = build_model(spec, s, gripped=True, resting=on_table, table=on_table)
     dt = s.dt_s
     rise = p.rise_m(spec)
     n_grip = max(1, round((s.grip_ramp_s + s.grip_settle_s) / dt))
     n_steps = n_grip + math.ceil(p.rise_time_s(rise) / dt) + round(p.hold_s / dt)
     check_run_steps(spec, s, n_steps, "lift attempt")
+    n_planned = n_steps
     t = np.arange(n_steps + 1, dtype=np.float64) * dt
     if s.grip_ramp_s > 0:
         force = grip_force_n * np.clip(t / s.grip_ramp_s, 0.0, 1.0)
@@ -286,8 +348,18 @@ def lift_attempt(
         force = np.full(n_steps + 1, float(grip_force_n))
     t_lift = n_grip * dt
     palm_vz = p.velocity_m_s(t - t_lift, rise)
-    _, _, rec = run_model(model, force, palm_vz)
+    early = c.stop_early if stop_when_slipped is None else stop_when_slipped
+    stop = c.tolerance_m if early and c.measure == "contact" else None
+    _, _, rec = run_model(
+        model,
+        force,
+        palm_vz,
+        gravity_scale=r.gravity_scale(t, t_lift),
+        stop_slip_m=stop,
+        stop_from_step=n_grip,
+    )
     _check_finite(rec, "lift attempt", spec)
+    n_steps = rec.shape[0]
     slip_l = rec[:, K.REC_SLIP_L] - rec[n_grip - 1, K.REC_SLIP_L]
     slip_r = rec[:, K.REC_SLIP_R] - rec[n_grip - 1, K.REC_SLIP_R]
     slip = np.where(np.arange(n_steps) >= n_grip - 1, 0.5 * (slip_l + slip_r), 0.0)
@@ -299,7 +371,7 @@ def lift_attempt(
     shortfall = float(palm_z[-1] - (com_z[-1] - com_z[n_grip - 1]))
     slip_final = float(slip[-1])
     measured = slip_final if c.measure == "contact" else shortfall
-    off_table = bool(rec[-1, K.REC_TABLE_N] == 0.0 and rec[-1, K.REC_MIN_Z] > 0.0)
+    off_table = not on_table or bool(rec[-1, K.REC_TABLE_N] == 0.0 and rec[-1, K.REC_MIN_Z] > 0.0)
     lifted = bool(measured <= c.tolerance_m and off_table)
     series = LiftAttemptSeries(
         time_s=time,
@@ -318,6 +390,8 @@ def lift_attempt(
         "lift_start_s": t_lift,
         "rise_m": rise,
         "profile": p.as_dict(),
+        "release": r.as_dict(),
+        "stopped_early": n_steps < n_planned,
         "slip_measure": c.measure,
         "min_particle_z_m": float(rec[:, K.REC_MIN_Z].min()),
         "max_palm_penetration_m": float(rec[:, K.REC_PENETRATION].max()),
@@ -367,7 +441,7 @@ def free_run(
     _, _, rec = run_model(model, zeros, zeros)
     _check_finite(rec, "free run", spec)
     com = np.stack([rec[:, K.REC_COM_X], rec[:, K.REC_COM_Y], rec[:, K.REC_COM_Z]], axis=1)
-    com[:, 2] += float(np.mean(model.base_x[:, 2]))
+    com[:, 2] += float(np.average(model.base_x[:, 2], weights=model.particle_masses_kg))
     return FreeRunSeries(
         time_s=rec[:, K.REC_TIME],
         com_m=com,

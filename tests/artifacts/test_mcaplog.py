@@ -20,10 +20,11 @@ from deformctl.artifacts import (
     write_lift_log,
     write_squeeze_log,
 )
-from deformctl.artifacts.mcaplog import decode_provenance, load_mcap
+from deformctl.artifacts.mcaplog import LOG_EPOCH_NS, decode_provenance, load_mcap
 from deformctl.artifacts.schema import json_schema_bytes
 from deformctl.errors import EXIT_DATAERR, InputDataError, OutputExistsError, SchemaError
-from deformctl.series import SqueezeSeries
+from deformctl.lift.search import LiftAttempt
+from deformctl.series import SqueezeSeries, TrialOutcome
 
 OBJECTS = [
     {"object_id": "A", "weight_n": 0.7, "friction_mu": 0.5, "material_damping_ns_per_cm": math.nan},
@@ -76,16 +77,18 @@ def test_squeeze_log_layout_is_foxglove_json(tmp_path: Path) -> None:
     assert json.loads(meta["provenance"]["seed"]) == 7
     assert len(messages) == sum(len(s) for s in squeezes) == 12
     schema, channel, _ = messages[0]
-    assert channel.topic == "/squeeze"
+    assert channel.topic == "/squeeze/A"  # one channel per object
+    assert [c.topic for _, c, _ in messages[6:7]] == ["/squeeze/B"]
     assert channel.message_encoding == "json"
     assert schema is not None
     assert schema.encoding == "jsonschema"
     assert schema.data == json_schema_bytes("squeeze_sample")
     assert json.loads(schema.data)["properties"]["force_n"]["x-unit"] == "N"
-    # Squeezes lie end to end with a 1 s gap: times 0, 0.25, 0.5 s per squeeze.
+    # Simulated squeezes lie end to end from 2000-01-01 with a 1 s gap: 0, 0.25, 0.5 s each.
     times = [m.log_time for _, _, m in messages]
     expected = [k * 1_500_000_000 + i * 250_000_000 for k in range(4) for i in range(3)]
-    assert times == expected
+    assert times == [LOG_EPOCH_NS + t for t in expected]
+    assert LOG_EPOCH_NS == 946_684_800_000_000_000  # 2000-01-01T00:00:00Z
     first = json.loads(messages[0][2].data)
     assert first["object_id"] == "A"
     assert first["compression_m"] == squeezes[0].compression_m[0]
@@ -111,6 +114,59 @@ def test_lift_round_trip(tmp_path: Path) -> None:
     assert second.outcome.lifted is True
     assert math.isnan(second.outcome.slip_m)
     assert second.outcome.series is None
+
+
+def _log_times(path: Path) -> list[tuple[str, int]]:
+    with path.open("rb") as fh:
+        return [(c.topic, m.log_time) for _, c, m in make_reader(fh).iter_messages()]
+
+
+def test_squeezes_with_a_source_clock_keep_it_and_time_never_decreases(tmp_path: Path) -> None:
+    t = np.array([0.0, 0.5, 1.0])
+    start = 1_700_000_000 * 10**9
+    squeezes = [
+        SqueezeSeries("A", 0, t, t, t, start_time_ns=start),
+        SqueezeSeries("A", 1, t, t, t, start_time_ns=start + 1_200_000_000),  # 0.2 s after
+        SqueezeSeries("A", 2, t, t, t, start_time_ns=start),  # claims to overlap: clamped
+    ]
+    path = tmp_path / "bag.mcap"
+    write_squeeze_log(path, [{"object_id": "A"}], squeezes, provenance=None)
+    times = [ns for _, ns in _log_times(path)]
+    half = 500_000_000
+    assert times[:6] == [start, start + half, start + 2 * half, *(start + 1_200_000_000 + k * half
+                                                                   for k in range(3))]  # fmt: skip
+    assert times[6] == times[5]
+    assert times == sorted(times)
+    out = tmp_path / "epoch.mcap"
+    write_squeeze_log(out, [{"object_id": "A"}], [SqueezeSeries("A", 0, t, t, t)],
+                      provenance=None, epoch_ns=5 * 10**9)  # fmt: skip
+    assert _log_times(out)[0] == ("/squeeze/A", 5 * 10**9)
+
+
+def test_lift_log_has_a_channel_per_object_and_rig_attempts_keep_their_wall_clock(
+    tmp_path: Path,
+) -> None:
+    sim = make_attempts()
+    wall = 1_750_000_000 * 10**9
+    rig = [LiftAttempt("B", 0, TrialOutcome(1.4, True, 0.0, None, {}, start_time_ns=wall))]
+    path = tmp_path / "lift.mcap"
+    write_lift_log(path, OBJECTS, [*sim, *rig], provenance=None)
+    logged = _log_times(path)
+    topics = [topic for topic, _ in logged]
+    assert topics == ["/lift/A/attempt_sample"] * 4 + ["/lift/A/attempt_result"] * 2 + [
+        "/lift/B/attempt_result"
+    ]
+    assert logged[0][1] == LOG_EPOCH_NS
+    assert logged[-1][1] == wall
+    _, back = read_lift_log(path)
+    assert [(a.object_id, a.attempt_index) for a in back] == [("A", 0), ("A", 1), ("B", 0)]
+
+
+def test_a_message_on_another_objects_channel_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "hand.mcap"
+    _hand_written(path, [GOOD], topic="/squeeze/B")
+    with pytest.raises(SchemaError, match="object_id 'A' on the channel of 'B'"):
+        read_squeeze_log(path)
 
 
 def test_read_from_stdin(tmp_path: Path) -> None:
@@ -161,8 +217,9 @@ def test_not_mcap(tmp_path: Path) -> None:
     assert str(info.value) == f"{bad}: not an MCAP file (bad magic bytes)"
 
 
-def _hand_written(path: Path, messages: list[dict[str, object]]) -> None:
-    """A well-formed MCAP (valid CRCs) whose messages we choose, written with mcap directly."""
+def _hand_written(path: Path, messages: list[dict[str, object]], topic: str = "/squeeze") -> None:
+    """A well-formed MCAP (valid CRCs) whose messages we choose, written with mcap directly
+    (on the first layout's shared ``/squeeze`` topic unless ``topic`` says otherwise)."""
     with path.open("wb") as fh:
         w = Writer(fh, enable_data_crcs=True)
         w.start()
@@ -170,7 +227,7 @@ def _hand_written(path: Path, messages: list[dict[str, object]]) -> None:
         sid = w.register_schema(
             "deformctl.SqueezeSample", "jsonschema", json_schema_bytes("squeeze_sample")
         )
-        cid = w.register_channel("/squeeze", "json", sid)
+        cid = w.register_channel(topic, "json", sid)
         for i, m in enumerate(messages):
             w.add_message(cid, i, json.dumps(m).encode(), i)
         w.finish()

@@ -2,7 +2,14 @@
 
 from __future__ import annotations
 
-from deformctl.sim import LiftProfile, ObjectSpec, SimSettings, SlipCriterion, lift_attempt
+from deformctl.sim import (
+    LiftProfile,
+    ObjectSpec,
+    SimSettings,
+    SlipCriterion,
+    SupportRelease,
+    lift_attempt,
+)
 
 
 def min_lift_force_n(
@@ -14,9 +21,10 @@ def min_lift_force_n(
     profile: LiftProfile | None = None,
     settings: SimSettings | None = None,
     criterion: SlipCriterion | None = None,
+    release: SupportRelease | None = None,
 ) -> float:
     """Smallest grip force in [lo, hi] that lifts ``spec`` (lo must slip, hi must lift)."""
-    kw = {"profile": profile, "settings": settings, "criterion": criterion}
+    kw = {"profile": profile, "settings": settings, "criterion": criterion, "release": release}
     assert not lift_attempt(spec, lo_n, **kw).lifted, "lower bracket lifts"
     assert lift_attempt(spec, hi_n, **kw).lifted, "upper bracket slips"
     while hi_n - lo_n > rel_tol * hi_n:

@@ -56,6 +56,7 @@ import os
 import shlex
 import signal
 import subprocess
+import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, TypeGuard
@@ -270,6 +271,7 @@ class RigRunner:
         """
         where = (attempt_index, grip_force_n)
         payload = json.dumps(self.request(grip_force_n, attempt_index)) + "\n"
+        started_ns = time.time_ns()  # the lift log places the attempt on the wall clock
         stdout = self._run(payload, where)
         try:
             answer = parse_rig_response(stdout)
@@ -293,7 +295,9 @@ class RigRunner:
             assert frames is not None  # parse_rig_response guarantees frames here
             lifted, slip_m = self._from_frames(frames, where)
             details["slip_source"] = "frames"
-        return TrialOutcome(float(grip_force_n), lifted, slip_m, None, details)
+        return TrialOutcome(
+            float(grip_force_n), lifted, slip_m, None, details, start_time_ns=started_ns
+        )
 
     def _error(self, where: tuple[int, float], reason: str) -> RigAttemptError:
         return RigAttemptError(self.object_id, where[0], where[1], reason)

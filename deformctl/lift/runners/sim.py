@@ -56,6 +56,7 @@ from deformctl.lift.stage import RunnerFactory, lift_catalog
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
 
 if TYPE_CHECKING:  # pragma: no cover - the simulator is imported where it runs (see below)
+    from deformctl.presets import SimPreset
     from deformctl.series import TrialOutcome
     from deformctl.sim import LiftProfile, SimSettings, SlipCriterion
 
@@ -91,6 +92,7 @@ def check_sim_objects(
 
 def sim_runner_factory(
     *,
+    preset: SimPreset | None = None,
     profile: LiftProfile | None = None,
     settings: SimSettings | None = None,
     criterion: SlipCriterion | None = None,
@@ -98,29 +100,34 @@ def sim_runner_factory(
     """A :class:`~deformctl.lift.stage.RunnerFactory` whose attempts run in the simulator.
 
     Args:
-        profile: the lift profile (default :class:`~deformctl.sim.LiftProfile`: 2 m/s², 0.25 m/s,
-            half the object's height, 0.5 s hold).
-        settings: simulator settings (default :class:`~deformctl.sim.SimSettings`).
-        criterion: the slip criterion (default :class:`~deformctl.sim.SlipCriterion`: contact
-            slip <= 0.5 mm).
+        preset: the simulator preset (:mod:`deformctl.presets`; default the ``paper`` preset):
+            the object model, lift profile, slip criterion and support release.
+        profile, settings, criterion: replace the preset's lift profile, simulator settings or
+            slip criterion (the row's ``sim_preset`` then reads ``NAME+overrides``).
 
     Returns:
-        The factory: ``name = "sim"``; each row gets ``lift_accel_m_s2``, ``lift_speed_m_s``
-        (the profile's), ``lift_height_m`` (the rise actually used for that object),
-        ``slip_tolerance_m`` and ``slip_criterion`` (``"contact"`` or ``"shortfall"``); a
-        simulation failure of one object does not stop the others.
+        The factory: ``name = "sim"``; each row gets ``sim_preset``, ``lift_accel_m_s2``,
+        ``lift_speed_m_s`` (the profile's), ``lift_height_m`` (the rise actually used for that
+        object), ``slip_tolerance_m`` and ``slip_criterion`` (``"contact"`` or ``"shortfall"``);
+        a simulation failure of one object does not stop the others.
     """
-    from deformctl.sim import LiftProfile, SimSettings, SlipCriterion, lift_attempt
+    from deformctl.presets import sim_preset
+    from deformctl.sim import lift_attempt
 
-    p = profile or LiftProfile()
-    s = settings or SimSettings()
-    c = criterion or SlipCriterion()
+    chosen = preset or sim_preset()
+    if profile is not None or settings is not None or criterion is not None:
+        chosen = chosen.replace(
+            profile=dataclasses.asdict(profile) if profile is not None else None,
+            settings=dataclasses.asdict(settings) if settings is not None else None,
+            criterion=dataclasses.asdict(criterion) if criterion is not None else None,
+        )
+    p, s, c, r = chosen.profile, chosen.settings, chosen.criterion, chosen.release
 
     def make(obj: CatalogObject) -> TrialRunner:
         spec = obj.to_sim_spec()
 
         def run(grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
-            return lift_attempt(spec, grip_force_n, profile=p, settings=s, criterion=c)
+            return lift_attempt(spec, grip_force_n, profile=p, settings=s, criterion=c, release=r)
 
         return run
 
@@ -129,6 +136,7 @@ def sim_runner_factory(
 
     def row_fields(obj: CatalogObject) -> Mapping[str, object]:
         return {
+            "sim_preset": chosen.name,
             "lift_accel_m_s2": p.accel_m_s2,
             "lift_speed_m_s": p.speed_m_s,
             "lift_height_m": p.rise_m(obj.to_sim_spec()),
@@ -142,9 +150,11 @@ def sim_runner_factory(
         row_fields=row_fields,
         stop_on_failure=False,
         settings={
+            "sim_preset": chosen.name,
             "sim_settings": dataclasses.asdict(s),
             "lift_profile": p.as_dict(),
-            "slip_criterion": {"measure": c.measure, "tolerance_m": c.tolerance_m},
+            "slip_criterion": dataclasses.asdict(c),
+            "support_release": r.as_dict(),
         },
         check=check,
     )
@@ -155,19 +165,18 @@ class LiftTask:
     """``lift --sim`` for one catalog object (a picklable sweep task).
 
     Attributes:
-        profile: the :class:`~deformctl.sim.LiftProfile`.
-        settings: the :class:`~deformctl.sim.SimSettings`.
-        criterion: the :class:`~deformctl.sim.SlipCriterion`.
+        preset: the :class:`~deformctl.presets.SimPreset` (model, profile, slip, release).
         protocol, growth, tolerance_rel, max_attempts: the search options.
+        log_epoch_ns: where each part's lift log begins, ns since the Unix epoch (None: the
+            log writer's fixed epoch, 2000-01-01).
     """
 
-    profile: LiftProfile
-    settings: SimSettings
-    criterion: SlipCriterion
+    preset: SimPreset
     protocol: str = "refine"
     growth: float = DEFAULT_GROWTH
     tolerance_rel: float = DEFAULT_TOLERANCE_REL
     max_attempts: int = DEFAULT_MAX_ATTEMPTS
+    log_epoch_ns: int | None = None
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """One object's search: its lift_results row, its attempts as the payload.
@@ -175,9 +184,7 @@ class LiftTask:
         Raises:
             InputDataError: the object cannot be lifted or simulated (recorded as failed).
         """
-        factory = sim_runner_factory(
-            profile=self.profile, settings=self.settings, criterion=self.criterion
-        )
+        factory = sim_runner_factory(preset=self.preset)
         run = lift_catalog(
             [CatalogObject.from_row(item)],
             factory,
@@ -211,7 +218,7 @@ def _check_budgets(catalog: pd.DataFrame, task: LiftTask) -> None:
         except InputDataError:
             continue
         runnable.append(obj)
-    check_sim_objects(runnable, settings=task.settings, profile=task.profile)
+    check_sim_objects(runnable, settings=task.preset.settings, profile=task.preset.profile)
 
 
 def lift_sweep(
@@ -226,7 +233,7 @@ def lift_sweep(
     """``lift --sim -o DIR/``: one search per catalog object through the sweep executor.
 
     Each part's rows go to ``DIR/part-k.parquet`` and its attempts to the lift log
-    ``DIR/part-k.mcap``; a row the simulator refuses, or a search that does not converge, is
+    ``DIR/_logs/part-k.mcap``; a row the simulator refuses, or a search that does not converge, is
     recorded in ``DIR/_failures/`` and the others go on. The rows are those of
     :func:`~deformctl.lift.stage.lift_catalog_files`, row for row.
 
@@ -238,9 +245,7 @@ def lift_sweep(
         object_ids: these objects, in this order (None: all).
         force: overwrite the sweep files of an existing directory.
     """
-    factory = sim_runner_factory(
-        profile=task.profile, settings=task.settings, criterion=task.criterion
-    )
+    factory = sim_runner_factory(preset=task.preset)
     catalog = select_objects(read_catalog(catalog_path), object_ids)
     _check_budgets(catalog, task)
     search = {
@@ -250,6 +255,8 @@ def lift_sweep(
         "max_attempts": task.max_attempts,
     }
     run_settings = {"runner": factory.name, **factory.settings, **search}
+    if task.log_epoch_ns is not None:
+        run_settings["log_epoch_ns"] = task.log_epoch_ns
     provenance = Provenance.from_invocation([catalog_path], settings=run_settings)
     fingerprint = dataset_fingerprint(
         "lift", "lift_results", run_settings, {"catalog": input_digest(catalog_path)}
@@ -260,7 +267,7 @@ def lift_sweep(
         out_dir=output,
         schema=table_schema("lift_results"),
         fingerprint=fingerprint,
-        part_writer=LogPartWriter("lift_log", provenance),
+        part_writer=LogPartWriter("lift_log", provenance, task.log_epoch_ns),
         force=force,
         **sweep.run_kwargs(),
     )
