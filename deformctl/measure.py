@@ -75,6 +75,7 @@ import pyarrow as pa
 
 from deformctl.artifacts import check_output_path, read_catalog, write_squeeze_log
 from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
+from deformctl.artifacts.io import note_input
 from deformctl.artifacts.mcaplog import LOG_EPOCH_NS
 from deformctl.artifacts.provenance import Provenance, input_digest
 from deformctl.catalog import CatalogObject, catalog_objects, select_objects
@@ -674,6 +675,7 @@ def read_ros2_bag(
     _check_recording_options(phase, position_increases_when)
     if not p.is_file():
         raise MissingInputError("no such bag file", path=p)
+    note_input(p)
     if not 1 <= len(wrench_topics) <= 2:
         raise UsageError(f"give one or two wrench topics, got {len(wrench_topics)}")
     if axis not in ("x", "y", "z"):
@@ -854,6 +856,7 @@ def read_csv_export(
     _check_recording_options(phase, position_increases_when)
     if not p.is_file():
         raise MissingInputError("no such CSV file", path=p)
+    note_input(p)
     pos_keys = [k for k in _POSITION_KEYS if k in columns]
     unknown = sorted(set(columns) - {"time", "force", *_POSITION_KEYS})
     if unknown or "time" not in columns or "force" not in columns or len(pos_keys) != 1:

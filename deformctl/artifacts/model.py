@@ -25,10 +25,8 @@ into place with :func:`os.replace`; an existing file is only replaced with ``for
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
-import tempfile
 import zipfile
 from collections.abc import Iterator, Mapping
 from importlib.metadata import PackageNotFoundError
@@ -43,6 +41,7 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 
 from deformctl import jsonsafe
+from deformctl.artifacts.io import atomic_output, note_input
 from deformctl.errors import InputDataError, MissingInputError, OutputExistsError, UsageError
 from deformctl.train import FEATURES, ScaledTargetRegressor
 
@@ -126,6 +125,7 @@ def inspect_types(path: str | os.PathLike[str]) -> tuple[set[str], set[str]]:
     p = Path(path)
     if not p.is_file():
         raise MissingInputError("model file not found", path=p)
+    note_input(p)
     try:
         with zipfile.ZipFile(p) as archive:
             schema = jsonsafe.loads(archive.read("schema.json"))
@@ -187,10 +187,7 @@ def save_model(
         raise UsageError(f"model metadata is not JSON-serialisable: {err}") from None
     payload = {"format": MODEL_FORMAT, "metadata_json": metadata_json, "model": model}
 
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
+    with atomic_output(out, force=force) as tmp:
         sio.dump(payload, tmp)
         types, loaders = inspect_types(tmp)
         bad = sorted(types - ALLOWED_TYPES) + sorted(loaders - ALLOWED_LOADERS)
@@ -198,10 +195,6 @@ def save_model(
             raise UsageError(
                 f"the model contains types a model file may not hold: {', '.join(bad)}"
             )
-        os.replace(tmp, out)
-    finally:
-        with contextlib.suppress(FileNotFoundError):
-            tmp.unlink()
     return out
 
 

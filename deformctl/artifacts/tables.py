@@ -36,6 +36,7 @@ from deformctl.artifacts.io import (
     PathArg,
     atomic_output,
     display_name,
+    forget_inputs,
     read_input_bytes,
 )
 from deformctl.artifacts.provenance import Provenance, to_json
@@ -483,6 +484,7 @@ def append_catalog_row(
     """
     table = pd.concat([existing, pd.DataFrame([dict(row)])], ignore_index=True)
     table.attrs = {}
+    forget_inputs(path)  # updated in place on purpose
     with open(path, "rb") as fh:
         parquet = fh.read(4) == PARQUET_MAGIC
     if parquet:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import functools
+import inspect
+import os
 import sys
 import warnings
 from collections.abc import Callable, Iterator, Sequence
@@ -15,6 +17,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from typer._click import exceptions as click_exc  # typer vendors click: its exceptions
 from typer.core import TyperGroup
 
+from deformctl.artifacts.io import forget_inputs
 from deformctl.errors import EXIT_FAILURE, EXIT_USAGE, DeformctlError, UsageError
 from deformctl.parallel import SweepSummary
 
@@ -38,6 +41,52 @@ def _warning_text(caught: Sequence[warnings.WarningMessage]) -> str:
     return "; ".join(texts[:3]) + more
 
 
+#: The parameters through which commands name the files they write.
+OUTPUT_PARAMETERS = ("output", "log", "metrics")
+
+
+def _output_names(func: Callable[..., Any]) -> tuple[str, ...]:
+    """The parameters of ``func`` that name outputs: :data:`OUTPUT_PARAMETERS` given as options
+    (``characterize``'s positional ``log`` is its input)."""
+    params = inspect.signature(func).parameters
+    return tuple(
+        name for name in OUTPUT_PARAMETERS if name in params and not _is_argument(params[name])
+    )
+
+
+def _is_argument(param: inspect.Parameter) -> bool:
+    """A positional typer argument (``typer.Argument`` as default or ``Annotated`` metadata)."""
+    if isinstance(param.default, typer.models.ArgumentInfo):
+        return True
+    annotation = param.annotation
+    if isinstance(annotation, str):
+        return "Argument(" in annotation
+    return any(
+        isinstance(m, typer.models.ArgumentInfo) for m in getattr(annotation, "__metadata__", ())
+    )
+
+
+def _refuse_output_as_input(kwargs: dict[str, Any], outputs: Sequence[str]) -> None:
+    """Before any work: no output may resolve to an existing file given as an input.
+
+    (The writers check again against every input actually read, see
+    :func:`deformctl.artifacts.io.check_not_an_input`.)
+
+    Raises:
+        UsageError: one line naming the output (exit 2).
+    """
+    inputs: set[str] = set()
+    for name, value in kwargs.items():
+        values = value if isinstance(value, list | tuple) else [value]
+        for v in values:
+            if name not in outputs and isinstance(v, str) and os.path.isfile(v):
+                inputs.add(os.path.realpath(v))
+    for name in outputs:
+        out = kwargs.get(name)
+        if isinstance(out, str) and out != "-" and os.path.realpath(out) in inputs:
+            raise UsageError(f"{out}: the output is one of the inputs; choose another name")
+
+
 def translate_errors(func: Callable[P, R]) -> Callable[P, R]:
     """Turn a :class:`DeformctlError` raised by ``func`` into one stderr line and its exit code.
 
@@ -49,11 +98,15 @@ def translate_errors(func: Callable[P, R]) -> Callable[P, R]:
     budget check was passed by raising the budget) is one line with exit 1.
     """
 
+    outputs = _output_names(func)
+
     @functools.wraps(func)
     def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
+        forget_inputs()  # a new command: its own inputs only (tests run many in one process)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("default")
             try:
+                _refuse_output_as_input(kwargs, outputs)
                 result = func(*args, **kwargs)
             except DeformctlError as err:
                 folded = f" (while: {_warning_text(caught)})" if caught else ""

@@ -12,7 +12,7 @@ from rich.console import Console
 from rich.table import Table
 
 from deformctl.artifacts import Provenance, atomic_output, check_output_path, read_table
-from deformctl.artifacts.io import is_stdio
+from deformctl.artifacts.io import committed_together, is_stdio
 from deformctl.cli._common import translate_errors
 from deformctl.cli._options import Force
 from deformctl.errors import UsageError
@@ -116,7 +116,7 @@ def train(
         raise UsageError(f"-o and --metrics name the same file: {output}")
     check_output_path(output, force)  # fail before training, and leave nothing behind
     if metrics is not None:
-        check_output_path(metrics, force)
+        check_output_path(metrics, force, binary=False)
 
     table = read_table(index, "index_table")
     result = train_model(table, hidden=sizes, train_size=train_size, seed=seed)
@@ -127,13 +127,11 @@ def train(
     report["provenance"] = provenance.to_dict()
     metadata = {k: v for k, v in report.items() if k != "predictions"}
 
-    if metrics is None:
+    with committed_together():  # the model and the metrics file: both or neither
         save_model(output, result.model, metadata=metadata, force=force)
-    else:
-        # The metrics file is renamed into place only after the model was saved.
-        with atomic_output(metrics, force=force) as tmp:
-            tmp.write_text(json.dumps(report, indent=2, allow_nan=False) + "\n")
-            save_model(output, result.model, metadata=metadata, force=force)
+        if metrics is not None:
+            with atomic_output(metrics, force=force, binary=False) as tmp:
+                tmp.write_text(json.dumps(report, indent=2, allow_nan=False) + "\n")
 
     # With --metrics - the JSON owns stdout; the table goes to stderr.
     console = Console(
