@@ -268,18 +268,32 @@ def _finite_array(value: Any, shape: tuple[int, ...], what: str) -> str | None:
     return None
 
 
+def _is_int(value: Any, expected: int | None = None) -> bool:
+    ok = isinstance(value, int | np.integer) and not isinstance(value, bool)
+    return ok and (expected is None or int(value) == expected)
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 def _structure_problem(model: ScaledTargetRegressor) -> str | None:
     """What is wrong with a loaded model's structure (None: it can predict)."""
     n = len(FEATURES)
     attrs = vars(model)
-    if attrs.get("n_features_in_") != n:
-        return f"the model takes {attrs.get('n_features_in_')!r} features, expected {n}"
+    if not _is_int(attrs.get("n_features_in_"), n):
+        return f"the model takes {_short(attrs.get('n_features_in_'))} features, expected {n}"
     names = attrs.get("feature_names_in_")
-    if names is not None and [str(x) for x in names] != list(FEATURES):
-        return f"the model's features are {[str(x) for x in names]}, expected {list(FEATURES)}"
-    index = attrs.get("scale_index")
-    if index is not None and not (isinstance(index, int) and 0 <= index < n):
-        return f"scale_index {index!r} is out of range (0..{n - 1})"
+    if names is not None and not (
+        isinstance(names, np.ndarray | list | tuple) and [str(x) for x in names] == list(FEATURES)
+    ):
+        return f"the model's features are {_short(names)}, expected {list(FEATURES)}"
+    if "scale_index" not in attrs:
+        return "the model has no scale_index"
+    index = attrs["scale_index"]
+    if index is not None and not (_is_int(index) and 0 <= index < n):
+        return f"scale_index {_short(index)} is out of range (0..{n - 1})"
     for key in ("feature_min_", "feature_max_"):
         problem = _finite_array(attrs.get(key), (n,), key)
         if problem:
@@ -287,7 +301,12 @@ def _structure_problem(model: ScaledTargetRegressor) -> str | None:
     pipe = attrs.get("regressor_")
     if not isinstance(pipe, Pipeline):
         return f"the regressor is a {type(pipe).__name__}, not a fitted Pipeline"
-    steps = [step for _, step in pipe.steps] if isinstance(pipe.steps, list) else []
+    raw_steps = vars(pipe).get("steps")
+    steps = (
+        [s[1] for s in raw_steps if isinstance(s, tuple) and len(s) == 2]
+        if isinstance(raw_steps, list)
+        else []
+    )
     if len(steps) != 2 or not isinstance(steps[0], StandardScaler):
         return "the pipeline is not (StandardScaler, MLPRegressor)"
     scaler, mlp = steps
@@ -302,7 +321,7 @@ def _structure_problem(model: ScaledTargetRegressor) -> str | None:
     coefs, intercepts = vars(mlp).get("coefs_"), vars(mlp).get("intercepts_")
     if not isinstance(coefs, list) or not isinstance(intercepts, list) or not coefs:
         return "the MLPRegressor is not fitted (no coefs_ / intercepts_)"
-    if len(intercepts) != len(coefs) or vars(mlp).get("n_layers_") != len(coefs) + 1:
+    if len(intercepts) != len(coefs) or not _is_int(vars(mlp).get("n_layers_"), len(coefs) + 1):
         return "the MLPRegressor's layers do not match (coefs_, intercepts_, n_layers_)"
     width = n
     for i, (w, b) in enumerate(zip(coefs, intercepts, strict=True)):
@@ -315,9 +334,10 @@ def _structure_problem(model: ScaledTargetRegressor) -> str | None:
         width = out
     if width != 1:
         return f"the network has {width} outputs, expected 1"
-    if mlp.activation not in ACTIVATIONS or vars(mlp).get("out_activation_") != "identity":
-        return f"the network's activations ({mlp.activation!r}) are not a regressor's"
-    if vars(mlp).get("n_outputs_") != 1:
+    activation, out = vars(mlp).get("activation"), vars(mlp).get("out_activation_")
+    if not (isinstance(activation, str) and activation in ACTIVATIONS and out == "identity"):
+        return f"the network's activations ({_short(activation)}) are not a regressor's"
+    if not _is_int(vars(mlp).get("n_outputs_"), 1):
         return "the MLPRegressor is not fitted for one output"
     return None
 
@@ -334,6 +354,9 @@ def check_structure(model: ScaledTargetRegressor, *, path: str | os.PathLike[str
     Raises:
         InputDataError: one line naming what is wrong (exit 65).
     """
-    problem = _structure_problem(model)
+    try:
+        problem = _structure_problem(model)
+    except (TypeError, ValueError, AttributeError, IndexError) as err:  # attributes of odd types
+        problem = f"malformed attributes ({type(err).__name__}: {err})"
     if problem is not None:
         raise InputDataError(f"not a usable lifting-force model: {problem}", path=path)
