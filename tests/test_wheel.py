@@ -16,6 +16,8 @@ from pathlib import Path
 
 import pytest
 
+from deformctl.presets import paper_preset
+
 REPO = Path(__file__).resolve().parents[1]
 SKIP = (".venv", ".git", "build", "dist", "*.egg-info", "__pycache__", ".*_cache", ".examples")
 
@@ -83,3 +85,22 @@ def test_commands_run_from_the_wheel(wheel_dir: Path, tmp_path: Path) -> None:
     shutil.copy(REPO / "tests/data/lift_results.parquet", tmp_path / "lift.parquet")
     table = _run(wheel_dir, tmp_path, "-m", "deformctl.repro.paper", "lift.parquet")
     assert "A (sponge)" in table
+
+
+def test_the_paper_preset_calibration_comes_with_the_wheel(wheel_dir: Path, tmp_path: Path) -> None:
+    where = _run(
+        wheel_dir,
+        tmp_path,
+        "-c",
+        "from importlib.resources import files; from deformctl.presets import CALIBRATION_PARTS, "
+        "paper_preset; print(files('deformctl.datasets').joinpath(*CALIBRATION_PARTS)); "
+        "print(paper_preset().settings.shear_damping_ratio)",
+    )
+    path, ratio = where.split()
+    assert Path(path).is_relative_to(wheel_dir)
+    assert float(ratio) == paper_preset().settings.shear_damping_ratio
+    _run(wheel_dir, tmp_path, "-m", "deformctl", "population", "--golden", "-o", "g.csv")
+    first = (tmp_path / "g.csv").read_text().splitlines()[1].split(",")[0]
+    _run(wheel_dir, tmp_path, "-m", "deformctl", "lift", "g.csv", "--sim", "--objects", first,
+         "-o", "lift.parquet")  # fmt: skip
+    assert (tmp_path / "lift.parquet").is_file()

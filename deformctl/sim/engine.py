@@ -21,7 +21,10 @@ model's memory is estimated from the particle counts before anything is built an
 ``SimSettings.memory_budget_gib``.
 
 Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
-    * **direct**, up to ``direct_max_dofs = 1000`` DOFs (the default lattices): ``A = L D L^T``
+    * **direct**, up to ``direct_max_dofs = 500`` DOFs (the ``table`` preset's 5-per-side
+      lattices; the ``paper`` preset's 7-per-side bags have 480-840 DOFs and run iterative, which
+      measured faster there: three squeezes of the cotton bag, 837 DOFs, 0.83 s direct vs 0.44 s
+      iterative; the sponge, 480 DOFs, 0.51 s vs 0.53 s): ``A = L D L^T``
       in geometric nested-dissection order (:mod:`deformctl.sim.solver`), a pair of sparse
       triangular solves per step, contacts from exact columns ``A^-1 e_d``. Exact, and
       bit-identical to the former dense inverse's results to 1e-12 (tests/sim/
@@ -205,7 +208,7 @@ class SimSettings:
     pgs_iterations: int = 60
     pgs_tolerance_m_s: float = 1e-13
     solver: Literal["auto", "direct", "iterative"] = "auto"
-    direct_max_dofs: int = 1000
+    direct_max_dofs: int = 500
     cg_tolerance_m_s: float = 1e-7
     cg_max_iterations: int = 100
     memory_budget_gib: float = 2.0
