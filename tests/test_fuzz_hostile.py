@@ -432,11 +432,11 @@ def _mutate(model: Any, data: st.DataObject) -> None:
         current = getattr(owner, attr, None)
         if how == "delete" and hasattr(owner, attr):
             delattr(owner, attr)
-        elif how == "nan" and isinstance(current, np.ndarray):
+        elif how == "nan" and isinstance(current, np.ndarray) and current.size:
             bad = current.astype(float).copy()
             bad.flat[0] = np.nan
             setattr(owner, attr, bad)
-        elif how == "nan" and isinstance(current, list) and current:
+        elif how == "nan" and isinstance(current, list) and current and np.size(current[0]):
             current[0] = np.full_like(current[0], np.nan)
         elif how == "shape":
             setattr(owner, attr, np.zeros(data.draw(st.integers(0, 4))))

@@ -109,6 +109,21 @@ def test_parquet_is_decoded_from_an_arrow_buffer(monkeypatch: pytest.MonkeyPatch
     assert all(isinstance(s, pa.BufferReader) for s in seen)
 
 
+def test_parquet_is_decoded_on_the_calling_thread(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The buffer wraps the Python bytes; an Arrow pool worker dropping it after the read takes
+    # the GIL in ~PyBuffer, which aborts the process when that happens during finalization.
+    calls: list[dict[str, object]] = []
+    real = tables.pq.ParquetFile.read
+
+    def spy(self: object, *args: object, **kwargs: object) -> object:
+        calls.append(kwargs)
+        return real(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(tables.pq.ParquetFile, "read", spy)
+    tables.read_parquet_bytes((DATA / "index_table.parquet").read_bytes(), "index.parquet")
+    assert calls == [{"use_threads": False}]
+
+
 def _bad_inputs(tmp: Path, command: str) -> list[str]:
     """The stress cases: table and predict on inputs that are refused (exit 65)."""
     import pyarrow.parquet as pq

@@ -50,35 +50,46 @@ def display_name(path: PathArg) -> str:
     return "<stdin>" if is_stdio(path) else os.fspath(path)
 
 
-#: The inputs this process has checked (resolved paths): an output may never be one of them.
-_INPUTS: set[str] = set()
+#: The inputs the running command has checked (resolved paths): an output may never be one of
+#: them. None outside a command (library use may read a file and write it back on purpose).
+_INPUTS: set[str] | None = None
 
 #: Room kept in a file name for the temporary name around it (``.NAME.deformctl-PID-RAND.tmp``).
 TEMP_NAME_ROOM = 40
 
 
 def note_input(path: PathArg) -> None:
-    """Remember ``path`` as an input of this run (see :func:`check_not_an_input`)."""
-    if not is_stdio(path):
+    """Remember ``path`` as an input of the running command (see :func:`check_not_an_input`)."""
+    if _INPUTS is not None and not is_stdio(path):
         _INPUTS.add(os.path.realpath(path))
 
 
-def forget_inputs(path: PathArg | None = None) -> None:
-    """Forget the inputs noted so far (a new command in the same process), or just ``path`` (a
-    file a command updates in place on purpose, e.g. a catalog a row is appended to)."""
-    if path is None:
-        _INPUTS.clear()
-    else:
+@contextlib.contextmanager
+def command_inputs() -> Iterator[None]:
+    """Track the inputs of one command (the CLI wraps every command in this)."""
+    global _INPUTS
+    outer, _INPUTS = _INPUTS, set()
+    try:
+        yield
+    finally:
+        _INPUTS = outer
+
+
+def forget_inputs(path: PathArg) -> None:
+    """Forget ``path`` as an input: a file the command updates in place on purpose (a catalog a
+    row is appended to)."""
+    if _INPUTS is not None:
         _INPUTS.discard(os.path.realpath(path))
 
 
 def check_not_an_input(path: PathArg) -> None:
-    """Refuse an output that resolves to one of the run's inputs, ``--force`` or not.
+    """Refuse an output that resolves to one of the running command's inputs, ``--force`` or
+    not.
 
     Raises:
         UsageError: one line naming the path (exit 2).
     """
-    if not is_stdio(path) and os.path.realpath(path) in _INPUTS:
+    if _INPUTS and not is_stdio(path) and os.path.realpath(path) in _INPUTS:
         raise UsageError(f"{os.fspath(path)}: the output is one of the inputs; choose another name")
 
 

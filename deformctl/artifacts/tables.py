@@ -204,11 +204,15 @@ def read_parquet_bytes(data: bytes, path: PathArg) -> tuple[pa.Table, dict[str, 
         # through the GIL (PyReadableFile::ReadAt), and a read still queued when the interpreter
         # exits after an error takes the GIL during finalization, which ends that std::thread with
         # pthread_exit and aborts the process ("terminate called without an active exception",
-        # exit -6). A BufferReader is read without the interpreter.
+        # exit -6). A BufferReader is read without the interpreter. And on this thread only
+        # (use_threads=False): the buffer wraps the Python bytes (arrow::py::PyBuffer), and a
+        # CPU-pool worker dropping the last reference to it after the read takes the GIL in
+        # ~PyBuffer, the same abort when that happens during finalization (found in a core dump
+        # of `predict MODEL bad_meta.parquet --catalog objects.csv`, about 1 run in 15).
         pf = pq.ParquetFile(pa.BufferReader(data))
         created_by = str(pf.metadata.created_by or "")
         kv_keys = set((pf.metadata.metadata or {}).keys())
-        table = pf.read()
+        table = pf.read(use_threads=False)
     except _DECODE_ERRORS as err:
         raise InputDataError(f"not a readable Parquet file ({_short(err)})", path=name) from None
     if (not created_by or created_by.startswith("parquet-cpp-arrow")) and (

@@ -17,7 +17,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from typer._click import exceptions as click_exc  # typer vendors click: its exceptions
 from typer.core import TyperGroup
 
-from deformctl.artifacts.io import forget_inputs
+from deformctl.artifacts.io import command_inputs
 from deformctl.errors import EXIT_FAILURE, EXIT_USAGE, DeformctlError, UsageError
 from deformctl.parallel import SweepSummary
 
@@ -102,8 +102,7 @@ def translate_errors(func: Callable[P, R]) -> Callable[P, R]:
 
     @functools.wraps(func)
     def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
-        forget_inputs()  # a new command: its own inputs only (tests run many in one process)
-        with warnings.catch_warnings(record=True) as caught:
+        with command_inputs(), warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("default")
             try:
                 _refuse_output_as_input(kwargs, outputs)
