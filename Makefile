@@ -58,6 +58,10 @@ examples: install
 	cd $(EX) && ../$(BIN)/python ../examples/render_scene.py scene
 	cd $(EX) && ../$(BIN)/python ../examples/synthetic_index.py demo
 	cd $(EX) && ../$(BIN)/python ../examples/doubtful_exports.py doubtful
+	cd $(EX) && ../$(BIN)/python ../examples/make_sample_recordings.py recordings
+	cd $(EX) && ../$(DC) measure --bag recordings/gripper.mcap --wrench-topic /left/wrench \
+	  --wrench-topic /right/wrench --position-topic /joint_states --joint gripper_width \
+	  --position-is gap --object-id sponge --weight-n 0.6 -o recordings/sponge.mcap
 	cd $(EX) && ../$(DC) measure --csv doubtful/utm.csv --columns time=t,force=load,compression=pos \
 	  --units compression=mm --object-id foam --weight-n 0.7 -o doubtful/utm.mcap
 	cd $(EX) && ../$(DC) characterize doubtful/utm.mcap -o doubtful/utm.parquet

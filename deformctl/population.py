@@ -167,3 +167,18 @@ def golden_population() -> pd.DataFrame:
         [list(row) for row in _GOLDEN_ROWS],
         columns=list(CATALOG_COLUMNS),
     ).astype(dict.fromkeys(CATALOG_COLUMNS[1:], "float64"))
+
+
+def paper_objects() -> pd.DataFrame:
+    """The seed paper's four Table I objects A–D (sponge, cotton, sand, water), as bundled.
+
+    Read from the package data ``deformctl.datasets`` (``datasets/paper/objects.csv`` in a
+    checkout), so it works from an installed wheel; the material values are Table II's D and λ.
+
+    Returns:
+        The catalog, 4 rows, with the file's extra columns (``name``, ``interior``).
+    """
+    from deformctl.artifacts import read_catalog
+    from deformctl.repro import dataset_path
+
+    return read_catalog(dataset_path("paper", "objects.csv"))

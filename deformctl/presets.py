@@ -28,7 +28,7 @@ log and squeeze log records the preset's name and its full settings.
     * ``lift_accel_m_s2`` a: the constant acceleration of the paper's lift, plausible 0.2-2 m/s²
       (the paper does not state it; its sponge lifts at F_w, which bounds a / g).
 
-    Fixed, not fitted: 7 particles along the longest side with massless palm surface layers,
+    Fixed, not fitted: 8 particles along the longest side with massless palm surface layers,
     linear (small-strain) springs, BDF2 with dt = 1 ms, a 0.2 ms floor on the lattice dampers'
     retardation time (an undamped object would otherwise ring in its lattice-scale modes forever),
     cruise speed 0.25 m/s, a 0.3 s hold, and slip judged strictly (1 µm of contact sliding; an
@@ -74,7 +74,7 @@ CALIBRATED_PARAMETERS: dict[str, tuple[float, float]] = {
 }
 #: The paper preset's fixed settings (see the module docstring).
 PAPER_FIXED: dict[str, Any] = {
-    "particles_per_side": 7,
+    "particles_per_side": 8,
     "dt_s": 1e-3,
     "integrator": "bdf2",
     "palm_layer": "surface",

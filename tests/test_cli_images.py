@@ -428,24 +428,30 @@ def test_frame_option_errors(args: list[object], message: str, tmp_path: Path) -
 def test_readme_measure_images_example_runs(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """The README's ``measure --images`` block, run as written (python3: this interpreter)."""
+    """The README's ``measure --images`` block, run as written (python: this interpreter)."""
     readme = (REPO / "README.md").read_text(encoding="utf-8")
     section = readme.split("\n### measure --images", 1)[1].split("\n## ", 1)[0]
     block = section.split("```sh\n", 1)[1].split("```", 1)[0].replace("\\\n", " ")
     commands = [line.split("#")[0].strip() for line in block.splitlines() if line.strip()]
-    assert commands[0].startswith("python3 examples/render_scene.py")
+    assert commands[0].startswith("python examples/render_scene.py")
     (tmp_path / "examples").symlink_to(REPO / "examples")
     monkeypatch.chdir(tmp_path)
     for command in commands:
         argv = shlex.split(command)
-        if argv[0] == "python3":
+        if argv[0] in ("python", "python3"):
             subprocess.run([sys.executable, *argv[1:]], check=True, capture_output=True)
         else:
             assert argv[0] == "deformctl"
             result = run(*argv[1:])
             assert result.exit_code == 0, (command, result.stderr)
-    table = read_catalog("objects.csv")
-    assert list(table["object_id"]) == ["red-box", "red-box-2"]
-    for size, column in zip((12.0, 7.0, 5.0), ("size_x_cm", "size_y_cm", "size_z_cm"), strict=True):
-        assert (abs(table[column] - size) <= tolerance_cm(size)).all(), column
+            guessed = "--camera-matrix" not in argv
+            assert ("no --camera-matrix: assumed a 60°" in result.stderr) == guessed, command
+    table = read_catalog("objects.csv").set_index("object_id")
+    assert list(table.index) == ["red-box", "red-box-45", "red-box-2"]
+    true_size = (12.0, 7.0, 5.0)
+    for size, column in zip(true_size, ("size_x_cm", "size_y_cm", "size_z_cm"), strict=True):
+        for oid in ("red-box", "red-box-2"):  # the 60° camera: its own matrix, or the guess
+            assert abs(table.loc[oid, column] - size) <= tolerance_cm(size), (oid, column)
+    # a 45° lens read with the 60° guess: its footprint comes out too small
+    assert table.loc["red-box-45", "size_x_cm"] < 0.98 * true_size[0]
     assert (tmp_path / "debug" / "top.png").exists()

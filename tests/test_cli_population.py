@@ -54,6 +54,42 @@ def test_golden(tmp_path: Path) -> None:
     assert list(read_catalog(out)["object_id"]) == list(golden_population()["object_id"])
 
 
+def test_paper_writes_the_four_table_i_objects(tmp_path: Path) -> None:
+    out = tmp_path / "p.csv"
+    result = runner.invoke(app, ["population", "--paper", "-o", str(out)])
+    assert result.exit_code == 0, result.stderr
+    assert result.stderr == f"wrote 4 objects to {out}\n"
+    cat = read_catalog(out).set_index("object_id")
+    assert list(cat.index) == ["A", "B", "C", "D"]
+    assert list(cat["interior"]) == ["sponge", "cotton", "sand", "water"]
+    # Table I's weights and sizes, Table II's D and λ as the simulator's material values
+    assert list(cat["weight_n"]) == [0.7, 1.4, 2.9, 4.9]
+    assert list(cat.loc["C", ["size_x_cm", "size_y_cm", "size_z_cm"]]) == [11.4, 11.4, 9.5]
+    assert list(cat["material_stiffness_n_per_cm"]) == [49.18, 13.03, 30.02, 10.52]
+    assert list(cat["material_damping_ns_per_cm"]) == [6.47, 0.33, 0.47, 0.0]
+    pq = tmp_path / "p.parquet"
+    assert runner.invoke(app, ["population", "--paper", "-o", str(pq)]).exit_code == 0
+    pd.testing.assert_frame_equal(read_catalog(pq), read_catalog(out))
+
+
+def test_paper_and_golden_together_is_a_usage_error(tmp_path: Path) -> None:
+    out = tmp_path / "p.csv"
+    result = runner.invoke(app, ["population", "--paper", "--golden", "-o", str(out)])
+    assert result.exit_code == 2
+    assert result.stderr == "error: give --golden or --paper, not both\n"
+    assert not out.exists()
+
+
+def test_paper_refuses_to_overwrite(tmp_path: Path) -> None:
+    out = tmp_path / "p.csv"
+    out.write_text("mine\n")
+    result = runner.invoke(app, ["population", "--paper", "-o", str(out)])
+    assert result.exit_code == 1
+    assert len(result.stderr.splitlines()) == 1
+    assert result.stderr.startswith("error: ")
+    assert out.read_text() == "mine\n"
+
+
 def test_same_seed_same_bytes(tmp_path: Path) -> None:
     a, b = tmp_path / "a.csv", tmp_path / "b.csv"
     for p in (a, b):

@@ -7,10 +7,12 @@ outside the checkout; the dependencies are the test environment's.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
 import sys
+import sysconfig
 import zipfile
 from pathlib import Path
 
@@ -23,8 +25,8 @@ SKIP = (".venv", ".git", "build", "dist", "*.egg-info", "__pycache__", ".*_cache
 
 
 @pytest.fixture(scope="session")
-def wheel_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The unpacked wheel of the current source tree."""
+def wheel_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The wheel of the current source tree, built from a clean copy."""
     tmp = tmp_path_factory.mktemp("wheel")
     src = tmp / "src"
     shutil.copytree(REPO, src, ignore=shutil.ignore_patterns(*SKIP, "reports"))
@@ -45,10 +47,66 @@ def wheel_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
         capture_output=True,
     )
     (wheel,) = (tmp / "dist").glob("deformctl-*.whl")
-    unpacked = tmp / "site"
-    with zipfile.ZipFile(wheel) as zf:
+    return wheel
+
+
+@pytest.fixture(scope="session")
+def wheel_dir(wheel_file: Path) -> Path:
+    """The unpacked wheel of the current source tree."""
+    unpacked = wheel_file.parent.parent / "site"
+    with zipfile.ZipFile(wheel_file) as zf:
         zf.extractall(unpacked)
     return unpacked
+
+
+@pytest.fixture(scope="session")
+def fresh_venv(wheel_file: Path) -> Path:
+    """A new virtual environment with ``pip install dist/deformctl-*.whl`` done (no download:
+    the dependencies are the test environment's, reached through a ``.pth`` line that adds its
+    site-packages after the venv's own, where the installed deformctl comes first)."""
+    venv = wheel_file.parent.parent / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
+    python = venv / "bin" / "python"
+    subprocess.run(
+        [sys.executable, "-m", "pip", "--python", str(python), "install", "--no-deps",
+         "--no-index", "-q", str(wheel_file)],
+        check=True,
+        capture_output=True,
+    )  # fmt: skip
+    site = subprocess.run(
+        [str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout.strip()
+    Path(site, "test_dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    return venv
+
+
+def test_a_fresh_venv_runs_the_first_commands(fresh_venv: Path, tmp_path: Path) -> None:
+    """``pip install`` of the wheel, then ``population --paper`` and ``measure --sim`` on it."""
+    deformctl = str(fresh_venv / "bin" / "deformctl")
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+
+    def run(*args: str) -> subprocess.CompletedProcess[str]:
+        proc = subprocess.run(args, cwd=tmp_path, env=env, capture_output=True, text=True,
+                              check=False)  # fmt: skip
+        assert proc.returncode == 0, proc.stderr
+        return proc
+
+    where = run(
+        str(fresh_venv / "bin" / "python"), "-c", "import deformctl; print(deformctl.__file__)"
+    )
+    assert Path(where.stdout.strip()).is_relative_to(fresh_venv)
+    run(deformctl, "population", "--paper", "-o", "p.csv")
+    paper = (REPO / "datasets/paper/objects.csv").read_text().splitlines()
+    written = (tmp_path / "p.csv").read_text().splitlines()
+    assert [line.split(",")[0] for line in written] == [line.split(",")[0] for line in paper]
+    run(deformctl, "measure", "p.csv", "--sim", "-o", "s.mcap")
+    info = json.loads(run(deformctl, "inspect", "s.mcap", "--json").stdout)
+    assert info["kind"] == "squeeze_log"
+    assert info["squeezes"] == 12  # 4 objects x 3 squeezes
+    assert {c["topic"] for c in info["channels"]} == {f"/squeeze/{o}" for o in "ABCD"}
 
 
 def _run(wheel_dir: Path, cwd: Path, *args: str) -> str:
@@ -68,7 +126,8 @@ def test_the_wheel_brings_its_data(wheel_dir: Path, tmp_path: Path) -> None:
         "import deformctl, deformctl.repro.golden as g; from deformctl.repro import dataset_path; "
         "from deformctl.artifacts.schema import load_table_spec; load_table_spec('catalog'); "
         "print(deformctl.__file__); print(dataset_path('paper', 'table2.csv')); "
-        "print(g.EXPECTED_PATH)",
+        "print(g.EXPECTED_PATH); print(dataset_path('examples', 'gripper.mcap')); "
+        "print(dataset_path('examples', 'utm_export.csv'))",
     )
     for line in where.split():
         assert Path(line).is_relative_to(wheel_dir), line

@@ -88,6 +88,17 @@ DebugDir = Annotated[
         help="Images: write annotated images (marker, contour, sizes) here.",
     ),
 ]
+CameraMatrix = Annotated[
+    str | None,
+    typer.Option(
+        "--camera-matrix",
+        metavar="FILE",
+        help="Images: the camera's calibration, OpenCV calibrateCamera output saved by "
+        "cv2.FileStorage (YAML or JSON: camera_matrix, distortion_coefficients) or a ROS "
+        "camera_info YAML; photos are undistorted with it [default: a 60° horizontal field of "
+        "view, no distortion, with a warning].",
+    ),
+]
 Append = Annotated[
     bool,
     typer.Option("--append", help="Images: add the row to the catalog -o (created if missing)."),
@@ -107,6 +118,7 @@ class ImageOptions:
     background: tuple[str, str] | None = None
     debug_dir: str | None = None
     append: bool = False
+    camera_matrix: str | None = None
 
     def given(self) -> dict[str, object]:
         """Flag -> value of every option given (for refusing them with another source)."""
@@ -124,6 +136,7 @@ class ImageOptions:
             "--background": self.background,
             "--debug-dir": self.debug_dir,
             "--append": self.append,
+            "--camera-matrix": self.camera_matrix,
         }
 
 

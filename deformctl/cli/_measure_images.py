@@ -58,9 +58,11 @@ def measure_images(
         raise UsageError("--append needs a catalog file, not - (stdout)")
     _check_row_values(object_id, weight_n, friction_mu)
     inputs = [top, side, *(opts.background or ())]
+    if opts.camera_matrix is not None:
+        inputs.append(opts.camera_matrix)
     for path in inputs:
         if is_stdio(path):
-            raise UsageError("--images and --background read files, not - (stdin)")
+            raise UsageError("--images, --background and --camera-matrix read files, not -")
         check_input_path(path)
     existing: pd.DataFrame | None = None
     if opts.append and os.path.exists(output):
@@ -80,15 +82,29 @@ def measure_images(
         )
     else:
         check_output_path(output, force)
-    from deformctl.vision import catalog_row, measure_object_size  # deferred: OpenCV
+    from deformctl.vision import (  # deferred: OpenCV
+        catalog_row,
+        load_camera_calibration,
+        measure_object_size,
+    )
 
+    camera = None if opts.camera_matrix is None else load_camera_calibration(opts.camera_matrix)
     size = measure_object_size(
         top,
         side,
         background_image=None if opts.background is None else tuple(opts.background),  # type: ignore[arg-type]
         debug_dir=opts.debug_dir,
+        camera=camera,
         **kwargs,
     )
+    if size.assumed_hfov_deg is not None:
+        typer.echo(
+            f"warning: {top}: no --camera-matrix: assumed a {size.assumed_hfov_deg:g}° "
+            f"horizontal field of view; the height correction applied to the top view is "
+            f"{size.height_correction_pct:+.1f} % and depends on that guess (give the camera's "
+            "calibration for sizes within 2 %)",
+            err=True,
+        )
     row = catalog_row(size, object_id=object_id, weight_n=weight_n, friction_mu=friction_mu)
     settings = {
         "source": "images",
@@ -96,6 +112,16 @@ def measure_images(
         **{k: v for k, v in kwargs.items() if k != "color_range"},
         "color_range": kwargs.get("color_range"),
         "background": list(opts.background) if opts.background else None,
+        "camera": None
+        if camera is None
+        else {
+            "file": camera.path,
+            "source": camera.source,
+            "camera_matrix": camera.camera_matrix.tolist(),
+            "distortion_coefficients": camera.distortion.tolist(),
+        },
+        "assumed_hfov_deg": size.assumed_hfov_deg,
+        "height_correction_pct": size.height_correction_pct,
         "measured_size_cm": [size.size_x_cm, size.size_y_cm, size.size_z_cm],
         "side_visible_width_cm": size.side.size_along_x_cm,
     }

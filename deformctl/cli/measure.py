@@ -81,6 +81,7 @@ def measure(
     background: img.Background = None,
     debug_dir: img.DebugDir = None,
     append: img.Append = False,
+    camera_matrix: img.CameraMatrix = None,
     object_id: rec.ObjectId = None,
     weight_n: rec.WeightN = None,
     size_cm: rec.SizeCm = None,
@@ -139,7 +140,7 @@ def measure(
     )  # fmt: skip
     image_opts = img.ImageOptions(
         marker_size_cm, marker_dict, marker_id, checkerboard, square_size_cm, color_range,
-        background, debug_dir, append,
+        background, debug_dir, append, camera_matrix,
     )  # fmt: skip
     rig_opts = _measure_rig.RigOptions(
         object_id, list(wrench_topics), position_topic, joint, axis, position_is, columns, units,

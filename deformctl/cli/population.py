@@ -13,6 +13,7 @@ from deformctl.population import (
     PAPER_POPULATION_SIZE,
     golden_population,
     make_population,
+    paper_objects,
 )
 
 
@@ -52,6 +53,12 @@ def population(
     golden: bool = typer.Option(
         False, "--golden", help="Write the fixed 8-object golden population (ignores the ranges)."
     ),
+    paper: bool = typer.Option(
+        False,
+        "--paper",
+        help="Write the paper's four Table I objects A-D with Table II's D and λ (the bundled "
+        "datasets/paper/objects.csv; ignores the ranges).",
+    ),
     force: Force = False,
 ) -> None:
     """Write a seeded catalog of objects with W, D, λ drawn uniformly from stated ranges.
@@ -61,10 +68,16 @@ def population(
     carries the simulator's ground truth in material_stiffness_n_per_cm and
     material_damping_ns_per_cm.
 
+    --paper writes the paper's four Table I objects instead, --golden the CI population.
+
     Example: deformctl population -n 73 --seed 0 -o population.csv
     """
+    if golden and paper:
+        raise UsageError("give --golden or --paper, not both")
     if golden:
         catalog = golden_population()
+    elif paper:
+        catalog = paper_objects()
     else:
         mu_low, mu_high = parse_range("--friction-mu", friction_mu)
         catalog = make_population(
@@ -77,7 +90,8 @@ def population(
             id_prefix=id_prefix,
         )
     provenance = Provenance.from_invocation(
-        seed=None if golden else seed, settings={"golden": golden, "n": len(catalog)}
+        seed=None if golden or paper else seed,
+        settings={"golden": golden, "paper": paper, "n": len(catalog)},
     )
     write_catalog(catalog, output, provenance=provenance, force=force)
     typer.echo(f"wrote {len(catalog)} objects to {output}", err=True)

@@ -22,8 +22,8 @@ model's memory is estimated from the particle counts before anything is built an
 
 Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
     * **direct**, up to ``direct_max_dofs = 500`` DOFs (the ``table`` preset's 5-per-side
-      lattices; the ``paper`` preset's 7-per-side bags have 480-840 DOFs and run iterative, which
-      measured faster there: three squeezes of the cotton bag, 837 DOFs, 0.83 s direct vs 0.44 s
+      lattices; the ``paper`` preset's finer bags run iterative, which measured faster there:
+      three squeezes of the cotton bag at 7 per side, 837 DOFs, 0.83 s direct vs 0.44 s
       iterative; the sponge, 480 DOFs, 0.51 s vs 0.53 s): ``A = L D L^T``
       in geometric nested-dissection order (:mod:`deformctl.sim.solver`), a pair of sparse
       triangular solves per step, contacts from exact columns ``A^-1 e_d``. Exact, and

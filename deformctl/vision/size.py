@@ -19,7 +19,9 @@ from numpy.typing import NDArray
 
 from deformctl.catalog import catalog_row as new_catalog_row
 from deformctl.errors import InputDataError, UsageError
+from deformctl.vision.camera import CameraCalibration, undistort
 from deformctl.vision.reference import (
+    DEFAULT_HFOV_DEG,
     MARKER_MASK_GROWTH,
     FloatArray,
     ImageSource,
@@ -47,6 +49,10 @@ _VIEW_ITERATIONS = 4
 # --------------------------------------------------------------------------------------------
 
 
+#: Terms of the background surface at each trimming pass: constant, plane, then the quadratic.
+_BACKGROUND_STAGES = (1, 3, 3, 6, 6, 6, 6)
+
+
 def _quadratic_terms(u: FloatArray, v: FloatArray) -> list[FloatArray]:
     return [np.ones_like(u + v), u, v, u * u, u * v, v * v]
 
@@ -55,7 +61,11 @@ def _background_model(img: NDArray[np.uint8], exclude: NDArray[np.bool_]) -> Flo
     """A smooth background, a quadratic surface per channel fitted robustly; float ``[h, w, 3]``.
 
     Fitted on a coarse grid by iteratively trimmed least squares (pixels more than three robust
-    standard deviations from the surface, i.e. the object and the marker, are dropped).
+    standard deviations from the surface, i.e. the object and the marker, are dropped). The fit
+    grows from a constant (the median colour: the background must cover most of the photo) to a
+    plane to the quadratic, so that a large or strongly coloured object cannot bend the first
+    surface towards itself and hide in it (a full quadratic fitted first to a photo with a 16 %
+    orange box on grey absorbed the box: no object was found).
     """
     h, w = img.shape[:2]
     step = max(1, round(max(h, w) / 160))
@@ -69,9 +79,14 @@ def _background_model(img: NDArray[np.uint8], exclude: NDArray[np.bool_]) -> Flo
     allowed = ~exclude[ys][:, xs].ravel()
     keep = allowed.copy()
     coef = np.zeros((6, 3))
-    for _ in range(5):
-        a = design[keep]
-        coef = _f64(np.linalg.solve(a.T @ a + 1e-9 * np.eye(6), a.T @ vals[keep]))  # [6, 3]
+    for n_terms in _BACKGROUND_STAGES:
+        a = design[keep][:, :n_terms]
+        coef = np.zeros((6, 3))
+        if n_terms == 1:
+            coef[0] = np.median(vals[keep], axis=0)
+        else:
+            gram = a.T @ a + 1e-9 * np.eye(n_terms)
+            coef[:n_terms] = _f64(np.linalg.solve(gram, a.T @ vals[keep]))  # [n_terms, 3]
         resid = np.linalg.norm(vals - design @ coef, axis=1)
         sigma = 1.4826 * float(np.median(resid[keep])) + 1e-6
         keep = (resid < 3.0 * sigma + 2.0) & allowed
@@ -268,6 +283,11 @@ class SizeMeasurement:
         top: details of the top view.
         side: details of the side view (``side.size_along_x_cm`` is the visible width, a
             cross-check of ``size_x_cm`` or ``size_y_cm``).
+        height_correction_pct: how much the parallax correction for the object's height changed
+            the top view's footprint, % (mean of both sides; negative: the flat reading was
+            too large, as the top face is nearer the camera than the marker).
+        assumed_hfov_deg: the horizontal field of view assumed for want of a camera matrix,
+            degrees; None when one was given.
     """
 
     size_x_cm: float
@@ -275,6 +295,8 @@ class SizeMeasurement:
     size_z_cm: float
     top: ViewMeasurement
     side: ViewMeasurement
+    height_correction_pct: float = 0.0
+    assumed_hfov_deg: float | None = None
 
 
 @dataclass(frozen=True)
@@ -466,6 +488,7 @@ def measure_object_size(
     background_image: ImageSource | tuple[ImageSource, ImageSource] | None = None,
     camera_matrix: ArrayLikeMatrix | None = None,
     debug_dir: str | PathLike[str] | None = None,
+    camera: CameraCalibration | None = None,
 ) -> SizeMeasurement:
     """Measure an object's x, y, z size from a top image and a side image.
 
@@ -485,6 +508,10 @@ def measure_object_size(
         camera_matrix: 3x3 intrinsic matrix ``K`` (px), used for both views; default: 60-degree
             horizontal field of view, principal point at the centre.
         debug_dir: write annotated PNGs here (``top.png``, ``side.png``, masks, failures).
+        camera: a calibrated camera (:func:`deformctl.vision.camera.load_camera_calibration`)
+            instead of ``camera_matrix``: its ``K`` is used, and the photos (and backgrounds) are
+            undistorted with its distortion coefficients first; photos of another size than
+            the calibration's are refused.
 
     Returns:
         The sizes in cm and the per-view details.
@@ -500,7 +527,9 @@ def measure_object_size(
         bg_top, bg_side = background_image
     else:
         bg_top = bg_side = background_image
-    k = _camera_matrix(camera_matrix)
+    if camera is not None and camera_matrix is not None:
+        raise UsageError("give camera or camera_matrix, not both")
+    k = camera.camera_matrix if camera is not None else _camera_matrix(camera_matrix)
     debug = None if debug_dir is None else _Debug(debug_dir)
     common = {
         "marker_size_cm": marker_size_cm,
@@ -514,24 +543,32 @@ def measure_object_size(
     }
     top_img = load_image(top_image, name="top image")
     side_img = load_image(side_image, name="side image")
+    top_bg = _load_background(bg_top, top_img, "top")
+    side_bg = _load_background(bg_side, side_img, "side")
+    if camera is not None:
+        camera.check_image(top_img.shape, "top image", _label(top_image, "top"))
+        camera.check_image(side_img.shape, "side image", _label(side_image, "side"))
+        top_img, side_img = undistort(top_img, camera), undistort(side_img, camera)
+        top_bg = None if top_bg is None else undistort(top_bg, camera)
+        side_bg = None if side_bg is None else undistort(side_bg, camera)
     top_sil = _silhouette(
         top_img,
         view="top",
         path=_label(top_image, "top"),
-        background=_load_background(bg_top, top_img, "top"),
+        background=top_bg,
         **common,  # type: ignore[arg-type]
     )
     side_sil = _silhouette(
         side_img,
         view="side",
         path=_label(side_image, "side"),
-        background=_load_background(bg_side, side_img, "side"),
+        background=side_bg,
         **common,  # type: ignore[arg-type]
     )
     # Fixed point: the top view needs the height, the side view the depth (the top-view side
     # that does not match the side view's visible width).
     height, depth = 0.0, 0.0
-    top = _view_from("top", top_sil, top_img.shape, 0.0, 0.0)
+    top = flat = _view_from("top", top_sil, top_img.shape, 0.0, 0.0)
     side = _view_from("side", side_sil, side_img.shape, 0.0, 0.0)
     for _ in range(_VIEW_ITERATIONS):
         side = _view_from("side", side_sil, side_img.shape, 0.0, -depth)
@@ -546,6 +583,13 @@ def measure_object_size(
         size_z_cm=side.size_along_y_cm,
         top=top,
         side=side,
+        height_correction_pct=100.0
+        * (
+            (top.size_along_x_cm + top.size_along_y_cm)
+            / (flat.size_along_x_cm + flat.size_along_y_cm)
+            - 1.0
+        ),
+        assumed_hfov_deg=DEFAULT_HFOV_DEG if k is None else None,
     )
     if debug is not None:
         debug.write_view(top, top_img, f"x {result.size_x_cm:.2f} cm, y {result.size_y_cm:.2f} cm")
