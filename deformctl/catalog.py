@@ -54,7 +54,25 @@ CATALOG_COLUMNS: tuple[str, ...] = (
 SIZE_COLUMNS: tuple[str, str, str] = ("size_x_cm", "size_y_cm", "size_z_cm")
 MATERIAL_COLUMNS: tuple[str, str] = ("material_stiffness_n_per_cm", "material_damping_ns_per_cm")
 
+#: Physical bounds of each numeric column, ``(lowest, highest)`` inclusive, in the column's unit:
+#: what a gripper can hold and the simulator can integrate. Outside them numpy sees underflow and
+#: overflow (a size of 1e-308 cm gives a non-finite lattice, a weight of 1e-300 N or a damping of
+#: 1e308 N·s/cm an indefinite factor) or the run never ends (an object of 1e6 cm). The catalog
+#: spec (``schemas/catalog.columns.json``) states the same numbers as ``minimum``/``maximum``,
+#: so every reader refuses an out-of-bounds row before any numerics (tests/test_catalog.py checks
+#: the two agree).
+BOUNDS: dict[str, tuple[float, float]] = {
+    "size_x_cm": (0.1, 200.0),
+    "size_y_cm": (0.1, 200.0),
+    "size_z_cm": (0.1, 200.0),
+    "weight_n": (0.001, 5000.0),
+    "friction_mu": (0.01, 10.0),
+    "material_stiffness_n_per_cm": (0.01, 1e5),
+    "material_damping_ns_per_cm": (0.0, 1e4),
+}
+
 __all__ = [
+    "BOUNDS",
     "CATALOG_COLUMNS",
     "MATERIAL_COLUMNS",
     "SIZE_COLUMNS",
@@ -93,6 +111,12 @@ def _number(row: Mapping[str, Any], key: str, object_id: str) -> float:
         raise InputDataError(f"object {object_id!r}: {key} is not a number: {value!r}") from None
     if not math.isfinite(number):
         raise InputDataError(f"object {object_id!r}: {key} is missing or not finite ({value!r})")
+    low, high = BOUNDS.get(key, (-math.inf, math.inf))
+    if not low <= number <= high:
+        raise InputDataError(
+            f"object {object_id!r}: {key} = {number:g} is outside its physical bounds "
+            f"[{low:g}, {high:g}]"
+        )
     return number
 
 
@@ -108,8 +132,7 @@ class CatalogObject(Mapping[str, Any]):
         object_id: the object's unique id.
         size_cm: box size along (x, y, z), cm; x is the squeeze axis, z is up.
         weight_n: weight W, N.
-        friction_mu: palm/object Coulomb friction coefficient μ (the catalog allows 0; a lift
-            needs it > 0, see :meth:`f_w_n`).
+        friction_mu: palm/object Coulomb friction coefficient μ (> 0, see :data:`BOUNDS`).
         material_stiffness_n_per_cm: the simulator's ground-truth D, N/cm, or None (a real
             object).
         material_damping_ns_per_cm: the simulator's ground-truth λ, N·s/cm, or None.
@@ -134,9 +157,8 @@ class CatalogObject(Mapping[str, Any]):
 
         Raises:
             InputDataError: no ``object_id``, or a size, weight or friction column that is
-                missing, not a number or not finite; one line naming the object and the column
-                (exit 65). Value ranges are the catalog spec's (checked when a file is read)
-                and each use's (:meth:`f_w_n`, :meth:`to_sim_spec`).
+                missing, not a number, not finite or outside :data:`BOUNDS`; one line naming
+                the object and the column (exit 65).
         """
         raw = {str(k): v for k, v in row.items()}
         oid = _plain(raw.get("object_id"))

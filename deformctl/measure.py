@@ -57,8 +57,10 @@ the log stores with the object (:meth:`Recording.log_fields`).
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import dataclasses
+import io
 import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -73,9 +75,10 @@ import pyarrow as pa
 
 from deformctl.artifacts import check_output_path, read_catalog, write_squeeze_log
 from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
+from deformctl.artifacts.io import note_input
 from deformctl.artifacts.mcaplog import LOG_EPOCH_NS
 from deformctl.artifacts.provenance import Provenance, input_digest
-from deformctl.catalog import catalog_objects, select_objects
+from deformctl.catalog import CatalogObject, catalog_objects, select_objects
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
 from deformctl.phases import PHASES, Phase, Rupture, cut_rupture, phase_slice, slice_squeeze
@@ -433,15 +436,92 @@ def _unit_hint(key: str, unit: str | None, what: str, stated: str | None = None)
 # ---------------------------------------------------------------------------------------------
 
 
-def _stamp_ns(msg: Any) -> int:
-    stamp = msg.header.stamp
-    return int(stamp.sec) * NS_PER_S + int(stamp.nanosec)
+#: The fields each message type must have for the reader (dotted paths).
+_REQUIRED_FIELDS: dict[str, tuple[str, ...]] = {
+    WRENCH_TYPE: ("header.stamp.sec", "header.stamp.nanosec", "wrench.force"),
+    POSE_TYPE: ("header.stamp.sec", "header.stamp.nanosec", "pose.position"),
+    JOINT_STATE_TYPE: ("header.stamp.sec", "header.stamp.nanosec", "name", "position"),
+}
+
+#: The first two bytes of a ROS 2 CDR payload (the encapsulation kind): plain CDR, big or little
+#: endian.
+_CDR_KINDS = (b"\x00\x00", b"\x00\x01")
+
+_MISSING = object()
+
+
+def _field(msg: Any, dotted: str, where: str, path: Path) -> Any:
+    """``msg.<dotted>``, or a one-line error naming the field the message definition lacks."""
+    value = msg
+    for part in dotted.split("."):
+        value = getattr(value, part, _MISSING)
+        if value is _MISSING:
+            raise InputDataError(
+                f"{where}: the message has no field {dotted!r} (its message definition does not "
+                "match its type name)",
+                path=path,
+            )
+    return value
+
+
+def _number(value: Any, dotted: str, where: str, path: Path) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise InputDataError(
+            f"{where}: field {dotted!r} is a {type(value).__name__}, not a number", path=path
+        )
+    return float(value)
+
+
+def _stamp_ns(msg: Any, where: str, path: Path) -> int:
+    sec = _field(msg, "header.stamp.sec", where, path)
+    nanosec = _field(msg, "header.stamp.nanosec", where, path)
+    if not all(isinstance(v, int) and not isinstance(v, bool) for v in (sec, nanosec)):
+        raise InputDataError(f"{where}: header.stamp is not (sec, nanosec) integers", path=path)
+    return int(sec) * NS_PER_S + int(nanosec)
+
+
+def _decoder(factory: Any, schema: Any, channel: Any, where: str, path: Path) -> Any:
+    """The CDR decoder of ``channel``'s message definition, or a one-line error (exit 65)."""
+    if channel.message_encoding != "cdr" or schema is None or schema.encoding != "ros2msg":
+        got = f"{channel.message_encoding}/{getattr(schema, 'encoding', None)}"
+        raise InputDataError(f"{where}: encoding {got}, expected cdr/ros2msg", path=path)
+    try:  # the msgdef parser also prints its complaint to stderr: keep that to the one line
+        with contextlib.redirect_stderr(io.StringIO()):
+            return factory.decoder_for(channel.message_encoding, schema)
+    except Exception as err:  # the msgdef parser raises many kinds of error on bad text
+        raise InputDataError(
+            f"{where}: unparseable message definition ({type(err).__name__}: "
+            f"{' '.join(str(err).split())[:200]})",
+            path=path,
+        ) from None
+
+
+def _decode(decode: Any, data: bytes, index: int, where: str, path: Path) -> Any:
+    """One CDR payload decoded, or a one-line error naming the message (exit 65)."""
+    if len(data) < 4 or bytes(data[:2]) not in _CDR_KINDS:
+        raise InputDataError(
+            f"{where}: message {index} has no CDR encapsulation header "
+            f"(first bytes {bytes(data[:4]).hex() or 'none'})",
+            path=path,
+        )
+    try:
+        return decode(data)
+    except Exception as err:  # a truncated payload raises struct, index, unicode... errors
+        raise InputDataError(
+            f"{where}: message {index} does not decode with its message definition "
+            f"({type(err).__name__}: {' '.join(str(err).split())[:200]})",
+            path=path,
+        ) from None
 
 
 def _read_topics(
     path: Path, roles: Mapping[str, tuple[str, ...]], joint: str | None, axis: Axis
 ) -> dict[str, tuple[list[int], list[Any]]]:
     """Read ``(stamp_ns list, value list)`` per topic: the force vector, position.axis or joint.
+
+    Each channel's encoding, message definition and every decoded message are checked against
+    the fields the reader needs (:data:`_REQUIRED_FIELDS`) before use; a mismatch names the
+    topic, the type and the field (exit 65).
 
     Args:
         path: the bag.
@@ -457,7 +537,7 @@ def _read_topics(
     out: dict[str, tuple[list[int], list[Any]]] = {t: ([], []) for t in topics}
     with path.open("rb") as fh:
         try:
-            reader = make_reader(fh, decoder_factories=[DecoderFactory()])
+            reader = make_reader(fh)
             summary = reader.get_summary()
         except (McapError, ValueError, OSError) as err:
             raise InputDataError(f"not a readable MCAP file ({err})", path=path) from err
@@ -483,30 +563,55 @@ def _read_topics(
                 )
             if want == JOINT_STATE_TYPE and joint is None:
                 raise UsageError(f"topic {topic!r} is {JOINT_STATE_TYPE}: pass a joint name")
+        factory = DecoderFactory()
+        decoders: dict[int, Any] = {}
+        counts = dict.fromkeys(topics, 0)
         try:
-            for _schema, channel, _message, msg in reader.iter_decoded_messages(topics=topics):
+            for schema, channel, message in reader.iter_messages(topics=topics):
+                where = f"topic {channel.topic!r} ({types[channel.topic]})"
+                if channel.id not in decoders:
+                    decoders[channel.id] = _decoder(factory, schema, channel, where, path)
+                index = counts[channel.topic]
+                counts[channel.topic] += 1
+                msg = _decode(decoders[channel.id], message.data, index, where, path)
                 stamps, values = out[channel.topic]
-                stamps.append(_stamp_ns(msg))
-                values.append(_extract(msg, types[channel.topic], axis, joint, channel.topic, path))
+                stamps.append(_stamp_ns(msg, where, path))
+                values.append(_extract(msg, types[channel.topic], axis, joint, where, path))
         except McapError as err:
             raise InputDataError(f"cannot decode bag ({err})", path=path) from err
     return out
 
 
 def _extract(
-    msg: Any, type_name: str, axis: Axis, joint: str | None, topic: str, path: Path
+    msg: Any, type_name: str, axis: Axis, joint: str | None, where: str, path: Path
 ) -> Any:
+    for dotted in _REQUIRED_FIELDS[type_name]:
+        _field(msg, dotted, where, path)
     if type_name == WRENCH_TYPE:
         force = msg.wrench.force
-        return (float(force.x), float(force.y), float(force.z))
+        return tuple(
+            _number(_field(force, a, where, path), f"wrench.force.{a}", where, path) for a in "xyz"
+        )
     if type_name == POSE_TYPE:
-        return float(getattr(msg.pose.position, axis))
-    names = list(msg.name)
+        position = msg.pose.position
+        return _number(_field(position, axis, where, path), f"pose.position.{axis}", where, path)
+    try:
+        names = [str(n) for n in msg.name]
+        positions = list(msg.position)
+    except TypeError:
+        raise InputDataError(f"{where}: name and position must be arrays", path=path) from None
     if joint not in names:
         raise InputDataError(
-            f"topic {topic!r}: joint {joint!r} not in the JointState names {names}", path=path
+            f"{where}: joint {joint!r} not in the JointState names {names}", path=path
         )
-    return float(msg.position[names.index(joint)])
+    i = names.index(joint)
+    if i >= len(positions):
+        raise InputDataError(
+            f"{where}: joint {joint!r} has no position ({len(positions)} positions for "
+            f"{len(names)} names)",
+            path=path,
+        )
+    return _number(positions[i], "position", where, path)
 
 
 def read_ros2_bag(
@@ -570,6 +675,7 @@ def read_ros2_bag(
     _check_recording_options(phase, position_increases_when)
     if not p.is_file():
         raise MissingInputError("no such bag file", path=p)
+    note_input(p)
     if not 1 <= len(wrench_topics) <= 2:
         raise UsageError(f"give one or two wrench topics, got {len(wrench_topics)}")
     if axis not in ("x", "y", "z"):
@@ -750,6 +856,7 @@ def read_csv_export(
     _check_recording_options(phase, position_increases_when)
     if not p.is_file():
         raise MissingInputError("no such CSV file", path=p)
+    note_input(p)
     pos_keys = [k for k in _POSITION_KEYS if k in columns]
     unknown = sorted(set(columns) - {"time", "force", *_POSITION_KEYS})
     if unknown or "time" not in columns or "force" not in columns or len(pos_keys) != 1:
@@ -1161,6 +1268,55 @@ def sim_provenance(
     )
 
 
+#: Bytes one sample of a squeeze log held in memory costs: the series arrays and the JSON message
+#: built from them before the log is written.
+LOG_SAMPLE_BYTES = 400
+
+
+def _check_budgets(
+    catalog: pd.DataFrame, task: SimulateCatalogTask, path: str, *, single_log: bool
+) -> None:
+    """Refuse, before simulating, a run above the memory budget (``--memory-budget-gib``).
+
+    Each object's squeeze (its model plus the recorded steps, see
+    :func:`deformctl.sim.engine.check_run_steps`) must fit; a single-file squeeze log, built in
+    memory (MCAP's summary comes at the end), must fit as a whole. A dataset directory is written
+    part by part and has no whole-log limit. With ``single_log`` a bad row is refused first
+    (exit 65); in a dataset it is skipped here and fails alone in its worker.
+
+    Raises:
+        InputDataError: ``single_log`` and a row the simulator refuses (exit 65).
+        UsageError: one line naming the estimate, the budget and the option (exit 2).
+    """
+    from deformctl.sim.engine import GIB, check_run_steps
+
+    settings = task.settings
+    squeezes = int(task.simulate.get("squeezes", DEFAULT_SIM_SQUEEZES))
+    ramp = task.simulate.get("ramp_s")
+    hold = task.simulate.get("hold_s")
+    duration_s = float(DEFAULT_SIM_RAMP_S if ramp is None else ramp) + float(
+        DEFAULT_SIM_HOLD_S if hold is None else hold
+    )
+    steps = duration_s / settings.dt_s + 1.0
+    for record in catalog.to_dict("records"):
+        try:
+            spec = CatalogObject.from_row(record).to_sim_spec(path=path)
+        except InputDataError:
+            if single_log:
+                raise
+            continue  # a dataset's bad row fails alone, in its worker
+        check_run_steps(spec, settings, steps, "squeeze")
+    samples = len(catalog) * squeezes * steps
+    estimate = samples * LOG_SAMPLE_BYTES
+    if single_log and estimate > settings.memory_budget_gib * GIB:
+        raise UsageError(
+            f"one squeeze log of {len(catalog):,} objects x {squeezes} squeezes is {samples:.3g} "
+            f"samples, an estimated {estimate / GIB:.3g} GiB in memory, above the memory budget "
+            f"of {settings.memory_budget_gib:g} GiB; write a dataset directory (-o DIR/) or "
+            "raise --memory-budget-gib"
+        )
+
+
 def simulate_catalog_file(
     catalog_path: str,
     task: SimulateCatalogTask,
@@ -1185,8 +1341,7 @@ def simulate_catalog_file(
     """
     check_output_path(output, force)
     catalog = select_objects(read_catalog(catalog_path), object_ids)
-    for obj in catalog_objects(catalog, path=catalog_path):  # refuse bad rows first
-        obj.to_sim_spec(path=catalog_path)
+    _check_budgets(catalog, task, catalog_path, single_log=True)  # bad rows first
     provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
     objects, series = simulate_squeezes(
         catalog,
@@ -1226,6 +1381,7 @@ def simulate_catalog_sweep(
         force: overwrite the sweep files of an existing directory.
     """
     catalog = select_objects(read_catalog(catalog_path), object_ids)
+    _check_budgets(catalog, task, catalog_path, single_log=False)
     provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
     items = [{**rec, "_position": i} for i, rec in enumerate(catalog.to_dict("records"))]
     settings = {**task.simulate, "sim_settings": dataclasses.asdict(task.settings)}

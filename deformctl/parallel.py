@@ -31,6 +31,7 @@ import multiprocessing
 import os
 import socket
 import sys
+import threading
 import time
 import uuid
 from collections.abc import Callable, Iterable, Mapping
@@ -279,7 +280,10 @@ class _LocalBackend:
                 preload.append(module)
             ctx.set_forkserver_preload(preload)
         self._pool = ProcessPoolExecutor(
-            max_workers=workers, mp_context=ctx, initializer=_one_blas_thread
+            max_workers=workers,
+            mp_context=ctx,
+            initializer=_init_worker,
+            initargs=(os.getpid(),),
         )
         self._task, self._schema, self._id_column = task, schema, id_column
         self._futures: dict[Future[ObjectResult], int] = {}
@@ -333,6 +337,33 @@ def _write_part(part_writer: Callable[[PartPayloads], None], part: PartPayloads)
 
 
 _THREAD_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+#: How often a local worker checks that its client is still alive, s.
+_WATCHDOG_S = 0.5
+
+
+def _init_worker(client_pid: int) -> None:
+    """Worker initializer: one BLAS thread (:func:`_one_blas_thread`) and a client watchdog.
+
+    The watchdog is a daemon thread that ends the worker when the client process is gone (killed
+    with ``kill -9``, so it could not shut its pool down): no worker outlives its client by
+    more than about :data:`_WATCHDOG_S`. The fork server exits by itself when the client's end of
+    its pipe closes, and the resource tracker when the last worker holding it is gone.
+    """
+    _one_blas_thread()
+    threading.Thread(target=_watch_client, args=(client_pid,), daemon=True).start()
+
+
+def _watch_client(client_pid: int) -> None:
+    while True:
+        time.sleep(_WATCHDOG_S)
+        try:
+            os.kill(client_pid, 0)
+        except ProcessLookupError:
+            os._exit(1)
+        except OSError:  # pragma: no cover - alive but not ours to signal
+            pass
 
 
 def _one_blas_thread() -> None:

@@ -40,6 +40,7 @@ when it beats this one).
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -542,11 +543,24 @@ def predict(model: ScaledTargetRegressor, features: pd.DataFrame) -> Prediction:
     return Prediction(frame=frame, warnings=messages)
 
 
-def parse_hidden(text: str) -> tuple[int, ...]:
+#: The most weights (and biases) a network may have, the default of ``train --max-parameters``:
+#: the paper's 3-2-1 network has 11, a generous 64,64 one 4,481; ``--hidden 100000000`` (400
+#: million weights, 8 restarts) used to run until the kernel killed it.
+MAX_PARAMETERS = 100_000
+
+
+def parameter_count(hidden: tuple[int, ...], n_features: int = 3) -> int:
+    """Weights and biases of an MLP with ``hidden`` layers on ``n_features`` inputs, one output."""
+    sizes = [n_features, *hidden, 1]
+    return sum((a + 1) * b for a, b in itertools.pairwise(sizes))
+
+
+def parse_hidden(text: str, *, max_parameters: int = MAX_PARAMETERS) -> tuple[int, ...]:
     """Hidden layer sizes from ``"2"`` or a comma list such as ``"8,4"``.
 
     Raises:
-        UsageError: an empty list, an item that is not an integer, or a size < 1.
+        UsageError: an empty list, an item that is not an integer, a size < 1, or a network of
+            more than ``max_parameters`` weights (checked before anything is allocated).
     """
     items = [s.strip() for s in str(text).split(",")]
     sizes: list[int] = []
@@ -560,6 +574,12 @@ def parse_hidden(text: str) -> tuple[int, ...]:
         if size < 1:
             raise UsageError(f"hidden layer sizes must be >= 1, got {text!r}")
         sizes.append(size)
+    n_weights = parameter_count(tuple(sizes))
+    if n_weights > max_parameters:
+        raise UsageError(
+            f"--hidden {text}: the network has {n_weights:,} weights, above the budget of "
+            f"{max_parameters:,} (raise it with --max-parameters)"
+        )
     return tuple(sizes)
 
 

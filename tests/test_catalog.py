@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import pytest
@@ -35,9 +36,9 @@ def test_from_catalog_row_reads_every_column() -> None:
     [
         ("material_stiffness_n_per_cm", math.nan, "material_stiffness_n_per_cm is missing"),
         ("material_damping_ns_per_cm", None, "material_damping_ns_per_cm is not a number"),
-        ("friction_mu", 0.0, "friction_mu must be finite and > 0"),
-        ("friction_mu", -0.3, "friction_mu must be finite and > 0"),
-        ("weight_n", 0.0, "weight_n must be finite and > 0"),
+        ("friction_mu", 0.0, r"friction_mu = 0 is outside its physical bounds \[0.01, 10\]"),
+        ("friction_mu", -0.3, "friction_mu = -0.3 is outside its physical bounds"),
+        ("weight_n", 0.0, "weight_n = 0 is outside its physical bounds"),
     ],
 )
 def test_bad_rows_raise_one_line_input_errors(column: str, value: object, message: str) -> None:
@@ -82,6 +83,8 @@ def test_parse_errors_name_the_object_and_the_column(
 
 
 def test_lifting_needs_positive_friction() -> None:
-    obj = CatalogObject.from_row({**ROW, "friction_mu": 0.0})
+    with pytest.raises(InputDataError, match="friction_mu = 0 is outside its physical bounds"):
+        CatalogObject.from_row({**ROW, "friction_mu": 0.0})  # F_w = W / (2 mu) would be infinite
+    obj = dataclasses.replace(CatalogObject.from_row(ROW), friction_mu=0.0)
     with pytest.raises(InputDataError, match=r"friction_mu must be > 0 to lift it \(F_w = W"):
         obj.f_w_n()

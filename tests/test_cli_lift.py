@@ -325,9 +325,8 @@ def test_runner_choice(catalog: Path, tmp_path: Path, args: list[str], message: 
 @pytest.mark.parametrize(
     ("mu", "message"),
     [
-        ("0", "object 'flat': friction_mu must be > 0 to lift it (F_w = W / (2 mu) is "
-              "undefined), got 0.0"),
-        ("-0.1", "field 'friction_mu': object 'flat': must be >= 0, got -0.1"),
+        ("0", "field 'friction_mu': object 'flat': must be >= 0.01, got 0.0"),
+        ("-0.1", "field 'friction_mu': object 'flat': must be >= 0.01, got -0.1"),
     ],
 )  # fmt: skip
 def test_friction_not_positive_is_bad_input_data(tmp_path: Path, mu: str, message: str) -> None:
@@ -342,12 +341,15 @@ def test_friction_not_positive_is_bad_input_data(tmp_path: Path, mu: str, messag
     assert listing(tmp_path) == ["objects.csv"]  # the rig never ran; nothing written
 
 
-def test_zero_friction_object_not_selected_is_fine(tmp_path: Path) -> None:
+def test_zero_friction_object_not_selected_is_still_refused(tmp_path: Path) -> None:
+    # friction_mu = 0 is outside the catalog's physical bounds (issue 17): the file is wrong,
+    # whichever objects are selected.
     cat = tmp_path / "objects.csv"
     cat.write_text(HEADER + "sponge,8,5,4,10,0.5\nflat,8,5,4,10,0\n", encoding="utf-8")
     out = tmp_path / "lift.parquet"
     result = run(cat, "--rig", rig("threshold_rig.py", 1), "-o", out, "--objects", "sponge")
-    assert result.exit_code == 0, result.stderr
+    assert result.exit_code == 65, result.stderr
+    assert "friction_mu" in one_line_error(result)
 
 
 def test_missing_catalog(tmp_path: Path) -> None:

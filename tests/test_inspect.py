@@ -126,7 +126,11 @@ def test_missing_input_is_66(tmp_path: Path) -> None:
     ("name", "content", "message"),
     [
         ("objects.csv", HEADER + "A,1,1,1,nan,0.5\n", "field 'weight_n': object 'A': missing"),
-        ("objects.csv", HEADER + "A,1,1,1,-1,0.5\n", "field 'weight_n': object 'A': must be > 0"),
+        (
+            "objects.csv",
+            HEADER + "A,1,1,1,-1,0.5\n",
+            "field 'weight_n': object 'A': must be >= 0.001",
+        ),
         ("objects.csv", HEADER, "empty catalog"),
         ("objects.csv", HEADER + "A,1,1,1,1,0.5\nA,1,1,1,1,0.5\n", "field 'object_id': duplicate"),
         ("x.mcap", "hello", "not a deformctl artifact"),

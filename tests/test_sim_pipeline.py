@@ -417,7 +417,7 @@ def test_friction_not_positive_under_sim(tmp_path: Path, command: str) -> None:
     res = run(command, catalog, "--sim", "-o", tmp_path / "out.file")
     assert res.exit_code == EXIT_DATAERR
     line = one_line_error(res)
-    assert line.startswith(f"error: {catalog}: object 'slick': friction_mu must be")
+    assert line.startswith(f"error: {catalog}: field 'friction_mu': object 'slick': must be >=")
     assert listing(tmp_path) == ["objects.csv"]
 
 
@@ -428,7 +428,7 @@ def test_friction_not_positive_under_sim(tmp_path: Path, command: str) -> None:
         (["lift", "{cat}", "--rig", "true", "--lift-accel-m-s2", "1"], "-m-s2 needs --sim"),
         (["lift", "{cat}", "--sim", "--slip-criterion", "vibes"], "slip measure must be"),
         (["lift", "{cat}", "--sim", "--lift-accel-m-s2", "0"], "accel_m_s2 must be > 0"),
-        (["lift", "{cat}", "--sim", "--dt-s", "0"], "dt_s must be in (0, 0.05] s"),
+        (["lift", "{cat}", "--sim", "--dt-s", "0"], "dt_s must be in [1e-05, 0.05] s"),
         (["measure", "{cat}", "--sim", "--object-id", "x"], "--object-id cannot be used"),
         (["measure", "--csv", "{cat}", "--squeezes", "2"], "--squeezes cannot be used with --csv"),
         (["measure", "{cat}"], "a catalog argument"),

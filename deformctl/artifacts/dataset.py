@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from deformctl import __version__
+from deformctl import __version__, jsonsafe
 from deformctl.artifacts.io import atomic_output, atomic_write_bytes
 from deformctl.artifacts.schema import load_table_spec, validate_frame
 from deformctl.artifacts.tables import read_table, table_schema
@@ -283,7 +283,7 @@ def _write_table(table: pa.Table, target: Path) -> None:
 
 def _part_metadata(table: pa.Table) -> dict[str, Any] | None:
     raw = (table.schema.metadata or {}).get(_META_KEY)
-    return None if raw is None else json.loads(raw)
+    return None if raw is None else jsonsafe.loads(raw, allow_nan=True)
 
 
 def _is_temp_file(name: str) -> bool:
@@ -360,7 +360,7 @@ class DatasetWriter:
                     f"cannot resume: no {MANIFEST_NAME} in the directory", path=out
                 )
             try:
-                old = json.loads(self.manifest_path.read_text())
+                old = jsonsafe.loads(self.manifest_path.read_bytes(), allow_nan=True)
             except (OSError, ValueError):
                 raise InputDataError(
                     f"cannot resume: unreadable {MANIFEST_NAME}", path=out
@@ -510,7 +510,7 @@ class DatasetWriter:
 
 def _manifest(path: Path) -> dict[str, Any] | None:
     try:
-        data = json.loads((path / MANIFEST_NAME).read_text())
+        data = jsonsafe.loads((path / MANIFEST_NAME).read_bytes(), allow_nan=True)
     except (OSError, ValueError):
         return None
     return data if isinstance(data, dict) else None
@@ -543,7 +543,7 @@ def dataset_part_paths(
     files = sorted(base.glob(f"part-*{suffix}")) if base.is_dir() else []
     if (d / MANIFEST_NAME).is_file():
         try:
-            n_parts = len(json.loads((d / MANIFEST_NAME).read_text())["parts"])
+            n_parts = len(jsonsafe.loads((d / MANIFEST_NAME).read_bytes(), allow_nan=True)["parts"])
         except (OSError, ValueError, KeyError, TypeError):
             raise InputDataError(f"unreadable {MANIFEST_NAME}", path=d) from None
         present = {p.name for p in files}

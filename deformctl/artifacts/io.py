@@ -7,19 +7,33 @@ nothing behind. An existing destination is refused unless ``force`` is true.
 
 ``-`` stands for stdin (inputs) or stdout (outputs). Inputs are read into memory whole, which is
 what MCAP needs anyway (its reader seeks).
+
+Temporary files are named ``.<output name>.deformctl-<pid>-<random>.tmp``: a run killed before
+its rename (``kill -9``) leaves one behind, and the next run writing the same output removes the
+ones whose process is gone (:func:`remove_stale_temporaries`). Outputs written inside
+:func:`committed_together` are renamed into place together when the block ends (in the order
+they were written: the table last), so a failure leaves none of them.
+
+Output checks (:func:`check_output_path`, before any work): the folder exists and is writable,
+the name fits the file system (with room for the temporary name), a path ending in ``/`` is a
+directory (refused where a file is written), binary formats are not written to a terminal, and
+an output is never one of the command's inputs (every input path is noted when it is checked),
+``--force`` or not.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import re
+import secrets
 import shutil
 import sys
-import tempfile
 from collections.abc import Iterator
+from contextvars import ContextVar
 from pathlib import Path
 
-from deformctl.errors import DeformctlError, MissingInputError, OutputExistsError
+from deformctl.errors import DeformctlError, MissingInputError, OutputExistsError, UsageError
 
 STDIO = "-"  #: the path that means stdin or stdout
 
@@ -34,6 +48,49 @@ def is_stdio(path: PathArg) -> bool:
 def display_name(path: PathArg) -> str:
     """The name used in error messages: the path as given, ``<stdin>`` for ``-``."""
     return "<stdin>" if is_stdio(path) else os.fspath(path)
+
+
+#: The inputs the running command has checked (resolved paths): an output may never be one of
+#: them. None outside a command (library use may read a file and write it back on purpose).
+_INPUTS: set[str] | None = None
+
+#: Room kept in a file name for the temporary name around it (``.NAME.deformctl-PID-RAND.tmp``).
+TEMP_NAME_ROOM = 40
+
+
+def note_input(path: PathArg) -> None:
+    """Remember ``path`` as an input of the running command (see :func:`check_not_an_input`)."""
+    if _INPUTS is not None and not is_stdio(path):
+        _INPUTS.add(os.path.realpath(path))
+
+
+@contextlib.contextmanager
+def command_inputs() -> Iterator[None]:
+    """Track the inputs of one command (the CLI wraps every command in this)."""
+    global _INPUTS
+    outer, _INPUTS = _INPUTS, set()
+    try:
+        yield
+    finally:
+        _INPUTS = outer
+
+
+def forget_inputs(path: PathArg) -> None:
+    """Forget ``path`` as an input: a file the command updates in place on purpose (a catalog a
+    row is appended to)."""
+    if _INPUTS is not None:
+        _INPUTS.discard(os.path.realpath(path))
+
+
+def check_not_an_input(path: PathArg) -> None:
+    """Refuse an output that resolves to one of the running command's inputs, ``--force`` or
+    not.
+
+    Raises:
+        UsageError: one line naming the path (exit 2).
+    """
+    if _INPUTS and not is_stdio(path) and os.path.realpath(path) in _INPUTS:
+        raise UsageError(f"{os.fspath(path)}: the output is one of the inputs; choose another name")
 
 
 def check_input_path(path: PathArg) -> Path | str:
@@ -57,6 +114,7 @@ def check_input_path(path: PathArg) -> Path | str:
         raise MissingInputError("is a directory, expected a file", path=p)
     if not os.access(p, os.R_OK):
         raise MissingInputError("cannot be read (permission denied)", path=p)
+    note_input(p)
     return p
 
 
@@ -75,31 +133,140 @@ def read_input_bytes(path: PathArg) -> bytes:
         raise MissingInputError(f"cannot be read: {err.strerror or err}", path=checked) from err
 
 
-def check_output_path(path: PathArg, force: bool) -> Path | str:
-    """Check that an output may be written.
+def check_output_path(path: PathArg, force: bool, *, binary: bool = True) -> Path | str:
+    """Check that an output may be written, before any work.
 
     Args:
         path: the output path, or ``-`` for stdout.
         force: overwrite an existing file.
+        binary: the format is binary (Parquet, MCAP, skops): refused on a terminal.
 
     Returns:
         ``"-"`` unchanged, otherwise the path as a :class:`~pathlib.Path`.
 
     Raises:
         OutputExistsError: the file exists and ``force`` is false (exit 1).
-        DeformctlError: the path is a directory or its directory does not exist (exit 1).
+        UsageError: binary output to a terminal, a path ending in ``/`` (a directory where a file
+            is written), a file name too long for the file system, or an output that is one of
+            the inputs (exit 2).
+        DeformctlError: the path is a directory, its directory does not exist or is not
+            writable (exit 1).
     """
     if is_stdio(path):
+        if binary and sys.stdout.isatty():
+            raise UsageError(
+                "refusing to write binary output to a terminal; redirect stdout or give -o FILE"
+            )
         return STDIO
+    text = os.fspath(path)
+    if text.endswith(("/", os.sep)):
+        raise UsageError(f"{text}: ends in '/', a directory; this output is one file")
     p = Path(path)
-    if p.is_dir():
-        raise DeformctlError("is a directory, expected a file name", path=p)
-    if p.exists() and not force:
-        raise OutputExistsError(p)
     parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise DeformctlError(f"directory {str(parent)!r} does not exist", path=p)
+    try:
+        name_max = os.pathconf(parent, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        name_max = 255
+    length = len(os.fsencode(p.name))
+    if length + TEMP_NAME_ROOM > name_max:
+        raise UsageError(
+            f"{text}: the file name is {length} bytes; this file system allows {name_max}, "
+            f"less {TEMP_NAME_ROOM} for the temporary name"
+        )
+    check_not_an_input(path)
+    try:
+        if p.is_dir():
+            raise DeformctlError("is a directory, expected a file name", path=p)
+        if p.exists() and not force:
+            raise OutputExistsError(p)
+        if not parent.is_dir():
+            raise DeformctlError(f"directory {str(parent)!r} does not exist", path=p)
+    except OSError as err:  # a path component too long, a symlink loop, ...
+        raise UsageError(f"{text}: not a usable output path ({err.strerror or err})") from None
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise DeformctlError(f"directory {str(parent)!r} is not writable", path=p)
     return p
+
+
+def _temp_pattern(name: str) -> re.Pattern[str]:
+    return re.compile(re.escape(f".{name}.deformctl-") + r"(\d+)-[0-9a-f]+\.tmp")
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process: alive
+        return True
+    return True
+
+
+def stale_temporaries(dest: PathArg) -> list[Path]:
+    """The temporary files of ``dest`` left by killed runs (their process is gone)."""
+    p = Path(dest)
+    parent = p.parent if str(p.parent) else Path(".")
+    pattern = _temp_pattern(p.name)
+    try:
+        names = os.listdir(parent)
+    except OSError:
+        return []
+    out = []
+    for name in sorted(names):
+        m = pattern.fullmatch(name)
+        if m is not None and not _alive(int(m.group(1))):
+            out.append(parent / name)
+    return out
+
+
+def remove_stale_temporaries(dest: PathArg) -> list[Path]:
+    """Remove (and return) the temporary files of ``dest`` whose writer was killed."""
+    removed = []
+    for tmp in stale_temporaries(dest):
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+            removed.append(tmp)
+    return removed
+
+
+#: The outputs of the enclosing :func:`committed_together` block: (temporary, destination, force).
+_GROUP: ContextVar[list[tuple[Path, Path, bool]] | None] = ContextVar("_GROUP", default=None)
+
+
+@contextlib.contextmanager
+def committed_together() -> Iterator[None]:
+    """Rename every output written inside the block into place together, at its end.
+
+    Each :func:`atomic_output` in the block writes its temporary file as usual but leaves the
+    rename to the end of the block, which renames them in the order written (write the table
+    last); an exception (or a kill) anywhere in the block leaves none of the outputs.
+
+    Raises:
+        OutputExistsError: an output appeared meanwhile and its writer had no ``force`` (exit 1);
+            nothing is renamed then.
+    """
+    if _GROUP.get() is not None:  # nested: the outer block commits
+        yield
+        return
+    pending: list[tuple[Path, Path, bool]] = []
+    token = _GROUP.set(pending)
+    try:
+        yield
+        for _tmp, dest, force in pending:
+            if dest.exists() and not force:
+                raise OutputExistsError(dest)
+        for tmp, dest, _force in pending:
+            try:
+                os.replace(tmp, dest)
+            except OSError as err:
+                raise DeformctlError(f"cannot write: {err.strerror or err}", path=dest) from None
+    finally:
+        _GROUP.reset(token)
+        for tmp, _dest, _force in pending:
+            with contextlib.suppress(FileNotFoundError):
+                tmp.unlink()
 
 
 def _umask() -> int:
@@ -109,7 +276,9 @@ def _umask() -> int:
 
 
 @contextlib.contextmanager
-def atomic_output(path: PathArg, *, force: bool = False, durable: bool = False) -> Iterator[Path]:
+def atomic_output(
+    path: PathArg, *, force: bool = False, durable: bool = False, binary: bool = True
+) -> Iterator[Path]:
     """Yield a temporary path to write to; move it to ``path`` when the block succeeds.
 
     The temporary file lives in the destination's directory (so the final :func:`os.replace` is
@@ -121,6 +290,7 @@ def atomic_output(path: PathArg, *, force: bool = False, durable: bool = False) 
         force: overwrite an existing destination.
         durable: ``fsync`` the file before the rename (a sweep's parts, which a resumed run
             trusts after a crash).
+        binary: a binary format (refused on a terminal stdout).
 
     Yields:
         A path to an empty temporary file that the caller writes.
@@ -128,14 +298,16 @@ def atomic_output(path: PathArg, *, force: bool = False, durable: bool = False) 
     Raises:
         OutputExistsError: the destination exists and ``force`` is false; checked both before the
             block runs and again before the rename.
+        DeformctlError: the temporary file cannot be created (a read-only folder) or written
+            (a full disk, ``ulimit -f``): one line, nothing left behind (exit 1).
 
     Example:
         >>> with atomic_output("out.parquet", force=True) as tmp:  # doctest: +SKIP
         ...     tmp.write_bytes(data)
     """
-    dest = check_output_path(path, force)
+    dest = check_output_path(path, force, binary=binary)
     if isinstance(dest, str):
-        with tempfile.TemporaryDirectory(prefix="deformctl-") as tmpdir:
+        with tempfile_dir() as tmpdir:
             tmp = Path(tmpdir) / "stdout"
             tmp.touch()
             yield tmp
@@ -144,9 +316,16 @@ def atomic_output(path: PathArg, *, force: bool = False, durable: bool = False) 
             sys.stdout.buffer.flush()
         return
     parent = dest.parent if str(dest.parent) else Path(".")
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=parent)
+    remove_stale_temporaries(dest)
+    tmp = parent / f".{dest.name}.deformctl-{os.getpid()}-{secrets.token_hex(4)}.tmp"
+    try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except OSError as err:
+        raise DeformctlError(
+            f"cannot write in {str(parent)!r}: {err.strerror or err}", path=dest
+        ) from None
     os.close(fd)
-    tmp = Path(tmp_name)
+    group = _GROUP.get()
     try:
         yield tmp
         if dest.exists() and not force:
@@ -155,11 +334,27 @@ def atomic_output(path: PathArg, *, force: bool = False, durable: bool = False) 
             with tmp.open("rb") as fh:
                 os.fsync(fh.fileno())
         os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, dest)
+        if group is not None:
+            group.append((tmp, dest, force))
+        else:
+            os.replace(tmp, dest)
+    except OSError as err:  # a full disk, a file size limit, a folder gone read-only
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+        raise DeformctlError(f"cannot write: {err.strerror or err}", path=dest) from None
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             tmp.unlink()
         raise
+
+
+@contextlib.contextmanager
+def tempfile_dir() -> Iterator[str]:
+    """A private temporary directory (for a stdout output), removed afterwards."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="deformctl-") as tmpdir:
+        yield tmpdir
 
 
 def atomic_write_bytes(path: PathArg, data: bytes) -> None:

@@ -47,7 +47,7 @@ from mcap.records import Channel, Header, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
 
-from deformctl import __version__
+from deformctl import __version__, jsonsafe
 from deformctl.artifacts.io import PathArg, atomic_output, display_name, read_input_bytes
 from deformctl.artifacts.provenance import Provenance, _json_default
 from deformctl.artifacts.schema import (
@@ -268,21 +268,29 @@ def load_mcap(data: bytes, path: PathArg) -> McapContents:
 
 
 def _check_kind(contents: McapContents, kind: str) -> None:
-    """Refuse a log of another kind, a format it cannot read or a log without its CRCs."""
+    """Refuse a log without the ``deformctl`` record, of another kind (a missing, bogus or
+    other ``kind``), of a format it cannot read, or without its CRCs."""
     name = contents.path
+    records = contents.metadata_named("deformctl")
+    if not records:
+        raise SchemaError(
+            f"no 'deformctl' metadata record (the log's kind); expected a {kind} written by "
+            "deformctl",
+            path=name,
+            field="deformctl",
+        )
     found = contents.kind
     if found != kind:
         what = f"a {found}" if found else "not a deformctl log"
         raise SchemaError(f"is {what}, expected a {kind}", path=name, field="deformctl")
-    records = contents.metadata_named("deformctl")
-    if records and records[0].get("format_version") != FORMAT_VERSION:
+    if records[0].get("format_version") != FORMAT_VERSION:
         raise SchemaError(
             f"format version {records[0].get('format_version')!r} not supported "
             f"(this deformctl reads {FORMAT_VERSION})",
             path=name,
             field="format_version",
         )
-    if records and not contents.crcs_present:
+    if not contents.crcs_present:
         raise SchemaError("written without CRCs; cannot be trusted", path=name, field="crc")
 
 
@@ -313,7 +321,7 @@ def _check_channels(contents: McapContents) -> dict[int, tuple[str, str | None]]
                 field=channel.topic,
             )
         try:
-            embedded = json.loads(schema.data)
+            embedded = jsonsafe.loads(schema.data)
         except ValueError as err:
             raise SchemaError(
                 f"channel {channel.topic}: embedded JSON Schema is not JSON ({_short(err)})",
@@ -332,11 +340,6 @@ def _check_channels(contents: McapContents) -> dict[int, tuple[str, str | None]]
     return out
 
 
-def _reject_constant(token: str) -> float:
-    """``json.loads`` hook: NaN / Infinity are not JSON and never written by deformctl."""
-    raise ValueError(f"non-standard JSON constant {token}")
-
-
 def _decoded_messages(contents: McapContents, schema_name: str) -> list[dict[str, Any]]:
     """Parse and JSON-Schema-validate every message of ``schema_name``, in file order.
 
@@ -353,7 +356,7 @@ def _decoded_messages(contents: McapContents, schema_name: str) -> list[dict[str
         topic = contents.channels[msg.channel_id].topic
         where = f"message {i} on {topic}"
         try:
-            obj = json.loads(msg.data, parse_constant=_reject_constant)
+            obj = jsonsafe.loads(msg.data)
         except ValueError as err:
             raise SchemaError(
                 f"{where}: not valid JSON ({_short(err)})", path=contents.path, field=topic
@@ -375,7 +378,7 @@ def decode_objects(contents: McapContents) -> list[dict[str, Any]]:
     seen: set[str] = set()
     for record in contents.metadata_named("object"):
         try:
-            obj = {k: json.loads(v) for k, v in record.items()}
+            obj = {k: jsonsafe.loads(v, allow_nan=True) for k, v in record.items()}
         except ValueError as err:
             raise SchemaError(
                 f"object metadata is not JSON ({_short(err)})", path=contents.path, field="object"

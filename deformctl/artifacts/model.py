@@ -25,10 +25,8 @@ into place with :func:`os.replace`; an existing file is only replaced with ``for
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
-import tempfile
 import zipfile
 from collections.abc import Iterator, Mapping
 from importlib.metadata import PackageNotFoundError
@@ -36,10 +34,19 @@ from importlib.metadata import version as _dist_version
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import skops.io as sio
+from sklearn.neural_network import MLPRegressor
+from sklearn.pipeline import Pipeline
+from sklearn.preprocessing import StandardScaler
 
+from deformctl import jsonsafe
+from deformctl.artifacts.io import atomic_output, note_input
 from deformctl.errors import InputDataError, MissingInputError, OutputExistsError, UsageError
-from deformctl.train import ScaledTargetRegressor
+from deformctl.train import FEATURES, ScaledTargetRegressor
+
+#: The hidden-layer activations of scikit-learn's MLP.
+ACTIVATIONS = frozenset({"identity", "logistic", "tanh", "relu"})
 
 #: The ``format`` tag of a deformctl model file.
 MODEL_FORMAT = "deformctl-lift-force-model/1"
@@ -118,9 +125,10 @@ def inspect_types(path: str | os.PathLike[str]) -> tuple[set[str], set[str]]:
     p = Path(path)
     if not p.is_file():
         raise MissingInputError("model file not found", path=p)
+    note_input(p)
     try:
         with zipfile.ZipFile(p) as archive:
-            schema = json.loads(archive.read("schema.json"))
+            schema = jsonsafe.loads(archive.read("schema.json"))
     except zipfile.BadZipFile:
         raise InputDataError(
             "not a skops model file (truncated or not a zip archive)", path=p
@@ -179,10 +187,7 @@ def save_model(
         raise UsageError(f"model metadata is not JSON-serialisable: {err}") from None
     payload = {"format": MODEL_FORMAT, "metadata_json": metadata_json, "model": model}
 
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
+    with atomic_output(out, force=force) as tmp:
         sio.dump(payload, tmp)
         types, loaders = inspect_types(tmp)
         bad = sorted(types - ALLOWED_TYPES) + sorted(loaders - ALLOWED_LOADERS)
@@ -190,10 +195,6 @@ def save_model(
             raise UsageError(
                 f"the model contains types a model file may not hold: {', '.join(bad)}"
             )
-        os.replace(tmp, out)
-    finally:
-        with contextlib.suppress(FileNotFoundError):
-            tmp.unlink()
     return out
 
 
@@ -245,9 +246,117 @@ def load_model(path: str | os.PathLike[str]) -> tuple[ScaledTargetRegressor, dic
         )
     raw = payload.get("metadata_json")
     try:
-        metadata = json.loads(raw) if isinstance(raw, str) else None
-    except ValueError:
-        metadata = None
+        metadata = jsonsafe.loads(raw, allow_nan=True) if isinstance(raw, str) else None
+    except ValueError as err:
+        raise InputDataError(
+            f"the model file's metadata is not usable JSON ({err})", path=p
+        ) from None
     if not isinstance(metadata, dict):
         raise InputDataError("the model file's metadata is not a JSON object", path=p)
+    check_structure(model, path=p)
     return model, metadata
+
+
+def _finite_array(value: Any, shape: tuple[int, ...], what: str) -> str | None:
+    """None when ``value`` is a finite float array of ``shape``; else what is wrong."""
+    if not isinstance(value, np.ndarray) or value.dtype.kind not in "fi":
+        return f"{what} is not a numeric array"
+    if value.shape != shape:
+        return f"{what} has shape {value.shape}, expected {shape}"
+    if not np.all(np.isfinite(value)):
+        return f"{what} has non-finite values"
+    return None
+
+
+def _is_int(value: Any, expected: int | None = None) -> bool:
+    ok = isinstance(value, int | np.integer) and not isinstance(value, bool)
+    return ok and (expected is None or int(value) == expected)
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _structure_problem(model: ScaledTargetRegressor) -> str | None:
+    """What is wrong with a loaded model's structure (None: it can predict)."""
+    n = len(FEATURES)
+    attrs = vars(model)
+    if not _is_int(attrs.get("n_features_in_"), n):
+        return f"the model takes {_short(attrs.get('n_features_in_'))} features, expected {n}"
+    names = attrs.get("feature_names_in_")
+    if names is not None and not (
+        isinstance(names, np.ndarray | list | tuple) and [str(x) for x in names] == list(FEATURES)
+    ):
+        return f"the model's features are {_short(names)}, expected {list(FEATURES)}"
+    if "scale_index" not in attrs:
+        return "the model has no scale_index"
+    index = attrs["scale_index"]
+    if index is not None and not (_is_int(index) and 0 <= index < n):
+        return f"scale_index {_short(index)} is out of range (0..{n - 1})"
+    for key in ("feature_min_", "feature_max_"):
+        problem = _finite_array(attrs.get(key), (n,), key)
+        if problem:
+            return problem
+    pipe = attrs.get("regressor_")
+    if not isinstance(pipe, Pipeline):
+        return f"the regressor is a {type(pipe).__name__}, not a fitted Pipeline"
+    raw_steps = vars(pipe).get("steps")
+    steps = (
+        [s[1] for s in raw_steps if isinstance(s, tuple) and len(s) == 2]
+        if isinstance(raw_steps, list)
+        else []
+    )
+    if len(steps) != 2 or not isinstance(steps[0], StandardScaler):
+        return "the pipeline is not (StandardScaler, MLPRegressor)"
+    scaler, mlp = steps
+    if not isinstance(mlp, MLPRegressor):
+        return f"the pipeline's last step is a {type(mlp).__name__}, not an MLPRegressor"
+    for key in ("mean_", "scale_"):
+        problem = _finite_array(vars(scaler).get(key), (n,), f"the scaler's {key}")
+        if problem:
+            return problem
+    if not np.all(scaler.scale_ > 0):
+        return "the scaler's scale_ is not > 0"
+    coefs, intercepts = vars(mlp).get("coefs_"), vars(mlp).get("intercepts_")
+    if not isinstance(coefs, list) or not isinstance(intercepts, list) or not coefs:
+        return "the MLPRegressor is not fitted (no coefs_ / intercepts_)"
+    if len(intercepts) != len(coefs) or not _is_int(vars(mlp).get("n_layers_"), len(coefs) + 1):
+        return "the MLPRegressor's layers do not match (coefs_, intercepts_, n_layers_)"
+    width = n
+    for i, (w, b) in enumerate(zip(coefs, intercepts, strict=True)):
+        out = w.shape[1] if isinstance(w, np.ndarray) and w.ndim == 2 else -1
+        problem = _finite_array(w, (width, out), f"layer {i}'s weights") or _finite_array(
+            b, (out,), f"layer {i}'s biases"
+        )
+        if problem:
+            return problem
+        width = out
+    if width != 1:
+        return f"the network has {width} outputs, expected 1"
+    activation, out = vars(mlp).get("activation"), vars(mlp).get("out_activation_")
+    if not (isinstance(activation, str) and activation in ACTIVATIONS and out == "identity"):
+        return f"the network's activations ({_short(activation)}) are not a regressor's"
+    if not _is_int(vars(mlp).get("n_outputs_"), 1):
+        return "the MLPRegressor is not fitted for one output"
+    return None
+
+
+def check_structure(model: ScaledTargetRegressor, *, path: str | os.PathLike[str]) -> None:
+    """Refuse a model whose structure cannot predict (the allow-list checks only the types).
+
+    Checks: ``n_features_in_`` is 3 (and the feature names are :data:`~deformctl.train.FEATURES`),
+    ``scale_index`` in range, the training range finite; the wrapped regressor is a fitted
+    ``Pipeline(StandardScaler, MLPRegressor)``: the scaler's ``mean_`` / ``scale_`` of 3 finite
+    values, the network's weights and biases finite and chained 3 → ... → 1, a regressor's
+    activations.
+
+    Raises:
+        InputDataError: one line naming what is wrong (exit 65).
+    """
+    try:
+        problem = _structure_problem(model)
+    except (TypeError, ValueError, AttributeError, IndexError) as err:  # attributes of odd types
+        problem = f"malformed attributes ({type(err).__name__}: {err})"
+    if problem is not None:
+        raise InputDataError(f"not a usable lifting-force model: {problem}", path=path)

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from deformctl import __version__
+from deformctl import __version__, jsonsafe
 from deformctl.artifacts.io import PathArg, display_name, is_stdio
 from deformctl.errors import MissingInputError, SchemaError
 
@@ -202,7 +202,7 @@ class Provenance:
                 "tool_version": data["tool_version"],
             }
             for key in ("command_line", "inputs", "seed", "settings"):
-                decoded[key] = json.loads(data[key])
+                decoded[key] = jsonsafe.loads(data[key], allow_nan=True)
         except KeyError as err:
             raise SchemaError(
                 f"provenance lacks {err.args[0]!r}", path=path, field="provenance"

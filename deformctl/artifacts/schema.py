@@ -54,6 +54,7 @@ class ColumnSpec:
         description: one sentence for humans (shown by ``inspect``).
         minimum: values must be >= this, when set.
         exclusive_minimum: values must be > this, when set.
+        maximum: values must be <= this, when set (physical bounds, e.g. the catalog's).
         unique: no two rows may share a value.
         nullable: missing values (NaN / null) are allowed.
     """
@@ -65,6 +66,7 @@ class ColumnSpec:
     description: str
     minimum: float | None = None
     exclusive_minimum: float | None = None
+    maximum: float | None = None
     unique: bool = False
     nullable: bool = False
 
@@ -123,6 +125,7 @@ def load_table_spec(kind: str) -> TableSpec:
                 description=c.get("description", ""),
                 minimum=c.get("minimum"),
                 exclusive_minimum=c.get("exclusive_minimum"),
+                maximum=c.get("maximum"),
                 unique=bool(c.get("unique", False)),
                 nullable=bool(c.get("nullable", False)),
             )
@@ -198,10 +201,11 @@ def _compile(schema: Any) -> Check | None:
     """Compile the small JSON Schema subset deformctl uses into a fast predicate.
 
     Handles ``type`` (a name or a list), ``properties``, ``required``,
-    ``additionalProperties: false``, ``minimum``, ``exclusiveMinimum``, ``minLength``, ``items``,
-    ``minItems``, ``maxItems``, ``dependentRequired`` and ``anyOf``; returns None for a schema
-    using anything else, so the caller falls back to :mod:`jsonschema`. The predicate answers
-    only "valid or not"; error messages always come from :mod:`jsonschema`.
+    ``additionalProperties: false``, ``minimum``, ``maximum``, ``exclusiveMinimum``,
+    ``minLength``, ``items``, ``minItems``, ``maxItems``, ``dependentRequired`` and ``anyOf``;
+    returns None for a schema using anything else, so the caller falls back to
+    :mod:`jsonschema`. The predicate answers only "valid or not"; error messages always come
+    from :mod:`jsonschema`.
     """
     if not isinstance(schema, dict):
         return None
@@ -211,6 +215,7 @@ def _compile(schema: Any) -> Check | None:
         "required",
         "additionalProperties",
         "minimum",
+        "maximum",
         "exclusiveMinimum",
         "minLength",
         "items",
@@ -232,6 +237,9 @@ def _compile(schema: Any) -> Check | None:
     if "minimum" in schema:
         low = schema["minimum"]
         checks.append(lambda v: not _is_number(v) or v >= low)
+    if "maximum" in schema:
+        high = schema["maximum"]
+        checks.append(lambda v: not _is_number(v) or v <= high)
     if "exclusiveMinimum" in schema:
         above = schema["exclusiveMinimum"]
         checks.append(lambda v: not _is_number(v) or v > above)
@@ -359,6 +367,12 @@ def _check_column(df: pd.DataFrame, col: ColumnSpec, kind: str, path: PathArg | 
                 i = _first(bad)
                 low = col.exclusive_minimum
                 raise fail(f"{_row_label(df, i)}: must be > {low:g}, got {float(values[i])!r}")
+        if col.maximum is not None:
+            bad = finite & (values > col.maximum)
+            if bad.any():
+                i = _first(bad)
+                high = col.maximum
+                raise fail(f"{_row_label(df, i)}: must be <= {high:g}, got {float(values[i])!r}")
         out = pd.Series(values, index=s.index, name=col.name)
     elif col.dtype == "int64":
         if pd.api.types.is_bool_dtype(s) or not pd.api.types.is_integer_dtype(s):
@@ -410,8 +424,9 @@ def validate_frame(df: pd.DataFrame, kind: str, *, path: PathArg | None = None) 
 
     Checks: every required column is present; each spec column has the spec's dtype
     (integers are accepted for float columns); no missing value in a non-nullable column;
-    no infinite value; ``minimum`` / ``exclusive_minimum`` hold; ``unique`` columns have no
-    duplicate. Columns the spec does not list are kept unchanged, after the spec's columns.
+    no infinite value; ``minimum`` / ``exclusive_minimum`` / ``maximum`` hold; ``unique``
+    columns have no duplicate. Columns the spec does not list are kept unchanged, after the
+    spec's columns.
 
     Args:
         df: the table, one row per record.

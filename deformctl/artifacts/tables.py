@@ -18,10 +18,12 @@ written by other tools, which are accepted when their columns match the spec).
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import io
 import json
 import struct
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -29,10 +31,12 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from deformctl import jsonsafe
 from deformctl.artifacts.io import (
     PathArg,
     atomic_output,
     display_name,
+    forget_inputs,
     read_input_bytes,
 )
 from deformctl.artifacts.provenance import Provenance, to_json
@@ -172,7 +176,7 @@ def _parse_meta(raw: bytes | None, path: PathArg) -> dict[str, Any] | None:
     if raw is None:
         return None
     try:
-        meta = json.loads(raw.decode("utf-8"))
+        meta = jsonsafe.loads(raw, allow_nan=True)
     except ValueError as err:
         raise SchemaError(
             f"metadata is not valid JSON ({err})", path=path, field="deformctl"
@@ -196,10 +200,19 @@ def read_parquet_bytes(data: bytes, path: PathArg) -> tuple[pa.Table, dict[str, 
     if len(data) < 12 or data[:4] != PARQUET_MAGIC or data[-4:] != PARQUET_MAGIC:
         raise InputDataError("not a Parquet file (bad magic bytes)", path=name)
     try:
-        pf = pq.ParquetFile(io.BytesIO(data))
+        # An Arrow buffer, never a Python file object: Arrow's I/O threads read a Python file
+        # through the GIL (PyReadableFile::ReadAt), and a read still queued when the interpreter
+        # exits after an error takes the GIL during finalization, which ends that std::thread with
+        # pthread_exit and aborts the process ("terminate called without an active exception",
+        # exit -6). A BufferReader is read without the interpreter. And on this thread only
+        # (use_threads=False): the buffer wraps the Python bytes (arrow::py::PyBuffer), and a
+        # CPU-pool worker dropping the last reference to it after the read takes the GIL in
+        # ~PyBuffer, the same abort when that happens during finalization (found in a core dump
+        # of `predict MODEL bad_meta.parquet --catalog objects.csv`, about 1 run in 15).
+        pf = pq.ParquetFile(pa.BufferReader(data))
         created_by = str(pf.metadata.created_by or "")
         kv_keys = set((pf.metadata.metadata or {}).keys())
-        table = pf.read()
+        table = pf.read(use_threads=False)
     except _DECODE_ERRORS as err:
         raise InputDataError(f"not a readable Parquet file ({_short(err)})", path=name) from None
     if (not created_by or created_by.startswith("parquet-cpp-arrow")) and (
@@ -261,6 +274,7 @@ def _frame_from_arrow(
 ) -> pd.DataFrame:
     """Validate an Arrow table as ``kind`` and attach kind/units/provenance as ``df.attrs``."""
     name = display_name(path)
+    _refuse_duplicates(table.column_names, name)
     spec = load_table_spec(kind)
     provenance = None
     if meta is not None:
@@ -360,6 +374,16 @@ def read_catalog_bytes(data: bytes, path: PathArg) -> pd.DataFrame:
     return df
 
 
+def _refuse_duplicates(columns: Sequence[str], name: str) -> None:
+    """A column named twice is refused, never silently renamed (pandas reads ``x.1``)."""
+    seen: set[str] = set()
+    for column in columns:
+        key = str(column).strip()
+        if key in seen:
+            raise SchemaError("column named twice in the header", path=name, field=key)
+        seen.add(key)
+
+
 def _parse_catalog_csv(data: bytes, name: str) -> pd.DataFrame:
     if not data.strip():
         raise InputDataError("empty catalog: the file is empty", path=name)
@@ -369,6 +393,11 @@ def _parse_catalog_csv(data: bytes, name: str) -> pd.DataFrame:
         raise InputDataError(f"not UTF-8 text (byte {err.start})", path=name) from None
     if "\x00" in text:
         raise InputDataError("not a CSV file (contains NUL bytes)", path=name)
+    try:
+        header = next(csv.reader(io.StringIO(text)), [])
+    except csv.Error as err:
+        raise InputDataError(f"not a valid CSV catalog ({_short(err)})", path=name) from None
+    _refuse_duplicates(header, name)
     try:
         raw = pd.read_csv(
             io.StringIO(text),
@@ -459,6 +488,7 @@ def append_catalog_row(
     """
     table = pd.concat([existing, pd.DataFrame([dict(row)])], ignore_index=True)
     table.attrs = {}
+    forget_inputs(path)  # updated in place on purpose
     with open(path, "rb") as fh:
         parquet = fh.read(4) == PARQUET_MAGIC
     if parquet:

@@ -23,9 +23,11 @@ from deformctl.cli import (
     table,
     train,
 )
+from deformctl.cli._common import OneLineErrorGroup
 
 app = typer.Typer(
     name="deformctl",
+    cls=OneLineErrorGroup,
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,

@@ -3,15 +3,22 @@
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Iterator
+import inspect
+import os
+import sys
+import warnings
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import ParamSpec, TypeVar
+from typing import Any, ParamSpec, TypeVar
 
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from typer._click import exceptions as click_exc  # typer vendors click: its exceptions
+from typer.core import TyperGroup
 
-from deformctl.errors import DeformctlError, UsageError
+from deformctl.artifacts.io import command_inputs
+from deformctl.errors import EXIT_FAILURE, EXIT_USAGE, DeformctlError, UsageError
 from deformctl.parallel import SweepSummary
 
 P = ParamSpec("P")
@@ -21,21 +28,153 @@ Advance = Callable[[str, int, int], None]
 """``advance(object_id, done, total)``: what the library's progress hooks call."""
 
 
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def _warning_text(caught: Sequence[warnings.WarningMessage]) -> str:
+    """The distinct warnings raised during a command, as one clause (first three, then a count)."""
+    texts = list(
+        dict.fromkeys(f"{w.category.__name__}: {_one_line(str(w.message))}" for w in caught)
+    )
+    more = f" (+{len(texts) - 3} more)" if len(texts) > 3 else ""
+    return "; ".join(texts[:3]) + more
+
+
+#: The parameters through which commands name the files they write.
+OUTPUT_PARAMETERS = ("output", "log", "metrics")
+
+
+def _output_names(func: Callable[..., Any]) -> tuple[str, ...]:
+    """The parameters of ``func`` that name outputs: :data:`OUTPUT_PARAMETERS` given as options
+    (``characterize``'s positional ``log`` is its input)."""
+    params = inspect.signature(func).parameters
+    return tuple(
+        name for name in OUTPUT_PARAMETERS if name in params and not _is_argument(params[name])
+    )
+
+
+def _is_argument(param: inspect.Parameter) -> bool:
+    """A positional typer argument (``typer.Argument`` as default or ``Annotated`` metadata)."""
+    if isinstance(param.default, typer.models.ArgumentInfo):
+        return True
+    annotation = param.annotation
+    if isinstance(annotation, str):
+        return "Argument(" in annotation
+    return any(
+        isinstance(m, typer.models.ArgumentInfo) for m in getattr(annotation, "__metadata__", ())
+    )
+
+
+def _refuse_output_as_input(kwargs: dict[str, Any], outputs: Sequence[str]) -> None:
+    """Before any work: no output may resolve to an existing file given as an input.
+
+    (The writers check again against every input actually read, see
+    :func:`deformctl.artifacts.io.check_not_an_input`.)
+
+    Raises:
+        UsageError: one line naming the output (exit 2).
+    """
+    inputs: set[str] = set()
+    for name, value in kwargs.items():
+        values = value if isinstance(value, list | tuple) else [value]
+        for v in values:
+            if name not in outputs and isinstance(v, str) and os.path.isfile(v):
+                inputs.add(os.path.realpath(v))
+    for name in outputs:
+        out = kwargs.get(name)
+        if isinstance(out, str) and out != "-" and os.path.realpath(out) in inputs:
+            raise UsageError(f"{out}: the output is one of the inputs; choose another name")
+
+
 def translate_errors(func: Callable[P, R]) -> Callable[P, R]:
     """Turn a :class:`DeformctlError` raised by ``func`` into one stderr line and its exit code.
 
-    ``functools.wraps`` keeps the signature typer reads.
+    Warnings that numpy, scipy or scikit-learn raise on the way (overflow, an ill-conditioned
+    matrix) are collected rather than printed: with an error they are folded into its one line
+    (``error: <file>: <what is wrong> (while: RuntimeWarning: overflow ...)``); after a
+    success each distinct one is printed as one ``warning:`` line. ``functools.wraps`` keeps the
+    signature typer reads. A :class:`MemoryError` (an allocation beyond the machine, once a
+    budget check was passed by raising the budget) is one line with exit 1.
     """
+
+    outputs = _output_names(func)
 
     @functools.wraps(func)
     def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
-        try:
-            return func(*args, **kwargs)
-        except DeformctlError as err:
-            typer.echo(f"error: {err}", err=True)
-            raise typer.Exit(err.exit_code) from None
+        with command_inputs(), warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("default")
+            try:
+                _refuse_output_as_input(kwargs, outputs)
+                result = func(*args, **kwargs)
+            except DeformctlError as err:
+                folded = f" (while: {_warning_text(caught)})" if caught else ""
+                typer.echo(f"error: {err}{folded}", err=True)
+                raise typer.Exit(err.exit_code) from None
+            except MemoryError as err:  # a budget raised beyond what the machine has
+                detail = f": {_one_line(str(err))}" if str(err) else ""
+                typer.echo(
+                    f"error: out of memory{detail}; lower the problem size (or the "
+                    "--memory-budget-gib you raised)",
+                    err=True,
+                )
+                raise typer.Exit(EXIT_FAILURE) from None
+        for text in dict.fromkeys(_one_line(str(w.message)) for w in caught):
+            typer.echo(f"warning: {text}", err=True)
+        return result
 
     return wrapper
+
+
+class OneLineErrorGroup(TyperGroup):
+    """The root command group: every click usage error becomes one ``error: ...`` line, exit 2.
+
+    Click prints a usage error (an unknown command or option, ``--seed abc``, a missing argument)
+    as a three-line box; shell pipelines and CI want the project's one-line form, so the group
+    runs click in non-standalone mode and formats what it raises itself. ``--help`` and the
+    help printed for a bare ``deformctl`` are unchanged.
+    """
+
+    def main(  # type: ignore[override]
+        self,
+        args: Sequence[str] | None = None,
+        prog_name: str | None = None,
+        complete_var: str | None = None,
+        standalone_mode: bool = True,
+        **extra: Any,
+    ) -> Any:
+        """Run the command; in standalone mode exit with its code, errors as one line."""
+        try:
+            result = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click_exc.NoArgsIsHelpError as err:
+            if not standalone_mode:
+                raise
+            typer.echo(err.ctx.get_help() if err.ctx is not None else "")
+            sys.exit(EXIT_USAGE)
+        except click_exc.ClickException as err:
+            if not standalone_mode:
+                raise
+            sys.exit(_report_click_error(err))
+        except typer.Abort:
+            if not standalone_mode:
+                raise
+            typer.echo("error: aborted", err=True)
+            sys.exit(EXIT_FAILURE)
+        if not standalone_mode:
+            return result
+        sys.exit(result if isinstance(result, int) else 0)
+
+
+def _report_click_error(err: click_exc.ClickException) -> int:
+    """Print ``err`` as the project's one line; return its exit code (2 for usage errors)."""
+    message = _one_line(err.format_message()).rstrip(".")
+    if isinstance(err, click_exc.UsageError):
+        where = f"{err.ctx.command_path}: " if err.ctx is not None else ""
+        hint = f" (see '{err.ctx.command_path} --help')" if err.ctx is not None else ""
+        typer.echo(f"error: {where}{message[:1].lower()}{message[1:]}{hint}", err=True)
+        return EXIT_USAGE
+    typer.echo(f"error: {message}", err=True)
+    return err.exit_code
 
 
 @contextmanager

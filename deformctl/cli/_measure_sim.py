@@ -8,6 +8,7 @@ output, :func:`deformctl.measure.simulate_catalog_sweep`.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Annotated, Any
 
@@ -122,6 +123,15 @@ class SimOptions:
 
         if self.peak_force_n is not None and self.strain is not None:
             raise UsageError("give --peak-force-n or --strain, not both")
+        if self.ramp_s is not None and not (math.isfinite(self.ramp_s) and self.ramp_s > 0):
+            raise UsageError(
+                f"--ramp-s must be a finite number of seconds > 0 (a force step does not "
+                f"excite the damping), got {self.ramp_s:g}"
+            )
+        if self.hold_s is not None and not (math.isfinite(self.hold_s) and self.hold_s >= 0):
+            raise UsageError(
+                f"--hold-s must be a finite number of seconds >= 0, got {self.hold_s:g}"
+            )
         squeezes = DEFAULT_SIM_SQUEEZES if self.squeezes is None else self.squeezes
         if squeezes < 1:
             raise UsageError(f"--squeezes must be >= 1, got {squeezes}")

@@ -11,6 +11,7 @@ import typer
 
 from deformctl.artifacts.dataset import describe_dataset
 from deformctl.artifacts.describe import describe
+from deformctl.artifacts.io import stale_temporaries
 from deformctl.cli._common import translate_errors
 
 
@@ -140,7 +141,9 @@ def inspect(
 ) -> None:
     """Show an artifact's kind, schema, counts, time range, units and provenance.
 
-    The file is fully validated first; a damaged or invalid file exits with 65.
+    The file is fully validated first; a damaged or invalid file exits with 65. Temporary files
+    a killed run left next to it (``.NAME.deformctl-PID-RANDOM.tmp``) are listed on stderr (and
+    as ``stale_temporary_files`` in --json); the next run writing the file removes them.
 
     Example: deformctl inspect datasets/paper/objects.csv --json
     """
@@ -150,10 +153,20 @@ def inspect(
     else:
         info = describe(file)
         text = ""
+        if file != "-":
+            stale = [str(p) for p in stale_temporaries(file)]
+            if stale:  # a killed writer's leftovers; the next run writing this file removes them
+                info["stale_temporary_files"] = stale
     if as_json:
         typer.echo(json.dumps(info, indent=2, allow_nan=False))
     else:
         typer.echo(text or render_text(info))
+        for path in info.get("stale_temporary_files", []):
+            typer.echo(
+                f"stale temporary file of a killed run: {path} (the next run writing "
+                f"{file} removes it)",
+                err=True,
+            )
 
 
 def render_dataset(info: dict[str, Any]) -> str:

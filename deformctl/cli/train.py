@@ -12,7 +12,7 @@ from rich.console import Console
 from rich.table import Table
 
 from deformctl.artifacts import Provenance, atomic_output, check_output_path, read_table
-from deformctl.artifacts.io import is_stdio
+from deformctl.artifacts.io import committed_together, is_stdio
 from deformctl.cli._common import translate_errors
 from deformctl.cli._options import Force
 from deformctl.errors import UsageError
@@ -84,6 +84,9 @@ def train(
     metrics: str | None = typer.Option(
         None, "--metrics", help="Also write the metrics as JSON here (- for stdout)."
     ),
+    max_parameters: int = typer.Option(
+        100_000, "--max-parameters", min=1, help="Refuse a network with more weights than this."
+    ),
     force: Force = False,
 ) -> None:
     """Train Pipeline(StandardScaler, MLPRegressor) on (W, D, λ) -> L_f and save it with skops.
@@ -106,14 +109,14 @@ def train(
     from deformctl.artifacts.model import save_model
     from deformctl.train import parse_hidden, train_model, train_report
 
-    sizes = parse_hidden(hidden)
+    sizes = parse_hidden(hidden, max_parameters=max_parameters)
     if is_stdio(output):
         raise UsageError("the model file cannot be stdout; give a file name with -o")
     if metrics is not None and not is_stdio(metrics) and Path(metrics) == Path(output):
         raise UsageError(f"-o and --metrics name the same file: {output}")
     check_output_path(output, force)  # fail before training, and leave nothing behind
     if metrics is not None:
-        check_output_path(metrics, force)
+        check_output_path(metrics, force, binary=False)
 
     table = read_table(index, "index_table")
     result = train_model(table, hidden=sizes, train_size=train_size, seed=seed)
@@ -124,13 +127,11 @@ def train(
     report["provenance"] = provenance.to_dict()
     metadata = {k: v for k, v in report.items() if k != "predictions"}
 
-    if metrics is None:
+    with committed_together():  # the model and the metrics file: both or neither
         save_model(output, result.model, metadata=metadata, force=force)
-    else:
-        # The metrics file is renamed into place only after the model was saved.
-        with atomic_output(metrics, force=force) as tmp:
-            tmp.write_text(json.dumps(report, indent=2, allow_nan=False) + "\n")
-            save_model(output, result.model, metadata=metadata, force=force)
+        if metrics is not None:
+            with atomic_output(metrics, force=force, binary=False) as tmp:
+                tmp.write_text(json.dumps(report, indent=2, allow_nan=False) + "\n")
 
     # With --metrics - the JSON owns stdout; the table goes to stderr.
     console = Console(

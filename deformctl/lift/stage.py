@@ -41,7 +41,7 @@ from deformctl.artifacts import (
     write_lift_log,
     write_table,
 )
-from deformctl.artifacts.io import is_stdio
+from deformctl.artifacts.io import committed_together, is_stdio
 from deformctl.catalog import CatalogObject, catalog_objects, select_objects
 from deformctl.errors import UsageError
 from deformctl.lift.search import (
@@ -290,7 +290,8 @@ def lift_catalog_files(
     """:func:`lift_catalog` from a catalog file: the lift_results table and the lift log written.
 
     Both are written (atomically, with provenance) before the caller decides the exit code, so
-    a failed run keeps every attempt it made.
+    a failed run keeps every attempt it made; they are renamed into place together
+    (:func:`~deformctl.artifacts.io.committed_together`), so a killed run leaves both or neither.
 
     Args:
         catalog_path: the catalog (CSV or Parquet; ``-`` for stdin).
@@ -339,10 +340,13 @@ def lift_catalog_files(
         progress=progress,
         path=catalog_path,
     )
-    if log is not None:
-        epoch = {} if log_epoch_ns is None else {"epoch_ns": log_epoch_ns}
-        write_lift_log(log, run.objects, run.attempts, provenance=provenance, force=force, **epoch)
-    write_table(run.table, output, "lift_results", provenance=provenance, force=force)
+    with committed_together():  # a kill leaves both outputs or neither (the table last)
+        if log is not None:
+            epoch = {} if log_epoch_ns is None else {"epoch_ns": log_epoch_ns}
+            write_lift_log(
+                log, run.objects, run.attempts, provenance=provenance, force=force, **epoch
+            )
+        write_table(run.table, output, "lift_results", provenance=provenance, force=force)
     return run
 
 

@@ -136,6 +136,16 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 
+#: The time steps the simulator accepts, s: below 10 µs a one-second squeeze is 100,000 steps of
+#: recorded state (a 1e-12 s step would ask for hundreds of GiB), above 50 ms the contact and
+#: slip events of a lift are not resolved.
+DT_BOUNDS_S = (1e-5, 0.05)
+
+#: Bytes each simulated step keeps: the record row (``kernels.N_REC`` doubles), the commanded force
+#: and palm velocity, and the series built from them (about three copies).
+STEP_BYTES = 8 * (kernels.N_REC + 2) * 3
+
+
 @dataclass(frozen=True)
 class SimSettings:
     """Numerical settings of the simulator (defaults from the convergence study, see bench/).
@@ -210,8 +220,9 @@ class SimSettings:
     def __post_init__(self) -> None:
         if self.alpha_cm is not None and not (math.isfinite(self.alpha_cm) and self.alpha_cm > 0):
             raise UsageError(f"alpha_cm must be > 0, got {self.alpha_cm}")
-        if not (math.isfinite(self.dt_s) and 0 < self.dt_s <= 0.05):
-            raise UsageError(f"dt_s must be in (0, 0.05] s, got {self.dt_s}")
+        if not (math.isfinite(self.dt_s) and DT_BOUNDS_S[0] <= self.dt_s <= DT_BOUNDS_S[1]):
+            low, high = DT_BOUNDS_S
+            raise UsageError(f"dt_s must be in [{low:g}, {high:g}] s, got {self.dt_s}")
         if not (0 < self.max_squeeze_strain < 1):
             raise UsageError(f"max_squeeze_strain must be in (0, 1), got {self.max_squeeze_strain}")
         if not (math.isfinite(self.memory_budget_gib) and self.memory_budget_gib > 0):
@@ -367,6 +378,27 @@ def check_lattice_size(spec: ObjectSpec, settings: SimSettings) -> None:
             f"object {spec.object_id!r}: alpha {alpha_m / CM:.3g} cm gives {n_particles:,} "
             f"particles, an estimated {estimate / GIB:.3g} GiB, above the memory budget of "
             f"{settings.memory_budget_gib:g} GiB; use a larger alpha_cm (or raise the budget)"
+        )
+
+
+def check_run_steps(spec: ObjectSpec, settings: SimSettings, n_steps: float, what: str) -> None:
+    """Refuse a run whose model and recorded steps exceed ``settings.memory_budget_gib``.
+
+    Made before any step is allocated (``n_steps`` comes from the protocol's durations and
+    ``dt_s``; a float, so an absurd duration is an estimate, not an overflow).
+
+    Raises:
+        UsageError: one line naming the steps, the estimate and the budget (exit 2); a model
+            too large by itself is named as :func:`check_lattice_size` does.
+    """
+    check_lattice_size(spec, settings)
+    estimate = memory_estimate_bytes(spec, settings) + float(n_steps) * STEP_BYTES
+    if not estimate <= settings.memory_budget_gib * GIB:  # also refuses inf / nan
+        raise UsageError(
+            f"object {spec.object_id!r}: a {what} of {float(n_steps):.3g} steps of "
+            f"{settings.dt_s:g} s needs an estimated {estimate / GIB:.3g} GiB, above the memory "
+            f"budget of {settings.memory_budget_gib:g} GiB; use a larger --dt-s or shorter "
+            "durations, or raise --memory-budget-gib"
         )
 
 

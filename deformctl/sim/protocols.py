@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from deformctl.errors import SimulationError, UsageError
 from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
 from deformctl.sim import kernels as K
-from deformctl.sim.engine import SimSettings, build_model, run_model
+from deformctl.sim.engine import SimSettings, build_model, check_run_steps, run_model
 from deformctl.sim.objects import ObjectSpec
 from deformctl.units import GRAVITY_M_S2
 
@@ -236,8 +236,9 @@ def squeeze(
         raise UsageError(f"peak_force_n must be > 0, got {peak_force_n}")
     if ramp_s < 0 or hold_s < 0 or not math.isfinite(ramp_s + hold_s):
         raise UsageError("ramp_s and hold_s must be >= 0")
-    model = build_model(spec, s, gripped=True, gravity=gravity, table=gravity)
     n_steps = max(1, round((ramp_s + hold_s) / s.dt_s))
+    check_run_steps(spec, s, n_steps, "squeeze")
+    model = build_model(spec, s, gripped=True, gravity=gravity, table=gravity)
     t = np.arange(n_steps + 1, dtype=np.float64) * s.dt_s
     force = peak_force_n * (np.clip(t / ramp_s, 0.0, 1.0) if ramp_s > 0 else np.ones_like(t))
     if ramp_s == 0:
@@ -338,6 +339,7 @@ def lift_attempt(
     rise = p.rise_m(spec)
     n_grip = max(1, round((s.grip_ramp_s + s.grip_settle_s) / dt))
     n_steps = n_grip + math.ceil(p.rise_time_s(rise) / dt) + round(p.hold_s / dt)
+    check_run_steps(spec, s, n_steps, "lift attempt")
     n_planned = n_steps
     t = np.arange(n_steps + 1, dtype=np.float64) * dt
     if s.grip_ramp_s > 0:

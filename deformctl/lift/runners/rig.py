@@ -50,6 +50,7 @@ stderr). The search wraps it so the attempts made so far are kept
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -61,6 +62,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, TypeGuard
 
+from deformctl import jsonsafe
 from deformctl.catalog import CatalogObject
 from deformctl.errors import DeformctlError, RigError, UsageError
 from deformctl.lift.search import AttemptError, TrialRunner
@@ -88,6 +90,10 @@ __all__ = [
 ]
 
 DEFAULT_RIG_TIMEOUT_S = 60.0  #: the longest one rig attempt may take, s (``lift --rig-timeout``)
+
+#: After killing a timed-out rig's process group: how long to wait for its pipes to close, s
+#: (a descendant that started its own session keeps them open; they are then closed unread).
+_DRAIN_S = 2.0
 RIG_SLIP_CRITERION = "rig"  #: ``slip_criterion`` of rows whose outcome the rig reported itself
 #: ``slip_criterion`` when deformctl judges rig frames (a rig answering ``lifted`` still decides).
 FRAMES_SLIP_CRITERION = "frames"
@@ -131,10 +137,6 @@ def _shorten(text: str) -> str:
     return text if len(text) <= _MAX_SHOWN_CHARS else text[: _MAX_SHOWN_CHARS - 3] + "..."
 
 
-def _reject_constant(name: str) -> float:
-    raise ValueError(f"non-standard JSON constant {name}")
-
-
 def parse_rig_response(text: str) -> dict[str, Any]:
     """Parse and check one rig answer; return it as a dict.
 
@@ -151,7 +153,7 @@ def parse_rig_response(text: str) -> dict[str, Any]:
     if not text.strip():
         raise ValueError("empty answer on stdout (expected one JSON object)")
     try:
-        answer = json.loads(text, parse_constant=_reject_constant)
+        answer = jsonsafe.loads(text)
     except ValueError as err:
         raise ValueError(f"answer is not valid JSON ({err}): {_shorten(text)!r}") from None
     if not isinstance(answer, dict):
@@ -344,7 +346,14 @@ class RigRunner:
                 proc.kill()
         except ProcessLookupError:  # pragma: no cover - it ended on its own meanwhile
             pass
-        proc.communicate()
+        try:  # a descendant that left the group (setsid) may still hold the pipes open
+            proc.communicate(timeout=_DRAIN_S)
+        except subprocess.TimeoutExpired:
+            for pipe in (proc.stdin, proc.stdout, proc.stderr):
+                if pipe is not None:
+                    with contextlib.suppress(OSError):
+                        pipe.close()
+            proc.wait(timeout=_DRAIN_S)
 
     def _frame(self, raw: str, where: tuple[int, float]) -> Path:
         path = Path(raw)

@@ -34,6 +34,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+import pandas as pd
+
 from deformctl.artifacts import read_catalog
 from deformctl.artifacts.dataset import (
     LogPartWriter,
@@ -43,6 +45,7 @@ from deformctl.artifacts.dataset import (
 )
 from deformctl.artifacts.provenance import Provenance, input_digest
 from deformctl.catalog import CatalogObject, select_objects
+from deformctl.errors import InputDataError
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
     DEFAULT_MAX_ATTEMPTS,
@@ -65,20 +68,26 @@ def check_sim_objects(
     path: str | None = None,
     *,
     settings: SimSettings | None = None,
+    profile: LiftProfile | None = None,
 ) -> None:
     """Refuse objects the simulator cannot run, before any attempt.
 
     Raises:
         InputDataError: an object without material values (or otherwise invalid), naming the
             catalog and the first such object (exit 65).
-        UsageError: an object's model would exceed ``settings.memory_budget_gib`` (exit 2).
+        UsageError: an object's model, or its model plus the steps of one lift attempt under
+            ``profile``, would exceed ``settings.memory_budget_gib`` (exit 2).
     """
-    from deformctl.sim import SimSettings
-    from deformctl.sim.engine import check_lattice_size
+    from deformctl.sim import LiftProfile, SimSettings
+    from deformctl.sim.engine import check_lattice_size, check_run_steps
 
+    s = settings or SimSettings()
+    p = profile or LiftProfile()
     specs = [obj.to_sim_spec(path=path) for obj in objects]
     for spec in specs:
-        check_lattice_size(spec, settings or SimSettings())
+        check_lattice_size(spec, s)
+        seconds = s.grip_ramp_s + s.grip_settle_s + p.rise_time_s(p.rise_m(spec)) + p.hold_s
+        check_run_steps(spec, s, seconds / s.dt_s + 2.0, "lift attempt")
 
 
 def sim_runner_factory(
@@ -123,7 +132,7 @@ def sim_runner_factory(
         return run
 
     def check(objects: Sequence[CatalogObject], path: str | None) -> None:
-        check_sim_objects(objects, path, settings=s)
+        check_sim_objects(objects, path, settings=s, profile=p)
 
     def row_fields(obj: CatalogObject) -> Mapping[str, object]:
         return {
@@ -193,6 +202,25 @@ class LiftTask:
         )
 
 
+def _check_budgets(catalog: pd.DataFrame, task: LiftTask) -> None:
+    """The memory budgets of :func:`check_sim_objects` for the rows the simulator can run.
+
+    A row it refuses is skipped here: it fails alone, in its worker (``DIR/_failures/``).
+
+    Raises:
+        UsageError: an object's model or lift attempt above the budget (exit 2).
+    """
+    runnable = []
+    for record in catalog.to_dict("records"):
+        try:
+            obj = CatalogObject.from_row(record)
+            obj.to_sim_spec()
+        except InputDataError:
+            continue
+        runnable.append(obj)
+    check_sim_objects(runnable, settings=task.preset.settings, profile=task.preset.profile)
+
+
 def lift_sweep(
     catalog_path: str,
     task: LiftTask,
@@ -219,6 +247,7 @@ def lift_sweep(
     """
     factory = sim_runner_factory(preset=task.preset)
     catalog = select_objects(read_catalog(catalog_path), object_ids)
+    _check_budgets(catalog, task)
     search = {
         "protocol": task.protocol,
         "growth": task.growth,
