@@ -171,10 +171,10 @@ def test_a_model_for_another_feature_set_is_refused(
     result = run(catalog, "--rig", rig("threshold_rig.py", THRESHOLD_N), "--start-model",
                  files["other"], "--coefficients", files["coefficients"], "-o", out)  # fmt: skip
     assert result.exit_code == 65
+    # the model file's structure check (deformctl.train, issue 17) refuses it on loading
     assert one_line_error(result) == (
-        f"error: {files['other']}: the model takes ['weight_n', 'deformability_n_per_cm'], not "
-        "the features a start is predicted from (weight_n, deformability_n_per_cm, "
-        "damping_ns_per_cm)"
+        f"error: {files['other']}: not a usable lifting-force model: the model takes 2 features, "
+        "expected 3"
     )
     assert listing(tmp_path) == ["objects.csv"]
 
