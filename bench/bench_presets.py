@@ -16,7 +16,7 @@ from deformctl.lift.search import DEFAULT_TOLERANCE_REL, find_min_lift_force
 from deformctl.measure import default_peak_force_n
 from deformctl.presets import SimPreset, sim_preset
 from deformctl.repro import dataset_path
-from deformctl.sim import ObjectSpec, lift_attempt, squeeze_many
+from deformctl.sim import ObjectSpec, squeeze_many
 from deformctl.sim.engine import build_model
 
 TARGET_S = 2.0
@@ -28,10 +28,7 @@ def complete_object(spec: ObjectSpec, preset: SimPreset) -> tuple[float, int, fl
     t0 = time.perf_counter()
     squeeze_many(spec, 3, peak_force_n=default_peak_force_n(spec), settings=preset.settings)
     result = find_min_lift_force(
-        lambda force_n, _i: lift_attempt(
-            spec, force_n, profile=preset.profile, settings=preset.settings,
-            criterion=preset.criterion, release=preset.release,
-        ),
+        lambda force_n, _i: preset.lift_attempt(spec, force_n),
         weight_n=spec.weight_n,
         friction_mu=spec.friction_mu,
         tolerance_rel=DEFAULT_TOLERANCE_REL,

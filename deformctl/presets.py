@@ -59,7 +59,8 @@ from typing import TYPE_CHECKING, Any, Literal
 from deformctl.errors import UsageError
 
 if TYPE_CHECKING:  # pragma: no cover - the simulator is imported where a preset is built
-    from deformctl.sim import LiftProfile, SimSettings, SlipCriterion, SupportRelease
+    from deformctl.series import TrialOutcome
+    from deformctl.sim import LiftProfile, ObjectSpec, SimSettings, SlipCriterion, SupportRelease
 
 PresetName = Literal["paper", "table"]
 PRESET_NAMES: tuple[PresetName, ...] = ("paper", "table")
@@ -115,6 +116,19 @@ class SimPreset:
             "slip": dataclasses.asdict(self.criterion),
             "release": self.release.as_dict(),
         }
+
+    def lift_attempt(self, spec: ObjectSpec, grip_force_n: float) -> TrialOutcome:
+        """One simulated lift attempt of ``spec`` at ``grip_force_n`` under this preset."""
+        from deformctl.sim import lift_attempt
+
+        return lift_attempt(
+            spec,
+            grip_force_n,
+            profile=self.profile,
+            settings=self.settings,
+            criterion=self.criterion,
+            release=self.release,
+        )
 
     def replace(
         self,

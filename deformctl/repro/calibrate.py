@@ -141,18 +141,10 @@ def simulated_lift_force_n(
         DeformctlError: the search did not converge (the message names the object).
     """
     from deformctl.lift.search import find_min_lift_force
-    from deformctl.sim import lift_attempt
     from deformctl.sim.engine import build_model
 
     def runner(force_n: float, _index: int) -> Any:
-        return lift_attempt(
-            spec,
-            force_n,
-            profile=preset.profile,
-            settings=preset.settings,
-            criterion=preset.criterion,
-            release=preset.release,
-        )
+        return preset.lift_attempt(spec, force_n)
 
     try:
         result = find_min_lift_force(

@@ -112,7 +112,6 @@ def sim_runner_factory(
         a simulation failure of one object does not stop the others.
     """
     from deformctl.presets import sim_preset
-    from deformctl.sim import lift_attempt
 
     chosen = preset or sim_preset()
     if profile is not None or settings is not None or criterion is not None:
@@ -127,7 +126,7 @@ def sim_runner_factory(
         spec = obj.to_sim_spec()
 
         def run(grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
-            return lift_attempt(spec, grip_force_n, profile=p, settings=s, criterion=c, release=r)
+            return chosen.lift_attempt(spec, grip_force_n)
 
         return run
 
