@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from contextlib import contextmanager
 from os import PathLike
+from typing import Any
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -41,6 +42,18 @@ class DeformctlError(Exception):
 
     def __str__(self) -> str:
         return f"{self.path}: {self.message}" if self.path else self.message
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickle by attributes: an error raised in a worker process reaches the client whole
+        (subclasses take other constructor arguments than ``args``)."""
+        return _rebuild_error, (type(self), dict(self.__dict__))
+
+
+def _rebuild_error(cls: type[DeformctlError], state: dict[str, Any]) -> DeformctlError:
+    err = cls.__new__(cls)
+    Exception.__init__(err, state.get("message", ""))
+    err.__dict__.update(state)
+    return err
 
 
 class UsageError(DeformctlError):

@@ -80,7 +80,13 @@ from deformctl.artifacts.mcaplog import LOG_EPOCH_NS
 from deformctl.artifacts.provenance import Provenance, input_digest
 from deformctl.catalog import CatalogObject, catalog_objects, select_objects
 from deformctl.errors import InputDataError, MissingInputError, UsageError
-from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
+from deformctl.parallel import (
+    SweepOptions,
+    SweepSummary,
+    TaskOutput,
+    run_sweep,
+    single_file_workers,
+)
 from deformctl.phases import PHASES, Phase, Rupture, cut_rupture, phase_slice, slice_squeeze
 from deformctl.plausibility import (
     MAX_PEAK_FORCE_N,
@@ -1325,11 +1331,17 @@ def simulate_catalog_file(
     object_ids: Sequence[str] | None = None,
     progress: SqueezeProgress | None = None,
     force: bool = False,
+    workers: int | None = None,
 ) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
     """``measure CATALOG --sim -o LOG``: squeeze every (selected) object into one squeeze log.
 
     Every row is checked before anything is simulated (a row without material values is
-    refused, naming the object).
+    refused, naming the object). With ``workers`` > 1 the objects are squeezed on that many
+    local processes (:func:`deformctl.parallel.map_in_order`, one :class:`SimulateCatalogTask`
+    per object); each object's noise stream depends only on the seed and its position, so the
+    log is byte for byte the one-process log. ``workers=None``: every core from
+    :data:`~deformctl.parallel.MIN_PARALLEL_OBJECTS` objects on
+    (:func:`~deformctl.parallel.single_file_workers`).
 
     Returns:
         The objects' rows and the squeezes written (see :func:`simulate_squeezes`).
@@ -1343,17 +1355,43 @@ def simulate_catalog_file(
     catalog = select_objects(read_catalog(catalog_path), object_ids)
     _check_budgets(catalog, task, catalog_path, single_log=True)  # bad rows first
     provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
-    objects, series = simulate_squeezes(
-        catalog,
-        settings=task.settings,
-        seed=task.seed,
-        progress=progress,
-        path=catalog_path,
-        **task.simulate,
-    )
+    n_workers = single_file_workers(workers, len(catalog))
+    if n_workers > 1:
+        objects, series = _squeeze_in_workers(catalog, task, n_workers, progress)
+    else:
+        objects, series = simulate_squeezes(
+            catalog,
+            settings=task.settings,
+            seed=task.seed,
+            progress=progress,
+            path=catalog_path,
+            **task.simulate,
+        )
     write_squeeze_log(
         output, objects, series, provenance=provenance, force=force, epoch_ns=task.log_epoch_ns
     )
+    return objects, series
+
+
+def _squeeze_in_workers(
+    catalog: pd.DataFrame,
+    task: SimulateCatalogTask,
+    workers: int,
+    progress: SqueezeProgress | None,
+) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
+    """:func:`simulate_squeezes` of ``catalog`` with one task per object on local processes."""
+    from deformctl.parallel import map_in_order
+
+    items = [{**rec, "_position": i} for i, rec in enumerate(catalog.to_dict("records"))]
+    per_object = int(task.simulate.get("squeezes", DEFAULT_SIM_SQUEEZES))
+
+    def done(i: int, _: object) -> None:
+        if progress is not None:
+            progress(str(items[i]["object_id"]), (i + 1) * per_object, len(items) * per_object)
+
+    outputs = map_in_order(task, items, workers=workers, on_result=done)
+    objects = [out.payload[0] for out in outputs]
+    series = [s for out in outputs for s in out.payload[1]]
     return objects, series
 
 

@@ -34,7 +34,7 @@ import sys
 import threading
 import time
 import uuid
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import (
     FIRST_COMPLETED,
     Future,
@@ -69,7 +69,9 @@ __all__ = [
     "SweepSummary",
     "TaskOutput",
     "connect_dask",
+    "map_in_order",
     "run_sweep",
+    "single_file_workers",
 ]
 
 
@@ -165,18 +167,24 @@ class SweepOptions:
         out = [flag for flag, value in flags if value is not None]
         return out + (["--resume"] if self.resume else [])
 
-    def check(self, output: str) -> bool:
+    def check(self, output: str, *, file_workers: bool = False) -> bool:
         """Check the flags against the output; True when the output is a dataset directory.
 
+        Args:
+            output: the ``-o`` value.
+            file_workers: the command also runs a single-file output on ``--workers`` local
+                processes (:func:`map_in_order`), so that flag is allowed without a directory.
+
         Raises:
-            UsageError: a sweep flag with a single-file output, ``--workers`` < 1, both
-                ``--workers`` and ``--scheduler``, ``--connect-timeout`` without
-                ``--scheduler`` or <= 0, ``--partition-size`` < 1.
+            UsageError: a sweep flag with a single-file output (``--workers`` too unless
+                ``file_workers``), ``--workers`` < 1, both ``--workers`` and ``--scheduler``,
+                ``--connect-timeout`` without ``--scheduler`` or <= 0, ``--partition-size`` < 1.
         """
         dataset = is_dataset_output(output)
-        if not dataset and self.given():
+        needs_dir = [f for f in self.given() if not (file_workers and f == "--workers")]
+        if not dataset and needs_dir:
             raise UsageError(
-                f"{self.given()[0]} needs a dataset directory output "
+                f"{needs_dir[0]} needs a dataset directory output "
                 f"(end -o with /, e.g. -o {output.rstrip('/') or 'out'}/)"
             )
         if self.workers is not None and self.workers < 1:
@@ -749,6 +757,82 @@ def run_sweep(
         rate=(n_done + n_failed) / elapsed_s if elapsed_s > 0 else 0.0,
         out_dir=Path(out_dir),
     )
+
+
+#: A single-file output runs its objects on local processes only from this many objects on: a
+#: worker costs about a second to start (imports and the compiled kernels), more than a short
+#: catalog's whole run.
+MIN_PARALLEL_OBJECTS = 8
+
+
+def single_file_workers(workers: int | None, n_items: int) -> int:
+    """How many local processes a single-file output uses for ``n_items`` objects.
+
+    ``workers`` as given (``--workers N``), else every available core once the catalog has
+    :data:`MIN_PARALLEL_OBJECTS` objects (in this process below that); never more than the
+    objects.
+    """
+    if workers is None:
+        workers = _available_cores() if n_items >= MIN_PARALLEL_OBJECTS else 1
+    return max(1, min(workers, n_items))
+
+
+def map_in_order(
+    task: Callable[[Any], Any],
+    items: Sequence[Any],
+    *,
+    workers: int,
+    on_result: Callable[[int, Any], None] | None = None,
+) -> list[Any]:
+    """``[task(item) for item in items]``, on ``workers`` local processes, results in item order.
+
+    The processes are set up as a sweep's (:class:`_LocalBackend`: fork server, one BLAS thread,
+    a watchdog that ends them with their client). For a single-file output that holds every
+    result anyway, so a result does not depend on the number of workers. ``workers <= 1`` (or
+    one item) runs in this process.
+
+    Args:
+        task: a picklable callable; its module must be importable by the workers.
+        items: picklable items.
+        workers: local processes.
+        on_result: called as ``on_result(index, result)`` in item order, as results arrive
+            (e.g. progress).
+
+    Raises:
+        whatever ``task`` raised for the first item (in order) that failed; the items after it
+        are cancelled. DeformctlError: a worker process died.
+    """
+    if workers <= 1 or len(items) <= 1:
+        out = []
+        for i, item in enumerate(items):
+            out.append(task(item))
+            if on_result is not None:
+                on_result(i, out[-1])
+        return out
+    methods = multiprocessing.get_all_start_methods()
+    ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    if ctx.get_start_method() == "forkserver":
+        module = getattr(type(task), "__module__", None) or getattr(task, "__module__", None)
+        preload = ["deformctl.parallel"]
+        if module and module != "__main__" and module in sys.modules:
+            preload.append(module)
+        ctx.set_forkserver_preload(preload)
+    results: list[Any] = [None] * len(items)
+    with ProcessPoolExecutor(
+        max_workers=workers, mp_context=ctx, initializer=_init_worker, initargs=(os.getpid(),)
+    ) as pool:
+        futures = [pool.submit(task, item) for item in items]
+        try:
+            for i, fut in enumerate(futures):
+                results[i] = fut.result()
+                if on_result is not None:
+                    on_result(i, results[i])
+        except BrokenProcessPool as err:
+            raise DeformctlError("a local worker process died") from err
+        finally:
+            for fut in futures:
+                fut.cancel()
+    return results
 
 
 def _available_cores() -> int:

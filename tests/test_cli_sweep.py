@@ -297,8 +297,8 @@ def test_bad_sweep_inputs(serial_lift: tuple[Path, pd.DataFrame], tmp_path: Path
     # --workers 0, or a sweep flag with a single-file output: usage errors, nothing written
     _one_line_error(_cli(*base, "-o", f"{tmp_path / 'a'}/", "--workers", 0), 2,
                     "--workers must be >= 1, got 0")  # fmt: skip
-    _one_line_error(_cli(*base, "-o", tmp_path / "a.parquet", "--workers", 2), 2,
-                    "--workers needs a dataset directory output")  # fmt: skip
+    _one_line_error(_cli(*base, "-o", tmp_path / "a.parquet", "--partition-size", 2), 2,
+                    "--partition-size needs a dataset directory output")  # fmt: skip
     assert not (tmp_path / "a").exists()
     assert not (tmp_path / "a.parquet").exists()
 

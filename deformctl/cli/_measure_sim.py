@@ -178,7 +178,7 @@ def run(
         raise UsageError("--sim needs a CATALOG argument (the objects to squeeze)")
     task = opts.task()
     object_ids = parse_object_ids(opts.objects)
-    if sweep.check(output):
+    if sweep.check(output, file_workers=True):
         summary = simulate_catalog_sweep(
             catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
         )
@@ -186,7 +186,13 @@ def run(
         return
     with progress_bar(console, "squeeze") as progress:
         objects, series = simulate_catalog_file(
-            catalog, task, output=output, object_ids=object_ids, progress=progress, force=force
+            catalog,
+            task,
+            output=output,
+            object_ids=object_ids,
+            progress=progress,
+            force=force,
+            workers=sweep.workers,
         )
     where = "stdout" if is_stdio(output) else output
     duration_s = sum(float(s.time_s[-1]) for s in series)

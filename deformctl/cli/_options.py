@@ -174,7 +174,8 @@ Workers = Annotated[
     typer.Option(
         "--workers",
         metavar="N",
-        help="Dataset output: local worker processes [default: every core].",
+        help="Local worker processes: a dataset output [default: every core], or a "
+        "single-file output of measure --sim / lift --sim [default: every core from 8 objects].",
     ),
 ]
 Scheduler = Annotated[

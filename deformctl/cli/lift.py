@@ -165,6 +165,8 @@ def lift(
     (--workers N local processes, or --scheduler tcp://HOST:PORT of a Dask cluster) into
     DIR/part-*.parquet with each part's attempts in DIR/_logs/; --resume completes an
     interrupted run. An object that fails is recorded in DIR/_failures/ and the rest go on.
+    A single-file output with --sim also runs on --workers N local processes (default: every
+    core from 8 objects on); the files are the same whatever N.
 
     With --start-model MODEL (or --start-table INDEX) each search starts at the predicted L_f ×
     --start-margin instead of at F_w, goes down (or up by --growth) until the outcome flips and
@@ -174,7 +176,11 @@ def lift(
     Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
     -o lift.parquet --log lift.mcap
     """
-    dataset = sweep.check(output)
+    dataset = sweep.check(output, file_workers=True)
+    if not dataset and sweep.workers is not None and not sim:
+        raise UsageError(
+            "--workers with a single-file output needs --sim (a rig lifts one object at a time)"
+        )
     if lift_hold_s is not None and hold_s is not None:
         raise UsageError("give --lift-hold-s (or its old spelling --hold-s), not both")
     parts = sim_parts(
@@ -218,6 +224,6 @@ def lift(
             protocol=cast(SearchProtocol, protocol),  # checked by validate_search_options
             growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts,
             progress=progress, force=force, log_epoch_ns=opt.parse_log_epoch(log_epoch),
-            seed=seed, warn=warn,
+            seed=seed, warn=warn, workers=sweep.workers,
         )  # fmt: skip
     report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)))

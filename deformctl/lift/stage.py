@@ -58,6 +58,7 @@ from deformctl.lift.search import (
     find_min_lift_force_seeded,
     validate_search_options,
 )
+from deformctl.parallel import single_file_workers
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the seed sources import sklearn when used
     from deformctl.lift.seeded import StartEstimate, StartSeed
@@ -194,6 +195,7 @@ def lift_catalog(
     path: str | None = None,
     seed: StartSeed | None = None,
     warn: Warn | None = None,
+    workers: int = 1,
 ) -> CatalogLiftResult:
     """Search the minimum lifting force of every object of a catalog, one after another.
 
@@ -225,6 +227,9 @@ def lift_catalog(
             for it before any attempt. The rows' ``predicted_lift_force_n``, ``start_force_n``,
             ``start_in_training_range`` and ``start_source`` are filled (null without a seed).
         warn: receives warning lines (None: they are dropped).
+        workers: local processes to run the objects on (:func:`deformctl.parallel.map_in_order`;
+            results in catalog order, the same as one process); a runner that stops on failure
+            (the rig) always runs in this process, one object after another.
 
     Returns:
         A :class:`CatalogLiftResult`.
@@ -261,34 +266,45 @@ def lift_catalog(
     failures: list[ObjectFailure] = []
     not_run: list[str] = []
     stopped_at: str | None = None
-    for done, (obj, f_w_n) in enumerate(zip(objects, f_w, strict=True), start=1):
-        oid = obj.object_id
-        start = starts.get(oid)
-        if stopped_at is not None:
-            row = _not_run_row(obj, f_w_n, factory, protocol, tolerance_rel, stopped_at)
-            rows.append({**row, **_start_columns(start, math.nan)})
-            not_run.append(oid)
-        else:
-            try:
-                result = _search(
-                    factory.make(obj), obj, start, seed, protocol, growth, tolerance_rel,
-                    max_attempts,
-                )  # fmt: skip
-                error = None if result.converged else result.message
-                if error is not None:
-                    failures.append(ObjectFailure(oid, error, aborted=False))
-            except SearchAbortedError as err:
-                result, error = _fallback(err.partial, start), str(err)
-                failures.append(ObjectFailure(oid, error, aborted=True))
-                if factory.stop_on_failure:
-                    stopped_at = oid
-            results.append(result)
-            attempts.extend(LiftAttempt(oid, i, t) for i, t in enumerate(result.trials))
-            row = result.table_row(runner=factory.name, error=error)
-            row.update(factory.row_fields(obj))
-            rows.append(row)
+    search = _ObjectSearch(
+        factory, None if seed is None else seed.margin, protocol, growth, tolerance_rel,
+        max_attempts,
+    )  # fmt: skip
+    jobs = [(obj, starts.get(obj.object_id)) for obj in objects]
+
+    def record(obj: CatalogObject, outcome: tuple[LiftSearchResult, str | None, bool]) -> None:
+        result, error, aborted = outcome
+        if error is not None:
+            failures.append(ObjectFailure(obj.object_id, error, aborted=aborted))
+        results.append(result)
+        attempts.extend(LiftAttempt(obj.object_id, i, t) for i, t in enumerate(result.trials))
+        row = result.table_row(runner=factory.name, error=error)
+        row.update(factory.row_fields(obj))
+        rows.append(row)
+
+    def done(i: int) -> None:
         if progress is not None:
-            progress(oid, done, len(objects))
+            progress(objects[i].object_id, i + 1, len(objects))
+
+    if workers > 1 and not factory.stop_on_failure:
+        from deformctl.parallel import map_in_order
+
+        outcomes = map_in_order(search, jobs, workers=workers, on_result=lambda i, _: done(i))
+        for obj, outcome in zip(objects, outcomes, strict=True):
+            record(obj, outcome)
+    else:
+        for i, (job, f_w_n) in enumerate(zip(jobs, f_w, strict=True)):
+            obj, start = job
+            if stopped_at is not None:
+                row = _not_run_row(obj, f_w_n, factory, protocol, tolerance_rel, stopped_at)
+                rows.append({**row, **_start_columns(start, math.nan)})
+                not_run.append(obj.object_id)
+            else:
+                outcome = search(job)
+                record(obj, outcome)
+                if outcome[2] and factory.stop_on_failure:
+                    stopped_at = obj.object_id
+            done(i)
     table = validate_frame(pd.DataFrame(rows), "lift_results")
     return CatalogLiftResult(
         table=table,
@@ -316,6 +332,7 @@ def lift_catalog_files(
     log_epoch_ns: int | None = None,
     seed: StartSeed | None = None,
     warn: Warn | None = None,
+    workers: int | None = None,
 ) -> CatalogLiftResult:
     """:func:`lift_catalog` from a catalog file: the lift_results table and the lift log written.
 
@@ -334,6 +351,9 @@ def lift_catalog_files(
         force: overwrite existing outputs.
         log_epoch_ns: where the log's attempts without a wall clock (simulated ones) begin, ns
             since the Unix epoch (None: the log writer's fixed epoch, 2000-01-01).
+        workers: local processes for the objects (see :func:`lift_catalog`); None: every core
+            from :data:`~deformctl.parallel.MIN_PARALLEL_OBJECTS` objects on
+            (:func:`~deformctl.parallel.single_file_workers`). The outputs do not depend on it.
 
     Raises:
         UsageError: ``output`` and ``log`` are the same file, or both stdout (exit 2).
@@ -373,6 +393,7 @@ def lift_catalog_files(
         path=catalog_path,
         seed=seed,
         warn=warn,
+        workers=1 if factory.stop_on_failure else single_file_workers(workers, len(selected)),
     )
     with committed_together():  # a kill leaves both outputs or neither (the table last)
         if log is not None:
@@ -438,24 +459,56 @@ def _start_columns(start: StartEstimate | None, start_force_n: float) -> dict[st
     }
 
 
+@dataclass(frozen=True)
+class _ObjectSearch:
+    """One object's search as a picklable task (:func:`lift_catalog` with ``workers > 1`` runs
+    it in worker processes): ``(object, start) -> (result, error, aborted)``.
+
+    Attributes:
+        factory: the runner factory (picklable for a parallel run).
+        margin: the seed's start margin; None without a seed.
+        protocol, growth, tolerance_rel, max_attempts: the search options.
+    """
+
+    factory: RunnerFactory
+    margin: float | None
+    protocol: SearchProtocol
+    growth: float
+    tolerance_rel: float
+    max_attempts: int
+
+    def __call__(
+        self, job: tuple[CatalogObject, StartEstimate | None]
+    ) -> tuple[LiftSearchResult, str | None, bool]:
+        obj, start = job
+        try:
+            result = _search(
+                self.factory.make(obj), obj, start, self.margin, self.protocol, self.growth,
+                self.tolerance_rel, self.max_attempts,
+            )  # fmt: skip
+        except SearchAbortedError as err:
+            return _fallback(err.partial, start), str(err), True
+        return result, (None if result.converged else result.message), False
+
+
 def _search(
     runner: TrialRunner,
     obj: CatalogObject,
     start: StartEstimate | None,
-    seed: StartSeed | None,
+    margin: float | None,
     protocol: SearchProtocol,
     growth: float,
     tolerance_rel: float,
     max_attempts: int,
 ) -> LiftSearchResult:
     """One object's search: from its start when it has a usable one, else ``protocol``."""
-    if start is not None and start.in_range and seed is not None:
+    if start is not None and start.in_range and margin is not None:
         return find_min_lift_force_seeded(
             runner,
             weight_n=obj.weight_n,
             friction_mu=obj.friction_mu,
             predicted_lift_force_n=start.predicted_lift_force_n,
-            margin=seed.margin,
+            margin=margin,
             growth=growth,
             tolerance_rel=tolerance_rel,
             max_attempts=max_attempts,

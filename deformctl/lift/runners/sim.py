@@ -121,32 +121,10 @@ def sim_runner_factory(
             criterion=dataclasses.asdict(criterion) if criterion is not None else None,
         )
     p, s, c, r = chosen.profile, chosen.settings, chosen.criterion, chosen.release
-
-    def make(obj: CatalogObject) -> TrialRunner:
-        spec = obj.to_sim_spec()
-
-        def run(grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
-            return chosen.lift_attempt(spec, grip_force_n)
-
-        return run
-
-    def check(objects: Sequence[CatalogObject], path: str | None) -> None:
-        check_sim_objects(objects, path, settings=s, profile=p)
-
-    def row_fields(obj: CatalogObject) -> Mapping[str, object]:
-        return {
-            "sim_preset": chosen.name,
-            "lift_accel_m_s2": p.accel_m_s2,
-            "lift_speed_m_s": p.speed_m_s,
-            "lift_height_m": p.rise_m(obj.to_sim_spec()),
-            "slip_tolerance_m": c.tolerance_m,
-            "slip_criterion": c.measure,
-        }
-
     return RunnerFactory(
         name="sim",
-        make=make,
-        row_fields=row_fields,
+        make=_SimRunnerMaker(chosen),
+        row_fields=_SimRowFields(chosen),
         stop_on_failure=False,
         settings={
             "sim_preset": chosen.name,
@@ -155,9 +133,56 @@ def sim_runner_factory(
             "slip_criterion": dataclasses.asdict(c),
             "support_release": r.as_dict(),
         },
-        check=check,
+        check=_SimCheck(chosen),
         material_features=True,
     )
+
+
+# The factory's parts are picklable classes, not closures: a single-file lift on several local
+# processes (``--workers``) sends the factory to its workers.
+
+
+@dataclass(frozen=True)
+class _SimAttempt:
+    """One object's trial runner: each attempt a fresh simulation under the preset."""
+
+    preset: SimPreset
+    spec: Any  # deformctl.sim.ObjectSpec
+
+    def __call__(self, grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
+        return self.preset.lift_attempt(self.spec, grip_force_n)
+
+
+@dataclass(frozen=True)
+class _SimRunnerMaker:
+    preset: SimPreset
+
+    def __call__(self, obj: CatalogObject) -> TrialRunner:
+        return _SimAttempt(self.preset, obj.to_sim_spec())
+
+
+@dataclass(frozen=True)
+class _SimCheck:
+    preset: SimPreset
+
+    def __call__(self, objects: Sequence[CatalogObject], path: str | None) -> None:
+        check_sim_objects(objects, path, settings=self.preset.settings, profile=self.preset.profile)
+
+
+@dataclass(frozen=True)
+class _SimRowFields:
+    preset: SimPreset
+
+    def __call__(self, obj: CatalogObject) -> Mapping[str, object]:
+        p, c = self.preset.profile, self.preset.criterion
+        return {
+            "sim_preset": self.preset.name,
+            "lift_accel_m_s2": p.accel_m_s2,
+            "lift_speed_m_s": p.speed_m_s,
+            "lift_height_m": p.rise_m(obj.to_sim_spec()),
+            "slip_tolerance_m": c.tolerance_m,
+            "slip_criterion": c.measure,
+        }
 
 
 @dataclass(frozen=True)
