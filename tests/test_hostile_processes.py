@@ -69,7 +69,9 @@ def _group(pgid: int) -> list[int]:
 
 
 @pytest.mark.skipif(not Path("/proc").is_dir(), reason="needs /proc")
-def test_a_killed_sweep_client_leaves_no_process_behind(tmp_path: Path) -> None:
+@pytest.mark.parametrize("output", ["d/", "lift.parquet"])
+def test_a_killed_sweep_client_leaves_no_process_behind(tmp_path: Path, output: str) -> None:
+    """A dataset sweep and a single-file lift on two workers: kill -9 the client."""
     rows = [f"o{i},20,20,20,1.0,0.5,5,1" for i in range(40)]
     cat = tmp_path / "cat.csv"
     header = "object_id,size_x_cm,size_y_cm,size_z_cm,weight_n,friction_mu"
@@ -78,7 +80,7 @@ def test_a_killed_sweep_client_leaves_no_process_behind(tmp_path: Path) -> None:
         fh.write("\n".join(rows) + "\n")
     argv = [sys.executable, "-m", "deformctl", "lift", str(cat), "--sim", "--workers", "2"]
     client = subprocess.Popen(
-        [*argv, "-o", str(tmp_path / "d") + "/"],
+        [*argv, "-o", str(tmp_path / output)],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
         start_new_session=True,  # its pid is the group of everything it starts
@@ -96,3 +98,5 @@ def test_a_killed_sweep_client_leaves_no_process_behind(tmp_path: Path) -> None:
     for pid in left:  # do not leave them to the next test either
         os.kill(pid, signal.SIGKILL)
     assert left == [], f"{len(left)} processes outlived their client by 5 s"
+    if not output.endswith("/"):  # a single file is written at the end: nothing yet
+        assert not (tmp_path / output).exists()
