@@ -19,7 +19,12 @@ client and every process under it (/proc polled every 0.1 s) and the largest sin
 peak RSS (``getrusage`` of the children). Target: PSS sum < 1 GiB. About 400 MiB of the client
 is the ``deformctl`` CLI's imports (OpenCV, scikit-learn, numba, ...), whatever the sweep size.
 
-Run: ``python -m bench.bench_sweep`` (or ``make bench``); about 2-4 minutes.
+Single files: ``measure --sim -o FILE`` and ``lift --sim -o FILE`` of the same 40 objects at the
+default preset with ``--workers 1`` and ``--workers 2`` (wall time of the whole command,
+interpreter start-up included: what ``make reproduce`` pays), and whether the two outputs hold
+the same rows.
+
+Run: ``python -m bench.bench_sweep`` (or ``make bench``); about 3-5 minutes.
 """
 
 from __future__ import annotations
@@ -100,8 +105,43 @@ def _sweep(
     return float(match.group(1)), (peak_pss, peak_rss), line
 
 
+def _single_file(catalog: Path, d: Path, workers: int) -> tuple[float, float]:
+    """Wall seconds of ``measure --sim`` and ``lift --sim`` into single files with ``workers``."""
+    times = []
+    for cmd in (
+        ["measure", str(catalog), "--sim", "--seed", "0", "-o", str(d / f"sq{workers}.mcap")],
+        ["lift", str(catalog), "--sim", "-o", str(d / f"lift{workers}.parquet")],
+    ):
+        t0 = time.monotonic()
+        subprocess.run(
+            [sys.executable, "-m", "deformctl", *cmd, "--workers", str(workers)],
+            check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        )  # fmt: skip
+        times.append(time.monotonic() - t0)
+    return times[0], times[1]
+
+
+def single_files() -> None:
+    """Single-file outputs on 1 and 2 local processes: wall times, ratios, same rows."""
+    from deformctl.artifacts import read_table
+
+    with tempfile.TemporaryDirectory(prefix="bench_single_") as tmp:
+        d = Path(tmp)
+        cat = d / "pop.csv"
+        make_population(SPEED_OBJECTS_DEFAULT, seed=0).to_csv(cat, index=False)
+        m1, l1 = _single_file(cat, d, 1)
+        m2, l2 = _single_file(cat, d, 2)
+        same = read_table(d / "lift1.parquet").equals(read_table(d / "lift2.parquet"))
+        load = os.getloadavg()[0]
+        print(f"single files, paper preset, {SPEED_OBJECTS_DEFAULT} objects (wall s, 1 vs 2 "
+              f"workers): measure --sim {m1:.1f} vs {m2:.1f} ({m1 / m2:.2f}x), lift --sim "
+              f"{l1:.1f} vs {l2:.1f} ({l1 / l2:.2f}x); same lift rows: {same}; "
+              f"load average {load:.2f}")  # fmt: skip
+
+
 def main() -> None:
     """Print objects/s with 1 and 2 workers, their ratio, and the 2,000-object peak memory."""
+    single_files()
     print(f"fast setting: {' '.join(FAST)}; cores available: {len(os.sched_getaffinity(0))}")
     print(f"load average before: {os.getloadavg()[0]:.2f} (a loaded machine lowers the ratio)")
     with tempfile.TemporaryDirectory(prefix="bench_sweep_") as tmp:
