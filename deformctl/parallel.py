@@ -336,7 +336,25 @@ class _LocalBackend:
         return written
 
     def close(self) -> None:
-        self._pool.shutdown(wait=True, cancel_futures=True)
+        if self._pool._broken:
+            _abandon_pool(self._pool)
+        else:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _abandon_pool(pool: ProcessPoolExecutor) -> None:
+    """Shut a broken pool down without waiting for its workers: terminate them first.
+
+    After a worker died, the pool's result-reading thread is gone, so a surviving worker that is
+    sending a large result (an object's attempt series) blocks on the full pipe for ever and
+    ``shutdown(wait=True)`` joins it for ever (seen under heavy load as a hung client). The
+    sweep is aborting anyway and its parts are committed, so the survivors are killed.
+    """
+    processes = getattr(pool, "_processes", None) or {}
+    for proc in list(processes.values()):
+        with contextlib.suppress(Exception):
+            proc.kill()
+    pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _write_part(part_writer: Callable[[PartPayloads], None], part: PartPayloads) -> None:
@@ -828,6 +846,7 @@ def map_in_order(
                 if on_result is not None:
                     on_result(i, results[i])
         except BrokenProcessPool as err:
+            _abandon_pool(pool)
             raise DeformctlError("a local worker process died") from err
         finally:
             for fut in futures:
