@@ -199,22 +199,40 @@ def build_index_table(
     return table.sort_values("object_id", kind="stable").reset_index(drop=True)
 
 
-def validate_index_table(table: pd.DataFrame) -> None:
-    """Check that ``table`` has the lookup columns and at least one row of finite values.
+#: The fewest entries a lookup or an interpolation accepts: a standardized distance divides by
+#: the spread over the table, and one entry has none (every answer would be that entry).
+MIN_LOOKUP_ROWS = 2
+
+
+def validate_index_table(table: pd.DataFrame, *, min_rows: int = 1) -> None:
+    """Check that ``table`` has the lookup columns and at least ``min_rows`` rows of finite values.
 
     Raises:
         SchemaError: a column of :data:`LOOKUP_KEYS` or ``lift_force_n`` is missing.
-        InputDataError: the table is empty or a lookup key is not finite somewhere.
+        InputDataError: the table has fewer than ``min_rows`` rows (or none), or a lookup key is
+            not finite somewhere.
     """
     _require_columns(table, ("object_id", *LOOKUP_KEYS, "lift_force_n"), "the index table")
     if len(table) == 0:
         raise InputDataError("the index table has no rows")
+    if len(table) < min_rows:
+        raise InputDataError(
+            f"the index table has {len(table)} row(s); a lookup needs at least {min_rows} "
+            "(distances are standardized by the spread over the table)"
+        )
     for col in LOOKUP_KEYS:
         bad = ~np.isfinite(table[col].to_numpy(dtype=float))
         if bad.any():
             raise InputDataError(
                 f"{col} is not a finite number for {format_ids(table['object_id'][bad])}"
             )
+
+
+def keys_without_spread(table: pd.DataFrame) -> list[str]:
+    """The :data:`LOOKUP_KEYS` that are constant over ``table``: compared in their own units."""
+    values = table[list(LOOKUP_KEYS)].to_numpy(dtype=np.float64)
+    std = values.std(axis=0, ddof=0)
+    return [k for k, s in zip(LOOKUP_KEYS, std, strict=True) if not (np.isfinite(s) and s > 0)]
 
 
 def standard_scales(table: pd.DataFrame, keys: Iterable[str] = LOOKUP_KEYS) -> np.ndarray:
@@ -301,7 +319,8 @@ def lookup(
 
     Raises:
         UsageError: a key is missing (the message names it and the expected keys) or not finite.
-        SchemaError / InputDataError: see :func:`validate_index_table`.
+        SchemaError / InputDataError: see :func:`validate_index_table`; a table of fewer than
+            :data:`MIN_LOOKUP_ROWS` entries is refused.
 
     Example:
         >>> t = pd.DataFrame({"object_id": ["A", "B"], "weight_n": [20.0, 40.0],
@@ -312,7 +331,7 @@ def lookup(
         ('B', 0.245)
     """
     q = _query(weight_n, deformability_n_per_cm, damping_ns_per_cm)
-    validate_index_table(index_table)
+    validate_index_table(index_table, min_rows=MIN_LOOKUP_ROWS)
     dist = standardized_distances(index_table, q)[0]
     i = int(np.argmin(dist))
     row = {k: _plain(v) for k, v in index_table.iloc[i].to_dict().items()}
@@ -353,13 +372,14 @@ def interpolate(
 
     Raises:
         UsageError: a key is missing or not finite, ``k < 1`` or ``power <= 0``.
+        SchemaError / InputDataError: as :func:`lookup`.
     """
     if k < 1:
         raise UsageError(f"k must be >= 1, got {k}")
     if not power > 0:
         raise UsageError(f"power must be > 0, got {power}")
     q = _query(weight_n, deformability_n_per_cm, damping_ns_per_cm)
-    validate_index_table(index_table)
+    validate_index_table(index_table, min_rows=MIN_LOOKUP_ROWS)
     dist = standardized_distances(index_table, q)[0]
     order = np.argsort(dist, kind="stable")[: min(k, len(dist))]
     d = dist[order]

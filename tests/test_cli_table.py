@@ -254,3 +254,90 @@ def test_inputs_in_the_wrong_order_are_refused(inputs: tuple[Path, Path], tmp_pa
         f"error: {lift_path}: field 'deformctl': is a lift_results table, expected coefficients"
     )
     assert not out.exists()
+
+
+def test_lookup_refuses_a_one_row_table(inputs: tuple[Path, Path], tmp_path: Path) -> None:
+    _, index = _index(inputs, tmp_path)
+    one = tmp_path / "one.parquet"
+    write_table(index.iloc[:1], one, "index_table", provenance=_prov())
+    for extra in ([], ["--interpolate", "2"], ["--json"]):
+        result = runner.invoke(
+            app,
+            [
+                "table",
+                str(one),
+                "--lookup",
+                "weight_n=1,deformability_n_per_cm=2,damping_ns_per_cm=3",
+                *extra,
+            ],
+        )
+        msg = _error(result, 65)
+        assert msg == (
+            "error: the index table has 1 row(s); a lookup needs at least 2 (distances are "
+            "standardized by the spread over the table)"
+        )
+        assert result.stdout == ""
+
+
+LOOKUP = "weight_n=40,deformability_n_per_cm=40,damping_ns_per_cm=5"
+
+
+def test_lookup_refuses_a_table_from_another_tool(
+    inputs: tuple[Path, Path], tmp_path: Path
+) -> None:
+    """Same columns and dtypes, written by pandas: no deformctl metadata, so no provenance."""
+    _, index = _index(inputs, tmp_path)
+    foreign = tmp_path / "foreign.parquet"
+    plain = pd.DataFrame({c: index[c].to_numpy() for c in index.columns})
+    plain.to_parquet(foreign)
+    msg = _error(runner.invoke(app, ["table", str(foreign), "--lookup", LOOKUP]), 65)
+    assert msg.startswith(
+        f"error: {foreign}: not a deformctl index_table (no 'deformctl' metadata)"
+    )
+    assert msg.endswith("build one with `deformctl table COEFFICIENTS LIFT -o INDEX`")
+
+
+@pytest.mark.parametrize("which", [0, 1])
+def test_lookup_refuses_a_table_of_another_kind(
+    inputs: tuple[Path, Path], tmp_path: Path, which: int
+) -> None:
+    other = inputs[which]
+    kind = ("coefficients", "lift_results")[which]
+    msg = _error(runner.invoke(app, ["table", str(other), "--lookup", LOOKUP]), 65)
+    assert f"is a {kind} table, expected index_table" in msg
+
+
+def test_lookup_warns_and_flags_keys_without_spread(tmp_path: Path) -> None:
+    table = pd.DataFrame(
+        {
+            "object_id": ["A", "B", "C"],
+            "weight_n": [20.0, 40.0, 30.0],
+            "deformability_n_per_cm": [30.0, 30.0, 30.0],
+            "damping_ns_per_cm": [1.0, 1.0, 1.0],
+            "lift_force_n": [15.0, 30.0, 22.0],
+            "friction_mu": [1.0, 1.0, 1.0],
+            "f_w_n": [10.0, 20.0, 15.0],
+            "converged": [True, True, True],
+        }
+    )
+    path = tmp_path / "flat.parquet"
+    write_table(table, path, "index_table", provenance=_prov())
+    result = runner.invoke(app, ["table", str(path), "--lookup", LOOKUP, "--json"])
+    assert result.exit_code == 0, result.stderr
+    assert result.stderr == (
+        "warning: deformability_n_per_cm, damping_ns_per_cm have no spread over the index "
+        "table: compared in raw units, not standard deviations\n"
+    )
+    out = json.loads(result.stdout)
+    assert out["keys_in_raw_units"] == ["deformability_n_per_cm", "damping_ns_per_cm"]
+    assert out["nearest"]["object_id"] == "B"
+    # D is 10 N/cm from every entry in raw units, W is 0 std from B, λ 4 N·s/cm raw.
+    assert out["distance_std"] == pytest.approx(float(np.hypot(10.0, 4.0)), rel=1e-12)
+
+
+def test_lookup_without_flat_keys_flags_none(inputs: tuple[Path, Path], tmp_path: Path) -> None:
+    path, _ = _index(inputs, tmp_path)
+    result = runner.invoke(app, ["table", str(path), "--lookup", LOOKUP, "--json"])
+    assert result.exit_code == 0, result.stderr
+    assert result.stderr == ""
+    assert json.loads(result.stdout)["keys_in_raw_units"] == []

@@ -237,3 +237,28 @@ def test_interpolate_inverse_distance(table: pd.DataFrame) -> None:
     assert exact.lift_force_n == 30.0
     with pytest.raises(UsageError, match="k must be >= 1"):
         interpolate(table, k=0, **q)
+
+
+def test_lookup_and_interpolate_refuse_one_entry(table: pd.DataFrame) -> None:
+    one = table.iloc[:1]
+    q = {"weight_n": 1.0, "deformability_n_per_cm": 2.0, "damping_ns_per_cm": 3.0}
+    with pytest.raises(InputDataError, match=r"has 1 row\(s\); a lookup needs at least 2"):
+        lookup(one, **q)
+    with pytest.raises(InputDataError, match=r"has 1 row\(s\); a lookup needs at least 2"):
+        interpolate(one, k=1, **q)
+    assert lookup(table.iloc[:2], **q).row["object_id"] in ("A", "B")
+
+
+def test_keys_without_spread() -> None:
+    from deformctl.table import keys_without_spread
+
+    t = pd.DataFrame(
+        {
+            "weight_n": [1.0, 2.0],
+            "deformability_n_per_cm": [3.0, 3.0],
+            "damping_ns_per_cm": [0.0, 0.0],
+        }
+    )
+    assert keys_without_spread(t) == ["deformability_n_per_cm", "damping_ns_per_cm"]
+    t["damping_ns_per_cm"] = [0.0, 1e-9]
+    assert keys_without_spread(t) == ["deformability_n_per_cm"]

@@ -327,12 +327,16 @@ def _frame_from_arrow(
     return df
 
 
-def read_table(path: PathArg, kind: str | None = None) -> pd.DataFrame:
+def read_table(
+    path: PathArg, kind: str | None = None, *, refuse_foreign: str | None = None
+) -> pd.DataFrame:
     """Read and validate a Parquet table.
 
     Args:
         path: the ``.parquet`` file, or ``-`` for stdin.
         kind: the expected table kind; None accepts whatever kind the file's metadata names.
+        refuse_foreign: when given, a table without the ``deformctl`` metadata (one written by
+            another tool, whatever its columns) is refused; the text says how to make one.
 
     Returns:
         The validated, normalised frame; ``df.attrs`` holds ``kind``, ``schema_version``,
@@ -347,6 +351,11 @@ def read_table(path: PathArg, kind: str | None = None) -> pd.DataFrame:
         raise ValueError(f"unknown table kind {kind!r}")
     data = read_input_bytes(path)
     table, meta = read_parquet_bytes(data, path)
+    if refuse_foreign is not None and meta is None:
+        raise SchemaError(
+            f"not a deformctl {kind or 'table'} (no 'deformctl' metadata): {refuse_foreign}",
+            path=display_name(path),
+        )
     if kind is None:
         if meta is None:
             raise SchemaError(

@@ -126,6 +126,11 @@ def translate_errors(func: Callable[P, R]) -> Callable[P, R]:
     return wrapper
 
 
+def warn(line: str) -> None:
+    """One ``warning: ...`` line on stderr (doubtful but usable input)."""
+    typer.echo(f"warning: {line}", err=True)
+
+
 class OneLineErrorGroup(TyperGroup):
     """The root command group: every click usage error becomes one ``error: ...`` line, exit 2.
 

@@ -111,11 +111,6 @@ def start_seed(
     return load_start_table(table, margin=chosen, k=interpolate, coefficients=coefficients)
 
 
-def warn(line: str) -> None:
-    """One ``warning: ...`` line on stderr."""
-    typer.echo(f"warning: {line}", err=True)
-
-
 def report_run(run: CatalogLiftResult, *, quiet: bool) -> None:
     """Each object's line on stdout (unless an output is stdout), then the exit.
 

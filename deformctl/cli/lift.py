@@ -27,7 +27,7 @@ from rich.console import Console
 
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli import _options as opt
-from deformctl.cli._common import progress_bar, translate_errors
+from deformctl.cli._common import progress_bar, translate_errors, warn
 from deformctl.cli._lift_frames import frames_judge
 from deformctl.cli._lift_runner import (
     DebugDir,
@@ -55,7 +55,6 @@ from deformctl.cli._lift_start import (
     StartTable,
     report_run,
     start_seed,
-    warn,
 )
 from deformctl.errors import UsageError
 from deformctl.lift.search import (

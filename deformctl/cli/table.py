@@ -23,15 +23,18 @@ import typer
 
 from deformctl.artifacts import Provenance, check_output_path, read_table, write_table
 from deformctl.artifacts.dataset import read_table_any
-from deformctl.cli._common import translate_errors
+from deformctl.cli._common import translate_errors, warn
 from deformctl.errors import UsageError, error_context
 from deformctl.table import (
     INDEX_COLUMNS,
     LOOKUP_KEYS,
+    MIN_LOOKUP_ROWS,
     build_index_table,
     interpolate,
+    keys_without_spread,
     lookup_mapping,
     parse_lookup,
+    validate_index_table,
 )
 
 BUILD_FORM = "deformctl table COEFFICIENTS LIFT -o INDEX"
@@ -82,12 +85,24 @@ def _fmt(value: object) -> str:
 
 def _lookup(path: str, text: str, interpolate_k: int | None, as_json: bool) -> None:
     query = parse_lookup(text)  # before reading: a bad --lookup is a usage error (exit 2)
-    index = read_table(path, "index_table")
+    index = read_table(
+        path,
+        "index_table",
+        refuse_foreign="build one with `deformctl table COEFFICIENTS LIFT -o INDEX`",
+    )
+    validate_index_table(index, min_rows=MIN_LOOKUP_ROWS)  # refusals before any warning
+    unspread = keys_without_spread(index)
+    if unspread:
+        warn(
+            f"{', '.join(unspread)} {'has' if len(unspread) == 1 else 'have'} no spread over the "
+            "index table: compared in raw units, not standard deviations"
+        )
     nearest = lookup_mapping(index, query)
     out: dict[str, Any] = {
         "query": query,
         "nearest": {k: nearest.row[k] for k in INDEX_COLUMNS if k in nearest.row},
         "distance_std": nearest.distance,
+        "keys_in_raw_units": unspread,
     }
     if interpolate_k is not None:
         est = interpolate(index, **query, k=interpolate_k)
