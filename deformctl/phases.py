@@ -143,6 +143,28 @@ def _kv_loading_fit(d: FloatArray, v: FloatArray, f: FloatArray) -> tuple[float,
     return float(k), float(c)
 
 
+@dataclass(frozen=True)
+class Smoothed:
+    """A squeeze's compression on its uniform grid, SG-smoothed as the rupture search did it.
+
+    The estimators smooth the compression of a squeeze that did not rupture the same way (same
+    grid, window and order), so they reuse these arrays instead of filtering twice.
+
+    Attributes:
+        dt_s: the grid's sample interval, s.
+        window_samples: the SG window, samples.
+        polyorder: the SG polynomial order.
+        compression_m: smoothed compression on the grid, m, ``[n]``.
+        rate_m_per_s: its time derivative, m/s, ``[n]``.
+    """
+
+    dt_s: float
+    window_samples: int
+    polyorder: int
+    compression_m: FloatArray
+    rate_m_per_s: FloatArray
+
+
 def find_rupture_index(
     time_s: FloatArray, force_n: FloatArray, compression_m: FloatArray, *, window_s: float
 ) -> int | None:
@@ -151,15 +173,23 @@ def find_rupture_index(
     See the module docstring for the criterion. The input may be non-uniformly sampled; it is
     judged on a uniform grid (``window_s`` is the SG window used to smooth ``d`` and ``d'``).
     """
+    return _find_rupture(time_s, force_n, compression_m, window_s=window_s)[0]
+
+
+def _find_rupture(
+    time_s: FloatArray, force_n: FloatArray, compression_m: FloatArray, *, window_s: float
+) -> tuple[int | None, Smoothed | None]:
+    """:func:`find_rupture_index`, and the smoothed compression it judged (None if too short)."""
     n_in = force_n.shape[0]
     if n_in < 10:
-        return None
+        return None, None
     dt_s, grid, (f, comp) = uniform_grid(time_s, force_n, compression_m)
     n = f.shape[0]
     wl = sg_window_length(window_s, dt_s, _POLYORDER)
     if n < 4 * wl:
-        return None
+        return None, None
     d, v = sg_smooth(comp, wl, _POLYORDER, dt_s)
+    smoothed = Smoothed(dt_s, wl, _POLYORDER, d, v)
     peak_idx = _running_peak_index(f)
     running = f[peak_idx]
     sigma = noise_std(comp)
@@ -189,17 +219,28 @@ def find_rupture_index(
         shortfall = predicted - f[after] > RUPTURE_DROP_FRAC * f[p]
         if np.any(shortfall & dropped[after] & (d[after] > d[p] + 3.0 * sigma)):
             # back to the input's samples: the last one at or before the peak's time
-            return int(np.searchsorted(time_s, grid[p], side="right") - 1)
-    return None
+            return int(np.searchsorted(time_s, grid[p], side="right") - 1), smoothed
+    return None, smoothed
 
 
 def cut_rupture(
     s: SqueezeSeries, *, window_s: float, recording_offset_s: float | None = None
 ) -> tuple[SqueezeSeries, Rupture | None]:
     """The squeeze up to its rupture (inclusive) and the rupture; the squeeze itself if none."""
-    i = find_rupture_index(s.time_s, s.force_n, s.compression_m, window_s=window_s)
+    cut, rupture, _ = cut_rupture_smoothed(
+        s, window_s=window_s, recording_offset_s=recording_offset_s
+    )
+    return cut, rupture
+
+
+def cut_rupture_smoothed(
+    s: SqueezeSeries, *, window_s: float, recording_offset_s: float | None = None
+) -> tuple[SqueezeSeries, Rupture | None, Smoothed | None]:
+    """:func:`cut_rupture`, and the squeeze's smoothed compression when it did not rupture
+    (None when it did, or was too short to judge)."""
+    i, smoothed = _find_rupture(s.time_s, s.force_n, s.compression_m, window_s=window_s)
     if i is None:
-        return s, None
+        return s, None, smoothed
     rupture = Rupture(
         squeeze_index=s.squeeze_index,
         time_s=float(s.time_s[i]),
@@ -209,7 +250,7 @@ def cut_rupture(
         if recording_offset_s is None
         else float(recording_offset_s + s.time_s[i]),
     )
-    return slice_squeeze(s, slice(0, i + 1)), rupture
+    return slice_squeeze(s, slice(0, i + 1)), rupture, None
 
 
 def slice_squeeze(s: SqueezeSeries, sl: slice) -> SqueezeSeries:

@@ -290,3 +290,31 @@ def test_unknown_method_and_mixed_objects() -> None:
         fit_lsq([_good(), other])
     with pytest.raises(InputDataError, match="no squeezes"):
         fit_lsq([])
+
+
+def test_one_smoothing_per_squeeze_and_one_table_per_log() -> None:
+    """Issue 15, item 6: the fits reuse the rupture search's smoothing of a squeeze that did not
+    rupture, and a log's table is built once from all rows; both give the numbers and the table
+    the per-squeeze smoothing and the concatenated one-row tables gave."""
+    from deformctl.characterize import _coefficient_frame, _fit_rows
+    from deformctl.phases import _POLYORDER, cut_rupture_smoothed
+    from deformctl.signals import sg_smooth, sg_window_length, uniform_grid
+
+    ramp = synthetic_kelvin_voigt_squeeze(13.0, 1.0, profile="ramp_hold_release", seed=5)
+    squeezes = [*_squeezes(30.0, 6.47, "sine", 11), ramp]
+    for s in squeezes:
+        cut, rupture, smoothed = cut_rupture_smoothed(s, window_s=0.2)
+        assert rupture is None
+        assert cut is s
+        assert smoothed is not None
+        dt_s, _, (_, comp) = uniform_grid(s.time_s, s.force_n, s.compression_m)
+        wl = sg_window_length(0.2, dt_s, _POLYORDER)
+        d, v = sg_smooth(comp, wl, _POLYORDER, dt_s)
+        assert smoothed.compression_m.tobytes() == d.tobytes()
+        assert smoothed.rate_m_per_s.tobytes() == v.tobytes()
+    by_object = {"a": squeezes[:3], "b": squeezes[3:]}
+    rows = _fit_rows(by_object, "lsq", preload="zero", constrain_damping=False,
+                     recorded_ruptures=None)  # fmt: skip
+    one_by_one = pd.concat([_coefficient_frame([r]) for r in rows], ignore_index=True)
+    pd.testing.assert_frame_equal(_coefficient_frame(rows), one_by_one, check_exact=True)
+    pd.testing.assert_frame_equal(characterize(by_object), one_by_one, check_exact=True)

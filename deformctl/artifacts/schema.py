@@ -19,6 +19,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+import operator
 from collections.abc import Callable
 from dataclasses import dataclass
 from importlib.resources import files
@@ -301,6 +302,110 @@ def _compile(schema: Any) -> Check | None:
 def fast_check(name: str) -> Check | None:
     """The compiled predicate of ``schemas/<name>.schema.json`` (None if not compilable)."""
     return _compile(load_json_schema(name))
+
+
+#: What :func:`message_columns` understands: a flat object of strings, integers and numbers.
+_COLUMN_KEYWORDS = _ANNOTATIONS | {"type", "minimum", "maximum", "minLength"}
+_COLUMN_TYPES = ("string", "integer", "number")
+
+ColumnPlan = tuple[tuple[tuple[str, str, dict[str, Any]], ...], frozenset[str]]
+
+
+@functools.cache
+def _column_plan(name: str) -> ColumnPlan | None:
+    """``(properties as (key, type, subschema), required keys)`` of a flat message schema, or
+    None when the schema uses more than :func:`message_columns` checks."""
+    schema = load_json_schema(name)
+    top = _ANNOTATIONS | {"type", "properties", "required", "additionalProperties"}
+    if set(schema) - top or schema.get("type") != "object":
+        return None
+    if schema.get("additionalProperties") is not False:
+        return None
+    props = []
+    for key, sub in schema.get("properties", {}).items():
+        if not isinstance(sub, dict) or set(sub) - _COLUMN_KEYWORDS:
+            return None
+        if sub.get("type") not in _COLUMN_TYPES:
+            return None
+        props.append((key, sub["type"], sub))
+    required = frozenset(schema.get("required", ()))
+    if not required <= {p[0] for p in props}:
+        return None
+    return tuple(props), required
+
+
+def message_columns(name: str, messages: list[Any]) -> dict[str, Any] | None:
+    """Check many decoded messages against the JSON Schema ``name`` at once; their columns.
+
+    For a flat schema (an object of ``string`` / ``integer`` / ``number`` properties with
+    ``minLength``, ``minimum``, ``maximum``, ``required`` and ``additionalProperties: false``,
+    as the MCAP sample schemas are) the checks run per column: the Python type of every value,
+    then the bounds with numpy. A message they accept is one :func:`validate_message` accepts.
+
+    Returns:
+        Key → column when every message is valid: a list of str for a string property, an int64
+        array for an integer one, a float64 array for a number (ints converted as
+        ``np.fromiter(..., float64)`` does), None for a property no message has, and a
+        :class:`numpy.ma.MaskedArray` (masked where absent) for a number property some messages
+        have. None when this cannot vouch for every message (a schema it does not understand, a
+        string or integer property in some messages only, any invalid message): then
+        :func:`validate_message` judges each message and names what is wrong.
+    """
+    plan = _column_plan(name)
+    if plan is None:
+        return None
+    props, required = plan
+    n = len(messages)
+    if n and set(map(type, messages)) != {dict}:
+        return None
+    out: dict[str, Any] = {}
+    seen = 0
+    for key, typ, sub in props:
+        present: np.ndarray | None = None
+        try:
+            col = list(map(operator.itemgetter(key), messages))
+        except KeyError:  # in some messages or none
+            if key in required and n:
+                return None
+            mask = [key in m for m in messages]
+            if not any(mask):
+                out[key] = None
+                continue
+            if typ != "number":
+                return None
+            present = np.array(mask, dtype=bool)
+            col = [m[key] for m in messages if key in m]
+        seen += len(col)
+        types = set(map(type, col))
+        values: Any
+        if typ == "string":
+            if types != {str} or min(map(len, col)) < sub.get("minLength", 0):
+                return None
+            out[key] = col
+            continue
+        try:
+            if typ == "integer":
+                if types != {int}:
+                    return None
+                values = np.array(col, dtype=np.int64)
+            else:
+                if not types <= {int, float}:
+                    return None
+                values = np.array(col, dtype=np.float64)
+        except OverflowError:
+            return None
+        if "minimum" in sub and not np.all(values >= sub["minimum"]):
+            return None
+        if "maximum" in sub and not np.all(values <= sub["maximum"]):
+            return None
+        if present is not None:
+            full = np.full(n, np.nan)
+            full[present] = values
+            values = np.ma.MaskedArray(full, mask=~present)
+        out[key] = values
+    if sum(map(len, messages)) != seen:  # a key the schema does not list
+        return None
+    return out
 
 
 def validate_message(
