@@ -21,6 +21,7 @@ from deformctl.sim import (
     LiftProfile,
     ObjectSpec,
     SimSettings,
+    SupportRelease,
     f_w_n,
     lift_attempt,
     rigid_lift_force_n,
@@ -208,8 +209,10 @@ def scaling_row(n: int, solver: str = "auto") -> dict[str, float | str]:
     lift_attempt(CUBE, grip, settings=small)  # load the compiled kernels
     _lattice_and_scale.cache_clear()
     build_model.cache_clear()
+    # the model lift_attempt builds (its default release decides table and resting)
+    on_table = SupportRelease().mode == "table"
     t0 = time.perf_counter()
-    model = build_model(CUBE, settings, gripped=True)
+    model = build_model(CUBE, settings, gripped=True, resting=on_table, table=on_table)
     t_build = time.perf_counter() - t0
     model.solver_stats[:] = 0
     t_attempt = _best_of(lambda: lift_attempt(CUBE, grip, settings=settings), REPEATS)
