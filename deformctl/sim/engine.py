@@ -38,7 +38,7 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       prescribes its DOF's velocity exactly, so sticking holds exactly), palm-plane rows a Schur
       complement on CG-solved columns. Cost per step: one force pass plus ~1-3 CG iterations of
       ~6 matrix-vector products each, linear in the lattice size. A lift's centre-of-mass path
-      stays within 4e-9 m of the direct solver's (11^3 cube), squeeze D/lambda within 1e-6.
+      stays within about 1e-9 m of a 100x tighter solve (11^3 cube), squeeze D/lambda within 1e-6.
     * Measured candidates (``bench/bench_sim.py``, 10 cm cube, one lift attempt, 2-core machine
       under load): SuperLU's MMD ordering fills 2x more than nested dissection (24 M at 21^3),
       COLAMD 3.4x; CHOLMOD (``scikit-sparse``) has no wheel on PyPI (source only, needs the
