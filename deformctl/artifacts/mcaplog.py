@@ -269,16 +269,10 @@ def load_mcap(data: bytes, path: PathArg) -> McapContents:
     try:
         reader = StreamReader(io.BytesIO(data), validate_crcs=True, record_size_limit=len(data))
         for record in reader.records:
-            if isinstance(record, Header):
-                contents.header = record
-            elif isinstance(record, Metadata):
-                contents.metadata.append((record.name, dict(record.metadata)))
-            elif isinstance(record, Schema):
-                contents.schemas[record.id] = record
-            elif isinstance(record, Channel):
-                contents.channels[record.id] = record
-            elif isinstance(record, Message):
+            if isinstance(record, Message):
                 contents.messages.append(record)
+            else:
+                _keep(record, contents)
     except _DECODE_ERRORS as err:
         raise InputDataError(f"damaged MCAP file ({_short(err)})", path=name) from None
     for msg in contents.messages:
