@@ -275,18 +275,8 @@ class _LocalBackend:
     def __init__(
         self, workers: int, task: Callable[..., Any], schema: pa.Schema, id_column: str
     ) -> None:
-        methods = multiprocessing.get_all_start_methods()
-        ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
-        if ctx.get_start_method() == "forkserver":
-            # Workers fork from a server that has imported the task's module once (a no-op when
-            # this process started its fork server already). pyarrow imports pandas lazily when
-            # it converts rows, so pandas is preloaded too. Python 3.11's fork server ignores the
-            # parent's sys.path: a task module must be importable from PYTHONPATH or the cwd.
-            preload = ["deformctl.parallel", "pandas"]
-            module = getattr(task, "__module__", None)
-            if module and module != "__main__" and module in sys.modules:
-                preload.append(module)
-            ctx.set_forkserver_preload(preload)
+        # pyarrow imports pandas lazily when it converts rows, so pandas is preloaded too
+        ctx = _worker_context(task, ["pandas"])
         self._pool = ProcessPoolExecutor(
             max_workers=workers,
             mp_context=ctx,
@@ -355,6 +345,24 @@ def _abandon_pool(pool: ProcessPoolExecutor) -> None:
         with contextlib.suppress(Exception):
             proc.kill()
     pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _worker_context(task: Callable[..., Any], preload: Sequence[str] = ()) -> Any:
+    """The start context of local workers: forkserver (spawn where unavailable).
+
+    Workers fork from a server that has imported this module, ``preload`` and the task's module
+    once (a no-op when this process started its fork server already). Python 3.11's fork server
+    ignores the parent's sys.path: a task module must be importable from PYTHONPATH or the cwd.
+    """
+    methods = multiprocessing.get_all_start_methods()
+    ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    if ctx.get_start_method() == "forkserver":
+        modules = ["deformctl.parallel", *preload]
+        module = getattr(task, "__module__", None)  # a function's, or an instance's class's
+        if module and module != "__main__" and module in sys.modules:
+            modules.append(module)
+        ctx.set_forkserver_preload(modules)
+    return ctx
 
 
 def _write_part(part_writer: Callable[[PartPayloads], None], part: PartPayloads) -> None:
@@ -827,14 +835,7 @@ def map_in_order(
             if on_result is not None:
                 on_result(i, out[-1])
         return out
-    methods = multiprocessing.get_all_start_methods()
-    ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
-    if ctx.get_start_method() == "forkserver":
-        module = getattr(type(task), "__module__", None) or getattr(task, "__module__", None)
-        preload = ["deformctl.parallel"]
-        if module and module != "__main__" and module in sys.modules:
-            preload.append(module)
-        ctx.set_forkserver_preload(preload)
+    ctx = _worker_context(task)
     results: list[Any] = [None] * len(items)
     with ProcessPoolExecutor(
         max_workers=workers, mp_context=ctx, initializer=_init_worker, initargs=(os.getpid(),)
