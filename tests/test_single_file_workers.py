@@ -159,3 +159,27 @@ def test_workers_flag_on_a_single_file(tmp_path: Path) -> None:
     )  # fmt: skip
     assert result.exit_code == 0, result.stderr
     assert "2 simulated squeeze(s) of 2 object(s)" in result.stderr
+
+
+def test_cli_logs_with_one_and_two_workers_hold_the_same_squeezes(tmp_path: Path) -> None:
+    """Through the command line: only the recorded command line (``--workers N``) differs."""
+    from deformctl.artifacts import read_squeeze_log
+
+    cat = _catalog(tmp_path, MIN_PARALLEL_OBJECTS)
+    fast = ["--alpha-cm", "5", "--dt-s", "0.002", "--squeezes", "1", "--ramp-s", "0.05",
+            "--hold-s", "0.05", "--noise-force-n", "0.01"]  # fmt: skip
+    logs = []
+    for workers in ("1", "2"):
+        out = tmp_path / f"s{workers}.mcap"
+        result = runner.invoke(
+            app, ["measure", str(cat), "--sim", "-o", str(out), "--workers", workers, *fast]
+        )
+        assert result.exit_code == 0, result.stderr
+        logs.append(read_squeeze_log(out))
+    (objects1, series1), (objects2, series2) = logs
+    assert objects1 == objects2
+    assert len(series1) == len(series2) == MIN_PARALLEL_OBJECTS
+    for a, b in zip(series1, series2, strict=True):
+        assert a.object_id == b.object_id
+        assert (a.force_n == b.force_n).all()
+        assert (a.compression_m == b.compression_m).all()
