@@ -84,6 +84,7 @@ from deformctl.parallel import (
     SweepOptions,
     SweepSummary,
     TaskOutput,
+    map_in_order,
     run_sweep,
     single_file_workers,
 )
@@ -1373,6 +1374,11 @@ def simulate_catalog_file(
     return objects, series
 
 
+def _positioned_items(catalog: pd.DataFrame) -> list[dict[str, Any]]:
+    """The :class:`SimulateCatalogTask` items of ``catalog``: each row with its ``_position``."""
+    return [{**rec, "_position": i} for i, rec in enumerate(catalog.to_dict("records"))]
+
+
 def _squeeze_in_workers(
     catalog: pd.DataFrame,
     task: SimulateCatalogTask,
@@ -1380,9 +1386,7 @@ def _squeeze_in_workers(
     progress: SqueezeProgress | None,
 ) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
     """:func:`simulate_squeezes` of ``catalog`` with one task per object on local processes."""
-    from deformctl.parallel import map_in_order
-
-    items = [{**rec, "_position": i} for i, rec in enumerate(catalog.to_dict("records"))]
+    items = _positioned_items(catalog)
     per_object = int(task.simulate.get("squeezes", DEFAULT_SIM_SQUEEZES))
 
     def done(i: int, _: object) -> None:
@@ -1421,7 +1425,7 @@ def simulate_catalog_sweep(
     catalog = select_objects(read_catalog(catalog_path), object_ids)
     _check_budgets(catalog, task, catalog_path, single_log=False)
     provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
-    items = [{**rec, "_position": i} for i, rec in enumerate(catalog.to_dict("records"))]
+    items = _positioned_items(catalog)
     settings = {**task.simulate, "sim_settings": dataclasses.asdict(task.settings)}
     if task.log_epoch_ns != LOG_EPOCH_NS:  # (the default keeps older directories resumable)
         settings["log_epoch_ns"] = task.log_epoch_ns

@@ -58,7 +58,7 @@ from deformctl.lift.search import (
     find_min_lift_force_seeded,
     validate_search_options,
 )
-from deformctl.parallel import single_file_workers
+from deformctl.parallel import map_in_order, single_file_workers
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the seed sources import sklearn when used
     from deformctl.lift.seeded import StartEstimate, StartSeed
@@ -287,8 +287,6 @@ def lift_catalog(
             progress(objects[i].object_id, i + 1, len(objects))
 
     if workers > 1 and not factory.stop_on_failure:
-        from deformctl.parallel import map_in_order
-
         outcomes = map_in_order(search, jobs, workers=workers, on_result=lambda i, _: done(i))
         for obj, outcome in zip(objects, outcomes, strict=True):
             record(obj, outcome)
@@ -393,7 +391,7 @@ def lift_catalog_files(
         path=catalog_path,
         seed=seed,
         warn=warn,
-        workers=1 if factory.stop_on_failure else single_file_workers(workers, len(selected)),
+        workers=single_file_workers(workers, len(selected)),  # the rig runs in-process anyway
     )
     with committed_together():  # a kill leaves both outputs or neither (the table last)
         if log is not None:
