@@ -36,9 +36,11 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       warm-started from the linear extrapolation of the last two steps' velocity changes, to an
       RMS residual of ``cg_tolerance_m_s = 3e-7`` m/s. Contacts become *fixed DOFs* (an active row
       prescribes its DOF's velocity exactly, so sticking holds exactly), palm-plane rows a Schur
-      complement on CG-solved columns. Cost per step: one force pass plus ~1-3 CG iterations of
-      ~6 matrix-vector products each, linear in the lattice size. A lift's centre-of-mass path
-      stays within about 1e-9 m of a 100x tighter solve (11^3 cube), squeeze D/lambda within 1e-6.
+      complement on CG-solved columns. Cost per step: one force pass, one matrix-vector
+      product and ~1-3 CG iterations of about 5 matrix-vector products' time each (the V-cycle,
+      which also returns CG's ``A p``; :mod:`deformctl.sim.multigrid`), linear in the lattice
+      size. A lift's centre-of-mass path stays within about 1e-9 m of a 100x tighter solve
+      (11^3 cube), squeeze D/lambda within 1e-6.
     * Measured candidates (``bench/bench_sim.py``, 10 cm cube, one lift attempt, 2-core machine
       under load): SuperLU's MMD ordering fills 2x more than nested dissection (24 M at 21^3),
       COLAMD 3.4x; CHOLMOD (``scikit-sparse``) has no wheel on PyPI (source only, needs the
@@ -697,6 +699,7 @@ def run_model(
             h.a_ptr,
             h.a_idx,
             h.a_val,
+            h.a_diag,
             h.inv_diag,
             h.p_row_off,
             h.p_ptr,

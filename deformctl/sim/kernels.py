@@ -1124,6 +1124,7 @@ def integrate_iterative(
     h_a_ptr: IntArray,
     h_a_idx: Int32Array,
     h_a_val: FloatArray,
+    h_a_diag: IntArray,
     h_inv_diag: FloatArray,
     h_p_row_off: IntArray,
     h_p_ptr: IntArray,
@@ -1208,7 +1209,7 @@ def integrate_iterative(
     tot = 0
     for lvl in range(h_n.shape[0]):
         tot += h_n[lvl]
-    work = np.empty(4 * n_dof + 3 * tot)
+    work = np.empty(5 * n_dof + 3 * tot)
     fixed = np.zeros(n_dof, dtype=np.bool_)
     fixed_list = np.zeros(n_dof, dtype=np.int64)
     fixer = np.full(n_dof, -1, dtype=np.int64)
@@ -1332,8 +1333,9 @@ def integrate_iterative(
                 n_fixed_prev = n_fixed
             # free solve (the fixed DOFs keep their prescribed change)
             its = pcg(
-                h_n, h_vec_off, h_row_off, h_a_ptr, h_a_idx, h_a_val, h_inv_diag, h_p_row_off,
-                h_p_ptr, h_p_idx, h_p_val, hc_colptr, hc_rowidx, hc_values, hc_diag, hc_perm,
+                h_n, h_vec_off, h_row_off, h_a_ptr, h_a_idx, h_a_val, h_a_diag, h_inv_diag,
+                h_p_row_off, h_p_ptr, h_p_idx, h_p_val, hc_colptr, hc_rowidx, hc_values, hc_diag,
+                hc_perm,
                 fixed, bt, dv, cg_tolerance, cg_max_iterations, work,
             )  # fmt: skip
             stats[0] += 1
@@ -1369,7 +1371,7 @@ def integrate_iterative(
                     if row_dof2[r] >= 0:
                         unit[row_dof2[r]] -= 1.0
                     its_y = pcg(
-                        h_n, h_vec_off, h_row_off, h_a_ptr, h_a_idx, h_a_val, h_inv_diag,
+                        h_n, h_vec_off, h_row_off, h_a_ptr, h_a_idx, h_a_val, h_a_diag, h_inv_diag,
                         h_p_row_off, h_p_ptr, h_p_idx, h_p_val, hc_colptr, hc_rowidx,
                         hc_values, hc_diag, hc_perm, fixed, unit, y, 1e-8, cg_max_iterations,
                         work,
