@@ -33,13 +33,16 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       scale.
     * **iterative** above that: CG preconditioned by one geometric-multigrid V-cycle
       (:mod:`deformctl.sim.multigrid`; convergence ~0.1 per iteration whatever the size),
-      warm-started from the linear extrapolation of the last two steps' velocity changes, to an
-      RMS residual of ``cg_tolerance_m_s = 3e-7`` m/s. Contacts become *fixed DOFs* (an active row
-      prescribes its DOF's velocity exactly, so sticking holds exactly), palm-plane rows a Schur
-      complement on CG-solved columns. Cost per step: one force pass, one matrix-vector
-      product and ~1-3 CG iterations of about 5 matrix-vector products' time each (the V-cycle,
-      which also returns CG's ``A p``; :mod:`deformctl.sim.multigrid`), linear in the lattice
-      size. A lift's centre-of-mass path stays within about 1e-9 m of a 100x tighter solve
+      warm-started from the least-squares combination of the last three steps' velocity changes
+      (the one whose image under ``A`` best matches the step's right-hand side; it contains the
+      linear extrapolation, and halves the CG iterations against it), to an RMS residual of
+      ``cg_tolerance_m_s = 3e-7`` m/s. Contacts become *fixed DOFs* (an active row prescribes its
+      DOF's velocity exactly, so sticking holds exactly), palm-plane rows a Schur complement on
+      CG-solved columns. Cost per step: one force pass, two matrix-vector products (the initial
+      residual and the warm start's image) and ~0.5-1.3 CG iterations of about 5 matrix-vector
+      products' time each (the V-cycle, which also returns CG's ``A p``;
+      :mod:`deformctl.sim.multigrid`), linear in the lattice size. A lift's centre-of-mass path
+      stays within about 1e-9 m of a 100x tighter solve
       (11^3 cube), squeeze D/lambda within 1e-6.
     * Measured candidates (``bench/bench_sim.py``, 10 cm cube, one lift attempt, 2-core machine
       under load): SuperLU's MMD ordering fills 2x more than nested dissection (24 M at 21^3),
@@ -142,6 +145,12 @@ IntArray = NDArray[np.int64]
 #: recorded state (a 1e-12 s step would ask for hundreds of GiB), above 50 ms the contact and
 #: slip events of a lift are not resolved.
 DT_BOUNDS_S = (1e-5, 0.05)
+#: velocity changes the iterative solver's warm start combines (:func:`kernels._warm_start`).
+#: CG iterations per solve, one lift attempt of the 10 cm cube at 8^3 / 16^3 / 21^3: linear
+#: extrapolation of two 1.24 / 1.97 / 2.47; least squares over 2: 0.63 / 1.06 / 1.47; over 3:
+#: 0.51 / 0.93 / 1.23; over 4: 0.47 / 0.88 / 1.16, over 6: 0.43 / - / 1.06 (3 is the fastest:
+#: each kept vector costs two passes over the DOFs per step)
+WARM_HISTORY = 3
 
 #: Bytes each simulated step keeps: the record row (``kernels.N_REC`` doubles), the commanded force
 #: and palm velocity, and the series built from them (about three copies).
@@ -712,6 +721,7 @@ def run_model(
             c.perm,
             tol,
             s.cg_max_iterations,
+            WARM_HISTORY,
         )
         return kernels.integrate_iterative(
             *(common_head + solver_args + common_tail + (model.solver_stats,))

@@ -40,12 +40,13 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from deformctl.sim.multigrid import pcg
+from deformctl.sim.multigrid import csr_matvec, pcg
 from deformctl.sim.solver import ldl_solve
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 Int32Array = NDArray[np.int32]
+BoolArray = NDArray[np.bool_]
 
 # columns of the record matrix returned by integrate()
 REC_TIME = 0
@@ -1087,6 +1088,62 @@ def integrate(
 
 
 @njit(cache=True)
+def _warm_start(
+    dv_hist: FloatArray,
+    y_hist: FloatArray,
+    order: IntArray,
+    n_hist: int,
+    fixed: BoolArray,
+    rhs: FloatArray,
+    dv: FloatArray,
+) -> None:
+    """CG's initial guess from the last ``n_hist`` velocity changes ``dv_k`` (rows
+    ``order[0], order[1], ...`` of ``dv_hist``, newest first) and their images ``y_k = A dv_k``
+    (same rows of ``y_hist``): ``dv = sum_k c_k dv_k`` with the least-squares ``c`` of
+    ``min |rhs - sum_k c_k y_k|`` over the DOFs not in ``fixed`` (last step's active set), by
+    the normal equations with a 1e-12 relative ridge. The span contains the linear extrapolation
+    ``2 dv_1 - dv_2``, the guess while fewer than two are known or the small system is singular.
+    """
+    n_dof = dv.shape[0]
+    k = n_hist
+    if k >= 2:
+        g = np.zeros((k, k))
+        t = np.zeros(k)
+        for i in range(n_dof):
+            if fixed[i]:
+                continue
+            for a in range(k):
+                ya = y_hist[order[a], i]
+                t[a] += ya * rhs[i]
+                for b in range(a, k):
+                    g[a, b] += ya * y_hist[order[b], i]
+        trace = 0.0
+        for a in range(k):
+            trace += g[a, a]
+            for b in range(a):
+                g[a, b] = g[b, a]
+        if trace > 0.0:
+            for a in range(k):
+                g[a, a] += 1e-12 * trace
+            c = np.zeros(k)
+            if _solve_dense(g, t, c):
+                for i in range(n_dof):
+                    acc = 0.0
+                    for a in range(k):
+                        acc += c[a] * dv_hist[order[a], i]
+                    dv[i] = acc
+                return
+    for i in range(n_dof):
+        dv[i] = 0.0
+    if k >= 1:
+        for i in range(n_dof):
+            dv[i] = 2.0 * dv_hist[order[0], i]
+    if k >= 2:
+        for i in range(n_dof):
+            dv[i] -= dv_hist[order[1], i]
+
+
+@njit(cache=True)
 def _fixed_residual(
     a_ptr: IntArray,
     a_idx: Int32Array,
@@ -1137,6 +1194,7 @@ def integrate_iterative(
     hc_perm: IntArray,
     cg_tolerance: float,
     cg_max_iterations: int,
+    warm_history: int,
     gravity: float,
     palm_x_dof: IntArray,
     palm_z_dof: IntArray,
@@ -1181,6 +1239,7 @@ def integrate_iterative(
             level 0 is ``A`` itself).
         cg_tolerance: CG stops when the free DOFs' residual 2-norm is at most this, N·s.
         cg_max_iterations: CG iteration limit per solve.
+        warm_history: velocity changes kept for the warm start (:func:`_warm_start`).
         stats: counters, ``[4]``: solves, CG iterations, active-set rounds, unconverged solves.
         Other arguments: as :func:`integrate`.
     """
@@ -1195,8 +1254,10 @@ def integrate_iterative(
     fq = np.empty(n_dof)
     bt = np.empty(n_dof)
     dv = np.zeros(n_dof)
-    dv_prev = np.zeros(n_dof)
-    dv_prev2 = np.zeros(n_dof)
+    dv_hist = np.zeros((warm_history, n_dof))
+    y_hist = np.zeros((warm_history, n_dof))
+    order = np.arange(warm_history)
+    n_hist = 0
     vnew = np.empty(n_dof)
     react = np.zeros(n_dof)
     h_step = 2.0 * dt / 3.0 if bdf2 else dt
@@ -1277,9 +1338,7 @@ def integrate_iterative(
                 target[r] = (palm_stop[1] - palm_x0[1] - q[palm_x_dof[1]]) / h_step
             else:
                 target[r] = 0.0
-        # warm start: last step's velocity change
-        for i in range(n_dof):
-            dv[i] = 2.0 * dv_prev[i] - dv_prev2[i]
+        _warm_start(dv_hist, y_hist, order, n_hist, fixed, fq, dv)
         for _round in range(64):
             stats[2] += 1
             # fixed DOFs and known impulses of the current active set
@@ -1481,9 +1540,15 @@ def integrate_iterative(
                         changed = True
             if not changed:
                 break
+        # the history: the oldest slot takes this step's dv and its image A dv
+        slot = order[warm_history - 1]
+        for a in range(warm_history - 1, 0, -1):
+            order[a] = order[a - 1]
+        order[0] = slot
+        n_hist = min(n_hist + 1, warm_history)
         for i in range(n_dof):
-            dv_prev2[i] = dv_prev[i]
-            dv_prev[i] = dv[i]
+            dv_hist[slot, i] = dv[i]
+        csr_matvec(h_a_ptr, h_a_idx, h_a_val, h_row_off[0], n_dof, dv, y_hist[slot])
         _record_step(
             step, rec, q, v, vnew, lam, row_type, row_dof, base_x, dof_of, x, palm_x_dof,
             palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, h_step, v_last, particle_mass,
