@@ -1258,6 +1258,7 @@ def integrate_iterative(
     y_hist = np.zeros((warm_history, n_dof))
     order = np.arange(warm_history)
     n_hist = 0
+    residual_in_work = False
     vnew = np.empty(n_dof)
     react = np.zeros(n_dof)
     h_step = 2.0 * dt / 3.0 if bdf2 else dt
@@ -1401,6 +1402,7 @@ def integrate_iterative(
             stats[1] += min(its, cg_max_iterations)
             if its > cg_max_iterations:
                 stats[3] += 1
+            residual_in_work = n_general == 0  # the Schur columns' solves reuse the scratch
             if n_general > 0:
                 # Schur complement on the two-DOF rows: columns y_r = A_FF^-1 J_r^T by CG, each
                 # warm-started from its last solve. W = J Y is formed from the same columns that
@@ -1548,7 +1550,14 @@ def integrate_iterative(
         n_hist = min(n_hist + 1, warm_history)
         for i in range(n_dof):
             dv_hist[slot, i] = dv[i]
-        csr_matvec(h_a_ptr, h_a_idx, h_a_val, h_row_off[0], n_dof, dv, y_hist[slot])
+        y = y_hist[slot]
+        if residual_in_work:
+            # A dv without a product: b - r on the free DOFs (r: CG's final residual, first in
+            # its scratch), b + the row impulse on the fixed ones (exact, from _fixed_residual)
+            for i in range(n_dof):
+                y[i] = bt[i] + react[i] if fixed[i] else bt[i] - work[i]
+        else:
+            csr_matvec(h_a_ptr, h_a_idx, h_a_val, h_row_off[0], n_dof, dv, y)
         _record_step(
             step, rec, q, v, vnew, lam, row_type, row_dof, base_x, dof_of, x, palm_x_dof,
             palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, h_step, v_last, particle_mass,
