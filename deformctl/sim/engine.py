@@ -150,7 +150,7 @@ DT_BOUNDS_S = (1e-5, 0.05)
 #: extrapolation of two 1.24 / 1.97 / 2.47; least squares over 2: 0.63 / 1.06 / 1.47; over 3:
 #: 0.51 / 0.93 / 1.23; over 4: 0.47 / 0.88 / 1.16, over 6: 0.43 / - / 1.06 (3 is the fastest:
 #: each kept vector costs two passes over the DOFs per step)
-WARM_HISTORY = 3
+WARM_HISTORY = 3  # kernels._warm_start takes at most 3
 
 #: Bytes each simulated step keeps: the record row (``kernels.N_REC`` doubles), the commanded force
 #: and palm velocity, and the series built from them (about three copies).

@@ -1097,41 +1097,64 @@ def _warm_start(
     rhs: FloatArray,
     dv: FloatArray,
 ) -> None:
-    """CG's initial guess from the last ``n_hist`` velocity changes ``dv_k`` (rows
+    """CG's initial guess from the last ``n_hist`` (at most 3) velocity changes ``dv_k`` (rows
     ``order[0], order[1], ...`` of ``dv_hist``, newest first) and their images ``y_k = A dv_k``
     (same rows of ``y_hist``): ``dv = sum_k c_k dv_k`` with the least-squares ``c`` of
     ``min |rhs - sum_k c_k y_k|`` over the DOFs not in ``fixed`` (last step's active set), by
     the normal equations with a 1e-12 relative ridge. The span contains the linear extrapolation
     ``2 dv_1 - dv_2``, the guess while fewer than two are known or the small system is singular.
+    The Gram entries are accumulated in one pass, in scalars (a pass per entry, or accumulating
+    into an array, costs several times more).
     """
     n_dof = dv.shape[0]
     k = n_hist
     if k >= 2:
-        g = np.zeros((k, k))
-        t = np.zeros(k)
+        y1 = y_hist[order[0]]
+        y2 = y_hist[order[1]]
+        y3 = y_hist[order[2]] if k >= 3 else y_hist[order[1]]
+        w3 = 1.0 if k >= 3 else 0.0
+        g11 = g12 = g13 = g22 = g23 = g33 = 0.0
+        t1 = t2 = t3 = 0.0
         for i in range(n_dof):
             if fixed[i]:
                 continue
-            for a in range(k):
-                ya = y_hist[order[a], i]
-                t[a] += ya * rhs[i]
-                for b in range(a, k):
-                    g[a, b] += ya * y_hist[order[b], i]
-        trace = 0.0
-        for a in range(k):
-            trace += g[a, a]
-            for b in range(a):
-                g[a, b] = g[b, a]
+            a1 = y1[i]
+            a2 = y2[i]
+            a3 = w3 * y3[i]
+            r = rhs[i]
+            g11 += a1 * a1
+            g12 += a1 * a2
+            g13 += a1 * a3
+            g22 += a2 * a2
+            g23 += a2 * a3
+            g33 += a3 * a3
+            t1 += a1 * r
+            t2 += a2 * r
+            t3 += a3 * r
+        trace = g11 + g22 + g33
         if trace > 0.0:
+            g = np.empty((k, k))
+            t = np.empty(k)
+            g[0, 0] = g11
+            g[0, 1] = g[1, 0] = g12
+            g[1, 1] = g22
+            t[0] = t1
+            t[1] = t2
+            if k >= 3:
+                g[0, 2] = g[2, 0] = g13
+                g[1, 2] = g[2, 1] = g23
+                g[2, 2] = g33
+                t[2] = t3
             for a in range(k):
                 g[a, a] += 1e-12 * trace
             c = np.zeros(k)
             if _solve_dense(g, t, c):
+                d1 = dv_hist[order[0]]
+                d2 = dv_hist[order[1]]
+                d3 = dv_hist[order[2]] if k >= 3 else d2
+                c3 = c[2] if k >= 3 else 0.0
                 for i in range(n_dof):
-                    acc = 0.0
-                    for a in range(k):
-                        acc += c[a] * dv_hist[order[a], i]
-                    dv[i] = acc
+                    dv[i] = c[0] * d1[i] + c[1] * d2[i] + c3 * d3[i]
                 return
     for i in range(n_dof):
         dv[i] = 0.0

@@ -51,6 +51,10 @@ def test_least_squares_recovers_a_combination_and_beats_extrapolation() -> None:
     want = 0.3 * dv[0] - 1.7 * dv[1] + 2.2 * dv[2]
     got = _guess(dv, y, [0, 1, 2], 3, fixed, a @ want)
     assert np.allclose(got, want, rtol=1e-8, atol=1e-10)
+    # with two kept: the combination of the newest two
+    want2 = 0.8 * dv[2] - 0.4 * dv[0]
+    got2 = _guess(dv, y, [2, 0, 1], 2, fixed, a @ want2)
+    assert np.allclose(got2, want2, rtol=1e-8, atol=1e-10)
     # any right-hand side: the free residual is no larger than the linear extrapolation's
     for trial in range(20):
         rhs = rng.normal(size=n) + 3.0 * (a @ dv[0]) * trial / 20
