@@ -1107,7 +1107,7 @@ def _warm_start(
     into an array, costs several times more).
     """
     n_dof = dv.shape[0]
-    k = n_hist
+    k = min(n_hist, 3)  # a longer history keeps its newest three
     if k >= 2:
         y1 = y_hist[order[0]]
         y2 = y_hist[order[1]]

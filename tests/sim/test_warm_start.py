@@ -51,6 +51,10 @@ def test_least_squares_recovers_a_combination_and_beats_extrapolation() -> None:
     want = 0.3 * dv[0] - 1.7 * dv[1] + 2.2 * dv[2]
     got = _guess(dv, y, [0, 1, 2], 3, fixed, a @ want)
     assert np.allclose(got, want, rtol=1e-8, atol=1e-10)
+    # a longer history: its newest three
+    dv4 = np.vstack([dv, rng.normal(size=(1, n))])
+    y4 = dv4 @ a.T
+    assert np.allclose(_guess(dv4, y4, [0, 1, 2, 3], 4, fixed, a @ want), want, rtol=1e-8)
     # with two kept: the combination of the newest two
     want2 = 0.8 * dv[2] - 0.4 * dv[0]
     got2 = _guess(dv, y, [2, 0, 1], 2, fixed, a @ want2)
