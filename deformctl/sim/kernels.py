@@ -40,7 +40,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from deformctl.sim.multigrid import csr_matvec, pcg
+from deformctl.sim.multigrid import csr_matvec, pcg, pcg_work_size
 from deformctl.sim.solver import ldl_solve
 
 FloatArray = NDArray[np.float64]
@@ -1291,10 +1291,7 @@ def integrate_iterative(
     q_last = q.copy()
     v_last = v.copy()
     rec = np.zeros((n_steps, N_REC))
-    tot = 0
-    for lvl in range(h_n.shape[0]):
-        tot += h_n[lvl]
-    work = np.empty(5 * n_dof + 3 * tot)
+    work = np.empty(pcg_work_size(h_n))
     fixed = np.zeros(n_dof, dtype=np.bool_)
     fixed_list = np.zeros(n_dof, dtype=np.int64)
     fixer = np.full(n_dof, -1, dtype=np.int64)

@@ -390,6 +390,15 @@ def v_cycle(
 
 
 @njit(cache=True)
+def pcg_work_size(n: IntArray) -> int:
+    """Length of :func:`pcg`'s scratch for levels of ``n`` DOFs: ``5 n[0] + 3 sum(n)``."""
+    tot = 0
+    for lvl in range(n.shape[0]):
+        tot += n[lvl]
+    return 5 * n[0] + 3 * tot
+
+
+@njit(cache=True)
 def pcg(
     n: IntArray,
     vec_off: IntArray,
@@ -417,7 +426,7 @@ def pcg(
 ) -> int:
     """Multigrid-preconditioned CG on the free DOFs: ``(A x)_i = b_i`` for every free ``i``, the
     fixed ``x_i`` kept. ``x`` holds the initial guess and receives the solution. Stops when the
-    free residual's 2-norm is at most ``tol``. ``work``: scratch of ``5 n0 + 3 sum(n)``.
+    free residual's 2-norm is at most ``tol``. ``work``: scratch of :func:`pcg_work_size`.
 
     One matrix-vector product per solve (the initial residual): each iteration's ``A p`` is
     ``A z + beta A p_prev``, with ``A z`` from the V-cycle (:func:`v_cycle`).
@@ -495,7 +504,7 @@ def solve(
     h = hierarchy
     n0 = int(h.n[0])
     x = np.zeros(n0) if x0 is None else np.array(x0, dtype=np.float64)
-    work = np.empty(5 * n0 + 3 * int(h.n.sum()))
+    work = np.empty(pcg_work_size(h.n))
     c = h.coarse
     bb = np.ascontiguousarray(b, dtype=np.float64)
     tol = rel_tol * float(np.linalg.norm(np.where(fixed, 0.0, bb)))
