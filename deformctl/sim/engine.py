@@ -154,6 +154,10 @@ DT_BOUNDS_S = (1e-5, 0.05)
 #: 0.51 / 0.93 / 1.23; over 4: 0.47 / 0.88 / 1.16, over 6: 0.43 / - / 1.06 (3 is the fastest:
 #: each kept vector costs two passes over the DOFs per step)
 WARM_HISTORY = 3  # kernels._warm_start takes at most 3
+#: the error a carried product ``A dv`` may have, as a fraction of the CG tolerance, before the
+#: iterative solver forms it again (:func:`kernels.integrate_iterative`): CG's stopping test then
+#: holds for the true residual within 1 %.
+PRODUCT_CARRY_FRACTION = 0.01
 
 #: Bytes each simulated step keeps: the record row (``kernels.N_REC`` doubles), the commanded force
 #: and palm velocity, and the series built from them (about three copies).
@@ -611,7 +615,7 @@ def build_model(
         contact_cols=contact_cols,
         col_of_dof=col_of_dof,
         hierarchy=hierarchy,
-        solver_stats=np.zeros(4, dtype=np.int64),
+        solver_stats=np.zeros(5, dtype=np.int64),
         row_dof=np.asarray(row_dof, dtype=np.int64),
         row_dof2=np.asarray(row_dof2, dtype=np.int64),
         row_particle=np.asarray(row_particle, dtype=np.int64),
@@ -725,6 +729,7 @@ def run_model(
             tol,
             s.cg_max_iterations,
             WARM_HISTORY,
+            PRODUCT_CARRY_FRACTION * tol,
         )
         return kernels.integrate_iterative(
             *(common_head + solver_args + common_tail + (model.solver_stats,))

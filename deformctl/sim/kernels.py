@@ -68,6 +68,11 @@ REC_COM_X = 15
 REC_COM_Y = 16
 N_REC = 17
 
+#: rounding allowed for each carried product ``A dv`` in :func:`integrate_iterative`, relative to
+#: ``max_i sum_j |A_ij| * |dv|_2`` (the scale of a product's rounding: a row of about 80 entries
+#: rounds to 80 ulp of ``|A| |dv|``, about 1e-14)
+PRODUCT_ROUNDING = 1e-14
+
 
 @njit(cache=True)
 def spring_forces(
@@ -1096,15 +1101,24 @@ def _warm_start(
     fixed: BoolArray,
     rhs: FloatArray,
     dv: FloatArray,
-) -> None:
+    adv: FloatArray,
+    err_hist: FloatArray,
+) -> float:
     """CG's initial guess from the last ``n_hist`` (at most 3) velocity changes ``dv_k`` (rows
     ``order[0], order[1], ...`` of ``dv_hist``, newest first) and their images ``y_k = A dv_k``
-    (same rows of ``y_hist``): ``dv = sum_k c_k dv_k`` with the least-squares ``c`` of
+    (same rows of ``y_hist``), and its image ``adv = A dv`` from the same combination of the
+    ``y_k`` (so CG needs no product for its initial residual): ``dv = sum_k c_k dv_k`` with the
+    least-squares ``c`` of
     ``min |rhs - sum_k c_k y_k|`` over the DOFs not in ``fixed`` (last step's active set), by
     the normal equations with a 1e-12 relative ridge. The span contains the linear extrapolation
     ``2 dv_1 - dv_2``, the guess while fewer than two are known or the small system is singular.
     The Gram entries are accumulated in one pass, in scalars (a pass per entry, or accumulating
     into an array, costs several times more).
+
+    Returns:
+        a bound on the 2-norm error of ``adv``: ``sum_k |c_k| err_k`` with ``err_hist[order[k]]``
+        the error bound of image ``k`` (the images are carried, not recomputed, so their errors
+        add up through the coefficients).
     """
     n_dof = dv.shape[0]
     k = min(n_hist, 3)  # a longer history keeps its newest three
@@ -1155,15 +1169,28 @@ def _warm_start(
                 c3 = c[2] if k >= 3 else 0.0
                 for i in range(n_dof):
                     dv[i] = c[0] * d1[i] + c[1] * d2[i] + c3 * d3[i]
-                return
-    for i in range(n_dof):
-        dv[i] = 0.0
-    if k >= 1:
+                    adv[i] = c[0] * y1[i] + c[1] * y2[i] + c3 * y3[i]
+                # the images' errors through the coefficients, and the combination's rounding
+                # (relative to the terms it sums; the Gram diagonal holds their free norms)
+                bound = abs(c[0]) * (err_hist[order[0]] + PRODUCT_ROUNDING * np.sqrt(g11))
+                bound += abs(c[1]) * (err_hist[order[1]] + PRODUCT_ROUNDING * np.sqrt(g22))
+                if k >= 3:
+                    bound += abs(c3) * (err_hist[order[2]] + PRODUCT_ROUNDING * np.sqrt(g33))
+                return bound
+    if k == 0:
+        for i in range(n_dof):
+            dv[i] = 0.0
+            adv[i] = 0.0
+        return 0.0
+    if k == 1:
         for i in range(n_dof):
             dv[i] = 2.0 * dv_hist[order[0], i]
-    if k >= 2:
-        for i in range(n_dof):
-            dv[i] -= dv_hist[order[1], i]
+            adv[i] = 2.0 * y_hist[order[0], i]
+        return 2.0 * err_hist[order[0]]
+    for i in range(n_dof):
+        dv[i] = 2.0 * dv_hist[order[0], i] - dv_hist[order[1], i]
+        adv[i] = 2.0 * y_hist[order[0], i] - y_hist[order[1], i]
+    return 2.0 * err_hist[order[0]] + err_hist[order[1]]
 
 
 @njit(cache=True)
@@ -1218,6 +1245,7 @@ def integrate_iterative(
     cg_tolerance: float,
     cg_max_iterations: int,
     warm_history: int,
+    product_carry: float,
     gravity: float,
     palm_x_dof: IntArray,
     palm_z_dof: IntArray,
@@ -1263,7 +1291,11 @@ def integrate_iterative(
         cg_tolerance: CG stops when the free DOFs' residual 2-norm is at most this, N·s.
         cg_max_iterations: CG iteration limit per solve.
         warm_history: velocity changes kept for the warm start (:func:`_warm_start`).
-        stats: counters, ``[4]``: solves, CG iterations, active-set rounds, unconverged solves.
+        product_carry: the largest error bound (2-norm, N·s) of a carried product ``A dv`` that
+            CG may start from instead of forming the product (a small fraction of
+            ``cg_tolerance``; 0 forms it every step).
+        stats: counters, ``[5]``: solves, CG iterations, active-set rounds, unconverged solves,
+            explicit products ``A dv``.
         Other arguments: as :func:`integrate`.
     """
     n = base_x.shape[0]
@@ -1282,6 +1314,14 @@ def integrate_iterative(
     order = np.arange(warm_history)
     n_hist = 0
     residual_in_work = False
+    adv = np.zeros(n_dof)  # A dv, carried as dv changes (CG's initial product)
+    err_hist = np.zeros(warm_history)  # 2-norm error bound of each kept image
+    a_abs = 0.0  # max_i sum_j |A_ij|, the scale of a product's rounding
+    for i in range(n_dof):
+        row_abs = 0.0
+        for kk in range(h_a_ptr[h_row_off[0] + i], h_a_ptr[h_row_off[0] + i + 1]):
+            row_abs += abs(h_a_val[kk])
+        a_abs = max(a_abs, row_abs)
     vnew = np.empty(n_dof)
     react = np.zeros(n_dof)
     h_step = 2.0 * dt / 3.0 if bdf2 else dt
@@ -1359,7 +1399,13 @@ def integrate_iterative(
                 target[r] = (palm_stop[1] - palm_x0[1] - q[palm_x_dof[1]]) / h_step
             else:
                 target[r] = 0.0
-        _warm_start(dv_hist, y_hist, order, n_hist, fixed, fq, dv)
+        adv_err = _warm_start(dv_hist, y_hist, order, n_hist, fixed, fq, dv, adv, err_hist)
+        # A dv is carried through the images while its error bound stays far below CG's
+        # tolerance (then CG's stopping test still holds for the true residual); else CG forms
+        # the product (the image is then exact, and the bounds start again from rounding)
+        adv_known = adv_err <= product_carry
+        if not adv_known:
+            stats[4] += 1
         for _round in range(64):
             stats[2] += 1
             # fixed DOFs and known impulses of the current active set
@@ -1393,13 +1439,21 @@ def integrate_iterative(
                 elif st == 1 and (fixer[d] < 0 or t != 0):
                     fixer[d] = r  # a sticking friction row, not the table row, fixes a patch
             n_fixed = 0
+            change2 = 0.0
             for i in range(n_dof):
                 r = fixer[i]
                 if r >= 0:
                     fixed[i] = True
                     fixed_list[n_fixed] = i
                     n_fixed += 1
-                    dv[i] = target[r] - v[i]
+                    change = target[r] - v[i] - dv[i]
+                    if change != 0.0:
+                        dv[i] += change
+                        if adv_known:  # A is symmetric: column i is row i
+                            for kk in range(a_ptr0[i], a_ptr0[i + 1]):
+                                adv[h_a_idx[kk]] += h_a_val[kk] * change
+                            change2 += change * change
+            adv_err += PRODUCT_ROUNDING * a_abs * np.sqrt(change2)
             same_fixed = n_fixed == n_fixed_prev
             if same_fixed:
                 for f in range(n_fixed):
@@ -1416,8 +1470,10 @@ def integrate_iterative(
                 h_n, h_vec_off, h_row_off, h_a_ptr, h_a_idx, h_a_val, h_a_diag, h_inv_diag,
                 h_p_row_off, h_p_ptr, h_p_idx, h_p_val, hc_colptr, hc_rowidx, hc_values, hc_diag,
                 hc_perm,
-                fixed, bt, dv, cg_tolerance, cg_max_iterations, work,
+                fixed, bt, dv, cg_tolerance, cg_max_iterations, work, adv, adv_known,
             )  # fmt: skip
+            if not adv_known:
+                adv_err = 0.0
             stats[0] += 1
             stats[1] += min(its, cg_max_iterations)
             if its > cg_max_iterations:
@@ -1455,7 +1511,7 @@ def integrate_iterative(
                         h_n, h_vec_off, h_row_off, h_a_ptr, h_a_idx, h_a_val, h_a_diag, h_inv_diag,
                         h_p_row_off, h_p_ptr, h_p_idx, h_p_val, hc_colptr, hc_rowidx,
                         hc_values, hc_diag, hc_perm, fixed, unit, y, 1e-8, cg_max_iterations,
-                        work,
+                        work, adv, False,
                     )  # fmt: skip
                     stats[0] += 1
                     stats[1] += min(its_y, cg_max_iterations)
@@ -1487,6 +1543,22 @@ def integrate_iterative(
                         if row_dof2[general[g]] >= 0:
                             bt[row_dof2[general[g]]] -= lg[g]
             _fixed_residual(a_ptr0, h_a_idx, h_a_val, fixed_list, n_fixed, dv, bt, react)
+            dv2 = 0.0
+            if residual_in_work:
+                # A dv without a product: b - r on the free DOFs (r: CG's final residual, first
+                # in its scratch), b + the row impulse on the fixed ones (from _fixed_residual);
+                # exact up to the error of CG's initial product and rounding
+                for i in range(n_dof):
+                    adv[i] = bt[i] + react[i] if fixed[i] else bt[i] - work[i]
+                    dv2 += dv[i] * dv[i]
+            else:
+                csr_matvec(h_a_ptr, h_a_idx, h_a_val, h_row_off[0], n_dof, dv, adv)
+                stats[4] += 1
+                adv_err = 0.0
+                for i in range(n_dof):
+                    dv2 += dv[i] * dv[i]
+            adv_err += PRODUCT_ROUNDING * a_abs * np.sqrt(dv2)
+            adv_known = True
             for i in range(n_dof):
                 vnew[i] = v[i] + dv[i]
             # impulses of the rows, then the complementarity checks
@@ -1570,14 +1642,8 @@ def integrate_iterative(
         n_hist = min(n_hist + 1, warm_history)
         for i in range(n_dof):
             dv_hist[slot, i] = dv[i]
-        y = y_hist[slot]
-        if residual_in_work:
-            # A dv without a product: b - r on the free DOFs (r: CG's final residual, first in
-            # its scratch), b + the row impulse on the fixed ones (exact, from _fixed_residual)
-            for i in range(n_dof):
-                y[i] = bt[i] + react[i] if fixed[i] else bt[i] - work[i]
-        else:
-            csr_matvec(h_a_ptr, h_a_idx, h_a_val, h_row_off[0], n_dof, dv, y)
+            y_hist[slot, i] = adv[i]
+        err_hist[slot] = adv_err
         _record_step(
             step, rec, q, v, vnew, lam, row_type, row_dof, base_x, dof_of, x, palm_x_dof,
             palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, h_step, v_last, particle_mass,

@@ -423,13 +423,17 @@ def pcg(
     tol: float,
     max_iter: int,
     work: FloatArray,
+    ax: FloatArray,
+    ax_known: bool,
 ) -> int:
     """Multigrid-preconditioned CG on the free DOFs: ``(A x)_i = b_i`` for every free ``i``, the
     fixed ``x_i`` kept. ``x`` holds the initial guess and receives the solution. Stops when the
     free residual's 2-norm is at most ``tol``. ``work``: scratch of :func:`pcg_work_size`.
 
-    One matrix-vector product per solve (the initial residual): each iteration's ``A p`` is
-    ``A z + beta A p_prev``, with ``A z`` from the V-cycle (:func:`v_cycle`).
+    At most one matrix-vector product per solve (the initial residual, skipped when the caller
+    knows ``A x``: ``ax_known`` with ``ax = A x`` on entry, read only); each iteration's ``A p``
+    is ``A z + beta A p_prev``, with ``A z`` from the V-cycle (:func:`v_cycle`). On return
+    ``work[:n[0]]`` holds the final residual ``b - A x`` (the recursive one; 0 on fixed DOFs).
 
     Returns:
         the number of iterations (``max_iter + 1`` when it did not converge).
@@ -446,10 +450,12 @@ def pcg(
     xs = work[5 * n0 : 5 * n0 + tot]
     bs = work[5 * n0 + tot : 5 * n0 + 2 * tot]
     rs = work[5 * n0 + 2 * tot : 5 * n0 + 3 * tot]
-    csr_matvec(a_ptr, a_idx, a_val, row_off[0], n0, x, q)
+    if not ax_known:
+        csr_matvec(a_ptr, a_idx, a_val, row_off[0], n0, x, q)
+        ax = q
     rr = 0.0
     for i in range(n0):
-        r[i] = 0.0 if fixed[i] else b[i] - q[i]
+        r[i] = 0.0 if fixed[i] else b[i] - ax[i]
         rr += r[i] * r[i]
     if np.sqrt(rr) <= tol:
         return 0
@@ -511,7 +517,7 @@ def solve(
     its = pcg(
         h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag, h.p_row_off,
         h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
-        np.ascontiguousarray(fixed, dtype=np.bool_), bb, x, tol, max_iter, work,
+        np.ascontiguousarray(fixed, dtype=np.bool_), bb, x, tol, max_iter, work, work[:0], False,
     )  # fmt: skip
     if its > max_iter:
         raise RuntimeError(f"multigrid CG did not converge in {max_iter} iterations")

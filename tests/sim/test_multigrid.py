@@ -112,10 +112,47 @@ def test_cg_converges_at_a_rate_independent_of_the_lattice() -> None:
         its = pcg(
             h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag,
             h.p_row_off, h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
-            fixed, b, x, 1e-8 * float(np.linalg.norm(b)), 100, work,
+            fixed, b, x, 1e-8 * float(np.linalg.norm(b)), 100, work, work[:0], False,
         )  # fmt: skip
         assert its <= 100
         assert np.linalg.norm(b - a @ x) <= 1.01e-8 * np.linalg.norm(b)
         counts.append(its)
     assert counts[1] <= counts[0] + 2, counts
     assert counts[1] <= 12, counts
+
+
+def test_cg_with_a_known_initial_product_skips_nothing_it_needs() -> None:
+    """Given ``A x0`` (``ax_known``), CG takes the same iterations to the same solution as when it
+    forms the product itself, from a nonzero guess with fixed DOFs; a wrong product is not
+    silently fixed (the answer then differs), so the flag really replaces the product."""
+    h, a, _ = _model_hierarchy(7)
+    n0 = a.shape[0]
+    rng = np.random.default_rng(3)
+    fixed = rng.random(n0) < 0.1
+    b = rng.normal(size=n0)
+    x0 = rng.normal(size=n0)
+    c = h.coarse
+    tol = 1e-9 * float(np.linalg.norm(b))
+
+    def run(ax: np.ndarray, known: bool) -> tuple[int, np.ndarray, np.ndarray]:
+        x = x0.copy()
+        work = np.empty(pcg_work_size(h.n))
+        its = pcg(
+            h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag,
+            h.p_row_off, h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
+            fixed, b, x, tol, 100, work, ax, known,
+        )  # fmt: skip
+        return its, x, work[:n0].copy()
+
+    its_self, x_self, r_self = run(np.empty(0), False)
+    its_known, x_known, r_known = run(a @ x0, True)
+    assert its_self == its_known <= 100
+    np.testing.assert_allclose(x_known, x_self, rtol=0, atol=1e-12 * np.abs(x_self).max())
+    free = ~fixed
+    # the returned residual is b - A x on the free DOFs (to the recursion's drift), 0 on fixed
+    true_r = np.where(free, b - a @ x_known, 0.0)
+    np.testing.assert_allclose(r_known, true_r, rtol=0, atol=1e-9 * np.linalg.norm(b))
+    assert np.all(r_known[fixed] == 0.0)
+    np.testing.assert_array_equal(x_known[fixed], x0[fixed])
+    _, x_wrong, _ = run(a @ x0 + 1.0, True)
+    assert np.abs(x_wrong - x_self).max() > 1e-3
