@@ -38,10 +38,14 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       linear extrapolation, and halves the CG iterations against it), to an RMS residual of
       ``cg_tolerance_m_s = 3e-7`` m/s. Contacts become *fixed DOFs* (an active row prescribes its
       DOF's velocity exactly, so sticking holds exactly), palm-plane rows a Schur complement on
-      CG-solved columns. Cost per step: one force pass, two matrix-vector products (the initial
-      residual and the warm start's image) and ~0.5-1.3 CG iterations of about 5 matrix-vector
-      products' time each (the V-cycle, which also returns CG's ``A p``;
-      :mod:`deformctl.sim.multigrid`), linear in the lattice size. A lift's centre-of-mass path
+      CG-solved columns. Cost per step: one force pass, ~0.3 matrix-vector products and
+      ~0.4-1.2 CG iterations of 3-4 matrix-vector products' time each (the V-cycle, which
+      also returns CG's ``A p``; :mod:`deformctl.sim.multigrid`), linear in the lattice size.
+      The warm start's image ``A dv`` comes from CG's final residual, and CG's initial product
+      is carried from step to step through the same combination of images as the guess
+      (``PRODUCT_CARRY_FRACTION``): it is formed again only when its error bound reaches 1 % of
+      the CG tolerance, about every third step (measured error: at most 5e-8 of that limit,
+      8^3 cube; the bound held in every step). A lift's centre-of-mass path
       stays within about 1e-9 m of a 100x tighter solve
       (11^3 cube), squeeze D/lambda within 1e-6.
     * Measured candidates (``bench/bench_sim.py``, 10 cm cube, one lift attempt, 2-core machine

@@ -144,7 +144,7 @@ def test_cg_with_a_known_initial_product_skips_nothing_it_needs() -> None:
         )  # fmt: skip
         return its, x, work[:n0].copy()
 
-    its_self, x_self, r_self = run(np.empty(0), False)
+    its_self, x_self, _ = run(np.empty(0), False)
     its_known, x_known, r_known = run(a @ x0, True)
     assert its_self == its_known <= 100
     np.testing.assert_allclose(x_known, x_self, rtol=0, atol=1e-12 * np.abs(x_self).max())

@@ -64,7 +64,8 @@ def test_the_guess_comes_with_its_image_from_the_same_combination() -> None:
             assert np.array_equal(guess, 2.0 * dv[1] - dv[2])
             assert np.array_equal(image, np.zeros(n))
             continue
-        np.testing.assert_allclose(image, a @ guess, rtol=1e-10, atol=1e-10 * np.abs(a @ guess).max())
+        want = a @ guess
+        np.testing.assert_allclose(image, want, rtol=1e-10, atol=1e-10 * np.abs(want).max())
 
 
 def test_least_squares_recovers_a_combination_and_beats_extrapolation() -> None:
@@ -138,7 +139,8 @@ def test_carrying_the_product_changes_nothing_but_the_cost(monkeypatch: pytest.M
     assert formed_rate >= 1.0  # fraction 0: a product every step (the first starts from 0)
     assert carried_rate <= 0.5, carried_rate
     assert carried.lifted == formed.lifted
-    assert carried.series is not None and formed.series is not None
+    assert carried.series is not None
+    assert formed.series is not None
     np.testing.assert_allclose(
         carried.series.object_com_z_m, formed.series.object_com_z_m, rtol=0, atol=3e-9
     )
