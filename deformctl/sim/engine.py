@@ -21,10 +21,10 @@ model's memory is estimated from the particle counts before anything is built an
 ``SimSettings.memory_budget_gib``.
 
 Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
-    * **direct**, up to ``direct_max_dofs = 500`` DOFs (the ``table`` preset's 5-per-side
-      lattices; the ``paper`` preset's finer bags run iterative, which measured faster there:
-      three squeezes of the cotton bag at 7 per side, 837 DOFs, 0.83 s direct vs 0.44 s
-      iterative; the sponge, 480 DOFs, 0.51 s vs 0.53 s): ``A = L D L^T``
+    * **direct**, up to ``direct_max_dofs = 32`` DOFs (lattices of 2-3 particles per side; from
+      3^3 on the iterative solver is faster: one lift attempt of the 10 cm cube, same run, 2^3
+      4.4 ms direct vs 4.9 ms iterative, 3^3 12.8 vs 11.1 ms, 4^3 50 vs 29 ms, 5^3 131 vs 60 ms;
+      the paper preset's flattest objects, 8 x 4 x 2 particles, 35 vs 21 ms): ``A = L D L^T``
       in geometric nested-dissection order (:mod:`deformctl.sim.solver`), a pair of sparse
       triangular solves per step, contacts from exact columns ``A^-1 e_d``. Exact, and
       bit-identical to the former dense inverse's results to 1e-12 (tests/sim/
@@ -36,11 +36,13 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       warm-started from the least-squares combination of the last three steps' velocity changes
       (the one whose image under ``A`` best matches the step's right-hand side; it contains the
       linear extrapolation, and halves the CG iterations against it), to an RMS residual of
-      ``cg_tolerance_m_s = 3e-7`` m/s. Contacts become *fixed DOFs* (an active row prescribes its
+      ``cg_tolerance_m_s = 2e-7`` m/s. Contacts become *fixed DOFs* (an active row prescribes its
       DOF's velocity exactly, so sticking holds exactly), palm-plane rows a Schur complement on
       CG-solved columns. Cost per step: one force pass, ~0.3 matrix-vector products and
-      ~0.4-1.2 CG iterations of 3-4 matrix-vector products' time each (the V-cycle, which
-      also returns CG's ``A p``; :mod:`deformctl.sim.multigrid`), linear in the lattice size.
+      ~0.5-1.2 CG iterations of about 3.5 matrix-vector products' time each (the V-cycle, which
+      also returns CG's ``A p``; the finest level and level 1 are swept particle by particle as
+      lattice stencils, :mod:`deformctl.sim.stencil`, the rest by compressed rows;
+      :mod:`deformctl.sim.multigrid`), linear in the lattice size.
       The warm start's image ``A dv`` comes from CG's final residual, and CG's initial product
       is carried from step to step through the same combination of images as the guess
       (``PRODUCT_CARRY_FRACTION``): it is formed again only when its error bound reaches 1 % of
@@ -54,12 +56,11 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       SuiteSparse headers), so CI could not install it; a banded Cholesky after RCM was not
       built (its band is a lattice cross-section, so its fill grows as ``N^{5/3}``, more than
       nested dissection's); float32 multigrid levels gave no speed-up.
-      When ``direct_max_dofs`` was chosen, multigrid CG beat the factor from about 7^3
-      particles (one lift attempt, same run: 5^3 0.066 s vs 0.063 s, 8^3 0.55 s vs 0.44 s, 11^3
-      2.7 s vs 1.1 s). Since the V-cycle returns ``A z`` and the least-squares warm start, CG is
-      ahead at 5^3 as well (same run: 0.028 s vs 0.049 s, 8^3 0.15 vs 0.40 s, 11^3 0.52 vs
-      1.79 s); the small lattices keep the exact factor, whose results the ``table`` preset's
-      recorded values and the dense-reference tests pin.
+      The V-cycle's finest level was first swept by compressed rows, one DOF at a time; as a
+      stencil (block Gauss–Seidel per particle, no column indices) one V-cycle costs 3.5
+      matrix-vector products instead of 5.3 at 16^3 and 3.1 instead of 4.9 at 21^3 (same run,
+      ``v_cycle`` alone). The squeeze D/lambda and L_f of the former dense path are kept within
+      0.5 % at 5^3 and 8^3 by the iterative solver too (tests/sim/test_dense_reference.py).
 
 The step is chosen for accuracy, not
 stability: the default ``dt = 1 ms`` resolves the lift profile's 50 ms jerk ramps; backward
@@ -142,6 +143,7 @@ from deformctl.sim.lattice import (
 from deformctl.sim.multigrid import Hierarchy, build_hierarchy
 from deformctl.sim.objects import ObjectSpec
 from deformctl.sim.solver import LDLFactor, estimate_factor_entries, ldl_columns
+from deformctl.sim.stencil import build_stencil
 from deformctl.units import CM, GRAVITY_M_S2
 
 FloatArray = NDArray[np.float64]
@@ -197,10 +199,13 @@ class SimSettings:
             ``"auto"`` (default: direct up to ``direct_max_dofs`` DOFs, iterative above).
         direct_max_dofs: the ``"auto"`` threshold, DOFs.
         cg_tolerance_m_s: CG stopping tolerance of the iterative solver: RMS residual impulse per
-            DOF over the particle mass, m/s. 3e-7 (tests/sim/test_cg_tolerance.py, against
-            1e-8): a lift's centre-of-mass path within 1.2e-9 m (11^3 cube) and the paper
-            preset's slip within 0.03 %; a free damped lattice's energy never rises (it does
-            from 1e-6 on, tests/sim/test_free_and_rest.py). 1e-7 cost 8 % more at 16^3.
+            DOF over the particle mass, m/s. 2e-7 (tests/sim/test_cg_tolerance.py, against
+            2e-9): a lift's centre-of-mass path within 8.3e-10 m (11^3 cube) and the paper
+            preset's slip within 2.1e-5 relative; a free damped lattice's energy never rises (it
+            does from 1e-6 on, tests/sim/test_free_and_rest.py). With the stencil V-cycle, 3e-7
+            left the paper preset's slip 1.3e-4 from the tight solve (the test asks for 1e-4);
+            2e-7 costs 4-9 % more CG iterations (8^3 0.50 -> 0.54, 16^3 0.89 -> 0.96 per solve,
+            the population's lattices 0.55 -> 0.57).
         cg_max_iterations: CG iteration limit per solve.
         memory_budget_gib: refuse a model whose estimated memory (:func:`memory_estimate_bytes`,
             made before anything is built) exceeds this, GiB.
@@ -232,8 +237,8 @@ class SimSettings:
     pgs_iterations: int = 60
     pgs_tolerance_m_s: float = 1e-13
     solver: Literal["auto", "direct", "iterative"] = "auto"
-    direct_max_dofs: int = 500
-    cg_tolerance_m_s: float = 3e-7
+    direct_max_dofs: int = 32
+    cg_tolerance_m_s: float = 2e-7
     cg_max_iterations: int = 100
     memory_budget_gib: float = 2.0
     integrator: Literal["euler", "bdf2"] = "euler"
@@ -513,7 +518,12 @@ def build_model(
     palm_dofs = np.concatenate([palm_x, palm_z])
     iterative = uses_iterative_solver(settings, n_dof)
     factor = None if iterative else lattice_factor(lattice, a, dof_of, n_dof, last=palm_dofs)
-    hierarchy = build_hierarchy(lattice.shape, gripped, a) if iterative else None
+    hierarchy = None
+    if iterative:
+        stencil = build_stencil(
+            lattice, h * h * stiffness + h * damping, masses, dof_of, n_dof, palm_x, palm_z
+        )
+        hierarchy = build_hierarchy(lattice.shape, gripped, a, stencil=stencil)
 
     row_dof: list[int] = []
     row_dof2: list[int] = []
@@ -730,6 +740,7 @@ def run_model(
             c.values,
             c.diag,
             c.perm,
+            *h.stencil_args(),
             tol,
             s.cg_max_iterations,
             WARM_HISTORY,

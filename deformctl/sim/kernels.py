@@ -1245,6 +1245,16 @@ def integrate_iterative(
     hc_values: FloatArray,
     hc_diag: FloatArray,
     hc_perm: IntArray,
+    st_shape: IntArray,
+    st_halo: IntArray,
+    st_coef: FloatArray,
+    st_coef_off: IntArray,
+    st_block: FloatArray,
+    st_inv: FloatArray,
+    st_node_off: IntArray,
+    st_dof: IntArray,
+    st_rep: IntArray,
+    st_palm: IntArray,
     cg_tolerance: float,
     cg_max_iterations: int,
     warm_history: int,
@@ -1290,7 +1300,8 @@ def integrate_iterative(
 
     Args:
         h_*: the multigrid hierarchy of ``A`` (:class:`deformctl.sim.multigrid.Hierarchy`;
-            level 0 is ``A`` itself).
+            level 0 is ``A`` itself); st_*: its finest level as a stencil
+            (:meth:`deformctl.sim.multigrid.Hierarchy.stencil_args`).
         cg_tolerance: CG stops when the free DOFs' residual 2-norm is at most this, N·s.
         cg_max_iterations: CG iteration limit per solve.
         warm_history: velocity changes kept for the warm start (:func:`_warm_start`).
@@ -1334,7 +1345,10 @@ def integrate_iterative(
     q_last = q.copy()
     v_last = v.copy()
     rec = np.zeros((n_steps, N_REC))
-    work = np.empty(pcg_work_size(h_n))
+    grid_len = 0
+    for lvl in range(st_shape.shape[0]):
+        grid_len += 6 * (st_shape[lvl, 0] * st_shape[lvl, 1] * st_shape[lvl, 2] + 2 * st_halo[lvl])
+    work = np.empty(pcg_work_size(h_n, grid_len))
     fixed = np.zeros(n_dof, dtype=np.bool_)
     fixed_list = np.zeros(n_dof, dtype=np.int64)
     fixer = np.full(n_dof, -1, dtype=np.int64)
@@ -1472,8 +1486,9 @@ def integrate_iterative(
             its = pcg(
                 h_n, h_vec_off, h_row_off, h_a_ptr, h_a_idx, h_a_val, h_a_diag, h_inv_diag,
                 h_p_row_off, h_p_ptr, h_p_idx, h_p_val, hc_colptr, hc_rowidx, hc_values, hc_diag,
-                hc_perm,
-                fixed, bt, dv, cg_tolerance, cg_max_iterations, work, adv, adv_known,
+                hc_perm, st_shape, st_halo, st_coef, st_coef_off, st_block, st_inv, st_node_off,
+                st_dof, st_rep, st_palm, fixed, bt, dv, cg_tolerance, cg_max_iterations, work, adv,
+                adv_known,
             )  # fmt: skip
             if not adv_known:
                 adv_err = 0.0
@@ -1513,8 +1528,9 @@ def integrate_iterative(
                     its_y = pcg(
                         h_n, h_vec_off, h_row_off, h_a_ptr, h_a_idx, h_a_val, h_a_diag, h_inv_diag,
                         h_p_row_off, h_p_ptr, h_p_idx, h_p_val, hc_colptr, hc_rowidx,
-                        hc_values, hc_diag, hc_perm, fixed, unit, y, 1e-8, cg_max_iterations,
-                        work, adv, False,
+                        hc_values, hc_diag, hc_perm, st_shape, st_halo, st_coef, st_coef_off,
+                        st_block, st_inv, st_node_off, st_dof, st_rep, st_palm, fixed, unit, y,
+                        1e-8, cg_max_iterations, work, adv, False,
                     )  # fmt: skip
                     stats[0] += 1
                     stats[1] += min(its_y, cg_max_iterations)

@@ -291,6 +291,7 @@ DIRECT_CALIBRATION_MAX_DOFS = 1000
 def _regularised_solve(
     lattice: Lattice,
     k: scipy.sparse.csr_matrix,
+    element_coef: FloatArray,
     load: FloatArray,
     dof_of: IntArray,
     n_dof: int,
@@ -298,7 +299,8 @@ def _regularised_solve(
     gripped: bool,
 ) -> FloatArray:
     """Solve ``K u = f`` with ``u = 0`` on the DOFs ``fixed``, for a self-equilibrated load; rigid
-    modes are removed by ``eps I`` (unit masses). Returns ``u [n_dof]``.
+    modes are removed by ``eps I`` (unit masses). ``K`` is assembled from ``element_coef``
+    (:func:`reduced_stiffness`). Returns ``u [n_dof]``.
 
     Sparse ``L D L^T`` of the free DOFs' submatrix (nested dissection) up to
     :data:`DIRECT_CALIBRATION_MAX_DOFS`, multigrid-preconditioned CG to a relative residual of
@@ -315,12 +317,18 @@ def _regularised_solve(
         u[keep] = factor.solve(load[keep])
         return u
     from deformctl.sim.multigrid import build_hierarchy, solve  # a cycle at module level
+    from deformctl.sim.stencil import build_stencil
 
     a = (k + eps * scipy.sparse.identity(n_dof, format="csr")).tocsr()
     mask = np.zeros(n_dof, dtype=bool)
     mask[fixed] = True
     rhs = np.where(mask, 0.0, load)
-    return solve(build_hierarchy(lattice.shape, gripped, a), mask, rhs, rel_tol=1e-13)
+    _, _, px, pz = shape_dof_map(lattice.shape, gripped)
+    stencil = build_stencil(
+        lattice, element_coef, np.full(lattice.n_particles, eps), dof_of, n_dof, px, pz
+    )
+    hierarchy = build_hierarchy(lattice.shape, gripped, a, stencil=stencil)
+    return solve(hierarchy, mask, rhs, rel_tol=1e-13)
 
 
 def unit_squeeze_stiffness_n_per_m(lattice: Lattice) -> float:
@@ -335,7 +343,9 @@ def unit_squeeze_stiffness_n_per_m(lattice: Lattice) -> float:
     load = np.zeros(n_dof)
     load[px[0]] = 1.0
     load[px[1]] = -1.0
-    u = _regularised_solve(lattice, k, load, dof_of, n_dof, pz, gripped=True)
+    u = _regularised_solve(
+        lattice, k, lattice.unit_stiffness, load, dof_of, n_dof, pz, gripped=True
+    )
     closing = u[px[0]] - u[px[1]]
     return 1.0 / closing
 
@@ -353,5 +363,5 @@ def resting_positions_m(
     fixed = dof_of[3 * np.flatnonzero(lattice.bottom_mask()) + 2]
     load = np.zeros(n_dof)
     load[dof_of[3 * np.arange(n) + 2]] = -np.broadcast_to(particle_weight_n, (n,))
-    u = _regularised_solve(lattice, k, load, dof_of, n_dof, fixed, gripped=False)
+    u = _regularised_solve(lattice, k, stiffness, load, dof_of, n_dof, fixed, gripped=False)
     return np.asarray(lattice.positions_m + u[dof_of].reshape(n, 3))

@@ -23,6 +23,7 @@ the principal subsystem of the free DOFs exactly as the contact problem needs.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse
@@ -36,6 +37,16 @@ from deformctl.sim.solver import (
     ldl_factor,
     ldl_solve,
     nested_dissection_order,
+)
+from deformctl.sim.stencil import (
+    N_COEF,
+    Stencil,
+    add_dofs,
+    backward_sweep,
+    build_block_stencil,
+    forward_sweep_from_zero,
+    grid_matrix,
+    residual_after_forward,
 )
 
 FloatArray = NDArray[np.float64]
@@ -59,6 +70,9 @@ class Hierarchy:
         p_ptr, p_idx, p_val, p_row_off: interpolation from level ``l + 1`` to ``l`` (CSR, rows of
             level ``l``), ``[L - 1]`` segments like the matrices.
         coarse: factor of the coarsest matrix.
+        stencils: the first levels as lattice stencils (:mod:`deformctl.sim.stencil`: the
+            finest level's element stencil, level 1's block stencil), swept particle by particle;
+            the other levels (and all of them when empty) are swept by rows.
     """
 
     n: IntArray
@@ -74,6 +88,7 @@ class Hierarchy:
     p_idx: Int32Array
     p_val: FloatArray
     coarse: LDLFactor
+    stencils: tuple[Stencil, ...] = ()
 
     @property
     def levels(self) -> int:
@@ -81,12 +96,49 @@ class Hierarchy:
         return int(self.n.shape[0])
 
     @property
+    def stencil(self) -> Stencil | None:
+        """The finest level's stencil, if any."""
+        return self.stencils[0] if self.stencils else None
+
+    @property
     def nbytes(self) -> int:
         """Memory held, bytes."""
         arrays = (
             self.a_ptr, self.a_idx, self.a_val, self.a_diag, self.inv_diag, self.p_ptr, self.p_idx
         )  # fmt: skip
-        return sum(a.nbytes for a in arrays) + self.p_val.nbytes + self.coarse.nbytes
+        total = sum(a.nbytes for a in arrays) + self.p_val.nbytes + self.coarse.nbytes
+        return total + sum(st.nbytes for st in self.stencils)
+
+    @property
+    def work_size(self) -> int:
+        """Length of :func:`pcg`'s scratch (:func:`pcg_work_size`)."""
+        return int(pcg_work_size(self.n, 2 * sum(st.grid_len for st in self.stencils)))
+
+    def stencil_args(self) -> tuple[Any, ...]:
+        """The ``st_*`` arguments of :func:`pcg` and :func:`v_cycle`: the stencils' arrays,
+        concatenated level after level (see :func:`v_cycle`)."""
+        sts = self.stencils
+        nodes = np.cumsum([0] + [st.n_particles for st in sts]).astype(np.int64)
+        coef_off = np.cumsum([0] + [st.coef.size for st in sts]).astype(np.int64)
+        palm = np.full((len(sts), 4), -1, dtype=np.int64)
+        for lvl, st in enumerate(sts):
+            palm[lvl, : st.palm.size] = st.palm
+        if not sts:
+            return (np.zeros((0, 3), dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0),
+                    coef_off, np.zeros((0, 9)), np.zeros((0, 9)), nodes,
+                    np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), palm)  # fmt: skip
+        return (
+            np.stack([st.shape for st in sts]),
+            np.array([st.halo for st in sts], dtype=np.int64),
+            np.concatenate([st.coef.ravel() for st in sts]),
+            coef_off,
+            np.concatenate([st.block for st in sts]),
+            np.concatenate([st.block_inv for st in sts]),
+            nodes,
+            np.concatenate([st.dof_of for st in sts]),
+            np.concatenate([st.rep for st in sts]),
+            palm,
+        )
 
 
 def _axis_interpolation(n_fine: int) -> scipy.sparse.csr_matrix:
@@ -116,6 +168,12 @@ def _axis_interpolation(n_fine: int) -> scipy.sparse.csr_matrix:
     return scipy.sparse.csr_matrix((vals, (rows, cols)), shape=(n_fine, len(sel)))
 
 
+def _scalar_interpolation(shape: tuple[int, int, int]) -> scipy.sparse.csr_matrix:
+    """Trilinear interpolation of one value per particle from the coarse lattice of ``shape``."""
+    px, py, pz = (_axis_interpolation(n) for n in shape)
+    return scipy.sparse.csr_matrix(scipy.sparse.kron(scipy.sparse.kron(px, py), pz))
+
+
 def _coarsen(shape: tuple[int, int, int]) -> tuple[int, int, int]:
     out = [n if n <= 2 else (n + 1) // 2 + (1 if (n - 1) % 2 else 0) for n in shape]
     return (out[0], out[1], out[2])
@@ -129,9 +187,8 @@ def interpolation(
     Returns:
         ``P [n_dof_fine, n_dof_coarse]``, the coarse shape and the coarse ``dof_of``.
     """
-    px, py, pz = (_axis_interpolation(n) for n in shape)
-    coarse_shape = (px.shape[1], py.shape[1], pz.shape[1])
-    scalar = scipy.sparse.kron(scipy.sparse.kron(px, py), pz).tocoo()
+    coarse_shape = _coarsen(shape)
+    scalar = _scalar_interpolation(shape).tocoo()
     dof_f, n_f, _, _ = shape_dof_map(shape, gripped)
     dof_c, n_c, _, _ = shape_dof_map(coarse_shape, gripped)
     # one representative coordinate per fine DOF (merged palm DOFs appear many times)
@@ -159,17 +216,40 @@ def interpolation(
 
 
 def build_hierarchy(
-    shape: tuple[int, int, int], gripped: bool, a: scipy.sparse.spmatrix, max_coarse: int = 200
+    shape: tuple[int, int, int],
+    gripped: bool,
+    a: scipy.sparse.spmatrix,
+    max_coarse: int = 200,
+    stencil: Stencil | None = None,
 ) -> Hierarchy:
-    """Multigrid levels of the lattice matrix ``a`` (generalised DOFs of ``shape``, ``gripped``)."""
+    """Multigrid levels of the lattice matrix ``a`` (generalised DOFs of ``shape``, ``gripped``).
+
+    Args:
+        stencil: the same matrix as a lattice stencil (:func:`deformctl.sim.stencil.
+            build_stencil`), which the V-cycle then sweeps on the finest level; level 1 (when it
+            is not the coarsest) is then swept as a block stencil too, its Galerkin matrix
+            formed on the particles' coordinates (:func:`deformctl.sim.stencil.grid_matrix`).
+    """
     mats = [scipy.sparse.csr_matrix(a)]
     interps: list[scipy.sparse.csr_matrix] = []
+    shapes = [shape]
+    dof_maps = [shape_dof_map(shape, gripped)]
     cur = shape
     dof_c, _, px_c, pz_c = shape_dof_map(shape, gripped)
     while mats[-1].shape[0] > max_coarse and _coarsen(cur) != cur:
         p, cur, dof_c = interpolation(cur, gripped)
         interps.append(p)
         mats.append(scipy.sparse.csr_matrix(p.T @ mats[-1] @ p))
+        shapes.append(cur)
+        dof_maps.append(shape_dof_map(cur, gripped))
+    stencils: tuple[Stencil, ...] = () if stencil is None else (stencil,)
+    if stencil is not None and len(mats) >= 3:
+        # level 1 in coordinates: R_1 P_grid = P R_0, so its Galerkin matrix is
+        # R_1^T (P_grid^T A_grid P_grid) R_1 plus the palm DOFs' own terms (in its rows)
+        p_grid = scipy.sparse.kron(_scalar_interpolation(shape), scipy.sparse.identity(3))
+        a1 = scipy.sparse.csr_matrix(p_grid.T @ grid_matrix(stencil) @ p_grid)
+        dof1, n1, px1, pz1 = dof_maps[1]
+        stencils += (build_block_stencil(a1, shapes[1], dof1, n1, px1, pz1),)
     _, n_c, px_c, pz_c = shape_dof_map(cur, gripped)
     last = np.concatenate([px_c, pz_c])
     last = last[last >= 0]
@@ -195,6 +275,7 @@ def build_hierarchy(
         p_idx=p_idx,
         p_val=p_val,
         coarse=coarse,
+        stencils=stencils,
     )
 
 
@@ -284,6 +365,16 @@ def v_cycle(
     c_values: FloatArray,
     c_diag: FloatArray,
     c_perm: IntArray,
+    st_shape: IntArray,
+    st_halo: IntArray,
+    st_coef: FloatArray,
+    st_coef_off: IntArray,
+    st_block: FloatArray,
+    st_inv: FloatArray,
+    st_node_off: IntArray,
+    st_dof: IntArray,
+    st_rep: IntArray,
+    st_palm: IntArray,
     fixed: BoolArray,
     b: FloatArray,
     x: FloatArray,
@@ -291,43 +382,79 @@ def v_cycle(
     xs: FloatArray,
     bs: FloatArray,
     rs: FloatArray,
+    xg: FloatArray,
 ) -> None:
     """``x = M^-1 b`` by one V-cycle from zero, and ``ax = A x`` (finest level: ``b``, ``x``,
     ``ax`` ``[n0]``; ``xs``, ``bs``, ``rs``: scratch for all levels). Fixed DOFs of the finest
     level get ``x = 0`` and ``ax = 0``.
 
-    ``A x`` comes from the last sweep: right after the backward update of free row ``i`` its
-    residual is zero, and only the rows below it change afterwards, by ``delta``, so
-    ``(A x)_i = b_i + sum_{j<i} a_ij delta_j``; the sum is scattered through the strict upper
-    triangle as each ``delta_j`` is made (``A`` is symmetric).
+    The first levels with a stencil (``st_*``, :meth:`Hierarchy.stencil_args`; ``xg``: their
+    coordinates' scratch, two arrays per level) are swept particle by particle
+    (:mod:`deformctl.sim.stencil`), the others by rows. ``A x`` comes from the last sweep:
+    right after the backward update of a free row its residual is zero, and only the rows
+    updated after it change it afterwards, so each change is scattered to the rows it couples to
+    as it is made (``A`` is symmetric) instead of forming the product.
     """
     levels = n.shape[0]
     n0 = n[0]
-    for i in range(n0):
-        bs[i] = 0.0 if fixed[i] else b[i]
+    # the levels swept as stencils (the coarsest is solved directly)
+    n_st = min(st_shape.shape[0], levels - 1)
+    grid_off = np.zeros(n_st + 1, dtype=np.int64)
+    for lvl in range(n_st):
+        rows = st_shape[lvl, 0] * st_shape[lvl, 1] * st_shape[lvl, 2] + 2 * st_halo[lvl]
+        grid_off[lvl + 1] = grid_off[lvl] + 6 * rows
+    none_fixed = np.zeros(n[1] if n_st > 1 else 0, dtype=np.bool_)  # (nothing is fixed there)
+    if n_st == 0:
+        for i in range(n0):
+            bs[i] = 0.0 if fixed[i] else b[i]
     # down: forward Gauss–Seidel from zero, residual, restriction
     for lvl in range(levels - 1):
         off = vec_off[lvl]
         nl = n[lvl]
         r0 = row_off[lvl]
-        # from zero, the sweep reads only the lower triangle: x_i = (b_i - L_i x) / a_ii
-        for i in range(nl):
-            if lvl == 0 and fixed[i]:
-                xs[off + i] = 0.0
-                continue
-            acc = bs[off + i]
-            for k in range(a_ptr[r0 + i], a_diag[off + i]):
-                acc -= a_val[k] * xs[off + a_idx[k]]
-            xs[off + i] = acc * inv_diag[off + i]
-        # after it, (D + L) x = b, so the residual is -U x: the strict upper triangle
-        for i in range(nl):
-            if lvl == 0 and fixed[i]:
-                rs[off + i] = 0.0
-                continue
-            acc = 0.0
-            for k in range(a_diag[off + i] + 1, a_ptr[r0 + i + 1]):
-                acc -= a_val[k] * xs[off + a_idx[k]]
-            rs[off + i] = acc
+        if lvl < n_st:
+            half = (grid_off[lvl + 1] - grid_off[lvl]) // 2
+            xg_l = xg[grid_off[lvl] : grid_off[lvl] + half]
+            wk_l = xg[grid_off[lvl] + half : grid_off[lvl + 1]]
+            nb = st_node_off[lvl]
+            ne = st_node_off[lvl + 1]
+            palm = st_palm[lvl, : (4 if st_palm[lvl, 0] >= 0 else 0)]
+            coef = st_coef[st_coef_off[lvl] : st_coef_off[lvl + 1]]
+            block = st_block[nb:ne]
+            inv = st_inv[nb:ne]
+            dof = st_dof[3 * nb : 3 * ne]
+            rep = st_rep[off : off + nl]
+            ptr = a_ptr[r0 : r0 + nl + 1]
+            if lvl == 0:  # the finest level: an element stencil, the fixed DOFs
+                _stencil_down(
+                    st_shape[0], st_halo[0], coef.reshape((half // 3, N_COEF)), block, inv, dof,
+                    rep, palm, ptr, a_idx, a_val, fixed, b, xg_l, wk_l, rs[off : off + nl],
+                )  # fmt: skip
+            else:  # level 1: a block stencil, nothing fixed
+                _stencil_down(
+                    st_shape[1], st_halo[1], coef.reshape((half // 3, 26, 9)), block, inv, dof,
+                    rep, palm, ptr, a_idx, a_val, none_fixed[:nl], bs[off : off + nl], xg_l,
+                    wk_l, rs[off : off + nl],
+                )  # fmt: skip
+        else:
+            # from zero, the sweep reads only the lower triangle: x_i = (b_i - L_i x) / a_ii
+            for i in range(nl):
+                if lvl == 0 and fixed[i]:
+                    xs[off + i] = 0.0
+                    continue
+                acc = bs[off + i]
+                for k in range(a_ptr[r0 + i], a_diag[off + i]):
+                    acc -= a_val[k] * xs[off + a_idx[k]]
+                xs[off + i] = acc * inv_diag[off + i]
+            # after it, (D + L) x = b, so the residual is -U x: the strict upper triangle
+            for i in range(nl):
+                if lvl == 0 and fixed[i]:
+                    rs[off + i] = 0.0
+                    continue
+                acc = 0.0
+                for k in range(a_diag[off + i] + 1, a_ptr[r0 + i + 1]):
+                    acc -= a_val[k] * xs[off + a_idx[k]]
+                rs[off + i] = acc
         coff = vec_off[lvl + 1]
         for i in range(n[lvl + 1]):
             bs[coff + i] = 0.0
@@ -352,14 +479,47 @@ def v_cycle(
         xs[off : off + nc],
     )
     # up: prolongation, backward Gauss–Seidel
-    for i in range(n0):
-        ax[i] = 0.0
+    if n_st == 0:
+        for i in range(n0):
+            ax[i] = 0.0
     for lvl in range(levels - 2, -1, -1):
         off = vec_off[lvl]
         coff = vec_off[lvl + 1]
         nl = n[lvl]
         r0 = row_off[lvl]
         p0 = p_row_off[lvl]
+        if lvl < n_st:
+            # the correction, prolonged (into rs) and added to every coordinate
+            for i in range(nl):
+                acc = 0.0
+                for k in range(p_ptr[p0 + i], p_ptr[p0 + i + 1]):
+                    acc += p_val[k] * xs[coff + p_idx[k]]
+                rs[off + i] = acc
+            half = (grid_off[lvl + 1] - grid_off[lvl]) // 2
+            xg_l = xg[grid_off[lvl] : grid_off[lvl] + half]
+            wk_l = xg[grid_off[lvl] + half : grid_off[lvl + 1]]
+            nb = st_node_off[lvl]
+            ne = st_node_off[lvl + 1]
+            palm = st_palm[lvl, : (4 if st_palm[lvl, 0] >= 0 else 0)]
+            coef = st_coef[st_coef_off[lvl] : st_coef_off[lvl + 1]]
+            block = st_block[nb:ne]
+            inv = st_inv[nb:ne]
+            dof = st_dof[3 * nb : 3 * ne]
+            rep = st_rep[off : off + nl]
+            ptr = a_ptr[r0 : r0 + nl + 1]
+            if lvl == 0:  # returns x and A x
+                _stencil_up(
+                    st_shape[0], st_halo[0], coef.reshape((half // 3, N_COEF)), block, inv, dof,
+                    rep, palm, ptr, a_idx, a_val, fixed, b, rs[off : off + nl], xg_l, wk_l, x, ax,
+                    True,
+                )  # fmt: skip
+            else:
+                _stencil_up(
+                    st_shape[1], st_halo[1], coef.reshape((half // 3, 26, 9)), block, inv, dof,
+                    rep, palm, ptr, a_idx, a_val, none_fixed[:nl], bs[off : off + nl],
+                    rs[off : off + nl], xg_l, wk_l, xs[off : off + nl], ax[:0], False,
+                )  # fmt: skip
+            continue
         for i in range(nl):
             if lvl == 0 and fixed[i]:
                 continue
@@ -379,6 +539,8 @@ def v_cycle(
                 ax[i] += bs[i]
                 for k in range(a_diag[i] + 1, a_ptr[r0 + i + 1]):
                     ax[a_idx[k]] += a_val[k] * delta
+    if n_st > 0:
+        return
     for i in range(n0):
         x[i] = 0.0 if fixed[i] else xs[i]
     if levels == 1:
@@ -390,12 +552,74 @@ def v_cycle(
 
 
 @njit(cache=True)
-def pcg_work_size(n: IntArray) -> int:
-    """Length of :func:`pcg`'s scratch for levels of ``n`` DOFs: ``5 n[0] + 3 sum(n)``."""
+def _stencil_down(
+    shape: IntArray,
+    halo: int,
+    coef: FloatArray,
+    block: FloatArray,
+    block_inv: FloatArray,
+    dof_of: IntArray,
+    rep: IntArray,
+    palm: IntArray,
+    a_ptr: IntArray,
+    a_idx: Int32Array,
+    a_val: FloatArray,
+    fixed: BoolArray,
+    b: FloatArray,
+    xg: FloatArray,
+    work: FloatArray,
+    r: FloatArray,
+) -> None:
+    """A stencil level on the way down: the forward sweep from zero and its residual ``r``."""
+    forward_sweep_from_zero(
+        shape, halo, coef, block, block_inv, dof_of, rep, palm, a_ptr, a_idx, a_val, fixed, b, xg
+    )
+    residual_after_forward(
+        shape, halo, coef, dof_of, rep, palm, a_ptr, a_idx, a_val, fixed, b, xg, work, r
+    )
+
+
+@njit(cache=True)
+def _stencil_up(
+    shape: IntArray,
+    halo: int,
+    coef: FloatArray,
+    block: FloatArray,
+    block_inv: FloatArray,
+    dof_of: IntArray,
+    rep: IntArray,
+    palm: IntArray,
+    a_ptr: IntArray,
+    a_idx: Int32Array,
+    a_val: FloatArray,
+    fixed: BoolArray,
+    b: FloatArray,
+    t: FloatArray,
+    xg: FloatArray,
+    work: FloatArray,
+    x: FloatArray,
+    ax: FloatArray,
+    with_product: bool,
+) -> None:
+    """A stencil level on the way up: add the prolonged correction ``t``, sweep backward, return
+    the DOFs ``x`` (and ``ax = A x``)."""
+    add_dofs(dof_of, halo, fixed, t, xg)
+    backward_sweep(
+        shape, halo, coef, block, block_inv, dof_of, rep, palm, a_ptr, a_idx, a_val, fixed, b,
+        xg, work, x, ax, with_product,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def pcg_work_size(n: IntArray, grid_len: int) -> int:
+    """Length of :func:`pcg`'s scratch for levels of ``n`` DOFs and stencil levels of
+    ``grid_len`` coordinates in all (twice the sum of their
+    :attr:`deformctl.sim.stencil.Stencil.grid_len`, 0 without): ``5 n[0] + 3 sum(n) +
+    grid_len``."""
     tot = 0
     for lvl in range(n.shape[0]):
         tot += n[lvl]
-    return 5 * n[0] + 3 * tot
+    return 5 * n[0] + 3 * tot + grid_len
 
 
 @njit(cache=True)
@@ -417,6 +641,16 @@ def pcg(
     c_values: FloatArray,
     c_diag: FloatArray,
     c_perm: IntArray,
+    st_shape: IntArray,
+    st_halo: IntArray,
+    st_coef: FloatArray,
+    st_coef_off: IntArray,
+    st_block: FloatArray,
+    st_inv: FloatArray,
+    st_node_off: IntArray,
+    st_dof: IntArray,
+    st_rep: IntArray,
+    st_palm: IntArray,
     fixed: BoolArray,
     b: FloatArray,
     x: FloatArray,
@@ -429,6 +663,8 @@ def pcg(
     """Multigrid-preconditioned CG on the free DOFs: ``(A x)_i = b_i`` for every free ``i``, the
     fixed ``x_i`` kept. ``x`` holds the initial guess and receives the solution. Stops when the
     free residual's 2-norm is at most ``tol``. ``work``: scratch of :func:`pcg_work_size`.
+    ``st_*``: the stencil levels (:meth:`Hierarchy.stencil_args`; none: every level is swept by
+    rows).
 
     At most one matrix-vector product per solve (the initial residual, skipped when the caller
     knows ``A x``: ``ax_known`` with ``ax = A x`` on entry, read only); each iteration's ``A p``
@@ -450,6 +686,7 @@ def pcg(
     xs = work[5 * n0 : 5 * n0 + tot]
     bs = work[5 * n0 + tot : 5 * n0 + 2 * tot]
     rs = work[5 * n0 + 2 * tot : 5 * n0 + 3 * tot]
+    xg = work[5 * n0 + 3 * tot :]
     if not ax_known:
         csr_matvec(a_ptr, a_idx, a_val, row_off[0], n0, x, q)
         ax = q
@@ -463,7 +700,9 @@ def pcg(
     for it in range(1, max_iter + 1):
         v_cycle(
             n, vec_off, row_off, a_ptr, a_idx, a_val, a_diag, inv_diag, p_row_off, p_ptr, p_idx,
-            p_val, c_colptr, c_rowidx, c_values, c_diag, c_perm, fixed, r, z, az, xs, bs, rs,
+            p_val, c_colptr, c_rowidx, c_values, c_diag, c_perm, st_shape, st_halo, st_coef,
+            st_coef_off, st_block, st_inv, st_node_off, st_dof, st_rep, st_palm, fixed, r, z, az,
+            xs, bs, rs, xg,
         )  # fmt: skip
         rz_new = 0.0
         for i in range(n0):
@@ -510,15 +749,17 @@ def solve(
     h = hierarchy
     n0 = int(h.n[0])
     x = np.zeros(n0) if x0 is None else np.array(x0, dtype=np.float64)
-    work = np.empty(pcg_work_size(h.n))
+    work = np.empty(h.work_size)
     c = h.coarse
     bb = np.ascontiguousarray(b, dtype=np.float64)
     tol = rel_tol * float(np.linalg.norm(np.where(fixed, 0.0, bb)))
-    its = pcg(
+    args = (
         h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag, h.p_row_off,
         h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
-        np.ascontiguousarray(fixed, dtype=np.bool_), bb, x, tol, max_iter, work, work[:0], False,
+        *h.stencil_args(), np.ascontiguousarray(fixed, dtype=np.bool_), bb, x, tol, max_iter,
+        work, work[:0], False,
     )  # fmt: skip
+    its = pcg(*args)
     if its > max_iter:
         raise RuntimeError(f"multigrid CG did not converge in {max_iter} iterations")
     return x

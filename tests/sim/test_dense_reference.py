@@ -37,7 +37,7 @@ def _system_matrix(spec: ObjectSpec, settings: SimSettings) -> np.ndarray:
 
 
 def test_factor_and_contact_columns_equal_the_dense_inverse() -> None:
-    settings = SimSettings()
+    settings = SimSettings(solver="direct")
     model = build_model(CUBE, settings, gripped=True)
     a_inv = np.linalg.inv(_system_matrix(CUBE, settings))
     rng = np.random.default_rng(0)

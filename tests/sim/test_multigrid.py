@@ -7,6 +7,8 @@ free DOFs' subsystem.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import scipy.sparse
@@ -14,7 +16,7 @@ import scipy.sparse.linalg
 
 from deformctl.sim import ObjectSpec, SimSettings
 from deformctl.sim.engine import build_model
-from deformctl.sim.multigrid import Hierarchy, build_hierarchy, pcg, pcg_work_size, solve, v_cycle
+from deformctl.sim.multigrid import Hierarchy, build_hierarchy, pcg, solve, v_cycle
 
 CUBE = ObjectSpec("cube", (10.0, 10.0, 10.0), 5.0, 0.5, 30.0, 1.0)
 
@@ -38,12 +40,18 @@ def _v_cycle(h: Hierarchy, fixed: np.ndarray, b: np.ndarray) -> tuple[np.ndarray
     tot = int(h.n.sum())
     z, az = np.empty(n0), np.empty(n0)
     c = h.coarse
+    grid = 2 * sum(st.grid_len for st in h.stencils)
     v_cycle(
         h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag, h.p_row_off,
-        h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm, fixed, b, z, az,
-        np.empty(tot), np.empty(tot), np.empty(tot),
+        h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
+        *h.stencil_args(), fixed, b, z, az, np.empty(tot), np.empty(tot), np.empty(tot),
+        np.empty(grid),
     )  # fmt: skip
     return z, az
+
+
+def _without_stencil(h: Hierarchy) -> Hierarchy:
+    return dataclasses.replace(h, stencils=())
 
 
 def test_diagonal_positions_point_at_every_rows_diagonal() -> None:
@@ -58,9 +66,13 @@ def test_diagonal_positions_point_at_every_rows_diagonal() -> None:
     assert np.allclose(h.a_val[h.a_diag[: h.n[0]]], a.diagonal(), rtol=0, atol=0)
 
 
-@pytest.mark.parametrize("levels", ["several", "one"])
+@pytest.mark.parametrize("levels", ["several", "rows", "one"])
 def test_v_cycle_returns_a_times_its_result(levels: str) -> None:
+    """With the finest level swept as a stencil (default), by rows, or a single level."""
     h, a, shape = _model_hierarchy(9)
+    assert h.stencil is not None
+    if levels == "rows":
+        h = _without_stencil(h)
     if levels == "one":
         h = build_hierarchy(shape, True, a, max_coarse=10**6)
         assert h.levels == 1
@@ -108,11 +120,12 @@ def test_cg_converges_at_a_rate_independent_of_the_lattice() -> None:
         b = np.random.default_rng(0).normal(size=n0)
         x = np.zeros(n0)
         c = h.coarse
-        work = np.empty(pcg_work_size(h.n))
+        work = np.empty(h.work_size)
         its = pcg(
             h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag,
             h.p_row_off, h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
-            fixed, b, x, 1e-8 * float(np.linalg.norm(b)), 100, work, work[:0], False,
+            *h.stencil_args(), fixed, b, x, 1e-8 * float(np.linalg.norm(b)), 100, work,
+            work[:0], False,
         )  # fmt: skip
         assert its <= 100
         assert np.linalg.norm(b - a @ x) <= 1.01e-8 * np.linalg.norm(b)
@@ -126,6 +139,7 @@ def test_cg_with_a_known_initial_product_skips_nothing_it_needs() -> None:
     forms the product itself, from a nonzero guess with fixed DOFs; a wrong product is not
     silently fixed (the answer then differs), so the flag really replaces the product."""
     h, a, _ = _model_hierarchy(7)
+    assert h.stencil is not None
     n0 = a.shape[0]
     rng = np.random.default_rng(3)
     fixed = rng.random(n0) < 0.1
@@ -136,11 +150,11 @@ def test_cg_with_a_known_initial_product_skips_nothing_it_needs() -> None:
 
     def run(ax: np.ndarray, known: bool) -> tuple[int, np.ndarray, np.ndarray]:
         x = x0.copy()
-        work = np.empty(pcg_work_size(h.n))
+        work = np.empty(h.work_size)
         its = pcg(
             h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag,
             h.p_row_off, h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
-            fixed, b, x, tol, 100, work, ax, known,
+            *h.stencil_args(), fixed, b, x, tol, 100, work, ax, known,
         )  # fmt: skip
         return its, x, work[:n0].copy()
 
