@@ -177,3 +177,16 @@ def test_garbage_and_missing_files(tmp_path: Path) -> None:
     with pytest.raises(MissingInputError) as exc:
         load_model(tmp_path / "missing.skops")
     assert exc.value.exit_code == 66
+
+
+def test_skops_is_imported_without_changing_scikit_learn() -> None:
+    """The model module imports skops with a short estimator list (its import's cost) and puts
+    scikit-learn's discovery back: afterwards ``all_estimators`` lists every estimator again."""
+    import sklearn.utils
+    from sklearn.utils import discovery
+
+    import deformctl.artifacts.model as model_module
+
+    assert model_module.sio.__name__ == "skops.io"
+    assert sklearn.utils.all_estimators is discovery.all_estimators
+    assert len(sklearn.utils.all_estimators()) > 100
