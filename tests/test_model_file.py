@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -143,11 +145,28 @@ def test_custom_class_is_refused_without_being_rebuilt(tmp_path: Path) -> None:
 
 
 def test_types_skops_trusts_by_default_are_still_refused(tmp_path: Path) -> None:
-    # skops trusts scikit-learn estimators by default; a model file may hold only ours.
+    """skops trusts scikit-learn's estimators by default; a model file may hold only ours.
+
+    skops builds that default list when it is imported: in a process that imported it before
+    deformctl did (checked in a fresh interpreter), it trusts ``LinearRegression``; deformctl's
+    own import gives it only the model's estimators. The loader refuses the file either way."""
     path = _crafted(tmp_path, LinearRegression())
-    assert sio.get_untrusted_types(file=path) == []
     with pytest.raises(InputDataError, match=r"sklearn\.linear_model\._base\.LinearRegression"):
         load_model(path)
+    code = (
+        "import sys, skops.io as sio\n"
+        "from deformctl.artifacts.model import load_model\n"
+        "from deformctl.errors import InputDataError\n"
+        "assert sio.get_untrusted_types(file=sys.argv[1]) == [], 'skops does not trust it'\n"
+        "try:\n"
+        "    load_model(sys.argv[1])\n"
+        "except InputDataError as err:\n"
+        "    print(err)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code, str(path)], capture_output=True, text=True, check=True
+    )
+    assert "sklearn.linear_model._base.LinearRegression" in out.stdout
 
 
 def test_wrong_format_tag_is_refused(trained: TrainResult, tmp_path: Path) -> None:
