@@ -1300,7 +1300,7 @@ def integrate_iterative(
 
     Args:
         h_*: the multigrid hierarchy of ``A`` (:class:`deformctl.sim.multigrid.Hierarchy`;
-            level 0 is ``A`` itself); st_*: its finest level as a stencil
+            level 0 is ``A`` itself); st_*: its first levels as lattice stencils
             (:meth:`deformctl.sim.multigrid.Hierarchy.stencil_args`).
         cg_tolerance: CG stops when the free DOFs' residual 2-norm is at most this, N·s.
         cg_max_iterations: CG iteration limit per solve.
@@ -1345,10 +1345,7 @@ def integrate_iterative(
     q_last = q.copy()
     v_last = v.copy()
     rec = np.zeros((n_steps, N_REC))
-    grid_len = 0
-    for lvl in range(st_shape.shape[0]):
-        grid_len += 6 * (st_shape[lvl, 0] * st_shape[lvl, 1] * st_shape[lvl, 2] + 2 * st_halo[lvl])
-    work = np.empty(pcg_work_size(h_n, grid_len))
+    work = np.empty(pcg_work_size(h_n, st_shape, st_halo))
     fixed = np.zeros(n_dof, dtype=np.bool_)
     fixed_list = np.zeros(n_dof, dtype=np.int64)
     fixer = np.full(n_dof, -1, dtype=np.int64)

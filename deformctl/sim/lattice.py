@@ -290,7 +290,6 @@ DIRECT_CALIBRATION_MAX_DOFS = 1000
 
 def _regularised_solve(
     lattice: Lattice,
-    k: scipy.sparse.csr_matrix,
     element_coef: FloatArray,
     load: FloatArray,
     dof_of: IntArray,
@@ -299,19 +298,20 @@ def _regularised_solve(
     gripped: bool,
 ) -> FloatArray:
     """Solve ``K u = f`` with ``u = 0`` on the DOFs ``fixed``, for a self-equilibrated load; rigid
-    modes are removed by ``eps I`` (unit masses). ``K`` is assembled from ``element_coef``
-    (:func:`reduced_stiffness`). Returns ``u [n_dof]``.
+    modes are removed by ``eps I`` (unit masses). ``K`` is assembled from the elements'
+    ``element_coef`` (:func:`reduced_stiffness`). Returns ``u [n_dof]``.
 
     Sparse ``L D L^T`` of the free DOFs' submatrix (nested dissection) up to
     :data:`DIRECT_CALIBRATION_MAX_DOFS`, multigrid-preconditioned CG to a relative residual of
     ``1e-13`` above (:mod:`deformctl.sim.multigrid`).
     """
+    k = reduced_stiffness(lattice, element_coef, dof_of, n_dof)
     keep = np.setdiff1d(np.arange(n_dof), fixed)
     eps = 1e-10 * float(k.diagonal()[keep].sum()) / float(keep.size)
     u = np.zeros(n_dof)
+    _, _, px, pz = shape_dof_map(lattice.shape, gripped)
     if n_dof <= DIRECT_CALIBRATION_MAX_DOFS:
         a = k[keep][:, keep] + eps * scipy.sparse.identity(keep.size, format="csr")
-        _, _, px, pz = shape_dof_map(lattice.shape, gripped)
         last = np.concatenate([px, pz])
         factor = lattice_factor(lattice, a, dof_of, n_dof, last=last[last >= 0], keep=keep)
         u[keep] = factor.solve(load[keep])
@@ -323,7 +323,6 @@ def _regularised_solve(
     mask = np.zeros(n_dof, dtype=bool)
     mask[fixed] = True
     rhs = np.where(mask, 0.0, load)
-    _, _, px, pz = shape_dof_map(lattice.shape, gripped)
     stencil = build_stencil(
         lattice, element_coef, np.full(lattice.n_particles, eps), dof_of, n_dof, px, pz
     )
@@ -339,13 +338,10 @@ def unit_squeeze_stiffness_n_per_m(lattice: Lattice) -> float:
     Returns force / change of the palm gap.
     """
     dof_of, n_dof, px, pz = palm_dof_map(lattice, gripped=True)
-    k = reduced_stiffness(lattice, lattice.unit_stiffness, dof_of, n_dof)
     load = np.zeros(n_dof)
     load[px[0]] = 1.0
     load[px[1]] = -1.0
-    u = _regularised_solve(
-        lattice, k, lattice.unit_stiffness, load, dof_of, n_dof, pz, gripped=True
-    )
+    u = _regularised_solve(lattice, lattice.unit_stiffness, load, dof_of, n_dof, pz, gripped=True)
     closing = u[px[0]] - u[px[1]]
     return 1.0 / closing
 
@@ -359,9 +355,8 @@ def resting_positions_m(
     """
     n = lattice.n_particles
     dof_of, n_dof, _, _ = palm_dof_map(lattice, gripped=False)
-    k = reduced_stiffness(lattice, stiffness, dof_of, n_dof)
     fixed = dof_of[3 * np.flatnonzero(lattice.bottom_mask()) + 2]
     load = np.zeros(n_dof)
     load[dof_of[3 * np.arange(n) + 2]] = -np.broadcast_to(particle_weight_n, (n,))
-    u = _regularised_solve(lattice, k, stiffness, load, dof_of, n_dof, fixed, gripped=False)
+    u = _regularised_solve(lattice, stiffness, load, dof_of, n_dof, fixed, gripped=False)
     return np.asarray(lattice.positions_m + u[dof_of].reshape(n, 3))

@@ -23,6 +23,7 @@ the principal subsystem of the free DOFs exactly as the contact problem needs.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -112,11 +113,16 @@ class Hierarchy:
     @property
     def work_size(self) -> int:
         """Length of :func:`pcg`'s scratch (:func:`pcg_work_size`)."""
-        return int(pcg_work_size(self.n, 2 * sum(st.grid_len for st in self.stencils)))
+        st_shape, st_halo = self.stencil_args()[:2]
+        return int(pcg_work_size(self.n, st_shape, st_halo))
 
     def stencil_args(self) -> tuple[Any, ...]:
         """The ``st_*`` arguments of :func:`pcg` and :func:`v_cycle`: the stencils' arrays,
-        concatenated level after level (see :func:`v_cycle`)."""
+        concatenated level after level (see :func:`v_cycle`); packed once per hierarchy."""
+        return self._packed_stencils
+
+    @cached_property
+    def _packed_stencils(self) -> tuple[Any, ...]:
         sts = self.stencils
         nodes = np.cumsum([0] + [st.n_particles for st in sts]).astype(np.int64)
         coef_off = np.cumsum([0] + [st.coef.size for st in sts]).astype(np.int64)
@@ -235,9 +241,8 @@ def build_hierarchy(
     shapes = [shape]
     dof_maps = [shape_dof_map(shape, gripped)]
     cur = shape
-    dof_c, _, px_c, pz_c = shape_dof_map(shape, gripped)
     while mats[-1].shape[0] > max_coarse and _coarsen(cur) != cur:
-        p, cur, dof_c = interpolation(cur, gripped)
+        p, cur, _ = interpolation(cur, gripped)
         interps.append(p)
         mats.append(scipy.sparse.csr_matrix(p.T @ mats[-1] @ p))
         shapes.append(cur)
@@ -250,7 +255,7 @@ def build_hierarchy(
         a1 = scipy.sparse.csr_matrix(p_grid.T @ grid_matrix(stencil) @ p_grid)
         dof1, n1, px1, pz1 = dof_maps[1]
         stencils += (build_block_stencil(a1, shapes[1], dof1, n1, px1, pz1),)
-    _, n_c, px_c, pz_c = shape_dof_map(cur, gripped)
+    dof_c, n_c, px_c, pz_c = dof_maps[-1]
     last = np.concatenate([px_c, pz_c])
     last = last[last >= 0]
     perm = dof_order(nested_dissection_order(cur), dof_c, n_c, last)
@@ -399,10 +404,7 @@ def v_cycle(
     n0 = n[0]
     # the levels swept as stencils (the coarsest is solved directly)
     n_st = min(st_shape.shape[0], levels - 1)
-    grid_off = np.zeros(n_st + 1, dtype=np.int64)
-    for lvl in range(n_st):
-        rows = st_shape[lvl, 0] * st_shape[lvl, 1] * st_shape[lvl, 2] + 2 * st_halo[lvl]
-        grid_off[lvl + 1] = grid_off[lvl] + 6 * rows
+    grid_off = stencil_scratch_offsets(st_shape, st_halo)
     none_fixed = np.zeros(n[1] if n_st > 1 else 0, dtype=np.bool_)  # (nothing is fixed there)
     if n_st == 0:
         for i in range(n0):
@@ -413,26 +415,20 @@ def v_cycle(
         nl = n[lvl]
         r0 = row_off[lvl]
         if lvl < n_st:
-            half = (grid_off[lvl + 1] - grid_off[lvl]) // 2
-            xg_l = xg[grid_off[lvl] : grid_off[lvl] + half]
-            wk_l = xg[grid_off[lvl] + half : grid_off[lvl + 1]]
-            nb = st_node_off[lvl]
-            ne = st_node_off[lvl + 1]
-            palm = st_palm[lvl, : (4 if st_palm[lvl, 0] >= 0 else 0)]
-            coef = st_coef[st_coef_off[lvl] : st_coef_off[lvl + 1]]
-            block = st_block[nb:ne]
-            inv = st_inv[nb:ne]
-            dof = st_dof[3 * nb : 3 * ne]
-            rep = st_rep[off : off + nl]
+            xg_l, wk_l, coef, block, inv, dof, rep, palm = _stencil_level(
+                lvl, off, nl, grid_off, xg, st_coef, st_coef_off, st_block, st_inv, st_node_off,
+                st_dof, st_rep, st_palm,
+            )  # fmt: skip
+            rows = xg_l.shape[0] // 3
             ptr = a_ptr[r0 : r0 + nl + 1]
             if lvl == 0:  # the finest level: an element stencil, the fixed DOFs
                 _stencil_down(
-                    st_shape[0], st_halo[0], coef.reshape((half // 3, N_COEF)), block, inv, dof,
+                    st_shape[0], st_halo[0], coef.reshape((rows, N_COEF)), block, inv, dof,
                     rep, palm, ptr, a_idx, a_val, fixed, b, xg_l, wk_l, rs[off : off + nl],
                 )  # fmt: skip
             else:  # level 1: a block stencil, nothing fixed
                 _stencil_down(
-                    st_shape[1], st_halo[1], coef.reshape((half // 3, 26, 9)), block, inv, dof,
+                    st_shape[1], st_halo[1], coef.reshape((rows, 26, 9)), block, inv, dof,
                     rep, palm, ptr, a_idx, a_val, none_fixed[:nl], bs[off : off + nl], xg_l,
                     wk_l, rs[off : off + nl],
                 )  # fmt: skip
@@ -495,27 +491,21 @@ def v_cycle(
                 for k in range(p_ptr[p0 + i], p_ptr[p0 + i + 1]):
                     acc += p_val[k] * xs[coff + p_idx[k]]
                 rs[off + i] = acc
-            half = (grid_off[lvl + 1] - grid_off[lvl]) // 2
-            xg_l = xg[grid_off[lvl] : grid_off[lvl] + half]
-            wk_l = xg[grid_off[lvl] + half : grid_off[lvl + 1]]
-            nb = st_node_off[lvl]
-            ne = st_node_off[lvl + 1]
-            palm = st_palm[lvl, : (4 if st_palm[lvl, 0] >= 0 else 0)]
-            coef = st_coef[st_coef_off[lvl] : st_coef_off[lvl + 1]]
-            block = st_block[nb:ne]
-            inv = st_inv[nb:ne]
-            dof = st_dof[3 * nb : 3 * ne]
-            rep = st_rep[off : off + nl]
+            xg_l, wk_l, coef, block, inv, dof, rep, palm = _stencil_level(
+                lvl, off, nl, grid_off, xg, st_coef, st_coef_off, st_block, st_inv, st_node_off,
+                st_dof, st_rep, st_palm,
+            )  # fmt: skip
+            rows = xg_l.shape[0] // 3
             ptr = a_ptr[r0 : r0 + nl + 1]
             if lvl == 0:  # returns x and A x
                 _stencil_up(
-                    st_shape[0], st_halo[0], coef.reshape((half // 3, N_COEF)), block, inv, dof,
+                    st_shape[0], st_halo[0], coef.reshape((rows, N_COEF)), block, inv, dof,
                     rep, palm, ptr, a_idx, a_val, fixed, b, rs[off : off + nl], xg_l, wk_l, x, ax,
                     True,
                 )  # fmt: skip
             else:
                 _stencil_up(
-                    st_shape[1], st_halo[1], coef.reshape((half // 3, 26, 9)), block, inv, dof,
+                    st_shape[1], st_halo[1], coef.reshape((rows, 26, 9)), block, inv, dof,
                     rep, palm, ptr, a_idx, a_val, none_fixed[:nl], bs[off : off + nl],
                     rs[off : off + nl], xg_l, wk_l, xs[off : off + nl], ax[:0], False,
                 )  # fmt: skip
@@ -549,6 +539,43 @@ def v_cycle(
     for i in range(n0):
         if fixed[i]:
             ax[i] = 0.0
+
+
+@njit(cache=True, inline="always")
+def _stencil_level(
+    lvl: int,
+    off: int,
+    nl: int,
+    grid_off: IntArray,
+    xg: FloatArray,
+    st_coef: FloatArray,
+    st_coef_off: IntArray,
+    st_block: FloatArray,
+    st_inv: FloatArray,
+    st_node_off: IntArray,
+    st_dof: IntArray,
+    st_rep: IntArray,
+    st_palm: IntArray,
+) -> tuple[
+    FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, IntArray, IntArray, IntArray
+]:
+    """Stencil level ``lvl``'s views of the packed arrays (:meth:`Hierarchy.stencil_args`;
+    ``off``, ``nl``: the level's DOF offset and count): its sweep's and work coordinates in the
+    scratch ``xg``, its flat coefficients, own blocks and their inverses, coordinate DOFs, DOF
+    representatives and palm DOFs (none for a free object)."""
+    half = (grid_off[lvl + 1] - grid_off[lvl]) // 2
+    nb = st_node_off[lvl]
+    ne = st_node_off[lvl + 1]
+    return (
+        xg[grid_off[lvl] : grid_off[lvl] + half],
+        xg[grid_off[lvl] + half : grid_off[lvl + 1]],
+        st_coef[st_coef_off[lvl] : st_coef_off[lvl + 1]],
+        st_block[nb:ne],
+        st_inv[nb:ne],
+        st_dof[3 * nb : 3 * ne],
+        st_rep[off : off + nl],
+        st_palm[lvl, : (4 if st_palm[lvl, 0] >= 0 else 0)],
+    )
 
 
 @njit(cache=True)
@@ -611,15 +638,26 @@ def _stencil_up(
 
 
 @njit(cache=True)
-def pcg_work_size(n: IntArray, grid_len: int) -> int:
-    """Length of :func:`pcg`'s scratch for levels of ``n`` DOFs and stencil levels of
-    ``grid_len`` coordinates in all (twice the sum of their
-    :attr:`deformctl.sim.stencil.Stencil.grid_len`, 0 without): ``5 n[0] + 3 sum(n) +
-    grid_len``."""
+def stencil_scratch_offsets(st_shape: IntArray, st_halo: IntArray) -> IntArray:
+    """Where each stencil level's two coordinate arrays (the sweep's and its work array, each
+    :attr:`deformctl.sim.stencil.Stencil.grid_len` long) start in the stencil scratch, and its
+    total length at the end, ``[levels + 1]``."""
+    off = np.zeros(st_shape.shape[0] + 1, dtype=np.int64)
+    for lvl in range(st_shape.shape[0]):
+        rows = st_shape[lvl, 0] * st_shape[lvl, 1] * st_shape[lvl, 2] + 2 * st_halo[lvl]
+        off[lvl + 1] = off[lvl] + 6 * rows
+    return off
+
+
+@njit(cache=True)
+def pcg_work_size(n: IntArray, st_shape: IntArray, st_halo: IntArray) -> int:
+    """Length of :func:`pcg`'s scratch for levels of ``n`` DOFs and the stencil levels
+    ``st_shape``, ``st_halo`` (:meth:`Hierarchy.stencil_args`): ``5 n[0] + 3 sum(n)`` and the
+    stencil scratch (:func:`stencil_scratch_offsets`)."""
     tot = 0
     for lvl in range(n.shape[0]):
         tot += n[lvl]
-    return 5 * n[0] + 3 * tot + grid_len
+    return 5 * n[0] + 3 * tot + stencil_scratch_offsets(st_shape, st_halo)[-1]
 
 
 @njit(cache=True)

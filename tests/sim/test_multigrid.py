@@ -16,7 +16,14 @@ import scipy.sparse.linalg
 
 from deformctl.sim import ObjectSpec, SimSettings
 from deformctl.sim.engine import build_model
-from deformctl.sim.multigrid import Hierarchy, build_hierarchy, pcg, solve, v_cycle
+from deformctl.sim.multigrid import (
+    Hierarchy,
+    build_hierarchy,
+    pcg,
+    solve,
+    stencil_scratch_offsets,
+    v_cycle,
+)
 
 CUBE = ObjectSpec("cube", (10.0, 10.0, 10.0), 5.0, 0.5, 30.0, 1.0)
 
@@ -40,7 +47,8 @@ def _v_cycle(h: Hierarchy, fixed: np.ndarray, b: np.ndarray) -> tuple[np.ndarray
     tot = int(h.n.sum())
     z, az = np.empty(n0), np.empty(n0)
     c = h.coarse
-    grid = 2 * sum(st.grid_len for st in h.stencils)
+    st_shape, st_halo = h.stencil_args()[:2]
+    grid = int(stencil_scratch_offsets(st_shape, st_halo)[-1])
     v_cycle(
         h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag, h.p_row_off,
         h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
