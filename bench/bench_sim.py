@@ -2,7 +2,8 @@
 implicit-step cost relative to one force evaluation, and the scaling table of issue 13 (cubes of
 5^3 .. 21^3 particles: model build, one lift attempt, step time, step / one force evaluation, the
 fitted exponent of step time against particle count, peak memory), the damped cube's wall time
-per simulated second (the MuJoCo comparison) and the direct-vs-iterative solver candidates.
+per simulated second (the MuJoCo comparison), one V-cycle with and without its stencil levels
+and the direct-vs-iterative solver candidates.
 Every ratio is measured in this run; each scaling row runs in a fresh interpreter (its own peak
 memory), best of ``REPEATS`` attempts."""
 
@@ -252,6 +253,53 @@ def scaling_row(n: int, solver: str = "auto") -> dict[str, float | str]:
     }
 
 
+def v_cycle_cost(sizes: tuple[int, ...] = (8, 11, 16, 21), rounds: int = 20) -> None:
+    """One V-cycle of the gripped cube's hierarchy with every level swept by rows, with the
+    finest level as a stencil, and with the finest level and level 1 as stencils, in units of one
+    compressed-row product ``A x`` (all four alternate, best of ``rounds``)."""
+    import dataclasses
+
+    from deformctl.sim.multigrid import csr_matvec, v_cycle
+
+    print(
+        "one V-cycle, in compressed-row products A x of the same run (best of alternating rounds):"
+    )
+    print(f"{'n':>4} {'by rows':>8} {'finest stencil':>15} {'+ level 1':>10} {'A x us':>8}")
+    for n in sizes:
+        model = build_model(CUBE, SimSettings(particles_per_side=n), gripped=True)
+        h = model.hierarchy
+        assert h is not None
+        n0, tot, c = int(h.n[0]), int(h.n.sum()), h.coarse
+        fixed = np.zeros(n0, dtype=bool)
+        b = np.random.default_rng(0).normal(size=n0)
+        out = np.empty(n0)
+        runs: dict[str, Callable[[], object]] = {
+            "product": lambda h=h, b=b, out=out, n0=n0: csr_matvec(
+                h.a_ptr, h.a_idx, h.a_val, 0, n0, b, out
+            )
+        }
+        for k in range(3):
+            hk = dataclasses.replace(h, stencils=h.stencils[:k])
+            args = (
+                hk.n, hk.vec_off, hk.row_off, hk.a_ptr, hk.a_idx, hk.a_val, hk.a_diag,
+                hk.inv_diag, hk.p_row_off, hk.p_ptr, hk.p_idx, hk.p_val, c.colptr, c.rowidx,
+                c.values, c.diag, c.perm, *hk.stencil_args(), fixed, b, np.empty(n0),
+                np.empty(n0), np.empty(tot), np.empty(tot), np.empty(tot),
+                np.empty(hk.work_size),
+            )  # fmt: skip
+            runs[str(k)] = lambda args=args: v_cycle(*args)
+        best = dict.fromkeys(runs, float("inf"))
+        for _ in range(rounds):
+            for key, run in runs.items():
+                best[key] = min(best[key], _best_of(run, 1))
+        unit = best["product"]
+        print(
+            f"{n:>3}^3 {best['0'] / unit:>8.2f} {best['1'] / unit:>15.2f} "
+            f"{best['2'] / unit:>10.2f} {unit * 1e6:>8.0f}",
+            flush=True,
+        )
+
+
 def _row_in_subprocess(n: int, solver: str = "auto") -> dict[str, float | str]:
     code = (
         "import json, sys; from bench.bench_sim import scaling_row; "
@@ -310,8 +358,9 @@ def scaling() -> None:
             f"  {n:>2}^3: {ours:.3f} wall s per simulated s; MuJoCo 4.0 flex {mj} (issue 13): "
             f"{mj / ours:.1f}x faster (target at 11^3: >= 20x, <= 3.4 s)"
         )
+    v_cycle_cost()
     print("solver candidates (same cube, one lift attempt, s):")
-    for n in (5, 8, 11):
+    for n in (2, 3, 4, 5, 8, 11):
         d = _row_in_subprocess(n, "direct")
         it = _row_in_subprocess(n, "iterative")
         print(

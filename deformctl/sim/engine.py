@@ -21,10 +21,10 @@ model's memory is estimated from the particle counts before anything is built an
 ``SimSettings.memory_budget_gib``.
 
 Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
-    * **direct**, up to ``direct_max_dofs = 32`` DOFs (lattices of 2-3 particles per side; from
-      3^3 on the iterative solver is faster: one lift attempt of the 10 cm cube, same run, 2^3
-      4.4 ms direct vs 4.9 ms iterative, 3^3 12.8 vs 11.1 ms, 4^3 50 vs 29 ms, 5^3 131 vs 60 ms;
-      the paper preset's flattest objects, 8 x 4 x 2 particles, 35 vs 21 ms): ``A = L D L^T``
+    * **direct**, up to ``direct_max_dofs = 32`` DOFs (lattices of 2 particles per side; from
+      3^3 on the iterative solver is faster: one lift attempt of the 10 cm cube, same run,
+      ``bench/bench_sim.py``'s solver candidates, 2^3 3 ms direct vs 4 ms iterative, 3^3 9 vs
+      8 ms, 4^3 29 vs 16 ms, 5^3 69 vs 30 ms, 8^3 0.51 vs 0.14 s): ``A = L D L^T``
       in geometric nested-dissection order (:mod:`deformctl.sim.solver`), a pair of sparse
       triangular solves per step, contacts from exact columns ``A^-1 e_d``. Exact, and
       bit-identical to the former dense inverse's results to 1e-12 (tests/sim/
@@ -56,11 +56,12 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       SuiteSparse headers), so CI could not install it; a banded Cholesky after RCM was not
       built (its band is a lattice cross-section, so its fill grows as ``N^{5/3}``, more than
       nested dissection's); float32 multigrid levels gave no speed-up.
-      The V-cycle's finest level was first swept by compressed rows, one DOF at a time; as a
-      stencil (block Gauss–Seidel per particle, no column indices) one V-cycle costs 3.5
-      matrix-vector products instead of 5.3 at 16^3 and 3.1 instead of 4.9 at 21^3 (same run,
-      ``v_cycle`` alone). The squeeze D/lambda and L_f of the former dense path are kept within
-      0.5 % at 5^3 and 8^3 by the iterative solver too (tests/sim/test_dense_reference.py).
+      The V-cycle's levels were first swept by compressed rows, one DOF at a time; with the
+      finest level and level 1 as stencils (block Gauss–Seidel per particle, no column indices)
+      one V-cycle costs 3.6 matrix-vector products instead of 5.1 at 16^3 and 3.2 instead of
+      5.0 at 21^3 (``bench/bench_sim.py``, ``v_cycle`` alone, same run). The squeeze D/lambda
+      and L_f of the former dense path are kept within 0.5 % at 5^3 and 8^3 by the iterative
+      solver too (tests/sim/test_dense_reference.py).
 
 The step is chosen for accuracy, not
 stability: the default ``dt = 1 ms`` resolves the lift profile's 50 ms jerk ramps; backward

@@ -1,26 +1,31 @@
-"""The finest multigrid level as a lattice stencil: block Gauss–Seidel sweeps without a matrix.
+"""The first multigrid levels as lattice stencils: block Gauss–Seidel without column indices.
 
 The implicit matrix of the lattice is ``A = R^T (M + h C + h^2 K) R + E`` (:mod:`.engine`): the
 particle masses and the Kelvin elements assembled on the particles' own coordinates, ``R`` the
 map from the generalised DOFs to the coordinates (a palm face's x and z coordinates all take the
 palm's DOF, :func:`deformctl.sim.lattice.palm_dof_map`), and ``E`` the few terms on the palm DOFs
 alone (the palms' mass, the damper across the gripped width). On the box lattice every particle
-has the same 18 neighbours at the same index offsets (9 directions, both ways; missing ones at
-the boundary carry a zero coefficient), so a row of ``A`` needs no column indices: it is the
-particle's own 3x3 block plus, per element, ``w_e n_e n_e^T`` times the neighbour's coordinates
-(one number for an axial element, three for a face diagonal: 21 numbers per particle, against
-about 57 entries and their indices per particle in compressed rows).
+has the same neighbours at the same index offsets (missing ones at the boundary carry zero
+coefficients), so a row of ``A`` needs no column indices:
 
-A sweep visits the particles in index order and solves each particle's free coordinates together
-(block Gauss–Seidel: the 3x3 block's inverse is precomputed; a particle with fixed or palm-bound
-coordinates solves the free part of its block); the palm DOFs, numbered after every particle,
-follow in DOF order with their compressed rows (they couple a whole face), and their new value is
-written to every coordinate of the face that carries it. The backward sweep is the exact reverse,
-so the smoother is symmetric and the V-cycle stays a valid CG preconditioner
-(:mod:`deformctl.sim.multigrid`).
+* the finest level is an *element* stencil (:func:`build_stencil`): the particle's own 3x3
+  block plus, per element, ``w_e n_e n_e^T`` times the neighbour's coordinates (one number for
+  an axial element, three for a face diagonal: 21 numbers per particle, against about 57 entries
+  and their indices per particle in compressed rows);
+* level 1 is a *block* stencil (:func:`build_block_stencil`): its Galerkin matrix, formed on the
+  particles' coordinates, as 3x3 blocks to the 26 neighbours.
 
-Measured (16^3 cube, 11,268 DOFs, one core): a full block sweep 99 µs against 300 µs for the
-compressed-row point sweep it replaces, a product ``A x`` about the same (see ``bench/``).
+A sweep solves each particle's free coordinates together (block Gauss–Seidel: the 3x3 block's
+inverse is precomputed; a particle with fixed or palm-bound coordinates solves the free part of
+its block). The palm DOFs, which couple a whole face, are swept by their compressed rows, first
+on the way down (:func:`forward_sweep_from_zero`, then the particles in index order) and last on
+the way up (:func:`backward_sweep`, the exact reverse), and each new value is written to every
+coordinate of its face. In that order the residual after the forward sweep is half a pass
+(:func:`residual_after_forward`) and ``A x`` comes out of the backward sweep; the smoother is
+symmetric, so the V-cycle stays a valid CG preconditioner (:mod:`deformctl.sim.multigrid`).
+
+``bench/bench_sim.py`` measures one V-cycle with and without the stencils, in units of one
+compressed-row product ``A x`` of the same run.
 """
 
 from __future__ import annotations
