@@ -270,7 +270,7 @@ def v_cycle_cost(sizes: tuple[int, ...] = (8, 11, 16, 21), rounds: int = 20) -> 
         h = model.hierarchy
         assert h is not None
         n0, tot, c = int(h.n[0]), int(h.n.sum()), h.coarse
-        fixed = np.zeros(n0, dtype=bool)
+        fixed, cf = h.fixed_levels(np.zeros(n0, dtype=bool))
         b = np.random.default_rng(0).normal(size=n0)
         out = np.empty(n0)
         runs: dict[str, Callable[[], object]] = {
@@ -285,7 +285,7 @@ def v_cycle_cost(sizes: tuple[int, ...] = (8, 11, 16, 21), rounds: int = 20) -> 
                 hk.inv_diag, hk.p_row_off, hk.p_ptr, hk.p_idx, hk.p_val, c.colptr, c.rowidx,
                 c.values, c.diag, c.perm, *hk.stencil_args(), fixed, b, np.empty(n0),
                 np.empty(n0), np.empty(tot), np.empty(tot), np.empty(tot),
-                np.empty(hk.work_size),
+                np.empty(hk.work_size), cf,
             )  # fmt: skip
             runs[str(k)] = lambda args=args: v_cycle(*args)
         best = dict.fromkeys(runs, float("inf"))

@@ -1345,7 +1345,7 @@ def integrate_iterative(
     q_last = q.copy()
     v_last = v.copy()
     rec = np.zeros((n_steps, N_REC))
-    work = np.empty(pcg_work_size(h_n, st_shape, st_halo))
+    work = np.zeros(pcg_work_size(h_n, st_shape, st_halo))
     fixed = np.zeros(n_dof, dtype=np.bool_)
     fixed_list = np.zeros(n_dof, dtype=np.int64)
     fixer = np.full(n_dof, -1, dtype=np.int64)

@@ -16,8 +16,10 @@ and also returns ``A z`` for CG by scattering its corrections through the strict
 So a CG iteration reads the finest matrix 2.5 times instead of 3.5.
 
 DOFs can be *fixed* (a prescribed value, e.g. a contact row held at its target velocity): the CG
-and the finest level's smoothing leave them untouched and the residual ignores them, which solves
-the principal subsystem of the free DOFs exactly as the contact problem needs.
+and the smoothing leave them untouched and the residual ignores them, which solves the principal
+subsystem of the free DOFs exactly as the contact problem needs. A coarse DOF whose interpolation
+reaches a fixed DOF is fixed too, and the coarsest level solves its free block, so every coarse
+correction is the Galerkin correction of the free subsystem (:func:`fix_levels`).
 """
 
 from __future__ import annotations
@@ -115,6 +117,18 @@ class Hierarchy:
         """Length of :func:`pcg`'s scratch (:func:`pcg_work_size`)."""
         st_shape, st_halo = self.stencil_args()[:2]
         return int(pcg_work_size(self.n, st_shape, st_halo))
+
+    def fixed_levels(self, fixed: BoolArray) -> tuple[BoolArray, FloatArray]:
+        """The fixed DOFs of every level for the finest level's ``fixed``, and the coarsest
+        level's factor for them: :func:`v_cycle`'s ``fixed`` and ``cf`` (:func:`fix_levels`)."""
+        fixed_all = np.zeros(int(self.n.sum()), dtype=np.bool_)
+        cf = np.zeros(int(coarse_scratch_size(self.n)))
+        fix_levels(
+            self.n, self.vec_off, self.row_off, self.a_ptr, self.a_idx, self.a_val,
+            self.p_row_off, self.p_ptr, self.p_idx, self.p_val,
+            np.ascontiguousarray(fixed, dtype=np.bool_), fixed_all, cf,
+        )  # fmt: skip
+        return fixed_all, cf
 
     def stencil_args(self) -> tuple[Any, ...]:
         """The ``st_*`` arguments of :func:`pcg` and :func:`v_cycle`: the stencils' arrays,
@@ -388,10 +402,14 @@ def v_cycle(
     bs: FloatArray,
     rs: FloatArray,
     xg: FloatArray,
+    cf: FloatArray,
 ) -> None:
     """``x = M^-1 b`` by one V-cycle from zero, and ``ax = A x`` (finest level: ``b``, ``x``,
-    ``ax`` ``[n0]``; ``xs``, ``bs``, ``rs``: scratch for all levels). Fixed DOFs of the finest
-    level get ``x = 0`` and ``ax = 0``.
+    ``ax`` ``[n0]``; ``xs``, ``bs``, ``rs``: scratch for all levels). ``fixed``: the fixed DOFs
+    of every level, concatenated like the level vectors, and ``cf`` the coarsest level's factor
+    for them, both from :func:`fix_levels`. Fixed DOFs of the finest level get ``x = 0`` and
+    ``ax = 0``; on every level the sweeps leave the fixed DOFs at zero, so the coarse
+    corrections are those of the free subsystem (see :func:`fix_levels`).
 
     The first levels with a stencil (``st_*``, :meth:`Hierarchy.stencil_args`; ``xg``: their
     coordinates' scratch, two arrays per level) are swept particle by particle
@@ -405,7 +423,6 @@ def v_cycle(
     # the levels swept as stencils (the coarsest is solved directly)
     n_st = min(st_shape.shape[0], levels - 1)
     grid_off = stencil_scratch_offsets(st_shape, st_halo)
-    none_fixed = np.zeros(n[1] if n_st > 1 else 0, dtype=np.bool_)  # (nothing is fixed there)
     if n_st == 0:
         for i in range(n0):
             bs[i] = 0.0 if fixed[i] else b[i]
@@ -421,21 +438,21 @@ def v_cycle(
             )  # fmt: skip
             rows = xg_l.shape[0] // 3
             ptr = a_ptr[r0 : r0 + nl + 1]
-            if lvl == 0:  # the finest level: an element stencil, the fixed DOFs
+            if lvl == 0:  # the finest level: an element stencil
                 _stencil_down(
                     st_shape[0], st_halo[0], coef.reshape((rows, N_COEF)), block, inv, dof,
-                    rep, palm, ptr, a_idx, a_val, fixed, b, xg_l, wk_l, rs[off : off + nl],
+                    rep, palm, ptr, a_idx, a_val, fixed[:nl], b, xg_l, wk_l, rs[off : off + nl],
                 )  # fmt: skip
-            else:  # level 1: a block stencil, nothing fixed
+            else:  # level 1: a block stencil
                 _stencil_down(
                     st_shape[1], st_halo[1], coef.reshape((rows, 26, 9)), block, inv, dof,
-                    rep, palm, ptr, a_idx, a_val, none_fixed[:nl], bs[off : off + nl], xg_l,
-                    wk_l, rs[off : off + nl],
+                    rep, palm, ptr, a_idx, a_val, fixed[off : off + nl], bs[off : off + nl],
+                    xg_l, wk_l, rs[off : off + nl],
                 )  # fmt: skip
         else:
             # from zero, the sweep reads only the lower triangle: x_i = (b_i - L_i x) / a_ii
             for i in range(nl):
-                if lvl == 0 and fixed[i]:
+                if fixed[off + i]:
                     xs[off + i] = 0.0
                     continue
                 acc = bs[off + i]
@@ -444,7 +461,7 @@ def v_cycle(
                 xs[off + i] = acc * inv_diag[off + i]
             # after it, (D + L) x = b, so the residual is -U x: the strict upper triangle
             for i in range(nl):
-                if lvl == 0 and fixed[i]:
+                if fixed[off + i]:
                     rs[off + i] = 0.0
                     continue
                 acc = 0.0
@@ -460,20 +477,24 @@ def v_cycle(
             if ri != 0.0:
                 for k in range(p_ptr[p0 + i], p_ptr[p0 + i + 1]):
                     bs[coff + p_idx[k]] += p_val[k] * ri
-    # coarsest: direct solve
+    # coarsest: direct solve (of its free DOFs, when some are fixed)
     lc = levels - 1
     off = vec_off[lc]
     nc = n[lc]
-    ldl_solve(
-        c_colptr,
-        c_rowidx,
-        c_values,
-        c_diag,
-        c_perm,
-        bs[off : off + nc],
-        rs[off : off + nc],
-        xs[off : off + nc],
-    )
+    if cf[0] == 1.0:
+        _coarse_free_solve(fixed[off : off + nc], cf, bs[off : off + nc], rs[off : off + nc],
+                           xs[off : off + nc])  # fmt: skip
+    else:
+        ldl_solve(
+            c_colptr,
+            c_rowidx,
+            c_values,
+            c_diag,
+            c_perm,
+            bs[off : off + nc],
+            rs[off : off + nc],
+            xs[off : off + nc],
+        )
     # up: prolongation, backward Gauss–Seidel
     if n_st == 0:
         for i in range(n0):
@@ -500,25 +521,25 @@ def v_cycle(
             if lvl == 0:  # returns x and A x
                 _stencil_up(
                     st_shape[0], st_halo[0], coef.reshape((rows, N_COEF)), block, inv, dof,
-                    rep, palm, ptr, a_idx, a_val, fixed, b, rs[off : off + nl], xg_l, wk_l, x, ax,
-                    True,
+                    rep, palm, ptr, a_idx, a_val, fixed[:nl], b, rs[off : off + nl], xg_l, wk_l, x,
+                    ax, True,
                 )  # fmt: skip
             else:
                 _stencil_up(
                     st_shape[1], st_halo[1], coef.reshape((rows, 26, 9)), block, inv, dof,
-                    rep, palm, ptr, a_idx, a_val, none_fixed[:nl], bs[off : off + nl],
+                    rep, palm, ptr, a_idx, a_val, fixed[off : off + nl], bs[off : off + nl],
                     rs[off : off + nl], xg_l, wk_l, xs[off : off + nl], ax[:0], False,
                 )  # fmt: skip
             continue
         for i in range(nl):
-            if lvl == 0 and fixed[i]:
+            if fixed[off + i]:
                 continue
             acc = 0.0
             for k in range(p_ptr[p0 + i], p_ptr[p0 + i + 1]):
                 acc += p_val[k] * xs[coff + p_idx[k]]
             xs[off + i] += acc
         for i in range(nl - 1, -1, -1):
-            if lvl == 0 and fixed[i]:
+            if fixed[off + i]:
                 continue
             acc = bs[off + i]
             for k in range(a_ptr[r0 + i], a_ptr[r0 + i + 1]):
@@ -650,14 +671,146 @@ def stencil_scratch_offsets(st_shape: IntArray, st_halo: IntArray) -> IntArray:
 
 
 @njit(cache=True)
+def coarse_scratch_size(n: IntArray) -> int:
+    """Length of the coarsest level's factor scratch ``cf`` (:func:`fix_levels`) for levels of
+    ``n`` DOFs: a flag, the fixed DOFs it was made for, and a dense factor, ``1 + nc + nc^2``."""
+    nc = n[n.shape[0] - 1]
+    return 1 + nc + nc * nc
+
+
+@njit(cache=True)
 def pcg_work_size(n: IntArray, st_shape: IntArray, st_halo: IntArray) -> int:
     """Length of :func:`pcg`'s scratch for levels of ``n`` DOFs and the stencil levels
-    ``st_shape``, ``st_halo`` (:meth:`Hierarchy.stencil_args`): ``5 n[0] + 3 sum(n)`` and the
-    stencil scratch (:func:`stencil_scratch_offsets`)."""
+    ``st_shape``, ``st_halo`` (:meth:`Hierarchy.stencil_args`): ``5 n[0] + 3 sum(n)``, the
+    stencil scratch (:func:`stencil_scratch_offsets`) and, last, the coarsest level's factor
+    (:func:`coarse_scratch_size`)."""
     tot = 0
     for lvl in range(n.shape[0]):
         tot += n[lvl]
-    return 5 * n[0] + 3 * tot + stencil_scratch_offsets(st_shape, st_halo)[-1]
+    grid = stencil_scratch_offsets(st_shape, st_halo)[-1]
+    return 5 * n[0] + 3 * tot + grid + coarse_scratch_size(n)
+
+
+@njit(cache=True)
+def fix_levels(
+    n: IntArray,
+    vec_off: IntArray,
+    row_off: IntArray,
+    a_ptr: IntArray,
+    a_idx: Int32Array,
+    a_val: FloatArray,
+    p_row_off: IntArray,
+    p_ptr: IntArray,
+    p_idx: Int32Array,
+    p_val: FloatArray,
+    fixed: BoolArray,
+    fixed_all: BoolArray,
+    cf: FloatArray,
+) -> None:
+    """The fixed DOFs of every level (``fixed_all``, concatenated like the level vectors) from
+    the finest level's ``fixed``, and the coarsest level's solve for them (``cf``, of
+    :func:`coarse_scratch_size`; zeros before its first use, then kept between calls).
+
+    A coarse DOF is fixed when its interpolation reaches a fixed DOF of the finer level. Then
+    every free coarse DOF's interpolant is zero on the finer fixed DOFs, so the Galerkin matrix
+    ``P^T A P`` restricted to the free coarse DOFs is exactly the Galerkin matrix of the finer
+    free subsystem: the V-cycle's coarse corrections are those of the constrained problem. (With
+    nothing fixed on the coarse levels, the correction moves coarse DOFs that are held on the
+    fine level, and is then cut there: a 12^3 cube held on its bottom face took 13 CG iterations
+    to 1e-8 instead of the free cube's 9; now 9. ``tests/sim/test_multigrid.py``.)
+
+    The coarsest level is solved by its sparse factor while none of its DOFs is fixed, else by a
+    dense Cholesky factor of its free block, made when its fixed DOFs change: ``cf[0]`` is 1
+    when that factor is in use, ``cf[1 : 1 + nc]`` the fixed DOFs it was made for, then the
+    factor (row-major, as many rows as free DOFs).
+    """
+    levels = n.shape[0]
+    for i in range(n[0]):
+        fixed_all[i] = fixed[i]
+    for lvl in range(levels - 1):
+        off = vec_off[lvl]
+        coff = vec_off[lvl + 1]
+        p0 = p_row_off[lvl]
+        for i in range(n[lvl + 1]):
+            fixed_all[coff + i] = False
+        for i in range(n[lvl]):
+            if fixed_all[off + i]:
+                for k in range(p_ptr[p0 + i], p_ptr[p0 + i + 1]):
+                    if p_val[k] != 0.0:
+                        fixed_all[coff + p_idx[k]] = True
+    lc = levels - 1
+    off = vec_off[lc]
+    nc = n[lc]
+    n_fixed = 0
+    same = cf[0] == 1.0
+    for i in range(nc):
+        f = fixed_all[off + i]
+        if f:
+            n_fixed += 1
+        if same and cf[1 + i] != (1.0 if f else 0.0):
+            same = False
+    if n_fixed == 0:
+        cf[0] = 0.0
+        return
+    if same:
+        return
+    m = nc - n_fixed
+    pos = np.full(nc, -1, dtype=np.int64)
+    k = 0
+    for i in range(nc):
+        cf[1 + i] = 1.0 if fixed_all[off + i] else 0.0
+        if not fixed_all[off + i]:
+            pos[i] = k
+            k += 1
+    if m > 0:
+        dense = np.zeros((m, m))
+        r0 = row_off[lc]
+        for i in range(nc):
+            pi = pos[i]
+            if pi < 0:
+                continue
+            for kk in range(a_ptr[r0 + i], a_ptr[r0 + i + 1]):
+                pj = pos[a_idx[kk]]
+                if pj >= 0:
+                    dense[pi, pj] = a_val[kk]
+        lower = np.linalg.cholesky(dense)
+        for a in range(m):
+            for b in range(a + 1):
+                cf[1 + nc + a * m + b] = lower[a, b]
+    cf[0] = 1.0
+
+
+@njit(cache=True)
+def _coarse_free_solve(
+    fixed: BoolArray, cf: FloatArray, b: FloatArray, work: FloatArray, x: FloatArray
+) -> None:
+    """``x = A_FF^-1 b_F`` on the coarsest level's free DOFs, 0 on the fixed ones, by the dense
+    factor in ``cf`` (:func:`fix_levels`; ``work``: scratch ``[nc]``)."""
+    nc = fixed.shape[0]
+    m = 0
+    for i in range(nc):
+        if not fixed[i]:
+            work[m] = b[i]
+            m += 1
+    lo = 1 + nc
+    for a in range(m):  # L y = b
+        acc = work[a]
+        row = lo + a * m
+        for c in range(a):
+            acc -= cf[row + c] * work[c]
+        work[a] = acc / cf[row + a]
+    for a in range(m - 1, -1, -1):  # L^T x = y
+        acc = work[a]
+        for c in range(a + 1, m):
+            acc -= cf[lo + c * m + a] * work[c]
+        work[a] = acc / cf[lo + a * m + a]
+    k = 0
+    for i in range(nc):
+        if fixed[i]:
+            x[i] = 0.0
+        else:
+            x[i] = work[k]
+            k += 1
 
 
 @njit(cache=True)
@@ -700,7 +853,10 @@ def pcg(
 ) -> int:
     """Multigrid-preconditioned CG on the free DOFs: ``(A x)_i = b_i`` for every free ``i``, the
     fixed ``x_i`` kept. ``x`` holds the initial guess and receives the solution. Stops when the
-    free residual's 2-norm is at most ``tol``. ``work``: scratch of :func:`pcg_work_size`.
+    free residual's 2-norm is at most ``tol``. ``work``: scratch of :func:`pcg_work_size`,
+    zeros before its first use; it keeps the coarsest level's factor for the fixed DOFs between
+    calls (:func:`fix_levels`, redone only when they change there), so reuse it for the same
+    hierarchy only.
     ``st_*``: the stencil levels (:meth:`Hierarchy.stencil_args`; none: every level is swept by
     rows).
 
@@ -724,7 +880,14 @@ def pcg(
     xs = work[5 * n0 : 5 * n0 + tot]
     bs = work[5 * n0 + tot : 5 * n0 + 2 * tot]
     rs = work[5 * n0 + 2 * tot : 5 * n0 + 3 * tot]
-    xg = work[5 * n0 + 3 * tot :]
+    cf_off = work.shape[0] - coarse_scratch_size(n)
+    xg = work[5 * n0 + 3 * tot : cf_off]
+    cf = work[cf_off:]
+    fixed_all = np.empty(tot, dtype=np.bool_)
+    fix_levels(
+        n, vec_off, row_off, a_ptr, a_idx, a_val, p_row_off, p_ptr, p_idx, p_val, fixed, fixed_all,
+        cf,
+    )  # fmt: skip
     if not ax_known:
         csr_matvec(a_ptr, a_idx, a_val, row_off[0], n0, x, q)
         ax = q
@@ -739,8 +902,8 @@ def pcg(
         v_cycle(
             n, vec_off, row_off, a_ptr, a_idx, a_val, a_diag, inv_diag, p_row_off, p_ptr, p_idx,
             p_val, c_colptr, c_rowidx, c_values, c_diag, c_perm, st_shape, st_halo, st_coef,
-            st_coef_off, st_block, st_inv, st_node_off, st_dof, st_rep, st_palm, fixed, r, z, az,
-            xs, bs, rs, xg,
+            st_coef_off, st_block, st_inv, st_node_off, st_dof, st_rep, st_palm, fixed_all, r, z,
+            az, xs, bs, rs, xg, cf,
         )  # fmt: skip
         rz_new = 0.0
         for i in range(n0):
@@ -787,7 +950,7 @@ def solve(
     h = hierarchy
     n0 = int(h.n[0])
     x = np.zeros(n0) if x0 is None else np.array(x0, dtype=np.float64)
-    work = np.empty(h.work_size)
+    work = np.zeros(h.work_size)
     c = h.coarse
     bb = np.ascontiguousarray(b, dtype=np.float64)
     tol = rel_tol * float(np.linalg.norm(np.where(fixed, 0.0, bb)))

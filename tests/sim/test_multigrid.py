@@ -49,11 +49,12 @@ def _v_cycle(h: Hierarchy, fixed: np.ndarray, b: np.ndarray) -> tuple[np.ndarray
     c = h.coarse
     st_shape, st_halo = h.stencil_args()[:2]
     grid = int(stencil_scratch_offsets(st_shape, st_halo)[-1])
+    fixed_all, cf = h.fixed_levels(fixed)
     v_cycle(
         h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag, h.p_row_off,
         h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
-        *h.stencil_args(), fixed, b, z, az, np.empty(tot), np.empty(tot), np.empty(tot),
-        np.empty(grid),
+        *h.stencil_args(), fixed_all, b, z, az, np.empty(tot), np.empty(tot), np.empty(tot),
+        np.empty(grid), cf,
     )  # fmt: skip
     return z, az
 
@@ -128,7 +129,7 @@ def test_cg_converges_at_a_rate_independent_of_the_lattice() -> None:
         b = np.random.default_rng(0).normal(size=n0)
         x = np.zeros(n0)
         c = h.coarse
-        work = np.empty(h.work_size)
+        work = np.zeros(h.work_size)
         its = pcg(
             h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag,
             h.p_row_off, h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
@@ -158,7 +159,7 @@ def test_cg_with_a_known_initial_product_skips_nothing_it_needs() -> None:
 
     def run(ax: np.ndarray, known: bool) -> tuple[int, np.ndarray, np.ndarray]:
         x = x0.copy()
-        work = np.empty(h.work_size)
+        work = np.zeros(h.work_size)
         its = pcg(
             h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag,
             h.p_row_off, h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
@@ -178,3 +179,52 @@ def test_cg_with_a_known_initial_product_skips_nothing_it_needs() -> None:
     np.testing.assert_array_equal(x_known[fixed], x0[fixed])
     _, x_wrong, _ = run(a @ x0 + 1.0, True)
     assert np.abs(x_wrong - x_self).max() > 1e-3
+
+
+def _cg_iterations(h: Hierarchy, fixed: np.ndarray, b: np.ndarray, rel_tol: float) -> int:
+    x = np.zeros(b.size)
+    c = h.coarse
+    work = np.zeros(h.work_size)
+    its = pcg(
+        h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag,
+        h.p_row_off, h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
+        *h.stencil_args(), fixed, b, x, rel_tol * float(np.linalg.norm(np.where(fixed, 0, b))),
+        100, work, work[:0], False,
+    )  # fmt: skip
+    return int(its)
+
+
+@pytest.mark.parametrize("part", ["whole", "half", "scattered"])
+def test_fixed_dofs_do_not_slow_cg(part: str) -> None:
+    """The object on the table holds its bottom particles' z (fixed DOFs). The coarse levels
+    hold the coarse DOFs that interpolate onto them and the coarsest solves its free block, so
+    every coarse correction is the free subsystem's: CG converges about as fast as with nothing
+    fixed. (When the coarse levels ignored the fixed DOFs, the whole face, half of it and a
+    scattered half took 13, 12 and 12 iterations to 1e-8; now 9, 11 and 10, against 9 free.)"""
+    n = 12
+    model = build_model(
+        CUBE, SimSettings(particles_per_side=n, solver="iterative"), gripped=True, table=True
+    )
+    h = model.hierarchy
+    assert h is not None
+    assert h.levels >= 3
+    n0 = int(h.n[0])
+    z = model.base_x[:, 2]
+    bottom = np.flatnonzero(np.isclose(z, z.min()))
+    rng = np.random.default_rng(1)
+    if part == "half":
+        x = model.base_x[bottom, 0]
+        bottom = bottom[x <= np.median(x)]
+    elif part == "scattered":
+        bottom = bottom[rng.random(bottom.size) < 0.5]
+    fixed = np.zeros(n0, dtype=bool)
+    fixed[model.dof_of[3 * bottom + 2]] = True
+    b = rng.normal(size=n0)
+    free_its = _cg_iterations(h, np.zeros(n0, dtype=bool), b, 1e-8)
+    held_its = _cg_iterations(h, fixed, b, 1e-8)
+    assert free_its <= 10
+    assert held_its <= free_its + (0 if part == "whole" else 2), (part, free_its, held_its)
+    # the coarse levels hold DOFs too, and the coarsest solves its free block exactly
+    fixed_all, cf = h.fixed_levels(fixed)
+    assert fixed_all[int(h.vec_off[1]) :].any()
+    assert cf[0] == 1.0

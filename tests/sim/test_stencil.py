@@ -242,13 +242,15 @@ def test_v_cycle_with_stencils_is_the_multigrid_cycle_and_symmetric(
     c = h.coarse
     tot = int(h.n.sum())
 
+    fixed_all, cf = h.fixed_levels(fixed)
+
     def cycle(b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         z, az = np.empty(n_dof), np.empty(n_dof)
         v_cycle(
             h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag,
             h.p_row_off, h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
-            *h.stencil_args(), fixed, b, z, az, np.empty(tot), np.empty(tot), np.empty(tot),
-            np.empty(h.work_size),
+            *h.stencil_args(), fixed_all, b, z, az, np.empty(tot), np.empty(tot), np.empty(tot),
+            np.empty(h.work_size), cf,
         )  # fmt: skip
         return z, az
 
@@ -264,10 +266,19 @@ def test_v_cycle_with_stencils_is_the_multigrid_cycle_and_symmetric(
         )
         mats.append(interps[-1].T @ mats[-1] @ interps[-1])
 
+    # a coarse DOF is fixed when its interpolation reaches a fixed finer DOF
+    fixes = [fixed]
+    for lvl in range(levels - 1):
+        fixes.append(np.abs(interps[lvl][fixes[-1]]).sum(axis=0) > 0)
+    np.testing.assert_array_equal(fixed_all, np.concatenate(fixes))
+
     def dense_cycle(lvl: int, b: np.ndarray) -> np.ndarray:
+        fx = fixes[lvl]
         if lvl == levels - 1:
-            return np.asarray(np.linalg.solve(mats[lvl], b))
-        fx = fixed if lvl == 0 else np.zeros(b.size, dtype=bool)
+            x = np.zeros(b.size)
+            free = ~fx
+            x[free] = np.linalg.solve(mats[lvl][np.ix_(free, free)], b[free])
+            return x
         x = np.zeros(b.size)
         _dense_block_gs(mats[lvl], h.stencils[lvl], fx, b, x, reverse=False)
         r = np.where(fx, 0.0, b - mats[lvl] @ x)
