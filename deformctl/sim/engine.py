@@ -38,8 +38,11 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       linear extrapolation, and halves the CG iterations against it), to an RMS residual of
       ``cg_tolerance_m_s = 2e-7`` m/s. Contacts become *fixed DOFs* (an active row prescribes its
       DOF's velocity exactly, so sticking holds exactly), palm-plane rows a Schur complement on
-      CG-solved columns. Cost per step: one force pass, ~0.3 matrix-vector products and
-      ~0.5-1.2 CG iterations of about 3.5 matrix-vector products' time each (the V-cycle, which
+      CG-solved columns; a coarse DOF whose interpolation reaches a fixed DOF is fixed too, so
+      the coarse corrections are the free subsystem's (:func:`deformctl.sim.multigrid.
+      fix_levels`: with the object held on the table CG converges as fast as with nothing
+      held). Cost per step: one force pass, ~0.3 matrix-vector products (by the stencil) and
+      ~0.4-0.7 CG iterations of about 3.5 matrix-vector products' time each (the V-cycle, which
       also returns CG's ``A p``; the finest level and level 1 are swept particle by particle as
       lattice stencils, :mod:`deformctl.sim.stencil`, the rest by compressed rows;
       :mod:`deformctl.sim.multigrid`), linear in the lattice size.

@@ -40,7 +40,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from deformctl.sim.multigrid import csr_matvec, pcg, pcg_work_size
+from deformctl.sim.multigrid import pcg, pcg_work_size, product
 from deformctl.sim.solver import ldl_solve
 
 FloatArray = NDArray[np.float64]
@@ -1568,7 +1568,11 @@ def integrate_iterative(
                     adv[i] = bt[i] + react[i] if fixed[i] else bt[i] - work[i]
                     dv2 += dv[i] * dv[i]
             else:
-                csr_matvec(h_a_ptr, h_a_idx, h_a_val, h_row_off[0], n_dof, dv, adv)
+                product(
+                    h_n, h_vec_off, h_row_off, h_a_ptr, h_a_idx, h_a_val, st_shape, st_halo,
+                    st_coef, st_coef_off, st_block, st_inv, st_node_off, st_dof, st_rep, st_palm,
+                    work, dv, adv,
+                )  # fmt: skip
                 stats[4] += 1
                 adv_err = 0.0
                 for i in range(n_dof):

@@ -50,6 +50,7 @@ from deformctl.sim.stencil import (
     forward_sweep_from_zero,
     grid_matrix,
     residual_after_forward,
+    stencil_product,
 )
 
 FloatArray = NDArray[np.float64]
@@ -363,6 +364,51 @@ def csr_matvec(
         for k in range(ptr[row0 + i], ptr[row0 + i + 1]):
             acc += val[k] * x[idx[k]]
         out[i] = acc
+
+
+@njit(cache=True)
+def product(
+    n: IntArray,
+    vec_off: IntArray,
+    row_off: IntArray,
+    a_ptr: IntArray,
+    a_idx: Int32Array,
+    a_val: FloatArray,
+    st_shape: IntArray,
+    st_halo: IntArray,
+    st_coef: FloatArray,
+    st_coef_off: IntArray,
+    st_block: FloatArray,
+    st_inv: FloatArray,
+    st_node_off: IntArray,
+    st_dof: IntArray,
+    st_rep: IntArray,
+    st_palm: IntArray,
+    work: FloatArray,
+    x: FloatArray,
+    out: FloatArray,
+) -> None:
+    """``out = A x`` on the finest level: by its stencil when it has one
+    (:func:`deformctl.sim.stencil.stencil_product`, using the stencil scratch of :func:`pcg`'s
+    ``work``), else by its compressed rows."""
+    n0 = n[0]
+    if st_shape.shape[0] == 0 or n.shape[0] < 2:
+        csr_matvec(a_ptr, a_idx, a_val, row_off[0], n0, x, out)
+        return
+    tot = 0
+    for lvl in range(n.shape[0]):
+        tot += n[lvl]
+    grid_off = stencil_scratch_offsets(st_shape, st_halo)
+    xg = work[5 * n0 + 3 * tot : 5 * n0 + 3 * tot + grid_off[-1]]
+    xg_l, _, coef, block, _, dof, _, palm = _stencil_level(
+        0, 0, n0, grid_off, xg, st_coef, st_coef_off, st_block, st_inv, st_node_off, st_dof,
+        st_rep, st_palm,
+    )  # fmt: skip
+    rows = xg_l.shape[0] // 3
+    stencil_product(
+        st_shape[0], st_halo[0], coef.reshape((rows, N_COEF)), block, dof, palm,
+        a_ptr[row_off[0] : row_off[0] + n0 + 1], a_idx, a_val, x, xg_l, out,
+    )  # fmt: skip
 
 
 @njit(cache=True)
@@ -889,7 +935,10 @@ def pcg(
         cf,
     )  # fmt: skip
     if not ax_known:
-        csr_matvec(a_ptr, a_idx, a_val, row_off[0], n0, x, q)
+        product(
+            n, vec_off, row_off, a_ptr, a_idx, a_val, st_shape, st_halo, st_coef, st_coef_off,
+            st_block, st_inv, st_node_off, st_dof, st_rep, st_palm, work, x, q,
+        )  # fmt: skip
         ax = q
     rr = 0.0
     for i in range(n0):

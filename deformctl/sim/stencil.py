@@ -885,3 +885,54 @@ def add_dofs(dof_of: IntArray, halo: int, fixed: BoolArray, t: FloatArray, xg: F
         g = dof_of[c]
         if not fixed[g]:
             xg[base + c] += t[g]
+
+
+@njit(cache=True)
+def stencil_product(
+    shape: IntArray,
+    halo: int,
+    coef: FloatArray,
+    block: FloatArray,
+    dof_of: IntArray,
+    palm: IntArray,
+    a_ptr: IntArray,
+    a_idx: Int32Array,
+    a_val: FloatArray,
+    x: FloatArray,
+    xg: FloatArray,
+    out: FloatArray,
+) -> None:
+    """``out = A x`` over every DOF from the stencil (``xg``: coordinate scratch like a sweep's).
+
+    Each particle's rows are its own block times its coordinates plus its outgoing and incoming
+    elements' terms, read without column indices; the palm DOFs' rows (which also hold the
+    palms' own terms) come from their compressed rows. A particle row of a palm-bound
+    coordinate is written and then overwritten by its palm's row. Cheaper than the compressed
+    rows, and it reads only the stencil's arrays (about 3x fewer bytes per particle), so it
+    evicts less of what the V-cycle reads next."""
+    nx, ny, nz = shape[0], shape[1], shape[2]
+    n = nx * ny * nz
+    off = _kernel_offsets(coef, shape)
+    base = 3 * halo
+    for i in range(base):
+        xg[i] = 0.0
+        xg[base + 3 * n + i] = 0.0
+    for c in range(3 * n):
+        xg[base + c] = x[dof_of[c]]
+    for p in range(n):
+        pp = p + halo
+        s0, s1, s2 = _sums_in(coef, xg, pp, off)
+        t0, t1, t2 = _sums_out(coef, xg, pp, off)
+        q = 3 * pp
+        x0 = xg[q]
+        x1 = xg[q + 1]
+        x2 = xg[q + 2]
+        out[dof_of[3 * p]] = block[p, 0] * x0 + block[p, 1] * x1 + block[p, 2] * x2 - s0 - t0
+        out[dof_of[3 * p + 1]] = block[p, 3] * x0 + block[p, 4] * x1 + block[p, 5] * x2 - s1 - t1
+        out[dof_of[3 * p + 2]] = block[p, 6] * x0 + block[p, 7] * x1 + block[p, 8] * x2 - s2 - t2
+    for k in range(palm.shape[0]):
+        g = palm[k]
+        acc = 0.0
+        for kk in range(a_ptr[g], a_ptr[g + 1]):
+            acc += a_val[kk] * x[a_idx[kk]]
+        out[g] = acc

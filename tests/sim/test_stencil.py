@@ -8,12 +8,20 @@ or free) and on a free one, with random fixed DOFs.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import scipy.sparse
 
 from deformctl.sim.lattice import build_lattice, palm_dof_map, reduced_stiffness, shape_dof_map
-from deformctl.sim.multigrid import _scalar_interpolation, build_hierarchy, interpolation, v_cycle
+from deformctl.sim.multigrid import (
+    _scalar_interpolation,
+    build_hierarchy,
+    interpolation,
+    product,
+    v_cycle,
+)
 from deformctl.sim.stencil import (
     DIRECTIONS,
     UPPER_OFFSETS,
@@ -28,6 +36,7 @@ from deformctl.sim.stencil import (
     forward_sweep_from_zero,
     grid_matrix,
     residual_after_forward,
+    stencil_product,
 )
 
 CASES = [
@@ -318,3 +327,35 @@ def test_build_stencil_refuses_palm_dofs_out_of_order() -> None:
     w = lat.unit_stiffness
     with pytest.raises(ValueError, match="palm DOFs"):
         build_stencil(lat, w, np.ones(lat.n_particles), dof_of, n_dof, pz, px)
+
+
+@pytest.mark.parametrize(("nx", "gripped", "surface", "fix_palm_z"), CASES)
+def test_stencil_product_is_the_matrix_product(
+    nx: int, gripped: bool, surface: bool, fix_palm_z: bool
+) -> None:
+    """Every DOF's row, the palm DOFs' included, from the stencil equals the compressed rows';
+    garbage in the scratch (the halo included) does not leak into it."""
+    a, st, _ = _system(nx, gripped, surface)
+    ptr, idx, val = _csr(a)
+    x = np.random.default_rng(nx).normal(size=a.shape[0])
+    out = np.full(a.shape[0], np.nan)
+    xg = np.full(st.grid_len, np.nan)
+    stencil_product(st.shape, st.halo, st.coef, st.block, st.dof_of, st.palm, ptr, idx, val, x,
+                    xg, out)  # fmt: skip
+    want = a @ x
+    np.testing.assert_allclose(out, want, rtol=0, atol=1e-12 * np.abs(want).max())
+
+
+@pytest.mark.parametrize("stencils", [2, 0])
+def test_hierarchy_product_is_the_finest_matrix_product(stencils: int) -> None:
+    """The product CG and the step use: by the stencil when there is one, else by rows."""
+    a, st, _ = _system(7, True, False)
+    shape = (int(st.shape[0]), int(st.shape[1]), int(st.shape[2]))
+    h = build_hierarchy(shape, True, a, max_coarse=a.shape[0] // 9, stencil=st)
+    h = dataclasses.replace(h, stencils=h.stencils[:stencils])
+    x = np.random.default_rng(2).normal(size=a.shape[0])
+    out = np.full(a.shape[0], np.nan)
+    work = np.full(h.work_size, np.nan)
+    product(h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, *h.stencil_args(), work, x, out)
+    want = a @ x
+    np.testing.assert_allclose(out, want, rtol=0, atol=1e-12 * np.abs(want).max())
