@@ -162,7 +162,9 @@ DT_BOUNDS_S = (1e-5, 0.05)
 #: CG iterations per solve, one lift attempt of the 10 cm cube at 8^3 / 16^3 / 21^3: linear
 #: extrapolation of two 1.24 / 1.97 / 2.47; least squares over 2: 0.63 / 1.06 / 1.47; over 3:
 #: 0.51 / 0.93 / 1.23; over 4: 0.47 / 0.88 / 1.16, over 6: 0.43 / - / 1.06 (3 is the fastest:
-#: each kept vector costs two passes over the DOFs per step)
+#: each kept vector costs two passes over the DOFs per step). Since the coarse levels also fix
+#: what the fine level fixes (fewer iterations), at 16^3 per step: over 3 0.64, over 4 0.61,
+#: over 5 0.59, over 8 0.54 (a scratch variant of the warm start; still not worth the passes)
 WARM_HISTORY = 3  # kernels._warm_start takes at most 3
 #: the error a carried product ``A dv`` may have, as a fraction of the CG tolerance, before the
 #: iterative solver forms it again (:func:`kernels.integrate_iterative`): CG's stopping test then
