@@ -390,16 +390,13 @@ def product(
 ) -> None:
     """``out = A x`` on the finest level: by its stencil when it has one
     (:func:`deformctl.sim.stencil.stencil_product`, using the stencil scratch of :func:`pcg`'s
-    ``work``), else by its compressed rows."""
+    ``work``, :func:`pcg_scratch`), else by its compressed rows."""
     n0 = n[0]
     if st_shape.shape[0] == 0 or n.shape[0] < 2:
         csr_matvec(a_ptr, a_idx, a_val, row_off[0], n0, x, out)
         return
-    tot = 0
-    for lvl in range(n.shape[0]):
-        tot += n[lvl]
+    xg = pcg_scratch(n, st_shape, st_halo, work)[8]
     grid_off = stencil_scratch_offsets(st_shape, st_halo)
-    xg = work[5 * n0 + 3 * tot : 5 * n0 + 3 * tot + grid_off[-1]]
     xg_l, _, coef, block, _, dof, _, palm = _stencil_level(
         0, 0, n0, grid_off, xg, st_coef, st_coef_off, st_block, st_inv, st_node_off, st_dof,
         st_rep, st_palm,
@@ -738,6 +735,45 @@ def pcg_work_size(n: IntArray, st_shape: IntArray, st_halo: IntArray) -> int:
 
 
 @njit(cache=True)
+def pcg_scratch(
+    n: IntArray, st_shape: IntArray, st_halo: IntArray, work: FloatArray
+) -> tuple[
+    FloatArray,
+    FloatArray,
+    FloatArray,
+    FloatArray,
+    FloatArray,
+    FloatArray,
+    FloatArray,
+    FloatArray,
+    FloatArray,
+    FloatArray,
+]:
+    """:func:`pcg`'s views of its scratch ``work`` (:func:`pcg_work_size`): CG's ``r, z, p, q,
+    A z`` (finest level), the V-cycle's ``xs, bs, rs`` (all levels), the stencil levels'
+    coordinates (:func:`stencil_scratch_offsets`) and, last, the coarsest level's factor
+    (:func:`fix_levels`)."""
+    n0 = n[0]
+    tot = 0
+    for lvl in range(n.shape[0]):
+        tot += n[lvl]
+    v = 5 * n0 + 3 * tot
+    cf_off = v + stencil_scratch_offsets(st_shape, st_halo)[-1]
+    return (
+        work[0:n0],
+        work[n0 : 2 * n0],
+        work[2 * n0 : 3 * n0],
+        work[3 * n0 : 4 * n0],
+        work[4 * n0 : 5 * n0],
+        work[5 * n0 : 5 * n0 + tot],
+        work[5 * n0 + tot : 5 * n0 + 2 * tot],
+        work[5 * n0 + 2 * tot : v],
+        work[v:cf_off],
+        work[cf_off : cf_off + coarse_scratch_size(n)],
+    )
+
+
+@njit(cache=True)
 def fix_levels(
     n: IntArray,
     vec_off: IntArray,
@@ -918,17 +954,7 @@ def pcg(
     tot = 0
     for lvl in range(n.shape[0]):
         tot += n[lvl]
-    r = work[0:n0]
-    z = work[n0 : 2 * n0]
-    p = work[2 * n0 : 3 * n0]
-    q = work[3 * n0 : 4 * n0]
-    az = work[4 * n0 : 5 * n0]
-    xs = work[5 * n0 : 5 * n0 + tot]
-    bs = work[5 * n0 + tot : 5 * n0 + 2 * tot]
-    rs = work[5 * n0 + 2 * tot : 5 * n0 + 3 * tot]
-    cf_off = work.shape[0] - coarse_scratch_size(n)
-    xg = work[5 * n0 + 3 * tot : cf_off]
-    cf = work[cf_off:]
+    r, z, p, q, az, xs, bs, rs, xg, cf = pcg_scratch(n, st_shape, st_halo, work)
     fixed_all = np.empty(tot, dtype=np.bool_)
     fix_levels(
         n, vec_off, row_off, a_ptr, a_idx, a_val, p_row_off, p_ptr, p_idx, p_val, fixed, fixed_all,
