@@ -170,6 +170,12 @@ WARM_HISTORY = 3  # kernels._warm_start takes at most 3
 #: iterative solver forms it again (:func:`kernels.integrate_iterative`): CG's stopping test then
 #: holds for the true residual within 1 %.
 PRODUCT_CARRY_FRACTION = 0.01
+#: the gap, as a fraction of the lattice's shortest element, beyond which the iterative solver's
+#: row loops leave out an inactive table or palm-plane row until the lattice moves
+#: (:func:`kernels._choose_rows`; results do not depend on it). Half an element keeps the bottom
+#: layer's table rows (and any palm-plane row a squeeze brings that close) and leaves out the
+#: rest; it is chosen again after 0.2 element of motion.
+ROW_MARGIN_FRACTION = 0.5
 
 #: Bytes each simulated step keeps: the record row (``kernels.N_REC`` doubles), the commanded force
 #: and palm velocity, and the series built from them (about three copies).
@@ -635,7 +641,7 @@ def build_model(
         contact_cols=contact_cols,
         col_of_dof=col_of_dof,
         hierarchy=hierarchy,
-        solver_stats=np.zeros(5, dtype=np.int64),
+        solver_stats=np.zeros(6, dtype=np.int64),
         row_dof=np.asarray(row_dof, dtype=np.int64),
         row_dof2=np.asarray(row_dof2, dtype=np.int64),
         row_particle=np.asarray(row_particle, dtype=np.int64),
@@ -751,6 +757,7 @@ def run_model(
             s.cg_max_iterations,
             WARM_HISTORY,
             PRODUCT_CARRY_FRACTION * tol,
+            ROW_MARGIN_FRACTION * float(model.lattice.rest_length_m.min()),
         )
         return kernels.integrate_iterative(
             *(common_head + solver_args + common_tail + (model.solver_stats,))

@@ -837,6 +837,9 @@ def integrate(
     target = np.zeros(nr)
     vrow = np.zeros(nr)
     gap = np.zeros(nr)
+    friction = np.zeros(nr)  # the palm friction rows' bound, N·s
+    all_rows = np.arange(nr)
+    all_bottoms = np.arange(bottom_particles.shape[0])
     fact = np.empty((0, 0))
     fact_rows = np.zeros(nr, dtype=np.int64)
     fact_n = np.zeros(1, dtype=np.int64)
@@ -876,44 +879,29 @@ def integrate(
             vnew[i] = vfree[i]
         # ---- contacts
         if nr > 0:
+            _row_targets(
+                all_rows, nr, all_bottoms, all_bottoms.shape[0], bottom_particles, bottom_row, x,
+                q, row_type, row_particle, palm_x_dof, palm_x0, palm_stop, palm_vz[step + 1],
+                mu * max(f_now, 0.0) * h_step, h_step, gap, target, friction,
+            )  # fmt: skip
             for r in range(nr):
-                gap[r] = 1e300
                 forced[r] = False
-            for b in range(bottom_particles.shape[0]):
-                r = bottom_row[b]
-                z = x[bottom_particles[b], 2]
-                if z < gap[r]:
-                    gap[r] = z
-            for r in range(nr):
-                t = row_type[r]
-                if t == 5:
-                    gap[r] = x[row_particle[r], 0] - palm_x0[0] - q[palm_x_dof[0]]
-                elif t == 6:
-                    gap[r] = palm_x0[1] + q[palm_x_dof[1]] - x[row_particle[r], 0]
-            for r in range(nr):
                 vrow[r] = vfree[row_dof[r]]
                 if row_dof2[r] >= 0:
                     vrow[r] -= vfree[row_dof2[r]]
                 t = row_type[r]
                 if t == 0 or t >= 5:
-                    target[r] = -gap[r] / h_step
                     lo[r] = 0.0
                     hi[r] = 1e300
                 elif t == 1:
-                    target[r] = palm_vz[step + 1]
-                    bound = mu * max(f_now, 0.0) * h_step
-                    lo[r] = -bound
-                    hi[r] = bound
+                    lo[r] = -friction[r]
+                    hi[r] = friction[r]
                 elif t == 3:
-                    target[r] = (palm_stop[0] - palm_x0[0] - q[palm_x_dof[0]]) / h_step
                     lo[r] = -1e300
                     hi[r] = 0.0
                 elif t == 4:
-                    target[r] = (palm_stop[1] - palm_x0[1] - q[palm_x_dof[1]]) / h_step
                     lo[r] = 0.0
                     hi[r] = 1e300
-                else:
-                    target[r] = 0.0
             # unilateral rows without impulse that the free velocity satisfies are skipped; after
             # the solve every skipped row is checked and the solve repeated if one is violated,
             # so skipping never changes the solution
@@ -1217,6 +1205,128 @@ def _fixed_residual(
 
 
 @njit(cache=True)
+def _row_targets(
+    rows: IntArray,
+    n_rows: int,
+    bottoms: IntArray,
+    n_bottoms: int,
+    bottom_particles: IntArray,
+    bottom_row: IntArray,
+    x: FloatArray,
+    q: FloatArray,
+    row_type: IntArray,
+    row_particle: IntArray,
+    palm_x_dof: IntArray,
+    palm_x0: FloatArray,
+    palm_stop: FloatArray,
+    palm_vz_now: float,
+    friction_bound: float,
+    h_step: float,
+    gap: FloatArray,
+    target: FloatArray,
+    bound: FloatArray,
+) -> None:
+    """Gap (m) and target velocity (m/s) of rows ``rows[:n_rows]``, and the palm friction rows'
+    bound ``friction_bound`` (N·s), as in :func:`integrate`. A table row's gap is the lowest
+    height of its particles ``bottom_particles[bottoms[:n_bottoms]]`` (``bottom_row``: the row
+    of each)."""
+    for j in range(n_rows):
+        gap[rows[j]] = 1e300
+    for j in range(n_bottoms):
+        b = bottoms[j]
+        r = bottom_row[b]
+        z = x[bottom_particles[b], 2]
+        if z < gap[r]:
+            gap[r] = z
+    for j in range(n_rows):
+        r = rows[j]
+        t = row_type[r]
+        if t == 5:
+            gap[r] = x[row_particle[r], 0] - palm_x0[0] - q[palm_x_dof[0]]
+        elif t == 6:
+            gap[r] = palm_x0[1] + q[palm_x_dof[1]] - x[row_particle[r], 0]
+        if t == 0 or t >= 5:
+            target[r] = -gap[r] / h_step
+        elif t == 1:
+            target[r] = palm_vz_now
+            bound[r] = friction_bound
+        elif t == 3:
+            target[r] = (palm_stop[0] - palm_x0[0] - q[palm_x_dof[0]]) / h_step
+        elif t == 4:
+            target[r] = (palm_stop[1] - palm_x0[1] - q[palm_x_dof[1]]) / h_step
+        else:
+            target[r] = 0.0
+
+
+@njit(cache=True)
+def _choose_rows(
+    cullable: BoolArray,
+    state: IntArray,
+    gap: FloatArray,
+    row_margin: float,
+    bottom_row: IntArray,
+    x: FloatArray,
+    q: FloatArray,
+    palm_x_dof: IntArray,
+    x_ref: FloatArray,
+    palm_ref: FloatArray,
+) -> tuple[IntArray, int, IntArray, int]:
+    """The rows :func:`integrate_iterative`'s loops visit until the lattice moves: all but the
+    ``cullable`` ones (table rows off the palm patches, palm-plane rows) that are inactive with a
+    gap of at least ``row_margin`` (m). Also returns the bottom particles of the kept table rows,
+    and records the positions ``x`` and palm x displacements they were chosen at (``x_ref``,
+    ``palm_ref``, for :func:`_moved_less`).
+
+    Such a row stays inactive, with no impulse, while the lattice has moved less than
+    ``0.4 row_margin`` (its gap then exceeds ``0.6 row_margin``) and no velocity could close more
+    than ``0.4 row_margin`` in the step (the caller checks both), so leaving it out changes no
+    result."""
+    nr = cullable.shape[0]
+    keep = np.empty(nr, dtype=np.bool_)
+    rows = np.empty(nr, dtype=np.int64)
+    n_rows = 0
+    for r in range(nr):
+        keep[r] = (not cullable[r]) or state[r] != 0 or gap[r] < row_margin
+        if keep[r]:
+            rows[n_rows] = r
+            n_rows += 1
+    bottoms = np.empty(bottom_row.shape[0], dtype=np.int64)
+    n_bottoms = 0
+    for b in range(bottom_row.shape[0]):
+        if keep[bottom_row[b]]:
+            bottoms[n_bottoms] = b
+            n_bottoms += 1
+    x_ref[:, :] = x
+    for a in range(2):
+        palm_ref[a] = q[palm_x_dof[a]] if palm_x_dof[a] >= 0 else 0.0
+    return rows, n_rows, bottoms, n_bottoms
+
+
+@njit(cache=True)
+def _moved_less(
+    x: FloatArray,
+    x_ref: FloatArray,
+    q: FloatArray,
+    palm_x_dof: IntArray,
+    palm_ref: FloatArray,
+    limit: float,
+) -> bool:
+    """Whether every gap a table or palm-plane row measures has changed by less than ``limit``
+    (m) since :func:`_choose_rows`: the particles' largest height change, and their largest x
+    change plus the palms' largest x change."""
+    moved_x = 0.0
+    moved_z = 0.0
+    for p in range(x.shape[0]):
+        moved_x = max(moved_x, abs(x[p, 0] - x_ref[p, 0]))
+        moved_z = max(moved_z, abs(x[p, 2] - x_ref[p, 2]))
+    palm = 0.0
+    for a in range(2):
+        if palm_x_dof[a] >= 0:
+            palm = max(palm, abs(q[palm_x_dof[a]] - palm_ref[a]))
+    return moved_x + palm < limit and moved_z < limit
+
+
+@njit(cache=True)
 def integrate_iterative(
     base_x: FloatArray,
     q: FloatArray,
@@ -1259,6 +1369,7 @@ def integrate_iterative(
     cg_max_iterations: int,
     warm_history: int,
     product_carry: float,
+    row_margin: float,
     gravity: float,
     palm_x_dof: IntArray,
     palm_z_dof: IntArray,
@@ -1308,8 +1419,12 @@ def integrate_iterative(
         product_carry: the largest error bound (2-norm, N·s) of a carried product ``A dv`` that
             CG may start from instead of forming the product (a small fraction of
             ``cg_tolerance``; 0 forms it every step).
-        stats: counters, ``[5]``: solves, CG iterations, active-set rounds, unconverged solves,
-            explicit products ``A dv``.
+        row_margin: gap, m, beyond which an inactive table or palm-plane row is left out of the
+            step's row loops (:func:`_choose_rows`); ``inf`` keeps every row in them. The
+            result does not depend on it: a left-out row cannot become active before the
+            rows are chosen again.
+        stats: counters, ``[6]``: solves, CG iterations, active-set rounds, unconverged solves,
+            explicit products ``A dv``, rows checked after the solves.
         Other arguments: as :func:`integrate`.
     """
     n = base_x.shape[0]
@@ -1380,6 +1495,30 @@ def integrate_iterative(
         com_z0 += particle_mass[p] * (base_x[p, 2] + q[dof_of[3 * p + 2]])
     com_z0 /= total_mass
     a_ptr0 = h_a_ptr[h_row_off[0] : h_row_off[0] + n_dof + 1]
+    # the rows the step's loops visit (see _choose_rows): every row at first
+    rows = np.arange(nr)
+    n_rows = nr
+    bottoms = np.arange(bottom_particles.shape[0])
+    n_bottoms = bottoms.shape[0]
+    all_rows = np.arange(nr)
+    all_bottoms = np.arange(bottom_particles.shape[0])
+    cullable = np.zeros(nr, dtype=np.bool_)
+    for r in range(nr):
+        t = row_type[r]
+        cullable[r] = t >= 5 or (
+            t == 0 and row_dof[r] != palm_z_dof[0] and row_dof[r] != palm_z_dof[1]
+        )
+    dof_axis = np.full(n_dof, 1, dtype=np.int64)
+    for p in range(n):
+        dof_axis[dof_of[3 * p]] = 0
+        dof_axis[dof_of[3 * p + 2]] = 2
+    for a in range(2):
+        if palm_x_dof[a] >= 0:
+            dof_axis[palm_x_dof[a]] = 0
+    x_ref = np.empty((n, 3))
+    palm_ref = np.zeros(2)
+    choose = np.isfinite(row_margin)
+    chosen = False
     for step in range(n_steps):
         f_now = force_cmd[step + 1]
         _predict(q, v, q_last, v_last, q_prev, v_prev, bdf2)
@@ -1388,31 +1527,24 @@ def integrate_iterative(
             gravity * gravity_scale[step + 1], palm_x_dof, f_now, width_damping, h_step, x, vel, fp,
             fq,
         )  # fmt: skip
-        # targets of the rows (as in integrate)
-        for r in range(nr):
-            gap[r] = 1e300
-        for b in range(bottom_particles.shape[0]):
-            r = bottom_row[b]
-            z = x[bottom_particles[b], 2]
-            if z < gap[r]:
-                gap[r] = z
-        for r in range(nr):
-            t = row_type[r]
-            if t == 5:
-                gap[r] = x[row_particle[r], 0] - palm_x0[0] - q[palm_x_dof[0]]
-            elif t == 6:
-                gap[r] = palm_x0[1] + q[palm_x_dof[1]] - x[row_particle[r], 0]
-            if t == 0 or t >= 5:
-                target[r] = -gap[r] / h_step
-            elif t == 1:
-                target[r] = palm_vz[step + 1]
-                bound[r] = mu * max(f_now, 0.0) * h_step
-            elif t == 3:
-                target[r] = (palm_stop[0] - palm_x0[0] - q[palm_x_dof[0]]) / h_step
-            elif t == 4:
-                target[r] = (palm_stop[1] - palm_x0[1] - q[palm_x_dof[1]]) / h_step
-            else:
-                target[r] = 0.0
+        # targets of the rows (as in integrate); only the chosen rows while the lattice has
+        # moved less than 0.4 row_margin since they were chosen
+        if choose:
+            if chosen:
+                chosen = _moved_less(x, x_ref, q, palm_x_dof, palm_ref, 0.4 * row_margin)
+            if not chosen:
+                rows, bottoms = all_rows, all_bottoms
+                n_rows, n_bottoms = nr, all_bottoms.shape[0]
+        _row_targets(
+            rows, n_rows, bottoms, n_bottoms, bottom_particles, bottom_row, x, q, row_type,
+            row_particle, palm_x_dof, palm_x0, palm_stop, palm_vz[step + 1],
+            mu * max(f_now, 0.0) * h_step, h_step, gap, target, bound,
+        )  # fmt: skip
+        if choose and not chosen:
+            rows, n_rows, bottoms, n_bottoms = _choose_rows(
+                cullable, state, gap, row_margin, bottom_row, x, q, palm_x_dof, x_ref, palm_ref
+            )
+            chosen = True
         adv_err = _warm_start(dv_hist, y_hist, order, n_hist, fixed, fq, dv, adv, err_hist)
         # A dv is carried through the images while its error bound stays far below CG's
         # tolerance (then CG's stopping test still holds for the true residual); else CG forms
@@ -1428,7 +1560,8 @@ def integrate_iterative(
                 fixed[i] = False
                 fixer[i] = -1
             n_general = 0
-            for r in range(nr):
+            for j in range(n_rows):
+                r = rows[j]
                 t = row_type[r]
                 st = state[r]
                 d = row_dof[r]
@@ -1579,11 +1712,31 @@ def integrate_iterative(
                     dv2 += dv[i] * dv[i]
             adv_err += PRODUCT_ROUNDING * a_abs * np.sqrt(dv2)
             adv_known = True
+            speed_x = 0.0
+            speed_z = 0.0
             for i in range(n_dof):
                 vnew[i] = v[i] + dv[i]
+                a = dof_axis[i]
+                if a == 0:
+                    speed_x = max(speed_x, abs(vnew[i]))
+                elif a == 2:
+                    speed_z = max(speed_z, abs(vnew[i]))
+            if chosen and max(2.0 * speed_x, speed_z) * h_step >= 0.4 * row_margin:
+                # fast enough that a left-out row could close its gap: all rows, chosen again
+                # next step
+                rows, bottoms = all_rows, all_bottoms
+                n_rows, n_bottoms = nr, all_bottoms.shape[0]
+                _row_targets(
+                    rows, n_rows, bottoms, n_bottoms, bottom_particles, bottom_row, x, q,
+                    row_type, row_particle, palm_x_dof, palm_x0, palm_stop, palm_vz[step + 1],
+                    mu * max(f_now, 0.0) * h_step, h_step, gap, target, bound,
+                )  # fmt: skip
+                chosen = False
             # impulses of the rows, then the complementarity checks
             changed = False
-            for r in range(nr):
+            stats[5] += n_rows
+            for j in range(n_rows):
+                r = rows[j]
                 t = row_type[r]
                 st = state[r]
                 d = row_dof[r]
