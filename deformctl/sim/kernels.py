@@ -630,6 +630,8 @@ def _record_step(
     v: FloatArray,
     vnew: FloatArray,
     lam: FloatArray,
+    rows: IntArray,
+    n_rows: int,
     row_type: IntArray,
     row_dof: IntArray,
     base_x: FloatArray,
@@ -655,16 +657,17 @@ def _record_step(
 
     ``q, v`` hold the step's base state (for BDF2 the predictor, see :func:`integrate`), ``h`` is
     the implicit step (impulses are ``h`` times the force) and ``v_last`` the velocity at the
-    start of the step (for the palm's acceleration). The centre of mass is mass-weighted.
+    start of the step (for the palm's acceleration). The centre of mass is mass-weighted. The
+    contact forces sum the impulses of rows ``rows[:n_rows]`` (every row with an impulse).
     """
     n = base_x.shape[0]
     n_dof = q.shape[0]
-    nr = row_type.shape[0]
     gripped = palm_x_dof[0] >= 0
     table_n = 0.0
     fric_l = 0.0
     fric_r = 0.0
-    for r in range(nr):
+    for j in range(n_rows):
+        r = rows[j]
         if row_type[r] == 0:
             table_n += lam[r] / h
         elif row_type[r] == 1:
@@ -1071,9 +1074,9 @@ def integrate(
                 if f >= 0 and state[r] == 1 and state[f] == 1:
                     state[r] = 3
         _record_step(
-            step, rec, q, v, vnew, lam, row_type, row_dof, base_x, dof_of, x, palm_x_dof,
-            palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, h_step, v_last, particle_mass,
-            total_mass, slip, palm_z_acc, com_z0,
+            step, rec, q, v, vnew, lam, all_rows, nr, row_type, row_dof, base_x, dof_of, x,
+            palm_x_dof, palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, h_step, v_last,
+            particle_mass, total_mass, slip, palm_z_acc, com_z0,
         )  # fmt: skip
         if _slipped_past(rec, step, stop_slip, stop_from):
             return q, v, rec[: step + 1]
@@ -1818,9 +1821,9 @@ def integrate_iterative(
             y_hist[slot, i] = adv[i]
         err_hist[slot] = adv_err
         _record_step(
-            step, rec, q, v, vnew, lam, row_type, row_dof, base_x, dof_of, x, palm_x_dof,
-            palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, h_step, v_last, particle_mass,
-            total_mass, slip, palm_z_acc, com_z0,
+            step, rec, q, v, vnew, lam, rows, n_rows, row_type, row_dof, base_x, dof_of, x,
+            palm_x_dof, palm_z_dof, palm_x0, palm_vz, palm_mass, f_now, dt, h_step, v_last,
+            particle_mass, total_mass, slip, palm_z_acc, com_z0,
         )  # fmt: skip
         if _slipped_past(rec, step, stop_slip, stop_from):
             return q, v, rec[: step + 1]
