@@ -855,11 +855,32 @@ def fix_levels(
                 pj = pos[a_idx[kk]]
                 if pj >= 0:
                     dense[pi, pj] = a_val[kk]
-        lower = np.linalg.cholesky(dense)
-        for a in range(m):
-            for b in range(a + 1):
-                cf[1 + nc + a * m + b] = lower[a, b]
+        _cholesky_into(dense, cf[1 + nc : 1 + nc + m * m])
     cf[0] = 1.0
+
+
+@njit(cache=True)
+def _cholesky_into(a: FloatArray, out: FloatArray) -> None:
+    """The lower Cholesky factor of the SPD matrix ``a`` ``[m, m]`` into ``out`` (row-major
+    ``[m * m]``, lower triangle; row by row). Written out rather than ``np.linalg.cholesky``:
+    numba's calls LAPACK's ``dpotrf`` of the bundled OpenBLAS, whose threaded version wakes
+    its worker threads, and they spin on the other core after every call (py-spy: a default
+    lattice's lift; ``make reproduce`` used 145-160 CPU-s, 101 with ``OPENBLAS_NUM_THREADS=1``),
+    and its blocking could depend on the thread count."""
+    m = a.shape[0]
+    for i in range(m):
+        row = i * m
+        for j in range(i + 1):
+            acc = a[i, j]
+            col = j * m
+            for c in range(j):
+                acc -= out[row + c] * out[col + c]
+            if i == j:
+                if acc <= 0.0:
+                    raise ValueError("the coarsest level's free block is not positive definite")
+                out[row + i] = np.sqrt(acc)
+            else:
+                out[row + j] = acc / out[col + j]
 
 
 @njit(cache=True)

@@ -18,6 +18,7 @@ from deformctl.sim import ObjectSpec, SimSettings
 from deformctl.sim.engine import build_model
 from deformctl.sim.multigrid import (
     Hierarchy,
+    _cholesky_into,
     build_hierarchy,
     pcg,
     solve,
@@ -220,3 +221,25 @@ def test_fixed_dofs_do_not_slow_cg(part: str) -> None:
     fixed_all, cf = h.fixed_levels(fixed)
     assert fixed_all[int(h.vec_off[1]) :].any()
     assert cf[0] == 1.0
+
+
+@pytest.mark.parametrize("m", [1, 2, 7, 60, 200])
+def test_the_coarse_factor_is_the_cholesky_factor(m: int) -> None:
+    """The coarsest level's free block is factored by a written-out Cholesky (not LAPACK's
+    threaded one): its lower triangle is numpy's factor to rounding, and ``L L^T`` is the
+    matrix."""
+    rng = np.random.default_rng(m)
+    g = rng.normal(size=(m, m))
+    a = g @ g.T + m * np.eye(m)
+    out = np.full(m * m, np.nan)
+    _cholesky_into(a, out)
+    lower = np.tril(np.nan_to_num(out.reshape(m, m), nan=0.0))
+    assert np.all(np.isfinite(np.tril(out.reshape(m, m))))
+    np.testing.assert_allclose(lower, np.linalg.cholesky(a), rtol=1e-12, atol=1e-12 * m)
+    np.testing.assert_allclose(lower @ lower.T, a, rtol=1e-13, atol=1e-12 * np.abs(a).max())
+
+
+def test_the_coarse_factor_refuses_an_indefinite_block() -> None:
+    a = np.array([[1.0, 2.0], [2.0, 1.0]])  # eigenvalues 3 and -1
+    with pytest.raises(ValueError, match="not positive definite"):
+        _cholesky_into(a, np.zeros(4))
