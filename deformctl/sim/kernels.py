@@ -1505,12 +1505,9 @@ def integrate_iterative(
     com_z0 /= total_mass
     a_ptr0 = h_a_ptr[h_row_off[0] : h_row_off[0] + n_dof + 1]
     # the rows the step's loops visit (see _choose_rows): every row at first
-    rows = np.arange(nr)
-    n_rows = nr
-    bottoms = np.arange(bottom_particles.shape[0])
-    n_bottoms = bottoms.shape[0]
     all_rows = np.arange(nr)
     all_bottoms = np.arange(bottom_particles.shape[0])
+    rows, n_rows, bottoms, n_bottoms = all_rows, nr, all_bottoms, all_bottoms.shape[0]
     cullable = np.zeros(nr, dtype=np.bool_)
     for r in range(nr):
         t = row_type[r]
@@ -1542,12 +1539,12 @@ def integrate_iterative(
             if chosen:
                 chosen = _moved_less(x, x_ref, q, palm_x_dof, palm_ref, 0.4 * row_margin)
             if not chosen:
-                rows, bottoms = all_rows, all_bottoms
-                n_rows, n_bottoms = nr, all_bottoms.shape[0]
+                rows, n_rows, bottoms, n_bottoms = all_rows, nr, all_bottoms, all_bottoms.shape[0]
+        friction_bound = mu * max(f_now, 0.0) * h_step
         _row_targets(
             rows, n_rows, bottoms, n_bottoms, bottom_particles, bottom_row, x, q, row_type,
-            row_particle, palm_x_dof, palm_x0, palm_stop, palm_vz[step + 1],
-            mu * max(f_now, 0.0) * h_step, h_step, gap, target, bound,
+            row_particle, palm_x_dof, palm_x0, palm_stop, palm_vz[step + 1], friction_bound,
+            h_step, gap, target, bound,
         )  # fmt: skip
         if choose and not chosen:
             rows, n_rows, bottoms, n_bottoms = _choose_rows(
@@ -1742,12 +1739,11 @@ def integrate_iterative(
             if chosen and max(2.0 * speed_x, speed_z) * h_step >= 0.4 * row_margin:
                 # fast enough that a left-out row could close its gap: all rows, chosen again
                 # next step
-                rows, bottoms = all_rows, all_bottoms
-                n_rows, n_bottoms = nr, all_bottoms.shape[0]
+                rows, n_rows, bottoms, n_bottoms = all_rows, nr, all_bottoms, all_bottoms.shape[0]
                 _row_targets(
                     rows, n_rows, bottoms, n_bottoms, bottom_particles, bottom_row, x, q,
                     row_type, row_particle, palm_x_dof, palm_x0, palm_stop, palm_vz[step + 1],
-                    mu * max(f_now, 0.0) * h_step, h_step, gap, target, bound,
+                    friction_bound, h_step, gap, target, bound,
                 )  # fmt: skip
                 chosen = False
             # impulses of the rows, then the complementarity checks

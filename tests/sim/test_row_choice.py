@@ -29,12 +29,17 @@ def _lift(spec: ObjectSpec, grip_n: float, n: int) -> tuple[object, np.ndarray]:
     return outcome, model.solver_stats.copy()
 
 
+def _same_fields(a: object, b: object) -> None:
+    for name in a.__dataclass_fields__:  # type: ignore[attr-defined]
+        va, vb = getattr(a, name), getattr(b, name)
+        if isinstance(va, np.ndarray):
+            np.testing.assert_array_equal(va, vb, err_msg=name)
+
+
 def _same_series(a: object, b: object) -> None:
-    sa = a.series  # type: ignore[attr-defined]
-    sb = b.series  # type: ignore[attr-defined]
+    """The same verdict and every series of a lift attempt (all arrays)."""
     assert a.lifted == b.lifted  # type: ignore[attr-defined]
-    for name in sa.__dataclass_fields__:
-        np.testing.assert_array_equal(getattr(sa, name), getattr(sb, name), err_msg=name)
+    _same_fields(a.series, b.series)  # type: ignore[attr-defined]
 
 
 @pytest.mark.parametrize(
@@ -68,13 +73,6 @@ def test_leaving_out_far_rows_changes_nothing(
     assert default_rows < runs[1e-4][1][5] < every_stats[5]
     # a margin larger than the object keeps every row
     assert runs[1e3][1][5] == every_stats[5]
-
-
-def _same_fields(a: object, b: object) -> None:
-    for name in a.__dataclass_fields__:  # type: ignore[attr-defined]
-        va, vb = getattr(a, name), getattr(b, name)
-        if isinstance(va, np.ndarray):
-            np.testing.assert_array_equal(va, vb, err_msg=name)
 
 
 @pytest.mark.parametrize("fraction", [0.5, 1e-4])
