@@ -327,7 +327,8 @@ class Model:
         particle_masses_kg: mass of each particle, kg, ``[n]`` (0 on palm surfaces);
         dof_mass_kg: ``[n_dof]``.
         width_damping_ns_per_m: the damper across the gripped width, N·s/m (0 when free).
-        stiffness_n_per_m, damping_ns_per_m: element constants, ``[m]``.
+        stiffness_n_per_m, damping_ns_per_m: element constants, ``[m]``; retardation_s: their
+            ratio, s (every element's ``damping = retardation_s * stiffness``).
         factor: sparse ``L D L^T`` of the implicit matrix ``A = M + dt C + dt^2 K``.
         contact_cols: ``A^-1 e_d`` for the DOFs of the rows that are live in most steps (palm
             DOFs, bottom layer), 1/kg, ``[n_cols, n_dof]``; col_of_dof: column of each DOF or -1.
@@ -352,6 +353,7 @@ class Model:
     dof_mass_kg: FloatArray
     stiffness_n_per_m: FloatArray
     damping_ns_per_m: FloatArray
+    retardation_s: float
     factor: LDLFactor | None
     contact_cols: FloatArray
     col_of_dof: IntArray
@@ -463,11 +465,17 @@ def element_constants(
     alpha_m = settings.alpha_m(spec)
     lattice, unit_d = _lattice_and_scale(spec.size_m, alpha_m, settings.palm_layer == "surface")
     stiffness = lattice.unit_stiffness * (spec.stiffness_n_per_m / unit_d)
+    damping = stiffness * element_retardation_s(spec, settings)
+    return lattice, stiffness, damping
+
+
+def element_retardation_s(spec: ObjectSpec, settings: SimSettings) -> float:
+    """The lattice elements' damping over stiffness, s: every element's damper is this times its
+    spring (:func:`element_constants`; the step kernels form the dampers from it)."""
     retardation = spec.damping_ns_per_m / spec.stiffness_n_per_m
     if settings.shear_damping_ratio != 1.0 or settings.min_shear_retardation_s > 0.0:
         retardation = settings.shear_damping_ratio * retardation + settings.min_shear_retardation_s
-    damping = stiffness * retardation
-    return lattice, stiffness, damping
+    return retardation
 
 
 def width_damping_ns_per_m(spec: ObjectSpec, settings: SimSettings) -> float:
@@ -649,6 +657,7 @@ def build_model(
         dof_mass_kg=dof_mass,
         stiffness_n_per_m=stiffness,
         damping_ns_per_m=damping,
+        retardation_s=element_retardation_s(spec, settings),
         factor=factor,
         contact_cols=contact_cols,
         col_of_dof=col_of_dof,
@@ -711,7 +720,7 @@ def run_model(
         lat.rest_length_m,
         lat.direction,
         model.stiffness_n_per_m,
-        model.damping_ns_per_m,
+        model.retardation_s,
     )
     common_tail: tuple[Any, ...] = (
         model.gravity_m_s2,

@@ -149,12 +149,17 @@ def _element_rhs(
     rest: FloatArray,
     n0: FloatArray,
     k: FloatArray,
-    c: FloatArray,
-    k_dt: FloatArray,
+    retardation: float,
+    h: float,
     nonlinear: bool,
     out: FloatArray,
 ) -> None:
-    """Element forces minus ``dt K v`` (tangent at rest), accumulated into ``out`` ``[n, 3]``."""
+    """Element forces minus ``h K v`` (tangent at rest), accumulated into ``out`` ``[n, 3]``.
+
+    The dampers are ``c = retardation k`` (:func:`deformctl.sim.engine.element_constants`), so
+    the loop reads one constant per element and forms ``c`` and ``h k`` from it (the same
+    products as the arrays would hold, so the same bits, with a third less to stream per
+    element)."""
     for e in range(edges.shape[0]):
         i = edges[e, 0]
         j = edges[e, 1]
@@ -179,8 +184,9 @@ def _element_rhs(
             ny = ay
             nz = az
             stretch = dx * ax + dy * ay + dz * az - rest[e]
-        f = k[e] * stretch + c[e] * (dvx * nx + dvy * ny + dvz * nz)
-        g = k_dt[e] * (dvx * ax + dvy * ay + dvz * az)
+        ke = k[e]
+        f = ke * stretch + (ke * retardation) * (dvx * nx + dvy * ny + dvz * nz)
+        g = (ke * h) * (dvx * ax + dvy * ay + dvz * az)
         fx = f * nx + g * ax
         fy = f * ny + g * ay
         fz = f * nz + g * az
@@ -539,8 +545,7 @@ def _step_impulse(
     rest: FloatArray,
     n0: FloatArray,
     k: FloatArray,
-    c: FloatArray,
-    k_dt: FloatArray,
+    retardation: float,
     nonlinear: bool,
     gravity: float,
     palm_x_dof: IntArray,
@@ -567,7 +572,7 @@ def _step_impulse(
             x[p, a] = base_x[p, a] + q[d]
             vel[p, a] = v[d]
             fp[p, a] = 0.0
-    _element_rhs(x, vel, edges, rest, n0, k, c, k_dt, nonlinear, fp)
+    _element_rhs(x, vel, edges, rest, n0, k, retardation, dt, nonlinear, fp)
     fq[:] = 0.0
     for p in range(n):
         fp[p, 2] -= particle_mass[p] * gravity
@@ -734,7 +739,7 @@ def integrate(
     rest: FloatArray,
     n0: FloatArray,
     k: FloatArray,
-    c: FloatArray,
+    retardation: float,
     l_colptr: IntArray,
     l_rowidx: Int32Array,
     l_values: FloatArray,
@@ -777,8 +782,8 @@ def integrate(
         q: DOF displacements, m, ``[n_dof]`` (copied). v: DOF velocities, m/s, ``[n_dof]``.
         dof_of: DOF of each particle coordinate, ``[3 n]``.
         particle_mass: mass of each particle, kg.
-        edges, rest, n0, k, c: elements ``[m, 2]``, rest length m, rest direction ``[m, 3]``,
-            stiffness N/m, damping N·s/m.
+        edges, rest, n0, k: elements ``[m, 2]``, rest length m, rest direction ``[m, 3]``,
+            stiffness N/m; retardation: s, each element's damping is ``retardation k`` N·s/m.
         l_colptr, l_rowidx, l_values, l_diag, l_perm: sparse ``L D L^T`` factor of the implicit
             system matrix ``A`` (:class:`deformctl.sim.solver.LDLFactor`).
         cols: precomputed contact columns ``A^-1 e_d``, ``[n_cols, n_dof]``; col_of_dof: the
@@ -816,7 +821,6 @@ def integrate(
     vfree = np.empty(n_dof)
     vnew = np.empty(n_dof)
     h_step = 2.0 * dt / 3.0 if bdf2 else dt
-    k_dt = k * h_step
     q_prev = q.copy()
     v_prev = v.copy()
     q_last = q.copy()
@@ -872,7 +876,7 @@ def integrate(
         f_now = force_cmd[step + 1]
         _predict(q, v, q_last, v_last, q_prev, v_prev, bdf2)
         _step_impulse(
-            base_x, q, v, dof_of, particle_mass, edges, rest, n0, k, c, k_dt, nonlinear,
+            base_x, q, v, dof_of, particle_mass, edges, rest, n0, k, retardation, nonlinear,
             gravity * gravity_scale[step + 1], palm_x_dof, f_now, width_damping, h_step, x, vel, fp,
             fq,
         )  # fmt: skip
@@ -1340,7 +1344,7 @@ def integrate_iterative(
     rest: FloatArray,
     n0: FloatArray,
     k: FloatArray,
-    c: FloatArray,
+    retardation: float,
     h_n: IntArray,
     h_vec_off: IntArray,
     h_row_off: IntArray,
@@ -1462,7 +1466,6 @@ def integrate_iterative(
     vnew = np.empty(n_dof)
     react = np.zeros(n_dof)
     h_step = 2.0 * dt / 3.0 if bdf2 else dt
-    k_dt = k * h_step
     q_prev = q.copy()
     v_prev = v.copy()
     q_last = q.copy()
@@ -1529,7 +1532,7 @@ def integrate_iterative(
         f_now = force_cmd[step + 1]
         _predict(q, v, q_last, v_last, q_prev, v_prev, bdf2)
         _step_impulse(
-            base_x, q, v, dof_of, particle_mass, edges, rest, n0, k, c, k_dt, nonlinear,
+            base_x, q, v, dof_of, particle_mass, edges, rest, n0, k, retardation, nonlinear,
             gravity * gravity_scale[step + 1], palm_x_dof, f_now, width_damping, h_step, x, vel, fp,
             fq,
         )  # fmt: skip
