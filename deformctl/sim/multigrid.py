@@ -465,6 +465,7 @@ def v_cycle(
     n0 = n[0]
     # the levels swept as stencils (the coarsest is solved directly)
     n_st = min(st_shape.shape[0], levels - 1)
+    n_st_all = st_shape.shape[0]
     grid_off = stencil_scratch_offsets(st_shape, st_halo)
     if n_st == 0:
         for i in range(n0):
@@ -512,6 +513,15 @@ def v_cycle(
                     acc -= a_val[k] * xs[off + a_idx[k]]
                 rs[off + i] = acc
         coff = vec_off[lvl + 1]
+        if lvl == 0 and n_st >= 2:
+            # both ends are lattice stencils: by the axis factors on the coordinates
+            n1 = st_node_off[1]
+            _grid_restrict(
+                st_shape[0], st_shape[1], st_dof[: 3 * n1], st_rep[:nl],
+                st_dof[3 * n1 : 3 * st_node_off[2]], rs[:nl], xg[grid_off[n_st_all] :],
+                bs[coff : coff + n[1]],
+            )  # fmt: skip
+            continue
         for i in range(n[lvl + 1]):
             bs[coff + i] = 0.0
         p0 = p_row_off[lvl]
@@ -549,29 +559,38 @@ def v_cycle(
         r0 = row_off[lvl]
         p0 = p_row_off[lvl]
         if lvl < n_st:
-            # the correction, prolonged (into rs) and added to every coordinate
-            for i in range(nl):
-                acc = 0.0
-                for k in range(p_ptr[p0 + i], p_ptr[p0 + i + 1]):
-                    acc += p_val[k] * xs[coff + p_idx[k]]
-                rs[off + i] = acc
             xg_l, wk_l, coef, block, inv, dof, rep, palm = _stencil_level(
                 lvl, off, nl, grid_off, xg, st_coef, st_coef_off, st_block, st_inv, st_node_off,
                 st_dof, st_rep, st_palm,
             )  # fmt: skip
+            # the correction, prolonged and added to every coordinate of the free DOFs
+            by_grid = lvl == 0 and n_st >= 2
+            if by_grid:
+                n1 = st_node_off[1]
+                _grid_prolong_add(
+                    st_shape[0], st_shape[1], dof, st_dof[3 * n1 : 3 * st_node_off[2]],
+                    fixed[:nl], xs[coff : coff + n[1]], xg[grid_off[n_st_all] :], st_halo[0],
+                    xg_l,
+                )  # fmt: skip
+            else:
+                for i in range(nl):
+                    acc = 0.0
+                    for k in range(p_ptr[p0 + i], p_ptr[p0 + i + 1]):
+                        acc += p_val[k] * xs[coff + p_idx[k]]
+                    rs[off + i] = acc
             rows = xg_l.shape[0] // 3
             ptr = a_ptr[r0 : r0 + nl + 1]
             if lvl == 0:  # returns x and A x
                 _stencil_up(
                     st_shape[0], st_halo[0], coef.reshape((rows, N_COEF)), block, inv, dof,
                     rep, palm, ptr, a_idx, a_val, fixed[:nl], b, rs[off : off + nl], xg_l, wk_l, x,
-                    ax, True,
+                    ax, True, not by_grid,
                 )  # fmt: skip
             else:
                 _stencil_up(
                     st_shape[1], st_halo[1], coef.reshape((rows, 26, 9)), block, inv, dof,
                     rep, palm, ptr, a_idx, a_val, fixed[off : off + nl], bs[off : off + nl],
-                    rs[off : off + nl], xg_l, wk_l, xs[off : off + nl], ax[:0], False,
+                    rs[off : off + nl], xg_l, wk_l, xs[off : off + nl], ax[:0], False, True,
                 )  # fmt: skip
             continue
         for i in range(nl):
@@ -691,10 +710,12 @@ def _stencil_up(
     x: FloatArray,
     ax: FloatArray,
     with_product: bool,
+    add_t: bool,
 ) -> None:
-    """A stencil level on the way up: add the prolonged correction ``t``, sweep backward, return
-    the DOFs ``x`` (and ``ax = A x``)."""
-    add_dofs(dof_of, halo, fixed, t, xg)
+    """A stencil level on the way up: add the prolonged correction ``t`` (unless ``add_t`` is
+    false: already in ``xg``), sweep backward, return the DOFs ``x`` (and ``ax = A x``)."""
+    if add_t:
+        add_dofs(dof_of, halo, fixed, t, xg)
     backward_sweep(
         shape, halo, coef, block, block_inv, dof_of, rep, palm, a_ptr, a_idx, a_val, fixed, b,
         xg, work, x, ax, with_product,
@@ -704,13 +725,162 @@ def _stencil_up(
 @njit(cache=True)
 def stencil_scratch_offsets(st_shape: IntArray, st_halo: IntArray) -> IntArray:
     """Where each stencil level's two coordinate arrays (the sweep's and its work array, each
-    :attr:`deformctl.sim.stencil.Stencil.grid_len` long) start in the stencil scratch, and its
-    total length at the end, ``[levels + 1]``."""
-    off = np.zeros(st_shape.shape[0] + 1, dtype=np.int64)
-    for lvl in range(st_shape.shape[0]):
+    :attr:`deformctl.sim.stencil.Stencil.grid_len` long) start in the stencil scratch, then where
+    the grid transfer's two partial arrays start (:func:`_grid_restrict`; none unless level 1 is
+    a stencil level too), and the total length at the end, ``[levels + 2]``."""
+    levels = st_shape.shape[0]
+    off = np.zeros(levels + 2, dtype=np.int64)
+    for lvl in range(levels):
         rows = st_shape[lvl, 0] * st_shape[lvl, 1] * st_shape[lvl, 2] + 2 * st_halo[lvl]
         off[lvl + 1] = off[lvl] + 6 * rows
+    off[levels + 1] = off[levels]
+    if levels >= 2:
+        # [cx, ny, nz, 3] after the x pass, [cx, cy, nz, 3] after the y pass
+        cx, cy = st_shape[1, 0], st_shape[1, 1]
+        ny, nz = st_shape[0, 1], st_shape[0, 2]
+        off[levels + 1] += 3 * cx * nz * (ny + cy)
     return off
+
+
+@njit(cache=True, inline="always")
+def _coarse_point(i: int, n: int) -> tuple[int, float]:
+    """Linear interpolation along one axis of ``n`` points from the coarse points (every second
+    one and the last, as :func:`_axis_interpolation`): fine point ``i`` is ``(1 - w) c[j] + w
+    c[j + 1]``; returns ``(j, w)``, ``w`` 0 or 0.5 (so a constant is interpolated exactly)."""
+    if n <= 2:
+        return i, 0.0
+    if i == n - 1:
+        return (n - 1) // 2 + (n - 1) % 2, 0.0
+    return i // 2, 0.5 if i % 2 else 0.0
+
+
+@njit(cache=True)
+def _grid_restrict(
+    shape: IntArray,
+    cshape: IntArray,
+    dof_of: IntArray,
+    rep: IntArray,
+    cdof_of: IntArray,
+    r: FloatArray,
+    part: FloatArray,
+    out: FloatArray,
+) -> None:
+    """``out = P^T r`` from the finest level to level 1, by the trilinear interpolation's three
+    axis factors on the lattice coordinates instead of :func:`interpolation`'s compressed rows
+    (the same sums in another order). ``shape``, ``dof_of``, ``rep``: the finest level's
+    particles per axis, coordinate DOFs and DOF representatives; ``cshape``, ``cdof_of``: level
+    1's; ``part``: scratch (:func:`stencil_scratch_offsets`).
+
+    A DOF's residual enters at its representative coordinate only; a merged palm DOF's rows of
+    ``P`` are equal at every coordinate of its face (the face layer interpolates from the
+    coarse face, which is the coarse palm DOF), so that is ``P^T``; the coarse coordinates of a
+    palm face add into its DOF."""
+    nx, ny, nz = shape[0], shape[1], shape[2]
+    cx, cy, cz = cshape[0], cshape[1], cshape[2]
+    row = 3 * ny * nz
+    zr = 3 * nz
+    px = part[: cx * row]
+    pxy = part[cx * row : cx * row + cx * cy * zr]
+    px[:] = 0.0
+    for i in range(nx):
+        j, w = _coarse_point(i, nx)
+        for k in range(row):
+            c = i * row + k
+            d = dof_of[c]
+            if rep[d] != c:
+                continue
+            val = r[d]
+            if w == 0.0:
+                px[j * row + k] += val
+            else:
+                px[j * row + k] += (1.0 - w) * val
+                px[(j + 1) * row + k] += w * val
+    pxy[:] = 0.0
+    for ix in range(cx):
+        for iy in range(ny):
+            j, w = _coarse_point(iy, ny)
+            src = (ix * ny + iy) * zr
+            da = (ix * cy + j) * zr
+            if w == 0.0:
+                for k in range(zr):
+                    pxy[da + k] += px[src + k]
+            else:
+                db = da + zr
+                for k in range(zr):
+                    val = px[src + k]
+                    pxy[da + k] += (1.0 - w) * val
+                    pxy[db + k] += w * val
+    out[:] = 0.0
+    for ixy in range(cx * cy):
+        src = ixy * zr
+        dst = ixy * 3 * cz
+        for iz in range(nz):
+            j, w = _coarse_point(iz, nz)
+            for a in range(3):
+                val = pxy[src + 3 * iz + a]
+                if w == 0.0:
+                    out[cdof_of[dst + 3 * j + a]] += val
+                else:
+                    out[cdof_of[dst + 3 * j + a]] += (1.0 - w) * val
+                    out[cdof_of[dst + 3 * (j + 1) + a]] += w * val
+
+
+@njit(cache=True)
+def _grid_prolong_add(
+    shape: IntArray,
+    cshape: IntArray,
+    dof_of: IntArray,
+    cdof_of: IntArray,
+    fixed: BoolArray,
+    xc: FloatArray,
+    part: FloatArray,
+    halo: int,
+    xg: FloatArray,
+) -> None:
+    """``xg += P xc`` on the free DOFs of the finest level, written to every coordinate of each
+    DOF (the sweep's coordinates, ``halo`` particles before the first): :func:`_grid_restrict`'s
+    transpose, the three axis factors applied from level 1's DOFs ``xc``. A palm face's
+    coordinates all receive its DOF's value (the weights are 0, 1/2 and 1, so the equal coarse
+    values interpolate exactly)."""
+    nx, ny, nz = shape[0], shape[1], shape[2]
+    cx, cy, cz = cshape[0], cshape[1], cshape[2]
+    row = 3 * ny * nz
+    zr = 3 * nz
+    px = part[: cx * row]
+    pxy = part[cx * row : cx * row + cx * cy * zr]
+    for ixy in range(cx * cy):
+        src = ixy * 3 * cz
+        dst = ixy * zr
+        for iz in range(nz):
+            j, w = _coarse_point(iz, nz)
+            for a in range(3):
+                val = xc[cdof_of[src + 3 * j + a]]
+                if w != 0.0:
+                    val = (1.0 - w) * val + w * xc[cdof_of[src + 3 * (j + 1) + a]]
+                pxy[dst + 3 * iz + a] = val
+    for ix in range(cx):
+        for iy in range(ny):
+            j, w = _coarse_point(iy, ny)
+            dst = (ix * ny + iy) * zr
+            sa = (ix * cy + j) * zr
+            if w == 0.0:
+                for k in range(zr):
+                    px[dst + k] = pxy[sa + k]
+            else:
+                sb = sa + zr
+                for k in range(zr):
+                    px[dst + k] = (1.0 - w) * pxy[sa + k] + w * pxy[sb + k]
+    base = 3 * halo
+    for i in range(nx):
+        j, w = _coarse_point(i, nx)
+        for k in range(row):
+            c = i * row + k
+            if fixed[dof_of[c]]:
+                continue
+            if w == 0.0:
+                xg[base + c] += px[j * row + k]
+            else:
+                xg[base + c] += (1.0 - w) * px[j * row + k] + w * px[(j + 1) * row + k]
 
 
 @njit(cache=True)

@@ -16,10 +16,14 @@ import scipy.sparse.linalg
 
 from deformctl.sim import ObjectSpec, SimSettings
 from deformctl.sim.engine import build_model
+from deformctl.sim.lattice import shape_dof_map
 from deformctl.sim.multigrid import (
     Hierarchy,
     _cholesky_into,
+    _grid_prolong_add,
+    _grid_restrict,
     build_hierarchy,
+    interpolation,
     pcg,
     solve,
     stencil_scratch_offsets,
@@ -243,3 +247,40 @@ def test_the_coarse_factor_refuses_an_indefinite_block() -> None:
     a = np.array([[1.0, 2.0], [2.0, 1.0]])  # eigenvalues 3 and -1
     with pytest.raises(ValueError, match="not positive definite"):
         _cholesky_into(a, np.zeros(4))
+
+
+@pytest.mark.parametrize("shape", [(5, 4, 3), (6, 7, 2), (9, 8, 6), (2, 5, 4), (3, 3, 3)])
+@pytest.mark.parametrize("gripped", [True, False])
+def test_grid_transfer_is_the_interpolation_and_its_transpose(
+    shape: tuple[int, int, int], gripped: bool
+) -> None:
+    """The V-cycle's transfer between the two stencil levels, by axis factors on the lattice
+    coordinates, is ``P^T r`` down and ``x += P x_c`` (free DOFs, every coordinate of a DOF) up,
+    with ``P`` the compressed-row interpolation: odd, even and two-point axes, palm DOFs merged
+    or not."""
+    p, cshape, cdof = interpolation(shape, gripped)
+    dof, n_f, _, _ = shape_dof_map(shape, gripped)
+    rep = np.full(n_f, -1, dtype=np.int64)
+    for c in range(dof.size - 1, -1, -1):
+        rep[dof[c]] = c  # the first coordinate of each DOF
+    nx, ny, nz = shape
+    cx, cy = cshape[0], cshape[1]
+    part = np.full(3 * cx * nz * (ny + cy), np.nan)
+    rng = np.random.default_rng(7)
+    r = rng.normal(size=n_f)
+    down = np.full(p.shape[1], np.nan)
+    fs, cs = np.array(shape, dtype=np.int64), np.array(cshape, dtype=np.int64)
+    _grid_restrict(fs, cs, dof, rep, cdof, r, part, down)
+    want = p.T @ r
+    np.testing.assert_allclose(down, want, rtol=0, atol=1e-14 * abs(want).max())
+    fixed = rng.random(n_f) < 0.2
+    xc = rng.normal(size=p.shape[1])
+    halo = 3
+    xg = rng.normal(size=3 * (nx * ny * nz + 2 * halo))
+    up = xg.copy()
+    _grid_prolong_add(fs, cs, dof, cdof, fixed, xc, part, halo, up)
+    t = p @ xc
+    expect = xg.copy()
+    free = ~fixed[dof]
+    expect[3 * halo : 3 * halo + dof.size][free] += t[dof][free]
+    np.testing.assert_allclose(up, expect, rtol=0, atol=1e-14 * abs(expect).max())
