@@ -616,15 +616,18 @@ def _predict(
     BDF2 predictor ``(4 x_n - x_{n-1}) / 3`` otherwise (a run starts from rest, so the first
     step's history is the start state itself).
     """
-    for i in range(q.shape[0]):
-        q_prev[i] = q_last[i]
-        v_prev[i] = v_last[i]
-        q_last[i] = q[i]
-        v_last[i] = v[i]
-    if bdf2:
-        for i in range(q.shape[0]):
-            q[i] = (4.0 * q_last[i] - q_prev[i]) / 3.0
-            v[i] = (4.0 * v_last[i] - v_prev[i]) / 3.0
+    for i in range(q.shape[0]):  # one pass
+        qp = q_last[i]
+        vp = v_last[i]
+        qn = q[i]
+        vn = v[i]
+        q_prev[i] = qp
+        v_prev[i] = vp
+        q_last[i] = qn
+        v_last[i] = vn
+        if bdf2:
+            q[i] = (4.0 * qn - qp) / 3.0
+            v[i] = (4.0 * vn - vp) / 3.0
 
 
 @njit(cache=True)
@@ -697,20 +700,19 @@ def _record_step(
             max_speed = abs(v[i])
     com = np.zeros(3)
     min_z = 1e300
+    penetration = 0.0
+    xl = palm_x0[0] + q[palm_x_dof[0]] if gripped else -np.inf
+    xr = palm_x0[1] + q[palm_x_dof[1]] if gripped else np.inf
     for p in range(n):
         for a in range(3):
             x[p, a] = base_x[p, a] + q[dof_of[3 * p + a]]
             com[a] += particle_mass[p] * x[p, a]
         if x[p, 2] < min_z:
             min_z = x[p, 2]
-    penetration = 0.0
+        pen = max(xl - x[p, 0], x[p, 0] - xr)
+        if pen > penetration:
+            penetration = pen
     if gripped:
-        xl = palm_x0[0] + q[palm_x_dof[0]]
-        xr = palm_x0[1] + q[palm_x_dof[1]]
-        for p in range(n):
-            pen = max(xl - x[p, 0], x[p, 0] - xr)
-            if pen > penetration:
-                penetration = pen
         rec[step, REC_PALM_XL] = xl
         rec[step, REC_PALM_XR] = xr
     rec[step, REC_TIME] = (step + 1) * dt
@@ -1475,6 +1477,8 @@ def integrate_iterative(
     fixed = np.zeros(n_dof, dtype=np.bool_)
     fixed_list = np.zeros(n_dof, dtype=np.int64)
     fixer = np.full(n_dof, -1, dtype=np.int64)
+    n_fixed = 0
+    cand = np.zeros(nr, dtype=np.int64)  # the DOFs the round's rows fix (repeats possible)
     lam = np.zeros(nr)
     lam_last = np.zeros(nr)  # each row's impulse one step earlier
     state = np.zeros(nr, dtype=np.int64)
@@ -1572,12 +1576,15 @@ def integrate_iterative(
             stats[4] += 1
         for _round in range(64):
             stats[2] += 1
-            # fixed DOFs and known impulses of the current active set
-            for i in range(n_dof):
-                bt[i] = fq[i]
-                fixed[i] = False
-                fixer[i] = -1
+            # fixed DOFs and known impulses of the current active set (the last round's fixed
+            # DOFs are the only ones to clear; the rows that fix one are collected as they are
+            # met and visited in DOF order, so no pass over every DOF)
+            bt[:] = fq
+            for f in range(n_fixed):
+                fixed[fixed_list[f]] = False
+                fixer[fixed_list[f]] = -1
             n_general = 0
+            n_cand = 0
             for j in range(n_rows):
                 r = rows[j]
                 t = row_type[r]
@@ -1586,12 +1593,16 @@ def integrate_iterative(
                 if t == 1:
                     if st == 1:
                         fixer[d] = r
+                        cand[n_cand] = d
+                        n_cand += 1
                     elif st != 0:
                         bt[d] += (1.0 if st > 0 else -1.0) * bound[r]
                 elif t == 2:
                     bound[r] = mu_table * max(lam[row_link[r]], 0.0)
                     if st == 1 and bound[r] > 0.0:
                         fixer[d] = r
+                        cand[n_cand] = d
+                        n_cand += 1
                     elif st == 2 or st == -2:
                         bt[d] += (1.0 if st > 0 else -1.0) * bound[r]
                 elif t >= 5:
@@ -1603,9 +1614,15 @@ def integrate_iterative(
                         bt[row_dof2[r]] -= lam[r]
                 elif st == 1 and (fixer[d] < 0 or t != 0):
                     fixer[d] = r  # a sticking friction row, not the table row, fixes a patch
+                    cand[n_cand] = d
+                    n_cand += 1
             n_fixed = 0
             change2 = 0.0
-            for i in range(n_dof):
+            cand[:n_cand].sort()
+            for ci in range(n_cand):
+                i = cand[ci]
+                if ci > 0 and i == cand[ci - 1]:
+                    continue
                 r = fixer[i]
                 if r >= 0:
                     fixed[i] = True
