@@ -1146,11 +1146,6 @@ def pcg(
     for lvl in range(n.shape[0]):
         tot += n[lvl]
     r, z, p, q, az, xs, bs, rs, xg, cf = pcg_scratch(n, st_shape, st_halo, work)
-    fixed_all = np.empty(tot, dtype=np.bool_)
-    fix_levels(
-        n, vec_off, row_off, a_ptr, a_idx, a_val, p_row_off, p_ptr, p_idx, p_val, fixed, fixed_all,
-        cf,
-    )  # fmt: skip
     if not ax_known:
         product(
             n, vec_off, row_off, a_ptr, a_idx, a_val, st_shape, st_halo, st_coef, st_coef_off,
@@ -1163,6 +1158,12 @@ def pcg(
         rr += r[i] * r[i]
     if np.sqrt(rr) <= tol:
         return 0
+    # the coarse levels' fixed DOFs (only when a V-cycle runs)
+    fixed_all = np.empty(tot, dtype=np.bool_)
+    fix_levels(
+        n, vec_off, row_off, a_ptr, a_idx, a_val, p_row_off, p_ptr, p_idx, p_val, fixed, fixed_all,
+        cf,
+    )  # fmt: skip
     rz = 0.0
     for it in range(1, max_iter + 1):
         v_cycle(
