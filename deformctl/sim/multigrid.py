@@ -5,6 +5,11 @@ both end layers, so the palm faces and the bottom layer stay on every level); th
 is trilinear in the lattice index per coordinate, written in the generalised DOFs of each level
 (a fine face DOF merged into a palm DOF interpolates from the coarse palm DOF). Coarse matrices
 are Galerkin products ``P^T A P``; the coarsest is factorised (:mod:`deformctl.sim.solver`).
+Between the two stencil levels the V-cycle applies ``P`` and ``P^T`` by the interpolation's three
+axis factors on the lattice coordinates (:func:`_grid_restrict`, :func:`_grid_prolong_add`: no
+index arrays, the prolonged correction written straight into the sweep's coordinates; ``make
+bench``'s V-cycle table at 21^3: 2.78 -> 2.60 compressed-row products per cycle); the coarser
+levels use ``P``'s rows.
 One V-cycle: a forward Gauss–Seidel sweep, restriction of the residual, the coarse correction,
 prolongation, a backward Gauss–Seidel sweep (a symmetric cycle, so it preconditions CG).
 
