@@ -42,7 +42,7 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       the coarse corrections are the free subsystem's (:func:`deformctl.sim.multigrid.
       fix_levels`: with the object held on the table CG converges as fast as with nothing
       held). Cost per step: one force pass, ~0.3 matrix-vector products (by the stencil) and
-      ~0.4-0.7 CG iterations of about 3.5 matrix-vector products' time each (the V-cycle, which
+      ~0.35-0.7 CG iterations of 2.6-3.9 matrix-vector products' time each (the V-cycle, which
       also returns CG's ``A p``; the finest level and level 1 are swept particle by particle as
       lattice stencils, :mod:`deformctl.sim.stencil`, the rest by compressed rows;
       :mod:`deformctl.sim.multigrid`), linear in the lattice size.
@@ -70,7 +70,9 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       The V-cycle's levels were first swept by compressed rows, one DOF at a time; with the
       finest level and level 1 as stencils (block Gauss–Seidel per particle, no column indices)
       one V-cycle costs 3.6 matrix-vector products instead of 5.1 at 16^3 and 3.2 instead of
-      5.0 at 21^3 (``bench/bench_sim.py``, ``v_cycle`` alone, same run). The squeeze D/lambda
+      5.0 at 21^3 (``bench/bench_sim.py``, ``v_cycle`` alone, same run); with the transfer
+      between those two levels by axis factors on the lattice (:mod:`deformctl.sim.multigrid`),
+      2.8 and 2.6 (finest level alone as a stencil: 3.4 and 3.2). The squeeze D/lambda
       and L_f of the former dense path are kept within 0.5 % at 5^3 and 8^3 by the iterative
       solver too (tests/sim/test_dense_reference.py).
 
