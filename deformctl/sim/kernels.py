@@ -158,7 +158,7 @@ def _element_rhs(
 
     The dampers are ``c = retardation k`` (:func:`deformctl.sim.engine.element_constants`), so
     the loop reads one constant per element and forms ``c`` and ``h k`` from it (the same
-    products as the arrays would hold, so the same bits, with a third less to stream per
+    products as the arrays would hold, so the same bits; 56 instead of 72 bytes streamed per
     element)."""
     for e in range(edges.shape[0]):
         i = edges[e, 0]

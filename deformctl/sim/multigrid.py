@@ -460,7 +460,8 @@ def v_cycle(
     corrections are those of the free subsystem (see :func:`fix_levels`).
 
     The first levels with a stencil (``st_*``, :meth:`Hierarchy.stencil_args`; ``xg``: their
-    coordinates' scratch, two arrays per level) are swept particle by particle
+    coordinates' scratch, two arrays per level, then the grid transfer's partial arrays, laid
+    out by :func:`stencil_scratch_offsets`) are swept particle by particle
     (:mod:`deformctl.sim.stencil`), the others by rows. ``A x`` comes from the last sweep:
     right after the backward update of a free row its residual is zero, and only the rows
     updated after it change it afterwards, so each change is scattered to the rows it couples to
