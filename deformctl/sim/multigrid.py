@@ -168,30 +168,23 @@ class Hierarchy:
 
 
 def _axis_interpolation(n_fine: int) -> scipy.sparse.csr_matrix:
-    """1-D linear interpolation from the coarse points (every second, both ends) to all points."""
-    if n_fine <= 2:
-        return scipy.sparse.identity(n_fine, format="csr")
-    sel = list(range(0, n_fine, 2))
-    if sel[-1] != n_fine - 1:
-        sel.append(n_fine - 1)
+    """1-D linear interpolation from the coarse points (every second, both ends) to all points,
+    as a matrix: the rule of :func:`_coarse_point`, which the V-cycle's grid transfer applies
+    without one."""
     rows: list[int] = []
     cols: list[int] = []
     vals: list[float] = []
-    for j in range(len(sel) - 1):
-        a, b = sel[j], sel[j + 1]
-        for i in range(a, b):
-            w = (i - a) / (b - a)
+    for i in range(n_fine):
+        j, w = _coarse_point.py_func(i, n_fine)
+        rows.append(i)
+        cols.append(j)
+        vals.append(1.0 - w)
+        if w > 0:
             rows.append(i)
-            cols.append(j)
-            vals.append(1.0 - w)
-            if w > 0:
-                rows.append(i)
-                cols.append(j + 1)
-                vals.append(w)
-    rows.append(n_fine - 1)
-    cols.append(len(sel) - 1)
-    vals.append(1.0)
-    return scipy.sparse.csr_matrix((vals, (rows, cols)), shape=(n_fine, len(sel)))
+            cols.append(j + 1)
+            vals.append(w)
+    n_coarse = _coarse_point.py_func(n_fine - 1, n_fine)[0] + 1
+    return scipy.sparse.csr_matrix((vals, (rows, cols)), shape=(n_fine, n_coarse))
 
 
 def _scalar_interpolation(shape: tuple[int, int, int]) -> scipy.sparse.csr_matrix:
@@ -471,8 +464,10 @@ def v_cycle(
     n0 = n[0]
     # the levels swept as stencils (the coarsest is solved directly)
     n_st = min(st_shape.shape[0], levels - 1)
-    n_st_all = st_shape.shape[0]
     grid_off = stencil_scratch_offsets(st_shape, st_halo)
+    # between levels 0 and 1, when both are stencils: the transfer on the lattice coordinates
+    by_grid = n_st >= 2
+    part = xg[grid_off[st_shape.shape[0]] :]
     if n_st == 0:
         for i in range(n0):
             bs[i] = 0.0 if fixed[i] else b[i]
@@ -519,13 +514,11 @@ def v_cycle(
                     acc -= a_val[k] * xs[off + a_idx[k]]
                 rs[off + i] = acc
         coff = vec_off[lvl + 1]
-        if lvl == 0 and n_st >= 2:
-            # both ends are lattice stencils: by the axis factors on the coordinates
+        if lvl == 0 and by_grid:
             n1 = st_node_off[1]
             _grid_restrict(
                 st_shape[0], st_shape[1], st_dof[: 3 * n1], st_rep[:nl],
-                st_dof[3 * n1 : 3 * st_node_off[2]], rs[:nl], xg[grid_off[n_st_all] :],
-                bs[coff : coff + n[1]],
+                st_dof[3 * n1 : 3 * st_node_off[2]], rs[:nl], part, bs[coff : coff + n[1]],
             )  # fmt: skip
             continue
         for i in range(n[lvl + 1]):
@@ -570,13 +563,11 @@ def v_cycle(
                 st_dof, st_rep, st_palm,
             )  # fmt: skip
             # the correction, prolonged and added to every coordinate of the free DOFs
-            by_grid = lvl == 0 and n_st >= 2
-            if by_grid:
+            if lvl == 0 and by_grid:
                 n1 = st_node_off[1]
                 _grid_prolong_add(
                     st_shape[0], st_shape[1], dof, st_dof[3 * n1 : 3 * st_node_off[2]],
-                    fixed[:nl], xs[coff : coff + n[1]], xg[grid_off[n_st_all] :], st_halo[0],
-                    xg_l,
+                    fixed[:nl], xs[coff : coff + n[1]], part, st_halo[0], xg_l,
                 )  # fmt: skip
             else:
                 for i in range(nl):
@@ -751,8 +742,9 @@ def stencil_scratch_offsets(st_shape: IntArray, st_halo: IntArray) -> IntArray:
 @njit(cache=True, inline="always")
 def _coarse_point(i: int, n: int) -> tuple[int, float]:
     """Linear interpolation along one axis of ``n`` points from the coarse points (every second
-    one and the last, as :func:`_axis_interpolation`): fine point ``i`` is ``(1 - w) c[j] + w
-    c[j + 1]``; returns ``(j, w)``, ``w`` 0 or 0.5 (so a constant is interpolated exactly)."""
+    one and the last; axes of one or two points are kept): fine point ``i`` is ``(1 - w) c[j] +
+    w c[j + 1]``; returns ``(j, w)``, ``w`` 0 or 0.5 (so a constant is interpolated exactly).
+    The one home of the rule: :func:`_axis_interpolation` builds ``P``'s axis factors from it."""
     if n <= 2:
         return i, 0.0
     if i == n - 1:
