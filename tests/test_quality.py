@@ -1,5 +1,6 @@
 """Quality flags of a fit: each fires on the synthetic log made to trip it and stays silent on
-clean ones (``tests/doubtful_logs.py`` builds the logs; thresholds in ``deformctl.quality``).
+clean ones (``tests/doubtful_logs.py`` builds the logs; thresholds in
+``deformctl.characterize.quality``).
 
 Silence on the good paths is checked here for clean position-controlled squeezes and in the
 tests of each path: the synthetic grid (``test_characterize.py``), the simulator and Table II
@@ -23,8 +24,7 @@ from deformctl.characterize import (
     kelvin_voigt_piecewise_linear,
     synthetic_kelvin_voigt_squeeze,
 )
-from deformctl.errors import InputDataError, UsageError
-from deformctl.quality import (
+from deformctl.characterize.quality import (
     DAMPING_EXCITATION_MIN,
     DAMPING_PRELOAD_SENSITIVITY,
     FEW_SAMPLES_WINDOWS,
@@ -40,6 +40,7 @@ from deformctl.quality import (
     quality_text,
     thresholds_help,
 )
+from deformctl.errors import InputDataError, UsageError
 from deformctl.series import SqueezeSeries
 
 
