@@ -43,17 +43,10 @@ def kernel_sources() -> list[Path]:
     ]
 
 
+@functools.cache
 def sources_digest() -> str:
-    """SHA-256 of the kernel sources' paths (relative to the package) and contents."""
-    stats = tuple(
-        (str(p), p.stat().st_mtime_ns, p.stat().st_size) for p in sorted(SIM_DIR.rglob("*.py"))
-    )
-    return _digest(stats)
-
-
-@functools.lru_cache(maxsize=8)
-def _digest(stats: tuple[tuple[str, int, int], ...]) -> str:
-    """The digest for one state of the files (``stats``: path, mtime and size of each)."""
+    """SHA-256 of the kernel sources' paths (relative to the package) and contents; made once
+    per process (numba reads a kernel's stamp once, when it is decorated)."""
     h = hashlib.sha256()
     for path in kernel_sources():
         h.update(path.relative_to(SIM_DIR).as_posix().encode())
