@@ -147,3 +147,12 @@ def test_baseline_tolerances_cover_lf_moved_by_one_search_bracket(expected: dict
             worst = max(worst, abs(value - e) / tol.allowed(e))
     # covered (the bound is reached: 1 up to rounding), and not by a tolerance wider than needed
     assert 0.99 < worst <= 1.0 + 1e-9
+
+
+def test_a_broken_network_moves_the_reference_numbers(expected: dict) -> None:
+    # the network learning L_f itself instead of L_f / W (the paper's plain network)
+    broken = {**expected, "reference_network": golden.reference_network(target="direct")}
+    moved = compare(expected, broken)
+    assert moved
+    assert all(line.startswith("reference_network.") for line in moved), moved
+    assert any(line.startswith("reference_network.prediction_n.") for line in moved)
