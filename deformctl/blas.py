@@ -67,3 +67,22 @@ def blas_summary(info: list[dict[str, Any]] | None = None) -> str:
         f"{lib['internal_api']} {lib['version']} {lib['architecture'] or '?'} x{lib['num_threads']}"
         for lib in libs
     )
+
+
+def blas_record(value: object) -> list[dict[str, Any]] | None:
+    """A :func:`blas_info` list read back from a file, or None when it is not one.
+
+    Each entry keeps only :data:`BLAS_INFO_KEYS` whose values are strings, integers or None, so
+    a damaged or hostile record can be shown but never trusted beyond that.
+    """
+    if not isinstance(value, list) or not all(isinstance(lib, dict) for lib in value):
+        return None
+    return [
+        {
+            key: lib.get(key)
+            if isinstance(lib.get(key), str | int) and not isinstance(lib.get(key), bool)
+            else None
+            for key in BLAS_INFO_KEYS
+        }
+        for lib in value
+    ]

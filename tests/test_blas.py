@@ -8,7 +8,7 @@ from threadpoolctl import threadpool_info
 from typer.testing import CliRunner
 
 from deformctl.artifacts.model import load_model
-from deformctl.blas import BLAS_INFO_KEYS, blas_info, blas_summary
+from deformctl.blas import BLAS_INFO_KEYS, blas_info, blas_record, blas_summary
 from deformctl.cli import app
 from deformctl.repro.synthetic import synthetic_index_table
 
@@ -53,3 +53,19 @@ def test_model_file_records_the_kernel_and_one_thread(tmp_path) -> None:
     for lib in metadata["blas"]:
         assert lib["num_threads"] == 1  # the fit runs on one BLAS thread, whatever the machine
         assert (lib["internal_api"], lib["architecture"]) == view[lib["library"]]
+    shown = CliRunner().invoke(app, ["inspect", str(model_path)])
+    assert shown.exit_code == 0, shown.stderr
+    assert f"BLAS of the fit: {blas_summary(metadata['blas'])}" in shown.stdout
+    assert " x1" in shown.stdout
+
+
+def test_blas_record_keeps_only_plain_values() -> None:
+    good = blas_info()
+    assert blas_record(good) == good
+    assert blas_record(None) is None
+    assert blas_record("openblas") is None
+    assert blas_record([{"library": "x"}, 3]) is None
+    hostile = [{"library": ["a"], "num_threads": True, "architecture": "Haswell", "extra": 1}]
+    assert blas_record(hostile) == [
+        {key: ("Haswell" if key == "architecture" else None) for key in BLAS_INFO_KEYS}
+    ]
