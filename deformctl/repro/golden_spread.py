@@ -258,7 +258,8 @@ def run_tests(
         )
         lines = proc.stdout.strip().splitlines()
         blas = next((ln[6:] for ln in lines if ln.startswith("BLAS: ")), "?")
-        summary = lines[-1] if lines else proc.stderr.strip()[-300:]
+        failed = [ln for ln in lines if ln.startswith(("FAILED ", "ERROR "))]
+        summary = "\n    ".join([lines[-1] if lines else proc.stderr.strip()[-300:], *failed])
         return (*combo, proc.returncode, blas, summary, time.perf_counter() - start)
 
     print(f"\ntests under each kernel: {' '.join(files)}")
@@ -303,6 +304,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--json", help="write every run's numbers to this file")
     parser.add_argument("--verbose", action="store_true", help="print every run's errors")
     opts = parser.parse_args(args)
+    if hasattr(sys.stdout, "reconfigure"):  # each line as it comes, also into a pipe or a file
+        sys.stdout.reconfigure(line_buffering=True)
 
     from deformctl.repro.golden import EXPECTED_PATH, compare
 
