@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from deformctl.catalog import catalog_objects
 from deformctl.population import PAPER_POPULATION_SIZE, make_population
 
 #: Relative amplitude of the uniform noise on L_f.
@@ -55,16 +56,16 @@ def synthetic_index_table(
         ``[n]`` rows: ``object_id``, ``weight_n``, ``deformability_n_per_cm``,
         ``damping_ns_per_cm``, ``lift_force_n``, ``friction_mu``, ``f_w_n``, ``converged``.
     """
-    cat = make_population(n, seed=seed)
-    w = cat["weight_n"].to_numpy()
-    d = cat["material_stiffness_n_per_cm"].to_numpy()
-    lam = cat["material_damping_ns_per_cm"].to_numpy()
-    mu = cat["friction_mu"].to_numpy()
+    objects = catalog_objects(make_population(n, seed=seed))  # the catalog module reads columns
+    w = np.array([o.weight_n for o in objects], dtype=np.float64)
+    d = np.array([o.material_stiffness_n_per_cm for o in objects], dtype=np.float64)
+    lam = np.array([o.material_damping_ns_per_cm for o in objects], dtype=np.float64)
+    mu = np.array([o.friction_mu for o in objects], dtype=np.float64)
     lift = synthetic_lift_force_n(w, d, lam, mu)
     lift *= 1.0 + noise_rel * np.random.default_rng(seed + 1000).uniform(-1.0, 1.0, n)
     return pd.DataFrame(
         {
-            "object_id": cat["object_id"],
+            "object_id": [o.object_id for o in objects],
             "weight_n": w,
             "deformability_n_per_cm": d,
             "damping_ns_per_cm": lam,
