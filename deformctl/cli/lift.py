@@ -16,6 +16,9 @@ Failures, decided here:
   written first, then exit 1 with one line. A rig failure stops the run: the objects after it
   are not run (rows with ``attempts = 0`` and ``error`` "not run: ..."), since a rig that failed
   usually needs a person. A search that runs out of attempts does not stop the others.
+* with ``--rig``, the table and the log are also kept on disk as the run goes
+  (:mod:`deformctl.lift.journal`): a run killed or stopped by an error after its first attempt
+  keeps every attempt and the finished objects, and its error line says so.
 """
 
 from __future__ import annotations

@@ -457,4 +457,5 @@ def rig_runner_factory(
         row_fields=row_fields,
         stop_on_failure=True,
         settings=settings,
+        journal=True,  # every attempt costs a grip on a real robot: keep them as they happen
     )
