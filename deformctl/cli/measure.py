@@ -27,7 +27,9 @@ from deformctl.parallel import SweepOptions
 RIG, IMAGES = ("--bag", "--csv"), ("--images",)
 #: Every option that only some sources take → those sources (``--sim`` takes the sweep options).
 SOURCES: dict[str, tuple[str, ...]] = {
-    **dict.fromkeys(("--wrench-topic", "--position-topic", "--joint"), ("--bag",)),
+    **dict.fromkeys(
+        ("--wrench-topic", "--position-topic", "--joint", "--no-crc-check"), ("--bag",)
+    ),
     **dict.fromkeys(("--columns", "--units"), ("--csv",)),
     **dict.fromkeys(("--segment/--no-segment", "--phase", "--position-increases-when"), RIG),
     **dict.fromkeys(("--object-id", "--weight-n", "--friction-mu"), (*RIG, *IMAGES)),
@@ -72,6 +74,7 @@ def measure(
     segment: rec.Segment = None,
     phase: rec.Phase = None,
     position_increases_when: rec.PositionIncreasesWhen = None,
+    no_crc_check: rec.NoCrcCheck = False,
     marker_size_cm: img.MarkerSizeCm = None,
     marker_dict: img.MarkerDict = None,
     marker_id: img.MarkerId = None,
@@ -144,7 +147,7 @@ def measure(
     )  # fmt: skip
     rig_opts = _measure_rig.RigOptions(
         object_id, list(wrench_topics), position_topic, joint, axis, position_is, columns, units,
-        segment, phase, position_increases_when,
+        segment, phase, position_increases_when, crc_check=not no_crc_check,
     )  # fmt: skip
     given: dict[str, object] = {
         **rig_opts.given(), "--weight-n": weight_n, "--size-cm": size_cm,

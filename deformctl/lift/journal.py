@@ -160,4 +160,3 @@ class LiftJournal:
             n = self._table_written
             where.append(f"{n} finished object{'' if n == 1 else 's'} in {self.output}")
         return "kept: " + ", ".join(where)
-

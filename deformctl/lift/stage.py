@@ -45,6 +45,7 @@ from deformctl.artifacts import (
 from deformctl.artifacts.io import committed_together, is_stdio
 from deformctl.catalog import CatalogObject, catalog_objects, select_objects
 from deformctl.errors import DeformctlError, UsageError
+from deformctl.lift.journal import LiftJournal
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
     DEFAULT_MAX_ATTEMPTS,
@@ -58,7 +59,6 @@ from deformctl.lift.search import (
     find_min_lift_force_seeded,
     validate_search_options,
 )
-from deformctl.lift.journal import LiftJournal
 from deformctl.parallel import map_in_order, single_file_workers
 from deformctl.series import TrialOutcome
 

@@ -59,6 +59,9 @@ class Recording:
             interpolated onto the force timestamps, so a slow position stream carries fewer
             independent samples than the squeezes have; ``characterize`` widens its
             differentiation window for it (see :func:`deformctl.characterize.default_window_s`).
+        source, phase, ruptures: where it came from, the phase kept, the cuts at ruptures.
+        notes: warning lines of the reader (a bag read without CRC checks), each naming the
+            file; the command prints them.
     """
 
     squeezes: list[SqueezeSeries]
@@ -67,6 +70,7 @@ class Recording:
     source: str = ""
     phase: str = "all"
     ruptures: tuple[Rupture, ...] = ()
+    notes: tuple[str, ...] = ()
 
     def log_fields(self) -> dict[str, Any]:
         """What a squeeze log stores with the object besides its catalog values.
