@@ -39,6 +39,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "plausibility",
         "jsonsafe",
         "resources",
+        "blas",
     ),
 )
 
