@@ -46,6 +46,7 @@ __all__ = [
     "COVERAGES_REPORTED",
     "check_coverage",
     "conformal_margin",
+    "conformal_min_scores",
     "conformal_rank",
     "coverage_report",
     "relative_scores",
@@ -85,6 +86,16 @@ def conformal_rank(n: int, coverage: float) -> int:
     """
     p = check_coverage(coverage)
     return math.ceil(round((n + 1) * p, 12))
+
+
+def conformal_min_scores(coverage: float) -> int:
+    """The fewest calibration scores with a finite margin at P: the least n with
+    ⌈(n + 1) P⌉ <= n (for example 9 at P = 0.9, 19 at P = 0.95)."""
+    p = check_coverage(coverage)
+    n = max(1, math.floor(p / (1.0 - p)) - 1)
+    while conformal_rank(n, p) > n:
+        n += 1
+    return n
 
 
 def conformal_margin(scores: Any, coverage: float) -> float:
