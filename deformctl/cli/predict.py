@@ -18,7 +18,7 @@ import typer
 
 from deformctl.cli._common import translate_errors
 from deformctl.cli._options import Force
-from deformctl.errors import InputDataError, SchemaError, UsageError, error_context
+from deformctl.errors import SchemaError, UsageError, error_context
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -256,21 +256,18 @@ def predict(
         )
         names = object_ids
         where = features
+    if coverage is not None:
+        predictor.margin(coverage)  # exit 65 naming the model file: no (or too few) scores
     with error_context(where):
-        try:
-            est = predictor.predict_many(
-                inputs["weight_n"],
-                inputs["deformability_n_per_cm"],
-                inputs["damping_ns_per_cm"],
-                inputs["friction_mu"],
-                coverage=coverage,
-                max_safe_force_n=inputs.get("max_safe_force_n"),
-                names=names,
-            )
-        except InputDataError as err:
-            if features is None:  # a flag's value: the rule was checked above, so only odd cases
-                raise UsageError(err.message) from None
-            raise
+        est = predictor.predict_many(
+            inputs["weight_n"],
+            inputs["deformability_n_per_cm"],
+            inputs["damping_ns_per_cm"],
+            inputs["friction_mu"],
+            coverage=coverage,
+            max_safe_force_n=inputs.get("max_safe_force_n"),
+            names=names,
+        )
     for line in est.warnings:
         typer.echo(f"warning: {line}", err=True)
     columns = output_columns(est, inputs, object_ids=object_ids)

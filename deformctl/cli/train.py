@@ -219,8 +219,8 @@ def train(
         highlight=False,
     )
     console.print(metrics_table(report))
-    for line in coverage_lines(report):
-        console.print(line)
+    for line in coverage_lines(report):  # unwrapped: one line per coverage
+        typer.echo(line, err=console.file is sys.stderr)
     if not report["converged"]:
         typer.echo(
             "warning: the chosen network stopped at max_iter before converging; "

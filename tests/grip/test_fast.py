@@ -133,7 +133,7 @@ def test_a_bound_needs_calibration_scores_enough_for_p(files: dict[str, Path]) -
         Predictor.load(files["paper"]).predict(30.0, 40.0, 1.0, coverage=0.9)
     assert err.value.message == NO_SCORES_MESSAGE
     assert "deformctl train --calibration-size N" in NO_SCORES_MESSAGE
-    with pytest.raises(InputDataError, match="--coverage 0.99 needs at least 99 calibration"):
+    with pytest.raises(InputDataError, match=r"--coverage 0\.99 needs at least 99 calibration"):
         Predictor.load(files["grip"]).predict(2.0, 10.0, 0.5, 0.5, coverage=0.99)
 
 

@@ -64,7 +64,8 @@ def test_calibration_scores_and_the_reported_coverage(trained: TrainResult) -> N
     pred = trained.predictions
     cal = pred[pred["split"] == "calibration"]
     np.testing.assert_allclose(
-        scores, (cal["lift_force_n"] - cal["predicted_lift_force_n"]) / cal["predicted_lift_force_n"]
+        scores,
+        (cal["lift_force_n"] - cal["predicted_lift_force_n"]) / cal["predicted_lift_force_n"],
     )
     report = trained.metrics["conformal"]
     test = pred[pred["split"] == "test"]
@@ -93,9 +94,7 @@ def test_bound_coverage_on_fresh_objects_drawn_like_the_training_ones(
     fresh = grip_index(4000, seed=99, noise=NOISE)
     predictor = Predictor.load(path)
     for p, sd in ((0.9, 0.038), (0.95, 0.027)):
-        est = predictor.predict_many(
-            *(fresh[c].to_numpy() for c in GRIP_FEATURES), coverage=p
-        )
+        est = predictor.predict_many(*(fresh[c].to_numpy() for c in GRIP_FEATURES), coverage=p)
         covered = np.mean(fresh["lift_force_n"].to_numpy() <= est.lift_force_upper_n)
         assert covered > p - 3 * sd
 
