@@ -52,14 +52,10 @@ def _breakdown(squeeze: Path, out: Path) -> dict[str, float]:
     """Seconds per phase of ``characterize squeeze/ -o out`` in this process."""
     from deformctl.artifacts import write_table
     from deformctl.artifacts.io import read_input_bytes
-    from deformctl.artifacts.mcaplog import load_mcap, read_squeeze_log, squeezes_from_contents
-    from deformctl.characterize import (
-        _coefficient_frame,
-        _fit_object,
-        _stored_rate,
-        default_window_s,
-        squeeze_log_parts,
-    )
+    from deformctl.artifacts.mcap import load_mcap, read_squeeze_log, squeezes_from_contents
+    from deformctl.characterize import default_window_s, squeeze_log_parts
+    from deformctl.characterize.coefficients import _coefficient_frame
+    from deformctl.characterize.stage import _fit_object, _stored_rate
     from deformctl.signals import sg_smooth
 
     t = dict.fromkeys(("read", "fits", "write", "imports", "reference read", "read of those"), 0.0)

@@ -15,7 +15,7 @@ from deformctl.catalog import CatalogObject
 from deformctl.lift.search import DEFAULT_TOLERANCE_REL, find_min_lift_force
 from deformctl.measure import default_peak_force_n
 from deformctl.presets import SimPreset, sim_preset
-from deformctl.repro import dataset_path
+from deformctl.resources import dataset_path
 from deformctl.sim import ObjectSpec, squeeze_many
 from deformctl.sim.engine import build_model
 

@@ -179,7 +179,7 @@ def paper_objects() -> pd.DataFrame:
         The catalog, 4 rows, with the file's extra columns (``name``, ``interior``).
     """
     from deformctl.artifacts import read_catalog
-    from deformctl.repro import dataset_path
+    from deformctl.resources import dataset_path
 
     return read_catalog(dataset_path("paper", "objects.csv"))
 

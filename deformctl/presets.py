@@ -53,10 +53,10 @@ import json
 import math
 from dataclasses import dataclass
 from functools import lru_cache
-from importlib.resources import files
 from typing import TYPE_CHECKING, Any, Literal
 
 from deformctl.errors import UsageError
+from deformctl.resources import dataset_path
 
 if TYPE_CHECKING:  # pragma: no cover - the simulator is imported where a preset is built
     from deformctl.series import TrialOutcome
@@ -176,7 +176,7 @@ def paper_calibration() -> dict[str, Any]:
     """
     from deformctl.errors import InputDataError
 
-    path = files("deformctl.datasets").joinpath(*CALIBRATION_PARTS)
+    path = dataset_path(*CALIBRATION_PARTS)
     data: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
     fitted = data.get("fitted", {})
     for key, (low, high) in CALIBRATED_PARAMETERS.items():

@@ -1,4 +1,4 @@
-"""In-memory time series shared by the stages: one squeeze, one lift attempt.
+"""In-memory time series shared by the stages: one squeeze, one lift attempt, and their records.
 
 These are the contract between the simulator (:mod:`deformctl.sim`), the ingestion of real logs
 (:mod:`deformctl.measure`), the estimators (:mod:`deformctl.characterize`), the lifting-force
@@ -9,11 +9,16 @@ in SI units named in the field.
 Compression ``d`` is defined once, here: the *total* compression between the two palms,
 ``d(t) = gap(t0) - gap(t)`` where ``gap = palm_right_x_m - palm_left_x_m`` and ``t0`` is the first
 sample of the squeeze (palms touching the unloaded object). It is positive when squeezed.
+
+Beside the series: :class:`Rupture` (where a squeeze ruptured, as a squeeze log stores it; found
+by :mod:`deformctl.characterize.rupture`) and :class:`LiftAttempt` (one attempt's
+:class:`TrialOutcome` as a lift log stores it).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -124,3 +129,80 @@ class TrialOutcome:
     series: LiftAttemptSeries | None = None
     details: dict[str, object] = field(default_factory=dict)
     start_time_ns: int | None = None
+
+
+@dataclass(frozen=True)
+class LiftAttempt:
+    """One lift attempt of one object: what a lift log stores per attempt.
+
+    Attributes:
+        object_id: catalog id of the object.
+        attempt_index: 0-based index of the attempt among the object's attempts.
+        outcome: what the attempt found (``outcome.series`` is the attempt's time series, when
+            recorded; ``outcome.details`` must be JSON-serialisable).
+    """
+
+    object_id: str
+    attempt_index: int
+    outcome: TrialOutcome
+
+
+@dataclass(frozen=True)
+class Rupture:
+    """Where a squeeze ruptured: its force peak before the collapse.
+
+    Attributes:
+        squeeze_index: the squeeze.
+        time_s: time of the peak since the start of the squeeze, s.
+        force_n: the force at the peak, N (the force the object could bear).
+        compression_m: the compression at the peak, m.
+        recording_time_s: time of the peak in the source recording, s (None when not known).
+    """
+
+    squeeze_index: int
+    time_s: float
+    force_n: float
+    compression_m: float
+    recording_time_s: float | None = None
+
+    def to_record(self) -> dict[str, Any]:
+        """The JSON record stored in a squeeze log's object row (key ``ruptures``)."""
+        rec: dict[str, Any] = {
+            "squeeze_index": self.squeeze_index,
+            "time_s": self.time_s,
+            "force_n": self.force_n,
+            "compression_m": self.compression_m,
+        }
+        if self.recording_time_s is not None:
+            rec["recording_time_s"] = self.recording_time_s
+        return rec
+
+    @classmethod
+    def from_record(cls, rec: Any) -> Rupture | None:
+        """A rupture from a stored record; None when the record is not one."""
+        if not isinstance(rec, dict):
+            return None
+        try:
+            rt = rec.get("recording_time_s")
+            return cls(
+                squeeze_index=int(rec["squeeze_index"]),
+                time_s=float(rec["time_s"]),
+                force_n=float(rec["force_n"]),
+                compression_m=float(rec["compression_m"]),
+                recording_time_s=None if rt is None else float(rt),
+            )
+        except (KeyError, TypeError, ValueError):
+            return None
+
+    def describe(self) -> str:
+        """``squeeze #1 at 2.00 s, 10.1 N``."""
+        return f"squeeze #{self.squeeze_index} at {self.time_s:.3g} s, {self.force_n:.3g} N"
+
+
+def ruptures_from_object(obj: Any) -> list[Rupture]:
+    """The ruptures a squeeze log's object row records (``ruptures``), in squeeze order."""
+    raw = obj.get("ruptures") if isinstance(obj, dict) else None
+    if not isinstance(raw, list):
+        return []
+    out = [r for r in (Rupture.from_record(x) for x in raw) if r is not None]
+    return sorted(out, key=lambda r: r.squeeze_index)

@@ -1,9 +1,9 @@
 """Small numerical helpers shared by the estimators and the recording checks.
 
 The estimators (:mod:`deformctl.characterize`) and the rupture and phase detection
-(:mod:`deformctl.phases`) work on one uniform time grid with Savitzky–Golay (SG) smoothed
-compression ``d`` and rate ``d'``; these are the helpers both use, so a squeeze is smoothed the
-same way wherever it is judged. Arrays are 1-D float64 ``[n]``.
+(:mod:`deformctl.characterize.rupture`) work on one uniform time grid with Savitzky–Golay (SG)
+smoothed compression ``d`` and rate ``d'``; these are the helpers both use, so a squeeze is
+smoothed the same way wherever it is judged. Arrays are 1-D float64 ``[n]``.
 """
 
 from __future__ import annotations

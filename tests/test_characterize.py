@@ -296,8 +296,9 @@ def test_one_smoothing_per_squeeze_and_one_table_per_log() -> None:
     """Issue 15, item 6: the fits reuse the rupture search's smoothing of a squeeze that did not
     rupture, and a log's table is built once from all rows; both give the numbers and the table
     the per-squeeze smoothing and the concatenated one-row tables gave."""
-    from deformctl.characterize import _coefficient_frame, _fit_rows
-    from deformctl.phases import _POLYORDER, cut_rupture_smoothed
+    from deformctl.characterize.coefficients import _coefficient_frame
+    from deformctl.characterize.fit import _fit_rows
+    from deformctl.characterize.rupture import _POLYORDER, cut_rupture_smoothed
     from deformctl.signals import sg_smooth, sg_window_length, uniform_grid
 
     ramp = synthetic_kelvin_voigt_squeeze(13.0, 1.0, profile="ramp_hold_release", seed=5)

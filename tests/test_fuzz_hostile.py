@@ -34,7 +34,7 @@ from mcap.writer import Writer
 
 from deformctl import jsonsafe
 from deformctl.artifacts import io as aio
-from deformctl.artifacts.mcaplog import (
+from deformctl.artifacts.mcap import (
     lift_attempts_from_contents,
     load_mcap,
     squeezes_from_contents,

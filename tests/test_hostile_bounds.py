@@ -157,17 +157,19 @@ def test_squeeze_steps_are_budgeted_before_simulating(output: str, tmp_path: Pat
 
 
 def test_out_of_memory_is_one_line(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    from deformctl import measure
+    from deformctl.measure import stage
 
     def boom(*args: object, **kwargs: object) -> None:
         raise MemoryError("Unable to allocate 22.8 TiB")
 
-    monkeypatch.setattr(measure, "simulate_squeezes", boom)
+    monkeypatch.setattr(stage, "simulate_squeezes", boom)
     cat = _csv(tmp_path / "cat.csv", [ROW])
-    argv = ["measure", str(cat), "--sim", "--memory-budget-gib", "1e9", "-o", "x.mcap"]
+    out = tmp_path / "x.mcap"
+    argv = ["measure", str(cat), "--sim", "--memory-budget-gib", "1e9", "-o", str(out)]
     result = runner.invoke(app, argv)
     assert result.exit_code == 1
     assert "out of memory" in _one_line(result.stderr)
+    assert not out.exists()
 
 
 def _squeeze_log(path: Path, field: str, value: float) -> Path:

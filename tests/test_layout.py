@@ -90,12 +90,17 @@ def test_only_the_catalog_module_names_catalog_columns() -> None:
     [
         "deformctl.parallel",
         "deformctl.artifacts",
-        "deformctl.artifacts.mcaplog",
+        "deformctl.artifacts.mcap",
+        "deformctl.artifacts.mcap.write",
+        "deformctl.characterize",
+        "deformctl.characterize.rupture",
         "deformctl.lift",
         "deformctl.lift.stage",
         "deformctl.lift.runners.sim",
         "deformctl.catalog",
         "deformctl.measure",
+        "deformctl.measure.csv",
+        "deformctl.model",
         "deformctl.repro.golden",
     ],
 )

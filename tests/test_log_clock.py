@@ -20,7 +20,7 @@ from test_measure_ingest import EPOCH_NS, LEFT, POSE, RIGHT, write_bag
 from typer.testing import CliRunner
 
 from deformctl.artifacts import read_squeeze_log
-from deformctl.artifacts.mcaplog import LOG_EPOCH_NS
+from deformctl.artifacts.mcap import LOG_EPOCH_NS
 from deformctl.cli import app
 from deformctl.errors import EXIT_USAGE
 

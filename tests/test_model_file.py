@@ -89,7 +89,32 @@ def test_round_trip_model_and_metadata(trained: TrainResult, tmp_path: Path) -> 
     assert meta["tool_version"]
     types, _ = inspect_types(path)
     assert types <= ALLOWED_TYPES
+    assert "deformctl.model.ScaledTargetRegressor" in types
+
+
+def test_a_file_naming_the_class_where_it_was_first_defined_still_loads(
+    trained: TrainResult, tmp_path: Path
+) -> None:
+    """Files written before the estimator moved to ``deformctl.model`` name it
+    ``deformctl.train.ScaledTargetRegressor`` (still re-exported there): they load as before."""
+    import zipfile
+
+    new = tmp_path / "new.skops"
+    save_model(new, trained.model, metadata={"seed": 1})
+    old = tmp_path / "old.skops"
+    with zipfile.ZipFile(new) as src, zipfile.ZipFile(old, "w") as dst:
+        for info in src.infolist():
+            data = src.read(info)
+            if info.filename == "schema.json":
+                assert b'"deformctl.model"' in data
+                data = data.replace(b'"deformctl.model"', b'"deformctl.train"')
+            dst.writestr(info, data)
+    types, _ = inspect_types(old)
     assert "deformctl.train.ScaledTargetRegressor" in types
+    model, meta = load_model(old)
+    x = pd.DataFrame([[30.0, 40.0, 5.0]], columns=list(FEATURES))
+    assert meta["seed"] == 1
+    assert model.predict(x).tolist() == trained.model.predict(x).tolist()
 
 
 def test_existing_file_needs_force(trained: TrainResult, tmp_path: Path) -> None:

@@ -1,4 +1,4 @@
-"""Rupture detection and the loading/unloading phases (``deformctl.phases``).
+"""Rupture detection and the loading/unloading phases (``deformctl.characterize.rupture``).
 
 The rupture criterion must fire on a force collapse while the gripper keeps closing, at the
 collapse, and stay silent on every Kelvin–Voigt squeeze, including heavily damped ones whose
@@ -15,9 +15,9 @@ import pytest
 from doubtful_logs import rupture
 
 from deformctl.characterize import synthetic_kelvin_voigt_squeeze
+from deformctl.characterize.rupture import Rupture, cut_rupture, phase_slice, ruptures_from_object
 from deformctl.errors import UsageError
 from deformctl.measure import simulate_squeezes
-from deformctl.phases import Rupture, cut_rupture, phase_slice, ruptures_from_object
 from deformctl.population import golden_population
 
 WINDOW_S = 0.2

@@ -10,7 +10,7 @@ import pyarrow.parquet as pq
 import pytest
 from typer.testing import CliRunner
 
-from deformctl.artifacts.mcaplog import decode_provenance, load_mcap
+from deformctl.artifacts.mcap import decode_provenance, load_mcap
 from deformctl.cli import app
 from deformctl.errors import UsageError
 from deformctl.presets import (

@@ -1,5 +1,6 @@
 """Quality flags of a fit: each fires on the synthetic log made to trip it and stays silent on
-clean ones (``tests/doubtful_logs.py`` builds the logs; thresholds in ``deformctl.quality``).
+clean ones (``tests/doubtful_logs.py`` builds the logs; thresholds in
+``deformctl.characterize.quality``).
 
 Silence on the good paths is checked here for clean position-controlled squeezes and in the
 tests of each path: the synthetic grid (``test_characterize.py``), the simulator and Table II
@@ -23,8 +24,7 @@ from deformctl.characterize import (
     kelvin_voigt_piecewise_linear,
     synthetic_kelvin_voigt_squeeze,
 )
-from deformctl.errors import InputDataError, UsageError
-from deformctl.quality import (
+from deformctl.characterize.quality import (
     DAMPING_EXCITATION_MIN,
     DAMPING_PRELOAD_SENSITIVITY,
     FEW_SAMPLES_WINDOWS,
@@ -40,6 +40,7 @@ from deformctl.quality import (
     quality_text,
     thresholds_help,
 )
+from deformctl.errors import InputDataError, UsageError
 from deformctl.series import SqueezeSeries
 
 
@@ -252,9 +253,13 @@ def test_quality_text_round_trip() -> None:
     assert parse_quality(quality_text(FLAGS)) == FLAGS
 
 
-def test_thresholds_are_stated_in_the_readme_and_the_help() -> None:
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
-    section = readme.split("## When the numbers are doubtful", 1)[1].split("\n## ", 1)[0]
+def test_thresholds_are_stated_in_the_docs_and_the_help() -> None:
+    guide = Path(__file__).resolve().parents[1] / "docs" / "guide" / "testing-machine.md"
+    section = (
+        guide.read_text(encoding="utf-8")
+        .split("## When the numbers are doubtful", 1)[1]
+        .split("\n## ", 1)[0]
+    )
     stated = {
         "low_r2": f"R² < {LOW_R2:g}",
         "negative_damping": f"{NEGATIVE_DAMPING_ATOL_NS_PER_CM:g} N·s/cm",

@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 
 from deformctl.artifacts import read_table
 from deformctl.cli import app
-from deformctl.repro import dataset_path
+from deformctl.resources import dataset_path
 
 REPO = Path(__file__).resolve().parents[1]
 runner = CliRunner()

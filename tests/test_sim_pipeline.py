@@ -32,7 +32,7 @@ from rich.console import Console
 from typer.testing import CliRunner
 
 from deformctl.artifacts import read_catalog, read_lift_log, read_squeeze_log, read_table
-from deformctl.artifacts.mcaplog import decode_provenance, load_mcap
+from deformctl.artifacts.mcap import decode_provenance, load_mcap
 from deformctl.catalog import CatalogObject
 from deformctl.cli import app
 from deformctl.errors import EXIT_DATAERR, EXIT_NOINPUT, EXIT_USAGE

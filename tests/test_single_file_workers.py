@@ -122,7 +122,7 @@ def test_errors_pickle_with_their_message_and_exit_code(err: Exception) -> None:
 
 
 def test_single_file_workers_rule(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr("deformctl.parallel._available_cores", lambda: 2)
+    monkeypatch.setattr("deformctl.parallel.sweep._available_cores", lambda: 2)
     assert single_file_workers(None, MIN_PARALLEL_OBJECTS - 1) == 1
     assert single_file_workers(None, MIN_PARALLEL_OBJECTS) == 2
     assert single_file_workers(4, 3) == 3  # never more workers than objects

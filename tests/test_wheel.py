@@ -123,7 +123,8 @@ def test_the_wheel_brings_its_data(wheel_dir: Path, tmp_path: Path) -> None:
         wheel_dir,
         tmp_path,
         "-c",
-        "import deformctl, deformctl.repro.golden as g; from deformctl.repro import dataset_path; "
+        "import deformctl, deformctl.repro.golden as g; "
+        "from deformctl.resources import dataset_path; "
         "from deformctl.artifacts.schema import load_table_spec; load_table_spec('catalog'); "
         "print(deformctl.__file__); print(dataset_path('paper', 'table2.csv')); "
         "print(g.EXPECTED_PATH); print(dataset_path('examples', 'gripper.mcap')); "

@@ -19,8 +19,7 @@ from deformctl.artifacts.io import (
     check_output_path,
     read_input_bytes,
 )
-from deformctl.artifacts.mcaplog import (
-    LiftAttempt,
+from deformctl.artifacts.mcap import (
     read_lift_log,
     read_squeeze_log,
     write_lift_log,
@@ -36,6 +35,7 @@ from deformctl.artifacts.schema import (
     validate_message,
 )
 from deformctl.artifacts.tables import read_catalog, read_table, write_catalog, write_table
+from deformctl.series import LiftAttempt
 
 __all__ = [
     "TABLE_KINDS",

@@ -255,7 +255,7 @@ class LogPartWriter:
 
     def __call__(self, part: PartPayloads) -> None:
         """Write ``part``'s log atomically."""
-        from deformctl.artifacts.mcaplog import write_lift_log, write_squeeze_log
+        from deformctl.artifacts.mcap import write_lift_log, write_squeeze_log
 
         objects = [p[0] for _, p in part.payloads]
         items = [item for _, p in part.payloads for item in p[1]]

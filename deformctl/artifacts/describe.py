@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from deformctl.artifacts.io import PathArg, display_name, is_stdio, read_input_bytes
-from deformctl.artifacts.mcaplog import (
+from deformctl.artifacts.mcap import (
     KIND_LIFT,
     KIND_SQUEEZE,
     MCAP_MAGIC,
@@ -44,8 +44,7 @@ from deformctl.artifacts.tables import (
     read_parquet_bytes,
 )
 from deformctl.errors import DeformctlError, InputDataError, SchemaError
-from deformctl.phases import ruptures_from_object
-from deformctl.series import SqueezeSeries
+from deformctl.series import SqueezeSeries, ruptures_from_object
 from deformctl.units import NS_PER_S
 
 GENERIC_MCAP = "mcap"  #: kind of an MCAP file deformctl did not write (e.g. a ROS 2 bag)

@@ -13,10 +13,11 @@ Loading never trusts the file. Before anything is imported or constructed,
 node's type (``module.Class``) must be in :data:`ALLOWED_TYPES` and every node's loader in
 :data:`ALLOWED_LOADERS` -- the handful of types the model is made of (builtins containers and
 scalars, numpy arrays, ``RandomState``, ``Pipeline``, ``StandardScaler``, ``MLPRegressor`` and
-:class:`deformctl.train.ScaledTargetRegressor` or :class:`deformctl.grip.model.
-GripForceRegressor`). A file with anything else (a function such as
-``os.system``, any other class) is refused with :class:`~deformctl.errors.InputDataError` (exit 65)
-naming the type(s). Only then is ``skops.io.load`` called, with ``trusted`` set to the types
+:class:`deformctl.model.ScaledTargetRegressor` (which files written before it moved there name
+``deformctl.train.ScaledTargetRegressor``, still re-exported there) or
+:class:`deformctl.grip.model.GripForceRegressor`). A file with anything else (a function such as
+``os.system``, any other class) is refused with :class:`~deformctl.errors.InputDataError` (exit
+65) naming the type(s). Only then is ``skops.io.load`` called, with ``trusted`` set to the types
 ``skops.io.get_untrusted_types`` reports, after checking that they too are in the allow-list;
 ``trusted=True`` is never used. A truncated or non-zip file is refused the same way.
 
@@ -46,7 +47,7 @@ from deformctl.artifacts.io import atomic_output, note_input
 from deformctl.errors import InputDataError, MissingInputError, OutputExistsError, UsageError
 from deformctl.grip.groups import GRIP_FEATURES
 from deformctl.grip.model import GripForceRegressor
-from deformctl.train import FEATURES, ScaledTargetRegressor
+from deformctl.model import FEATURES, ScaledTargetRegressor
 
 #: The estimator classes a model file may hold.
 LiftForceModel = ScaledTargetRegressor | GripForceRegressor
@@ -112,7 +113,8 @@ ALLOWED_TYPES: frozenset[str] = frozenset(
         "sklearn.pipeline.Pipeline",
         "sklearn.preprocessing._data.StandardScaler",
         "sklearn.neural_network._multilayer_perceptron.MLPRegressor",
-        "deformctl.train.ScaledTargetRegressor",
+        "deformctl.model.ScaledTargetRegressor",
+        "deformctl.train.ScaledTargetRegressor",  # files written before the class moved
         "deformctl.grip.model.GripForceRegressor",
     }
 )
@@ -401,7 +403,7 @@ def _structure_problem(model: LiftForceModel) -> str | None:
 def check_structure(model: LiftForceModel, *, path: str | os.PathLike[str]) -> None:
     """Refuse a model whose structure cannot predict (the allow-list checks only the types).
 
-    Checks: ``n_features_in_`` is 3 (and the feature names are :data:`~deformctl.train.FEATURES`),
+    Checks: ``n_features_in_`` is 3 (and the feature names are :data:`~deformctl.model.FEATURES`),
     ``scale_index`` in range, the training range finite; the wrapped regressor is a fitted
     ``Pipeline(StandardScaler, MLPRegressor)``: the scaler's ``mean_`` / ``scale_`` of 3 finite
     values, the network's weights and biases finite and chained 3 → ... → 1, a regressor's

@@ -1,32 +1,19 @@
 """``deformctl measure --images TOP SIDE``: an object's catalog row from a top and a side image.
 
-Unlike the recording sources of ``measure`` (which write a squeeze log), the images source writes
-an object-catalog row: ``size_x_cm`` and ``size_y_cm`` from the top view, ``size_z_cm`` from the
-side view (:func:`deformctl.vision.measure_object_size`), with the given weight and friction.
-The catalog is created, overwritten with ``--force``, or extended with ``--append`` (an atomic
-rewrite that keeps the file's format and extra columns and refuses an ``object_id`` it has).
+The options are checked (:func:`deformctl.cli._image_options.check_image_options`) and
+:func:`deformctl.measure.images.measure_images` measures the images and writes the row; this
+module prints what it found.
 """
 
 from __future__ import annotations
 
-import math
-import os
 from collections.abc import Sequence
 
-import pandas as pd
 import typer
 
-from deformctl.artifacts import (
-    Provenance,
-    check_input_path,
-    check_output_path,
-    read_catalog,
-    write_catalog,
-)
 from deformctl.artifacts.io import is_stdio
-from deformctl.artifacts.tables import append_catalog_row
 from deformctl.cli._image_options import ImageOptions, check_image_options
-from deformctl.errors import DeformctlError, InputDataError, UsageError
+from deformctl.measure.images import measure_images as measure_images_to_catalog
 
 
 def measure_images(
@@ -41,111 +28,39 @@ def measure_images(
 ) -> None:
     """Measure the object in ``images = (top, side)`` and write (or append) its catalog row.
 
-    Checks, in order (nothing is written when one fails): options (exit 2), the input images
-    exist (66), the output may be written (1) and, with ``--append``, the catalog is valid and
-    does not have ``object_id`` yet (65); then the images are measured (65 on a bad image).
-
     Raises:
-        UsageError, MissingInputError, OutputExistsError, InputDataError: see above.
+        UsageError, MissingInputError, OutputExistsError, InputDataError: see
+            :func:`deformctl.measure.images.measure_images`.
     """
-    top, side = images
-    kwargs = check_image_options(opts)
-    if friction_mu is None:
-        raise UsageError("--images needs --friction-mu (the catalog requires friction_mu)")
-    if opts.append and force:
-        raise UsageError("--append and --force cannot be used together")
-    if opts.append and is_stdio(output):
-        raise UsageError("--append needs a catalog file, not - (stdout)")
-    _check_row_values(object_id, weight_n, friction_mu)
-    inputs = [top, side, *(opts.background or ())]
-    if opts.camera_matrix is not None:
-        inputs.append(opts.camera_matrix)
-    for path in inputs:
-        if is_stdio(path):
-            raise UsageError("--images, --background and --camera-matrix read files, not -")
-        check_input_path(path)
-    existing: pd.DataFrame | None = None
-    if opts.append and os.path.exists(output):
-        check_input_path(output)
-        existing = read_catalog(output)
-        if object_id in set(existing["object_id"]):
-            raise InputDataError(
-                f"object_id {object_id!r} is in the catalog already; choose another "
-                "--object-id or remove its row first",
-                path=output,
-            )
-    elif not force and not is_stdio(output) and os.path.exists(output):
-        raise DeformctlError(
-            "exists already, not overwriting (use --force to replace it, or --append to add "
-            "the row)",
-            path=output,
-        )
-    else:
-        check_output_path(output, force)
-    from deformctl.vision import (  # deferred: OpenCV
-        catalog_row,
-        load_camera_calibration,
-        measure_object_size,
-    )
-
-    camera = None if opts.camera_matrix is None else load_camera_calibration(opts.camera_matrix)
-    size = measure_object_size(
-        top,
-        side,
-        background_image=None if opts.background is None else tuple(opts.background),  # type: ignore[arg-type]
+    result = measure_images_to_catalog(
+        images,
+        check_image_options(opts),
+        object_id=object_id,
+        weight_n=weight_n,
+        friction_mu=friction_mu,
+        output=output,
+        force=force,
+        append=opts.append,
+        background=opts.background,
+        camera_matrix=opts.camera_matrix,
         debug_dir=opts.debug_dir,
-        camera=camera,
-        **kwargs,
     )
+    size = result.size
     if size.assumed_hfov_deg is not None:
         typer.echo(
-            f"warning: {top}: no --camera-matrix: assumed a {size.assumed_hfov_deg:g}° "
+            f"warning: {images[0]}: no --camera-matrix: assumed a {size.assumed_hfov_deg:g}° "
             f"horizontal field of view; the height correction applied to the top view is "
             f"{size.height_correction_pct:+.1f} % and depends on that guess (give the camera's "
             "calibration for sizes within 2 %)",
             err=True,
         )
-    row = catalog_row(size, object_id=object_id, weight_n=weight_n, friction_mu=friction_mu)
-    settings = {
-        "source": "images",
-        "reference": "checkerboard" if "checkerboard" in kwargs else "aruco",
-        **{k: v for k, v in kwargs.items() if k != "color_range"},
-        "color_range": kwargs.get("color_range"),
-        "background": list(opts.background) if opts.background else None,
-        "camera": None
-        if camera is None
-        else {
-            "file": camera.path,
-            "source": camera.source,
-            "camera_matrix": camera.camera_matrix.tolist(),
-            "distortion_coefficients": camera.distortion.tolist(),
-        },
-        "assumed_hfov_deg": size.assumed_hfov_deg,
-        "height_correction_pct": size.height_correction_pct,
-        "measured_size_cm": [size.size_x_cm, size.size_y_cm, size.size_z_cm],
-        "side_visible_width_cm": size.side.size_along_x_cm,
-    }
-    provenance = Provenance.from_invocation(inputs, settings=settings)
-    if existing is not None:
-        n_rows = append_catalog_row(output, row, existing, provenance=provenance)
-    else:
-        n_rows = len(write_catalog(pd.DataFrame([row]), output, provenance=provenance, force=force))
     where = "stdout" if is_stdio(output) else output
     typer.echo(
         f"{where}: {object_id!r} {round(size.size_x_cm, 2)} x {round(size.size_y_cm, 2)} x "
         f"{round(size.size_z_cm, 2)} cm "
-        f"(x, y from the top view, z from the side view; {n_rows} row(s) in the catalog)",
+        f"(x, y from the top view, z from the side view; {result.rows} row(s) in the catalog)",
         err=True,
     )
-
-
-def _check_row_values(object_id: str, weight: float, mu: float) -> None:
-    if not object_id:
-        raise UsageError("--object-id must not be empty")
-    if not (math.isfinite(weight) and weight > 0):
-        raise UsageError(f"--weight-n must be a number > 0, got {weight}")
-    if not (math.isfinite(mu) and mu > 0):
-        raise UsageError(f"--friction-mu must be a number > 0, got {mu}")
 
 
 __all__ = ["measure_images"]

@@ -17,11 +17,11 @@ from deformctl.characterize import (
     characterize_sweep,
     sweep_warnings,
 )
+from deformctl.characterize.quality import thresholds_help
 from deformctl.cli import _options as opt
 from deformctl.cli._common import finish_sweep, translate_errors
 from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
-from deformctl.quality import thresholds_help
 
 Preload = Annotated[
     str | None,

@@ -53,13 +53,13 @@ from deformctl.units import GRAVITY_M_S2
 
 __all__ = [
     "BUNDLED_MODELS",
-    "MAX_FRICTION_MU",
-    "Estimate",
-    "Estimates",
     "INPUT_RULES",
+    "MAX_FRICTION_MU",
     "NEEDS_FRICTION_MESSAGE",
     "NO_SCORES_MESSAGE",
     "UNRECORDED_MU_WARNING",
+    "Estimate",
+    "Estimates",
     "NoNumpyExportError",
     "Predictor",
     "input_problem",

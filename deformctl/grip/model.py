@@ -44,9 +44,19 @@ from deformctl.grip.groups import (
     ZETA_SHIFT,
     groups,
 )
+from deformctl.model import (
+    DEFAULT_ACTIVATION,
+    DEFAULT_ALPHA,
+    DEFAULT_MAX_ITER,
+    DEFAULT_SOLVER,
+    DEFAULT_TOL,
+)
 from deformctl.physics import rigid_grip_force_n
 
-__all__ = ["GripForceRegressor", "check_grip_inputs"]
+__all__ = ["DEFAULT_GRIP_HIDDEN", "GripForceRegressor", "check_grip_inputs", "make_grip_model"]
+
+#: The grip model's default hidden layers (the paper's network has ``(2,)``).
+DEFAULT_GRIP_HIDDEN: tuple[int, ...] = (8, 8)
 
 
 def check_grip_inputs(X: np.ndarray) -> None:
@@ -116,3 +126,26 @@ class GripForceRegressor(RegressorMixin, BaseEstimator):
         """``[n]`` predicted L_f, N."""
         X_arr = np.asarray(validate_data(self, X, reset=False), dtype=np.float64)
         return self.predict_ratio(X) * rigid_grip_force_n(X_arr[:, 0], X_arr[:, 3])
+
+
+def make_grip_model(
+    *,
+    hidden: tuple[int, ...] = DEFAULT_GRIP_HIDDEN,
+    activation: str = DEFAULT_ACTIVATION,
+    solver: str = DEFAULT_SOLVER,
+    alpha: float = DEFAULT_ALPHA,
+    max_iter: int = DEFAULT_MAX_ITER,
+    tol: float = DEFAULT_TOL,
+    random_state: int = 0,
+) -> GripForceRegressor:
+    """An unfitted grip model: ``GripForceRegressor(Pipeline(StandardScaler, MLP))``."""
+    mlp = MLPRegressor(
+        hidden_layer_sizes=tuple(hidden),
+        activation=activation,
+        solver=solver,
+        alpha=alpha,
+        max_iter=max_iter,
+        tol=tol,
+        random_state=random_state,
+    )
+    return GripForceRegressor(Pipeline([("scale", StandardScaler()), ("mlp", mlp)]))

@@ -2,8 +2,8 @@
 
 * :mod:`deformctl.lift.search`: the trial-runner protocol, one object's search
   (``find_min_lift_force``: the paper's ramp and the refined bisection), its result
-  (``LiftSearchResult``) and ``LiftAttempt``, the unit a lift log stores. Its public names are
-  re-exported here.
+  (``LiftSearchResult``) and ``LiftAttempt`` (defined in :mod:`deformctl.series`, the unit a lift
+  log stores). Its public names are re-exported here.
 * :mod:`deformctl.lift.stage`: the ``lift`` stage over a catalog (``lift_catalog``, one runner
   per object from a ``RunnerFactory``; ``lift_catalog_files`` reads the catalog and writes the
   table and the log).
@@ -11,8 +11,8 @@
   :mod:`deformctl.lift.runners.sim`: the built-in simulator (``sim_runner_factory``), its sweep
   task and ``lift_sweep``.
 
-Only the search is imported with the package: the artifact layer imports ``LiftAttempt`` from
-here, and the stage and the runners import the artifact layer.
+Only the search is imported with the package: the stage and the runners import the artifact
+layer, which sits below every stage.
 
 Example:
     >>> from deformctl.series import TrialOutcome

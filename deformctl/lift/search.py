@@ -10,7 +10,8 @@ grip force and an attempt index and returns a :class:`deformctl.series.TrialOutc
 simulator (:mod:`deformctl.lift.runners.sim`) and an external rig
 (:class:`deformctl.lift.runners.rig.RigRunner`) are both runners, so the same code drives a
 simulation and a real robot. This module knows neither: it holds the protocols, the result types
-(:class:`LiftSearchResult`, and :class:`LiftAttempt`, the unit a lift log stores) and the search.
+(:class:`LiftSearchResult`; :class:`LiftAttempt`, the unit a lift log stores, is
+:class:`deformctl.series.LiftAttempt`, re-exported) and the search.
 
 Two protocols:
 
@@ -77,7 +78,7 @@ from typing import Any, Literal, Protocol
 
 from deformctl.catalog import rigid_grip_force_n
 from deformctl.errors import DeformctlError, RigError, SearchError, UsageError
-from deformctl.series import TrialOutcome
+from deformctl.series import LiftAttempt, TrialOutcome
 
 SearchProtocol = Literal["refine", "paper", "seeded"]
 #: The protocols ``lift --protocol`` chooses from; ``seeded`` is chosen by a start force
@@ -141,22 +142,6 @@ class AttemptError(DeformctlError):
     The search uses such a message as it is; any other :class:`DeformctlError` of a runner is
     prefixed with the object, the attempt and the force.
     """
-
-
-@dataclass(frozen=True)
-class LiftAttempt:
-    """One lift attempt of one object: what a lift log stores per attempt.
-
-    Attributes:
-        object_id: catalog id of the object.
-        attempt_index: 0-based index of the attempt among the object's attempts.
-        outcome: what the attempt found (``outcome.series`` is the attempt's time series, when
-            recorded; ``outcome.details`` must be JSON-serialisable).
-    """
-
-    object_id: str
-    attempt_index: int
-    outcome: TrialOutcome
 
 
 @dataclass(frozen=True)

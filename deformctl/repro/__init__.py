@@ -7,22 +7,12 @@
 * :mod:`deformctl.repro.golden`: the golden population through the pipeline against its expected
   numbers (``python -m deformctl.repro.golden [--update]``).
 
-The bundled data (``datasets/`` in a checkout) is the package data ``deformctl.datasets``;
-:func:`dataset_path` finds it through :mod:`importlib.resources`, so all three work from an
-installed wheel as well as from a checkout.
+The bundled data (``datasets/`` in a checkout) is found by :func:`deformctl.resources.dataset_path`
+(re-exported here), so all three work from an installed wheel as well as from a checkout.
 """
 
 from __future__ import annotations
 
-from importlib.resources import files
-from pathlib import Path
+from deformctl.resources import dataset_path
 
 __all__ = ["dataset_path"]
-
-
-def dataset_path(*parts: str) -> Path:
-    """The path of a bundled dataset file, e.g. ``dataset_path("paper", "table2.csv")``.
-
-    The datasets are installed as files (not zipped), so this is a real path on disk.
-    """
-    return Path(str(files("deformctl.datasets").joinpath(*parts)))

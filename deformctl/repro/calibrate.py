@@ -55,7 +55,7 @@ from deformctl.catalog import CATALOG_COLUMNS, CatalogObject
 from deformctl.errors import DeformctlError
 from deformctl.physics import damping_ratio, rigid_grip_force_n
 from deformctl.presets import CALIBRATED_PARAMETERS, PAPER_FIXED, SimPreset, paper_preset
-from deformctl.repro import dataset_path
+from deformctl.resources import dataset_path
 from deformctl.sim.objects import ObjectSpec
 from deformctl.units import GRAVITY_M_S2
 

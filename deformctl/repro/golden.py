@@ -30,7 +30,7 @@ from deformctl.lift.runners.sim import sim_runner_factory
 from deformctl.lift.stage import lift_catalog
 from deformctl.measure import simulate_squeezes
 from deformctl.population import golden_population
-from deformctl.repro import dataset_path
+from deformctl.resources import dataset_path
 from deformctl.series import SqueezeSeries
 from deformctl.table import build_index_table
 from deformctl.train import train_model

@@ -24,7 +24,7 @@ from pathlib import Path
 import pandas as pd
 
 from deformctl.errors import DeformctlError, InputDataError, MissingInputError
-from deformctl.repro import dataset_path
+from deformctl.resources import dataset_path
 
 #: The bundled Table II (``datasets/paper/table2.csv``, the package data ``deformctl.datasets``).
 TABLE2_CSV = dataset_path("paper", "table2.csv")

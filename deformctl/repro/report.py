@@ -38,8 +38,8 @@ from deformctl.artifacts import read_squeeze_log, read_table
 from deformctl.catalog import catalog_objects
 from deformctl.errors import DeformctlError, MissingInputError
 from deformctl.physics import damping_ratio, rigid_grip_force_n
-from deformctl.repro import dataset_path
 from deformctl.repro.paper import compare_with_paper
+from deformctl.resources import dataset_path
 
 #: The artifacts :func:`write_report` reads from the run directory.
 RUN_FILES = {

@@ -18,7 +18,7 @@ from typer.testing import CliRunner
 
 from deformctl.artifacts import describe, read_catalog, read_table
 from deformctl.artifacts.dataset import read_table_any
-from deformctl.artifacts.mcaplog import (
+from deformctl.artifacts.mcap import (
     decode_objects,
     decode_provenance,
     lift_attempts_from_contents,

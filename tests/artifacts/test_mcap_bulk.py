@@ -27,8 +27,8 @@ from hypothesis import strategies as st
 from mcap.writer import CompressionType, Writer
 
 from deformctl import jsonsafe
-from deformctl.artifacts import mcaplog
-from deformctl.artifacts.mcaplog import (
+from deformctl.artifacts.mcap import bulk as mcap_bulk
+from deformctl.artifacts.mcap import (
     decode_objects,
     load_mcap,
     read_squeeze_log,
@@ -80,7 +80,7 @@ def _same(
 
 def _agree(data: bytes, name: str = "s.mcap") -> bool:
     """The bulk reader returns the reference result or nothing; True when it returned one."""
-    bulk = mcaplog._bulk_squeeze_log(data, name)
+    bulk = mcap_bulk._bulk_squeeze_log(data, name)
     try:
         ref = _reference(data, name)
     except DeformctlError:
@@ -163,7 +163,7 @@ def test_refusals_are_the_reference_readers(tmp_path: Path) -> None:
     w.add_message(cid, 5, (good % "true").encode(), 5)
     w.finish()
     log.write_bytes(buffer.getvalue())
-    assert mcaplog._bulk_squeeze_log(log.read_bytes(), log) is None
+    assert mcap_bulk._bulk_squeeze_log(log.read_bytes(), log) is None
     with pytest.raises(SchemaError) as err:
         read_squeeze_log(log)
     assert "message 5 on /squeeze/A" in str(err.value)
@@ -306,7 +306,7 @@ def test_the_bulk_reader_is_faster(tmp_path: Path) -> None:
             times.append(time.perf_counter() - t0)
         return min(times)
 
-    bulk = best(lambda: mcaplog._bulk_squeeze_log(data, "s.mcap"))
+    bulk = best(lambda: mcap_bulk._bulk_squeeze_log(data, "s.mcap"))
     reference = best(lambda: _reference(data, "s.mcap"))
     assert _agree(data)
     assert reference >= 2.0 * bulk, (reference, bulk)

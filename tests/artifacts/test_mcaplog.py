@@ -20,7 +20,7 @@ from deformctl.artifacts import (
     write_lift_log,
     write_squeeze_log,
 )
-from deformctl.artifacts.mcaplog import LOG_EPOCH_NS, decode_provenance, load_mcap
+from deformctl.artifacts.mcap import LOG_EPOCH_NS, decode_provenance, load_mcap
 from deformctl.artifacts.schema import json_schema_bytes
 from deformctl.errors import EXIT_DATAERR, InputDataError, OutputExistsError, SchemaError
 from deformctl.lift.search import LiftAttempt

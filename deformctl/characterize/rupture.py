@@ -2,9 +2,11 @@
 
 **Rupture.** A soft natural object squeezed too hard gives way: the force collapses while the
 gripper keeps closing. Fitted whole, such a squeeze halves D and flips the sign of λ.
-:func:`find_rupture` finds the point where it happened; ``measure`` cuts every squeeze there and
-records the point in the log, ``characterize`` does the same for logs that were not cut and flags
-the object (``rupture``). A rupture is a sample ``i`` after the running force peak ``p`` where
+:func:`find_rupture_index` finds the point where it happened; ``measure`` cuts every squeeze there
+and records the point in the log, ``characterize`` does the same for logs that were not cut and
+flags the object (``rupture``). The point is a :class:`~deformctl.series.Rupture` (a squeeze log
+stores it in the object's row, so the record lives with the series; re-exported here). A rupture
+is a sample ``i`` after the running force peak ``p`` where
 
 1. the force has fallen by more than :data:`RUPTURE_DROP_FRAC` of the peak,
    ``f[i] < (1 − RUPTURE_DROP_FRAC) · f[p]`` (with ``f[p]`` at least
@@ -33,17 +35,34 @@ judged on the SG-smoothed force: loading ends at the first sample within
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 
 from deformctl.errors import UsageError
-from deformctl.series import FloatArray, SqueezeSeries
+from deformctl.series import FloatArray, Rupture, SqueezeSeries, ruptures_from_object
 from deformctl.signals import noise_std, sg_smooth, sg_window_length, uniform_grid
 from deformctl.units import NS_PER_S
 
 Phase = Literal["loading", "unloading", "all"]
 PHASES: tuple[str, ...] = ("loading", "unloading", "all")
+
+__all__ = [
+    "PHASES",
+    "PHASE_PEAK_TOL",
+    "RUPTURE_DROP_FRAC",
+    "RUPTURE_MIN_PEAK_FRAC",
+    "RUPTURE_NOISE_MULT",
+    "Phase",
+    "Rupture",
+    "Smoothed",
+    "cut_rupture",
+    "cut_rupture_smoothed",
+    "find_rupture_index",
+    "phase_slice",
+    "ruptures_from_object",
+    "slice_squeeze",
+]
 
 #: A rupture is a force drop of more than this fraction of the running peak force while the
 #: compression still grows (and that the Kelvin–Voigt fit of the loading does not predict).
@@ -60,67 +79,6 @@ _POLYORDER = 3
 _MAX_PEAKS = 20
 #: Phases: the force peak is the stretch within this fraction of the smoothed maximum force.
 PHASE_PEAK_TOL = 0.01
-
-
-@dataclass(frozen=True)
-class Rupture:
-    """Where a squeeze ruptured: its force peak before the collapse.
-
-    Attributes:
-        squeeze_index: the squeeze.
-        time_s: time of the peak since the start of the squeeze, s.
-        force_n: the force at the peak, N (the force the object could bear).
-        compression_m: the compression at the peak, m.
-        recording_time_s: time of the peak in the source recording, s (None when not known).
-    """
-
-    squeeze_index: int
-    time_s: float
-    force_n: float
-    compression_m: float
-    recording_time_s: float | None = None
-
-    def to_record(self) -> dict[str, Any]:
-        """The JSON record stored in a squeeze log's object row (key ``ruptures``)."""
-        rec: dict[str, Any] = {
-            "squeeze_index": self.squeeze_index,
-            "time_s": self.time_s,
-            "force_n": self.force_n,
-            "compression_m": self.compression_m,
-        }
-        if self.recording_time_s is not None:
-            rec["recording_time_s"] = self.recording_time_s
-        return rec
-
-    @classmethod
-    def from_record(cls, rec: Any) -> Rupture | None:
-        """A rupture from a stored record; None when the record is not one."""
-        if not isinstance(rec, dict):
-            return None
-        try:
-            rt = rec.get("recording_time_s")
-            return cls(
-                squeeze_index=int(rec["squeeze_index"]),
-                time_s=float(rec["time_s"]),
-                force_n=float(rec["force_n"]),
-                compression_m=float(rec["compression_m"]),
-                recording_time_s=None if rt is None else float(rt),
-            )
-        except (KeyError, TypeError, ValueError):
-            return None
-
-    def describe(self) -> str:
-        """``squeeze #1 at 2.00 s, 10.1 N``."""
-        return f"squeeze #{self.squeeze_index} at {self.time_s:.3g} s, {self.force_n:.3g} N"
-
-
-def ruptures_from_object(obj: Any) -> list[Rupture]:
-    """The ruptures a squeeze log's object row records (``ruptures``), in squeeze order."""
-    raw = obj.get("ruptures") if isinstance(obj, dict) else None
-    if not isinstance(raw, list):
-        return []
-    out = [r for r in (Rupture.from_record(x) for x in raw) if r is not None]
-    return sorted(out, key=lambda r: r.squeeze_index)
 
 
 def _running_peak_index(force_n: FloatArray) -> np.ndarray:

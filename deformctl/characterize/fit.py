@@ -1,0 +1,635 @@
+"""The fit: D and λ of one object's squeezes (the paper's Kelvin model, section III.B).
+
+A squeeze is modelled as one Kelvin–Voigt element between the palms::
+
+    f(t) = D · d(t) + λ · d'(t)
+
+with ``f`` the force felt by the manipulator (N), ``d`` the total compression between the palms
+(m, see :mod:`deformctl.series`) and ``d'`` its rate (m/s). Inside the code D is a stiffness in
+N/m and λ a damping in N·s/m; results are reported in the paper's units (N/cm, N·s/cm) through
+:data:`deformctl.units.N_PER_CM` and :data:`deformctl.units.NS_PER_CM`.
+
+Two estimators:
+
+* :func:`fit_lsq` (the default): one joint linear least-squares fit of ``f = D d + λ d'`` over
+  every usable sample of every squeeze of an object. ``d`` and ``d'`` come from one
+  Savitzky–Golay local polynomial per sample (on a uniform time grid; non-uniform logs are
+  resampled linearly first), so noisy positions are differentiated robustly. Samples within half
+  a filter window of either end of a squeeze are dropped (the filter's edge fit is a one-sided
+  extrapolation whose derivative is much noisier and biased), as are samples whose compression is
+  below ``min_compression_frac`` of the squeeze's peak (before contact a log carries no
+  information about the object, and on a real rig the palms may travel in free air). Standard
+  errors are heteroscedasticity-and-autocorrelation-consistent (Newey–West, Bartlett weights,
+  bandwidth one SG window, within each squeeze): the smoothed regressors carry position noise
+  that is correlated over a window, so plain OLS errors ``s² (XᵀX)⁻¹`` come out 2–3× too small.
+  Known bias: noise in ``d'`` (errors in variables) pulls λ towards zero by roughly
+  ``var(noise in d') / mean(d'²)``; a longer window reduces it at the cost of smoothing bias.
+
+* :func:`fit_paper`: the paper's estimator. The paper defines the deformability function per
+  sample, ``D(t_m) = f(t_m) / d(t_m)`` "for all t_m", and then the damping function on the
+  residual, ``λ(t_m) = (f(t_m) − D d(t_m)) / d'(t_m)``, and reports one number per object
+  (Table II). Our reading: each squeeze's D is the *median* of the per-sample ratios over the
+  samples with non-negligible compression (the median because a ratio with a small denominator
+  has heavy tails; ``aggregate="mean"`` is available), λ is the median of the residual ratios
+  over the samples with non-negligible rate ``|d'|``, and the object's values are the means over
+  its squeezes, with the squeeze-to-squeeze standard error when there are two or more. The
+  paper does not say how it differentiates ``d``; we use the same Savitzky–Golay derivative as
+  :func:`fit_lsq`, so the two estimators differ only in the estimator. Note the bias this
+  method carries by construction: ``f/d = D + λ d'/d``, so wherever the object is still moving
+  the ratio mixes damping into D.
+
+Every fit carries its diagnostics (R², standard errors, samples, the loading range, the damping
+excitation and design condition, the preload) and quality flags
+(:mod:`deformctl.characterize.quality`): λ is NaN when it cannot be told from a constant force or
+from D, a squeeze that ruptured is fitted up to its rupture
+(:mod:`deformctl.characterize.rupture`), and the policy (warnings, ``strict``, negative D) is
+applied before a table is written. ``preload="fit"`` adds an intercept F0 (a
+contact preload) to the model; ``constrain_damping`` bounds λ ≥ 0 (``scipy.optimize.lsq_linear``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import pandas as pd
+
+from deformctl.characterize.coefficients import CoefficientFit, _coefficient_frame
+from deformctl.characterize.quality import PAPER_MONOTONIC_FRAC, damping_identifiable
+from deformctl.characterize.rupture import Rupture, cut_rupture_smoothed
+from deformctl.errors import InputDataError, UsageError
+from deformctl.series import FloatArray, SqueezeSeries
+from deformctl.signals import noise_std, sg_smooth, sg_window_length, uniform_grid
+from deformctl.units import N_PER_CM, NS_PER_CM
+
+Method = Literal["lsq", "paper"]
+
+
+Preload = Literal["fit", "zero"]
+PRELOADS: tuple[str, ...] = ("fit", "zero")
+
+#: Default Savitzky–Golay window, s. Long enough that the derivative of 0.05 mm position noise is
+#: small against squeeze rates of a few mm/s (noise in ``d'`` biases λ low, see ``fit_lsq``), short
+#: enough that a cubic follows a squeeze of a few seconds (cubic smoothing bias < 0.1 % in tests).
+DEFAULT_WINDOW_S = 0.2
+#: Sample rate the default window was chosen for, Hz (see :func:`default_window_s`).
+DEFAULT_WINDOW_RATE_HZ = 1000.0
+#: Default Savitzky–Golay polynomial order (cubic: exact for d through a smooth corner).
+DEFAULT_POLYORDER = 3
+#: Samples with compression below this fraction of the squeeze's peak compression are not used.
+DEFAULT_MIN_COMPRESSION_FRAC = 0.02
+#: Paper method: samples with |d'| below this fraction of the peak |d'| are not used for λ.
+DEFAULT_MIN_RATE_FRAC = 0.05
+#: A squeeze whose peak compression is at or below this is "no compression", m.
+NO_COMPRESSION_M = 1e-6
+#: ... or at or below this multiple of the estimated position noise std (max of pure noise ≈ 4σ).
+NO_COMPRESSION_NOISE_MULT = 6.0
+#: Fewest samples a squeeze must have (before trimming).
+MIN_SAMPLES = 10
+#: Relative spread of the sampling interval above which a log is resampled to a uniform grid.
+UNIFORM_DT_RTOL = 1e-3
+#: Condition number of ``XᵀX`` of ``[d, d']`` above which D cannot be estimated at all.
+COLLINEAR_COND = 1e12
+
+
+@dataclass(frozen=True)
+class _Prepared:
+    """One validated squeeze on a uniform grid with SG-smoothed compression and rate.
+
+    All arrays ``[m]`` after trimming half a window at each end; ``rupture`` is where the
+    squeeze was cut (None when it did not rupture).
+    """
+
+    force_n: FloatArray
+    compression_m: FloatArray
+    rate_m_per_s: FloatArray
+    window_samples: int
+    rupture: Rupture | None = None
+
+
+def _where(s: SqueezeSeries) -> str:
+    return f"squeeze {s.object_id!r} #{s.squeeze_index}"
+
+
+def validate_squeeze(s: SqueezeSeries, *, min_samples: int = MIN_SAMPLES) -> None:
+    """Refuse a squeeze that cannot be characterised.
+
+    Raises:
+        InputDataError: too few samples, NaN/inf samples, timestamps that do not strictly
+            increase, or no compression (peak compression ≤ :data:`NO_COMPRESSION_M`); a
+            compression that is mostly negative is named as having the wrong sign.
+    """
+    if len(s) < min_samples:
+        raise InputDataError(f"{_where(s)}: only {len(s)} samples, need at least {min_samples}")
+    for name in ("time_s", "force_n", "compression_m"):
+        arr: FloatArray = getattr(s, name)
+        bad = np.flatnonzero(~np.isfinite(arr))
+        if bad.size:
+            raise InputDataError(
+                f"{_where(s)}: {bad.size} non-finite (NaN/inf) {name} sample(s), first at index "
+                f"{int(bad[0])}"
+            )
+    dt = np.diff(s.time_s)
+    bad = np.flatnonzero(dt <= 0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise InputDataError(
+            f"{_where(s)}: non-monotonic timestamps, time_s[{i}]={s.time_s[i]:.9g} s does not "
+            f"follow time_s[{i - 1}]={s.time_s[i - 1]:.9g} s"
+        )
+    peak_m = float(np.max(s.compression_m))
+    noise_m = _noise_std_m(s.compression_m)
+    low_m = float(np.min(s.compression_m))
+    if -low_m > max(peak_m, NO_COMPRESSION_NOISE_MULT * noise_m, NO_COMPRESSION_M):
+        raise InputDataError(
+            f"{_where(s)}: no compression: it has the wrong sign (down to {low_m:.3g} m, at most "
+            f"{peak_m:.3g} m): it must be positive when squeezed; re-measure with the "
+            "position direction flipped (measure --position-increases-when)"
+        )
+    if peak_m <= max(NO_COMPRESSION_M, NO_COMPRESSION_NOISE_MULT * noise_m):
+        raise InputDataError(
+            f"{_where(s)}: no compression (peak compression {peak_m:.3g} m, position noise "
+            f"{noise_m:.3g} m); the palms did not squeeze the object, or compression has the "
+            "wrong sign (it must be positive when squeezed)"
+        )
+
+
+#: Robust white-noise std of a sampled signal, m (see :func:`deformctl.signals.noise_std`).
+_noise_std_m = noise_std
+
+
+def _uniform(s: SqueezeSeries) -> tuple[float, FloatArray, FloatArray]:
+    """Return ``(dt_s, force_n [m], compression_m [m])`` on a uniform grid.
+
+    A log whose sampling interval varies by more than :data:`UNIFORM_DT_RTOL` is linearly
+    resampled onto the grid ``t0 + k · median(dt)``.
+    """
+    dt_s, _, (force_n, comp_m) = uniform_grid(s.time_s, s.force_n, s.compression_m)
+    return dt_s, force_n, comp_m
+
+
+_window_length = sg_window_length
+
+
+def _prepare(
+    s: SqueezeSeries, *, window_s: float, polyorder: int, min_compression_frac: float
+) -> _Prepared:
+    """Validate, cut at a rupture, resample, differentiate, trim the edges and mask small d."""
+    validate_squeeze(s)
+    s, rupture, smoothed = cut_rupture_smoothed(s, window_s=window_s)
+    dt_s, force_n, comp_m = _uniform(s)
+    wl = _window_length(window_s, dt_s, polyorder)
+    if force_n.shape[0] < 2 * wl:
+        rate_hz = 1.0 / dt_s
+        why = (
+            f"; the sample rate {rate_hz:.3g} Hz is implausible: is the time unit right?"
+            if not 1.0 <= rate_hz <= 1e5
+            else f" (cut at a rupture, {rupture.describe()})"
+            if rupture is not None
+            else " (use a shorter window)"
+        )
+        raise InputDataError(
+            f"{_where(s)}: only {force_n.shape[0]} samples on the uniform grid, need at least "
+            f"{2 * wl} for a {wl}-sample Savitzky–Golay window{why}"
+        )
+    if (
+        smoothed is not None
+        and (smoothed.dt_s, smoothed.window_samples, smoothed.polyorder) == (dt_s, wl, polyorder)
+        and smoothed.compression_m.shape == comp_m.shape
+    ):  # the rupture search smoothed this very squeeze so already
+        d_m, rate = smoothed.compression_m, smoothed.rate_m_per_s
+    else:
+        d_m, rate = sg_smooth(comp_m, wl, polyorder, dt_s)
+    half = wl // 2
+    core = slice(half, force_n.shape[0] - half)
+    f, d, v = force_n[core], d_m[core], rate[core]
+    keep = d > min_compression_frac * float(np.max(d))
+    return _Prepared(
+        force_n=f[keep],
+        compression_m=d[keep],
+        rate_m_per_s=v[keep],
+        window_samples=wl,
+        rupture=rupture,
+    )
+
+
+def _check_options(window_s: float, polyorder: int, min_compression_frac: float) -> None:
+    if not window_s > 0:
+        raise UsageError(f"window_s must be > 0, got {window_s}")
+    if polyorder < 1:
+        raise UsageError(f"polyorder must be >= 1 (the fit needs a derivative), got {polyorder}")
+    if not 0 <= min_compression_frac < 1:
+        raise UsageError(f"min_compression_frac must be in [0, 1), got {min_compression_frac}")
+
+
+def _hac_meat(x: FloatArray, resid: FloatArray, lags: int) -> FloatArray:
+    """Newey–West (Bartlett) estimate of ``Σ_t Σ_s w_|t−s| (x_t e_t)(x_s e_s)ᵀ``, ``[p, p]``.
+
+    Args:
+        x: regressors of one squeeze, ``[m, p]``.
+        resid: residuals ``[m]``.
+        lags: bandwidth in samples (the SG window: the span over which smoothed regressors,
+            and so residuals, are correlated).
+    """
+    u = x * resid[:, None]
+    meat = u.T @ u
+    for lag in range(1, min(lags, u.shape[0] - 1) + 1):
+        g = u[lag:].T @ u[:-lag]
+        meat += (1.0 - lag / (lags + 1)) * (g + g.T)
+    return np.asarray(meat, dtype=np.float64)
+
+
+def _r2(f: FloatArray, pred: FloatArray) -> float:
+    ss_tot = float(np.sum((f - f.mean()) ** 2))
+    ss_res = float(np.sum((f - pred) ** 2))
+    return 1.0 - ss_res / ss_tot if ss_tot > 0 else float("nan")
+
+
+def _require(squeezes: Sequence[SqueezeSeries]) -> None:
+    if len(squeezes) == 0:
+        raise InputDataError("no squeezes to characterize")
+    ids = {s.object_id for s in squeezes}
+    if len(ids) > 1:
+        raise InputDataError(f"squeezes of several objects in one fit: {sorted(ids)}")
+
+
+def _unit_rms(x: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """``x`` with unit-RMS columns, and the column scales (1 for an all-zero column)."""
+    scale = np.sqrt(np.mean(x * x, axis=0))
+    scale = np.where(scale > 0, scale, 1.0)
+    return x / scale, scale
+
+
+def _lstsq(x: FloatArray, f: FloatArray) -> FloatArray:
+    """Least-squares coefficients of ``f ≈ x c`` (columns scaled for conditioning)."""
+    xs, scale = _unit_rms(x)
+    coef, *_ = np.linalg.lstsq(xs, f, rcond=None)
+    return np.asarray(coef / scale, dtype=np.float64)
+
+
+def _hac_cov(x: FloatArray, resid: FloatArray, prepared: Sequence[_Prepared]) -> FloatArray:
+    """Newey–West covariance of the coefficients of ``f ≈ x c``, within each squeeze, ``[p, p]``."""
+    xs, scale = _unit_rms(x)
+    p = x.shape[1]
+    meat = np.zeros((p, p))
+    start = 0
+    for prep in prepared:
+        stop = start + prep.force_n.shape[0]
+        meat += _hac_meat(xs[start:stop], resid[start:stop], prep.window_samples)
+        start = stop
+    n = x.shape[0]
+    bread = np.linalg.pinv(xs.T @ xs)
+    cov = bread @ meat @ bread * (n / max(n - p, 1))
+    return np.asarray(cov / np.outer(scale, scale), dtype=np.float64)
+
+
+def damping_excitation(compression_m: FloatArray, rate_m_per_s: FloatArray) -> float:
+    """Share of the rate's mean square not explained by a constant and by d, in [0, 1].
+
+    ``‖d' − P d'‖² / ‖d'‖²`` with ``P`` the projection onto ``[1, d]``: 0 for a constant rate
+    (``λ d'`` is then a constant force) or a rate that follows d, 1 for a rate independent of
+    both (a load–unload cycle). See :func:`deformctl.characterize.quality.damping_identifiable`.
+    """
+    total = float(rate_m_per_s @ rate_m_per_s)
+    if not total > 0:
+        return 0.0
+    a = np.column_stack([np.ones_like(compression_m), compression_m])
+    coef, *_ = np.linalg.lstsq(a, rate_m_per_s, rcond=None)
+    resid = rate_m_per_s - a @ coef
+    return float(min(1.0, (resid @ resid) / total))
+
+
+def _relative_change(a: float, b: float) -> float:
+    big = max(abs(a), abs(b))
+    return abs(a - b) / big if big > 0 else 0.0
+
+
+def _ranges(f: FloatArray, d: FloatArray) -> dict[str, float]:
+    """The loading range used: d (cm) and f (N) extremes, keyed as the row's columns."""
+    return {
+        "compression_min_cm": float(np.min(d)) * 100.0,
+        "compression_max_cm": float(np.max(d)) * 100.0,
+        "force_min_n": float(np.min(f)),
+        "force_max_n": float(np.max(f)),
+    }
+
+
+def _ruptures(prepared: Sequence[_Prepared]) -> tuple[Rupture, ...]:
+    return tuple(p.rupture for p in prepared if p.rupture is not None)
+
+
+def fit_lsq(
+    squeezes: Sequence[SqueezeSeries],
+    *,
+    window_s: float = DEFAULT_WINDOW_S,
+    polyorder: int = DEFAULT_POLYORDER,
+    min_compression_frac: float = DEFAULT_MIN_COMPRESSION_FRAC,
+    preload: Preload = "zero",
+    constrain_damping: bool = False,
+) -> CoefficientFit:
+    """Joint least-squares fit of ``f = D d + λ d'`` (``+ F0`` with a preload) over all squeezes.
+
+    Besides D, λ and their standard errors the fit reports its diagnostics: R², the damping
+    excitation and design condition, the loading range used, and whether λ is identifiable. λ
+    is unidentifiable (NaN, flag ``damping_unidentifiable``) when it cannot be told from a
+    constant force or from D (:func:`deformctl.characterize.quality.damping_identifiable`): to
+    judge, the fit is made both with and without the preload intercept. A squeeze that ruptured
+    is fitted up to its rupture (:func:`deformctl.characterize.rupture.cut_rupture`).
+
+    Args:
+        squeezes: the object's squeezes (same ``object_id``), each with ``time_s``, ``force_n``
+            and ``compression_m`` of shape ``[n]``.
+        window_s: Savitzky–Golay window, s (rounded to an odd number of samples).
+        polyorder: Savitzky–Golay polynomial order.
+        min_compression_frac: drop samples with compression below this fraction of the
+            squeeze's peak.
+        preload: ``"zero"`` (the force is 0 at zero compression) or ``"fit"`` (an intercept
+            F0: a contact preload at the start of the squeeze, reported as ``preload_n``).
+        constrain_damping: fit with λ ≥ 0 (bounded least squares, ``scipy.optimize.lsq_linear``);
+            ``damping_bound_active`` says whether the bound held λ at 0.
+
+    Returns:
+        The fit in N/cm and N·s/cm with Newey–West standard errors and its diagnostics.
+
+    Raises:
+        InputDataError: a squeeze that fails :func:`validate_squeeze`, is shorter than two
+            filter windows, or a set of samples that cannot separate D from λ at all.
+        UsageError: an invalid option value.
+    """
+    _check_options(window_s, polyorder, min_compression_frac)
+    if preload not in PRELOADS:
+        raise UsageError(f"preload must be 'fit' or 'zero', got {preload!r}")
+    _require(squeezes)
+    prepared = [
+        _prepare(
+            s, window_s=window_s, polyorder=polyorder, min_compression_frac=min_compression_frac
+        )
+        for s in squeezes
+    ]
+    f = np.concatenate([p.force_n for p in prepared])
+    d = np.concatenate([p.compression_m for p in prepared])
+    v = np.concatenate([p.rate_m_per_s for p in prepared])
+    n = f.shape[0]
+    if n < 3:
+        raise InputDataError(f"object {squeezes[0].object_id!r}: only {n} usable samples")
+    x2 = np.column_stack([d, v])
+    cond = np.linalg.cond(x2.T @ x2)
+    if not np.isfinite(cond) or cond > COLLINEAR_COND:
+        raise InputDataError(
+            f"object {squeezes[0].object_id!r}: compression and its rate are collinear "
+            "(the force profile does not excite the damping term); cannot separate D from λ"
+        )
+    x3 = np.column_stack([np.ones(n), d, v])
+    excitation = damping_excitation(d, v)
+    sensitivity = _relative_change(float(_lstsq(x2, f)[1]), float(_lstsq(x3, f)[2]))
+    identifiable = damping_identifiable(excitation, sensitivity)
+    x = x3 if preload == "fit" else x2
+    lam_col = x.shape[1] - 1
+    coef = _lstsq(x, f)
+    bound_active = False
+    if constrain_damping and identifiable:
+        from scipy.optimize import lsq_linear
+
+        xs, scale = _unit_rms(x)
+        lower = np.full(x.shape[1], -np.inf)
+        lower[lam_col] = 0.0
+        res = lsq_linear(xs, f, bounds=(lower, np.inf))
+        coef = np.asarray(res.x / scale, dtype=np.float64)
+        bound_active = bool(res.active_mask[lam_col] != 0)
+    if bound_active:  # λ = 0: the rest is the fit without the damping column
+        x_fit = np.delete(x, lam_col, axis=1)
+        coef_fit = _lstsq(x_fit, f)
+        coef = np.insert(coef_fit, lam_col, 0.0)
+        cov = _hac_cov(x_fit, f - x_fit @ coef_fit, prepared)
+        se = np.insert(np.sqrt(np.diag(cov)), lam_col, math.nan)
+    else:
+        cov = _hac_cov(x, f - x @ coef, prepared)
+        se = np.sqrt(np.diag(cov))
+    pred = x @ coef
+    lam, lam_se = float(coef[lam_col]), float(se[lam_col])
+    if not identifiable:
+        lam, lam_se = math.nan, math.nan
+    return CoefficientFit(
+        deformability_n_per_cm=float(coef[lam_col - 1]) / N_PER_CM,
+        damping_ns_per_cm=lam / NS_PER_CM,
+        method="lsq",
+        deformability_se_n_per_cm=float(se[lam_col - 1]) / N_PER_CM,
+        damping_se_ns_per_cm=lam_se / NS_PER_CM,
+        r2=_r2(f, pred),
+        n_samples=n,
+        n_squeezes=len(squeezes),
+        preload_n=float(coef[0]) if preload == "fit" else math.nan,
+        damping_excitation=excitation,
+        design_condition=float(np.linalg.cond(_unit_rms(x)[0])),
+        damping_bound_active=bound_active,
+        damping_unidentifiable=not identifiable,
+        window_samples=max(p.window_samples for p in prepared),
+        ruptures=_ruptures(prepared),
+    ).with_ranges(_ranges(f, d))
+
+
+def _monotonic(rate: FloatArray) -> bool:
+    """Whether the rate has one sign on all but :data:`PAPER_MONOTONIC_FRAC` of its samples."""
+    if rate.size == 0:
+        return True
+    minority = min(float(np.mean(rate > 0)), float(np.mean(rate < 0)))
+    return minority < PAPER_MONOTONIC_FRAC
+
+
+def fit_paper(
+    squeezes: Sequence[SqueezeSeries],
+    *,
+    aggregate: Literal["median", "mean"] = "median",
+    window_s: float = DEFAULT_WINDOW_S,
+    polyorder: int = DEFAULT_POLYORDER,
+    min_compression_frac: float = DEFAULT_MIN_COMPRESSION_FRAC,
+    min_rate_frac: float = DEFAULT_MIN_RATE_FRAC,
+) -> CoefficientFit:
+    """The paper's estimator: D from ``f/d``, then λ from ``(f − D d)/d'`` (section III.B).
+
+    Per squeeze: ``D_i = agg(f/d)`` over the samples with compression above
+    ``min_compression_frac`` of the peak, ``λ_i = agg((f − D_i d)/d')`` over those samples whose
+    ``|d'|`` is above ``min_rate_frac`` of the squeeze's peak ``|d'|``; ``agg`` is the median (or
+    the mean). The object's D and λ are the means over squeezes; their standard errors are the
+    squeeze-to-squeeze standard deviations over ``√n`` (NaN for a single squeeze). R² is that of
+    ``D d + λ d'`` on the samples used for D. See the module docstring for why this is biased.
+
+    A squeeze whose rate keeps one sign (a monotonic loading, see
+    :data:`deformctl.characterize.quality.PAPER_MONOTONIC_FRAC`) gives no λ: its residual ratio is
+    pinned near 0 by construction. λ is the mean over the other squeezes, NaN with the flag
+    ``damping_unidentifiable`` when there are none.
+
+    Args:
+        squeezes: the object's squeezes, arrays ``[n]``.
+        aggregate: ``"median"`` (default) or ``"mean"`` of the per-sample ratios.
+        window_s: Savitzky–Golay window for ``d'``, s.
+        polyorder: Savitzky–Golay polynomial order.
+        min_compression_frac: minimum compression, as a fraction of the squeeze's peak.
+        min_rate_frac: minimum ``|d'|`` for the λ ratios, as a fraction of the peak ``|d'|``.
+
+    Returns:
+        The fit in N/cm and N·s/cm.
+
+    Raises:
+        InputDataError: as :func:`fit_lsq`.
+        UsageError: an invalid option value.
+    """
+    _check_options(window_s, polyorder, min_compression_frac)
+    if aggregate not in ("median", "mean"):
+        raise UsageError(f"aggregate must be 'median' or 'mean', got {aggregate!r}")
+    if not 0 <= min_rate_frac < 1:
+        raise UsageError(f"min_rate_frac must be in [0, 1), got {min_rate_frac}")
+    _require(squeezes)
+    agg = np.median if aggregate == "median" else np.mean
+    d_list: list[float] = []
+    lam_list: list[float] = []
+    fs: list[FloatArray] = []
+    ds: list[FloatArray] = []
+    vs: list[FloatArray] = []
+    preds: list[FloatArray] = []
+    prepared: list[_Prepared] = []
+    for s in squeezes:
+        p = _prepare(
+            s, window_s=window_s, polyorder=polyorder, min_compression_frac=min_compression_frac
+        )
+        if p.force_n.shape[0] < 3:
+            raise InputDataError(f"{_where(s)}: only {p.force_n.shape[0]} usable samples")
+        prepared.append(p)
+        d_i = float(agg(p.force_n / p.compression_m))
+        abs_rate = np.abs(p.rate_m_per_s)
+        moving = abs_rate > min_rate_frac * float(np.max(abs_rate))
+        if not np.any(moving):
+            raise InputDataError(f"{_where(s)}: compression never changes; no damping estimate")
+        if _monotonic(p.rate_m_per_s[moving]):
+            lam_i = math.nan
+        else:
+            resid = p.force_n[moving] - d_i * p.compression_m[moving]
+            lam_i = float(agg(resid / p.rate_m_per_s[moving]))
+        d_list.append(d_i)
+        lam_list.append(lam_i)
+        fs.append(p.force_n)
+        ds.append(p.compression_m)
+        vs.append(p.rate_m_per_s)
+        lam_pred = 0.0 if math.isnan(lam_i) else lam_i
+        preds.append(d_i * p.compression_m + lam_pred * p.rate_m_per_s)
+    d_arr = np.asarray(d_list)
+    lam_arr = np.asarray([x for x in lam_list if not math.isnan(x)])
+    k, k_lam = d_arr.shape[0], lam_arr.shape[0]
+    se_d = float(np.std(d_arr, ddof=1) / math.sqrt(k)) if k > 1 else float("nan")
+    se_l = float(np.std(lam_arr, ddof=1) / math.sqrt(k_lam)) if k_lam > 1 else float("nan")
+    f_all, d_all, v_all = np.concatenate(fs), np.concatenate(ds), np.concatenate(vs)
+    x = np.column_stack([d_all, v_all])
+    return CoefficientFit(
+        deformability_n_per_cm=float(d_arr.mean()) / N_PER_CM,
+        damping_ns_per_cm=(float(lam_arr.mean()) if k_lam else math.nan) / NS_PER_CM,
+        method="paper",
+        deformability_se_n_per_cm=se_d / N_PER_CM,
+        damping_se_ns_per_cm=se_l / NS_PER_CM,
+        r2=_r2(f_all, np.concatenate(preds)),
+        n_samples=int(f_all.shape[0]),
+        n_squeezes=k,
+        damping_excitation=damping_excitation(d_all, v_all),
+        design_condition=float(np.linalg.cond(_unit_rms(x)[0])),
+        damping_unidentifiable=k_lam == 0,
+        window_samples=max(p.window_samples for p in prepared),
+        ruptures=_ruptures(prepared),
+    ).with_ranges(_ranges(f_all, d_all))
+
+
+def characterize(
+    squeezes_by_object: Mapping[str, Sequence[SqueezeSeries]],
+    method: Method = "lsq",
+    *,
+    preload: Preload | Mapping[str, Preload] = "zero",
+    constrain_damping: bool = False,
+    recorded_ruptures: Mapping[str, Sequence[Rupture]] | None = None,
+    **options: float,
+) -> pd.DataFrame:
+    """Fit every object's squeezes and return the coefficient table.
+
+    Args:
+        squeezes_by_object: object id → that object's squeezes.
+        method: ``"lsq"`` (default, :func:`fit_lsq`) or ``"paper"`` (:func:`fit_paper`).
+        preload: lsq only: ``"zero"`` or ``"fit"``, for every object or per object id.
+        constrain_damping: lsq only: fit with λ ≥ 0.
+        recorded_ruptures: object id → the ruptures ``measure`` cut off (from the log); they
+            count for the ``rupture`` flag and the rupture columns with those found here.
+        **options: passed to the estimator (``window_s``, ``polyorder``, ...).
+
+    Returns:
+        One row per object, columns :data:`COEFFICIENT_COLUMNS` (coefficients in N/cm, N·s/cm;
+        ``quality`` is ``ok`` or the flags of :mod:`deformctl.characterize.quality`).
+
+    Raises:
+        UsageError: an unknown method, or a preload or damping bound with ``method="paper"``.
+        InputDataError: any object whose squeezes cannot be fitted (the message names it).
+    """
+    rows = _fit_rows(
+        squeezes_by_object,
+        method,
+        preload=preload,
+        constrain_damping=constrain_damping,
+        recorded_ruptures=recorded_ruptures,
+        **options,
+    )
+    return _coefficient_frame(rows)
+
+
+def _fit_rows(
+    squeezes_by_object: Mapping[str, Sequence[SqueezeSeries]],
+    method: Method,
+    *,
+    preload: Preload | Mapping[str, Preload],
+    constrain_damping: bool,
+    recorded_ruptures: Mapping[str, Sequence[Rupture]] | None,
+    **options: float,
+) -> list[dict[str, object]]:
+    """The rows of :func:`characterize`, one per object."""
+    if method not in ("lsq", "paper"):
+        raise UsageError(f"unknown method {method!r}; expected 'lsq' or 'paper'")
+    if method == "paper" and (preload == "fit" or constrain_damping):
+        raise UsageError("the paper estimator has no preload or damping bound; use --method lsq")
+    rows: list[dict[str, object]] = []
+    for object_id, squeezes in squeezes_by_object.items():
+        if method == "lsq":
+            mode = preload if isinstance(preload, str) else preload.get(object_id, "zero")
+            fit = fit_lsq(squeezes, preload=mode, constrain_damping=constrain_damping, **options)  # type: ignore[arg-type]
+        else:
+            fit = fit_paper(squeezes, **options)  # type: ignore[arg-type]
+        recorded = list((recorded_ruptures or {}).get(object_id, ()))
+        if recorded:
+            merged = sorted([*recorded, *fit.ruptures], key=lambda r: r.squeeze_index)
+            fit = dataclasses.replace(fit, ruptures=tuple(merged))
+        rows.append(fit.row(object_id))
+    return rows
+
+
+def default_window_s(position_rate_hz: float | None) -> float:
+    """The Savitzky–Golay window for a log whose positions were sampled at ``position_rate_hz``.
+
+    A squeeze log from a rig may carry positions sampled far more slowly than its forces (a
+    100 Hz pose topic beside a 1 kHz wrench topic); ingestion interpolates them onto the force
+    timestamps, so a window of ``T`` seconds holds only ``N = rate · T`` independent position
+    samples. The noise variance of an SG derivative scales as ``σ² / (N T²) = σ² / (rate T³)``,
+    and that noise biases λ low (see :func:`fit_lsq`). The default keeps it at the level of
+    :data:`DEFAULT_WINDOW_S` at :data:`DEFAULT_WINDOW_RATE_HZ`::
+
+        T = DEFAULT_WINDOW_S · (DEFAULT_WINDOW_RATE_HZ / rate)^(1/3),  never below DEFAULT_WINDOW_S
+
+    (100 Hz → 0.43 s, 500 Hz → 0.25 s, ≥ 1 kHz → 0.2 s). A longer window costs smoothing bias
+    at the corners of the force profile, so squeezes should last several windows.
+
+    Args:
+        position_rate_hz: position sample rate, Hz; None (unknown) gives the default.
+
+    Returns:
+        The window, s.
+    """
+    if position_rate_hz is None or not math.isfinite(position_rate_hz) or position_rate_hz <= 0:
+        return DEFAULT_WINDOW_S
+    scale = (DEFAULT_WINDOW_RATE_HZ / position_rate_hz) ** (1.0 / 3.0)
+    return DEFAULT_WINDOW_S * max(1.0, scale)

@@ -1,0 +1,438 @@
+"""The ``characterize`` stage: squeeze logs in, the coefficients table out.
+
+:func:`read_and_characterize` fits every object of a squeeze log (the window and preload chosen
+per object from what the log stores: :func:`~deformctl.characterize.fit.default_window_s`,
+:func:`default_preload`), :func:`characterize_dir` those of a ``measure`` dataset directory, and
+:func:`characterize_file` writes their table; at scale, :class:`CharacterizeTask` is the sweep task
+of one object and :func:`characterize_sweep` writes a coefficients dataset directory.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from deformctl.artifacts import check_output_path, write_table
+from deformctl.artifacts.dataset import (
+    MANIFEST_NAME,
+    dataset_fingerprint,
+    dataset_log_paths,
+    iter_dataset_parts,
+    part_log_path,
+    spec_rows,
+    table_schema,
+)
+from deformctl.artifacts.provenance import Provenance, sha256_file
+from deformctl.characterize.coefficients import _coefficient_frame
+from deformctl.characterize.fit import PRELOADS, Method, Preload, _fit_rows, default_window_s
+from deformctl.characterize.quality import check_policy, enforce
+from deformctl.errors import InputDataError, MissingInputError, UsageError
+from deformctl.parallel import SweepOptions, SweepSummary, run_sweep
+from deformctl.series import SqueezeSeries, ruptures_from_object
+
+
+@dataclass(frozen=True)
+class LogCoefficients:
+    """What :func:`read_and_characterize` found in one squeeze log.
+
+    Attributes:
+        table: one row per object, columns :data:`COEFFICIENT_COLUMNS`, in log order.
+        window_s: object id → the Savitzky–Golay window used, s.
+        position_rate_hz: object id → the position sample rate stored in the log, Hz (None
+            when the log does not say).
+        preload: object id → the preload mode used (``fit`` or ``zero``; lsq only).
+        warnings: one line per flagged object (``<file>: object 'X': <flags>``), for stderr.
+    """
+
+    table: pd.DataFrame
+    window_s: dict[str, float]
+    position_rate_hz: dict[str, float | None]
+    preload: dict[str, str] = dataclasses.field(default_factory=dict)
+    warnings: list[str] = dataclasses.field(default_factory=list)
+
+
+def _stored_rate(obj: Mapping[str, object] | None) -> float | None:
+    value = None if obj is None else obj.get("position_rate_hz")
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        return float(value)
+    return None
+
+
+#: The ``source`` a squeeze log's object row carries when ``measure`` read a rig recording.
+RIG_SOURCES = ("ros2_bag", "csv")
+
+
+def default_preload(obj: Mapping[str, object] | None) -> Preload:
+    """The preload mode of an object whose log does not choose one: ``fit`` for rig recordings.
+
+    A rig's palms may already press on the object when its compression zero is taken (a testing
+    machine starts at a seating preload); ignored, a preload of 1 % of the peak force raises D by
+    1–3 % and one of 5 % by 6–15 % (synthetic Kelvin–Voigt squeezes), while fitting it costs
+    at most 0.3 % on squeezes without one. Simulated squeezes start from rest at exactly zero force,
+    so their preload is known to be 0 (``zero``): there an intercept would only absorb the
+    lattice's departure from Kelvin–Voigt (it moves the simulator's D by −0.3 to −2.2 %). Logs that
+    do not say where they came from (written before ``source`` was stored) keep ``zero``.
+    """
+    source = None if obj is None else obj.get("source")
+    return "fit" if source in RIG_SOURCES else "zero"
+
+
+def _check_fit_options(method: str, window_s: float | None, preload: str | None) -> None:
+    if method not in ("lsq", "paper"):
+        raise UsageError(f"unknown method {method!r}; expected 'lsq' or 'paper'")
+    if window_s is not None and not (math.isfinite(window_s) and window_s > 0):
+        raise UsageError(f"window must be a finite number > 0 s, got {window_s}")
+    if preload is not None and preload not in PRELOADS:
+        raise UsageError(f"--preload must be fit or zero, got {preload!r}")
+
+
+def _fit_object(
+    oid: str,
+    group: Sequence[SqueezeSeries],
+    obj: Mapping[str, object] | None,
+    method: str,
+    *,
+    window_s: float,
+    preload: Preload | None,
+    constrain_damping: bool,
+) -> tuple[dict[str, object], str]:
+    """One object's coefficients row (see :func:`characterize`) and the preload mode used."""
+    mode: Preload = preload if preload is not None else default_preload(obj)
+    if method == "paper":
+        mode = "zero"
+    rows = _fit_rows(
+        {oid: group},
+        method,  # type: ignore[arg-type]
+        preload=mode,
+        constrain_damping=constrain_damping,
+        recorded_ruptures={oid: ruptures_from_object(dict(obj or {}))},
+        window_s=window_s,
+    )
+    return rows[0], mode
+
+
+def read_and_characterize(
+    path: str | PathLike[str],
+    method: Method = "lsq",
+    *,
+    window_s: float | None = None,
+    preload: Preload | None = None,
+    constrain_damping: bool = False,
+    strict: bool = False,
+    allow_flagged: bool = False,
+) -> LogCoefficients:
+    """Read a squeeze log (validated), group its squeezes by object and fit each object.
+
+    Args:
+        path: the squeeze-log ``.mcap``, or ``-`` for stdin (read into memory).
+        method: ``"lsq"`` (:func:`fit_lsq`) or ``"paper"`` (:func:`fit_paper`).
+        window_s: Savitzky–Golay window, s, for every object; None picks it per object from
+            the ``position_rate_hz`` the log stores for it (:func:`default_window_s`).
+        preload: lsq: ``"fit"`` or ``"zero"`` for every object; None chooses per object
+            (:func:`default_preload`). The paper method never fits a preload.
+        constrain_damping: lsq: fit with λ ≥ 0.
+        strict: any quality flag is an error (:func:`deformctl.characterize.quality.enforce`).
+        allow_flagged: keep objects with negative D (flagged) instead of refusing them.
+
+    Returns:
+        The coefficient table, the window and preload used for each object and the warning
+        lines of the flagged objects.
+
+    Raises:
+        MissingInputError: the log does not exist (exit 66).
+        InputDataError: a damaged log or one that does not match its schema, no squeezes, an
+            object whose squeezes cannot be fitted (no compression, too short, ...), an object
+            with negative D (unless ``allow_flagged``) or any flagged object with ``strict``;
+            the message names the file and the object (exit 65).
+        UsageError: an unknown method, a window that is not > 0, ``strict`` with
+            ``allow_flagged``, or a preload or bound with the paper method (exit 2).
+    """
+    from deformctl.artifacts.io import display_name
+    from deformctl.artifacts.mcap import read_squeeze_log
+
+    _check_fit_options(method, window_s, preload)
+    check_policy(strict, allow_flagged)
+    if method == "paper" and (preload == "fit" or constrain_damping):
+        raise UsageError("the paper estimator has no preload or damping bound; use --method lsq")
+    name = display_name(path)
+    objects, squeezes = read_squeeze_log(path)
+    if not squeezes:
+        raise InputDataError("the squeeze log holds no squeezes", path=name)
+    by_object: dict[str, list[SqueezeSeries]] = {}
+    for s in squeezes:
+        by_object.setdefault(s.object_id, []).append(s)
+    meta = {str(o["object_id"]): o for o in objects}
+    rates = {oid: _stored_rate(meta.get(oid)) for oid in by_object}
+    windows = {
+        oid: window_s if window_s is not None else default_window_s(rates[oid]) for oid in by_object
+    }
+    rows = []
+    modes: dict[str, str] = {}
+    for oid, group in by_object.items():
+        try:
+            row, modes[oid] = _fit_object(
+                oid,
+                group,
+                meta.get(oid),
+                method,
+                window_s=windows[oid],
+                preload=preload,
+                constrain_damping=constrain_damping,
+            )
+        except InputDataError as err:
+            if err.path is None:  # the estimators name the object; add the file
+                raise InputDataError(err.message, path=name) from err
+            raise
+        rows.append(row)
+    table = _coefficient_frame(rows)
+    warnings = enforce(table, strict=strict, allow_flagged=allow_flagged, path=name)
+    return LogCoefficients(
+        table=table, window_s=windows, position_rate_hz=rates, preload=modes, warnings=warnings
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# Squeeze-log directories and sweeps (measure --sim -o DIR/, characterize -o DIR/)
+# --------------------------------------------------------------------------------------------
+
+
+def squeeze_log_parts(path: str | PathLike[str]) -> list[Path]:
+    """The squeeze logs ``_logs/part-*.mcap`` of a ``measure`` dataset directory, in part order.
+
+    Raises:
+        InputDataError: no logs, or a part of the sweep missing (rerun measure with --resume).
+    """
+    return dataset_log_paths(path, ".mcap", what="squeeze logs", rerun="measure")
+
+
+def characterize_dir(
+    path: str | PathLike[str], method: Method = "lsq", **options: Any
+) -> LogCoefficients:
+    """:func:`read_and_characterize` of every squeeze log of a ``measure`` directory, in order.
+
+    ``options`` are those of :func:`read_and_characterize` (``window_s``, ``preload``, ...).
+    """
+    parts = [read_and_characterize(p, method, **options) for p in squeeze_log_parts(path)]
+    return LogCoefficients(
+        table=pd.concat([p.table for p in parts], ignore_index=True),
+        window_s={k: v for p in parts for k, v in p.window_s.items()},
+        position_rate_hz={k: v for p in parts for k, v in p.position_rate_hz.items()},
+        preload={k: v for p in parts for k, v in p.preload.items()},
+        warnings=[line for p in parts for line in p.warnings],
+    )
+
+
+def characterize_file(
+    log: str,
+    method: Method = "lsq",
+    *,
+    output: str,
+    window_s: float | None = None,
+    force: bool = False,
+    preload: Preload | None = None,
+    constrain_damping: bool = False,
+    strict: bool = False,
+    allow_flagged: bool = False,
+) -> LogCoefficients:
+    """``characterize LOG -o TABLE``: fit a squeeze log (or a ``measure`` directory's logs).
+
+    The quality policy is applied before anything is written (``strict``, ``allow_flagged``:
+    see :func:`read_and_characterize`); the coefficients table is then written atomically with
+    its provenance (the method, the window and preload used for each object and the position
+    sample rates behind them). The caller prints ``result.warnings``.
+
+    Raises:
+        OutputExistsError: ``output`` exists and ``force`` is false (exit 1).
+        MissingInputError, InputDataError, UsageError: see :func:`read_and_characterize`.
+    """
+    check_output_path(output, force)
+    options: dict[str, Any] = {
+        "window_s": window_s,
+        "preload": preload,
+        "constrain_damping": constrain_damping,
+        "strict": strict,
+        "allow_flagged": allow_flagged,
+    }
+    if os.path.isdir(log):
+        result = characterize_dir(log, method, **options)
+    else:
+        result = read_and_characterize(log, method, **options)
+    provenance = Provenance.from_invocation(
+        [log],
+        settings={
+            "method": method,
+            "window_s": result.window_s,
+            "window_s_option": window_s,
+            "position_rate_hz": result.position_rate_hz,
+            "preload": result.preload,
+            "preload_option": preload,
+            "constrain_damping": constrain_damping,
+        },
+    )
+    write_table(result.table, output, "coefficients", provenance=provenance, force=force)
+    return result
+
+
+def sweep_warnings(out_dir: str | PathLike[str]) -> list[str]:
+    """One warning line per flagged object of a coefficients dataset directory (parts in order).
+
+    Returns an empty list when the directory's parts cannot be read (an interrupted sweep).
+    """
+    from deformctl.errors import DeformctlError
+
+    lines: list[str] = []
+    try:
+        for table in iter_dataset_parts(out_dir):
+            lines.extend(enforce(table.to_pandas(), path=str(out_dir)))
+    except DeformctlError:
+        return []
+    return lines
+
+
+def characterize_items(path: str | PathLike[str]) -> list[dict[str, Any]]:
+    """One sweep item per object of a ``measure`` dataset: ``object_id`` and its log's path.
+
+    The objects are those with rows in the dataset (failed objects have no squeezes).
+    """
+    from deformctl.artifacts.mcap import read_squeeze_log
+
+    d = Path(path).resolve()
+    logs = squeeze_log_parts(d)
+    items: list[dict[str, Any]] = []
+    if (d / MANIFEST_NAME).is_file() and any(d.glob("part-*.parquet")):
+        for k, table in enumerate(iter_dataset_parts(d)):
+            part_log = str(part_log_path(d, k))
+            items.extend(
+                {"object_id": oid, "log_path": part_log} for oid in table["object_id"].to_pylist()
+            )
+        return items
+    for log in logs:  # no manifest: ask each log for its objects
+        objects, _ = read_squeeze_log(log)
+        items.extend({"object_id": str(o["object_id"]), "log_path": str(log)} for o in objects)
+    return items
+
+
+_LOG_CACHE: dict[tuple[str, int], tuple[dict[str, Any], dict[str, list[SqueezeSeries]]]] = {}
+
+
+def _read_log_cached(path: str) -> tuple[dict[str, Any], dict[str, list[SqueezeSeries]]]:
+    """A squeeze log's objects and squeezes by object id; the last log read is kept per process.
+
+    Items arrive in catalog order, so a worker reads each part's log about once.
+    """
+    from deformctl.artifacts.mcap import read_squeeze_log
+
+    key = (path, os.stat(path).st_mtime_ns)
+    if key not in _LOG_CACHE:
+        objects, squeezes = read_squeeze_log(path)
+        by_object: dict[str, list[SqueezeSeries]] = {}
+        for s in squeezes:
+            by_object.setdefault(s.object_id, []).append(s)
+        _LOG_CACHE.clear()
+        _LOG_CACHE[key] = ({str(o["object_id"]): o for o in objects}, by_object)
+    return _LOG_CACHE[key]
+
+
+@dataclass(frozen=True)
+class CharacterizeTask:
+    """``characterize`` for one object of a squeeze-log directory (a picklable sweep task).
+
+    Attributes:
+        method, window_s, preload, constrain_damping: as :func:`read_and_characterize`.
+        strict: a flagged object fails (recorded in ``_failures/``) instead of being written.
+        allow_flagged: write an object with negative D (flagged) instead of failing it.
+    """
+
+    method: str = "lsq"
+    window_s: float | None = None
+    preload: str | None = None
+    constrain_damping: bool = False
+    strict: bool = False
+    allow_flagged: bool = False
+
+    def __call__(self, item: dict[str, Any]) -> Any:
+        """Fit one object; its coefficients row (an Arrow table).
+
+        Raises:
+            InputDataError: the object has no squeezes, cannot be fitted, or is refused by the
+                quality policy (recorded as failed).
+        """
+        oid, log = str(item["object_id"]), str(item["log_path"])
+        meta, by_object = _read_log_cached(log)
+        group = by_object.get(oid)
+        if not group:
+            raise InputDataError(f"object {oid!r} has no squeezes", path=log)
+        rate_hz = _stored_rate(meta.get(oid))
+        window = self.window_s if self.window_s is not None else default_window_s(rate_hz)
+        try:
+            row, _ = _fit_object(
+                oid,
+                group,
+                meta.get(oid),
+                self.method,
+                window_s=window,
+                preload=self.preload,  # type: ignore[arg-type]
+                constrain_damping=self.constrain_damping,
+            )
+        except InputDataError as err:
+            if err.path is None:
+                raise InputDataError(err.message, path=log) from err
+            raise
+        df = _coefficient_frame([row])
+        enforce(df, strict=self.strict, allow_flagged=self.allow_flagged, path=log)
+        return spec_rows(df, "coefficients")
+
+
+def characterize_sweep(
+    log_dir: str,
+    task: CharacterizeTask,
+    *,
+    output: str,
+    sweep: SweepOptions,
+    force: bool = False,
+) -> SweepSummary:
+    """``characterize DIR -o OUT/``: one fit per object of a squeeze-log directory, in parallel.
+
+    Raises:
+        MissingInputError: ``log_dir`` does not exist (exit 66).
+        UsageError: ``log_dir`` is a file, or the window is not > 0 (exit 2).
+    """
+    if task.window_s is not None and not (math.isfinite(task.window_s) and task.window_s > 0):
+        raise UsageError(f"--window-s must be a finite number > 0 s, got {task.window_s}")
+    _check_fit_options(task.method, task.window_s, task.preload)
+    check_policy(task.strict, task.allow_flagged)
+    if not os.path.isdir(log_dir):
+        if not os.path.exists(log_dir):
+            raise MissingInputError("no such file or directory", path=log_dir)
+        raise UsageError(
+            "a dataset directory output (-o DIR/) needs a squeeze-log directory input "
+            "(measure --sim -o DIR/)"
+        )
+    settings = {
+        "method": task.method,
+        "window_s_option": task.window_s,
+        "preload_option": task.preload,
+        "constrain_damping": task.constrain_damping,
+        "strict": task.strict,
+        "allow_flagged": task.allow_flagged,
+    }
+    fingerprint = dataset_fingerprint(
+        "characterize", "coefficients", settings, {"log": sha256_file(log_dir)}
+    )
+    return run_sweep(
+        task,
+        characterize_items(log_dir),
+        out_dir=output,
+        schema=table_schema("coefficients"),
+        fingerprint=fingerprint,
+        force=force,
+        **sweep.run_kwargs(),
+    )

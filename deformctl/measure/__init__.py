@@ -1,0 +1,118 @@
+"""Squeeze logs from real rigs (ROS 2 MCAP bags, CSV exports) and the simulator; catalog rows from
+images.
+
+One module per source, each a reader the ``measure`` command calls:
+
+* :mod:`~deformctl.measure.ros2_bag`: :func:`read_ros2_bag` (``--bag``);
+* :mod:`~deformctl.measure.csv`: :func:`read_csv_export` (``--csv``);
+* :mod:`~deformctl.measure.sim`: :func:`simulate_squeezes` (``--sim``), squeezing catalog objects
+  in :mod:`deformctl.sim`;
+* :mod:`~deformctl.measure.images`: :func:`~deformctl.measure.images.measure_images`
+  (``--images``), an object-catalog row from a top and a side image (OpenCV, imported when used).
+
+Both recording readers return a :class:`Recording` (:mod:`~deformctl.measure.recording`: the
+squeezes in SI, the source sample rates and the ruptures; the compression from a position signal),
+cut into squeezes by :mod:`~deformctl.measure.segment` (segmentation, rupture and phase cuts).
+:mod:`~deformctl.measure.stage` writes the squeeze logs: :func:`recording_log` for a recording,
+:func:`simulate_catalog_file` for a catalog and, at scale, :class:`SimulateCatalogTask` (the sweep
+task of one object) and :func:`simulate_catalog_sweep` (a dataset directory).
+
+Every reader checks the recording's plausibility (:mod:`deformctl.plausibility`: a sample rate,
+peak force, peak compression, force axis or compression sign that a unit, axis or sign mistake
+explains is refused with the likely fix), and every squeeze is cut at a rupture and reduced to the
+``phase`` asked for (:mod:`deformctl.characterize.rupture`); the :class:`Recording` carries the
+ruptures, which the log stores with the object (:meth:`Recording.log_fields`).
+
+The public names of the readers and the stage are re-exported here.
+"""
+
+from __future__ import annotations
+
+from deformctl.measure.csv import (
+    ABSOLUTE_TIME_MIN_S,
+    FORCE_UNITS_N,
+    LENGTH_UNITS_M,
+    TIME_UNITS_S,
+    read_csv_export,
+    squeeze_from_csv,
+)
+from deformctl.measure.images import ImagesResult, measure_images
+from deformctl.measure.recording import (
+    INCREASES_WHEN,
+    Axis,
+    CompressionZero,
+    IncreasesWhen,
+    PositionIs,
+    Recording,
+)
+from deformctl.measure.ros2_bag import (
+    JOINT_STATE_TYPE,
+    POSE_TYPE,
+    WRENCH_TYPE,
+    read_ros2_bag,
+    squeeze_from_ros2_bag,
+)
+from deformctl.measure.segment import (
+    DEFAULT_FORCE_THRESHOLD_FRAC,
+    DEFAULT_MIN_GAP_S,
+    DEFAULT_MIN_SQUEEZE_S,
+    segment_squeezes,
+)
+from deformctl.measure.sim import (
+    DEFAULT_SIM_HOLD_S,
+    DEFAULT_SIM_RAMP_S,
+    DEFAULT_SIM_SQUEEZES,
+    DEFAULT_SQUEEZE_STRAIN,
+    SqueezeProgress,
+    default_peak_force_n,
+    simulate_squeezes,
+)
+from deformctl.measure.stage import (
+    LOG_SAMPLE_BYTES,
+    MEASURE_SCHEMA,
+    SimulateCatalogTask,
+    recording_log,
+    sim_provenance,
+    simulate_catalog_file,
+    simulate_catalog_sweep,
+)
+
+__all__ = [
+    "ABSOLUTE_TIME_MIN_S",
+    "DEFAULT_FORCE_THRESHOLD_FRAC",
+    "DEFAULT_MIN_GAP_S",
+    "DEFAULT_MIN_SQUEEZE_S",
+    "DEFAULT_SIM_HOLD_S",
+    "DEFAULT_SIM_RAMP_S",
+    "DEFAULT_SIM_SQUEEZES",
+    "DEFAULT_SQUEEZE_STRAIN",
+    "FORCE_UNITS_N",
+    "INCREASES_WHEN",
+    "JOINT_STATE_TYPE",
+    "LENGTH_UNITS_M",
+    "LOG_SAMPLE_BYTES",
+    "MEASURE_SCHEMA",
+    "POSE_TYPE",
+    "TIME_UNITS_S",
+    "WRENCH_TYPE",
+    "Axis",
+    "CompressionZero",
+    "ImagesResult",
+    "IncreasesWhen",
+    "PositionIs",
+    "Recording",
+    "SimulateCatalogTask",
+    "SqueezeProgress",
+    "default_peak_force_n",
+    "measure_images",
+    "read_csv_export",
+    "read_ros2_bag",
+    "recording_log",
+    "segment_squeezes",
+    "sim_provenance",
+    "simulate_catalog_file",
+    "simulate_catalog_sweep",
+    "simulate_squeezes",
+    "squeeze_from_csv",
+    "squeeze_from_ros2_bag",
+]

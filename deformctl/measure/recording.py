@@ -1,0 +1,198 @@
+"""A rig recording: what the readers return, and the compression from a position signal.
+
+Both readers (:func:`~deformctl.measure.ros2_bag.read_ros2_bag`,
+:func:`~deformctl.measure.csv.read_csv_export`) return a :class:`Recording`: the squeezes as
+``list[SqueezeSeries]`` in SI units with compression ``d`` as defined in :mod:`deformctl.series`
+(total compression between the palms, positive when squeezed), plus the source streams' sample
+rates, which ``measure`` stores with the object so that ``characterize`` can widen its
+differentiation window for slow position topics.
+
+**Where the compression comes from.** A position signal is one of:
+
+* ``gap``: the distance between the palms (e.g. a parallel gripper's opening width):
+  ``d = gap(t0) − gap(t)``.
+* ``palm``: the travel of one palm along the squeeze axis while its partner moves symmetrically
+  (mirror-image arms, as in the paper's rig): ``d = 2 · s · (p(t) − p(t0))``, with the sign
+  ``s = ±1`` chosen so that ``d`` is positive at the sample of peak force (so it does not matter
+  whether the logged palm is the left or the right one).
+* ``compression`` (CSV only): the compression itself, e.g. a testing machine's crosshead travel
+  against a fixed anvil: ``d = c(t) − c(t0)``.
+
+The zero of compression is the median position over the recording's lead-in (the samples from
+the start of the force/position overlap until the force first reaches half the segmentation
+threshold), so the recording must start with the palms touching the unloaded object
+(``compression_zero="lead_in"``, the default for bags, whose position noise would otherwise
+enter every compression through one sample), or the first sample (``"first"``, the default for
+CSV exports of testing machines, which start at the contact point). Every squeeze in a recording
+is referenced to that same zero: an object that has not fully recovered between squeezes is
+still measured from its unloaded shape.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from deformctl.characterize.rupture import PHASES
+from deformctl.errors import InputDataError, UsageError
+from deformctl.plausibility import compression_has_wrong_sign
+from deformctl.series import FloatArray, Rupture, SqueezeSeries
+
+Axis = Literal["x", "y", "z"]
+PositionIs = Literal["gap", "palm"]
+CompressionZero = Literal["first", "lead_in"]
+IncreasesWhen = Literal["closing", "opening"]
+INCREASES_WHEN: tuple[str, ...] = ("closing", "opening")
+
+
+@dataclass(frozen=True)
+class Recording:
+    """The squeezes read from one recording, with the sample rates of its source streams.
+
+    Attributes:
+        squeezes: the squeezes, in SI, as returned by :func:`squeeze_from_ros2_bag` /
+            :func:`squeeze_from_csv`.
+        force_rate_hz: median sample rate of the (first) force stream, Hz.
+        position_rate_hz: median sample rate of the position stream, Hz. Position is
+            interpolated onto the force timestamps, so a slow position stream carries fewer
+            independent samples than the squeezes have; ``characterize`` widens its
+            differentiation window for it (see :func:`deformctl.characterize.default_window_s`).
+    """
+
+    squeezes: list[SqueezeSeries]
+    force_rate_hz: float
+    position_rate_hz: float
+    source: str = ""
+    phase: str = "all"
+    ruptures: tuple[Rupture, ...] = ()
+
+    def log_fields(self) -> dict[str, Any]:
+        """What a squeeze log stores with the object besides its catalog values.
+
+        ``force_rate_hz`` and ``position_rate_hz``; ``source`` (``ros2_bag`` or ``csv``: the
+        log is a rig recording, which ``characterize`` fits with a preload by default),
+        ``phase`` and ``ruptures`` (the points where squeezes were cut, see
+        :class:`deformctl.phases.Rupture`).
+        """
+        out: dict[str, Any] = {
+            "force_rate_hz": self.force_rate_hz,
+            "position_rate_hz": self.position_rate_hz,
+        }
+        if self.source:
+            out["source"] = self.source
+        if self.phase != "all":
+            out["phase"] = self.phase
+        if self.ruptures:
+            out["ruptures"] = [r.to_record() for r in self.ruptures]
+        return out
+
+
+def _rate_hz(time_s: FloatArray) -> float:
+    """Median sample rate of increasing timestamps ``[n]`` (n ≥ 2), Hz."""
+    return float(1.0 / np.median(np.diff(time_s)))
+
+
+def _check_stream(name: str, time_s: FloatArray, values: FloatArray, path: str) -> None:
+    """Refuse NaN samples and timestamps that do not strictly increase."""
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise InputDataError(
+            f"{name}: {bad.size} NaN/inf sample(s), first at index {int(bad[0])}", path=path
+        )
+    steps = np.diff(time_s)
+    back = np.flatnonzero(steps <= 0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise InputDataError(
+            f"{name}: non-monotonic timestamps, sample {i} at {time_s[i]:.9f} s does not follow "
+            f"sample {i - 1} at {time_s[i - 1]:.9f} s",
+            path=path,
+        )
+    if time_s.shape[0] < 2:
+        raise InputDataError(f"{name}: only {time_s.shape[0]} sample(s)", path=path)
+
+
+def _unloaded_reference(position: FloatArray, force_n: FloatArray, threshold_frac: float) -> float:
+    """Position of the unloaded object: the median over the lead-in before the first squeeze.
+
+    The lead-in is the run of samples from the start whose force stays below half the
+    segmentation threshold; one noisy sample would put its noise into every compression.
+    """
+    peak = float(np.max(force_n))
+    loaded = np.flatnonzero(force_n >= 0.5 * threshold_frac * peak)
+    n_lead = int(loaded[0]) if loaded.size else position.shape[0]
+    return float(np.median(position[: max(n_lead, 1)]))
+
+
+def _convention(kind: str, increases_when: str | None) -> str | None:
+    """When the position grows for a position kind: ``closing``, ``opening`` or None (auto)."""
+    if increases_when is not None:
+        if increases_when not in INCREASES_WHEN:
+            raise UsageError(
+                f"position_increases_when must be closing or opening, got {increases_when!r}"
+            )
+        return increases_when
+    return {"gap": "opening", "compression": "closing"}.get(kind)
+
+
+def _compression(
+    position: FloatArray,
+    force_n: FloatArray,
+    kind: str,
+    path: str,
+    threshold_frac: float,
+    zero: str,
+    increases_when: str | None = None,
+    what: str = "the position",
+) -> FloatArray:
+    """Compression ``[n]`` (m) from a gap, a symmetric palm's travel, or a direct compression.
+
+    ``increases_when`` says whether the position grows as the gripper closes or opens; None
+    means the kind's convention (a gap grows when opening, a compression when closing) or, for
+    one palm's travel, the sign that makes d positive at the peak force.
+
+    Raises:
+        InputDataError: the position never moves, or d is negative where the object is loaded
+            (the message names the ``--position-increases-when`` that flips it).
+    """
+    if zero == "first":
+        rel = position - position[0]
+    elif zero == "lead_in":
+        rel = position - _unloaded_reference(position, force_n, threshold_frac)
+    else:
+        raise UsageError(f"compression_zero must be 'first' or 'lead_in', got {zero!r}")
+    if kind not in ("gap", "palm", "compression"):
+        raise UsageError(f"unknown position kind {kind!r}; expected 'gap' or 'palm'")
+    convention = _convention(kind, increases_when)
+    if convention is None:  # one palm, auto: positive at the peak force
+        peak = int(np.argmax(force_n))
+        sign = 1.0 if rel[peak] >= 0 else -1.0
+    else:
+        sign = 1.0 if convention == "closing" else -1.0
+    d = (2.0 if kind == "palm" else 1.0) * sign * rel
+    if float(np.max(np.abs(d))) <= 0.0:
+        raise InputDataError(
+            "no compression: the position signal never moves (zero displacement)", path=path
+        )
+    if convention is not None and compression_has_wrong_sign(d, force_n):
+        other = "opening" if convention == "closing" else "closing"
+        loaded = float(np.median(d[force_n >= 0.5 * float(np.max(force_n))]))
+        raise InputDataError(
+            f"compression has the wrong sign: {what} moves the other way as the force rises "
+            f"(compression {loaded:.3g} m where loaded); if it grows as the gripper "
+            f"{'closes' if other == 'closing' else 'opens'}, pass --position-increases-when "
+            f"{other}",
+            path=path,
+        )
+    return np.asarray(d, dtype=np.float64)
+
+
+def _check_recording_options(phase: str, increases_when: str | None) -> None:
+    if phase not in PHASES:
+        raise UsageError(f"--phase must be one of {', '.join(PHASES)}, got {phase!r}")
+    if increases_when is not None and increases_when not in INCREASES_WHEN:
+        raise UsageError(
+            f"--position-increases-when must be closing or opening, got {increases_when!r}"
+        )

@@ -1,0 +1,409 @@
+"""The ROS 2 bag source of ``measure``: one object's squeezes from an MCAP bag (``--bag``).
+
+**Force.** ``geometry_msgs/msg/WrenchStamped`` ``wrench.force.<axis>``: the force felt is its
+magnitude; with two wrench topics (one per palm) it is the mean of the two palms' magnitudes, the
+second palm interpolated onto the first palm's timestamps.
+
+**Position.** A ``geometry_msgs/msg/PoseStamped`` palm pose or one joint of a
+``sensor_msgs/msg/JointState`` (:mod:`deformctl.measure.recording` says how it becomes the
+compression).
+
+**Alignment.** Streams are aligned by their header stamps; position is linearly interpolated
+onto the force timestamps inside the overlap of the two streams. Samples outside the overlap are
+dropped.
+
+**Checks.** Every channel's encoding, message definition and every decoded message are checked
+against the fields the reader needs; a recording whose sample rate, peak force, peak compression,
+force axis or compression sign a unit, axis or sign mistake explains is refused with the likely
+fix (:mod:`deformctl.plausibility`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from collections.abc import Mapping, Sequence
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from deformctl.artifacts.io import note_input
+from deformctl.characterize.rupture import Phase
+from deformctl.errors import InputDataError, MissingInputError, UsageError
+from deformctl.measure.recording import (
+    Axis,
+    CompressionZero,
+    IncreasesWhen,
+    PositionIs,
+    Recording,
+    _check_recording_options,
+    _check_stream,
+    _compression,
+    _rate_hz,
+)
+from deformctl.measure.segment import (
+    DEFAULT_FORCE_THRESHOLD_FRAC,
+    DEFAULT_MIN_GAP_S,
+    DEFAULT_MIN_SQUEEZE_S,
+    _detection_window_s,
+    _to_squeezes,
+)
+from deformctl.plausibility import (
+    check_force_axis,
+    check_peak_compression,
+    check_peak_force,
+    check_sample_rate,
+)
+from deformctl.series import FloatArray, SqueezeSeries
+from deformctl.units import NS_PER_S
+
+WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
+POSE_TYPE = "geometry_msgs/msg/PoseStamped"
+JOINT_STATE_TYPE = "sensor_msgs/msg/JointState"
+
+
+#: The fields each message type must have for the reader (dotted paths).
+_REQUIRED_FIELDS: dict[str, tuple[str, ...]] = {
+    WRENCH_TYPE: ("header.stamp.sec", "header.stamp.nanosec", "wrench.force"),
+    POSE_TYPE: ("header.stamp.sec", "header.stamp.nanosec", "pose.position"),
+    JOINT_STATE_TYPE: ("header.stamp.sec", "header.stamp.nanosec", "name", "position"),
+}
+
+#: The first two bytes of a ROS 2 CDR payload (the encapsulation kind): plain CDR, big or little
+#: endian.
+_CDR_KINDS = (b"\x00\x00", b"\x00\x01")
+
+_MISSING = object()
+
+
+def _field(msg: Any, dotted: str, where: str, path: Path) -> Any:
+    """``msg.<dotted>``, or a one-line error naming the field the message definition lacks."""
+    value = msg
+    for part in dotted.split("."):
+        value = getattr(value, part, _MISSING)
+        if value is _MISSING:
+            raise InputDataError(
+                f"{where}: the message has no field {dotted!r} (its message definition does not "
+                "match its type name)",
+                path=path,
+            )
+    return value
+
+
+def _number(value: Any, dotted: str, where: str, path: Path) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise InputDataError(
+            f"{where}: field {dotted!r} is a {type(value).__name__}, not a number", path=path
+        )
+    return float(value)
+
+
+def _stamp_ns(msg: Any, where: str, path: Path) -> int:
+    sec = _field(msg, "header.stamp.sec", where, path)
+    nanosec = _field(msg, "header.stamp.nanosec", where, path)
+    if not all(isinstance(v, int) and not isinstance(v, bool) for v in (sec, nanosec)):
+        raise InputDataError(f"{where}: header.stamp is not (sec, nanosec) integers", path=path)
+    return int(sec) * NS_PER_S + int(nanosec)
+
+
+def _decoder(factory: Any, schema: Any, channel: Any, where: str, path: Path) -> Any:
+    """The CDR decoder of ``channel``'s message definition, or a one-line error (exit 65)."""
+    if channel.message_encoding != "cdr" or schema is None or schema.encoding != "ros2msg":
+        got = f"{channel.message_encoding}/{getattr(schema, 'encoding', None)}"
+        raise InputDataError(f"{where}: encoding {got}, expected cdr/ros2msg", path=path)
+    try:  # the msgdef parser also prints its complaint to stderr: keep that to the one line
+        with contextlib.redirect_stderr(io.StringIO()):
+            return factory.decoder_for(channel.message_encoding, schema)
+    except Exception as err:  # the msgdef parser raises many kinds of error on bad text
+        raise InputDataError(
+            f"{where}: unparseable message definition ({type(err).__name__}: "
+            f"{' '.join(str(err).split())[:200]})",
+            path=path,
+        ) from None
+
+
+def _decode(decode: Any, data: bytes, index: int, where: str, path: Path) -> Any:
+    """One CDR payload decoded, or a one-line error naming the message (exit 65)."""
+    if len(data) < 4 or bytes(data[:2]) not in _CDR_KINDS:
+        raise InputDataError(
+            f"{where}: message {index} has no CDR encapsulation header "
+            f"(first bytes {bytes(data[:4]).hex() or 'none'})",
+            path=path,
+        )
+    try:
+        return decode(data)
+    except Exception as err:  # a truncated payload raises struct, index, unicode... errors
+        raise InputDataError(
+            f"{where}: message {index} does not decode with its message definition "
+            f"({type(err).__name__}: {' '.join(str(err).split())[:200]})",
+            path=path,
+        ) from None
+
+
+def _read_topics(
+    path: Path, roles: Mapping[str, tuple[str, ...]], joint: str | None, axis: Axis
+) -> dict[str, tuple[list[int], list[Any]]]:
+    """Read ``(stamp_ns list, value list)`` per topic: the force vector, position.axis or joint.
+
+    Each channel's encoding, message definition and every decoded message are checked against
+    the fields the reader needs (:data:`_REQUIRED_FIELDS`) before use; a mismatch names the
+    topic, the type and the field (exit 65).
+
+    Args:
+        path: the bag.
+        roles: topic → the message types accepted on it.
+        joint: JointState joint name.
+        axis: squeeze axis.
+    """
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    topics = list(roles)
+    out: dict[str, tuple[list[int], list[Any]]] = {t: ([], []) for t in topics}
+    with path.open("rb") as fh:
+        try:
+            reader = make_reader(fh)
+            summary = reader.get_summary()
+        except (McapError, ValueError, OSError) as err:
+            raise InputDataError(f"not a readable MCAP file ({err})", path=path) from err
+        if summary is None:
+            raise InputDataError("MCAP file has no summary (unindexed bag)", path=path)
+        types: dict[str, str] = {}
+        for ch in summary.channels.values():
+            schema = summary.schemas.get(ch.schema_id)
+            types[ch.topic] = schema.name if schema is not None else ""
+        available = ", ".join(sorted(types)) or "none"
+        for topic in topics:
+            if topic not in types:
+                raise InputDataError(
+                    f"topic {topic!r} is not in the bag; topics: {available}", path=path
+                )
+        for topic in topics:
+            want = types[topic]
+            if want not in roles[topic]:
+                raise InputDataError(
+                    f"topic {topic!r} has type {want or 'unknown'}, expected "
+                    f"{' or '.join(roles[topic])}",
+                    path=path,
+                )
+            if want == JOINT_STATE_TYPE and joint is None:
+                raise UsageError(f"topic {topic!r} is {JOINT_STATE_TYPE}: pass a joint name")
+        factory = DecoderFactory()
+        decoders: dict[int, Any] = {}
+        counts = dict.fromkeys(topics, 0)
+        try:
+            for schema, channel, message in reader.iter_messages(topics=topics):
+                where = f"topic {channel.topic!r} ({types[channel.topic]})"
+                if channel.id not in decoders:
+                    decoders[channel.id] = _decoder(factory, schema, channel, where, path)
+                index = counts[channel.topic]
+                counts[channel.topic] += 1
+                msg = _decode(decoders[channel.id], message.data, index, where, path)
+                stamps, values = out[channel.topic]
+                stamps.append(_stamp_ns(msg, where, path))
+                values.append(_extract(msg, types[channel.topic], axis, joint, where, path))
+        except McapError as err:
+            raise InputDataError(f"cannot decode bag ({err})", path=path) from err
+    return out
+
+
+def _extract(
+    msg: Any, type_name: str, axis: Axis, joint: str | None, where: str, path: Path
+) -> Any:
+    for dotted in _REQUIRED_FIELDS[type_name]:
+        _field(msg, dotted, where, path)
+    if type_name == WRENCH_TYPE:
+        force = msg.wrench.force
+        return tuple(
+            _number(_field(force, a, where, path), f"wrench.force.{a}", where, path) for a in "xyz"
+        )
+    if type_name == POSE_TYPE:
+        position = msg.pose.position
+        return _number(_field(position, axis, where, path), f"pose.position.{axis}", where, path)
+    try:
+        names = [str(n) for n in msg.name]
+        positions = list(msg.position)
+    except TypeError:
+        raise InputDataError(f"{where}: name and position must be arrays", path=path) from None
+    if joint not in names:
+        raise InputDataError(
+            f"{where}: joint {joint!r} not in the JointState names {names}", path=path
+        )
+    i = names.index(joint)
+    if i >= len(positions):
+        raise InputDataError(
+            f"{where}: joint {joint!r} has no position ({len(positions)} positions for "
+            f"{len(names)} names)",
+            path=path,
+        )
+    return _number(positions[i], "position", where, path)
+
+
+def read_ros2_bag(
+    path: str | PathLike[str],
+    *,
+    wrench_topics: Sequence[str],
+    position_topic: str,
+    object_id: str,
+    axis: Axis = "x",
+    joint: str | None = None,
+    position_is: PositionIs = "palm",
+    compression_zero: CompressionZero = "lead_in",
+    segment: bool = True,
+    force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
+    min_gap_s: float = DEFAULT_MIN_GAP_S,
+    min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
+    phase: Phase = "all",
+    position_increases_when: IncreasesWhen | None = None,
+    size_x_cm: float | None = None,
+) -> Recording:
+    """Read the squeezes of one object from a ROS 2 MCAP bag (``ros2msg`` schemas, ``cdr``).
+
+    The recording is checked for plausibility (:mod:`deformctl.plausibility`: sample rates,
+    peak force, the force's axis, the compression's sign and size); every squeeze is cut at a
+    rupture (recorded in the result) and reduced to ``phase`` (:mod:`deformctl.phases`).
+
+    Args:
+        path: the bag, one ``.mcap`` file.
+        wrench_topics: one or two ``geometry_msgs/msg/WrenchStamped`` topics (one per palm).
+        position_topic: a ``geometry_msgs/msg/PoseStamped`` topic (palm pose) or a
+            ``sensor_msgs/msg/JointState`` topic (with ``joint``).
+        object_id: catalog id written into every squeeze.
+        axis: the squeeze axis in the wrench and pose frames.
+        joint: joint name in a JointState topic (its ``position`` in m).
+        position_is: ``"palm"`` (one palm's travel, symmetric partner: d = 2·travel) or
+            ``"gap"`` (the distance between the palms: d = gap(t0) − gap).
+        compression_zero: ``"lead_in"`` (median over the unloaded lead-in) or ``"first"``.
+        segment: split the recording into squeezes (else one squeeze).
+        force_threshold_frac, min_gap_s, min_squeeze_s: segmentation (module docstring).
+        phase: ``"all"``, ``"loading"`` (each squeeze up to its peak force) or ``"unloading"``.
+        position_increases_when: ``"closing"`` or ``"opening"``: the direction in which the
+            position grows; None: a gap grows when opening, one palm's sign is automatic.
+        size_x_cm: the object's size along the squeeze axis, when known (a compression larger
+            than it is refused).
+
+    Returns:
+        The squeezes (time in s from each squeeze's first sample, on the (first) wrench
+        topic's timestamps inside the overlap with the position stream), the median sample
+        rates of the first wrench topic and of the position topic, and the ruptures.
+
+    Raises:
+        MissingInputError: the bag does not exist.
+        InputDataError: not an MCAP file, a topic not in the bag (the message lists those that
+            are), a topic of the wrong type, a joint not in the JointState, NaN samples,
+            non-monotonic header stamps, streams that do not overlap, no compression, no squeeze,
+            or an implausible recording (the message names the likely cause).
+        UsageError: no or more than two wrench topics, an unknown axis or position kind, a
+            JointState topic without ``joint``.
+    """
+    p = Path(path)
+    _check_recording_options(phase, position_increases_when)
+    if not p.is_file():
+        raise MissingInputError("no such bag file", path=p)
+    note_input(p)
+    if not 1 <= len(wrench_topics) <= 2:
+        raise UsageError(f"give one or two wrench topics, got {len(wrench_topics)}")
+    if axis not in ("x", "y", "z"):
+        raise UsageError(f"axis must be x, y or z, got {axis!r}")
+    if position_is not in ("gap", "palm"):
+        raise UsageError(f"position_is must be 'gap' or 'palm', got {position_is!r}")
+    if position_topic in wrench_topics:
+        raise UsageError(f"topic {position_topic!r} given as both wrench and position topic")
+    roles: dict[str, tuple[str, ...]] = dict.fromkeys(wrench_topics, (WRENCH_TYPE,))
+    roles[position_topic] = (POSE_TYPE, JOINT_STATE_TYPE)
+    data = _read_topics(p, roles, joint, axis)
+    where = str(p)
+
+    streams: list[tuple[FloatArray, FloatArray]] = []
+    t_ref_ns = min((data[t][0][0] for t in data if data[t][0]), default=0)
+    for topic in [*wrench_topics, position_topic]:
+        stamps, values = data[topic]
+        if not stamps:
+            raise InputDataError(f"topic {topic!r} has no messages", path=p)
+        t_s = (np.asarray(stamps, dtype=np.int64) - t_ref_ns).astype(np.float64) / NS_PER_S
+        what = f"topic {topic!r}"
+        if topic == position_topic:
+            v = np.asarray(values, dtype=np.float64)
+            _check_stream(what, t_s, v, where)
+        else:
+            vectors = np.asarray(values, dtype=np.float64).reshape(-1, 3)
+            v = np.abs(vectors[:, "xyz".index(axis)])
+            _check_stream(what, t_s, v, where)
+            check_force_axis(vectors, axis, what=what, path=where)
+            check_peak_force(
+                float(np.max(v)), what=what, path=where, hint="is the wrench in newtons?"
+            )
+        if t_s.shape[0] >= 2:
+            check_sample_rate(
+                _rate_hz(t_s), what=what, path=where, hint="are its header stamps right?"
+            )
+        streams.append((t_s, v))
+
+    pos_t, pos_v = streams[-1]
+    force_streams = streams[:-1]
+    lo = max(max(s[0][0] for s in force_streams), pos_t[0])
+    hi = min(min(s[0][-1] for s in force_streams), pos_t[-1])
+    if not hi > lo:
+        spans = "; ".join(
+            f"{name} {t[0]:.3f}..{t[-1]:.3f} s"
+            for name, (t, _) in zip([*wrench_topics, position_topic], streams, strict=True)
+        )
+        raise InputDataError(f"force and position streams do not overlap in time: {spans}", path=p)
+    t0, f0 = force_streams[0]
+    keep = (t0 >= lo) & (t0 <= hi)
+    time_s = t0[keep]
+    force_n = f0[keep]
+    if len(force_streams) == 2:
+        t1, f1 = force_streams[1]
+        force_n = 0.5 * (force_n + np.interp(time_s, t1, f1))
+    position = np.interp(time_s, pos_t, pos_v)
+    if time_s.shape[0] < 2:
+        raise InputDataError("fewer than two force samples inside the overlap", path=p)
+    compression_m = _compression(
+        position,
+        force_n,
+        position_is,
+        where,
+        force_threshold_frac,
+        compression_zero,
+        position_increases_when,
+        f"topic {position_topic!r}",
+    )
+    check_peak_compression(
+        float(np.max(compression_m)),
+        size_x_cm=size_x_cm,
+        what=f"topic {position_topic!r}",
+        path=where,
+        hint="is the position in metres? (ROS uses metres; convert a joint in mm or rad)",
+    )
+    position_rate_hz = _rate_hz(pos_t)
+    squeezes, ruptures = _to_squeezes(
+        time_s,
+        force_n,
+        compression_m,
+        object_id=object_id,
+        segment=segment,
+        path=where,
+        force_threshold_frac=force_threshold_frac,
+        min_gap_s=min_gap_s,
+        min_squeeze_s=min_squeeze_s,
+        phase=phase,
+        window_s=_detection_window_s(position_rate_hz),
+        clock_origin_ns=t_ref_ns,
+    )
+    return Recording(
+        squeezes,
+        _rate_hz(force_streams[0][0]),
+        position_rate_hz,
+        source="ros2_bag",
+        phase=phase,
+        ruptures=tuple(ruptures),
+    )
+
+
+def squeeze_from_ros2_bag(path: str | PathLike[str], **options: Any) -> list[SqueezeSeries]:
+    """The squeezes of :func:`read_ros2_bag` (same keyword arguments and errors), no rates."""
+    return read_ros2_bag(path, **options).squeezes

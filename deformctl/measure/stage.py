@@ -1,0 +1,324 @@
+"""The ``measure`` stage: squeeze logs from a recording or from a catalog in the simulator.
+
+:func:`recording_log` writes a rig recording's squeeze log (``--bag``, ``--csv``);
+:func:`simulate_catalog_file` squeezes a catalog into one log and, at scale,
+:class:`SimulateCatalogTask` is the sweep task of one object and :func:`simulate_catalog_sweep`
+runs a catalog into a dataset directory.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import pandas as pd
+import pyarrow as pa
+
+from deformctl.artifacts import check_output_path, read_catalog, write_squeeze_log
+from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
+from deformctl.artifacts.mcap import LOG_EPOCH_NS
+from deformctl.artifacts.provenance import Provenance, input_digest
+from deformctl.catalog import CatalogObject, select_objects
+from deformctl.errors import InputDataError, UsageError
+from deformctl.measure.recording import Recording
+from deformctl.measure.sim import (
+    DEFAULT_SIM_HOLD_S,
+    DEFAULT_SIM_RAMP_S,
+    DEFAULT_SIM_SQUEEZES,
+    SqueezeProgress,
+    simulate_squeezes,
+)
+from deformctl.parallel import (
+    SweepOptions,
+    SweepSummary,
+    TaskOutput,
+    map_in_order,
+    run_sweep,
+    single_file_workers,
+)
+from deformctl.series import SqueezeSeries
+
+if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported when used
+    from deformctl.sim import SimSettings
+
+
+#: Rows of a ``measure --sim`` dataset: one per object squeezed (the series are in the logs).
+MEASURE_SCHEMA = pa.schema(
+    [
+        pa.field("object_id", pa.string(), nullable=False),
+        pa.field("squeezes", pa.int64(), nullable=False),
+        pa.field("samples", pa.int64(), nullable=False),
+        pa.field("duration_s", pa.float64(), nullable=False, metadata={"unit": "s"}),
+        pa.field("peak_force_n", pa.float64(), nullable=False, metadata={"unit": "N"}),
+    ]
+)
+
+
+@dataclass(frozen=True)
+class SimulateCatalogTask:
+    """``measure --sim`` for one catalog object (a picklable sweep task).
+
+    The item carries the object's catalog row and its catalog position under
+    ``"_position"``; the noise stream is derived from (seed, position) as in the serial run.
+
+    Attributes:
+        simulate: the keyword arguments of :func:`simulate_squeezes` (squeezes, peak force or
+            strain, ramp, hold, gravity, noise).
+        settings: the :class:`~deformctl.sim.SimSettings` (a preset's object model).
+        seed: the run's noise seed.
+        sim_preset: the name of the preset ``settings`` came from (recorded in the log).
+        log_epoch_ns: where the log's squeezes begin, ns since the Unix epoch (they are laid
+            end to end from there).
+    """
+
+    simulate: Mapping[str, Any]
+    settings: SimSettings
+    seed: int = 0
+    sim_preset: str | None = None
+    log_epoch_ns: int = LOG_EPOCH_NS
+
+    def __call__(self, item: dict[str, Any]) -> TaskOutput:
+        """Squeeze one object: its summary row, its (object row, squeezes) as the payload."""
+        row = {k: v for k, v in item.items() if k != "_position"}
+        objects, series = simulate_squeezes(
+            pd.DataFrame([row]),
+            settings=self.settings,
+            seed=self.seed,
+            first_index=int(item["_position"]),
+            **self.simulate,
+        )
+        summary = {
+            "object_id": str(objects[0]["object_id"]),
+            "squeezes": len(series),
+            "samples": int(sum(len(s.time_s) for s in series)),
+            "duration_s": float(sum(float(s.time_s[-1]) for s in series)),
+            "peak_force_n": float(objects[0]["sim_peak_force_n"]),
+        }
+        return TaskOutput(rows=[summary], payload=(objects[0], series))
+
+
+def sim_provenance(
+    catalog_path: str, task: SimulateCatalogTask, object_ids: list[str]
+) -> Provenance:
+    """The provenance of a ``measure --sim`` log: the catalog, the seed and every setting."""
+    return Provenance.from_invocation(
+        [catalog_path],
+        seed=task.seed,
+        settings={
+            "source": "sim",
+            **task.simulate,
+            "peak_force_rule": (
+                "peak_force_n" if task.simulate.get("peak_force_n") is not None else "strain"
+            ),
+            "objects": object_ids,
+            "sim_preset": task.sim_preset,
+            "sim_settings": dataclasses.asdict(task.settings),
+            "log_epoch_ns": task.log_epoch_ns,
+        },
+    )
+
+
+#: Bytes one sample of a squeeze log held in memory costs: the series arrays and the JSON message
+#: built from them before the log is written.
+LOG_SAMPLE_BYTES = 400
+
+
+def _check_budgets(
+    catalog: pd.DataFrame, task: SimulateCatalogTask, path: str, *, single_log: bool
+) -> None:
+    """Refuse, before simulating, a run above the memory budget (``--memory-budget-gib``).
+
+    Each object's squeeze (its model plus the recorded steps, see
+    :func:`deformctl.sim.engine.check_run_steps`) must fit; a single-file squeeze log, built in
+    memory (MCAP's summary comes at the end), must fit as a whole. A dataset directory is written
+    part by part and has no whole-log limit. With ``single_log`` a bad row is refused first
+    (exit 65); in a dataset it is skipped here and fails alone in its worker.
+
+    Raises:
+        InputDataError: ``single_log`` and a row the simulator refuses (exit 65).
+        UsageError: one line naming the estimate, the budget and the option (exit 2).
+    """
+    from deformctl.sim.engine import GIB, check_run_steps
+
+    settings = task.settings
+    squeezes = int(task.simulate.get("squeezes", DEFAULT_SIM_SQUEEZES))
+    ramp = task.simulate.get("ramp_s")
+    hold = task.simulate.get("hold_s")
+    duration_s = float(DEFAULT_SIM_RAMP_S if ramp is None else ramp) + float(
+        DEFAULT_SIM_HOLD_S if hold is None else hold
+    )
+    steps = duration_s / settings.dt_s + 1.0
+    for record in catalog.to_dict("records"):
+        try:
+            spec = CatalogObject.from_row(record).to_sim_spec(path=path)
+        except InputDataError:
+            if single_log:
+                raise
+            continue  # a dataset's bad row fails alone, in its worker
+        check_run_steps(spec, settings, steps, "squeeze")
+    samples = len(catalog) * squeezes * steps
+    estimate = samples * LOG_SAMPLE_BYTES
+    if single_log and estimate > settings.memory_budget_gib * GIB:
+        raise UsageError(
+            f"one squeeze log of {len(catalog):,} objects x {squeezes} squeezes is {samples:.3g} "
+            f"samples, an estimated {estimate / GIB:.3g} GiB in memory, above the memory budget "
+            f"of {settings.memory_budget_gib:g} GiB; write a dataset directory (-o DIR/) or "
+            "raise --memory-budget-gib"
+        )
+
+
+def simulate_catalog_file(
+    catalog_path: str,
+    task: SimulateCatalogTask,
+    *,
+    output: str,
+    object_ids: Sequence[str] | None = None,
+    progress: SqueezeProgress | None = None,
+    force: bool = False,
+    workers: int | None = None,
+) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
+    """``measure CATALOG --sim -o LOG``: squeeze every (selected) object into one squeeze log.
+
+    Every row is checked before anything is simulated (a row without material values is
+    refused, naming the object). With ``workers`` > 1 the objects are squeezed on that many
+    local processes (:func:`deformctl.parallel.map_in_order`, one :class:`SimulateCatalogTask`
+    per object); each object's noise stream depends only on the seed and its position, so the
+    log is byte for byte the one-process log. ``workers=None``: every core from
+    :data:`~deformctl.parallel.MIN_PARALLEL_OBJECTS` objects on
+    (:func:`~deformctl.parallel.single_file_workers`).
+
+    Returns:
+        The objects' rows and the squeezes written (see :func:`simulate_squeezes`).
+
+    Raises:
+        OutputExistsError: ``output`` exists and ``force`` is false (exit 1).
+        UsageError: an unknown object id, or a squeeze option out of range (exit 2).
+        InputDataError: a row the simulator refuses (exit 65).
+    """
+    check_output_path(output, force)
+    catalog = select_objects(read_catalog(catalog_path), object_ids)
+    _check_budgets(catalog, task, catalog_path, single_log=True)  # bad rows first
+    provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
+    n_workers = single_file_workers(workers, len(catalog))
+    if n_workers > 1:
+        objects, series = _squeeze_in_workers(catalog, task, n_workers, progress)
+    else:
+        objects, series = simulate_squeezes(
+            catalog,
+            settings=task.settings,
+            seed=task.seed,
+            progress=progress,
+            path=catalog_path,
+            **task.simulate,
+        )
+    write_squeeze_log(
+        output, objects, series, provenance=provenance, force=force, epoch_ns=task.log_epoch_ns
+    )
+    return objects, series
+
+
+def _positioned_items(catalog: pd.DataFrame) -> list[dict[str, Any]]:
+    """The :class:`SimulateCatalogTask` items of ``catalog``: each row with its ``_position``."""
+    return [{**rec, "_position": i} for i, rec in enumerate(catalog.to_dict("records"))]
+
+
+def _squeeze_in_workers(
+    catalog: pd.DataFrame,
+    task: SimulateCatalogTask,
+    workers: int,
+    progress: SqueezeProgress | None,
+) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
+    """:func:`simulate_squeezes` of ``catalog`` with one task per object on local processes."""
+    items = _positioned_items(catalog)
+    per_object = int(task.simulate.get("squeezes", DEFAULT_SIM_SQUEEZES))
+
+    def done(i: int, _: object) -> None:
+        if progress is not None:
+            progress(str(items[i]["object_id"]), (i + 1) * per_object, len(items) * per_object)
+
+    outputs = map_in_order(task, items, workers=workers, on_result=done)
+    objects = [out.payload[0] for out in outputs]
+    series = [s for out in outputs for s in out.payload[1]]
+    return objects, series
+
+
+def simulate_catalog_sweep(
+    catalog_path: str,
+    task: SimulateCatalogTask,
+    *,
+    output: str,
+    sweep: SweepOptions,
+    object_ids: Sequence[str] | None = None,
+    force: bool = False,
+) -> SweepSummary:
+    """``measure --sim -o DIR/``: one object per task; part ``k``'s squeezes in ``DIR/_logs/``.
+
+    The rows of a part are :data:`MEASURE_SCHEMA` summaries; the squeezes are byte for byte
+    those of the serial run (each object's noise stream depends on the seed and its position).
+    A row the simulator refuses fails alone (``DIR/_failures/``).
+
+    Args:
+        catalog_path: the catalog (``-`` for stdin), hashed into the fingerprint.
+        task: the squeeze and simulator settings and the seed.
+        output: the dataset directory.
+        sweep: where to run (workers, scheduler), partition size, resume.
+        object_ids: these objects, in this order (None: all).
+        force: overwrite the sweep files of an existing directory.
+    """
+    catalog = select_objects(read_catalog(catalog_path), object_ids)
+    _check_budgets(catalog, task, catalog_path, single_log=False)
+    provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
+    items = _positioned_items(catalog)
+    settings = {**task.simulate, "sim_settings": dataclasses.asdict(task.settings)}
+    if task.log_epoch_ns != LOG_EPOCH_NS:  # (the default keeps older directories resumable)
+        settings["log_epoch_ns"] = task.log_epoch_ns
+    fingerprint = dataset_fingerprint(
+        "measure", "squeeze_log", settings, {"catalog": input_digest(catalog_path)}, task.seed
+    )
+    return run_sweep(
+        task,
+        items,
+        out_dir=output,
+        schema=MEASURE_SCHEMA,
+        fingerprint=fingerprint,
+        part_writer=LogPartWriter("squeeze_log", provenance, task.log_epoch_ns),
+        force=force,
+        **sweep.run_kwargs(),
+    )
+
+
+def recording_log(
+    source: str,
+    recording: Recording,
+    obj: Mapping[str, object],
+    settings: Mapping[str, Any],
+    *,
+    output: str,
+    force: bool = False,
+) -> None:
+    """Write a rig recording's squeezes as a squeeze log (``measure --bag`` / ``--csv``).
+
+    Args:
+        source: the recording file (hashed into the provenance).
+        recording: what :func:`read_ros2_bag` or :func:`read_csv_export` read.
+        obj: the object's row (:func:`deformctl.catalog.object_record`); the source sample
+            rates are added, as they are to the provenance's ``settings``, with the source,
+            phase and ruptures (:meth:`Recording.log_fields`).
+        settings: the reader's options.
+        output: the squeeze log (``-`` for stdout).
+        force: overwrite an existing output.
+    """
+    rates = {
+        "force_rate_hz": recording.force_rate_hz,
+        "position_rate_hz": recording.position_rate_hz,
+    }
+    provenance = Provenance.from_invocation([source], settings={**settings, **rates})
+    write_squeeze_log(
+        output,
+        [{**obj, **recording.log_fields()}],
+        recording.squeezes,
+        provenance=provenance,
+        force=force,
+    )

@@ -1,0 +1,94 @@
+"""The scale-out options of a stage command (``--workers`` ... ``--resume``), checked once.
+
+:class:`SweepOptions` is what the CLI builds from the five flags; it checks them against the output
+(:meth:`SweepOptions.check`) and gives :func:`~deformctl.parallel.sweep.run_sweep` its keyword
+arguments.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from deformctl.artifacts.dataset import is_dataset_output
+from deformctl.errors import UsageError
+
+DEFAULT_CONNECT_TIMEOUT_S = 10.0  #: time allowed to reach a Dask scheduler, s
+DEFAULT_PARTITION_SIZE = 100  #: objects per part of a dataset directory
+
+
+@dataclass(frozen=True)
+class SweepOptions:
+    """The scale-out flags of a stage command, as given (None: not given).
+
+    Attributes:
+        workers: ``--workers N`` local processes.
+        scheduler: ``--scheduler tcp://HOST:PORT`` of a running Dask scheduler.
+        connect_timeout_s: ``--connect-timeout S``.
+        partition_size: ``--partition-size N`` objects per part.
+        resume: ``--resume``.
+    """
+
+    workers: int | None = None
+    scheduler: str | None = None
+    connect_timeout_s: float | None = None
+    partition_size: int | None = None
+    resume: bool = False
+
+    def given(self) -> list[str]:
+        """The flags given on the command line."""
+        flags = [
+            ("--workers", self.workers),
+            ("--scheduler", self.scheduler),
+            ("--connect-timeout", self.connect_timeout_s),
+            ("--partition-size", self.partition_size),
+        ]
+        out = [flag for flag, value in flags if value is not None]
+        return out + (["--resume"] if self.resume else [])
+
+    def check(self, output: str, *, file_workers: bool = False) -> bool:
+        """Check the flags against the output; True when the output is a dataset directory.
+
+        Args:
+            output: the ``-o`` value.
+            file_workers: the command also runs a single-file output on ``--workers`` local
+                processes (:func:`map_in_order`), so that flag is allowed without a directory.
+
+        Raises:
+            UsageError: a sweep flag with a single-file output (``--workers`` too unless
+                ``file_workers``), ``--workers`` < 1, both ``--workers`` and ``--scheduler``,
+                ``--connect-timeout`` without ``--scheduler`` or <= 0, ``--partition-size`` < 1.
+        """
+        dataset = is_dataset_output(output)
+        needs_dir = [f for f in self.given() if not (file_workers and f == "--workers")]
+        if not dataset and needs_dir:
+            raise UsageError(
+                f"{needs_dir[0]} needs a dataset directory output "
+                f"(end -o with /, e.g. -o {output.rstrip('/') or 'out'}/)"
+            )
+        if self.workers is not None and self.workers < 1:
+            raise UsageError(f"--workers must be >= 1, got {self.workers}")
+        if self.workers is not None and self.scheduler is not None:
+            raise UsageError("give either --workers (local processes) or --scheduler, not both")
+        if self.connect_timeout_s is not None:
+            if self.scheduler is None:
+                raise UsageError("--connect-timeout needs --scheduler")
+            if not (math.isfinite(self.connect_timeout_s) and self.connect_timeout_s > 0):
+                raise UsageError(f"--connect-timeout must be > 0 s, got {self.connect_timeout_s}")
+        if self.partition_size is not None and self.partition_size < 1:
+            raise UsageError(f"--partition-size must be >= 1, got {self.partition_size}")
+        return dataset
+
+    def run_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :func:`run_sweep` for these flags."""
+        kwargs: dict[str, Any] = {
+            "workers": self.workers,
+            "scheduler": self.scheduler,
+            "resume": self.resume,
+        }
+        if self.connect_timeout_s is not None:
+            kwargs["connect_timeout_s"] = self.connect_timeout_s
+        if self.partition_size is not None:
+            kwargs["partition_size"] = self.partition_size
+        return kwargs
