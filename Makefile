@@ -140,6 +140,9 @@ $(M)/%/coefficients.parquet: $(M)/%/squeeze.mcap
 	$(DC) characterize $< -o $@ > $(@D)/coefficients.txt
 $(M)/%/index.parquet: $(M)/%/coefficients.parquet $(M)/%/lift.parquet
 	$(DC) table $^ -o $@
+# keep every step's output (make would delete a pattern rule's intermediate files)
+.PRECIOUS: $(M)/%/population.csv $(M)/%/lift.parquet $(M)/%/squeeze.mcap \
+  $(M)/%/coefficients.parquet $(M)/%/index.parquet
 
 # What the simulated lifting force depends on (μ, the groups ω_n and ζ, the box size): the
 # evidence behind the grip model's form (docs/explanation/model.md), 2-4 minutes on 2 cores.

@@ -37,7 +37,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from deformctl.catalog import CATALOG_COLUMNS, SIZE_COLUMNS
+from deformctl.catalog import CATALOG_COLUMNS, MATERIAL_COLUMNS, SIZE_COLUMNS
 from deformctl.errors import UsageError
 
 #: The paper's population size and split (section V.A).
@@ -210,8 +210,8 @@ def grip_strain_at_f_w(catalog: pd.DataFrame) -> np.ndarray:
         catalog["weight_n"].to_numpy(dtype=np.float64),
         catalog["friction_mu"].to_numpy(dtype=np.float64),
     )
-    d = catalog["material_stiffness_n_per_cm"].to_numpy(dtype=np.float64)
-    return np.asarray(f_w / (d * catalog["size_x_cm"].to_numpy(dtype=np.float64)))
+    d = catalog[MATERIAL_COLUMNS[0]].to_numpy(dtype=np.float64)
+    return np.asarray(f_w / (d * catalog[SIZE_COLUMNS[0]].to_numpy(dtype=np.float64)))
 
 
 def grip_population(n: int, *, seed: int, id_prefix: str = "P") -> pd.DataFrame:

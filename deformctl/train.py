@@ -52,7 +52,7 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
-from deformctl.catalog import catalog_weights, rigid_grip_force_n
+from deformctl.catalog import rigid_grip_force_n
 from deformctl.errors import InputDataError, SchemaError, UsageError
 from deformctl.grip.conformal import coverage_report, relative_scores
 from deformctl.grip.groups import (
@@ -713,84 +713,3 @@ def train_report(result: TrainResult) -> dict[str, Any]:
             "predictions": records,
         }
     )
-
-
-#: Coefficients-table columns that bound the grip force (the smallest finite one is the object's
-#: safe force, ``max_safe_force_n``): ``characterize``'s rupture force, and a yield force.
-SAFE_FORCE_COLUMNS: tuple[str, ...] = ("rupture_force_n", "yield_force_n")
-
-
-def _join_catalog_column(
-    frame: pd.DataFrame, catalog: pd.DataFrame, column: str, ids: pd.Series
-) -> np.ndarray:
-    """``column`` of the catalog row of each id; must agree (relative 1e-6) with the table's."""
-    values = dict(
-        zip(
-            catalog["object_id"].astype(str),
-            pd.to_numeric(catalog[column], errors="coerce").to_numpy(dtype=np.float64).tolist(),
-            strict=True,
-        )
-    )
-    joined = ids.map(values).to_numpy(dtype=np.float64)
-    if column in frame.columns:
-        own = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=np.float64)
-        bad = ~np.isclose(own, joined, rtol=1e-6, atol=0.0, equal_nan=True)
-        if bad.any():
-            raise InputDataError(
-                f"{column} differs between the input and the catalog for {format_ids(ids[bad])}"
-            )
-    return joined
-
-
-def prediction_inputs(table: pd.DataFrame, catalog: pd.DataFrame | None = None) -> pd.DataFrame:
-    """The model's inputs per object from a table, taking ``weight_n`` and ``friction_mu`` from
-    ``catalog``.
-
-    The table (an index table, a predictions table or a coefficients table) must have
-    ``deformability_n_per_cm`` and ``damping_ns_per_cm``; ``weight_n`` and ``friction_mu`` come
-    from the table itself or, when ``catalog`` is given, from the catalog row with the same
-    ``object_id``. When both have a value they must agree (relative 1e-6).
-
-    Args:
-        table: ``[n]`` rows, with ``object_id`` when a catalog is to be joined.
-        catalog: a validated object catalog (:func:`deformctl.artifacts.read_catalog`), or None.
-
-    Returns:
-        ``[n]`` rows in the table's order: ``object_id`` (when the table has it),
-        :data:`FEATURES`, ``friction_mu`` (when known) and ``max_safe_force_n`` (the smallest of
-        :data:`SAFE_FORCE_COLUMNS` the table has, NaN where none is finite; only when the table
-        has one of them).
-
-    Raises:
-        SchemaError: a feature column is missing and cannot be joined; ``object_id`` missing
-            when a catalog is given.
-        InputDataError: an object missing from the catalog, or a weight or friction that
-            differs between the table and the catalog (the messages name the ids).
-    """
-    frame = table.copy()
-    if catalog is not None:
-        if "object_id" not in frame.columns:
-            raise SchemaError("the input has no column 'object_id' to join on", field="object_id")
-        ids = frame["object_id"].astype(str)
-        weights = catalog_weights(catalog)
-        missing = sorted(set(ids) - set(weights))
-        if missing:
-            raise InputDataError(
-                f"{len(missing)} object(s) are not in the catalog: {format_ids(missing)}"
-            )
-        frame["weight_n"] = _join_catalog_column(frame, catalog, "weight_n", ids)
-        if "friction_mu" in catalog.columns:
-            frame["friction_mu"] = _join_catalog_column(frame, catalog, "friction_mu", ids)
-    for col in FEATURES:
-        if col not in frame.columns:
-            hint = " (pass --catalog to join weights by object_id)" if col == "weight_n" else ""
-            raise SchemaError(f"the input has no column {col!r}{hint}", field=col)
-    keep = ["object_id"] if "object_id" in frame.columns else []
-    keep += [*FEATURES, *(["friction_mu"] if "friction_mu" in frame.columns else [])]
-    out = frame[keep].reset_index(drop=True)
-    safe_cols = [c for c in SAFE_FORCE_COLUMNS if c in frame.columns]
-    if safe_cols:
-        safe = frame[safe_cols].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=np.float64)
-        safe = np.where(np.isfinite(safe) & (safe > 0), safe, np.inf).min(axis=1)
-        out["max_safe_force_n"] = np.where(np.isfinite(safe), safe, np.nan)
-    return out

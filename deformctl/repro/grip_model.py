@@ -35,7 +35,7 @@ import pandas as pd
 
 from deformctl.errors import DeformctlError
 from deformctl.grip.fast import Estimates, Predictor
-from deformctl.population import GRIP_MAX_STRAIN_AT_F_W
+from deformctl.population import GRIP_MAX_STRAIN_AT_F_W, grip_strain_at_f_w
 
 #: The index tables ``report`` reads from the run directory.
 RUN_FILES = {
@@ -59,9 +59,7 @@ TARGET_TABLE_I = 0.10
 
 def mu_catalog(population: pd.DataFrame, n: int = N_MU_PAIRS) -> pd.DataFrame:
     """The friction pairs: the first ``n`` objects grippable at μ = 0.25, at μ 0.25 and 1.0."""
-    low = MU_PAIR[0]
-    f_w = population["weight_n"] / (2 * low)
-    strain = f_w / (population["material_stiffness_n_per_cm"] * population["size_x_cm"])
+    strain = grip_strain_at_f_w(population.assign(friction_mu=MU_PAIR[0]))
     chosen = population[strain <= GRIP_MAX_STRAIN_AT_F_W].head(n)
     rows = []
     for mu in MU_PAIR:

@@ -94,8 +94,8 @@ def test_predict_one_object_with_its_bound(setup: dict[str, Path]) -> None:
 @pytest.mark.parametrize(
     ("extra", "code", "line"),
     [
-        ([], 2, "error: the model needs the object's friction: give --friction-mu MU (a table "
-                "gives it in its friction_mu column)"),
+        ([], 2, "error: the model needs each object's friction: give --friction-mu MU for one "
+                "object, or a friction_mu column (in the table or a --catalog)"),
         (["--friction-mu", "0"], 2, "error: --friction-mu must be > 0 and <= 3, got 0"),
         (["--friction-mu", "-0.5"], 2, "error: --friction-mu must be > 0 and <= 3, got -0.5"),
         (["--friction-mu", "3.5"], 2, "error: --friction-mu must be > 0 and <= 3, got 3.5"),
@@ -149,8 +149,8 @@ def test_a_table_without_mu_for_a_mu_aware_model(setup: dict[str, Path], tmp_pat
     )
     result = runner.invoke(app, ["predict", str(setup["model"]), str(path)])
     assert _error(result, 2) == (
-        "error: the model needs each object's friction: the table has no friction_mu column; "
-        "give --catalog with one (--friction-mu is for one object given by flags)"
+        "error: the model needs each object's friction: give --friction-mu MU for one object, "
+        "or a friction_mu column (in the table or a --catalog)"
     )
 
 
