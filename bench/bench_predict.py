@@ -2,9 +2,11 @@
 
 Prints, measured side by side in this run (the machine is shared; quote the ratios):
 
-* the wall time of ``python -c pass`` and of one-object ``deformctl predict grip --weight-n ...
-  --friction-mu ... --coverage 0.9`` (median of 7 runs each, the command's own console script),
-  and their ratio; target: the command <= 1.0 s;
+* the wall time and the CPU time (user + sys) of ``python -c pass`` and of one-object
+  ``deformctl predict grip --weight-n ... --friction-mu ... --coverage 0.9`` (median of 7 runs
+  each, the command's own console script), and their ratio; target: the command <= 1.0 s wall.
+  On a shared machine the wall time waits for the other jobs (the load average is printed); the
+  CPU time is what the command costs;
 * the cost of :meth:`deformctl.grip.fast.Predictor.load` (``grip``) and of one
   :meth:`~deformctl.grip.fast.Predictor.predict` call after loading, with and without a bound
   (median over 7 batches of 2,000 calls), beside a bare numpy ``(1, 2) @ (2, 8)`` product as
@@ -13,6 +15,8 @@ Prints, measured side by side in this run (the machine is shared; quote the rati
 
 from __future__ import annotations
 
+import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -24,13 +28,17 @@ CALL_TARGET_US = 100.0
 OBJECT = ("2.9", "30", "0.47", "0.5")  # Table I's sand: W, D, λ, μ
 
 
-def _wall(cmd: list[str], runs: int = 7) -> float:
-    times = []
+def _wall(cmd: list[str], runs: int = 7) -> tuple[float, float]:
+    """(median wall s, median CPU s: user + sys of the child) over ``runs`` runs."""
+    walls, cpus = [], []
     for _ in range(runs):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
         subprocess.run(cmd, check=True, capture_output=True)
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+        walls.append(time.perf_counter() - t0)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpus.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
+    return statistics.median(walls), statistics.median(cpus)
 
 
 def _per_call_us(fn: object, calls: int = 2000, batches: int = 7) -> float:
@@ -57,11 +65,17 @@ def main() -> None:
         script, "predict", "grip", "--weight-n", w, "--deformability-n-per-cm", d,
         "--damping-ns-per-cm", lam, "--friction-mu", mu, "--coverage", "0.9",
     ]  # fmt: skip
-    base = _wall([sys.executable, "-c", "pass"])
-    cli = _wall(command)
-    print(f"python -c pass:                    {base:.3f} s wall (median of 7)")
-    print(f"deformctl predict grip (1 object): {cli:.3f} s wall (median of 7), "
-          f"{cli / base:.1f} x python -c pass; target <= {CLI_TARGET_S:.1f} s")  # fmt: skip
+    base, base_cpu = _wall([sys.executable, "-c", "pass"])
+    cli, cli_cpu = _wall(command)
+    print(f"load average (1 min): {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    print(
+        f"python -c pass:                    {base:.3f} s wall, {base_cpu:.3f} s CPU (median of 7)"
+    )
+    ratio = cli / base
+    print(
+        f"deformctl predict grip (1 object): {cli:.3f} s wall, {cli_cpu:.3f} s CPU (median of 7),"
+        f" {ratio:.1f} x python -c pass; target <= {CLI_TARGET_S:.1f} s wall"
+    )
 
     t0 = time.perf_counter()
     grip = Predictor.load("grip")
