@@ -209,3 +209,44 @@ def test_bundled_name_and_model_metadata(setup: dict[str, Path]) -> None:
     assert len(meta["conformal_scores"]) == 40
     assert meta["numpy_model"]["form"] == "grip"
     assert meta["notes"]["sim_preset"] == "paper"
+
+
+def test_lift_starts_from_the_grip_model_with_the_catalogs_mu(
+    setup: dict[str, Path], tmp_path: Path
+) -> None:
+    """``lift --start-model`` with a μ-aware model: the start is the model's L_f at the catalog's
+    μ (threshold rig: lifts from 17 N)."""
+    import shlex
+    import sys
+
+    from deformctl.grip.fast import Predictor
+
+    table = read_table(setup["index"], "index_table").iloc[:2]
+    catalog = pd.DataFrame(
+        {
+            "object_id": table["object_id"], "size_x_cm": 15.0, "size_y_cm": 15.0,
+            "size_z_cm": 10.0, "weight_n": table["weight_n"], "friction_mu": table["friction_mu"],
+            "deformability_n_per_cm": table["deformability_n_per_cm"],
+            "damping_ns_per_cm": table["damping_ns_per_cm"],
+        }
+    )  # fmt: skip
+    write_catalog(catalog, tmp_path / "objects.csv")
+    rig = shlex.join(
+        [sys.executable, str(Path(__file__).parents[1] / "rigs" / "threshold_rig.py"), "17"]
+    )
+    out = tmp_path / "lift.parquet"
+    result = runner.invoke(
+        app,
+        ["lift", str(tmp_path / "objects.csv"), "--rig", rig, "--start-model",
+         str(setup["model"]), "-o", str(out)],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.stderr
+    lifted = read_table(out, "lift_results").set_index("object_id")
+    assert set(lifted["start_source"]) == {"model"}
+    predictor = Predictor.load(setup["model"])
+    for oid, row in table.set_index("object_id").iterrows():
+        want = predictor.predict(
+            row["weight_n"], row["deformability_n_per_cm"], row["damping_ns_per_cm"],
+            row["friction_mu"],
+        ).lift_force_n  # fmt: skip
+        assert lifted.loc[oid, "predicted_lift_force_n"] == pytest.approx(want, rel=1e-12)
