@@ -12,6 +12,8 @@
 
 from __future__ import annotations
 
+import sys
+import types
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # the names below, for type checkers; at run time they load on first use
@@ -84,6 +86,22 @@ def __getattr__(name: str) -> Any:
 
 def __dir__() -> list[str]:
     return sorted([*globals(), *_EXPORTS])
+
+
+class _Package(types.ModuleType):
+    """This package's module type. ``describe`` is both a public function and the submodule that
+    defines it; importing the submodule (``from deformctl.artifacts.describe import ...``) would
+    make the package attribute the module, so ``from deformctl.artifacts import describe``
+    depended on import order. The function keeps the name, as it did when this package imported
+    everything eagerly."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name in _EXPORTS and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
 
 
 __all__ = [

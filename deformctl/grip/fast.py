@@ -30,8 +30,8 @@ its training μ.
 
 from __future__ import annotations
 
-import json
 import math
+import operator
 import zipfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from deformctl import jsonsafe
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.grip.conformal import (
     check_coverage,
@@ -131,12 +132,14 @@ def read_model_metadata(path: str | Path) -> dict[str, Any]:
                 raise InputDataError(
                     f"schema.json is {info.file_size} bytes, more than a model file holds", path=p
                 )
-            schema = json.loads(archive.read(info))
+            schema = jsonsafe.loads(archive.read(info))
         node = schema["content"]["metadata_json"]
-        fmt = json.loads(schema["content"]["format"]["content"])
+        fmt = jsonsafe.loads(schema["content"]["format"]["content"])
         if node.get("__loader__") != "JsonNode" or node.get("__class__") != "str":
-            raise ValueError("metadata_json is not a string")
-        metadata = json.loads(json.loads(node["content"]))
+            raise TypeError("metadata_json is not a string")
+        text = jsonsafe.loads(node["content"])
+        if not isinstance(text, str):
+            raise TypeError("metadata_json is not a string")
     except InputDataError:
         raise
     except zipfile.BadZipFile:
@@ -145,10 +148,18 @@ def read_model_metadata(path: str | Path) -> dict[str, Any]:
         ) from None
     except (KeyError, TypeError, ValueError, AttributeError, OSError, EOFError) as err:
         raise InputDataError(f"not a deformctl model file ({type(err).__name__})", path=p) from None
-    if fmt not in MODEL_FORMATS or not isinstance(metadata, dict):
+    if fmt not in MODEL_FORMATS:
         raise InputDataError(
             f"not a deformctl model file (expected format {MODEL_FORMATS[-1]})", path=p
         )
+    try:
+        metadata = jsonsafe.loads(text, allow_nan=True)
+    except ValueError as err:
+        raise InputDataError(
+            f"the model file's metadata is not usable JSON ({err})", path=p
+        ) from None
+    if not isinstance(metadata, dict):
+        raise InputDataError("the model file's metadata is not a JSON object", path=p)
     return metadata
 
 
@@ -268,6 +279,16 @@ class Estimate:
     warnings: tuple[str, ...] = ()
 
 
+def _activation_scalar(name: str, x: float) -> float:
+    if name == "tanh":
+        return math.tanh(x)
+    if name == "relu":
+        return max(x, 0.0)
+    if name == "logistic":
+        return 1.0 / (1.0 + math.exp(-x)) if x >= -700 else 0.0
+    return x
+
+
 def _activation(name: str, x: np.ndarray) -> np.ndarray:
     if name == "tanh":
         return np.tanh(x, out=x)
@@ -302,7 +323,8 @@ class Predictor:
     ranges: Mapping[str, tuple[float, float]]
     training_friction_mu: float | None
     scores: np.ndarray | None
-    _margins: dict[float, float] = field(default_factory=dict, repr=False, compare=False)
+    #: what is worked out once per predictor: the margins per coverage, the plain-float layers
+    _cache: dict[Any, Any] = field(default_factory=dict, repr=False, compare=False)
 
     @classmethod
     def load(cls, model: str | Path = "grip") -> Predictor:
@@ -437,6 +459,36 @@ class Predictor:
 
     # -- evaluation ------------------------------------------------------------------------
 
+    def _network_one(self, z: Sequence[float]) -> float:
+        """The network on one input row in plain floats: a small network costs less this way
+        than numpy's per-call overhead (the same numbers to rounding, tested)."""
+        x = [(v - m) / s for v, m, s in zip(z, self._plain[0], self._plain[1], strict=True)]
+        layers = self._plain[2]
+        last = len(layers) - 1
+        for i, (columns, biases) in enumerate(layers):
+            x = [b + sum(map(operator.mul, col, x)) for col, b in zip(columns, biases, strict=True)]
+            if i != last:
+                x = [_activation_scalar(self.activation, v) for v in x]
+        return x[0]
+
+    @property
+    def _plain(
+        self,
+    ) -> tuple[list[float], list[float], list[tuple[list[list[float]], list[float]]]]:
+        """The scaler and the layers as lists (columns of each weight matrix), made once."""
+        cached = self._cache.get("plain")
+        if cached is None:
+            cached = (
+                self.mean.tolist(),
+                self.scale.tolist(),
+                [
+                    (w.T.tolist(), b.tolist())
+                    for w, b in zip(self.weights, self.biases, strict=True)
+                ],
+            )
+            self._cache["plain"] = cached
+        return cached
+
     def _network(self, Z: np.ndarray) -> np.ndarray:
         """The scaler and the network on ``Z`` ``[n, n_in]``, as scikit-learn computes them."""
         x = (Z - self.mean) / self.scale
@@ -470,9 +522,9 @@ class Predictor:
             UsageError: ``coverage`` outside (0, 1) (exit 2).
             InputDataError: the model has no calibration scores, or too few for P (exit 65).
         """
-        cached = self._margins.get(coverage)
+        cached = self._cache.get(("margin", coverage))
         if cached is not None:
-            return cached
+            return float(cached)
         try:
             p = check_coverage(coverage)
         except (TypeError, ValueError):
@@ -487,7 +539,7 @@ class Predictor:
                 path=self.path,
             )
         q = conformal_margin(self.scores, p)
-        self._margins[coverage] = q
+        self._cache[("margin", coverage)] = q
         return q
 
     def _checked_values(
@@ -564,9 +616,9 @@ class Predictor:
             mass = W / GRAVITY_M_S2
             d_si = D * 100.0
             zeta = _max0(lam) * 100.0 / (2.0 * math.sqrt(d_si * mass))
-            z = np.array([[math.log10(math.sqrt(d_si / mass)), math.log10(zeta + self.zeta_shift)]])
+            z = (math.log10(math.sqrt(d_si / mass)), math.log10(zeta + self.zeta_shift))
             f_w = W / (2.0 * mu)
-            lift = math.exp(float(self._network(z)[0])) * f_w
+            lift = math.exp(self._network_one(z)) * f_w
         else:
             lift, f_w = self._paper_scalar(W, D, lam, mu, name, warnings)
             outside = bool(warnings)
