@@ -43,6 +43,7 @@ from deformctl.artifacts.tables import (
     read_catalog_bytes,
     read_parquet_bytes,
 )
+from deformctl.blas import blas_record
 from deformctl.errors import DeformctlError, InputDataError, SchemaError
 from deformctl.series import SqueezeSeries, ruptures_from_object
 from deformctl.units import NS_PER_S
@@ -389,6 +390,7 @@ def _model_summary(data: bytes, path: PathArg) -> dict[str, Any]:
         "conformal": conformal,
         "notes": {str(k): str(v) for k, v in notes.items()},
         "tool_version": str(meta.get("tool_version", "unknown")),
+        "blas": blas_record(meta.get("blas")),
         "provenance": None if prov is None else Provenance.from_dict(prov, path=name).to_dict(),
     }
 
@@ -407,7 +409,8 @@ def describe(path: PathArg) -> dict[str, Any]:
         ``training_range`` (feature, and for a grip model group, -> [min, max]), ``seed``,
         ``hyperparameters``, ``form``, ``n_train``, ``n_calibration``, ``n_test``, ``metrics``
         (model and baselines, train and test), ``conformal`` (the bound's coverage and margins
-        on the test rows), ``notes`` and ``tool_version``.
+        on the test rows), ``notes``, ``tool_version`` and ``blas`` (the BLAS libraries, kernels
+        and thread count of the fit; None for older files).
 
     Raises:
         MissingInputError: ``path`` does not exist (exit 66).
