@@ -341,8 +341,22 @@ def _model_summary(data: bytes, path: PathArg) -> dict[str, Any]:
     training_range: dict[str, list[float] | None] = {}
     if lo is not None and hi is not None and len(lo) == len(hi) == len(features):
         training_range = {f: _float_pair(a, b) for f, a, b in zip(features, lo, hi, strict=True)}
+    stored = meta.get("training_range")  # format 2: the checked ranges, inputs and groups
+    if isinstance(stored, dict) and all(
+        isinstance(v, list) and len(v) == 2 for v in stored.values()
+    ):
+        training_range.update({str(k): _float_pair(*v) for k, v in stored.items()})
+    conformal = {}
+    if isinstance(meta.get("conformal"), dict):
+        for p, entry in meta["conformal"].items():
+            if isinstance(entry, dict):
+                conformal[str(p)] = {
+                    k: v for k, v in entry.items() if isinstance(v, int | float) or v is None
+                }
+    raw_notes = meta.get("notes")
+    notes: dict[Any, Any] = raw_notes if isinstance(raw_notes, dict) else {}
     metrics = {}
-    for key in ("model", "baseline_nearest", "baseline_f_w"):
+    for key in ("model", "baseline_nearest", "baseline_f_w", "baseline_constant_ratio"):
         entry = meta.get(key)
         if isinstance(entry, dict):
             metrics[key] = {
@@ -366,9 +380,15 @@ def _model_summary(data: bytes, path: PathArg) -> dict[str, Any]:
         "hyperparameters": meta.get("hyperparameters")
         if isinstance(meta.get("hyperparameters"), dict)
         else None,
+        "form": str(meta.get("form", "paper")),
         "n_train": meta.get("n_train") if isinstance(meta.get("n_train"), int) else None,
+        "n_calibration": meta.get("n_calibration")
+        if isinstance(meta.get("n_calibration"), int)
+        else 0,
         "n_test": meta.get("n_test") if isinstance(meta.get("n_test"), int) else None,
         "metrics": metrics,
+        "conformal": conformal,
+        "notes": {str(k): str(v) for k, v in notes.items()},
         "tool_version": str(meta.get("tool_version", "unknown")),
         "blas": blas_record(meta.get("blas")),
         "provenance": None if prov is None else Provenance.from_dict(prov, path=name).to_dict(),
@@ -386,9 +406,11 @@ def describe(path: PathArg) -> dict[str, Any]:
         for a squeeze log ``squeeze_summary`` (per object: squeezes, peak force and compression,
         sample rates, phase, ruptures); for a coefficients table ``coefficients`` (per object: D,
         λ, R², quality); for a model file (kind ``model``) ``features``, ``target``,
-        ``training_range`` (feature -> [min, max]), ``seed``, ``hyperparameters``, ``n_train``,
-        ``n_test``, ``metrics`` (model and baselines, train and test), ``tool_version`` and ``blas``
-        (the BLAS libraries, kernels and thread count of the fit; None for older files).
+        ``training_range`` (feature, and for a grip model group, -> [min, max]), ``seed``,
+        ``hyperparameters``, ``form``, ``n_train``, ``n_calibration``, ``n_test``, ``metrics``
+        (model and baselines, train and test), ``conformal`` (the bound's coverage and margins
+        on the test rows), ``notes``, ``tool_version`` and ``blas`` (the BLAS libraries, kernels
+        and thread count of the fit; None for older files).
 
     Raises:
         MissingInputError: ``path`` does not exist (exit 66).
