@@ -10,6 +10,7 @@ printed here, once per distinct line.
 
 from __future__ import annotations
 
+import dataclasses
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -19,8 +20,8 @@ from typing import Annotated, Any
 import typer
 
 from deformctl.cli._common import finish_sweep, parse_mapping
+from deformctl.measure import DEFAULT_CSV_MEMORY_BUDGET_GIB as DEFAULT_BUDGET
 from deformctl.measure import (
-    DEFAULT_CSV_MEMORY_BUDGET_GIB,
     CsvBatchResult,
     CsvDialect,
     CsvFileTask,
@@ -110,16 +111,7 @@ class CsvFlags:
 
     def given(self) -> dict[str, object]:
         """Flag → value (for refusing them with another source)."""
-        return {
-            "--skip-rows": self.skip_rows,
-            "--delimiter": self.delimiter,
-            "--decimal": self.decimal,
-            "--thousands": self.thousands,
-            "--encoding": self.encoding,
-            "--force-sign": self.force_sign,
-            "--lag-s": self.lag_s,
-            "--objects-from": self.objects_from,
-        }
+        return {"--" + k.replace("_", "-"): v for k, v in dataclasses.asdict(self).items()}
 
 
 FLAGS = tuple(CsvFlags().given())
@@ -144,9 +136,7 @@ def csv_options(
         lag_s=flags.lag_s,  # type: ignore[arg-type]  # checked by CsvOptions
         position_is=rig.position_is,
         position_increases_when=rig.position_increases_when,
-        memory_budget_gib=DEFAULT_CSV_MEMORY_BUDGET_GIB
-        if memory_budget_gib is None
-        else memory_budget_gib,
+        memory_budget_gib=DEFAULT_BUDGET if memory_budget_gib is None else memory_budget_gib,
     )
     reader = {"segment": bool(rig.segment), "phase": rig.phase or "all"}
     return options, reader

@@ -116,7 +116,7 @@ def measure(
     floating: sq.Floating = None,
     alpha_cm: opt.AlphaCm = None,
     dt_s: opt.DtS = None,
-    memory_budget_gib: opt.MemoryBudgetGib = None,
+    memory_budget_gib: sq.MemoryBudgetGib = None,
     seed: sq.Seed = None,
     noise_force_n: sq.NoiseForceN = None,
     noise_position_m: sq.NoisePositionM = None,
