@@ -194,8 +194,8 @@ def guess_encoding(raw: bytes) -> tuple[str, str] | None:
         odd = [c for c in text if ord(c) > 127]
         if enc in ("gbk", "big5", "shift_jis") and not any("\u3040" <= c <= "\u9fff" for c in odd):
             continue
-        sample = next((w for w in re.split(r"[\s,;]+", text) if any(ord(c) > 127 for c in w)), "")
-        return enc, sample[:20]
+        line = next((w for w in text.splitlines() if any(ord(c) > 127 for c in w)), "")
+        return enc, line.strip()[:40]
     return None
 
 
@@ -380,9 +380,10 @@ def _sniff_dialect(lines: Sequence[str], dialect: CsvDialect, name: str) -> _Dia
             is_number(c, d.decimal, d.thousands) for c in commas for d in (best[3], rival[3])
         ):
             raise UsageError(
-                f"{name}: cannot tell whether ',' is the decimal mark or the thousands separator "
-                "(every number with a comma reads as digit groups, e.g. 1,234); pass --decimal , "
-                "or --thousands ,"
+                "cannot tell whether ',' is the decimal mark or the thousands separator (every "
+                "number with a comma reads as digit groups, e.g. 1,234); pass --decimal , or "
+                "--thousands ,",
+                path=name,
             )
     return best[3]
 
