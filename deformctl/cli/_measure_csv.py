@@ -19,6 +19,7 @@ from typing import Annotated, Any
 
 import typer
 
+from deformctl.artifacts.io import display_name
 from deformctl.cli._common import finish_sweep, parse_mapping
 from deformctl.measure import DEFAULT_CSV_MEMORY_BUDGET_GIB as DEFAULT_BUDGET
 from deformctl.measure import (
@@ -183,17 +184,20 @@ def _report_files(result: CsvBatchResult, output: str) -> None:
         assert rec is not None
         notes.append(rec.notes[0])
         for line in rec.notes[1:]:
-            typer.echo(f"{o.file.path}: {line}", err=True)
+            typer.echo(f"{display_name(o.file.path)}: {line}", err=True)
         for line in rec.warnings:
-            typer.echo(f"warning: {o.file.path}: object {o.file.object_id!r}: {line}", err=True)
+            typer.echo(
+                f"warning: {display_name(o.file.path)}: object {o.file.object_id!r}: {line}",
+                err=True,
+            )
         for r in rec.ruptures:
             typer.echo(
-                f"warning: {o.file.path}: object {o.file.object_id!r}: rupture in "
+                f"warning: {display_name(o.file.path)}: object {o.file.object_id!r}: rupture in "
                 f"{r.describe()}: cut off",
                 err=True,
             )
     for line in _counted(notes, len(read)):
-        typer.echo(line if total > 1 else f"{read[0].file.path}: {line}", err=True)
+        typer.echo(line if total > 1 else f"{display_name(read[0].file.path)}: {line}", err=True)
     for o in result.failed:
         typer.echo(f"error: {o.error}", err=True)
     if not read:

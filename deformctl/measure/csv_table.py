@@ -52,7 +52,10 @@ SNIFF_LINES = 200
 DATA_RUN = 3
 #: Encodings a file that does not decode is tried in, for the hint (first that decodes wins;
 #: the CJK ones only when they give CJK characters).
-GUESS_ENCODINGS: tuple[str, ...] = ("utf-8", "gbk", "big5", "shift_jis", "cp1252")
+GUESS_ENCODINGS: tuple[str, ...] = ("utf-8", "gb2312", "shift_jis", "cp1252")
+#: The encoding a guess names: GB2312 holds the common Chinese characters (a Latin-1 byte before
+#: ASCII never decodes in it, unlike in GBK), GBK is the superset to read the file with.
+_GUESS_NAME = {"gb2312": "gbk"}
 #: A thousands separator is taken when this share of the cells holding it has digit groups
 #: (the others are then named as bad cells, rather than hiding the separator).
 GROUPED_SHARE = 0.9
@@ -95,6 +98,14 @@ class CsvSource:
         if self.data is not None:
             return self.data[:n]
         with self.path.open("rb") as fh:  # type: ignore[union-attr]
+            return fh.read(n)
+
+    def tail(self, n: int) -> bytes:
+        """The last ``n`` bytes."""
+        if self.data is not None:
+            return self.data[-n:]
+        with self.path.open("rb") as fh:  # type: ignore[union-attr]
+            fh.seek(max(self.size - n, 0))
             return fh.read(n)
 
     def stream(self, offset: int) -> IO[bytes]:
@@ -192,10 +203,10 @@ def guess_encoding(raw: bytes) -> tuple[str, str] | None:
         except UnicodeError:
             continue
         odd = [c for c in text if ord(c) > 127]
-        if enc in ("gbk", "big5", "shift_jis") and not any("\u3040" <= c <= "\u9fff" for c in odd):
+        if enc in ("gb2312", "shift_jis") and not any("\u3040" <= c <= "\u9fff" for c in odd):
             continue
         line = next((w for w in text.splitlines() if any(ord(c) > 127 for c in w)), "")
-        return enc, line.strip()[:40]
+        return _GUESS_NAME.get(enc, enc), line.strip()[:40]
     return None
 
 
@@ -553,11 +564,7 @@ def read_layout(source: CsvSource, dialect: CsvDialect) -> CsvLayout:
     offsets = _line_offsets(lines, codec, bom)
     data_bytes = offsets[-1] - offsets[start]
     data_rows = sum(1 for line in lines[start:] if line.strip())
-    estimate = (
-        data_rows
-        if whole
-        else int((source.size - offsets[start]) / max(data_bytes / max(data_rows, 1), 1.0))
-    )
+    estimate = data_rows if whole else _rows_estimate(source, offsets[start], data_bytes, data_rows)
     return CsvLayout(
         encoding=codec,
         delimiter=sniff.delimiter,
@@ -575,6 +582,16 @@ def read_layout(source: CsvSource, dialect: CsvDialect) -> CsvLayout:
         sniffed=sniffed,
         rows_estimate=estimate,
     )
+
+
+def _rows_estimate(source: CsvSource, start: int, head_bytes: int, head_rows: int) -> int:
+    """The data rows of a file larger than its head: its size over the mean row length of the
+    head's rows and of the last :data:`HEAD_BYTES` (numbers grow longer down a file)."""
+    tail = source.tail(HEAD_BYTES)
+    tail = tail[tail.find(b"\n") + 1 :]  # the tail's first line may be cut
+    per_tail_row = len(tail) / max(tail.count(b"\n"), 1)
+    per_row = 0.5 * (head_bytes / max(head_rows, 1) + per_tail_row)
+    return int((source.size - start) / max(per_row, 1.0))
 
 
 def _other_delimiter(line: str, sniff: _Dialect) -> str | None:

@@ -64,7 +64,7 @@ LAG_MIN_RATE_VARIATION = 0.1
 #: Smoothing window for the rates, s (the same filter on both keeps their relative delay).
 LAG_WINDOW_S = 0.1
 #: The ramp is decimated to at most this many samples for the search.
-LAG_MAX_SAMPLES = 50_000
+LAG_MAX_SAMPLES = 20_000
 
 
 @dataclass(frozen=True)
