@@ -170,9 +170,12 @@ def run(
 
 
 def _counted(lines: Sequence[str], of: int) -> list[str]:
-    """Each distinct line once, with ``(N of M files)`` when it is not every file's."""
+    """Each distinct line once, with ``(all M files)`` or ``(N of M files)``."""
     counts = Counter(lines)
-    return [line if n == of == 1 else f"{line} ({n} of {of} files)" for line, n in counts.items()]
+    return [
+        line if of == 1 else f"{line} ({'all ' if n == of else f'{n} of '}{of} files)"
+        for line, n in counts.items()
+    ]
 
 
 def _report_files(result: CsvBatchResult, output: str) -> None:

@@ -61,6 +61,9 @@ LAG_MIN_CORRELATION = 0.8
 #: ... and each rate's standard deviation must be at least this fraction of its mean magnitude
 #: along the ramp (a constant-rate test cannot be aligned).
 LAG_MIN_RATE_VARIATION = 0.1
+#: ... and the correlation at the ends of the search must be lower than at the lag by at least
+#: this (rates that change too slowly to be aligned within the search correlate everywhere).
+LAG_MIN_CONTRAST = 0.05
 #: Smoothing window for the rates, s (the same filter on both keeps their relative delay).
 LAG_WINDOW_S = 0.1
 #: The ramp is decimated to at most this many samples for the search.
@@ -228,6 +231,14 @@ def estimate_lag(time_s: FloatArray, force_n: FloatArray, compression_m: FloatAr
     if best in (0, lags.shape[0] - 1):
         return LagEstimate(
             None, float(corr[best]), f"the best lag is at the search limit ±{k_max * dt:.3g} s"
+        )
+    contrast = float(corr[best]) - float(np.nanmax(corr[[0, -1]]))
+    if not contrast >= LAG_MIN_CONTRAST:
+        return LagEstimate(
+            None,
+            float(corr[best]),
+            f"the rates change too slowly to be aligned within ±{k_max * dt:.3g} s (correlation "
+            f"{float(corr[best]):.3f} at best, {float(np.nanmax(corr[[0, -1]])):.3f} at the ends)",
         )
     y0, y1, y2 = corr[best - 1], corr[best], corr[best + 1]
     denom = y0 - 2 * y1 + y2

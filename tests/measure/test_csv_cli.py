@@ -262,7 +262,7 @@ def test_many_files_one_log_with_a_failure(tmp_path: Path) -> None:
     lines = err.splitlines()
     assert lines == [
         "columns: time='Time (s)' [s], force='Load (N)' [N], compression='Compression (mm)' "
-        "[mm] (3 of 3 files)",
+        "[mm] (all 3 files)",
         f"error: {bad}: only 1 data row (line 2): a squeeze needs at least 2",
         f"{log}: 3 object(s) from 4 files, 3 squeeze(s), 24.0 s; 1 file(s) failed (recorded in "
         "the log)",
@@ -300,7 +300,7 @@ def test_many_files_dataset_directory_with_a_failure(tmp_path: Path) -> None:
     lines = err.splitlines()
     assert lines[0] == (
         f"{out}: columns: time='Time (s)' [s], force='Load (N)' [N], compression='Compression "
-        "(mm)' [mm] (3 of 3 files)"
+        "(mm)' [mm] (all 3 files)"
     )
     assert lines[1] == (
         f"error: {bad}: mixed delimiters: line 5 splits into 3 cells at ';', not at ',' (1 "

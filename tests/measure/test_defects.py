@@ -129,6 +129,11 @@ def test_constant_rate_lag_is_not_identifiable() -> None:
     est = estimate_lag(t, f, d)
     assert est.lag_s is None
     assert est.reason == "the compression rate is nearly constant on the loading ramp"
+    slow = np.arange(0.0, 2000.0, 0.01)  # one haversine over 2000 s: no lag, none found
+    f = 5.0 * (1.0 - np.cos(2.0 * np.pi * slow / 2000.0))
+    est = estimate_lag(slow, np.round(f, 5), np.round(f / 2000.0, 8))
+    assert est.lag_s is None
+    assert est.reason.startswith("the rates change too slowly to be aligned within ±")
 
 
 def test_force_lag_flag_and_lag_auto_remove_the_negative_damping(tmp_path: Path) -> None:

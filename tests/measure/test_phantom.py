@@ -42,7 +42,7 @@ def _check_folder(files: list[Path], tmp_path: Path) -> pd.DataFrame:
     assert res.exit_code == 0, res.stderr
     assert res.stderr.splitlines()[0] == (
         f"{out}: columns: time='Time (s)' [s], force='Load (N)' [N], compression='Compression "
-        f"(mm)' [mm] ({len(files)} of {len(files)} files)"
+        f"(mm)' [mm] (all {len(files)} files)"
     )
     table = tmp_path / "coefficients.parquet"
     res = runner.invoke(app, ["characterize", f"{out}/", "-o", str(table), "--model", "kv"])
