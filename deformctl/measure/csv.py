@@ -26,7 +26,6 @@ from typing import Any
 
 import numpy as np
 
-from deformctl.artifacts.io import note_input
 from deformctl.characterize.rupture import Phase
 from deformctl.errors import DeformctlError, InputDataError, UsageError
 from deformctl.measure.csv_columns import ColumnRole, column_roles, describe_roles
@@ -179,8 +178,6 @@ def read_csv_export(
     elif columns or units:
         raise UsageError("give columns and units in options, not beside it")
     source = CsvSource.open(path)
-    if source.path is not None:
-        note_input(source.path)
     try:
         return _read(
             source,

@@ -37,7 +37,8 @@ from typing import IO, Any
 
 import numpy as np
 
-from deformctl.errors import InputDataError, MissingInputError, UsageError
+from deformctl.artifacts.io import check_input_path
+from deformctl.errors import InputDataError, UsageError
 from deformctl.measure.csv_options import DELIMITER_NAMES, DELIMITERS, THOUSANDS, CsvDialect
 from deformctl.series import FloatArray
 from deformctl.units import parse_unit
@@ -79,14 +80,12 @@ class CsvSource:
         """The file ``path``, or stdin for ``-`` (read whole).
 
         Raises:
-            MissingInputError: no such file (exit 66).
+            MissingInputError: no such file, a directory, or no permission to read (exit 66).
         """
-        if str(path) == "-":
+        checked = check_input_path(path)
+        if isinstance(checked, str):
             return cls("<stdin>", data=sys.stdin.buffer.read())
-        p = Path(path)
-        if not p.is_file():
-            raise MissingInputError("no such CSV file", path=p)
-        return cls(str(p), path=p)
+        return cls(str(checked), path=checked)
 
     @property
     def size(self) -> int:

@@ -158,7 +158,7 @@ def test_contradicting_units_and_wrong_encoding(tmp_path: Path) -> None:
     )
     assert _measure("--csv", str(tmp_path / "no.csv"), "--weight-n", "1", "-o", "x.mcap") == (
         EXIT_NOINPUT,
-        f"error: {tmp_path / 'no.csv'}: no such CSV file\n",
+        f"error: {tmp_path / 'no.csv'}: no such file\n",
     )
 
 
