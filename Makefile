@@ -171,6 +171,8 @@ examples: install
 	cd $(EX) && ../$(DC) measure --csv doubtful/utm.csv --columns time=t,force=load,compression=pos \
 	  --units compression=mm --object-id foam --weight-n 0.7 -o doubtful/utm.mcap
 	cd $(EX) && ../$(DC) characterize doubtful/utm.mcap -o doubtful/utm.parquet
+	cd $(EX) && ../$(DC) measure --csv ../datasets/examples/phantom/*.csv --weight-n 0.62 -o phantoms/
+	cd $(EX) && ../$(DC) characterize phantoms/ -o phantoms.parquet --model kv
 	cd $(EX) && ../$(DC) lift ../datasets/paper/objects.csv \
 	  --rig "../$(BIN)/python ../examples/threshold_rig.py" -o lift-rig.parquet --log lift-rig.mcap
 	@echo "examples ran in $(EX)/"

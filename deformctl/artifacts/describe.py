@@ -191,7 +191,8 @@ def coefficient_rows(df: pd.DataFrame) -> list[dict[str, Any]]:
 def squeeze_summaries(
     objects: list[dict[str, Any]], squeezes: list[SqueezeSeries]
 ) -> list[dict[str, Any]]:
-    """Per object of a squeeze log: squeezes, peak force and compression, rates, phase, ruptures.
+    """Per object of a squeeze log: squeezes, peak force and compression, rates, phase, ruptures,
+    and for a CSV recording its columns and the recording's defects.
 
     The sample rates are those ``measure`` stored (``force_rate_hz``, ``position_rate_hz``), or
     the squeezes' own median rate when the log does not say.
@@ -215,9 +216,24 @@ def squeeze_summaries(
                 "position_rate_hz": obj.get("position_rate_hz", own_rate),
                 "phase": obj.get("phase", "all"),
                 "ruptures": [r.to_record() for r in ruptures_from_object(obj)],
+                "columns": _csv_columns(obj),
+                "recording_flags": list(obj.get("recording_flags") or []),
             }
         )
     return out
+
+
+def _csv_columns(obj: dict[str, Any]) -> str | None:
+    """A CSV recording's columns as ``measure`` read them: ``time='Time (s)' [s], ...``."""
+    csv = obj.get("csv")
+    columns = csv.get("columns") if isinstance(csv, dict) else None
+    if not isinstance(columns, dict):
+        return None
+    return ", ".join(
+        f"{role}={c.get('column')!r} [{c.get('unit')}]"
+        for role, c in columns.items()
+        if isinstance(c, dict)
+    )
 
 
 def _fields(schema_name: str) -> list[dict[str, Any]]:

@@ -81,6 +81,12 @@ def _per_object_lines(info: dict[str, Any]) -> list[str]:
             f"{_num(o['peak_compression_m'], '.4g')} m, force {_num(o['force_rate_hz'], '.4g')} "
             f"Hz, position {_num(o['position_rate_hz'], '.4g')} Hz, phase {o['phase']}"
             + (f"; {rupt}" if rupt else "")
+            + (f"; columns {o['columns']}" if o.get("columns") else "")
+            + (
+                f"; recording flags {','.join(o['recording_flags'])}"
+                if o.get("recording_flags")
+                else ""
+            )
         )
     for c in info.get("coefficients") or []:
         lines.append(
