@@ -534,7 +534,7 @@ def read_ros2_bag(
         source="ros2_bag",
         phase=phase,
         ruptures=tuple(ruptures),
-        notes=tuple(notes),
+        warnings=tuple(notes),
     )
 
 
