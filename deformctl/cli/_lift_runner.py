@@ -23,6 +23,16 @@ from deformctl.parallel import SweepOptions
 if TYPE_CHECKING:  # pragma: no cover - the simulator is imported when --sim is given
     from deformctl.presets import SimPreset
 
+MaxForceN = Annotated[
+    float | None,
+    typer.Option(
+        "--max-force-n",
+        metavar="N",
+        help="Force ceiling per palm, N, for every object: no attempt asks for more; a search "
+        "that needs more stops with 'no safe grip'. Default: the catalog's max_force_n, else "
+        "10 x F_w lowered to a known rupture or yield force (--coefficients).",
+    ),
+]
 RigTimeout = Annotated[
     float | None,
     typer.Option(

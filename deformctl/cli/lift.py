@@ -41,6 +41,7 @@ from deformctl.cli._lift_runner import (
     LiftHeight,
     LiftHoldS,
     LiftSpeed,
+    MaxForceN,
     PalmMarkerIds,
     PalmRegions,
     RigTimeout,
@@ -60,6 +61,7 @@ from deformctl.cli._lift_start import (
     start_seed,
 )
 from deformctl.errors import UsageError
+from deformctl.lift.ceiling import validate_max_force
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
     DEFAULT_MAX_ATTEMPTS,
@@ -140,6 +142,7 @@ def lift(
     max_attempts: Annotated[
         int, typer.Option("--max-attempts", help="Most attempts per object (>= 1).")
     ] = DEFAULT_MAX_ATTEMPTS,
+    max_force_n: MaxForceN = None,
     log_epoch: opt.LogEpoch = None,
     start_model: StartModel = None,
     start_table: StartTable = None,
@@ -174,6 +177,10 @@ def lift(
     --start-margin instead of at F_w, goes down (or up by --growth) until the outcome flips and
     bisects to --tolerance: the same L_f as refine in fewer attempts. D and λ come from
     --coefficients (or the catalog); an object outside the training range starts at F_w.
+
+    No attempt asks for more than the object's force ceiling (--max-force-n, the catalog's
+    max_force_n, or 10 x F_w lowered to a known rupture force): a start above it is clamped,
+    a search that needs more stops with "no safe grip" (exit 1).
 
     Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
     -o lift.parquet --log lift.mcap
@@ -213,10 +220,14 @@ def lift(
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
     )
+    if max_force_n is not None:
+        validate_max_force(max_force_n, "--max-force-n")
     object_ids = opt.parse_object_ids(objects)
     seed = start_seed(start_model, start_table, start_interpolate, start_margin, coefficients,
                       protocol=protocol, dataset=dataset)  # fmt: skip
     if dataset:
+        if max_force_n is not None:
+            raise UsageError("--max-force-n is for a single-file output (a dataset is simulated)")
         search = (protocol, growth, tolerance, max_attempts, opt.parse_log_epoch(log_epoch))
         lift_dataset(catalog, parts, log, search, output, sweep, object_ids, force)
         return
@@ -226,6 +237,6 @@ def lift(
             protocol=cast(SearchProtocol, protocol),  # checked by validate_search_options
             growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts,
             progress=progress, force=force, log_epoch_ns=opt.parse_log_epoch(log_epoch),
-            seed=seed, warn=warn, workers=sweep.workers,
+            seed=seed, warn=warn, workers=sweep.workers, max_force_n=max_force_n,
         )  # fmt: skip
     report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)))

@@ -45,6 +45,7 @@ from deformctl.artifacts import (
 from deformctl.artifacts.io import committed_together, is_stdio
 from deformctl.catalog import CatalogObject, catalog_objects, select_objects
 from deformctl.errors import DeformctlError, UsageError
+from deformctl.lift.ceiling import CEILING_COLUMN, ForceCeiling, force_ceiling
 from deformctl.lift.journal import LiftJournal
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
@@ -202,6 +203,7 @@ def lift_catalog(
     warn: Warn | None = None,
     workers: int = 1,
     journal: LiftJournal | None = None,
+    max_force_n: float | None = None,
 ) -> CatalogLiftResult:
     """Search the minimum lifting force of every object of a catalog, one after another.
 
@@ -238,6 +240,10 @@ def lift_catalog(
             (the rig) always runs in this process, one object after another.
         journal: record every attempt and every finished row in it as they happen
             (:mod:`deformctl.lift.journal`); the objects then run in this process.
+        max_force_n: the force ceiling of every object, N (``--max-force-n``); None: the
+            catalog's ``max_force_n`` or the default of :mod:`deformctl.lift.ceiling`. No
+            attempt requests more; the runner gets it as the row's ``max_force_n`` (the rig
+            request carries it); a seeded start above it is clamped and ``warn`` says so.
 
     Returns:
         A :class:`CatalogLiftResult`.
@@ -271,6 +277,17 @@ def lift_catalog(
         for estimate in starts.values():
             if estimate.warning is not None and warn is not None:
                 warn(estimate.warning)
+    ceilings = _ceilings(objects, f_w, max_force_n, seed, path)
+    for obj, f_w_n in zip(objects, f_w, strict=True):
+        clamp = _clamp_warning(obj.object_id, f_w_n, starts.get(obj.object_id), seed, ceilings)
+        if clamp is not None and warn is not None:
+            warn(clamp)
+    objects = [
+        dataclasses.replace(
+            obj, row={**obj.row, CEILING_COLUMN: ceilings[obj.object_id].max_force_n}
+        )
+        for obj in objects
+    ]
     rows: list[dict[str, object]] = []
     attempts: list[LiftAttempt] = []
     results: list[LiftSearchResult] = []
@@ -355,6 +372,7 @@ def lift_catalog_files(
     seed: StartSeed | None = None,
     warn: Warn | None = None,
     workers: int | None = None,
+    max_force_n: float | None = None,
 ) -> CatalogLiftResult:
     """:func:`lift_catalog` from a catalog file: the lift_results table and the lift log written.
 
@@ -372,8 +390,8 @@ def lift_catalog_files(
         output: the lift_results table (``-`` for stdout).
         log: the lift log with every attempt (``-`` for stdout), or None.
         object_ids: these objects, in this order (None: all).
-        protocol, growth, tolerance_rel, max_attempts, progress, seed, warn: as for
-            :func:`lift_catalog`.
+        protocol, growth, tolerance_rel, max_attempts, progress, seed, warn, max_force_n: as
+            for :func:`lift_catalog`.
         force: overwrite existing outputs.
         log_epoch_ns: where the log's attempts without a wall clock (simulated ones) begin, ns
             since the Unix epoch (None: the log writer's fixed epoch, 2000-01-01).
@@ -404,6 +422,7 @@ def lift_catalog_files(
             "growth": growth,
             "tolerance_rel": tolerance_rel,
             "max_attempts": max_attempts,
+            **({"max_force_n": max_force_n} if max_force_n is not None else {}),
             "objects": list(selected["object_id"]),
             **({"start": {"source": seed.source, **seed.settings}} if seed is not None else {}),
         },
@@ -424,6 +443,7 @@ def lift_catalog_files(
             warn=warn,
             workers=single_file_workers(workers, len(selected)),  # the rig runs in-process anyway
             journal=journal if journal is not None and journal.active else None,
+            max_force_n=max_force_n,
         )
     except DeformctlError as err:
         if journal is not None and journal.written:  # say what survived the failure
@@ -464,6 +484,7 @@ def _not_run_row(
         "tolerance_rel": math.nan if protocol == "paper" else float(tolerance_rel),
         "runner": factory.name,
         "error": error,
+        "max_force_n": float(obj.get(CEILING_COLUMN, math.nan)),
     }
     row.update(factory.row_fields(obj))
     return row
@@ -596,6 +617,7 @@ def _search(
             max_attempts=max_attempts,
             object_id=obj.object_id,
             source=start.source,
+            max_force_n=float(obj[CEILING_COLUMN]),
         )
     result = find_min_lift_force(
         runner,
@@ -606,5 +628,55 @@ def _search(
         tolerance_rel=tolerance_rel,
         max_attempts=max_attempts,
         object_id=obj.object_id,
+        max_force_n=float(obj.get(CEILING_COLUMN, math.inf)),
     )
     return _fallback(result, start)
+
+
+def _ceilings(
+    objects: Sequence[CatalogObject],
+    f_w: Sequence[float],
+    max_force_n: float | None,
+    seed: StartSeed | None,
+    path: str | None,
+) -> dict[str, ForceCeiling]:
+    """Each object's force ceiling (:func:`~deformctl.lift.ceiling.force_ceiling`)."""
+    coefficients: dict[str, Mapping[str, Any]] = {}
+    if seed is not None and seed.coefficients is not None:
+        coefficients = {str(r["object_id"]): r for r in seed.coefficients.to_dict("records")}
+    return {
+        obj.object_id: force_ceiling(
+            obj.object_id,
+            f_w_n,
+            row=obj.row,
+            max_force_n=max_force_n,
+            coefficients=coefficients.get(obj.object_id),
+            path=path,
+        )
+        for obj, f_w_n in zip(objects, f_w, strict=True)
+    }
+
+
+def _clamp_warning(
+    object_id: str,
+    f_w_n: float,
+    start: StartEstimate | None,
+    seed: StartSeed | None,
+    ceilings: Mapping[str, ForceCeiling],
+) -> str | None:
+    """The warning of a seeded start (or an F_w) above the object's ceiling, else None."""
+    ceiling = ceilings[object_id]
+    if f_w_n > ceiling.max_force_n:
+        return (
+            f"object {object_id!r}: F_w = {f_w_n:.6g} N is above its {ceiling.describe()}: "
+            "no safe grip, not lifted"
+        )
+    if start is None or seed is None or not start.in_range:
+        return None
+    wanted = max(f_w_n, start.predicted_lift_force_n * seed.margin)
+    if wanted <= ceiling.max_force_n:
+        return None
+    return (
+        f"object {object_id!r}: the {start.source}'s start {wanted:.6g} N is above its "
+        f"{ceiling.describe()}: clamped to the ceiling"
+    )
