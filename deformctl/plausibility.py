@@ -45,6 +45,13 @@ AXIS_DOMINANCE = 2.0
 #: The compression sign is judged on the samples whose force is at least this fraction of the
 #: peak: where the object is squeezed, d must be positive.
 SIGN_FORCE_FRAC = 0.5
+#: The largest plausible L_f / F_w. The lifting force of a deformable object is
+#: L_f = F_w + F_d; L_f / F_w is about 2 for an undamped object and falls with damping
+#: (docs/explanation/model.md), and the paper's objects lie below 2. Five times that is a unit or
+#: catalog mistake (a weight in grams, a μ of 0.005), not an object: ``lift``'s default force
+#: ceiling (:mod:`deformctl.lift.ceiling`), the index table's refusal of absurd rows
+#: (:func:`deformctl.table.impossible_rows`) and a prediction's plausibility all use it.
+MAX_LIFT_RATIO = 10.0
 #: Suggested units aim at these magnitudes: a 1 kHz sensor, a 10 N squeeze, a compression of a
 #: tenth of the object (or 1 cm when its size is unknown).
 _TARGET_RATE_HZ = 1000.0

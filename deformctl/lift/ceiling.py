@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from deformctl.errors import InputDataError, UsageError
+from deformctl.plausibility import MAX_LIFT_RATIO
 
 __all__ = [
     "CEILING_COLUMN",
@@ -37,7 +38,7 @@ __all__ = [
 ]
 
 #: The default ceiling, in multiples of the object's F_w (module doc).
-DEFAULT_CEILING_RATIO = 10.0
+DEFAULT_CEILING_RATIO = MAX_LIFT_RATIO
 #: The catalog column that sets one object's ceiling, N.
 CEILING_COLUMN = "max_force_n"
 #: Coefficient columns holding a force the object does not survive, N (``characterize``).
