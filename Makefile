@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
 .PHONY: install test lint bench golden-spread reproduce _report calibrate examples clean model \
-  _grip_train _grip_eval grip-study
+  _grip_train _grip_eval grip-study fuzz
 
 install: $(STAMP)
 
@@ -26,6 +26,13 @@ lint: install
 
 bench: install
 	$(BIN)/python -m bench
+
+# Seeded hostile inputs through the CLI (tests/fuzz/hostile_cli.py): prints the clean fraction
+# (issue 34 point 8). CASES and SEED change the set.
+CASES ?= 600
+SEED ?= 0
+fuzz: install
+	$(BIN)/python -m tests.fuzz.hostile_cli --cases $(CASES) --seed $(SEED)
 
 # The golden numbers (tests/test_golden.py) recomputed under every OpenBLAS kernel the installed
 # numpy accepts x 1 and 2 BLAS threads, each number's spread beside its tolerance, then
