@@ -11,6 +11,7 @@ from deformctl.errors import UsageError
 from deformctl.population import (
     DEFAULT_FRICTION_MU,
     PAPER_POPULATION_SIZE,
+    check_population_size,
     golden_population,
     grip_population,
     make_population,
@@ -82,6 +83,7 @@ def population(
 
     Example: deformctl population -n 73 --seed 0 -o population.csv
     """
+    check_population_size(n, "-n")  # before anything: exit 2 naming the flag
     chosen = [
         flag for flag, on in (("--golden", golden), ("--paper", paper), ("--grip", grip)) if on
     ]
