@@ -18,6 +18,9 @@ from deformctl.population import (
     paper_objects,
 )
 
+#: The columns whose ranges are options (``--weight-n`` for ``weight_n``, ...).
+RANGE_COLUMNS = ("weight_n", "deformability_n_per_cm", "damping_ns_per_cm", "friction_mu")
+
 
 def parse_range(option: str, text: str) -> tuple[float, float]:
     """Parse ``LOW,HIGH`` (or a single number meaning LOW = HIGH) into a pair of floats."""
@@ -99,15 +102,23 @@ def population(
         catalog = paper_objects()
     else:
         mu_low, mu_high = parse_range("--friction-mu", friction_mu)
-        catalog = make_population(
-            n,
-            seed=seed,
-            weight_n=parse_range("--weight-n", weight_n),
-            deformability_n_per_cm=parse_range("--deformability-n-per-cm", deformability_n_per_cm),
-            damping_ns_per_cm=parse_range("--damping-ns-per-cm", damping_ns_per_cm),
-            friction_mu=mu_low if mu_low == mu_high else (mu_low, mu_high),
-            id_prefix=id_prefix,
-        )
+        try:
+            catalog = make_population(
+                n,
+                seed=seed,
+                weight_n=parse_range("--weight-n", weight_n),
+                deformability_n_per_cm=parse_range(
+                    "--deformability-n-per-cm", deformability_n_per_cm
+                ),
+                damping_ns_per_cm=parse_range("--damping-ns-per-cm", damping_ns_per_cm),
+                friction_mu=mu_low if mu_low == mu_high else (mu_low, mu_high),
+                id_prefix=id_prefix,
+            )
+        except UsageError as err:  # the library names the column: name the flag too
+            column = err.message.split(" ", 1)[0]
+            if column in RANGE_COLUMNS:
+                err.message = f"--{column.replace('_', '-')}: {err.message}"
+            raise
     provenance = Provenance.from_invocation(
         seed=None if golden or paper else seed,
         settings={"golden": golden, "paper": paper, "grip": grip, "n": len(catalog)},

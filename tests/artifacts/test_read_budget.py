@@ -65,3 +65,16 @@ def test_population_n_is_bounded_naming_the_flag(tmp_path: Path) -> None:
     )
     assert not out.exists()
     assert runner.invoke(app, ["population", "-n", "5", "-o", str(out)]).exit_code == 0
+
+
+@pytest.mark.parametrize(
+    ("args", "line"),
+    [
+        (["--weight-n", "0,10"], "error: --weight-n: weight_n must be > 0.0, got low = 0.0"),
+        (["--friction-mu", "0"], "error: --friction-mu: friction_mu must be > 0.0, got low = 0.0"),
+    ],
+)
+def test_population_range_errors_name_the_flag(tmp_path: Path, args: list[str], line: str) -> None:
+    out = tmp_path / "pop.csv"
+    assert _one_error(runner.invoke(app, ["population", *args, "-o", str(out)]), 2) == line
+    assert not out.exists()
