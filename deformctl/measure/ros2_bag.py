@@ -307,6 +307,8 @@ def _cut_bag(fh: BinaryIO, size: int, path: Path, detail: str, notes: list[str] 
 
 def _damage_text(detail: str, crc_check: bool) -> str:
     """The one line of a damaged bag: what and where, and the way out when there is one."""
+    if detail.startswith("not an MCAP file"):
+        return "not a readable MCAP file (bad magic bytes)"
     cut = detail.startswith("the file ends at byte")
     what = "truncated MCAP file" if cut else "damaged MCAP file"
     hint = ""
