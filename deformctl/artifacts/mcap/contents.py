@@ -149,6 +149,31 @@ class McapContents:
                 return kind
         return None
 
+    def kind_from_topics(self) -> str | None:
+        """The kind the channels' topics make (whatever the ``deformctl`` record declares);
+        None without channels or for topics of no deformctl kind."""
+        found = {topic_schema(c.topic) for c in self.channels.values() if c.topic}
+        names = {f[0] if f else None for f in found}
+        for kind, kind_schemas in KIND_SCHEMAS.items():
+            if names and names <= set(kind_schemas):
+                return kind
+        return None
+
+    def check_declared_kind(self) -> None:
+        """Refuse a log whose declared kind its channels contradict (a relabelled log).
+
+        Raises:
+            InputDataError: one line naming both kinds and a topic (exit 65).
+        """
+        declared, found = self.kind, self.kind_from_topics()
+        if declared in MCAP_KINDS and found is not None and found != declared:
+            topic = sorted(c.topic for c in self.channels.values() if c.topic)[0]
+            raise InputDataError(
+                f"declares kind {declared!r} but its channels are a {found}'s ({topic!r}): "
+                "the content does not match the label",
+                path=self.path,
+            )
+
     def message_counts(self) -> dict[str, int]:
         """Topic → number of messages."""
         counts = {c.topic: 0 for c in self.channels.values()}
