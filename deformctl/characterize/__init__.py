@@ -30,9 +30,6 @@ from deformctl.characterize.fit import (
     DEFAULT_POLYORDER,
     DEFAULT_WINDOW_RATE_HZ,
     DEFAULT_WINDOW_S,
-    MIN_SAMPLES,
-    NO_COMPRESSION_M,
-    NO_COMPRESSION_NOISE_MULT,
     PRELOADS,
     UNIFORM_DT_RTOL,
     Method,
@@ -42,13 +39,18 @@ from deformctl.characterize.fit import (
     default_window_s,
     fit_lsq,
     fit_paper,
-    validate_squeeze,
 )
 from deformctl.characterize.models import (
     Profile,
     kelvin_voigt_piecewise_linear,
     kelvin_voigt_response,
     synthetic_kelvin_voigt_squeeze,
+)
+from deformctl.characterize.prepare import (
+    MIN_SAMPLES,
+    NO_COMPRESSION_M,
+    NO_COMPRESSION_NOISE_MULT,
+    validate_squeeze,
 )
 from deformctl.characterize.stage import (
     RIG_SOURCES,

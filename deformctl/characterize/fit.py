@@ -59,11 +59,12 @@ import numpy as np
 import pandas as pd
 
 from deformctl.characterize.coefficients import CoefficientFit, _coefficient_frame
+from deformctl.characterize.prepare import _where, validate_squeeze
 from deformctl.characterize.quality import PAPER_MONOTONIC_FRAC, damping_identifiable
 from deformctl.characterize.rupture import Rupture, cut_rupture_smoothed
 from deformctl.errors import InputDataError, UsageError
 from deformctl.series import FloatArray, SqueezeSeries
-from deformctl.signals import noise_std, sg_smooth, sg_window_length, uniform_grid
+from deformctl.signals import sg_smooth, sg_window_length, uniform_grid
 from deformctl.units import N_PER_CM, NS_PER_CM
 
 Method = Literal["lsq", "paper"]
@@ -84,12 +85,6 @@ DEFAULT_POLYORDER = 3
 DEFAULT_MIN_COMPRESSION_FRAC = 0.02
 #: Paper method: samples with |d'| below this fraction of the peak |d'| are not used for λ.
 DEFAULT_MIN_RATE_FRAC = 0.05
-#: A squeeze whose peak compression is at or below this is "no compression", m.
-NO_COMPRESSION_M = 1e-6
-#: ... or at or below this multiple of the estimated position noise std (max of pure noise ≈ 4σ).
-NO_COMPRESSION_NOISE_MULT = 6.0
-#: Fewest samples a squeeze must have (before trimming).
-MIN_SAMPLES = 10
 #: Relative spread of the sampling interval above which a log is resampled to a uniform grid.
 UNIFORM_DT_RTOL = 1e-3
 #: Condition number of ``XᵀX`` of ``[d, d']`` above which D cannot be estimated at all.
@@ -109,57 +104,6 @@ class _Prepared:
     rate_m_per_s: FloatArray
     window_samples: int
     rupture: Rupture | None = None
-
-
-def _where(s: SqueezeSeries) -> str:
-    return f"squeeze {s.object_id!r} #{s.squeeze_index}"
-
-
-def validate_squeeze(s: SqueezeSeries, *, min_samples: int = MIN_SAMPLES) -> None:
-    """Refuse a squeeze that cannot be characterised.
-
-    Raises:
-        InputDataError: too few samples, NaN/inf samples, timestamps that do not strictly
-            increase, or no compression (peak compression ≤ :data:`NO_COMPRESSION_M`); a
-            compression that is mostly negative is named as having the wrong sign.
-    """
-    if len(s) < min_samples:
-        raise InputDataError(f"{_where(s)}: only {len(s)} samples, need at least {min_samples}")
-    for name in ("time_s", "force_n", "compression_m"):
-        arr: FloatArray = getattr(s, name)
-        bad = np.flatnonzero(~np.isfinite(arr))
-        if bad.size:
-            raise InputDataError(
-                f"{_where(s)}: {bad.size} non-finite (NaN/inf) {name} sample(s), first at index "
-                f"{int(bad[0])}"
-            )
-    dt = np.diff(s.time_s)
-    bad = np.flatnonzero(dt <= 0)
-    if bad.size:
-        i = int(bad[0]) + 1
-        raise InputDataError(
-            f"{_where(s)}: non-monotonic timestamps, time_s[{i}]={s.time_s[i]:.9g} s does not "
-            f"follow time_s[{i - 1}]={s.time_s[i - 1]:.9g} s"
-        )
-    peak_m = float(np.max(s.compression_m))
-    noise_m = _noise_std_m(s.compression_m)
-    low_m = float(np.min(s.compression_m))
-    if -low_m > max(peak_m, NO_COMPRESSION_NOISE_MULT * noise_m, NO_COMPRESSION_M):
-        raise InputDataError(
-            f"{_where(s)}: no compression: it has the wrong sign (down to {low_m:.3g} m, at most "
-            f"{peak_m:.3g} m): it must be positive when squeezed; re-measure with the "
-            "position direction flipped (measure --position-increases-when)"
-        )
-    if peak_m <= max(NO_COMPRESSION_M, NO_COMPRESSION_NOISE_MULT * noise_m):
-        raise InputDataError(
-            f"{_where(s)}: no compression (peak compression {peak_m:.3g} m, position noise "
-            f"{noise_m:.3g} m); the palms did not squeeze the object, or compression has the "
-            "wrong sign (it must be positive when squeezed)"
-        )
-
-
-#: Robust white-noise std of a sampled signal, m (see :func:`deformctl.signals.noise_std`).
-_noise_std_m = noise_std
 
 
 def _uniform(s: SqueezeSeries) -> tuple[float, FloatArray, FloatArray]:
