@@ -16,9 +16,11 @@ N, m, s). Every law carries a preload ``F0`` (a contact preload or a force-senso
 differentiates the compression: it compares the mean force over short windows with the mean of
 each law over the same windows, which needs only integrals of ``d``. The damping terms are exact
 derivatives (``λ ḋ = d/dt(λ d)``, ``λ dⁿ ḋ = d/dt(λ dⁿ⁺¹/(n+1))``), so their window means are
-end-point differences, and the Maxwell arm is an exact recursion on the compression's increments
-(exact for a compression that is linear between samples). :func:`window_design` builds these
-window means; no filter edge, corner or sharp reversal biases them.
+end-point differences (of the compression lightly smoothed, one-sided at the squeeze's ends, so
+that position noise is not divided by the window undamped), and the Maxwell arm is an exact
+recursion on the compression's increments (exact for a compression linear between samples).
+:func:`window_design` builds these window means; no filter edge, corner or sharp reversal
+biases them.
 
 **What a grip uses.** :func:`elastic_force` is a law's rate-free force–compression curve (KV and
 HC: the spring; SLS: the relaxed spring ``k1``, what a held grip settles to);
@@ -108,6 +110,7 @@ def maxwell_strain(d: FloatArray, dt_s: float, tau_s: float) -> FloatArray:
 def window_design(
     model: str,
     d: FloatArray,
+    d_end: FloatArray,
     dt_s: float,
     a: np.ndarray,
     b: np.ndarray,
@@ -117,7 +120,9 @@ def window_design(
 
     Args:
         model: ``kv``, ``hc`` or ``sls``.
-        d: compression on a uniform grid, divided by the reference compression (dimensionless).
+        d: raw compression on a uniform grid, divided by the reference compression.
+        d_end: the same compression lightly smoothed, for the damping terms' end points (an
+            end-point difference of raw samples carries two samples' noise undivided).
         dt_s: grid interval, s.
         a, b: window start and end sample indices ``[m]``.
         shape: HC's exponent ``n``; SLS's relaxation time ``τ`` (s); ignored for KV.
@@ -128,12 +133,11 @@ def window_design(
     """
     if model == "kv":
         first = window_mean(cumulative_mean_parts(d, dt_s), a, b, dt_s)
-        second = (d[b] - d[a]) / ((b - a) * dt_s)
+        second = (d_end[b] - d_end[a]) / ((b - a) * dt_s)
     elif model == "hc":
-        dp = np.maximum(d, 0.0)
-        pw = dp**shape
+        pw = np.maximum(d, 0.0) ** shape
         first = window_mean(cumulative_mean_parts(pw, dt_s), a, b, dt_s)
-        g = pw * dp / (shape + 1.0)
+        g = np.maximum(d_end, 0.0) ** (shape + 1.0) / (shape + 1.0)
         second = (g[b] - g[a]) / ((b - a) * dt_s)
     elif model == "sls":
         first = window_mean(cumulative_mean_parts(d, dt_s), a, b, dt_s)

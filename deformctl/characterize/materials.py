@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from deformctl.characterize.laws import (
+    DAMPING_PARAMETERS,
     HC_EXPONENT_BOUNDS,
     MODELS,
     PARAMETERS,
@@ -76,6 +77,8 @@ class FitSqueeze:
         force_n: force on the grid, N ``[n]``.
         compression_m: raw compression on the grid, m ``[n]``.
         starts, ends: window start and end sample indices ``[m]`` (windows in contact only).
+        end_compression_m: the compression lightly smoothed (cubic Savitzky–Golay over a quarter
+            window, one-sided at the ends), for the damping terms' end points, m ``[n]``.
     """
 
     squeeze_index: int
@@ -85,6 +88,7 @@ class FitSqueeze:
     compression_m: FloatArray
     starts: np.ndarray
     ends: np.ndarray
+    end_compression_m: FloatArray
 
     @property
     def duration_s(self) -> float:
@@ -118,7 +122,7 @@ class FitSqueeze:
 
     def mean_rate(self) -> FloatArray:
         """Window means of the compression rate, m/s ``[m]`` (end-point differences)."""
-        d = self.compression_m
+        d = self.end_compression_m
         return np.asarray(
             (d[self.ends] - d[self.starts]) / ((self.ends - self.starts) * self.dt_s),
             dtype=np.float64,
@@ -142,6 +146,19 @@ def windows(n: int, window_samples: int) -> tuple[np.ndarray, np.ndarray]:
     return starts.astype(np.int64), (starts + w).astype(np.int64)
 
 
+def end_smoothed(compression_m: FloatArray, window: int) -> FloatArray:
+    """The compression for the damping terms' end points: a cubic Savitzky–Golay fit over a
+    quarter window (at least 5 samples), one-sided at the ends (``mode="interp"``)."""
+    from scipy.signal import savgol_filter
+
+    n = compression_m.shape[0]
+    length = max(5, window // 4)
+    length = length if length % 2 == 1 else length + 1
+    if n < length:
+        return compression_m
+    return np.asarray(savgol_filter(compression_m, length, 3, mode="interp"), dtype=np.float64)
+
+
 def fit_squeeze(
     squeeze_index: int, dt_s: float, force_n: FloatArray, compression_m: FloatArray, window: int
 ) -> FitSqueeze:
@@ -152,6 +169,7 @@ def fit_squeeze(
     running_max = np.maximum.accumulate(compression_m)
     contact = running_max[b] >= MIN_COMPRESSION_FRAC * peak
     return FitSqueeze(
+        end_compression_m=end_smoothed(compression_m, window),
         squeeze_index=squeeze_index,
         dt_s=dt_s,
         time_s=dt_s * np.arange(n, dtype=np.float64),
@@ -171,12 +189,15 @@ class FitData:
         window_samples: the window, samples (the Savitzky–Golay window the log's rate implies).
         fit_preload: fit the preload ``F0`` (else 0).
         lag_s: the lag of the force behind the compression, s; None fits it.
+        damping: fit the law's rate-dependent part (KV and HC ``λ``, SLS's Maxwell arm); False
+            when it cannot be identified (a single speed): the law is then its spring alone.
     """
 
     squeezes: tuple[FitSqueeze, ...]
     window_samples: int
     fit_preload: bool
     lag_s: float | None = None
+    damping: bool = True
 
     @property
     def reference_compression_m(self) -> float:
@@ -249,6 +270,26 @@ class MaterialFit:
     internal: dict[str, float] = field(default_factory=dict, repr=False)
     reference_compression_m: float = 1.0
 
+    def rate_window_force(self, squeeze: FitSqueeze) -> FloatArray:
+        """The law's rate-dependent force over the windows of one squeeze, N ``[m]`` (0 when the
+        damping was not fitted)."""
+        b = self.internal["b"]
+        if not math.isfinite(b) or b == 0.0 or not math.isfinite(self.params["preload_n"]):
+            return np.zeros(squeeze.starts.shape[0])
+        shape = self.internal.get("shape", 1.0)
+        shape_value = math.exp(shape) if self.model == "sls" else shape
+        d_ref = self.reference_compression_m
+        cols = window_design(
+            self.model,
+            squeeze.compression_m / d_ref,
+            squeeze.end_compression_m / d_ref,
+            squeeze.dt_s,
+            squeeze.starts,
+            squeeze.ends,
+            shape_value,
+        )
+        return np.asarray(b * cols[:, 1], dtype=np.float64)
+
     def derived_se(self, func: Callable[[dict[str, float]], float]) -> float:
         """Standard error of a function of the SI parameters (delta method over the free ones)."""
         if not self.free or not np.all(np.isfinite(self.covariance)):
@@ -289,12 +330,13 @@ class _Problem:
         self.data = data
         self.d_ref = data.reference_compression_m
         self.scaled = [s.compression_m / self.d_ref for s in data.squeezes]
+        self.scaled_end = [s.end_compression_m / self.d_ref for s in data.squeezes]
         self.designs: dict[float, FloatArray] = {}
         self.targets: dict[float, FloatArray] = {}
         self.shape_bounds: tuple[float, float] | None = None
         if model == "hc":
             self.shape_bounds = HC_EXPONENT_BOUNDS
-        elif model == "sls":
+        elif model == "sls" and data.damping:
             dt = min(s.dt_s for s in data.squeezes)
             total = sum(s.duration_s for s in data.squeezes)
             self.shape_bounds = (math.log(data.window_samples * dt), math.log(10.0 * total))
@@ -314,9 +356,11 @@ class _Problem:
             if len(self.designs) > 256:
                 self.designs.clear()
             shape_value = math.exp(shape) if self.model == "sls" else shape
+            if self.model == "sls" and not self.data.damping:
+                shape_value = 1.0  # the arm is not fitted
             blocks = []
-            for s, d in zip(self.data.squeezes, self.scaled, strict=True):
-                cols = window_design(self.model, d, s.dt_s, s.starts, s.ends, shape_value)
+            for s, d, d_end in zip(self.data.squeezes, self.scaled, self.scaled_end, strict=True):
+                cols = window_design(self.model, d, d_end, s.dt_s, s.starts, s.ends, shape_value)
                 blocks.append(np.column_stack([np.ones(cols.shape[0]), cols]))
             self.designs[shape] = np.vstack(blocks)
         return self.designs[shape]
@@ -335,7 +379,8 @@ class _Problem:
         rhs = (x.T @ y) / scale
         first = 0 if self.data.fit_preload else 1
         best: tuple[float, FloatArray] | None = None
-        for keep in ((1, 2), (1,), (2,), ()):
+        subsets = ((1, 2), (1,), (2,), ()) if self.data.damping else ((1,), ())
+        for keep in subsets:
             idx = list(range(first, 1)) + list(keep)
             coef = np.zeros(3)
             if idx:
@@ -349,7 +394,7 @@ class _Problem:
             gain = 2.0 * float(coef @ rhs) - float(coef @ gram @ coef)
             if best is None or gain > best[0]:
                 best = (gain, coef)
-            if len(keep) == 2:
+            if keep == subsets[0]:
                 break  # the unconstrained fit is feasible: it is the optimum
         assert best is not None  # the empty subset is always feasible
         beta = np.asarray(best[1] / scale, dtype=np.float64)
@@ -443,8 +488,8 @@ def fit_material(model: str, data: FitData) -> MaterialFit:
     if model not in MODELS:
         raise ValueError(f"unknown model {model!r}")
     problem = _Problem(model, data)
-    n_lin = 3 if data.fit_preload else 2
-    n_params = n_lin + (model != "kv") + (problem.lag_bounds is not None)
+    n_lin = (3 if data.fit_preload else 2) - (not data.damping)
+    n_params = n_lin + (problem.shape_bounds is not None) + (problem.lag_bounds is not None)
     if data.n_windows < n_params + 2:
         raise InputDataError(
             f"only {data.n_windows} windows of {data.window_samples} samples to fit {n_params} "
@@ -472,15 +517,15 @@ def fit_material(model: str, data: FitData) -> MaterialFit:
     at_bound_internal: list[str] = []
     if beta[1] <= tol * max(abs(beta).max(), 1e-300):
         at_bound_internal.append("a")
-    if beta[2] <= tol * max(abs(beta).max(), 1e-300):
+    if data.damping and beta[2] <= tol * max(abs(beta).max(), 1e-300):
         at_bound_internal.append("b")
     if problem.shape_bounds is not None:
         lo, hi = problem.shape_bounds
         if min(shape - lo, hi - shape) <= 1e-4 * (hi - lo):
             at_bound_internal.append("shape")
     free = [p for p in ("f0", "a", "b") if not (p == "f0" and not data.fit_preload)]
-    free = [p for p in free if p not in at_bound_internal]
-    if model != "kv" and "shape" not in at_bound_internal:
+    free = [p for p in free if p not in at_bound_internal and (p != "b" or data.damping)]
+    if problem.shape_bounds is not None and "shape" not in at_bound_internal:
         free.append("shape")
     if problem.lag_bounds is not None and lag > 1e-6 and lag < problem.lag_bounds[1] - 1e-6:
         free.append("lag")
@@ -488,6 +533,9 @@ def fit_material(model: str, data: FitData) -> MaterialFit:
     cov = _covariance(problem, x, beta, shape, lag, resid, free)
     params = _physical_full(model, internal, problem.d_ref)
     se = _parameter_se(model, params, internal, free, cov, problem.d_ref)
+    if not data.damping:  # not fitted: no value
+        for name in DAMPING_PARAMETERS[model]:
+            params[name] = se[name] = math.nan
     names = {"a": PARAMETERS[model][0], "b": PARAMETERS[model][-1]}
     if model == "hc":
         names["shape"] = "exponent"

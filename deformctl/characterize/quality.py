@@ -10,15 +10,28 @@ wrong sign, wrong units; numbers in each constant's docstring) and stated here o
 
 ================================ ==============================================================
 ``negative_stiffness``           D ≤ 0: always an error unless ``--allow-flagged``
-``negative_damping``             λ below −:data:`NEGATIVE_DAMPING_ATOL_NS_PER_CM` and below
-                                 −:data:`NEGATIVE_DAMPING_SE_MULT` standard errors
-``damping_at_bound``             ``--constrain-damping`` held λ at 0 (the free fit was negative)
-``damping_unidentifiable``       λ cannot be told from a constant force or from D (λ = NaN);
-                                 see :func:`damping_identifiable`; ``--method paper``: monotonic
-                                 loading (:data:`PAPER_MONOTONIC_FRAC`)
+``negative_damping``             λ below 0 (any amount: λ is never negative with ``ok``; the
+                                 lsq fits are bounded, so this is the paper estimator's)
+``damping_at_bound``             ``--method paper`` rows written before v3: ``--constrain-damping``
+                                 held λ at 0 (lsq fits say ``at_bound``)
+``damping_unidentifiable``       λ cannot be told from a constant force or from D, or the
+                                 squeezes move at a single speed without a hold (λ = NaN; the
+                                 row gives ``hysteresis_energy_j`` when a loop closes); see
+                                 :func:`damping_identifiable` and
+                                 :func:`deformctl.characterize.stiffness.speed_summary`;
+                                 ``--method paper``: monotonic loading
+                                 (:data:`PAPER_MONOTONIC_FRAC`)
 ``low_r2``                       R² below :data:`LOW_R2`
 ``few_samples``                  fewer than :data:`FEW_SAMPLES_WINDOWS` SG windows of samples
 ``rupture``                      a squeeze ruptured (it is fitted up to the rupture only)
+``at_bound``                     a parameter of the chosen law sits at a physical bound
+                                 (stiffness or damping 0, HC's n at 1 or 3, SLS's τ at one
+                                 window or ten recordings; ``params_at_bound`` names them)
+``nonlinear_stiffness``          the loading curve's tangent stiffness varies by more than
+                                 :data:`deformctl.characterize.stiffness.NONLINEAR_RATIO` ×: D is
+                                 the secant at ``operating_force_n`` only
+``relaxation``                   the force decayed smoothly at constant compression (stress
+                                 relaxation, not rupture; ``rupture.find_relaxation``)
 ================================ ==============================================================
 
 Policy (:func:`enforce`): each flagged object gives one warning line naming the flags and their
@@ -43,6 +56,9 @@ DAMPING_UNIDENTIFIABLE = "damping_unidentifiable"
 LOW_R2_FLAG = "low_r2"
 FEW_SAMPLES = "few_samples"
 RUPTURE = "rupture"
+AT_BOUND = "at_bound"
+NONLINEAR_STIFFNESS = "nonlinear_stiffness"
+RELAXATION = "relaxation"
 #: Every flag, in the order ``quality`` lists them.
 FLAGS: tuple[str, ...] = (
     NEGATIVE_STIFFNESS,
@@ -52,6 +68,9 @@ FLAGS: tuple[str, ...] = (
     LOW_R2_FLAG,
     FEW_SAMPLES,
     RUPTURE,
+    AT_BOUND,
+    NONLINEAR_STIFFNESS,
+    RELAXATION,
 )
 OK = "ok"
 
@@ -61,11 +80,11 @@ OK = "ok"
 #: is mostly sensor noise (a wrong wrench axis: 2 % cross-talk) 0.33, a rupture fitted whole −0.7
 #: to −0.9 (D then falls to a tenth).
 LOW_R2 = 0.9
-#: ``negative_damping`` when λ is below −this (N·s/cm) ... Measured on objects with λ = 0: the
-#: simulator −0.05 ± 0.08 at worst (73 objects), synthetic squeezes −0.03 ± 0.02.
-NEGATIVE_DAMPING_ATOL_NS_PER_CM = 0.1
-#: ... and more than this many standard errors below 0 (both must hold).
-NEGATIVE_DAMPING_SE_MULT = 2.0
+#: Until schema v3, ``negative_damping`` needed λ below −0.1 N·s/cm and more than 2 standard
+#: errors below 0; 11 of 14 force-controlled fruit loadings then wrote λ < 0 with ``ok``. Since
+#: v3 any negative λ is flagged (these constants are 0 and kept for old callers).
+NEGATIVE_DAMPING_ATOL_NS_PER_CM = 0.0
+NEGATIVE_DAMPING_SE_MULT = 0.0
 #: ``damping_unidentifiable`` when less than this share of the rate's mean square is independent
 #: of a constant force and of d (``damping_excitation``) ... Measured: constant-rate loadings of a
 #: testing machine 0.000–0.043 (even with a 2 s acceleration ramp), a force ramp without a hold
@@ -116,17 +135,16 @@ def assess(
     damping_unidentifiable: bool = False,
     damping_bound_active: bool = False,
     ruptures: int = 0,
+    at_bound: bool = False,
+    nonlinear_stiffness: bool = False,
+    relaxations: int = 0,
 ) -> tuple[str, ...]:
     """The flags of one fit, in :data:`FLAGS` order (empty: ok)."""
     flags: list[str] = []
     if not deformability_n_per_cm > 0:
         flags.append(NEGATIVE_STIFFNESS)
-    lam, se = damping_ns_per_cm, damping_se_ns_per_cm
-    if (
-        math.isfinite(lam)
-        and lam < -NEGATIVE_DAMPING_ATOL_NS_PER_CM
-        and not (math.isfinite(se) and lam + NEGATIVE_DAMPING_SE_MULT * se >= 0)
-    ):
+    del damping_se_ns_per_cm  # a negative λ is flagged whatever its standard error
+    if math.isfinite(damping_ns_per_cm) and damping_ns_per_cm < 0:
         flags.append(NEGATIVE_DAMPING)
     if damping_bound_active:
         flags.append(DAMPING_AT_BOUND)
@@ -138,6 +156,12 @@ def assess(
         flags.append(FEW_SAMPLES)
     if ruptures > 0:
         flags.append(RUPTURE)
+    if at_bound:
+        flags.append(AT_BOUND)
+    if nonlinear_stiffness:
+        flags.append(NONLINEAR_STIFFNESS)
+    if relaxations > 0:
+        flags.append(RELAXATION)
     return tuple(flags)
 
 
@@ -183,9 +207,12 @@ def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
         if row.get("method") == "paper":
             return f"{flag} (not identifiable by the paper estimator: monotonic loading)"
         exc = _num(row.get("damping_excitation"), ".2g")
+        energy = _num(row.get("hysteresis_energy_j"), ".3g")
+        loop = f"; the loop dissipates {energy} J" if energy not in ("NaN", "?") else ""
         return (
-            f"{flag} (λ cannot be told from a preload or from D: rate excitation {exc} < "
-            f"{DAMPING_EXCITATION_MIN:g}; a constant-rate or creep-only test)"
+            f"{flag} (λ cannot be told from a preload, from D or from a rate-independent "
+            f"force: a single speed without a hold, or rate excitation {exc} < "
+            f"{DAMPING_EXCITATION_MIN:g}{loop})"
         )
     if flag == LOW_R2_FLAG:
         return f"{flag} (R² = {_num(row.get('r2'), '.3g')} < {LOW_R2:g})"
@@ -200,6 +227,21 @@ def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
             f"{flag} ({count} squeeze(s); first at {_num(row.get('rupture_time_s'), '.3g')} s, "
             f"{_num(row.get('rupture_force_n'), '.3g')} N; fitted up to it)"
         )
+    if flag == AT_BOUND:
+        which = row.get("params_at_bound") or "a parameter"
+        return f"{flag} ({which} of the {row.get('model', '?')} law at its bound)"
+    if flag == NONLINEAR_STIFFNESS:
+        return (
+            f"{flag} (tangent stiffness varies {_num(row.get('tangent_stiffness_spread'), '.3g')}× "
+            f"over the loading; small-strain "
+            f"{_num(row.get('deformability_small_strain_n_per_cm'), '.3g')} N/cm, stiffening "
+            f"ratio {_num(row.get('stiffening_ratio'), '.3g')}; D is the secant at "
+            f"{_num(row.get('operating_force_n'), '.3g')} N)"
+        )
+    if flag == RELAXATION:
+        drop = row.get("relaxation_force_drop_frac")
+        pct = _num(100.0 * float(drop), ".3g") if isinstance(drop, int | float) else "?"
+        return f"{flag} (the force fell {pct} % at constant compression: not a rupture)"
     return flag
 
 
@@ -275,13 +317,14 @@ def enforce(
 def thresholds_help() -> str:
     """The flags and thresholds in one paragraph (``characterize --help``)."""
     return (
-        f"Quality flags: negative_stiffness (D <= 0; exit 65 unless --allow-flagged), "
-        f"negative_damping (λ < -{NEGATIVE_DAMPING_ATOL_NS_PER_CM:g} N·s/cm and < "
-        f"-{NEGATIVE_DAMPING_SE_MULT:g} se), damping_at_bound (--constrain-damping held λ at 0), "
-        f"damping_unidentifiable (λ = NaN: rate excitation < {DAMPING_EXCITATION_MIN:g} and a "
-        f"preload would move λ by > {100 * DAMPING_PRELOAD_SENSITIVITY:g} %, e.g. a "
-        f"constant-rate test; --method paper: a monotonic loading, the rate of the other sign "
-        f"on < {100 * PAPER_MONOTONIC_FRAC:g} % of its samples), low_r2 (R² < {LOW_R2:g}), "
-        f"few_samples (< {FEW_SAMPLES_WINDOWS:g} Savitzky-Golay windows of samples), rupture "
-        "(a squeeze ruptured; fitted up to it)."
+        "Quality flags: negative_stiffness (D <= 0; exit 65 unless --allow-flagged), "
+        "negative_damping (λ < 0), damping_at_bound (old tables: --constrain-damping held λ at "
+        f"0), damping_unidentifiable (λ = NaN: a single speed without a hold, or rate "
+        f"excitation < {DAMPING_EXCITATION_MIN:g} and a preload would move λ by > "
+        f"{100 * DAMPING_PRELOAD_SENSITIVITY:g} %; --method paper: a monotonic loading, the "
+        f"rate of the other sign on < {100 * PAPER_MONOTONIC_FRAC:g} % of its samples), low_r2 "
+        f"(R² < {LOW_R2:g}), few_samples (< {FEW_SAMPLES_WINDOWS:g} windows of samples), "
+        "rupture (a squeeze ruptured; fitted up to it), at_bound (a parameter of the chosen "
+        "law at its bound), nonlinear_stiffness (the loading tangent stiffness varies by more "
+        "than 2x), relaxation (the force decayed at constant compression)."
     )

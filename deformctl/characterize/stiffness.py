@@ -7,11 +7,14 @@ damping can be told at all.
   fitted law's rate-dependent force taken out, fitted by a straight line in each of
   :data:`STIFFNESS_BINS` equal slices of the loading compression range: the first slice is the
   small-strain stiffness, last over first is the stiffening ratio, and a largest-over-smallest
-  slope above :data:`NONLINEAR_RATIO` flags ``nonlinear_stiffness``.
+  slope above :data:`NONLINEAR_RATIO` (among the slopes known to :data:`SLOPE_REL_SE`) flags
+  ``nonlinear_stiffness``.
 * :func:`speed_summary`: whether the squeezes move at more than one speed; a single speed
   (a constant-rate ramp, a load–unload cycle at one rate, without a hold) cannot separate a
   rate-dependent force from a rate-independent one, so damping is not identifiable.
 * :func:`hysteresis_energy_j`: the energy a closed load–unload loop dissipates, ``∮ f dd``.
+* :func:`damping_excitation`: the share of the rate a constant force and the compression cannot
+  explain (:func:`deformctl.characterize.quality.damping_identifiable`).
 """
 
 from __future__ import annotations
@@ -27,8 +30,11 @@ from deformctl.series import FloatArray
 #: Slices of the loading compression range for the tangent stiffness (the first is the small
 #: strain: 0–10 % of the largest loading compression).
 STIFFNESS_BINS = 10
-#: ``nonlinear_stiffness`` when the largest slice slope exceeds the smallest by this factor.
+#: ``nonlinear_stiffness`` when the largest slice slope exceeds the smallest by this factor ...
 NONLINEAR_RATIO = 2.0
+#: ... among the slices whose slope has a standard error below this fraction of it (under heavy
+#: damping the small-strain force is mostly the damping taken out, and its error with it).
+SLOPE_REL_SE = 0.2
 #: Slices with fewer samples are not used.
 MIN_BIN_SAMPLES = 5
 #: A window moves when its speed exceeds this fraction of the 95th percentile speed.
@@ -83,11 +89,14 @@ class LoadingStiffness:
         small_strain_n_per_m: slope of the first slice (0–10 % of the loading compression).
         large_strain_n_per_m: slope of the last slice (90–100 %).
         slopes_n_per_m: every slice's slope (NaN where too few samples).
+        slope_se_n_per_m: their standard errors: the slice's scatter and the fitted damping's
+            standard error carried through the rate-dependent force taken out.
     """
 
     small_strain_n_per_m: float
     large_strain_n_per_m: float
     slopes_n_per_m: tuple[float, ...]
+    slope_se_n_per_m: tuple[float, ...] = ()
 
     @property
     def stiffening_ratio(self) -> float:
@@ -97,8 +106,16 @@ class LoadingStiffness:
 
     @property
     def tangent_spread(self) -> float:
-        """Largest over smallest positive slice slope (inf when one is not positive)."""
-        s = np.asarray([x for x in self.slopes_n_per_m if math.isfinite(x)])
+        """Largest over smallest slope of the slices whose slope is known to
+        :data:`SLOPE_REL_SE` (inf when one of them is not positive; NaN: fewer than two)."""
+        se = self.slope_se_n_per_m or tuple(0.0 for _ in self.slopes_n_per_m)
+        s = np.asarray(
+            [
+                x
+                for x, e in zip(self.slopes_n_per_m, se, strict=True)
+                if math.isfinite(x) and math.isfinite(e) and e <= SLOPE_REL_SE * abs(x)
+            ]
+        )
         if s.size < 2:
             return math.nan
         if np.any(s <= 0):
@@ -112,27 +129,53 @@ class LoadingStiffness:
         return not math.isnan(spread) and spread > NONLINEAR_RATIO
 
 
-def loading_stiffness(compression_m: FloatArray, elastic_force_n: FloatArray) -> LoadingStiffness:
+def loading_stiffness(
+    compression_m: FloatArray,
+    elastic_force_n: FloatArray,
+    *,
+    rate_force_per_unit: FloatArray | None = None,
+    rate_unit_se: float = 0.0,
+    correlated_samples: int = 1,
+) -> LoadingStiffness:
     """Straight-line slopes of the elastic force over :data:`STIFFNESS_BINS` slices of the
     loading compression ``[0, max]`` (module docstring).
 
     Args:
         compression_m: the loading samples' compression, m ``[n]``.
         elastic_force_n: their force with the fitted rate-dependent part taken out, N ``[n]``.
+        rate_force_per_unit: the rate-dependent force taken out, per unit of its fitted
+            coefficient, ``[n]`` (None: none was taken out).
+        rate_unit_se: that coefficient's standard error.
+        correlated_samples: samples over which the elastic force's errors are correlated (the
+            smoothing window of the rate taken out); the scatter's error is inflated by its root.
     """
     top = float(np.max(compression_m))
     edges = np.linspace(0.0, top, STIFFNESS_BINS + 1)
-    slopes = []
+    slopes: list[float] = []
+    ses: list[float] = []
     for i in range(STIFFNESS_BINS):
         sel = (compression_m >= edges[i]) & (compression_m <= edges[i + 1])
-        if int(np.count_nonzero(sel)) < MIN_BIN_SAMPLES:
+        count = int(np.count_nonzero(sel))
+        if count < MIN_BIN_SAMPLES:
             slopes.append(math.nan)
+            ses.append(math.nan)
             continue
         d, f = compression_m[sel], elastic_force_n[sel]
         dc = d - d.mean()
         den = float(dc @ dc)
-        slopes.append(float(dc @ (f - f.mean())) / den if den > 0 else math.nan)
-    return LoadingStiffness(slopes[0], slopes[-1], tuple(slopes))
+        if not den > 0:
+            slopes.append(math.nan)
+            ses.append(math.nan)
+            continue
+        slope = float(dc @ (f - f.mean())) / den
+        resid = f - f.mean() - slope * dc
+        var = float(resid @ resid) / max(count - 2, 1) / den * max(correlated_samples, 1)
+        if rate_force_per_unit is not None and rate_unit_se > 0:
+            r = rate_force_per_unit[sel]
+            var += (float(dc @ (r - r.mean())) / den * rate_unit_se) ** 2
+        slopes.append(slope)
+        ses.append(math.sqrt(var))
+    return LoadingStiffness(slopes[0], slopes[-1], tuple(slopes), tuple(ses))
 
 
 @dataclass(frozen=True)
@@ -211,3 +254,19 @@ def hysteresis_energy_j(compressions: Sequence[FloatArray], forces: Sequence[Flo
             continue
         loops.append(float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(d))))
     return float(np.mean(loops)) if loops else math.nan
+
+
+def damping_excitation(compression_m: FloatArray, rate_m_per_s: FloatArray) -> float:
+    """Share of the rate's mean square not explained by a constant and by d, in [0, 1].
+
+    ``‖d' − P d'‖² / ‖d'‖²`` with ``P`` the projection onto ``[1, d]``: 0 for a constant rate
+    (``λ d'`` is then a constant force) or a rate that follows d, 1 for a rate independent of
+    both (a load–unload cycle). See :func:`deformctl.characterize.quality.damping_identifiable`.
+    """
+    total = float(rate_m_per_s @ rate_m_per_s)
+    if not total > 0:
+        return 0.0
+    a = np.column_stack([np.ones_like(compression_m), compression_m])
+    coef, *_ = np.linalg.lstsq(a, rate_m_per_s, rcond=None)
+    resid = rate_m_per_s - a @ coef
+    return float(min(1.0, (resid @ resid) / total))
