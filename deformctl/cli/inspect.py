@@ -12,6 +12,7 @@ import typer
 from deformctl.artifacts.dataset import describe_dataset
 from deformctl.artifacts.describe import describe
 from deformctl.artifacts.io import stale_temporaries
+from deformctl.blas import blas_summary
 from deformctl.cli._common import translate_errors
 
 
@@ -37,6 +38,8 @@ def _model_lines(info: dict[str, Any]) -> list[str]:
     if hp:
         lines.append(f"hyperparameters: {json.dumps(hp, sort_keys=True)}")
     lines.append(f"split: {info['n_train']} train / {info['n_test']} test")
+    if info.get("blas") is not None:  # older model files did not record it
+        lines.append(f"BLAS of the fit: {blas_summary(info['blas'])}")
     for key, entry in info["metrics"].items():
         for split, m in entry.items():
             lines.append(
