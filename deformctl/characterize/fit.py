@@ -60,7 +60,7 @@ import pandas as pd
 
 from deformctl.characterize.coefficients import CoefficientFit, _coefficient_frame
 from deformctl.characterize.laws import check_model
-from deformctl.characterize.objectfit import fit_object
+from deformctl.characterize.objectfit import ObjectFit, fit_object
 from deformctl.characterize.prepare import _where, validate_squeeze
 from deformctl.characterize.quality import PAPER_MONOTONIC_FRAC
 from deformctl.characterize.rupture import Rupture, cut_rupture_smoothed
@@ -459,6 +459,7 @@ def characterize(
         at_force_n=at_force_n,
         lag_s=lag_s,
         objects=objects,
+        fits_out=None,
         **options,
     )
     return _coefficient_frame(rows)
@@ -481,9 +482,11 @@ def _fit_rows(
     at_force_n: float | None = None,
     lag_s: float | Mapping[str, float | None] | None = 0.0,
     objects: Mapping[str, Mapping[str, object]] | None = None,
+    fits_out: dict[str, ObjectFit] | None = None,
     **options: float,
 ) -> list[dict[str, object]]:
-    """The rows of :func:`characterize`, one per object."""
+    """The rows of :func:`characterize`, one per object (lsq: each object's material fit goes
+    into ``fits_out`` when given)."""
     if method not in ("lsq", "paper"):
         raise UsageError(f"unknown method {method!r}; expected 'lsq' or 'paper'")
     if method == "paper" and (preload == "fit" or constrain_damping):
@@ -506,6 +509,8 @@ def _fit_rows(
                 friction_mu=_number(meta.get("friction_mu")),
             )
             fit = CoefficientFit.from_object(obj)
+            if fits_out is not None:
+                fits_out[object_id] = obj
         else:
             fit = fit_paper(squeezes, **options)  # type: ignore[arg-type]
         recorded = list((recorded_ruptures or {}).get(object_id, ()))

@@ -270,16 +270,11 @@ class MaterialFit:
     internal: dict[str, float] = field(default_factory=dict, repr=False)
     reference_compression_m: float = 1.0
 
-    def rate_window_force(self, squeeze: FitSqueeze) -> FloatArray:
-        """The law's rate-dependent force over the windows of one squeeze, N ``[m]`` (0 when the
-        damping was not fitted)."""
-        b = self.internal["b"]
-        if not math.isfinite(b) or b == 0.0 or not math.isfinite(self.params["preload_n"]):
-            return np.zeros(squeeze.starts.shape[0])
+    def _window_columns(self, squeeze: FitSqueeze) -> FloatArray:
         shape = self.internal.get("shape", 1.0)
         shape_value = math.exp(shape) if self.model == "sls" else shape
         d_ref = self.reference_compression_m
-        cols = window_design(
+        return window_design(
             self.model,
             squeeze.compression_m / d_ref,
             squeeze.end_compression_m / d_ref,
@@ -288,7 +283,24 @@ class MaterialFit:
             squeeze.ends,
             shape_value,
         )
-        return np.asarray(b * cols[:, 1], dtype=np.float64)
+
+    def rate_window_force(self, squeeze: FitSqueeze) -> FloatArray:
+        """The law's rate-dependent force over the windows of one squeeze, N ``[m]`` (0 when the
+        damping was not fitted)."""
+        b = self.internal["b"]
+        if not math.isfinite(b) or b == 0.0 or not math.isfinite(self.params["preload_n"]):
+            return np.zeros(squeeze.starts.shape[0])
+        return np.asarray(b * self._window_columns(squeeze)[:, 1], dtype=np.float64)
+
+    def window_prediction(self, squeeze: FitSqueeze) -> FloatArray:
+        """The law's mean force over the windows of one squeeze, N ``[m]`` (compare with
+        ``squeeze.mean_force(lag)``)."""
+        cols = self._window_columns(squeeze)
+        b = self.internal["b"] if math.isfinite(self.internal["b"]) else 0.0
+        return np.asarray(
+            self.internal["f0"] + self.internal["a"] * cols[:, 0] + b * cols[:, 1],
+            dtype=np.float64,
+        )
 
     def derived_se(self, func: Callable[[dict[str, float]], float]) -> float:
         """Standard error of a function of the SI parameters (delta method over the free ones)."""
