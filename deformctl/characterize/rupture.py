@@ -17,7 +17,8 @@ running force peak ``p`` where
    more than three position-noise standard deviations and :data:`HOLD_TOL_FRAC` of ``d[p]``),
    **or it holds** (it stayed within that tolerance of ``d[p]`` since the peak) and the force
    fell suddenly: somewhere between ``p`` and ``i`` faster than :data:`RUPTURE_SUDDEN_MULT`
-   times the rate at which it rose over the upper half of the loading. The hold is the
+   times the rate at which it rose over the upper half of the loading (both over spans of
+   :data:`SUDDEN_SPAN_S`). The hold is the
    force-controlled gripper that backs off after the collapse while its fingers stay put (the
    pattern the shared fruit recordings show; the rule before it required a growing compression
    and missed 8 of 25 such ruptures);
@@ -47,6 +48,7 @@ judged on the SG-smoothed force: loading ends at the first sample within
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal
 
@@ -100,6 +102,8 @@ HOLD_TOL_FRAC = 0.01
 #: rupture with back-off falls 10x faster, a standard linear solid relaxing at a hold at most
 #: 0.6x, a release ramp 1x; ``tests/characterize/test_rupture.py``).
 RUPTURE_SUDDEN_MULT = 5.0
+#: ... both rates measured over this span, s (module docstring, :func:`_sudden`).
+SUDDEN_SPAN_S = 0.02
 #: Relaxation: a hold under load of at least this long, s ...
 RELAXATION_HOLD_S = 0.2
 #: ... whose smoothed force falls by more than this fraction of its value at the hold's start.
@@ -187,10 +191,13 @@ def _find_rupture(
         RUPTURE_NOISE_MULT * noise_std(f) / RUPTURE_DROP_FRAC,
     )
     dropped = (f < (1.0 - RUPTURE_DROP_FRAC) * running) & (running >= floor)
-    tol = np.maximum(3.0 * sigma, HOLD_TOL_FRAC * np.abs(d[peak_idx]))
-    growing = d > d[peak_idx] + tol
-    near = d >= d[peak_idx] - tol
-    rate_f = _force_rate(f, dt_s)
+    # growth and holds on the raw compression's short local means: a long smoothing window
+    # rounds the corner of a ramp that stops at the peak and overshoots after it
+    m = max(2, round(SUDDEN_SPAN_S / dt_s))
+    d_loc = np.convolve(comp, np.ones(m) / m, mode="same")
+    tol = np.maximum(3.0 * sigma / math.sqrt(m), HOLD_TOL_FRAC * np.abs(d_loc[peak_idx]))
+    growing = d_loc > d_loc[peak_idx] + tol
+    near = d_loc >= d_loc[peak_idx] - tol
     half = wl // 2
     tried: set[int] = set()
     for i in np.flatnonzero(dropped & near):
@@ -216,7 +223,7 @@ def _find_rupture(
             return _back_to_input(time_s, grid, p), smoothed
         if np.any(shortfall & holds):
             j = p + int(np.argmax(shortfall & holds))
-            if _sudden(f, rate_f, p, j):
+            if _sudden(f, dt_s, p, j):
                 return _back_to_input(time_s, grid, p), smoothed
     return None, smoothed
 
@@ -226,24 +233,26 @@ def _back_to_input(time_s: FloatArray, grid: FloatArray, p: int) -> int:
     return int(np.searchsorted(time_s, grid[p], side="right") - 1)
 
 
-def _force_rate(f: FloatArray, dt_s: float) -> FloatArray:
-    """The force's rate from a short quadratic SG fit (5 samples), N/s ``[n]``."""
-    from scipy.signal import savgol_filter
-
-    if f.shape[0] < 5:
-        return np.gradient(f, dt_s)
-    return np.asarray(savgol_filter(f, 5, 2, deriv=1, delta=dt_s), dtype=np.float64)
-
-
-def _sudden(f: FloatArray, rate: FloatArray, p: int, j: int) -> bool:
+def _sudden(f: FloatArray, dt_s: float, p: int, j: int) -> bool:
     """Whether the force fell between ``p`` and ``j`` faster than :data:`RUPTURE_SUDDEN_MULT`
-    times its rise over the upper half of the loading before ``p``."""
+    times its rise over the upper half of the loading before ``p``.
+
+    Rates are changes of the force's mean over :data:`SUDDEN_SPAN_S` (at least two samples)
+    across one such span: a collapse within tens of milliseconds stands out, while the sensor's
+    noise, averaged over the span, does not.
+    """
+    m = max(2, round(SUDDEN_SPAN_S / dt_s))
+    if f.shape[0] < 2 * m + 2:
+        return True
+    local = np.convolve(f, np.ones(m) / m, mode="valid")  # local[i]: mean of f[i : i + m]
     below = np.flatnonzero(f[:p] < 0.5 * f[p])
     start = int(below[-1]) if below.size else 0
-    if p - start < 2:
+    rise_idx = np.arange(start, max(start, p - 2 * m))
+    fall_idx = np.arange(max(p - m, 0), min(j, local.shape[0] - m))
+    if rise_idx.size == 0 or fall_idx.size == 0:
         return True
-    rise = float(np.median(rate[start:p]))
-    fall = float(-np.min(rate[p : j + 1]))
+    rise = float(np.median(local[rise_idx + m] - local[rise_idx]))
+    fall = float(np.max(local[fall_idx] - local[fall_idx + m]))
     return rise <= 0 or fall > RUPTURE_SUDDEN_MULT * rise
 
 
