@@ -179,10 +179,12 @@ def test_paper_method_flags_a_monotonic_loading() -> None:
     assert "damping_unidentifiable" in fit.flags
     row = characterize({"obj": ramps}, "paper").iloc[0]
     assert "not identifiable by the paper estimator" in describe_row(row)
-    # lsq on the same ramps: the transient at the start identifies λ
+    # lsq on the same ramps (issue 33): one speed cannot tell a material's rate dependence from
+    # a preload, however exactly the start's transient pins a Kelvin-Voigt λ; D is still right
     lsq = fit_lsq(ramps)
-    assert lsq.quality == "ok"
-    assert lsq.damping_ns_per_cm == pytest.approx(3.0, rel=0.05)
+    assert lsq.quality == "damping_unidentifiable"
+    assert math.isnan(lsq.damping_ns_per_cm)
+    assert lsq.deformability_n_per_cm == pytest.approx(20.0, rel=0.05)
 
 
 def test_rupture_is_cut_and_flagged() -> None:

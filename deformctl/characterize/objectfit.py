@@ -165,6 +165,10 @@ def _identifiable(data: FitData) -> tuple[bool, float, SpeedSummary]:
     excitation, and allowing the preload and the direction term moves λ by the sensitivity;
     :func:`deformctl.characterize.quality.damping_identifiable` judges them. A constant-rate
     ramp and a load–unload cycle at one rate (``ḋ = v sign(ḋ)``) give an excitation near 0.
+    Squeezes that move at a single speed without a hold
+    (:attr:`~deformctl.characterize.stiffness.SpeedSummary.single_speed`) are not identifiable
+    either, however exactly the short accelerations at their corners pin a Kelvin–Voigt λ: a
+    real material's rate dependence cannot be told from one speed.
     """
     rates = [s.mean_rate() for s in data.squeezes]
     comps = [s.mean_compression() for s in data.squeezes]
@@ -183,7 +187,8 @@ def _identifiable(data: FitData) -> tuple[bool, float, SpeedSummary]:
         sensitivity = abs(lam2 - lam4) / big if big > 0 else 0.0
     except np.linalg.LinAlgError:
         pass
-    return damping_identifiable(excitation, sensitivity), excitation, speeds
+    ok = damping_identifiable(excitation, sensitivity) and not speeds.single_speed
+    return ok, excitation, speeds
 
 
 def _unexplained(v: FloatArray, x: FloatArray) -> float:
@@ -196,26 +201,40 @@ def _unexplained(v: FloatArray, x: FloatArray) -> float:
     return min(1.0, float(resid @ resid) / total)
 
 
+def _short_rate(d: FloatArray, window_samples: int, dt_s: float) -> FloatArray:
+    """The compression's rate from a cubic Savitzky–Golay fit over a quarter window (at least 5
+    samples; one-sided at the ends), m/s: short, so the corners of a squeeze are not smeared."""
+    from scipy.signal import savgol_filter
+
+    length = max(5, window_samples // 4)
+    length = length if length % 2 == 1 else length + 1
+    if d.shape[0] < length:
+        return np.gradient(d, dt_s)
+    return np.asarray(savgol_filter(d, length, 3, deriv=1, delta=dt_s), dtype=np.float64)
+
+
 def _loading(
     chosen: MaterialFit, data: FitData, grids: Sequence[Grid], damping: bool
 ) -> tuple[LoadingStiffness, FloatArray]:
     """The loading curve's slopes on the loading samples, with the chosen law's preload and
     (when damping was fitted) rate-dependent force taken out, and the loading samples' forces.
 
-    The force is moved back by the fitted lag; KV's and HC's rate comes from a cubic
-    Savitzky–Golay derivative over the window, SLS's arm from its recursion.
+    The force is moved back by the fitted lag; KV's and HC's rate comes from a short cubic
+    Savitzky–Golay derivative (:func:`_short_rate`: a long one smooths the squeeze's corners, and
+    under damping that error lands in the small-strain slope), SLS's arm from its recursion.
     """
     lag = chosen.params.get("lag_s", 0.0)
-    ds: list[FloatArray] = []
-    fs: list[FloatArray] = []
-    rs: list[FloatArray] = []
-    raw: list[FloatArray] = []
-    unit = dict(chosen.params)
+    lag = lag if math.isfinite(lag) else 0.0
     name = {"kv": "damping_ns_per_m", "hc": "damping_ns_per_m_pow_n_plus_1"}.get(
         chosen.model, "arm_stiffness_n_per_m"
     )
     value = chosen.params[name]
+    unit = dict(chosen.params)
     unit[name] = 1.0
+    ds: list[FloatArray] = []
+    fs: list[FloatArray] = []
+    rs: list[FloatArray] = []
+    raw: list[FloatArray] = []
     for g in grids:
         t = np.asarray(g.dt_s * np.arange(g.force_n.shape[0]), dtype=np.float64)
         load = phase_slice(t, g.force_n, "loading", window_s=data.window_samples * g.dt_s)
@@ -223,12 +242,11 @@ def _loading(
         d = g.compression_m
         per_unit = np.zeros_like(d)
         if damping and math.isfinite(value) and value > 0:
-            wl = min(data.window_samples, d.shape[0] - (1 - d.shape[0] % 2))
-            _, rate = sg_smooth(d, wl, POLYORDER, g.dt_s)
+            rate = _short_rate(d, data.window_samples, g.dt_s)
             per_unit = rate_force(chosen.model, unit, d, rate, g.dt_s)
+        elastic = f - chosen.params["preload_n"] - (value * per_unit if damping else 0.0)
         ds.append(d[load])
-        fs.append((f - chosen.params["preload_n"] - value * per_unit)[load] if damping
-                  else (f - chosen.params["preload_n"])[load])  # fmt: skip
+        fs.append(elastic[load])
         rs.append(per_unit[load])
         raw.append(g.force_n[load])
     se = chosen.se.get(name, math.nan)
