@@ -32,6 +32,8 @@ wrong sign, wrong units; numbers in each constant's docstring) and stated here o
                                  the secant at ``operating_force_n`` only
 ``relaxation``                   the force decayed smoothly at constant compression (stress
                                  relaxation, not rupture; ``rupture.find_relaxation``)
+``logging_gap``, ``coarse_force``, the recording's defects, found by ``measure`` and stored in
+``force_lag``                    the squeeze log (:mod:`deformctl.measure.defects`)
 ================================ ==============================================================
 
 Policy (:func:`enforce`): each flagged object gives one warning line naming the flags and their
@@ -59,6 +61,13 @@ RUPTURE = "rupture"
 AT_BOUND = "at_bound"
 NONLINEAR_STIFFNESS = "nonlinear_stiffness"
 RELAXATION = "relaxation"
+#: The recording's defects (:data:`deformctl.measure.defects.RECORDING_FLAGS`, restated here:
+#: imports only go down; a test checks that they agree) and what each means.
+RECORDING_FLAGS: dict[str, str] = {
+    "logging_gap": "the recording has a gap of more than 5 sample intervals",
+    "coarse_force": "the force's resolution is coarser than 2 % of its peak",
+    "force_lag": "the force lags the position; λ is low by D × the lag (measure --lag-s auto)",
+}
 #: Every flag, in the order ``quality`` lists them.
 FLAGS: tuple[str, ...] = (
     NEGATIVE_STIFFNESS,
@@ -71,6 +80,7 @@ FLAGS: tuple[str, ...] = (
     AT_BOUND,
     NONLINEAR_STIFFNESS,
     RELAXATION,
+    *RECORDING_FLAGS,
 )
 OK = "ok"
 
@@ -165,6 +175,17 @@ def assess(
     return tuple(flags)
 
 
+def with_recording_flags(quality: str, recording_flags: object) -> str:
+    """``quality`` with the recording's flags (a squeeze log object's ``recording_flags``)."""
+    extra = (
+        [f for f in recording_flags if f in RECORDING_FLAGS]
+        if isinstance(recording_flags, list | tuple)
+        else []
+    )
+    flags = list(parse_quality(quality))
+    return quality_text([*flags, *(f for f in extra if f not in flags)])
+
+
 def quality_text(flags: Sequence[str]) -> str:
     """The ``quality`` column: ``ok`` or the flags joined by commas."""
     return ",".join(flags) if flags else OK
@@ -221,6 +242,8 @@ def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
             f"{flag} ({row.get('n_samples')} samples < {FEW_SAMPLES_WINDOWS:g} windows of "
             f"{row.get('window_samples')})"
         )
+    if flag in RECORDING_FLAGS:
+        return f"{flag} ({RECORDING_FLAGS[flag]}; found by measure, details in the squeeze log)"
     if flag == RUPTURE:
         count = row.get("ruptures")
         return (
@@ -326,5 +349,6 @@ def thresholds_help() -> str:
         f"(R² < {LOW_R2:g}), few_samples (< {FEW_SAMPLES_WINDOWS:g} windows of samples), "
         "rupture (a squeeze ruptured; fitted up to it), at_bound (a parameter of the chosen "
         "law at its bound), nonlinear_stiffness (the loading tangent stiffness varies by more "
-        "than 2x), relaxation (the force decayed at constant compression)."
+        "than 2x), relaxation (the force decayed at constant compression); the recording's defects "
+        "found by measure: logging_gap, coarse_force, force_lag."
     )

@@ -40,7 +40,7 @@ from deformctl.characterize.material_options import (
     default_lag,
 )
 from deformctl.characterize.plot import check_plot_dir, plot_fits
-from deformctl.characterize.quality import check_policy, enforce
+from deformctl.characterize.quality import check_policy, enforce, with_recording_flags
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, run_sweep
 from deformctl.series import SqueezeSeries, ruptures_from_object
@@ -134,7 +134,9 @@ def _fit_object(
         fits_out=fits,
         window_s=window_s,
     )
-    return rows[0], mode
+    row = rows[0]
+    row["quality"] = with_recording_flags(str(row["quality"]), (obj or {}).get("recording_flags"))
+    return row, mode
 
 
 def _read_logs(
@@ -424,6 +426,7 @@ class CharacterizeTask:
         method, window_s, preload, constrain_damping: as :func:`read_and_characterize`.
         strict: a flagged object fails (recorded in ``_failures/``) instead of being written.
         allow_flagged: write an object with negative D (flagged) instead of failing it.
+        materials: the law and the operating force (:class:`MaterialOptions`).
     """
 
     method: str = "lsq"
