@@ -19,6 +19,11 @@ NO_COMPRESSION_M = 1e-6
 NO_COMPRESSION_NOISE_MULT = 6.0
 #: Fewest samples a squeeze must have (before trimming).
 MIN_SAMPLES = 10
+#: The force "does not change" when the span of its means over :data:`FORCE_BLOCKS` blocks is at
+#: most this multiple of the noise of one block mean (20 means of pure noise span about 3.7 of
+#: it; a 401-sample constant force with 0.01 N noise passed the raw-span rule half the time).
+FORCE_BLOCKS = 20
+FORCE_BLOCK_NOISE_MULT = 8.0
 
 
 def _where(s: SqueezeSeries) -> str:
@@ -76,7 +81,14 @@ def validate_squeeze(s: SqueezeSeries, *, min_samples: int = MIN_SAMPLES) -> Non
         )
     force_span = float(np.max(s.force_n) - np.min(s.force_n))
     force_noise = noise_std(s.force_n)
-    if force_span <= max(1e-9, NO_COMPRESSION_NOISE_MULT * force_noise):
+    # the raw span of pure noise grows with the samples (≈ 6σ at 400): the means of blocks of
+    # k samples shrink it by √k, so a constant force with noise is told from a small change
+    k = max(1, len(s) // FORCE_BLOCKS)
+    means = s.force_n[: k * (len(s) // k)].reshape(-1, k).mean(axis=1)
+    mean_span = float(np.max(means) - np.min(means))
+    if force_span <= max(1e-9, NO_COMPRESSION_NOISE_MULT * force_noise) or (
+        k > 1 and mean_span <= FORCE_BLOCK_NOISE_MULT * force_noise / np.sqrt(k)
+    ):
         raise InputDataError(
             f"{_where(s)}: the force does not change (it stays within {force_span:.3g} N, force "
             f"noise {force_noise:.3g} N): nothing resisted the squeeze, or the force column is "

@@ -70,6 +70,4 @@ def test_small_strain_slope_and_stiffening_ratio(tmp_path: Path, name: str) -> N
     assert "nonlinear_stiffness" in flags
     assert np.isnan(row["damping_ns_per_cm"])
     assert row["operating_force_source"] == "median_loading"  # no friction in the log
-    assert row["operating_force_n"] == pytest.approx(
-        float(np.median(rows["Load (N)"])), rel=0.02
-    )
+    assert row["operating_force_n"] == pytest.approx(float(np.median(rows["Load (N)"])), rel=0.02)
