@@ -5,11 +5,11 @@ Each draw is one object squeezed three times (the paper's X = 3) by a testing ma
 identifiable), 500 Hz, force noise 0.5 % of the peak, compression noise 2 µm, and the force
 lagging the compression by 17.3 ms (fitted). The truth of each law is below; every parameter
 must come back within 2 % and ``auto`` must pick the true law, each in at least 95 % of the
-seeded draws. The draws are ``DEFORMCTL_MATERIAL_DRAWS`` (default 20, to keep ``make test`` fast;
-``make materials`` runs 400). Measured with 40 draws (the numbers the assertions print): largest error kv 1.20 %,
-hc 1.52 %, sls 0.66 %; BIC picked the true law 40/40 for each. AIC on one-squeeze draws picked
-kv for kv data 31/40 times only (a richer law that nests the true one wins by chance): the
-choice is by BIC.
+seeded draws. The draws are ``DEFORMCTL_MATERIAL_DRAWS`` (default 20, to keep ``make test``
+fast; ``make materials`` runs 400). Measured with 40 draws (the numbers the assertions print):
+largest error kv 1.20 %, hc 1.52 %, sls 0.66 %; BIC picked the true law 40/40 for each. AIC on
+one-squeeze draws picked kv for kv data 31/40 times only (a richer law that nests the true one
+wins by chance): the choice is by BIC.
 """
 
 from __future__ import annotations
