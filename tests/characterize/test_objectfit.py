@@ -137,3 +137,21 @@ def test_nonlinear_stiffness_fires_on_a_stiffening_law_only() -> None:
     )  # fmt: skip
     assert not kv.loading.nonlinear
     assert kv.loading.stiffening_ratio == pytest.approx(1.0, abs=0.1)
+
+
+def test_a_loading_phase_that_ends_at_its_peak_loses_no_sample() -> None:
+    # issue 33 point 5: the stiffest samples are the last ones; none is trimmed, and the secant
+    # near the peak is the closed form's (an undamped HC ramp: the rate force cannot be told)
+    undamped = {**TRUTH["hc"], "damping_ns_per_m_pow_n_plus_1": 0.0}
+    for seed in range(2):
+        s = synthetic_law_squeeze(
+            "hc", undamped, hold_s=0.0, release_s=0.0, rest_s=0.0, lag_s=0.0, seed=seed
+        )
+        peak = float(np.max(s.force_n))
+        row = characterize({"synthetic": [s]}, model="hc", at_force_n=0.9 * peak).iloc[0]
+        assert row["n_samples"] == len(s)
+        assert row["deformability_n_per_cm"] == pytest.approx(
+            _hc_secant(0.9 * peak) / 100, rel=0.02
+        )
+        assert row["hc_exponent"] == pytest.approx(1.8, rel=0.02)
+        assert "damping_unidentifiable" in row["quality"].split(",")
