@@ -22,7 +22,7 @@ from deformctl.characterize.columns import (
     empty_values,
     material_values,
 )
-from deformctl.characterize.quality import assess, quality_text
+from deformctl.characterize.quality import SECANT_MISFIT_FRAC, assess, quality_text
 from deformctl.series import Rupture
 from deformctl.units import CM, N_PER_CM, NS_PER_CM
 
@@ -86,6 +86,8 @@ class CoefficientFit:
         at_bound: a physical parameter of the chosen law sits at its bound.
         nonlinear_stiffness: the loading curve's tangent stiffness varies by more than 2×.
         relaxations: squeezes whose force relaxed at constant compression.
+        secant_misfit: the law misses the recording where D is stated
+            (:data:`deformctl.characterize.quality.SECANT_MISFIT_FRAC`).
     """
 
     deformability_n_per_cm: float
@@ -111,6 +113,7 @@ class CoefficientFit:
     at_bound: bool = False
     nonlinear_stiffness: bool = False
     relaxations: int = 0
+    secant_misfit: bool = False
 
     @classmethod
     def from_object(cls, obj: ObjectFit) -> CoefficientFit:
@@ -144,6 +147,7 @@ class CoefficientFit:
             at_bound=bool(at_bound),
             nonlinear_stiffness=obj.loading.nonlinear,
             relaxations=len(obj.relaxations),
+            secant_misfit=abs(obj.secant_residual_frac) > SECANT_MISFIT_FRAC,
         )
 
     @property
@@ -173,6 +177,7 @@ class CoefficientFit:
             at_bound=self.at_bound,
             nonlinear_stiffness=self.nonlinear_stiffness,
             relaxations=self.relaxations,
+            secant_misfit=self.secant_misfit,
         )
 
     @property

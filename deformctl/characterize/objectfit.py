@@ -64,6 +64,9 @@ from deformctl.errors import InputDataError, UsageError
 from deformctl.series import FloatArray, SqueezeSeries
 from deformctl.signals import sg_smooth, sg_window_length, uniform_grid
 
+#: The windows compared with the law where D is stated: mean compression within this fraction
+#: of the law's compression at the operating force (``secant_residual_frac``).
+SECANT_BAND = 0.1
 #: Savitzky–Golay order of the window length (the window the log's rate implies, as ``paper``).
 POLYORDER = 3
 #: Windows slower than this fraction of the 95th-percentile speed have no direction of motion.
@@ -133,6 +136,7 @@ class ObjectFit:
     per_speed: tuple[tuple[float, float], ...] = field(default=())
     sample_r2: dict[str, float] = field(default_factory=dict)
     fit_preload: bool = False
+    secant_residual_frac: float = math.nan
 
     def fit(self, model: str) -> MaterialFit | None:
         """The fit of one law, or None when it was not fitted."""
@@ -211,6 +215,24 @@ def _short_rate(d: FloatArray, window_samples: int, dt_s: float) -> FloatArray:
     if d.shape[0] < length:
         return np.gradient(d, dt_s)
     return np.asarray(savgol_filter(d, length, 3, deriv=1, delta=dt_s), dtype=np.float64)
+
+
+def _secant_residual(chosen: MaterialFit, data: FitData, force_n: float) -> float:
+    """How far the chosen law misses the recording where D is stated: the median window residual
+    (measured mean force − the law's) over the windows whose mean compression is within
+    :data:`SECANT_BAND` of the law's compression at ``force_n`` (above the preload), as a fraction
+    of ``force_n``; NaN when no window is there (the law is extrapolated, nothing to compare)."""
+    d_op = compression_at_force(chosen.model, chosen.params, force_n)
+    if not (math.isfinite(d_op) and d_op > 0 and force_n > 0):
+        return math.nan
+    lag = chosen.params.get("lag_s", 0.0)
+    lag = lag if math.isfinite(lag) else 0.0
+    resid: list[FloatArray] = []
+    for s in data.squeezes:
+        near = np.abs(s.mean_compression() - d_op) <= SECANT_BAND * d_op
+        resid.append((s.mean_force(lag) - chosen.window_prediction(s))[near])
+    r = np.concatenate(resid)
+    return float(np.median(r)) / force_n if r.size else math.nan
 
 
 def _loading(
@@ -414,4 +436,5 @@ def fit_object(
         per_speed=_per_speed(speeds, chosen.residual_rms_n),
         sample_r2={f.model: _sample_r2(f, data, grids) for f in fits},
         fit_preload=fit_preload,
+        secant_residual_frac=_secant_residual(chosen, data, above(chosen.params)),
     )

@@ -115,6 +115,8 @@ def test_at_force_n_and_the_median_loading_force() -> None:
     given = characterize({"hc": squeezes}, model="hc", at_force_n=8.0).iloc[0]
     assert given["operating_force_source"] == "option"
     assert given["deformability_n_per_cm"] == pytest.approx(_hc_secant(8.0) / 100, rel=0.02)
+    assert "secant_misfit" not in given["quality"].split(",")  # the law is the material's
+    assert abs(given["secant_residual_frac"]) < 0.01
     median = characterize({"hc": squeezes}, model="hc").iloc[0]
     assert median["operating_force_source"] == "median_loading"
     assert 0 < median["operating_force_n"] < float(max(np.max(s.force_n) for s in squeezes))
