@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
 .PHONY: install test lint bench golden-spread reproduce _report calibrate examples clean model \
-  _grip_train _grip_eval grip-study
+  _grip_train _grip_eval grip-study materials
 
 install: $(STAMP)
 
@@ -26,6 +26,11 @@ lint: install
 
 bench: install
 	$(BIN)/python -m bench
+
+# The material laws' known-truth recovery and BIC choice over 400 seeded draws per law
+# (tests/characterize/test_materials.py; make test runs 20).
+materials: install
+	DEFORMCTL_MATERIAL_DRAWS=400 $(BIN)/python -m pytest -q -s tests/characterize/test_materials.py
 
 # The golden numbers (tests/test_golden.py) recomputed under every OpenBLAS kernel the installed
 # numpy accepts x 1 and 2 BLAS threads, each number's spread beside its tolerance, then
