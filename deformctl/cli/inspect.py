@@ -11,8 +11,19 @@ import typer
 
 from deformctl.artifacts.dataset import describe_dataset
 from deformctl.artifacts.describe import describe
-from deformctl.artifacts.io import stale_temporaries
+from deformctl.artifacts.io import display_name, read_input_bytes, stale_temporaries
+from deformctl.artifacts.rows import (
+    DEFAULT_ROWS,
+    artifact_rows,
+    parse_column_list,
+    parse_row_count,
+    rows_csv,
+    rows_records,
+    select_rows,
+)
 from deformctl.cli._common import translate_errors
+from deformctl.cli._rows import rows_footer, rows_text
+from deformctl.errors import UsageError
 
 
 def _utc(ns: int) -> str:
@@ -138,35 +149,82 @@ def inspect(
         ..., help="Any deformctl artifact (MCAP, Parquet, catalog CSV, model file); - for stdin."
     ),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON document instead of text."),
+    rows: str | None = typer.Option(
+        None,
+        "--rows",
+        metavar="N|all",
+        help=f"Show only the first N rows of a table (or of --attempts) [default: the summary "
+        f"and the first {DEFAULT_ROWS}]; all: every row; 0: none.",
+    ),
+    columns: str | None = typer.Option(
+        None, "--columns", metavar="a,b,c", help="Show only these columns, in this order."
+    ),
+    as_csv: bool = typer.Option(
+        False, "--csv", help="Print the rows as CSV on stdout (every digit), nothing else."
+    ),
+    attempts: bool = typer.Option(
+        False,
+        "--attempts",
+        help="A lift log's attempts: per object every attempt (force, lifted, outcome, slip) "
+        "and the L_f found.",
+    ),
 ) -> None:
-    """Show an artifact's kind, schema, counts, time range, units and provenance.
+    """Show an artifact's kind, schema, counts, time range, units and provenance, and its rows.
+
+    A table (catalog, coefficients, lift results, index table, predictions, a dataset
+    directory) shows its first 20 rows under the summary, units in the headers; --rows N (or
+    all), --columns and --attempts show the rows alone; --json adds them as "records", --csv
+    prints them as CSV. Numbers show 6 significant digits in the text table and every digit in
+    --json and --csv; long text is cut to the terminal width.
 
     The file is fully validated first; a damaged or invalid file exits with 65. Temporary files
     a killed run left next to it (``.NAME.deformctl-PID-RANDOM.tmp``) are listed on stderr (and
     as ``stale_temporary_files`` in --json); the next run writing the file removes them.
 
-    Example: deformctl inspect datasets/paper/objects.csv --json
+    Example: deformctl inspect datasets/paper/objects.csv --rows all --columns object_id,weight_n
     """
+    if as_json and as_csv:
+        raise UsageError("give --json or --csv, not both")
+    limit = parse_row_count(rows)
+    chosen = parse_column_list(columns)
+    explicit = rows is not None or chosen is not None or as_csv or attempts
     if os.path.isdir(file):  # a sweep dataset directory
         info = describe_dataset(file)
+        table = artifact_rows(file, None, attempts=attempts)
         text = render_dataset(info)
     else:
-        info = describe(file)
+        data = read_input_bytes(file)
+        info = describe(file, data=data)  # validates, with the errors every reader gives
+        table = artifact_rows(file, data, attempts=attempts)
         text = ""
         if file != "-":
             stale = [str(p) for p in stale_temporaries(file)]
             if stale:  # a killed writer's leftovers; the next run writing this file removes them
                 info["stale_temporary_files"] = stale
-    if as_json:
+    if table is None and explicit:
+        raise UsageError(
+            f"{display_name(file)} is a {info['kind']}: it has no rows (rows: tables and dataset "
+            "directories; a lift log's attempts: --attempts)"
+        )
+    shown = None if table is None else select_rows(table, chosen, limit, display_name(file))
+    if as_csv:
+        assert shown is not None
+        typer.echo(rows_csv(shown), nl=False)
+    elif as_json:
+        if shown is not None:
+            info["records"] = rows_records(shown)
+            info["records_total"] = shown.total
         typer.echo(json.dumps(info, indent=2, allow_nan=False))
     else:
-        typer.echo(text or render_text(info))
-        for path in info.get("stale_temporary_files", []):
-            typer.echo(
-                f"stale temporary file of a killed run: {path} (the next run writing "
-                f"{file} removes it)",
-                err=True,
-            )
+        typer.echo(rows_text(shown, text or render_text(info), summary=not explicit))
+    if shown is not None and (note := rows_footer(shown)):
+        typer.echo(note, err=True)
+    for path in info.get("stale_temporary_files", []):
+        typer.echo(
+            f"stale temporary file of a killed run: {path} (the next run writing "
+            f"{file} removes it)",
+            err=True,
+        )
 
 
 def render_dataset(info: dict[str, Any]) -> str:
