@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install test lint bench reproduce _report calibrate examples clean
+.PHONY: install test lint bench golden-spread reproduce _report calibrate examples clean
 
 install: $(STAMP)
 
@@ -25,6 +25,14 @@ lint: install
 
 bench: install
 	$(BIN)/python -m bench
+
+# The golden numbers (tests/test_golden.py) recomputed under every OpenBLAS kernel the installed
+# numpy accepts x 1 and 2 BLAS threads, each number's spread beside its tolerance, then
+# tests/test_golden.py under each kernel (docs/reference/reproducibility.md). JOBS subprocesses
+# side by side. TESTS="tests/test_train.py ..." runs other test files under each kernel instead.
+TESTS ?= tests/test_golden.py
+golden-spread: install
+	$(BIN)/python -m deformctl.repro.golden_spread --jobs $(JOBS) --tests $(TESTS)
 
 # The paper's experiment end to end with the deformctl command: a seeded 73-object population
 # (40 train / 33 test) and the four Table I objects, into $(RUN)/ (report.md + PNG plots).

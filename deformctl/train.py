@@ -24,6 +24,10 @@ it is chosen for a tiny data set and a tiny network:
 * **alpha** (L2 penalty) small (1e-4): 11 weights on 40 rows cannot overfit much.
 * **One BLAS thread** while fitting and predicting (``threadpoolctl``): the matrices are
   ``[40, 3]``, threads only cost time, and a fixed thread count keeps results bit-identical.
+  The BLAS kernel is another matter: OpenBLAS picks one per CPU, and ``lbfgs`` amplifies its
+  last bits (``make golden-spread``: the chosen restart and the test errors move between
+  kernels), so ``metrics["blas"]`` records the libraries, kernels and thread count of the fit
+  (:func:`deformctl.blas.blas_info`); the model file and ``--metrics`` keep it.
 
 Everything random is seeded from ``seed``: the train/test split (a permutation of the rows
 sorted by ``object_id``) and the restarts' initial weights, so the same table and seed give
@@ -52,6 +56,7 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
+from deformctl.blas import blas_info
 from deformctl.catalog import catalog_weights, rigid_grip_force_n
 from deformctl.errors import InputDataError, SchemaError, UsageError
 from deformctl.model import (
@@ -110,7 +115,9 @@ class TrainResult:
             ``Pipeline(StandardScaler, MLPRegressor)``.
         metrics: JSON-friendly dict: seed, hyper-parameters, features, split sizes, the restarts'
             training losses and the chosen one, and ``model`` / ``baseline_nearest`` /
-            ``baseline_f_w`` metrics, each ``{"train": {...}, "test": {...}}``.
+            ``baseline_f_w`` metrics, each ``{"train": {...}, "test": {...}}``; ``blas``:
+            the BLAS libraries, kernels and thread count of the fit (:func:`~deformctl.blas.
+            blas_info`).
         split: train / test object ids.
         predictions: one row per object: ``object_id``, ``split`` ("train"/"test"), the
             features, ``lift_force_n``, ``predicted_lift_force_n``, ``rel_error``,
@@ -296,7 +303,7 @@ def train_model(
                 candidate.fit(X_train, y_train)
             except ValueError as err:  # e.g. an invalid solver / activation name
                 raise UsageError(f"cannot train the network: {err}") from None
-        loss = _rms_rel_error(candidate, X_train, y_train)
+            loss = _rms_rel_error(candidate, X_train, y_train)
         losses.append(loss)
         if loss < best_loss:  # strict: ties keep the earlier restart
             best, best_loss, best_index = candidate, loss, i
@@ -306,6 +313,7 @@ def train_model(
     with threadpool_limits(limits=1):
         pred_train = best.predict(X_train)
         pred_test = best.predict(X_test)
+        blas = blas_info()  # the kernel and the 1 thread the fit and these predictions ran on
     nn_train, nn_test = _nearest_baseline(train, test)
     fw_train, fw_test = _f_w(train), _f_w(test)
     ratio = constant_ratio(y_train, fw_train)
@@ -342,6 +350,7 @@ def train_model(
         "baseline_f_w": both(fw_train, fw_test),
         "baseline_constant_ratio": both(cr_train, cr_test),
         "constant_ratio": None if not math.isfinite(ratio) else ratio,
+        "blas": blas,
     }
 
     frames = []

@@ -43,6 +43,7 @@ from deformctl.artifacts.tables import (
     read_catalog_bytes,
     read_parquet_bytes,
 )
+from deformctl.blas import blas_record
 from deformctl.errors import DeformctlError, InputDataError, SchemaError
 from deformctl.series import SqueezeSeries, ruptures_from_object
 from deformctl.units import NS_PER_S
@@ -369,6 +370,7 @@ def _model_summary(data: bytes, path: PathArg) -> dict[str, Any]:
         "n_test": meta.get("n_test") if isinstance(meta.get("n_test"), int) else None,
         "metrics": metrics,
         "tool_version": str(meta.get("tool_version", "unknown")),
+        "blas": blas_record(meta.get("blas")),
         "provenance": None if prov is None else Provenance.from_dict(prov, path=name).to_dict(),
     }
 
@@ -385,7 +387,8 @@ def describe(path: PathArg, *, data: bytes | None = None) -> dict[str, Any]:
         sample rates, phase, ruptures); for a coefficients table ``coefficients`` (per object: D,
         λ, R², quality); for a model file (kind ``model``) ``features``, ``target``,
         ``training_range`` (feature -> [min, max]), ``seed``, ``hyperparameters``, ``n_train``,
-        ``n_test``, ``metrics`` (model and baselines, train and test) and ``tool_version``.
+        ``n_test``, ``metrics`` (model and baselines, train and test), ``tool_version`` and ``blas``
+        (the BLAS libraries, kernels and thread count of the fit; None for older files).
 
     Raises:
         MissingInputError: ``path`` does not exist (exit 66).

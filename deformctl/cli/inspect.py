@@ -21,6 +21,7 @@ from deformctl.artifacts.rows import (
     rows_records,
     select_rows,
 )
+from deformctl.blas import blas_summary
 from deformctl.cli._common import translate_errors
 from deformctl.cli._rows import rows_footer, rows_text
 from deformctl.errors import UsageError
@@ -48,6 +49,8 @@ def _model_lines(info: dict[str, Any]) -> list[str]:
     if hp:
         lines.append(f"hyperparameters: {json.dumps(hp, sort_keys=True)}")
     lines.append(f"split: {info['n_train']} train / {info['n_test']} test")
+    if info.get("blas") is not None:  # older model files did not record it
+        lines.append(f"BLAS of the fit: {blas_summary(info['blas'])}")
     for key, entry in info["metrics"].items():
         for split, m in entry.items():
             lines.append(
