@@ -690,6 +690,8 @@ def run_model(
     stop_from_step: int = 0,
     q: FloatArray | None = None,
     v: FloatArray | None = None,
+    frame_every: int = 0,
+    frames: FloatArray | None = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Integrate ``len(force_cmd_n) - 1`` steps.
 
@@ -706,6 +708,9 @@ def run_model(
         stop_slip_m: stop early once the mean palm slip accumulated since the step before
             ``stop_from_step`` exceeds this, m (None: run every step).
         q, v: initial DOF displacement (m) and velocity (m/s), ``[n_dof]``; zero by default.
+        frame_every, frames: copy the particle positions into ``frames`` (m, ``[n_frames, n,
+            3]``, see :func:`deformctl.sim.scene.frame_buffer`) after steps 0, ``frame_every``,
+            2 ``frame_every``... (0: no copies; what is simulated does not depend on it).
 
     Returns:
         final q, final v and the record matrix ``[n_run, N_REC]`` (``n_run`` is
@@ -740,6 +745,8 @@ def run_model(
         s.integrator == "bdf2",
         -1.0 if stop_slip_m is None else float(stop_slip_m),
         int(stop_from_step),
+        int(frame_every) if frames is not None else 0,
+        np.zeros((0, model.lattice.n_particles, 3)) if frames is None else frames,
     )
     if model.hierarchy is not None:
         tol = s.cg_tolerance_m_s * model.particle_mass_kg * math.sqrt(model.n_dof)
