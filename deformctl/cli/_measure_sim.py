@@ -18,6 +18,7 @@ from rich.console import Console
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli._common import finish_sweep, progress_bar
 from deformctl.cli._options import parse_log_epoch, parse_object_ids
+from deformctl.cli._scene_options import scene_rate
 from deformctl.errors import UsageError
 from deformctl.measure import (
     DEFAULT_SIM_HOLD_S,
@@ -29,6 +30,7 @@ from deformctl.measure import (
     simulate_catalog_sweep,
 )
 from deformctl.parallel import SweepOptions
+from deformctl.scene import scene_every_steps
 
 Squeezes = Annotated[
     int | None,
@@ -104,6 +106,7 @@ class SimOptions:
     noise_force_n: float | None
     noise_position_m: float | None
     log_epoch: str | None = None
+    scene_hz: float | None = None
 
     def given(self) -> dict[str, object]:
         """Option flag → value for the options given on the command line."""
@@ -151,7 +154,9 @@ class SimOptions:
             "gravity": not self.floating,
             "noise_force_n": self.noise_force_n or 0.0,
             "noise_position_m": self.noise_position_m or 0.0,
+            "scene_hz": scene_rate(self.scene_hz),
         }
+        scene_every_steps(simulate["scene_hz"], preset.settings.dt_s)
         epoch_ns = parse_log_epoch(self.log_epoch)
         return SimulateCatalogTask(
             simulate,

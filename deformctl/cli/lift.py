@@ -56,6 +56,7 @@ from deformctl.cli._lift_start import (
     report_run,
     start_seed,
 )
+from deformctl.cli._scene_options import SceneHz, scene_rate
 from deformctl.errors import UsageError
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
@@ -138,6 +139,7 @@ def lift(
         int, typer.Option("--max-attempts", help="Most attempts per object (>= 1).")
     ] = DEFAULT_MAX_ATTEMPTS,
     log_epoch: opt.LogEpoch = None,
+    scene_hz: SceneHz = None,
     start_model: StartModel = None,
     start_table: StartTable = None,
     start_interpolate: StartInterpolate = None,
@@ -198,6 +200,7 @@ def lift(
             "--dt-s": dt_s,
             "--memory-budget-gib": memory_budget_gib,
             "--log-epoch": log_epoch,
+            "--scene-hz": scene_hz,
         },
     )
     judge = frames_judge(
@@ -206,7 +209,7 @@ def lift(
         slip_tolerance_m=None if sim else slip_tolerance_m,
         marker_dict=frame_marker_dict, debug_dir=debug_dir,
     )  # fmt: skip
-    factory = choose_runner(rig, rig_timeout, judge, parts)
+    factory = choose_runner(rig, rig_timeout, judge, parts, scene_rate(scene_hz))
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
     )
@@ -214,7 +217,8 @@ def lift(
     seed = start_seed(start_model, start_table, start_interpolate, start_margin, coefficients,
                       protocol=protocol, dataset=dataset)  # fmt: skip
     if dataset:
-        search = (protocol, growth, tolerance, max_attempts, opt.parse_log_epoch(log_epoch))
+        search = (protocol, growth, tolerance, max_attempts, opt.parse_log_epoch(log_epoch),
+                  scene_rate(scene_hz))  # fmt: skip
         lift_dataset(catalog, parts, log, search, output, sweep, object_ids, force)
         return
     with progress_bar(Console(stderr=True), "lift") as progress:

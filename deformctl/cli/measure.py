@@ -21,6 +21,7 @@ from deformctl.cli import _measure_rig as rec
 from deformctl.cli import _measure_sim as sq
 from deformctl.cli import _options as opt
 from deformctl.cli._common import translate_errors
+from deformctl.cli._scene_options import SceneHz
 from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
 
@@ -110,6 +111,7 @@ def measure(
     noise_force_n: sq.NoiseForceN = None,
     noise_position_m: sq.NoisePositionM = None,
     log_epoch: opt.LogEpoch = None,
+    scene_hz: SceneHz = None,
     force: opt.Force = False,
     sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
@@ -136,7 +138,7 @@ def measure(
     """
     sim_opts = _measure_sim.SimOptions(
         squeezes, sim_preset, objects, peak_force_n, strain, ramp_s, hold_s, floating, alpha_cm,
-        dt_s, memory_budget_gib, seed, noise_force_n, noise_position_m, log_epoch,
+        dt_s, memory_budget_gib, seed, noise_force_n, noise_position_m, log_epoch, scene_hz,
     )  # fmt: skip
     image_opts = img.ImageOptions(
         marker_size_cm, marker_dict, marker_id, checkerboard, square_size_cm, color_range,
