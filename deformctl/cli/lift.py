@@ -209,7 +209,11 @@ def lift(
         slip_tolerance_m=None if sim else slip_tolerance_m,
         marker_dict=frame_marker_dict, debug_dir=debug_dir,
     )  # fmt: skip
-    factory = choose_runner(rig, rig_timeout, judge, parts, scene_rate(scene_hz))
+    if scene_hz is not None and log is None and not dataset:
+        raise UsageError("--scene-hz needs --log FILE: the scene is written into the lift log")
+    # the scene goes into a log: without one, the attempts record none
+    scene = scene_rate(scene_hz) if log is not None or dataset else 0.0
+    factory = choose_runner(rig, rig_timeout, judge, parts, scene)
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
     )

@@ -86,3 +86,12 @@ def test_scene_hz_needs_the_simulator(tmp_path: Path) -> None:
     result = runner.invoke(app, args)
     assert result.exit_code == 2
     assert "--scene-hz needs --sim" in result.stderr
+
+
+def test_scene_hz_needs_a_log(tmp_path: Path) -> None:
+    out = tmp_path / "x.parquet"
+    args = ["lift", PAPER, "--sim", *FAST_LIFT, "--scene-hz", "10", "-o", str(out)]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2
+    assert "--scene-hz needs --log" in result.stderr
+    assert list(tmp_path.iterdir()) == []
