@@ -13,13 +13,26 @@ library. The README's Architecture section says what each package owns.
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
+from typing import TYPE_CHECKING, Any
 
 from deformctl.errors import DeformctlError
 
-try:
-    __version__ = version("deformctl")
-except PackageNotFoundError:  # pragma: no cover - running from a source tree without install
-    __version__ = "0.0.0+unknown"
+if TYPE_CHECKING:  # pragma: no cover - computed on first use (module __getattr__)
+    __version__: str
 
 __all__ = ["DeformctlError", "__version__"]
+
+
+def __getattr__(name: str) -> Any:
+    """``__version__``, read from the installed distribution on first use: the lookup
+    (``importlib.metadata``) costs a good part of a one-object ``predict``'s start-up."""
+    if name != "__version__":
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        value = version("deformctl")
+    except PackageNotFoundError:  # pragma: no cover - a source tree without install
+        value = "0.0.0+unknown"
+    globals()["__version__"] = value
+    return value

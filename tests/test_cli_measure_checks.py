@@ -47,7 +47,7 @@ def test_units_key_that_names_no_column(tmp_path: Path) -> None:
     csv = _fruit_csv(_in(tmp_path) / "fruit.csv")
     out = tmp_path / "o.mcap"
     args = csv_args(csv, out, "time=t,force=load,compression=Pos", "--units", "position=mm")
-    msg = _fails(args, EXIT_USAGE, "--units: 'position' names no column of --columns", out)
+    msg = _fails(args, EXIT_USAGE, "--units: 'position' names no column (time='t'", out)
     assert msg.endswith("valid keys: time, force, compression")
 
 
@@ -286,4 +286,6 @@ def test_a_unit_stated_by_the_file_is_questioned(tmp_path: Path) -> None:
         "peak compression 5",
         out,
     )
-    assert msg.endswith("the file's units row says 'm'; is column 'Pos' in mm?")
+    assert msg.endswith(
+        "the file's units row says m; the values are plausible in mm: is the units row wrong?"
+    )

@@ -276,7 +276,7 @@ def test_inspect_model_json_and_text(trained: dict[str, object]) -> None:
     assert result.exit_code == 0, result.stderr
     info = json.loads(result.stdout)
     assert (info["format"], info["kind"]) == ("skops", "model")
-    assert info["schema"] == {"name": "deformctl-lift-force-model", "version": 1}
+    assert info["schema"] == {"name": "deformctl-lift-force-model", "version": 2}
     assert info["features"] == list(FEATURES)
     assert info["seed"] == SEED
     assert info["training_range"] == m["training_range"]

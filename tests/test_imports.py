@@ -24,10 +24,10 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("__main__", "cli"),
     ("repro", "golden"),
     # the stages, each one module or package (they may import each other, never in a cycle)
-    ("population", "measure", "characterize", "lift", "table", "train", "vision"),
+    ("population", "measure", "characterize", "lift", "table", "train", "predict", "vision"),
     ("parallel",),
     ("artifacts",),
-    ("model", "catalog", "presets"),
+    ("model", "grip", "catalog", "presets"),
     ("sim",),
     (
         "__init__",
@@ -39,6 +39,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "plausibility",
         "jsonsafe",
         "resources",
+        "blas",
     ),
 )
 

@@ -68,6 +68,22 @@ from deformctl.units import N_PER_CM, NS_PER_CM
 
 Method = Literal["lsq", "paper"]
 
+#: The material models ``characterize --model`` selects by name. ``kv``: Kelvin–Voigt,
+#: ``f = D d + λ d'`` (``+ F0`` with a preload), fitted by :func:`fit_lsq` or :func:`fit_paper`.
+MODELS: tuple[str, ...] = ("kv",)
+DEFAULT_MODEL = "kv"
+
+
+def check_model(model: str) -> str:
+    """``model`` when it names a model of :data:`MODELS`.
+
+    Raises:
+        UsageError: an unknown model (exit 2).
+    """
+    if model not in MODELS:
+        raise UsageError(f"--model must be one of {', '.join(MODELS)}, got {model!r}")
+    return model
+
 
 Preload = Literal["fit", "zero"]
 PRELOADS: tuple[str, ...] = ("fit", "zero")

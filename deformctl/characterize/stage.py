@@ -32,8 +32,16 @@ from deformctl.artifacts.dataset import (
 )
 from deformctl.artifacts.provenance import Provenance, sha256_file
 from deformctl.characterize.coefficients import _coefficient_frame
-from deformctl.characterize.fit import PRELOADS, Method, Preload, _fit_rows, default_window_s
-from deformctl.characterize.quality import check_policy, enforce
+from deformctl.characterize.fit import (
+    DEFAULT_MODEL,
+    PRELOADS,
+    Method,
+    Preload,
+    _fit_rows,
+    check_model,
+    default_window_s,
+)
+from deformctl.characterize.quality import check_policy, enforce, with_recording_flags
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, run_sweep
 from deformctl.series import SqueezeSeries, ruptures_from_object
@@ -116,7 +124,9 @@ def _fit_object(
         recorded_ruptures={oid: ruptures_from_object(dict(obj or {}))},
         window_s=window_s,
     )
-    return rows[0], mode
+    row = rows[0]
+    row["quality"] = with_recording_flags(str(row["quality"]), (obj or {}).get("recording_flags"))
+    return row, mode
 
 
 def read_and_characterize(
@@ -128,6 +138,7 @@ def read_and_characterize(
     constrain_damping: bool = False,
     strict: bool = False,
     allow_flagged: bool = False,
+    model: str = DEFAULT_MODEL,
 ) -> LogCoefficients:
     """Read a squeeze log (validated), group its squeezes by object and fit each object.
 
@@ -141,6 +152,7 @@ def read_and_characterize(
         constrain_damping: lsq: fit with λ ≥ 0.
         strict: any quality flag is an error (:func:`deformctl.characterize.quality.enforce`).
         allow_flagged: keep objects with negative D (flagged) instead of refusing them.
+        model: the material model (:data:`deformctl.characterize.fit.MODELS`; ``kv``).
 
     Returns:
         The coefficient table, the window and preload used for each object and the warning
@@ -159,6 +171,7 @@ def read_and_characterize(
     from deformctl.artifacts.mcap import read_squeeze_log
 
     _check_fit_options(method, window_s, preload)
+    check_model(model)
     check_policy(strict, allow_flagged)
     if method == "paper" and (preload == "fit" or constrain_damping):
         raise UsageError("the paper estimator has no preload or damping bound; use --method lsq")
@@ -241,6 +254,7 @@ def characterize_file(
     constrain_damping: bool = False,
     strict: bool = False,
     allow_flagged: bool = False,
+    model: str = DEFAULT_MODEL,
 ) -> LogCoefficients:
     """``characterize LOG -o TABLE``: fit a squeeze log (or a ``measure`` directory's logs).
 
@@ -260,6 +274,7 @@ def characterize_file(
         "constrain_damping": constrain_damping,
         "strict": strict,
         "allow_flagged": allow_flagged,
+        "model": model,
     }
     if os.path.isdir(log):
         result = characterize_dir(log, method, **options)
@@ -268,6 +283,7 @@ def characterize_file(
     provenance = Provenance.from_invocation(
         [log],
         settings={
+            "model": model,
             "method": method,
             "window_s": result.window_s,
             "window_s_option": window_s,
@@ -346,7 +362,7 @@ class CharacterizeTask:
     """``characterize`` for one object of a squeeze-log directory (a picklable sweep task).
 
     Attributes:
-        method, window_s, preload, constrain_damping: as :func:`read_and_characterize`.
+        method, window_s, preload, constrain_damping, model: as :func:`read_and_characterize`.
         strict: a flagged object fails (recorded in ``_failures/``) instead of being written.
         allow_flagged: write an object with negative D (flagged) instead of failing it.
     """
@@ -357,6 +373,7 @@ class CharacterizeTask:
     constrain_damping: bool = False
     strict: bool = False
     allow_flagged: bool = False
+    model: str = DEFAULT_MODEL
 
     def __call__(self, item: dict[str, Any]) -> Any:
         """Fit one object; its coefficients row (an Arrow table).
@@ -408,6 +425,7 @@ def characterize_sweep(
     if task.window_s is not None and not (math.isfinite(task.window_s) and task.window_s > 0):
         raise UsageError(f"--window-s must be a finite number > 0 s, got {task.window_s}")
     _check_fit_options(task.method, task.window_s, task.preload)
+    check_model(task.model)
     check_policy(task.strict, task.allow_flagged)
     if not os.path.isdir(log_dir):
         if not os.path.exists(log_dir):
@@ -424,6 +442,8 @@ def characterize_sweep(
         "strict": task.strict,
         "allow_flagged": task.allow_flagged,
     }
+    if task.model != DEFAULT_MODEL:  # (the default keeps older directories resumable)
+        settings["model"] = task.model
     fingerprint = dataset_fingerprint(
         "characterize", "coefficients", settings, {"log": sha256_file(log_dir)}
     )

@@ -1,8 +1,8 @@
-"""``deformctl measure --bag | --csv``: one object's squeeze log from a rig recording.
+"""``deformctl measure --bag``: one object's squeeze log from a rig recording, and the options
+``--bag`` and ``--csv`` share (``--csv`` runs in :mod:`deformctl.cli._measure_csv`).
 
-Each recording source has a reader (:func:`deformctl.measure.read_ros2_bag`,
-:func:`deformctl.measure.read_csv_export`) behind :data:`READERS`, which checks its own options
-and returns the recording and the settings the provenance records;
+The bag reader (:func:`deformctl.measure.read_ros2_bag`) is behind :data:`READERS`, which checks
+its own options and returns the recording and the settings the provenance records;
 :func:`deformctl.measure.recording_log` writes the log.
 """
 
@@ -18,9 +18,8 @@ import typer
 from deformctl.artifacts import check_input_path, check_output_path
 from deformctl.artifacts.io import is_stdio
 from deformctl.catalog import object_record
-from deformctl.cli._common import parse_mapping
 from deformctl.errors import UsageError
-from deformctl.measure import Recording, read_csv_export, read_ros2_bag, recording_log
+from deformctl.measure import Recording, read_ros2_bag, recording_log
 
 Bag = Annotated[
     str | None,
@@ -33,7 +32,8 @@ Csv = Annotated[
     typer.Option(
         "--csv",
         metavar="FILE",
-        help="Source: a CSV export, plain or with a units row under the names.",
+        help="Source: CSV exports, one object each (more files follow as arguments; - for "
+        "stdin): a preamble, the header, units in the names or a units row are found.",
     ),
 ]
 WrenchTopics = Annotated[
@@ -70,16 +70,18 @@ Columns = Annotated[
     str | None,
     typer.Option(
         "--columns",
-        metavar="time=COL,force=COL,position=COL",
-        help="CSV: the columns; position may be gap=COL or compression=COL instead.",
+        metavar="time=COL,force=COL,compression=COL",
+        help="CSV: the columns of these roles (the others are found by name: time, force, "
+        "compression, position or gap); position may be gap=COL or compression=COL.",
     ),
 ]
 Units = Annotated[
     str | None,
     typer.Option(
         "--units",
-        metavar="time=s,force=N,position=mm",
-        help="CSV: units of columns whose unit the file does not state (default s, N, m).",
+        metavar="time=s,force=N,compression=mm",
+        help="CSV: units of the columns whose unit the file does not state (default s, N, m, "
+        "with a warning); one that contradicts the file is an error.",
     ),
 ]
 Segment = Annotated[
@@ -177,23 +179,6 @@ def _from_bag(
     return _read(read_ros2_bag, path, opts, size_x_cm, settings), settings
 
 
-def _from_csv(
-    path: str, opts: RigOptions, size_x_cm: float | None
-) -> tuple[Recording, dict[str, Any]]:
-    if opts.columns is None:
-        raise UsageError("--csv needs --columns time=COL,force=COL,position=COL")
-    settings: dict[str, Any] = {
-        "source": "csv",
-        "columns": parse_mapping(opts.columns, "--columns"),
-        "units": parse_mapping(opts.units, "--units") if opts.units is not None else {},
-        "position_is": opts.position_is,
-        "segment": False if opts.segment is None else opts.segment,
-        "phase": opts.phase or "all",
-        "position_increases_when": opts.position_increases_when,
-    }
-    return _read(read_csv_export, path, opts, size_x_cm, settings), settings
-
-
 def _read(
     reader: Callable[..., Recording],
     path: str,
@@ -209,7 +194,6 @@ def _read(
 #: source option → its reader; exactly one source is given per run.
 READERS: dict[str, Callable[[str, RigOptions, float | None], tuple[Recording, dict[str, Any]]]] = {
     "--bag": _from_bag,
-    "--csv": _from_csv,
 }
 
 

@@ -17,6 +17,7 @@ from deformctl.characterize import (
     characterize_sweep,
     sweep_warnings,
 )
+from deformctl.characterize.fit import DEFAULT_MODEL, MODELS
 from deformctl.characterize.quality import thresholds_help
 from deformctl.cli import _options as opt
 from deformctl.cli._common import finish_sweep, translate_errors
@@ -44,6 +45,14 @@ Strict = Annotated[
     typer.Option(
         "--strict",
         help="Exit 65 (nothing written) if any object is flagged. " + thresholds_help(),
+    ),
+]
+Model = Annotated[
+    str,
+    typer.Option(
+        "--model",
+        metavar="|".join(MODELS),
+        help="The material model: kv, Kelvin-Voigt, f = D d + λ d' (+ F0 with a preload).",
     ),
 ]
 AllowFlagged = Annotated[
@@ -113,6 +122,7 @@ def characterize(
             f"rate, {DEFAULT_WINDOW_S:g} s at >= 1 kHz, 0.43 s at 100 Hz).",
         ),
     ] = None,
+    model: Model = DEFAULT_MODEL,
     preload: Preload = None,
     constrain_damping: ConstrainDamping = False,
     strict: Strict = False,
@@ -144,6 +154,7 @@ def characterize(
         "constrain_damping": constrain_damping,
         "strict": strict,
         "allow_flagged": allow_flagged,
+        "model": model,
     }
     if sweep.check(output):
         task = CharacterizeTask(method, window_s, **options)

@@ -16,7 +16,8 @@ import typer
 from rich.console import Console
 
 from deformctl.cli import _image_options as img
-from deformctl.cli import _measure_images, _measure_rig, _measure_sim
+from deformctl.cli import _measure_csv, _measure_images, _measure_rig, _measure_sim
+from deformctl.cli import _measure_csv as csvo
 from deformctl.cli import _measure_rig as rec
 from deformctl.cli import _measure_sim as sq
 from deformctl.cli import _options as opt
@@ -29,12 +30,13 @@ RIG, IMAGES = ("--bag", "--csv"), ("--images",)
 #: Every option that only some sources take → those sources (``--sim`` takes the sweep options).
 SOURCES: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(("--wrench-topic", "--position-topic", "--joint"), ("--bag",)),
-    **dict.fromkeys(("--columns", "--units"), ("--csv",)),
+    **dict.fromkeys(("--columns", "--units", *_measure_csv.FLAGS), ("--csv",)),
     **dict.fromkeys(("--segment/--no-segment", "--phase", "--position-increases-when"), RIG),
     **dict.fromkeys(("--object-id", "--weight-n", "--friction-mu"), (*RIG, *IMAGES)),
     "--size-cm": RIG,
     **dict.fromkeys(img.FLAGS, IMAGES),
     **dict.fromkeys(_measure_sim.FLAGS, ("--sim",)),
+    "--memory-budget-gib": ("--sim", "--csv"),
 }
 
 
@@ -49,11 +51,12 @@ def _refuse_foreign(source: str, given: dict[str, object]) -> None:
 @translate_errors
 @opt.with_sweep_options
 def measure(
-    catalog: Annotated[
-        str | None,
+    inputs: Annotated[
+        list[str] | None,
         typer.Argument(
-            metavar="[CATALOG]",
-            help="--sim: the object catalog (CSV or Parquet, with material values); - for stdin.",
+            metavar="[CATALOG | FILE...]",
+            help="--sim: the object catalog (CSV or Parquet, with material values); - for stdin. "
+            "--csv: more CSV files (a shell glob after --csv: --csv data/*.csv).",
         ),
     ] = None,
     sim: Annotated[
@@ -73,6 +76,14 @@ def measure(
     segment: rec.Segment = None,
     phase: rec.Phase = None,
     position_increases_when: rec.PositionIncreasesWhen = None,
+    skip_rows: csvo.SkipRows = None,
+    delimiter: csvo.Delimiter = None,
+    decimal: csvo.Decimal = None,
+    thousands: csvo.Thousands = None,
+    encoding: csvo.Encoding = None,
+    force_sign: csvo.ForceSign = None,
+    lag_s: csvo.LagS = None,
+    objects_from: csvo.ObjectsFrom = None,
     marker_size_cm: img.MarkerSizeCm = None,
     marker_dict: img.MarkerDict = None,
     marker_id: img.MarkerId = None,
@@ -106,7 +117,7 @@ def measure(
     floating: sq.Floating = None,
     alpha_cm: opt.AlphaCm = None,
     dt_s: opt.DtS = None,
-    memory_budget_gib: opt.MemoryBudgetGib = None,
+    memory_budget_gib: sq.MemoryBudgetGib = None,
     seed: sq.Seed = None,
     noise_force_n: sq.NoiseForceN = None,
     noise_position_m: sq.NoisePositionM = None,
@@ -144,6 +155,9 @@ def measure(
         marker_size_cm, marker_dict, marker_id, checkerboard, square_size_cm, color_range,
         background, debug_dir, append, camera_matrix,
     )  # fmt: skip
+    csv_flags = csvo.CsvFlags(
+        skip_rows, delimiter, decimal, thousands, encoding, force_sign, lag_s, objects_from
+    )
     rig_opts = _measure_rig.RigOptions(
         object_id, list(wrench_topics), position_topic, joint, axis, position_is, columns, units,
         segment, phase, position_increases_when,
@@ -151,10 +165,15 @@ def measure(
     given: dict[str, object] = {
         **rig_opts.given(), "--weight-n": weight_n, "--size-cm": size_cm,
         "--friction-mu": friction_mu, **image_opts.given(), **sim_opts.given(),
+        **csv_flags.given(),
     }  # fmt: skip
     given = {flag: value for flag, value in given.items() if value not in (None, [], False)}
-    if catalog is not None and not sim:
-        raise UsageError(f"a catalog argument ({catalog!r}) needs --sim")
+    inputs = list(inputs or [])
+    if inputs and not sim and csv is None:
+        raise UsageError(f"an argument ({inputs[0]!r}) needs --sim (a catalog) or --csv (files)")
+    if sim and len(inputs) > 1:
+        raise UsageError(f"--sim takes one catalog, got {len(inputs)}: {', '.join(inputs)}")
+    catalog = inputs[0] if sim and inputs else None
     sources = {"--bag": bag, "--csv": csv, "--images": images and images[0]}
     sources["--sim"] = (catalog or "") if sim else None
     chosen = [(flag, value) for flag, value in sources.items() if value is not None]
@@ -168,8 +187,15 @@ def measure(
     if flag == "--sim":
         _measure_sim.run(source, sim_opts, output, force, sweep, Console(stderr=True))
         return
+    if flag == "--csv":
+        obj = {"object_id": object_id, "weight_n": weight_n, "size_cm": size_cm,
+               "friction_mu": friction_mu}  # fmt: skip
+        _measure_csv.run(
+            [source, *inputs], csv_flags, rig_opts, obj, memory_budget_gib, output, force, sweep
+        )
+        return
     if sweep.given():
-        raise UsageError(f"{sweep.given()[0]} needs --sim")
+        raise UsageError(f"{sweep.given()[0]} needs --sim or --csv")
     if object_id is None or weight_n is None:
         raise UsageError(f"{flag} needs --object-id and --weight-n")
     if images is not None:

@@ -4,7 +4,10 @@ images.
 One module per source, each a reader the ``measure`` command calls:
 
 * :mod:`~deformctl.measure.ros2_bag`: :func:`read_ros2_bag` (``--bag``);
-* :mod:`~deformctl.measure.csv`: :func:`read_csv_export` (``--csv``);
+* :mod:`~deformctl.measure.csv`: :func:`read_csv_export` (``--csv``), with the text of an
+  export in :mod:`~deformctl.measure.csv_table`, its columns and units in
+  :mod:`~deformctl.measure.csv_columns`, its options in :mod:`~deformctl.measure.csv_options`
+  and many files per call in :mod:`~deformctl.measure.csv_batch`;
 * :mod:`~deformctl.measure.sim`: :func:`simulate_squeezes` (``--sim``), squeezing catalog objects
   in :mod:`deformctl.sim`;
 * :mod:`~deformctl.measure.images`: :func:`~deformctl.measure.images.measure_images`
@@ -17,7 +20,9 @@ cut into squeezes by :mod:`~deformctl.measure.segment` (segmentation, rupture an
 :func:`simulate_catalog_file` for a catalog and, at scale, :class:`SimulateCatalogTask` (the sweep
 task of one object) and :func:`simulate_catalog_sweep` (a dataset directory).
 
-Every reader checks the recording's plausibility (:mod:`deformctl.plausibility`: a sample rate,
+A recording's defects (a logging gap, a coarse force, a force that lags the position) are
+reported, not fitted over (:mod:`~deformctl.measure.defects`). Every reader checks the
+recording's plausibility (:mod:`deformctl.plausibility`: a sample rate,
 peak force, peak compression, force axis or compression sign that a unit, axis or sign mistake
 explains is refused with the likely fix), and every squeeze is cut at a rupture and reduced to the
 ``phase`` asked for (:mod:`deformctl.characterize.rupture`); the :class:`Recording` carries the
@@ -35,6 +40,21 @@ from deformctl.measure.csv import (
     TIME_UNITS_S,
     read_csv_export,
     squeeze_from_csv,
+)
+from deformctl.measure.csv_batch import (
+    CSV_MEASURE_SCHEMA,
+    CsvBatchResult,
+    CsvFile,
+    CsvFileTask,
+    csv_objects,
+    measure_csv_files,
+    measure_csv_sweep,
+    read_objects_from,
+)
+from deformctl.measure.csv_options import (
+    DEFAULT_CSV_MEMORY_BUDGET_GIB,
+    CsvDialect,
+    CsvOptions,
 )
 from deformctl.measure.images import ImagesResult, measure_images
 from deformctl.measure.recording import (
@@ -79,6 +99,8 @@ from deformctl.measure.stage import (
 
 __all__ = [
     "ABSOLUTE_TIME_MIN_S",
+    "CSV_MEASURE_SCHEMA",
+    "DEFAULT_CSV_MEMORY_BUDGET_GIB",
     "DEFAULT_FORCE_THRESHOLD_FRAC",
     "DEFAULT_MIN_GAP_S",
     "DEFAULT_MIN_SQUEEZE_S",
@@ -97,15 +119,24 @@ __all__ = [
     "WRENCH_TYPE",
     "Axis",
     "CompressionZero",
+    "CsvBatchResult",
+    "CsvDialect",
+    "CsvFile",
+    "CsvFileTask",
+    "CsvOptions",
     "ImagesResult",
     "IncreasesWhen",
     "PositionIs",
     "Recording",
     "SimulateCatalogTask",
     "SqueezeProgress",
+    "csv_objects",
     "default_peak_force_n",
+    "measure_csv_files",
+    "measure_csv_sweep",
     "measure_images",
     "read_csv_export",
+    "read_objects_from",
     "read_ros2_bag",
     "recording_log",
     "segment_squeezes",
