@@ -199,8 +199,10 @@ def lift_dataset(
     sweep: SweepOptions,
     object_ids: Sequence[str] | None,
     force: bool,
+    quiet: bool = False,
 ) -> None:
-    """``lift --sim -o DIR/``: the search of every object through the sweep executor.
+    """``lift --sim -o DIR/``: the search of every object through the sweep executor, then the
+    sweep's summary line (unless ``quiet``).
 
     ``search`` is (protocol, growth, tolerance, max_attempts, log_epoch_ns, scene_hz), as
     :class:`~deformctl.lift.runners.sim.LiftTask` takes them.
@@ -220,4 +222,4 @@ def lift_dataset(
     summary = lift_sweep(
         catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
     )
-    finish_sweep(summary, "lift")
+    finish_sweep(summary, "lift", quiet=quiet)

@@ -54,9 +54,11 @@ from deformctl.cli._lift_start import (
     StartModel,
     StartTable,
     report_run,
+    run_summary,
     start_seed,
 )
 from deformctl.cli._scene_options import SceneHz, scene_rate
+from deformctl.cli._summary import Quiet, RunClock
 from deformctl.errors import UsageError
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
@@ -140,6 +142,7 @@ def lift(
     ] = DEFAULT_MAX_ATTEMPTS,
     log_epoch: opt.LogEpoch = None,
     scene_hz: SceneHz = None,
+    quiet: Quiet = False,
     start_model: StartModel = None,
     start_table: StartTable = None,
     start_interpolate: StartInterpolate = None,
@@ -177,6 +180,7 @@ def lift(
     Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
     -o lift.parquet --log lift.mcap
     """
+    clock = RunClock("lift")
     dataset = sweep.check(output, file_workers=True)
     if not dataset and sweep.workers is not None and not sim:
         raise UsageError(
@@ -223,7 +227,7 @@ def lift(
     if dataset:
         search = (protocol, growth, tolerance, max_attempts, opt.parse_log_epoch(log_epoch),
                   scene_rate(scene_hz))  # fmt: skip
-        lift_dataset(catalog, parts, log, search, output, sweep, object_ids, force)
+        lift_dataset(catalog, parts, log, search, output, sweep, object_ids, force, quiet)
         return
     with progress_bar(Console(stderr=True), "lift") as progress:
         run = lift_catalog_files(
@@ -233,4 +237,5 @@ def lift(
             progress=progress, force=force, log_epoch_ns=opt.parse_log_epoch(log_epoch),
             seed=seed, warn=warn, workers=sweep.workers,
         )  # fmt: skip
-    report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)))
+    report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)),
+               summary=None if quiet else run_summary(run, clock, output, log))  # fmt: skip

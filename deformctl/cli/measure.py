@@ -23,6 +23,7 @@ from deformctl.cli import _measure_sim as sq
 from deformctl.cli import _options as opt
 from deformctl.cli._common import translate_errors
 from deformctl.cli._scene_options import SceneHz
+from deformctl.cli._summary import Quiet
 from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
 
@@ -37,6 +38,7 @@ SOURCES: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(img.FLAGS, IMAGES),
     **dict.fromkeys(_measure_sim.FLAGS, ("--sim",)),
     "--memory-budget-gib": ("--sim", "--csv"),
+    "--quiet": ("--sim",),
 }
 
 
@@ -123,6 +125,7 @@ def measure(
     noise_position_m: sq.NoisePositionM = None,
     log_epoch: opt.LogEpoch = None,
     scene_hz: SceneHz = None,
+    quiet: Quiet = False,
     force: opt.Force = False,
     sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
@@ -165,7 +168,7 @@ def measure(
     given: dict[str, object] = {
         **rig_opts.given(), "--weight-n": weight_n, "--size-cm": size_cm,
         "--friction-mu": friction_mu, **image_opts.given(), **sim_opts.given(),
-        **csv_flags.given(),
+        **csv_flags.given(), "--quiet": quiet,
     }  # fmt: skip
     given = {flag: value for flag, value in given.items() if value not in (None, [], False)}
     inputs = list(inputs or [])
@@ -185,7 +188,7 @@ def measure(
     flag, source = chosen[0]
     _refuse_foreign(flag, given)
     if flag == "--sim":
-        _measure_sim.run(source, sim_opts, output, force, sweep, Console(stderr=True))
+        _measure_sim.run(source, sim_opts, output, force, sweep, Console(stderr=True), quiet)
         return
     if flag == "--csv":
         obj = {"object_id": object_id, "weight_n": weight_n, "size_cm": size_cm,
