@@ -21,6 +21,7 @@ from deformctl.characterize.fit import DEFAULT_MODEL, MODELS
 from deformctl.characterize.quality import thresholds_help
 from deformctl.cli import _options as opt
 from deformctl.cli._common import finish_sweep, translate_errors
+from deformctl.cli._summary import Quiet, RunClock
 from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
 
@@ -127,6 +128,7 @@ def characterize(
     constrain_damping: ConstrainDamping = False,
     strict: Strict = False,
     allow_flagged: AllowFlagged = False,
+    quiet: Quiet = False,
     force: opt.Force = False,
     sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
@@ -147,6 +149,7 @@ def characterize(
 
     Example: deformctl characterize squeeze.mcap -o coefficients.parquet --method lsq
     """
+    clock = RunClock("characterize")
     if method not in ("lsq", "paper"):
         raise UsageError(f"--method must be lsq or paper, got {method!r}")
     options: dict[str, Any] = {
@@ -161,10 +164,13 @@ def characterize(
         summary = characterize_sweep(log, task, output=output, sweep=sweep, force=force)
         for line in sweep_warnings(summary.out_dir):
             typer.echo(f"warning: {line}", err=True)
-        finish_sweep(summary, "characterize")
+        finish_sweep(summary, "characterize", quiet=quiet)
         return
     result = characterize_file(log, method, output=output, window_s=window_s, force=force,  # type: ignore[arg-type]
                                **options)  # fmt: skip
     for line in result.warnings:
         typer.echo(f"warning: {line}", err=True)
     typer.echo(render_summary(result), err=is_stdio(output))
+    flagged = int((result.table["quality"] != "ok").sum())
+    clock.finish(done=len(result.table), flagged=flagged, failed=0, quiet=quiet,
+                 output="stdout" if is_stdio(output) else output)  # fmt: skip

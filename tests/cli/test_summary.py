@@ -105,3 +105,29 @@ def test_quiet_is_a_sim_option_of_measure(tmp_path: Path) -> None:
     assert result.exit_code == 2
     assert "--quiet cannot be used with --csv" in result.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_characterize_counts_its_flagged_objects(tmp_path: Path) -> None:
+    # strong force noise flags both fits (low R²); the clean squeezes flag none
+    for noise, flagged in (("0", "0"), ("2", "2")):
+        log, out = tmp_path / f"sq{noise}.mcap", tmp_path / f"c{noise}.parquet"
+        args = ["measure", PAPER, "--sim", "--objects", "A,B", "--squeezes", "2", "--dt-s",
+                "0.002", "--alpha-cm", "10", "--noise-force-n", noise, "--seed", "1", "-q",
+                "-o", str(log)]  # fmt: skip
+        assert runner.invoke(app, args).exit_code == 0
+        result = runner.invoke(app, ["characterize", str(log), "-o", str(out)])
+        assert result.exit_code == 0, result.stderr
+        lines = result.stderr.strip().splitlines()
+        warnings = [line for line in lines if line.startswith("warning: ")]
+        assert len(warnings) == int(flagged)
+        m = LINE.match(lines[-1])
+        assert m is not None, lines[-1]
+        assert (m["cmd"], m["done"], m["flagged"], m["failed"]) == (
+            "characterize",
+            "2",
+            flagged,
+            "0",
+        )
+        quiet = runner.invoke(app, ["characterize", str(log), "-o", str(out), "--force", "-q"])
+        assert quiet.exit_code == 0
+        assert quiet.stderr.strip().splitlines() == warnings  # warnings stay, the line goes
