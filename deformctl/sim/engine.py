@@ -205,6 +205,9 @@ PREDICT_RELEASE = True
 #: Bytes each simulated step keeps: the record row (``N_REC`` doubles), the commanded force
 #: and palm velocity, and the series built from them (about three copies).
 STEP_BYTES = 8 * (N_REC + 2) * 3
+#: Bytes a scene frame keeps per particle: the copied position (3 doubles) and, for a surface
+#: particle, its JSON sphere in the log writer's messages (about 200 bytes).
+SCENE_FRAME_BYTES_PER_PARTICLE = 24 + 200
 
 
 @dataclass(frozen=True)
@@ -450,8 +453,11 @@ def check_lattice_size(spec: ObjectSpec, settings: SimSettings) -> None:
         )
 
 
-def check_run_steps(spec: ObjectSpec, settings: SimSettings, n_steps: float, what: str) -> None:
-    """Refuse a run whose model and recorded steps exceed ``settings.memory_budget_gib``.
+def check_run_steps(
+    spec: ObjectSpec, settings: SimSettings, n_steps: float, what: str, frame_every: int = 0
+) -> None:
+    """Refuse a run whose model, recorded steps and scene frames (one every ``frame_every``
+    steps; 0: none) exceed ``settings.memory_budget_gib``.
 
     Made before any step is allocated (``n_steps`` comes from the protocol's durations and
     ``dt_s``; a float, so an absurd duration is an estimate, not an overflow).
@@ -462,6 +468,10 @@ def check_run_steps(spec: ObjectSpec, settings: SimSettings, n_steps: float, wha
     """
     check_lattice_size(spec, settings)
     estimate = memory_estimate_bytes(spec, settings) + float(n_steps) * STEP_BYTES
+    if frame_every > 0:
+        n = math.prod(float(k) for k in particles_per_axis(spec.size_m, settings.alpha_m(spec)))
+        frames = float(n_steps) / frame_every + 2.0
+        estimate += frames * n * SCENE_FRAME_BYTES_PER_PARTICLE
     if not estimate <= settings.memory_budget_gib * GIB:  # also refuses inf / nan
         raise UsageError(
             f"object {spec.object_id!r}: a {what} of {float(n_steps):.3g} steps of "

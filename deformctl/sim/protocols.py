@@ -244,7 +244,7 @@ def squeeze(
         raise UsageError("ramp_s and hold_s must be >= 0")
     every = scene_every_steps(scene_hz, s.dt_s)
     n_steps = max(1, round((ramp_s + hold_s) / s.dt_s))
-    check_run_steps(spec, s, n_steps, "squeeze")
+    check_run_steps(spec, s, n_steps, "squeeze", every)
     model = build_model(spec, s, gripped=True, gravity=gravity, table=gravity)
     t = np.arange(n_steps + 1, dtype=np.float64) * s.dt_s
     force = peak_force_n * (np.clip(t / ramp_s, 0.0, 1.0) if ramp_s > 0 else np.ones_like(t))
@@ -357,7 +357,7 @@ def lift_attempt(
     rise = p.rise_m(spec)
     n_grip = max(1, round((s.grip_ramp_s + s.grip_settle_s) / dt))
     n_steps = n_grip + math.ceil(p.rise_time_s(rise) / dt) + round(p.hold_s / dt)
-    check_run_steps(spec, s, n_steps, "lift attempt")
+    check_run_steps(spec, s, n_steps, "lift attempt", every)
     n_planned = n_steps
     t = np.arange(n_steps + 1, dtype=np.float64) * dt
     if s.grip_ramp_s > 0:

@@ -6,6 +6,8 @@ the frame's step, whose final DOF displacements the step loop returns (not the f
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -143,3 +145,25 @@ def test_a_rate_above_the_step_rate_is_refused_before_simulating() -> None:
         lift_attempt(SPEC, F_W, settings=FAST, scene_hz=501.0)
     with pytest.raises(UsageError, match=">= 0"):
         squeeze(SPEC, peak_force_n=1.0, settings=FAST, scene_hz=-1.0)
+
+
+def test_the_scene_counts_in_the_memory_budget() -> None:
+    from deformctl.sim.engine import (
+        GIB,
+        SCENE_FRAME_BYTES_PER_PARTICLE,
+        STEP_BYTES,
+        check_run_steps,
+        memory_estimate_bytes,
+    )
+
+    n_steps = 500
+    n = 4**3  # particles_per_side=4 on a cube
+    without = memory_estimate_bytes(SPEC, FAST) + n_steps * STEP_BYTES
+    frames = (n_steps + 2) * n * SCENE_FRAME_BYTES_PER_PARTICLE  # a frame every step
+    tight = dataclasses.replace(FAST, memory_budget_gib=(without + 0.5 * frames) / GIB)
+    check_run_steps(SPEC, tight, n_steps, "squeeze")  # fits without its scene
+    check_run_steps(SPEC, tight, n_steps, "squeeze", frame_every=10)  # a frame every 10 steps fits
+    with pytest.raises(UsageError, match="memory"):
+        check_run_steps(SPEC, tight, n_steps, "squeeze", frame_every=1)
+    with pytest.raises(UsageError, match="memory"):  # refused before simulating
+        squeeze(SPEC, peak_force_n=1.0, ramp_s=0.5, hold_s=0.5, settings=tight, scene_hz=500.0)
