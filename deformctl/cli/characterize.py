@@ -22,6 +22,7 @@ from deformctl.characterize import (
 from deformctl.characterize.quality import thresholds_help
 from deformctl.cli import _options as opt
 from deformctl.cli._common import finish_sweep, translate_errors
+from deformctl.cli._summary import Quiet, RunClock
 from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
 
@@ -168,6 +169,7 @@ def characterize(
     plot: Plot = None,
     strict: Strict = False,
     allow_flagged: AllowFlagged = False,
+    quiet: Quiet = False,
     force: opt.Force = False,
     sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
@@ -190,6 +192,7 @@ def characterize(
 
     Example: deformctl characterize squeeze.mcap -o coefficients.parquet --model auto
     """
+    clock = RunClock("characterize")
     if method not in ("lsq", "paper"):
         raise UsageError(f"--method must be lsq or paper, got {method!r}")
     materials = MaterialOptions(model=model, at_force_n=at_force_n)
@@ -208,7 +211,7 @@ def characterize(
         summary = characterize_sweep(logs[0], task, output=output, sweep=sweep, force=force)
         for line in sweep_warnings(summary.out_dir):
             typer.echo(f"warning: {line}", err=True)
-        finish_sweep(summary, "characterize")
+        finish_sweep(summary, "characterize", quiet=quiet)
         return
     result = characterize_file(logs, method, output=output, window_s=window_s, force=force,  # type: ignore[arg-type]
                                plot_dir=plot, **options)  # fmt: skip
@@ -217,3 +220,6 @@ def characterize(
     typer.echo(render_summary(result), err=is_stdio(output))
     for path in result.plots:
         typer.echo(f"plot: {path}", err=True)
+    flagged = int((result.table["quality"] != "ok").sum())
+    clock.finish(done=len(result.table), flagged=flagged, failed=0, quiet=quiet,
+                 output="stdout" if is_stdio(output) else output)  # fmt: skip
