@@ -34,6 +34,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "errors",
         "units",
         "series",
+        "scene",
         "physics",
         "signals",
         "plausibility",

@@ -58,8 +58,11 @@ from deformctl.cli._lift_start import (
     StartModel,
     StartTable,
     report_run,
+    run_summary,
     start_seed,
 )
+from deformctl.cli._scene_options import SceneHz, scene_rate
+from deformctl.cli._summary import Quiet, RunClock
 from deformctl.errors import UsageError
 from deformctl.lift.ceiling import validate_max_force
 from deformctl.lift.search import (
@@ -144,6 +147,8 @@ def lift(
     ] = DEFAULT_MAX_ATTEMPTS,
     max_force_n: MaxForceN = None,
     log_epoch: opt.LogEpoch = None,
+    scene_hz: SceneHz = None,
+    quiet: Quiet = False,
     start_model: StartModel = None,
     start_table: StartTable = None,
     start_interpolate: StartInterpolate = None,
@@ -178,13 +183,10 @@ def lift(
     bisects to --tolerance: the same L_f as refine in fewer attempts. D and λ come from
     --coefficients (or the catalog); an object outside the training range starts at F_w.
 
-    No attempt asks for more than the object's force ceiling (--max-force-n, the catalog's
-    max_force_n, or 10 x F_w lowered to a known rupture force): a start above it is clamped,
-    a search that needs more stops with "no safe grip" (exit 1).
-
     Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
     -o lift.parquet --log lift.mcap
     """
+    clock = RunClock("lift")
     dataset = sweep.check(output, file_workers=True)
     if not dataset and sweep.workers is not None and not sim:
         raise UsageError(
@@ -208,6 +210,7 @@ def lift(
             "--dt-s": dt_s,
             "--memory-budget-gib": memory_budget_gib,
             "--log-epoch": log_epoch,
+            "--scene-hz": scene_hz,
         },
     )
     judge = frames_judge(
@@ -216,20 +219,24 @@ def lift(
         slip_tolerance_m=None if sim else slip_tolerance_m,
         marker_dict=frame_marker_dict, debug_dir=debug_dir,
     )  # fmt: skip
-    factory = choose_runner(rig, rig_timeout, judge, parts)
+    if scene_hz is not None and log is None and not dataset:
+        raise UsageError("--scene-hz needs --log FILE: the scene is written into the lift log")
+    # the scene goes into a log: without one, the attempts record none
+    scene = scene_rate(scene_hz) if log is not None or dataset else 0.0
+    factory = choose_runner(rig, rig_timeout, judge, parts, scene)
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
     )
-    if max_force_n is not None:
-        validate_max_force(max_force_n, "--max-force-n")
+    validate_max_force(max_force_n, "--max-force-n")  # None: the default ceiling
     object_ids = opt.parse_object_ids(objects)
     seed = start_seed(start_model, start_table, start_interpolate, start_margin, coefficients,
                       protocol=protocol, dataset=dataset)  # fmt: skip
     if dataset:
         if max_force_n is not None:
             raise UsageError("--max-force-n is for a single-file output (a dataset is simulated)")
-        search = (protocol, growth, tolerance, max_attempts, opt.parse_log_epoch(log_epoch))
-        lift_dataset(catalog, parts, log, search, output, sweep, object_ids, force)
+        search = (protocol, growth, tolerance, max_attempts, opt.parse_log_epoch(log_epoch),
+                  scene_rate(scene_hz))  # fmt: skip
+        lift_dataset(catalog, parts, log, search, output, sweep, object_ids, force, quiet)
         return
     with progress_bar(Console(stderr=True), "lift") as progress:
         run = lift_catalog_files(
@@ -239,4 +246,5 @@ def lift(
             progress=progress, force=force, log_epoch_ns=opt.parse_log_epoch(log_epoch),
             seed=seed, warn=warn, workers=sweep.workers, max_force_n=max_force_n,
         )  # fmt: skip
-    report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)))
+    report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)),
+               summary=None if quiet else run_summary(run, clock, output, log))  # fmt: skip

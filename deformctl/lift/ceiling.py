@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, overload
 
 from deformctl.errors import InputDataError, UsageError
 from deformctl.plausibility import MAX_LIFT_RATIO
@@ -68,12 +68,18 @@ class ForceCeiling:
         return f"force ceiling {self.max_force_n:.6g} N ({why})"
 
 
-def validate_max_force(value: Any, what: str) -> float:
-    """``value`` as a ceiling, N: a finite number > 0.
+@overload
+def validate_max_force(value: None, what: str) -> None: ...
+@overload
+def validate_max_force(value: float, what: str) -> float: ...
+def validate_max_force(value: Any, what: str) -> float | None:
+    """``value`` as a ceiling, N: a finite number > 0 (None passes: no ceiling given).
 
     Raises:
         UsageError: it is not (``what`` names the flag; exit 2).
     """
+    if value is None:
+        return None
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise UsageError(f"{what} must be a finite number > 0 N, got {value!r}")
     if not (math.isfinite(value) and value > 0):
