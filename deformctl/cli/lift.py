@@ -47,6 +47,7 @@ from deformctl.cli._lift_runner import (
     RigTimeout,
     SlipCriterionOption,
     SlipToleranceM,
+    check_max_force,
     choose_runner,
     lift_dataset,
     sim_parts,
@@ -64,7 +65,6 @@ from deformctl.cli._lift_start import (
 from deformctl.cli._scene_options import SceneHz, scene_rate
 from deformctl.cli._summary import Quiet, RunClock
 from deformctl.errors import UsageError
-from deformctl.lift.ceiling import validate_max_force
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
     DEFAULT_MAX_ATTEMPTS,
@@ -227,13 +227,11 @@ def lift(
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
     )
-    validate_max_force(max_force_n, "--max-force-n")  # None: the default ceiling
+    check_max_force(max_force_n, dataset=dataset)
     object_ids = opt.parse_object_ids(objects)
     seed = start_seed(start_model, start_table, start_interpolate, start_margin, coefficients,
                       protocol=protocol, dataset=dataset)  # fmt: skip
     if dataset:
-        if max_force_n is not None:
-            raise UsageError("--max-force-n is for a single-file output (a dataset is simulated)")
         search = (protocol, growth, tolerance, max_attempts, opt.parse_log_epoch(log_epoch),
                   scene_rate(scene_hz))  # fmt: skip
         lift_dataset(catalog, parts, log, search, output, sweep, object_ids, force, quiet)
