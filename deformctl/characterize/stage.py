@@ -31,7 +31,7 @@ from deformctl.artifacts.dataset import (
     table_schema,
 )
 from deformctl.artifacts.provenance import Provenance, sha256_file
-from deformctl.characterize.coefficients import _coefficient_frame
+from deformctl.characterize.coefficients import _coefficient_frame, object_fields
 from deformctl.characterize.fit import (
     DEFAULT_MODEL,
     PRELOADS,
@@ -126,6 +126,7 @@ def _fit_object(
     )
     row = rows[0]
     row["quality"] = with_recording_flags(str(row["quality"]), (obj or {}).get("recording_flags"))
+    row.update(object_fields(obj))
     return row, mode
 
 
