@@ -71,7 +71,14 @@ from deformctl.parallel import SweepOptions
 @translate_errors
 @opt.with_sweep_options
 def lift(
-    catalog: Annotated[str, typer.Argument(help="Object catalog, CSV or Parquet; - for stdin.")],
+    catalog: Annotated[
+        str,
+        typer.Argument(
+            help="Object catalog, CSV or Parquet; - for stdin. Or a coefficients table from "
+            "characterize: its objects' size, weight and μ, with the measured D and λ as the "
+            "material (--sim lifts the measured object)."
+        ),
+    ],
     output: Annotated[
         str, typer.Option("-o", "--output", help="Lift results table (Parquet); - for stdout.")
     ],

@@ -37,7 +37,6 @@ import pandas as pd
 from deformctl.artifacts import (
     Provenance,
     check_output_path,
-    read_catalog,
     validate_frame,
     write_lift_log,
     write_table,
@@ -45,6 +44,7 @@ from deformctl.artifacts import (
 from deformctl.artifacts.io import committed_together, is_stdio
 from deformctl.catalog import CatalogObject, catalog_objects, select_objects
 from deformctl.errors import UsageError
+from deformctl.lift.objects import read_lift_objects
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
     DEFAULT_MAX_ATTEMPTS,
@@ -339,7 +339,9 @@ def lift_catalog_files(
     (:func:`~deformctl.artifacts.io.committed_together`), so a killed run leaves both or neither.
 
     Args:
-        catalog_path: the catalog (CSV or Parquet; ``-`` for stdin).
+        catalog_path: the catalog (CSV or Parquet; ``-`` for stdin), or a coefficients table
+            whose objects carry their weight, size and μ (measured D and λ as the material,
+            :func:`~deformctl.lift.objects.read_lift_objects`).
         factory: builds the runner of each object.
         output: the lift_results table (``-`` for stdout).
         log: the lift log with every attempt (``-`` for stdout), or None.
@@ -366,7 +368,7 @@ def lift_catalog_files(
             raise UsageError(f"-o and --log are the same file: {log!r}")
         check_output_path(log, force)
     check_output_path(output, force)
-    selected = select_objects(read_catalog(catalog_path), object_ids)
+    selected = select_objects(read_lift_objects(catalog_path), object_ids)
     provenance = Provenance.from_invocation(
         [catalog_path, *(seed.inputs if seed is not None else ())],
         settings={
