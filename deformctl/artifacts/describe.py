@@ -277,6 +277,13 @@ def _mcap_summary(contents: McapContents) -> dict[str, Any]:
             "attempts_per_object": per_object,
             "lifted": sum(att.outcome.lifted for att in attempts),
         }
+        starts = [  # a seeded run (lift --start-model): each object's prediction and outcome
+            {"object_id": o["object_id"], **o["start"]}
+            for o in decode_objects(contents)
+            if isinstance(o.get("start"), dict)
+        ]
+        if starts:
+            extra["starts"] = starts
     objects = decode_objects(contents) if kind != GENERIC_MCAP else []
     counts = contents.message_counts()
     channels = []

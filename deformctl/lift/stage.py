@@ -266,6 +266,7 @@ def lift_catalog(
     failures: list[ObjectFailure] = []
     not_run: list[str] = []
     stopped_at: str | None = None
+    story: dict[str, dict[str, Any]] = {}  # a seeded run: each start and its outcome, for the log
     search = _ObjectSearch(
         factory, None if seed is None else seed.margin, protocol, growth, tolerance_rel,
         max_attempts,
@@ -281,6 +282,9 @@ def lift_catalog(
         row = result.table_row(runner=factory.name, error=error)
         row.update(factory.row_fields(obj))
         rows.append(row)
+        start = starts.get(obj.object_id)
+        if start is not None:
+            story[obj.object_id] = start_story(start, result, growth, tolerance_rel, max_attempts)
 
     def done(i: int) -> None:
         if progress is not None:
@@ -308,7 +312,10 @@ def lift_catalog(
         table=table,
         attempts=tuple(attempts),
         results=tuple(results),
-        objects=tuple(obj.record() for obj in objects),
+        objects=tuple(
+            {**obj.record(), **({"start": story[obj.object_id]} if obj.object_id in story else {})}
+            for obj in objects
+        ),
         failures=tuple(failures),
         not_run=tuple(not_run),
     )
@@ -403,6 +410,64 @@ def lift_catalog_files(
             )
         write_table(run.table, output, "lift_results", provenance=provenance, force=force)
     return run
+
+
+def attempts_from_f_w(
+    lift_force_n: float,
+    *,
+    weight_n: float,
+    friction_mu: float,
+    growth: float,
+    tolerance_rel: float,
+    max_attempts: int,
+) -> int | None:
+    """How many attempts the ``refine`` search from F_w takes on an object that lifts exactly
+    from ``lift_force_n`` on (the search replayed against that threshold; None when
+    ``lift_force_n`` is not a finite number). What a seeded search is compared with."""
+    from deformctl.series import TrialOutcome
+
+    if not (math.isfinite(lift_force_n) and lift_force_n > 0):
+        return None
+    replay = find_min_lift_force(
+        lambda force, _i: TrialOutcome(force, force >= lift_force_n, math.nan),
+        weight_n=weight_n,
+        friction_mu=friction_mu,
+        protocol="refine",
+        growth=growth,
+        tolerance_rel=tolerance_rel,
+        max_attempts=max_attempts,
+    )
+    return replay.attempts
+
+
+def start_story(
+    start: StartEstimate,
+    result: LiftSearchResult,
+    growth: float,
+    tolerance_rel: float,
+    max_attempts: int,
+) -> dict[str, Any]:
+    """One object of a seeded run as its lift log tells it: the prediction and its bound
+    (:meth:`StartEstimate.record`), the first force tried, the attempts, the outcome (converged,
+    the L_f found) and the attempts a search from F_w would have taken
+    (:func:`attempts_from_f_w`, against the L_f found)."""
+    from_f_w = attempts_from_f_w(
+        result.lift_force_n,
+        weight_n=result.weight_n,
+        friction_mu=result.friction_mu,
+        growth=growth,
+        tolerance_rel=tolerance_rel,
+        max_attempts=max_attempts,
+    )
+    return {
+        **start.record(),
+        "start_force_n": result.trials[0].grip_force_n if result.trials else None,
+        "attempts": result.attempts,
+        "converged": result.converged,
+        "lift_force_n": result.lift_force_n if math.isfinite(result.lift_force_n) else None,
+        "attempts_from_f_w": from_f_w,
+        "attempts_saved": None if from_f_w is None else from_f_w - result.attempts,
+    }
 
 
 def _not_run_row(
