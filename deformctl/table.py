@@ -104,6 +104,17 @@ def _pick(
     raise SchemaError(f"neither the coefficients nor the lift results have {name!r}", field=name)
 
 
+#: The index table's ``source`` of a lift results ``runner``: a simulated or a rig lift.
+SOURCES: dict[str, str] = {"sim": "sim", "rig": "rig"}
+
+
+def _sources(joined: pd.DataFrame) -> np.ndarray:
+    """``sim`` or ``rig`` per row from the lift results' ``runner`` (``""`` when unknown)."""
+    if "runner" not in joined.columns:
+        return np.full(len(joined), "", dtype=object)
+    return joined["runner"].map(lambda r: SOURCES.get(str(r), "")).to_numpy(dtype=object)
+
+
 def build_index_table(
     coefficients: pd.DataFrame,
     lift_results: pd.DataFrame,
@@ -122,8 +133,9 @@ def build_index_table(
             as long as they have a finite lifting force (an upper bound that did lift).
 
     Returns:
-        The index table, columns :data:`INDEX_COLUMNS`, one row per object, sorted by
-        ``object_id``; floats are float64 and ``converged`` is bool.
+        The index table, columns :data:`INDEX_COLUMNS` and ``source`` (``sim`` or ``rig``, from
+        the lift results' ``runner``: rig rows are what ``adapt`` corrects a model with), one
+        row per object, sorted by ``object_id``; floats are float64 and ``converged`` is bool.
 
     Raises:
         SchemaError: a required column is missing.
@@ -191,6 +203,7 @@ def build_index_table(
         },
         columns=list(INDEX_COLUMNS),
     )
+    table["source"] = _sources(joined)
     for col in INDEX_COLUMNS[1:-1]:
         bad = ~np.isfinite(table[col].to_numpy())
         if bad.any():

@@ -54,7 +54,7 @@ IDS = ["B", "A", "C", "D"]
 
 def test_join_columns_order_and_values() -> None:
     t = build_index_table(_coefficients(IDS), _lift(IDS))
-    assert tuple(t.columns) == INDEX_COLUMNS
+    assert tuple(t.columns) == (*INDEX_COLUMNS, "source")
     assert list(t["object_id"]) == ["A", "B", "C", "D"]  # sorted
     row_b = t.set_index("object_id").loc["B"]
     assert row_b["weight_n"] == 20.0
@@ -262,3 +262,12 @@ def test_keys_without_spread() -> None:
     assert keys_without_spread(t) == ["deformability_n_per_cm", "damping_ns_per_cm"]
     t["damping_ns_per_cm"] = [0.0, 1e-9]
     assert keys_without_spread(t) == ["deformability_n_per_cm"]
+
+
+def test_source_comes_from_the_lift_runner() -> None:
+    lift = _lift(IDS)
+    assert set(build_index_table(_coefficients(IDS), lift)["source"]) == {""}  # not recorded
+    runners = ["sim", "rig"] * len(IDS)
+    lift["runner"] = runners[: len(IDS)]
+    got = build_index_table(_coefficients(IDS), lift).set_index("object_id")["source"]
+    assert got.to_dict() == dict(zip(lift["object_id"], lift["runner"], strict=True))

@@ -323,6 +323,9 @@ class Predictor:
     ranges: Mapping[str, tuple[float, float]]
     training_friction_mu: float | None
     scores: np.ndarray | None
+    #: ``adapt``'s linear correction of the network's output, log(L_f / F_w), in its scaled
+    #: inputs: ``[c0, c_1..c_k]`` adds ``c0 + Σ c_j x_j`` (:mod:`deformctl.grip.adapt`); None: none
+    correction: np.ndarray | None = None
     #: what is worked out once per predictor: the margins per coverage, the plain-float layers
     _cache: dict[Any, Any] = field(default_factory=dict, repr=False, compare=False)
 
@@ -411,6 +414,9 @@ class Predictor:
             raise InputDataError("the numpy export's scale_index is out of range", path=path)
         if mu is not None and not (math.isfinite(mu) and mu > 0):
             raise InputDataError(f"the model's training friction_mu {mu!r} is not > 0", path=path)
+        correction = None
+        if exp.get("correction") is not None:
+            correction = _float_array(exp["correction"], (n_in + 1,), "correction", path)
         raw_scores = meta.get("conformal_scores")
         scores = None
         if raw_scores is not None:
@@ -430,6 +436,7 @@ class Predictor:
             ranges=ranges,
             training_friction_mu=mu,
             scores=scores,
+            correction=correction,
         )
         if check_points:
             predictor._check_stored_points()
@@ -463,12 +470,16 @@ class Predictor:
         """The network on one input row in plain floats: a small network costs less this way
         than numpy's per-call overhead (the same numbers to rounding, tested)."""
         x = [(v - m) / s for v, m, s in zip(z, self._plain[0], self._plain[1], strict=True)]
+        scaled = x
         layers = self._plain[2]
         last = len(layers) - 1
         for i, (columns, biases) in enumerate(layers):
             x = [b + sum(map(operator.mul, col, x)) for col, b in zip(columns, biases, strict=True)]
             if i != last:
                 x = [_activation_scalar(self.activation, v) for v in x]
+        if self.correction is not None:
+            c = self.correction.tolist()
+            return x[0] + c[0] + sum(map(operator.mul, c[1:], scaled))
         return x[0]
 
     @property
@@ -491,13 +502,15 @@ class Predictor:
 
     def _network(self, Z: np.ndarray) -> np.ndarray:
         """The scaler and the network on ``Z`` ``[n, n_in]``, as scikit-learn computes them."""
-        x = (Z - self.mean) / self.scale
+        x = scaled = (Z - self.mean) / self.scale
         last = len(self.weights) - 1
         for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
             x = x @ w
             x += b
             if i != last:
                 x = _activation(self.activation, x)
+        if self.correction is not None:
+            return x[:, 0] + self.correction[0] + scaled @ self.correction[1:]
         return x[:, 0]
 
     def _groups(self, W: np.ndarray, D: np.ndarray, lam: np.ndarray) -> np.ndarray:
