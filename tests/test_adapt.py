@@ -112,20 +112,27 @@ def test_the_command_writes_a_model_predict_and_lift_use(base: Predictor, tmp_pa
     assert one.lift_force_upper_n[0] == pytest.approx(one.lift_force_n[0] * (1 + scores[18]))
 
 
-def test_eight_rows_have_no_p_0_9_bound(base: Predictor, tmp_path: Path) -> None:
+def test_eight_rows_give_the_largest_score_flagged(base: Predictor, tmp_path: Path) -> None:
     write_table(_index(base, 8, seed=6), tmp_path / "rig.parquet", "index_table", provenance=None)
     out = tmp_path / "adapted.skops"
-    assert (
-        runner.invoke(
-            app, ["adapt", "grip", str(tmp_path / "rig.parquet"), "-o", str(out)]
-        ).exit_code
-        == 0
-    )
+    args = ["adapt", "grip", str(tmp_path / "rig.parquet"), "-o", str(out)]
+    assert runner.invoke(app, args).exit_code == 0
     flags = ["--weight-n", "10", "--deformability-n-per-cm", "20", "--damping-ns-per-cm", "2",
              "--friction-mu", "0.5"]  # fmt: skip
-    line = _error(runner.invoke(app, ["predict", str(out), *flags, "--coverage", "0.9"]), 65)
-    assert "needs at least 9 calibration scores; the model has 8" in line
-    assert runner.invoke(app, ["predict", str(out), *flags, "--coverage", "0.8"]).exit_code == 0
+    result = runner.invoke(app, ["predict", str(out), *flags, "--coverage", "0.9"])
+    assert result.exit_code == 0, result.stderr
+    assert result.stderr.splitlines() == [
+        "warning: the bound at P = 0.9 rests on 8 rig rows, fewer than the 9 it needs: it is "
+        "their largest score, guaranteed at n / (n + 1) = 0.889 only (bound_guaranteed = false)"
+    ]
+    got = pd.read_csv(io.StringIO(result.stdout)).iloc[0]
+    scores = [r["loo_score"] for r in read_model_metadata(out)["adapted"]["rows"]]
+    assert not got["bound_guaranteed"]
+    want = got["predicted_lift_force_n"] * (1 + max(scores))
+    assert got["lift_force_upper_n"] == pytest.approx(want, rel=1e-5)
+    result = runner.invoke(app, ["predict", str(out), *flags, "--coverage", "0.8"])  # k = 8 <= 8
+    assert result.stderr == ""
+    assert bool(pd.read_csv(io.StringIO(result.stdout)).loc[0, "bound_guaranteed"])
 
 
 @pytest.mark.parametrize(
