@@ -21,10 +21,12 @@ squared error wins, the larger α on a tie. Three rows are the fewest it accepts
 the rig, so they are replaced by the rig rows' leave-one-out scores ``s_i = L_f,i / L̂_f,(−i) − 1``
 (each row predicted by the correction fitted without it). The bound at coverage P is then the
 ``k = ⌈(n + 1) P⌉``-th smallest of the n scores: this needs ``n ≥ P / (1 − P)`` rows (9 at
-P = 0.9, 19 at P = 0.95); with fewer, ``predict --coverage P`` refuses it (exit 65) and says how
-many rows P needs. Leave-one-out scores are not independent of the correction that is used,
-so the guarantee is the jackknife's (Barber et al. 2021, jackknife+: at least 1 − 2(1 − P) in
-the worst case), not split conformal's ``≥ P``; the metadata says so.
+P = 0.9, 19 at P = 0.95). With fewer, the bound is the largest of the n scores, whose guarantee
+is only ``n / (n + 1)``: the predictions say ``bound_guaranteed = false`` and a warning line
+gives the numbers (:meth:`deformctl.grip.fast.Predictor.margin`). Leave-one-out scores are not
+independent of the correction that is used, so the guarantee is the jackknife's (Barber et al.
+2021, jackknife+: at least 1 − 2(1 − P) in the worst case), not split conformal's ``≥ P``; the
+metadata says so.
 
 The adapted model is the base model file with its network unchanged, the correction in its numpy
 export, the rig scores as its calibration scores, new check points, and ``adapted`` in its
@@ -63,7 +65,8 @@ ALPHAS: tuple[float, ...] = tuple(float(a) for a in np.logspace(-4, 3, 29))
 #: The rule of the adapted model's bound, stored in its metadata.
 BOUND_RULE = (
     "k = ceil((n + 1) P)-th smallest of the n rig rows' leave-one-out relative scores; "
-    "needs n >= P / (1 - P) rows (9 at P = 0.9); jackknife guarantee (>= 1 - 2 (1 - P) worst "
+    "needs n >= P / (1 - P) rows (9 at P = 0.9), with fewer the largest score, guaranteed at "
+    "n / (n + 1) only (bound_guaranteed = false); jackknife guarantee (>= 1 - 2 (1 - P) worst "
     "case), not split conformal's >= P"
 )
 

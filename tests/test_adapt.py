@@ -99,6 +99,9 @@ def test_the_command_writes_a_model_predict_and_lift_use(base: Predictor, tmp_pa
     meta = read_model_metadata(out)
     assert [r["object_id"] for r in meta["adapted"]["rows"]] == [f"R{i:02d}" for i in range(20)]
     assert "ceil((n + 1) P)" in meta["adapted"]["bound_rule"]
+    shown = runner.invoke(app, ["inspect", str(out)]).stdout
+    assert f"adapted: from grip with 20 rig rows of {tmp_path / 'rig.parquet'}" in shown
+    assert "  R07: L_f " in shown
     flags = ["--weight-n", "10", "--deformability-n-per-cm", "20", "--damping-ns-per-cm", "2",
              "--friction-mu", "0.5", "--coverage", "0.9"]  # fmt: skip
     got = pd.read_csv(io.StringIO(runner.invoke(app, ["predict", str(out), *flags]).stdout))

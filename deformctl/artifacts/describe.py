@@ -412,6 +412,7 @@ def _model_summary(data: bytes, path: PathArg) -> dict[str, Any]:
         "metrics": metrics,
         "conformal": conformal,
         "notes": {str(k): str(v) for k, v in notes.items()},
+        "adapted": meta.get("adapted") if isinstance(meta.get("adapted"), dict) else None,
         "tool_version": str(meta.get("tool_version", "unknown")),
         "blas": blas_record(meta.get("blas")),
         "provenance": None if prov is None else Provenance.from_dict(prov, path=name).to_dict(),

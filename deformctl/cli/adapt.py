@@ -29,10 +29,10 @@ def adapt(
     Fits a linear correction of log(L_f / F_w) in the model's scaled inputs (the dimensionless
     groups), shrunk toward no correction by a ridge penalty chosen by leave-one-out, so that it
     stays sane with 3-20 rows. The conformal bound is recalibrated on the rig rows'
-    leave-one-out scores: at coverage P it needs n >= P / (1 - P) rows (9 at P = 0.9), else
-    `predict --coverage P` refuses it. The metadata records the base model, the rows, the
-    correction and the rules (`inspect adapted.skops`). Use it like any model:
-    `predict adapted.skops ...`, `lift --start-model adapted.skops --rig ...`.
+    leave-one-out scores: at coverage P it needs n >= P / (1 - P) rows (9 at P = 0.9); with
+    fewer it is their largest score, flagged bound_guaranteed = false. The metadata records the
+    base model, the rows, the correction and the rules (`inspect adapted.skops`). Use it like any
+    model: `predict adapted.skops ...`, `lift --start-model adapted.skops --rig ...`.
 
     Example: deformctl adapt grip rig_index.parquet -o adapted.skops
     """

@@ -54,6 +54,20 @@ def _model_lines(info: dict[str, Any]) -> list[str]:
             f"upper bound P = {p}: margin {_pct(c.get('margin'))}, on the test rows coverage "
             f"{_num(c.get('coverage'), '.3f')}, mean margin {_pct(c.get('mean_margin'))}"
         )
+    adapted = info.get("adapted")
+    if adapted:  # a model corrected by `adapt` with rig lifts
+        rows = adapted.get("rows") or []
+        alpha = adapted.get("alpha")
+        lines.append(
+            f"adapted: from {adapted.get('base_model')} with {len(rows)} rig rows of "
+            f"{adapted.get('index')} (ridge alpha {'inf' if alpha is None else f'{alpha:.3g}'}, "
+            f"correction {adapted.get('coefficients')}); bound: {adapted.get('bound_rule')}"
+        )
+        lines.extend(
+            f"  {r['object_id']}: L_f {r['lift_force_n']:.4g} N, predicted "
+            f"{r['predicted_before_n']:.4g} N before, {r['predicted_after_n']:.4g} N after"
+            for r in rows
+        )
     if info.get("notes"):
         lines.append("notes: " + ", ".join(f"{k}={v}" for k, v in sorted(info["notes"].items())))
     return lines

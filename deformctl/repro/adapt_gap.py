@@ -36,9 +36,11 @@ _FEATURES = ("weight_n", "deformability_n_per_cm", "damping_ns_per_cm", "frictio
 
 def lifts_frame(catalog: pd.DataFrame, lift_results: pd.DataFrame) -> pd.DataFrame:
     """The objects' features (material D and λ) and L_f, as :data:`CACHE` holds them."""
+    from deformctl.catalog import MATERIAL_COLUMNS
+
     df = catalog.merge(lift_results[["object_id", "lift_force_n", "converged"]], on="object_id")
-    df["deformability_n_per_cm"] = df["material_stiffness_n_per_cm"]
-    df["damping_ns_per_cm"] = df["material_damping_ns_per_cm"]
+    df["deformability_n_per_cm"] = df[MATERIAL_COLUMNS[0]]
+    df["damping_ns_per_cm"] = df[MATERIAL_COLUMNS[1]]
     return df[["object_id", *_FEATURES, "lift_force_n", "converged"]]
 
 
