@@ -89,14 +89,15 @@ def _pick(
     if name in lift.columns and name in coefficients.columns:
         a = joined[lift_col].to_numpy(dtype=float)
         b = joined[coef_col].to_numpy(dtype=float)
-        bad = ~np.isclose(a, b, rtol=1e-6, atol=0.0, equal_nan=True)
+        both = ~np.isnan(a) & ~np.isnan(b)  # (a coefficients table has NaN where the log had none)
+        bad = both & ~np.isclose(a, b, rtol=1e-6, atol=0.0)
         if bad.any():
             ids = joined["object_id"][bad]
             raise InputDataError(
                 f"{name} differs between the coefficients and the lift results for "
                 f"{format_ids(ids)}"
             )
-        return joined[lift_col]
+        return pd.Series(np.where(np.isnan(a), b, a), index=joined.index)
     if name in lift.columns:
         return joined[lift_col]
     if name in coefficients.columns:

@@ -271,3 +271,13 @@ def test_source_comes_from_the_lift_runner() -> None:
     lift["runner"] = runners[: len(IDS)]
     got = build_index_table(_coefficients(IDS), lift).set_index("object_id")["source"]
     assert got.to_dict() == dict(zip(lift["object_id"], lift["runner"], strict=True))
+
+
+def test_a_weight_the_squeeze_log_did_not_have_is_taken_from_the_lift() -> None:
+    coefficients = _coefficients(IDS).assign(weight_n=np.nan)  # characterize without a weight
+    t = build_index_table(coefficients, _lift(IDS)).set_index("object_id")
+    lift = _lift(IDS).set_index("object_id")
+    np.testing.assert_array_equal(t.loc[lift.index, "weight_n"], lift["weight_n"])
+    coefficients.loc[0, "weight_n"] = 99.0  # a value that differs is still refused
+    with pytest.raises(InputDataError, match="weight_n differs"):
+        build_index_table(coefficients, _lift(IDS))
