@@ -44,6 +44,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "errors",
         "units",
         "series",
+        "scene",
         "physics",
         "signals",
         "plausibility",

@@ -16,7 +16,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
@@ -32,19 +32,21 @@ from deformctl.artifacts.dataset import (
 )
 from deformctl.artifacts.provenance import Provenance, sha256_file
 from deformctl.characterize.coefficients import _coefficient_frame, object_fields
-from deformctl.characterize.fit import (
-    DEFAULT_MODEL,
-    PRELOADS,
-    Method,
-    Preload,
-    _fit_rows,
-    check_model,
-    default_window_s,
+from deformctl.characterize.fit import PRELOADS, Method, Preload, _fit_rows, default_window_s
+from deformctl.characterize.material_options import (
+    DEFAULT_MATERIALS,
+    RIG_SOURCES,
+    MaterialOptions,
+    default_lag,
 )
+from deformctl.characterize.plot import check_plot_dir, plot_fits
 from deformctl.characterize.quality import check_policy, enforce, with_recording_flags
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, run_sweep
 from deformctl.series import SqueezeSeries, ruptures_from_object
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from deformctl.characterize.objectfit import ObjectFit
 
 
 @dataclass(frozen=True)
@@ -58,6 +60,8 @@ class LogCoefficients:
             when the log does not say).
         preload: object id → the preload mode used (``fit`` or ``zero``; lsq only).
         warnings: one line per flagged object (``<file>: object 'X': <flags>``), for stderr.
+        fits: object id → its material fit (lsq; for plots), when asked to keep them.
+        plots: the plot files written, in object order.
     """
 
     table: pd.DataFrame
@@ -65,6 +69,8 @@ class LogCoefficients:
     position_rate_hz: dict[str, float | None]
     preload: dict[str, str] = dataclasses.field(default_factory=dict)
     warnings: list[str] = dataclasses.field(default_factory=list)
+    fits: dict[str, ObjectFit] = dataclasses.field(default_factory=dict)
+    plots: list[str] = dataclasses.field(default_factory=list)
 
 
 def _stored_rate(obj: Mapping[str, object] | None) -> float | None:
@@ -72,10 +78,6 @@ def _stored_rate(obj: Mapping[str, object] | None) -> float | None:
     if isinstance(value, int | float) and not isinstance(value, bool):
         return float(value)
     return None
-
-
-#: The ``source`` a squeeze log's object row carries when ``measure`` read a rig recording.
-RIG_SOURCES = ("ros2_bag", "csv")
 
 
 def default_preload(obj: Mapping[str, object] | None) -> Preload:
@@ -111,8 +113,11 @@ def _fit_object(
     window_s: float,
     preload: Preload | None,
     constrain_damping: bool,
+    materials: MaterialOptions = DEFAULT_MATERIALS,
+    fits: dict[str, ObjectFit] | None = None,
 ) -> tuple[dict[str, object], str]:
-    """One object's coefficients row (see :func:`characterize`) and the preload mode used."""
+    """One object's coefficients row (see :func:`characterize`) and the preload mode used;
+    its material fit goes into ``fits`` when given."""
     mode: Preload = preload if preload is not None else default_preload(obj)
     if method == "paper":
         mode = "zero"
@@ -122,6 +127,11 @@ def _fit_object(
         preload=mode,
         constrain_damping=constrain_damping,
         recorded_ruptures={oid: ruptures_from_object(dict(obj or {}))},
+        model=materials.model,
+        at_force_n=materials.at_force_n,
+        lag_s=default_lag(obj),
+        objects={oid: dict(obj or {})},
+        fits_out=fits,
         window_s=window_s,
     )
     row = rows[0]
@@ -130,8 +140,38 @@ def _fit_object(
     return row, mode
 
 
+def _read_logs(
+    paths: Sequence[str | PathLike[str]],
+) -> tuple[str, list[dict[str, Any]], list[SqueezeSeries]]:
+    """The logs' objects (the first row of each id) and squeezes, and the name of the first.
+
+    The squeezes of one object in several logs (recordings of one object at several speeds)
+    are numbered on from one log to the next.
+    """
+    from deformctl.artifacts.io import display_name
+    from deformctl.artifacts.mcap import read_squeeze_log
+
+    objects: list[dict[str, Any]] = []
+    seen: set[str] = set()
+    squeezes: list[SqueezeSeries] = []
+    count: dict[str, int] = {}
+    for path in paths:
+        objs, sq = read_squeeze_log(path)
+        if not sq:
+            raise InputDataError("the squeeze log holds no squeezes", path=display_name(path))
+        for o in objs:
+            if str(o["object_id"]) not in seen:
+                seen.add(str(o["object_id"]))
+                objects.append(dict(o))
+        for s in sq:
+            k = count.get(s.object_id, 0)
+            count[s.object_id] = k + 1
+            squeezes.append(s if k == s.squeeze_index else dataclasses.replace(s, squeeze_index=k))
+    return display_name(paths[0]), objects, squeezes
+
+
 def read_and_characterize(
-    path: str | PathLike[str],
+    path: str | PathLike[str] | Sequence[str | PathLike[str]],
     method: Method = "lsq",
     *,
     window_s: float | None = None,
@@ -139,21 +179,24 @@ def read_and_characterize(
     constrain_damping: bool = False,
     strict: bool = False,
     allow_flagged: bool = False,
-    model: str = DEFAULT_MODEL,
+    materials: MaterialOptions = DEFAULT_MATERIALS,
+    keep_fits: bool = False,
 ) -> LogCoefficients:
     """Read a squeeze log (validated), group its squeezes by object and fit each object.
 
     Args:
-        path: the squeeze-log ``.mcap``, or ``-`` for stdin (read into memory).
+        path: the squeeze-log ``.mcap``, or ``-`` for stdin (read into memory); or several logs,
+            whose squeezes of one object id are fitted together (one joint fit over speeds).
         method: ``"lsq"`` (:func:`fit_lsq`) or ``"paper"`` (:func:`fit_paper`).
         window_s: Savitzky–Golay window, s, for every object; None picks it per object from
             the ``position_rate_hz`` the log stores for it (:func:`default_window_s`).
         preload: lsq: ``"fit"`` or ``"zero"`` for every object; None chooses per object
             (:func:`default_preload`). The paper method never fits a preload.
-        constrain_damping: lsq: fit with λ ≥ 0.
+        constrain_damping: lsq: kept for old callers (the fits are always bounded).
         strict: any quality flag is an error (:func:`deformctl.characterize.quality.enforce`).
         allow_flagged: keep objects with negative D (flagged) instead of refusing them.
-        model: the material model (:data:`deformctl.characterize.fit.MODELS`; ``kv``).
+        materials: lsq: the law and the operating force (:class:`MaterialOptions`).
+        keep_fits: keep each object's material fit in the result (for plots).
 
     Returns:
         The coefficient table, the window and preload used for each object and the warning
@@ -166,20 +209,15 @@ def read_and_characterize(
             with negative D (unless ``allow_flagged``) or any flagged object with ``strict``;
             the message names the file and the object (exit 65).
         UsageError: an unknown method, a window that is not > 0, ``strict`` with
-            ``allow_flagged``, or a preload or bound with the paper method (exit 2).
+            ``allow_flagged``, a preload or bound with the paper method, or an operating force
+            above an object's peak force (exit 2).
     """
-    from deformctl.artifacts.io import display_name
-    from deformctl.artifacts.mcap import read_squeeze_log
-
     _check_fit_options(method, window_s, preload)
-    check_model(model)
     check_policy(strict, allow_flagged)
     if method == "paper" and (preload == "fit" or constrain_damping):
         raise UsageError("the paper estimator has no preload or damping bound; use --method lsq")
-    name = display_name(path)
-    objects, squeezes = read_squeeze_log(path)
-    if not squeezes:
-        raise InputDataError("the squeeze log holds no squeezes", path=name)
+    paths = [path] if isinstance(path, str | PathLike) else list(path)
+    name, objects, squeezes = _read_logs(paths)
     by_object: dict[str, list[SqueezeSeries]] = {}
     for s in squeezes:
         by_object.setdefault(s.object_id, []).append(s)
@@ -190,6 +228,7 @@ def read_and_characterize(
     }
     rows = []
     modes: dict[str, str] = {}
+    fits: dict[str, ObjectFit] = {}
     for oid, group in by_object.items():
         try:
             row, modes[oid] = _fit_object(
@@ -200,6 +239,8 @@ def read_and_characterize(
                 window_s=windows[oid],
                 preload=preload,
                 constrain_damping=constrain_damping,
+                materials=materials,
+                fits=fits if keep_fits else None,
             )
         except InputDataError as err:
             if err.path is None:  # the estimators name the object; add the file
@@ -209,7 +250,12 @@ def read_and_characterize(
     table = _coefficient_frame(rows)
     warnings = enforce(table, strict=strict, allow_flagged=allow_flagged, path=name)
     return LogCoefficients(
-        table=table, window_s=windows, position_rate_hz=rates, preload=modes, warnings=warnings
+        table=table,
+        window_s=windows,
+        position_rate_hz=rates,
+        preload=modes,
+        warnings=warnings,
+        fits=fits,
     )
 
 
@@ -241,11 +287,12 @@ def characterize_dir(
         position_rate_hz={k: v for p in parts for k, v in p.position_rate_hz.items()},
         preload={k: v for p in parts for k, v in p.preload.items()},
         warnings=[line for p in parts for line in p.warnings],
+        fits={k: v for p in parts for k, v in p.fits.items()},
     )
 
 
 def characterize_file(
-    log: str,
+    log: str | Sequence[str],
     method: Method = "lsq",
     *,
     output: str,
@@ -255,36 +302,46 @@ def characterize_file(
     constrain_damping: bool = False,
     strict: bool = False,
     allow_flagged: bool = False,
-    model: str = DEFAULT_MODEL,
+    materials: MaterialOptions = DEFAULT_MATERIALS,
+    plot_dir: str | None = None,
 ) -> LogCoefficients:
     """``characterize LOG -o TABLE``: fit a squeeze log (or a ``measure`` directory's logs).
 
     The quality policy is applied before anything is written (``strict``, ``allow_flagged``:
     see :func:`read_and_characterize`); the coefficients table is then written atomically with
     its provenance (the method, the window and preload used for each object and the position
-    sample rates behind them). The caller prints ``result.warnings``.
+    sample rates behind them). With ``plot_dir`` (lsq) each object's fit is drawn into
+    ``plot_dir/<object_id>.png`` after the table is written
+    (:func:`deformctl.characterize.plot.plot_object`). The caller prints ``result.warnings``
+    and ``result.plots``.
 
     Raises:
         OutputExistsError: ``output`` exists and ``force`` is false (exit 1).
-        MissingInputError, InputDataError, UsageError: see :func:`read_and_characterize`.
+        MissingInputError, InputDataError, UsageError: see :func:`read_and_characterize`;
+            ``plot_dir`` with the paper method (exit 2).
     """
     check_output_path(output, force)
+    if plot_dir is not None:
+        if method != "lsq":
+            raise UsageError("--plot draws the material laws' fits: use it with --method lsq")
+        check_plot_dir(plot_dir)
+    logs = [log] if isinstance(log, str) else list(log)
     options: dict[str, Any] = {
         "window_s": window_s,
         "preload": preload,
         "constrain_damping": constrain_damping,
         "strict": strict,
         "allow_flagged": allow_flagged,
-        "model": model,
+        "materials": materials,
+        "keep_fits": plot_dir is not None,
     }
-    if os.path.isdir(log):
-        result = characterize_dir(log, method, **options)
+    if len(logs) == 1 and os.path.isdir(logs[0]):
+        result = characterize_dir(logs[0], method, **options)
     else:
-        result = read_and_characterize(log, method, **options)
+        result = read_and_characterize(logs, method, **options)
     provenance = Provenance.from_invocation(
-        [log],
+        logs,
         settings={
-            "model": model,
             "method": method,
             "window_s": result.window_s,
             "window_s_option": window_s,
@@ -292,9 +349,13 @@ def characterize_file(
             "preload": result.preload,
             "preload_option": preload,
             "constrain_damping": constrain_damping,
+            **materials.as_dict(),
         },
     )
     write_table(result.table, output, "coefficients", provenance=provenance, force=force)
+    if plot_dir is not None:
+        quality = dict(zip(result.table["object_id"], result.table["quality"], strict=True))
+        result = dataclasses.replace(result, plots=plot_fits(result.fits, quality, plot_dir))
     return result
 
 
@@ -363,9 +424,10 @@ class CharacterizeTask:
     """``characterize`` for one object of a squeeze-log directory (a picklable sweep task).
 
     Attributes:
-        method, window_s, preload, constrain_damping, model: as :func:`read_and_characterize`.
+        method, window_s, preload, constrain_damping: as :func:`read_and_characterize`.
         strict: a flagged object fails (recorded in ``_failures/``) instead of being written.
         allow_flagged: write an object with negative D (flagged) instead of failing it.
+        materials: the law and the operating force (:class:`MaterialOptions`).
     """
 
     method: str = "lsq"
@@ -374,7 +436,7 @@ class CharacterizeTask:
     constrain_damping: bool = False
     strict: bool = False
     allow_flagged: bool = False
-    model: str = DEFAULT_MODEL
+    materials: MaterialOptions = DEFAULT_MATERIALS
 
     def __call__(self, item: dict[str, Any]) -> Any:
         """Fit one object; its coefficients row (an Arrow table).
@@ -399,6 +461,7 @@ class CharacterizeTask:
                 window_s=window,
                 preload=self.preload,  # type: ignore[arg-type]
                 constrain_damping=self.constrain_damping,
+                materials=self.materials,
             )
         except InputDataError as err:
             if err.path is None:
@@ -426,7 +489,6 @@ def characterize_sweep(
     if task.window_s is not None and not (math.isfinite(task.window_s) and task.window_s > 0):
         raise UsageError(f"--window-s must be a finite number > 0 s, got {task.window_s}")
     _check_fit_options(task.method, task.window_s, task.preload)
-    check_model(task.model)
     check_policy(task.strict, task.allow_flagged)
     if not os.path.isdir(log_dir):
         if not os.path.exists(log_dir):
@@ -442,9 +504,8 @@ def characterize_sweep(
         "constrain_damping": task.constrain_damping,
         "strict": task.strict,
         "allow_flagged": task.allow_flagged,
+        **task.materials.as_dict(),
     }
-    if task.model != DEFAULT_MODEL:  # (the default keeps older directories resumable)
-        settings["model"] = task.model
     fingerprint = dataset_fingerprint(
         "characterize", "coefficients", settings, {"log": sha256_file(log_dir)}
     )

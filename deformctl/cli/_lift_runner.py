@@ -161,8 +161,10 @@ def choose_runner(
     rig_timeout_s: float | None,
     judge: SlipFromFrames | None,
     sim: SimPreset | None,
+    scene_hz: float = 0.0,
 ) -> RunnerFactory:
-    """The one trial runner the options ask for (``sim``: the parts of ``--sim``, if given).
+    """The one trial runner the options ask for (``sim``: the parts of ``--sim``, if given, with
+    its scene at ``scene_hz``).
 
     Raises:
         UsageError: no runner, more than one, or a runner option without its runner.
@@ -178,7 +180,7 @@ def choose_runner(
     if sim is not None:
         from deformctl.lift.runners.sim import sim_runner_factory
 
-        chosen.append(sim_runner_factory(preset=sim))
+        chosen.append(sim_runner_factory(preset=sim, scene_hz=scene_hz))
     if len(chosen) != 1:
         raise UsageError(
             "choose exactly one trial runner: --rig CMD or --sim"
@@ -197,10 +199,12 @@ def lift_dataset(
     sweep: SweepOptions,
     object_ids: Sequence[str] | None,
     force: bool,
+    quiet: bool = False,
 ) -> None:
-    """``lift --sim -o DIR/``: the search of every object through the sweep executor.
+    """``lift --sim -o DIR/``: the search of every object through the sweep executor, then the
+    sweep's summary line (unless ``quiet``).
 
-    ``search`` is (protocol, growth, tolerance, max_attempts, log_epoch_ns), as
+    ``search`` is (protocol, growth, tolerance, max_attempts, log_epoch_ns, scene_hz), as
     :class:`~deformctl.lift.runners.sim.LiftTask` takes them.
 
     Raises:
@@ -218,4 +222,4 @@ def lift_dataset(
     summary = lift_sweep(
         catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
     )
-    finish_sweep(summary, "lift")
+    finish_sweep(summary, "lift", quiet=quiet)

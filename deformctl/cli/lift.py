@@ -54,8 +54,11 @@ from deformctl.cli._lift_start import (
     StartModel,
     StartTable,
     report_run,
+    run_summary,
     start_seed,
 )
+from deformctl.cli._scene_options import SceneHz, scene_rate
+from deformctl.cli._summary import Quiet, RunClock
 from deformctl.errors import UsageError
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
@@ -145,6 +148,8 @@ def lift(
         int, typer.Option("--max-attempts", help="Most attempts per object (>= 1).")
     ] = DEFAULT_MAX_ATTEMPTS,
     log_epoch: opt.LogEpoch = None,
+    scene_hz: SceneHz = None,
+    quiet: Quiet = False,
     start_model: StartModel = None,
     start_table: StartTable = None,
     start_interpolate: StartInterpolate = None,
@@ -182,6 +187,7 @@ def lift(
     Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
     -o lift.parquet --log lift.mcap
     """
+    clock = RunClock("lift")
     dataset = sweep.check(output, file_workers=True)
     if not dataset and sweep.workers is not None and not sim:
         raise UsageError(
@@ -205,6 +211,7 @@ def lift(
             "--dt-s": dt_s,
             "--memory-budget-gib": memory_budget_gib,
             "--log-epoch": log_epoch,
+            "--scene-hz": scene_hz,
         },
     )
     judge = frames_judge(
@@ -213,7 +220,11 @@ def lift(
         slip_tolerance_m=None if sim else slip_tolerance_m,
         marker_dict=frame_marker_dict, debug_dir=debug_dir,
     )  # fmt: skip
-    factory = choose_runner(rig, rig_timeout, judge, parts)
+    if scene_hz is not None and log is None and not dataset:
+        raise UsageError("--scene-hz needs --log FILE: the scene is written into the lift log")
+    # the scene goes into a log: without one, the attempts record none
+    scene = scene_rate(scene_hz) if log is not None or dataset else 0.0
+    factory = choose_runner(rig, rig_timeout, judge, parts, scene)
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
     )
@@ -221,8 +232,9 @@ def lift(
     seed = start_seed(start_model, start_table, start_interpolate, start_margin, coefficients,
                       protocol=protocol, dataset=dataset)  # fmt: skip
     if dataset:
-        search = (protocol, growth, tolerance, max_attempts, opt.parse_log_epoch(log_epoch))
-        lift_dataset(catalog, parts, log, search, output, sweep, object_ids, force)
+        search = (protocol, growth, tolerance, max_attempts, opt.parse_log_epoch(log_epoch),
+                  scene_rate(scene_hz))  # fmt: skip
+        lift_dataset(catalog, parts, log, search, output, sweep, object_ids, force, quiet)
         return
     with progress_bar(Console(stderr=True), "lift") as progress:
         run = lift_catalog_files(
@@ -232,4 +244,5 @@ def lift(
             progress=progress, force=force, log_epoch_ns=opt.parse_log_epoch(log_epoch),
             seed=seed, warn=warn, workers=sweep.workers,
         )  # fmt: skip
-    report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)))
+    report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)),
+               summary=None if quiet else run_summary(run, clock, output, log))  # fmt: skip

@@ -22,6 +22,8 @@ from deformctl.cli import _measure_rig as rec
 from deformctl.cli import _measure_sim as sq
 from deformctl.cli import _options as opt
 from deformctl.cli._common import translate_errors
+from deformctl.cli._scene_options import SceneHz
+from deformctl.cli._summary import Quiet
 from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
 
@@ -36,6 +38,7 @@ SOURCES: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(img.FLAGS, IMAGES),
     **dict.fromkeys(_measure_sim.FLAGS, ("--sim",)),
     "--memory-budget-gib": ("--sim", "--csv"),
+    "--quiet": ("--sim",),
 }
 
 
@@ -121,6 +124,8 @@ def measure(
     noise_force_n: sq.NoiseForceN = None,
     noise_position_m: sq.NoisePositionM = None,
     log_epoch: opt.LogEpoch = None,
+    scene_hz: SceneHz = None,
+    quiet: Quiet = False,
     force: opt.Force = False,
     sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
@@ -147,7 +152,7 @@ def measure(
     """
     sim_opts = _measure_sim.SimOptions(
         squeezes, sim_preset, objects, peak_force_n, strain, ramp_s, hold_s, floating, alpha_cm,
-        dt_s, memory_budget_gib, seed, noise_force_n, noise_position_m, log_epoch,
+        dt_s, memory_budget_gib, seed, noise_force_n, noise_position_m, log_epoch, scene_hz,
     )  # fmt: skip
     image_opts = img.ImageOptions(
         marker_size_cm, marker_dict, marker_id, checkerboard, square_size_cm, color_range,
@@ -163,7 +168,7 @@ def measure(
     given: dict[str, object] = {
         **rig_opts.given(), "--weight-n": weight_n, "--size-cm": size_cm,
         "--friction-mu": friction_mu, **image_opts.given(), **sim_opts.given(),
-        **csv_flags.given(),
+        **csv_flags.given(), "--quiet": quiet,
     }  # fmt: skip
     given = {flag: value for flag, value in given.items() if value not in (None, [], False)}
     inputs = list(inputs or [])
@@ -183,7 +188,7 @@ def measure(
     flag, source = chosen[0]
     _refuse_foreign(flag, given)
     if flag == "--sim":
-        _measure_sim.run(source, sim_opts, output, force, sweep, Console(stderr=True))
+        _measure_sim.run(source, sim_opts, output, force, sweep, Console(stderr=True), quiet)
         return
     if flag == "--csv":
         obj = {"object_id": object_id, "weight_n": weight_n, "size_cm": size_cm,

@@ -13,6 +13,7 @@ import pandas as pd
 
 from deformctl.catalog import catalog_objects
 from deformctl.errors import UsageError
+from deformctl.scene import DEFAULT_SCENE_HZ, scene_every_steps
 from deformctl.series import SqueezeSeries
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported when used
@@ -64,6 +65,7 @@ def simulate_squeezes(
     progress: SqueezeProgress | None = None,
     path: str | None = None,
     first_index: int = 0,
+    scene_hz: float = DEFAULT_SCENE_HZ,
 ) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
     """Simulate ``squeezes`` force-controlled squeezes of every catalog object.
 
@@ -92,6 +94,8 @@ def simulate_squeezes(
         first_index: the position of ``catalog``'s first row in the whole run's catalog: row
             ``i`` gets the noise stream of object ``first_index + i``, so squeezing a slice of
             a catalog (a sweep's one object) gives the bytes of the whole run.
+        scene_hz: record each squeeze's scene (:mod:`deformctl.scene`, noise-free) at this many
+            frames per simulated second for the log (0: none; at most 1/dt).
 
     Returns:
         ``(objects, squeezes)``: the objects' catalog rows (NaN as None) plus
@@ -123,6 +127,7 @@ def simulate_squeezes(
     for name, value in (("force", noise_force_n), ("position", noise_position_m)):
         if not (math.isfinite(value) and value >= 0):
             raise UsageError(f"{name} noise must be a finite number >= 0, got {value}")
+    scene_every_steps(scene_hz, s.dt_s)  # refuses a bad rate before any squeeze
     objects_in = catalog_objects(catalog, path=path)
     specs = [obj.to_sim_spec(path=path) for obj in objects_in]
     records = [obj.record() for obj in objects_in]
@@ -146,6 +151,7 @@ def simulate_squeezes(
                     noise_force_n=noise_force_n,
                     noise_position_m=noise_position_m,
                     seed=base_seed + j,
+                    scene_hz=scene_hz,
                 )
             )
             if progress is not None:
