@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
 .PHONY: install test lint bench golden-spread reproduce _report calibrate examples clean model \
-  _grip_train _grip_eval grip-study materials scene-figure
+  _grip_train _grip_eval grip-study materials scene-figure fuzz
 
 install: $(STAMP)
 
@@ -31,6 +31,13 @@ bench: install
 # (tests/characterize/test_materials.py; make test runs 20).
 materials: install
 	DEFORMCTL_MATERIAL_DRAWS=400 $(BIN)/python -m pytest -q -s tests/characterize/test_materials.py
+
+# Seeded hostile inputs through the CLI (tests/fuzz/hostile_cli.py): prints the clean fraction
+# (issue 34 point 8). CASES and SEED change the set.
+CASES ?= 600
+SEED ?= 0
+fuzz: install
+	$(BIN)/python -m tests.fuzz.hostile_cli --cases $(CASES) --seed $(SEED)
 
 # The golden numbers (tests/test_golden.py) recomputed under every OpenBLAS kernel the installed
 # numpy accepts x 1 and 2 BLAS threads, each number's spread beside its tolerance, then

@@ -45,6 +45,13 @@ AXIS_DOMINANCE = 2.0
 #: The compression sign is judged on the samples whose force is at least this fraction of the
 #: peak: where the object is squeezed, d must be positive.
 SIGN_FORCE_FRAC = 0.5
+#: The largest plausible L_f / F_w. The lifting force of a deformable object is
+#: L_f = F_w + F_d; L_f / F_w is about 2 for an undamped object and falls with damping
+#: (docs/explanation/model.md), and the paper's objects lie below 2. Five times that is a unit or
+#: catalog mistake (a weight in grams, a μ of 0.005), not an object: ``lift``'s default force
+#: ceiling (:mod:`deformctl.lift.ceiling`), the index table's refusal of absurd rows
+#: (:func:`deformctl.table.impossible_rows`) and a prediction's plausibility all use it.
+MAX_LIFT_RATIO = 10.0
 #: Suggested units aim at these magnitudes: a 1 kHz sensor, a 10 N squeeze, a compression of a
 #: tenth of the object (or 1 cm when its size is unknown).
 _TARGET_RATE_HZ = 1000.0
@@ -196,3 +203,80 @@ def compression_has_wrong_sign(compression_m: FloatArray, force_n: FloatArray) -
         return False
     loaded = force_n >= SIGN_FORCE_FRAC * peak
     return bool(np.median(compression_m[loaded]) < 0)
+
+
+# -- the "too small" side (issue 34 point 1): flags, since a small reading can be right ---------
+
+#: A peak force below this (N) is doubtful: a gripper squeeze or a testing machine on a soft
+#: object loads it with at least 50 mN; a kN column read as N (or N values under an ``mN`` label)
+#: lands 1000 times lower.
+MIN_PEAK_FORCE_N = 0.05
+#: A peak force above this (N, and up to :data:`MAX_PEAK_FORCE_N`, refused beyond) is doubtful:
+#: N values under a ``kN`` label land 1000 times higher. The shared silicone phantoms, squeezed
+#: 20 mm on a testing machine, peak at up to 1151 N (EF50_0T_A2.csv): 3 kN leaves them a margin
+#: of 2.6; N values under ``kN`` with a peak below 3 N are not caught (no reading tells them).
+DOUBTFUL_PEAK_FORCE_N = 3000.0
+#: A peak compression below this (m) is doubtful: metres under an ``mm`` label land here.
+MIN_PEAK_COMPRESSION_M = 2e-5
+#: With no time unit stated, a sample rate below this (Hz) is doubtful: a kHz logger's ms
+#: stamps read as seconds land at a few Hz.
+MIN_UNSTATED_RATE_HZ = 10.0
+DOUBT_FLAGS = ("force_unit_doubtful", "compression_unit_doubtful", "time_unit_doubtful")
+
+
+def unit_doubts(
+    *,
+    rate_hz: float,
+    time_unit_stated: bool,
+    peak_force_n: float,
+    peak_compression_m: float,
+    suggest: Callable[[str, float], str | None],
+) -> list[tuple[str, str, dict[str, float]]]:
+    """The "too small" (and "rather large") side of the plausibility checks, as flags.
+
+    Args:
+        rate_hz: the force's sample rate.
+        time_unit_stated: the time column's unit was given (header, units row, ``--units``).
+        peak_force_n, peak_compression_m: the recording's peaks, SI.
+        suggest: ``suggest(kind, value)`` -> the unit under which ``value`` (kind ``time``
+            (a sample interval, s), ``force`` or ``length``) would be plausible, or None.
+
+    Returns:
+        ``(flag, line, numbers)`` per doubt; each line names the unit that would make the value
+        plausible. Empty for a plausible recording.
+    """
+    out: list[tuple[str, str, dict[str, float]]] = []
+
+    def unit_clause(kind: str, value: float) -> str:
+        unit = suggest(kind, value)
+        return f"; plausible in {unit}: is the unit right?" if unit else "; is the unit right?"
+
+    if not time_unit_stated and math.isfinite(rate_hz) and rate_hz < MIN_UNSTATED_RATE_HZ:
+        out.append((
+            "time_unit_doubtful",
+            f"time unit not stated and the sample rate is {rate_hz:.3g} Hz (below "
+            f"{MIN_UNSTATED_RATE_HZ:g} Hz){unit_clause('time', 1.0 / rate_hz)}",
+            {"rate_hz": rate_hz},
+        ))  # fmt: skip
+    if math.isfinite(peak_force_n) and 0 < peak_force_n < MIN_PEAK_FORCE_N:
+        out.append((
+            "force_unit_doubtful",
+            f"peak force {peak_force_n:.3g} N is below {MIN_PEAK_FORCE_N * 1e3:g} mN"
+            f"{unit_clause('force', peak_force_n)}",
+            {"peak_force_n": peak_force_n},
+        ))  # fmt: skip
+    elif DOUBTFUL_PEAK_FORCE_N < peak_force_n <= MAX_PEAK_FORCE_N:
+        out.append((
+            "force_unit_doubtful",
+            f"peak force {peak_force_n:.3g} N is above {DOUBTFUL_PEAK_FORCE_N / 1e3:g} kN for a "
+            f"soft object{unit_clause('force', peak_force_n)}",
+            {"peak_force_n": peak_force_n},
+        ))  # fmt: skip
+    if math.isfinite(peak_compression_m) and 0 < peak_compression_m < MIN_PEAK_COMPRESSION_M:
+        out.append((
+            "compression_unit_doubtful",
+            f"peak compression {peak_compression_m * 1e6:.3g} µm is below "
+            f"{MIN_PEAK_COMPRESSION_M * 1e6:g} µm{unit_clause('length', peak_compression_m)}",
+            {"peak_compression_m": peak_compression_m},
+        ))  # fmt: skip
+    return out

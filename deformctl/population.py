@@ -40,6 +40,31 @@ import pandas as pd
 from deformctl.catalog import CATALOG_COLUMNS, MATERIAL_COLUMNS, SIZE_COLUMNS
 from deformctl.errors import UsageError
 
+#: The largest population one call draws: a catalog of 10^7 objects is 0.7 GB in memory
+#: (:data:`BYTES_PER_OBJECT`, measured on 10^5 objects) and about 1 GB of CSV; more is a typo.
+MAX_POPULATION_SIZE = 10_000_000
+#: Memory per object of a drawn catalog, bytes (``DataFrame.memory_usage(deep=True)`` / n).
+BYTES_PER_OBJECT = 70
+
+
+def check_population_size(n: object, what: str = "population size") -> int:
+    """``n`` as a population size: an integer in [1, :data:`MAX_POPULATION_SIZE`].
+
+    Raises:
+        UsageError: it is not; ``what`` names it (``-n`` from the CLI), a size above the bound
+            with its memory estimate (exit 2).
+    """
+    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+        raise UsageError(f"{what} must be an integer >= 1, got {n!r}")
+    if n > MAX_POPULATION_SIZE:
+        gib = int(n) * BYTES_PER_OBJECT / (1 << 30)
+        raise UsageError(
+            f"{what} {int(n)} is above the bound of {MAX_POPULATION_SIZE} objects (it would need "
+            f"about {gib:.3g} GiB of memory at {BYTES_PER_OBJECT} bytes per object)"
+        )
+    return int(n)
+
+
 #: The paper's population size and split (section V.A).
 PAPER_POPULATION_SIZE = 73
 PAPER_TRAIN_SIZE = 40
@@ -100,9 +125,7 @@ def make_population(
     Raises:
         UsageError: ``n`` < 1, or a range that is empty, reversed, non-finite or out of bounds.
     """
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-        raise UsageError(f"population size must be an integer >= 1, got {n!r}")
-    n = int(n)
+    n = check_population_size(n)
     w = _check_range("weight_n", weight_n, low_bound=0.0, strict=True)
     d = _check_range("deformability_n_per_cm", deformability_n_per_cm, low_bound=0.0, strict=True)
     lam = _check_range("damping_ns_per_cm", damping_ns_per_cm, low_bound=0.0, strict=False)
@@ -232,9 +255,7 @@ def grip_population(n: int, *, seed: int, id_prefix: str = "P") -> pd.DataFrame:
     Raises:
         UsageError: ``n`` < 1.
     """
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-        raise UsageError(f"population size must be an integer >= 1, got {n!r}")
-    n = int(n)
+    n = check_population_size(n)
     rng = np.random.default_rng(seed)
     shift = GRIP_DAMPING_SHIFT_NS_PER_CM
 

@@ -175,7 +175,7 @@ def predict_objects(
     if coverage is not None:
         predictor.margin(coverage)  # the model file's problem: exit 65 naming it
     with error_context(source) if source else contextlib.nullcontext():  # names the source
-        return predictor.predict_many(
+        est = predictor.predict_many(
             inputs["weight_n"],
             inputs["deformability_n_per_cm"],
             inputs["damping_ns_per_cm"],
@@ -184,6 +184,14 @@ def predict_objects(
             max_safe_force_n=inputs.get("max_safe_force_n"),
             names=names,
         )
+        not_force = ~(np.isfinite(est.lift_force_n) & (est.lift_force_n > 0))
+        if not_force.any():  # never printed: a robot would act on it
+            first = int(np.flatnonzero(not_force)[0])
+            raise InputDataError(
+                f"the model predicts {float(est.lift_force_n[first])!r} N for "
+                f"{', '.join(map(str, est.names[not_force][:5]))}: not a force (refused)"
+            )
+        return est
 
 
 def output_columns(
@@ -196,8 +204,10 @@ def output_columns(
     """The predictions table's columns, in order (optional ones only when they say something):
     the inputs, ``friction_mu`` and ``f_w_n`` (when μ is an input), ``predicted_lift_force_n``,
     the bound's ``lift_force_upper_n``, ``coverage`` and ``bound_guaranteed`` (with a coverage),
-    ``max_safe_force_n`` and ``window_ok`` (with a safe force), ``outside_training_range`` and
-    ``damping_assumed`` (when some λ was unknown, :func:`assume_damping`)."""
+    ``max_safe_force_n`` and ``window_ok`` (with a safe force), ``outside_training_range``,
+    ``prediction_implausible`` when a prediction is not a lifting force
+    (:mod:`deformctl.grip.sanity`) and ``damping_assumed`` (when some λ was unknown,
+    :func:`assume_damping`)."""
     cols: dict[str, Any] = {}
     if object_ids is not None:
         cols["object_id"] = list(object_ids)
@@ -215,6 +225,8 @@ def output_columns(
         cols["max_safe_force_n"] = est.max_safe_force_n
         cols["window_ok"] = est.window_ok
     cols["outside_training_range"] = est.outside_training_range
+    if est.prediction_implausible is not None and est.prediction_implausible.any():
+        cols["prediction_implausible"] = est.prediction_implausible
     if damping_assumed is not None and np.any(damping_assumed):
         cols["damping_assumed"] = np.asarray(damping_assumed, dtype=bool)
     return cols

@@ -36,6 +36,8 @@ import pandas as pd
 
 from deformctl.catalog import rigid_grip_force_n
 from deformctl.errors import InputDataError, SchemaError, UsageError
+from deformctl.grip.groups import NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM
+from deformctl.plausibility import MAX_LIFT_RATIO
 
 #: The columns of an index table, in order.
 INDEX_COLUMNS: tuple[str, ...] = (
@@ -58,6 +60,13 @@ LOOKUP_KEYS: tuple[str, ...] = ("weight_n", "deformability_n_per_cm", "damping_n
 COEFFICIENT_COLUMNS: tuple[str, ...] = ("object_id", "deformability_n_per_cm", "damping_ns_per_cm")
 LIFT_COLUMNS: tuple[str, ...] = ("object_id", "lift_force_n", "converged")
 
+#: An L_f below F_w by more than this (relative) cannot come from a lift search, which never
+#: reports a force below F_w (a rounding of the search tolerance is allowed).
+F_W_TOLERANCE_REL = 0.005
+#: The index table's quality column: ``ok``, or the coefficients' flags (``table
+#: --allow-flagged``); a lookup names a flagged entry it returns.
+QUALITY_COLUMN = "quality"
+
 #: How many offending ids an error message names before "and N more".
 MAX_IDS_IN_MESSAGE = 5
 
@@ -79,6 +88,78 @@ def _duplicates(frame: pd.DataFrame, what: str) -> None:
     dup = frame["object_id"][frame["object_id"].duplicated()].unique()
     if len(dup):
         raise InputDataError(f"{what} list object(s) more than once: {format_ids(sorted(dup))}")
+
+
+def impossible_rows(table: pd.DataFrame, *, coefficients: bool = True) -> list[str]:
+    """What is physically impossible in the rows of an index table, one clause per problem.
+
+    Coefficients (``coefficients=True``): D ≤ 0 or not finite, λ < 0 (beyond a fit's noise,
+    :data:`~deformctl.grip.groups.NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM`) or not finite. Weights
+    and μ ≤ 0 or not finite. Lifting forces: L_f not finite or ≤ 0, L_f below F_w by more than
+    :data:`F_W_TOLERANCE_REL` (a search never reports less than F_w), or above
+    :data:`~deformctl.plausibility.MAX_LIFT_RATIO` × F_w (a unit or catalog mistake). F_w is
+    the ``f_w_n`` column, else W / (2 μ); without either the F_w checks are skipped.
+
+    Returns:
+        e.g. ``["deformability_n_per_cm <= 0 for B (-20)", "lift_force_n above 10 x F_w for
+        C (1e+308 N, F_w 2.9 N)"]``; empty when every row is possible.
+    """
+    ids = table["object_id"].astype(str).to_numpy()
+    out: list[str] = []
+
+    def col(name: str) -> np.ndarray | None:
+        if name not in table.columns:
+            return None
+        return pd.to_numeric(table[name], errors="coerce").to_numpy(dtype=np.float64)
+
+    def named(bad: np.ndarray, values: np.ndarray, unit: str = "") -> str:
+        first = values[bad][0]
+        return f"{format_ids(ids[bad])} ({first:.6g}{unit}{', ...' if bad.sum() > 1 else ''})"
+
+    checks: list[tuple[str, str, str]] = [("weight_n", "<= 0", " N"), ("friction_mu", "<= 0", "")]
+    if coefficients:
+        checks += [("deformability_n_per_cm", "<= 0", " N/cm"), ("damping_ns_per_cm", "< 0", "")]
+    checks.append(("lift_force_n", "<= 0", " N"))
+    for name, rule, unit in checks:
+        values = col(name)
+        if values is None:
+            continue
+        finite = np.isfinite(values)
+        if (~finite).any():
+            out.append(f"{name} not a finite number for {named(~finite, values, unit)}")
+        floor = -NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM if name == "damping_ns_per_cm" else 0.0
+        bad = finite & ((values < floor) if rule == "< 0" else (values <= 0))
+        if bad.any():
+            out.append(f"{name} {rule} for {named(bad, values, unit)}")
+    lift, f_w = col("lift_force_n"), col("f_w_n")
+    if f_w is None and "weight_n" in table.columns and "friction_mu" in table.columns:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f_w = rigid_grip_force_n(col("weight_n"), col("friction_mu"))  # type: ignore[arg-type]
+    if lift is not None and f_w is not None:
+        ok = np.isfinite(lift) & np.isfinite(f_w) & (lift > 0) & (f_w > 0)
+        below = ok & (lift < f_w * (1 - F_W_TOLERANCE_REL))
+        above = ok & (lift > MAX_LIFT_RATIO * f_w)
+        for bad, what in ((below, "below F_w"), (above, f"above {MAX_LIFT_RATIO:g} x F_w")):
+            if bad.any():
+                first = int(np.flatnonzero(bad)[0])
+                out.append(
+                    f"lift_force_n {what} for {format_ids(ids[bad])} "
+                    f"({lift[first]:.6g} N, F_w {f_w[first]:.6g} N)"
+                )
+    return out
+
+
+def refuse_impossible_rows(
+    table: pd.DataFrame, what: str, *, coefficients: bool = True, hint: str = ""
+) -> None:
+    """Raise when :func:`impossible_rows` finds anything.
+
+    Raises:
+        InputDataError: one line, ``"impossible rows in {what}: ...; ..."`` (exit 65).
+    """
+    problems = impossible_rows(table, coefficients=coefficients)
+    if problems:
+        raise InputDataError(f"impossible rows in {what}: {'; '.join(problems)}{hint}")
 
 
 def _pick(
@@ -121,6 +202,7 @@ def build_index_table(
     lift_results: pd.DataFrame,
     *,
     allow_unconverged: bool = False,
+    allow_flagged: bool = False,
 ) -> pd.DataFrame:
     """Join coefficients and lift results on ``object_id`` into an index table.
 
@@ -132,6 +214,13 @@ def build_index_table(
             ``friction_mu`` must be present on at least one side; when on both they must agree.
         allow_unconverged: keep objects whose search did not converge (``converged`` False),
             as long as they have a finite lifting force (an upper bound that did lift).
+        allow_flagged: keep objects whose coefficients are physically impossible (D ≤ 0, λ < 0,
+            not finite; ``characterize --allow-flagged`` writes them); their ``quality`` says
+            so. Impossible lifting forces (:func:`impossible_rows`) are refused even then.
+
+    The table's ``quality`` column is the coefficients' ``quality`` (``ok`` or the flags; ``ok``
+    when the coefficients have none), with ``impossible_coefficients`` added to a row kept by
+    ``allow_flagged``.
 
     Returns:
         The index table, columns :data:`INDEX_COLUMNS` and ``source`` (``sim`` or ``rig``, from
@@ -141,9 +230,10 @@ def build_index_table(
     Raises:
         SchemaError: a required column is missing.
         InputDataError: an object listed twice on one side or missing on the other side, an
-            unconverged object (unless ``allow_unconverged``), a non-finite attribute or lifting
-            force, or a weight / friction that differs between the sides. The message names the
-            offending ids (up to a few, then "and N more").
+            unconverged object (unless ``allow_unconverged``), an impossible row
+            (:func:`impossible_rows`; coefficients only unless ``allow_flagged``), or a weight /
+            friction that differs between the sides. The message names the offending ids (up
+            to a few, then "and N more").
     """
     _require_columns(coefficients, COEFFICIENT_COLUMNS, "the coefficients")
     _require_columns(lift_results, LIFT_COLUMNS, "the lift results")
@@ -205,12 +295,34 @@ def build_index_table(
         columns=list(INDEX_COLUMNS),
     )
     table["source"] = _sources(joined)
-    for col in INDEX_COLUMNS[1:-1]:
-        bad = ~np.isfinite(table[col].to_numpy())
-        if bad.any():
-            ids = sorted(table["object_id"][bad])
-            raise InputDataError(f"{col} is not a finite number for {format_ids(ids)}")
-    return table.sort_values("object_id", kind="stable").reset_index(drop=True)
+    quality = (
+        joined["quality"].astype("string").fillna("ok").to_numpy(dtype=object)
+        if "quality" in joined.columns
+        else np.full(len(table), "ok", dtype=object)
+    )
+    table = table.sort_values("object_id", kind="stable")  # the problems name ids in order
+    quality = quality[table.index.to_numpy()]
+    table = table.reset_index(drop=True)
+    refuse_impossible_rows(table, "the lift results", coefficients=False)
+    coefficient_rows = table.drop(columns=["lift_force_n"])
+    problems = impossible_rows(coefficient_rows)
+    if problems and not allow_flagged:
+        raise InputDataError(
+            f"impossible rows in the coefficients: {'; '.join(problems)} "
+            "(use --allow-flagged to keep them, flagged)"
+        )
+    if problems:
+        bad = np.zeros(len(table), dtype=bool)
+        d = table["deformability_n_per_cm"].to_numpy(dtype=np.float64)
+        lam = table["damping_ns_per_cm"].to_numpy(dtype=np.float64)
+        with np.errstate(invalid="ignore"):
+            bad |= ~np.isfinite(d) | (d <= 0) | ~np.isfinite(lam)
+            bad |= lam < -NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM
+        for i in np.flatnonzero(bad):
+            flags = [f for f in str(quality[i]).split(",") if f and f != "ok"]
+            quality[i] = ",".join([*flags, "impossible_coefficients"])
+    table[QUALITY_COLUMN] = pd.array(quality, dtype="string")
+    return table
 
 
 #: The fewest entries a lookup or an interpolation accepts: a standardized distance divides by
@@ -240,6 +352,17 @@ def validate_index_table(table: pd.DataFrame, *, min_rows: int = 1) -> None:
             raise InputDataError(
                 f"{col} is not a finite number for {format_ids(table['object_id'][bad])}"
             )
+    flagged = _flagged(table)
+    refuse_impossible_rows(table[~flagged], "the index table")
+    refuse_impossible_rows(table[flagged], "the index table", coefficients=False)
+
+
+def _flagged(table: pd.DataFrame) -> np.ndarray:
+    """Rows kept with impossible coefficients by ``table --allow-flagged`` (their quality)."""
+    if QUALITY_COLUMN not in table.columns:
+        return np.zeros(len(table), dtype=bool)
+    quality = table[QUALITY_COLUMN].astype("string").fillna("")
+    return quality.str.contains("impossible_coefficients", regex=False).to_numpy(dtype=bool)
 
 
 def keys_without_spread(table: pd.DataFrame) -> list[str]:

@@ -79,7 +79,12 @@ from deformctl.model import (
     TargetMode,
     make_model,
 )
-from deformctl.table import format_ids, standard_scales, standardized_distances
+from deformctl.table import (
+    format_ids,
+    refuse_impossible_rows,
+    standard_scales,
+    standardized_distances,
+)
 
 #: Defaults of :func:`train_model` besides the network's: the paper's split, our restarts.
 DEFAULT_TRAIN_SIZE = 40
@@ -206,6 +211,7 @@ def _validate_table(
                 f"damping_ns_per_cm must be >= 0 (a fit's -{NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM:g}"
                 f" reads as 0); it is {lam[bad][0]:g} for {format_ids(ids[bad])}"
             )
+    refuse_impossible_rows(table, "the index table")  # L_f below F_w or absurd, D <= 0, λ < 0
     for col in features:
         values = table[col].to_numpy(dtype=np.float64)
         if np.all(values == values[0]):

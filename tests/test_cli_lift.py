@@ -134,7 +134,9 @@ def test_refine_rows_and_log_match_the_threshold(catalog: Path, tmp_path: Path) 
         "weight_n": 10.0,
         "friction_mu": 0.5,
         "size_cm": [8.0, 5.0, 4.0],
+        "max_force_n": 100.0,  # the default ceiling, 10 x F_w
     }
+    assert all(r["grip_force_n"] <= r["max_force_n"] for r in sent)
 
     info = json.loads(cli.invoke(app, ["inspect", str(out), "--json"]).stdout)
     assert (info["kind"], info["rows"]) == ("lift_results", 3)

@@ -27,7 +27,10 @@ PAPER = Path(__file__).resolve().parents[1] / "datasets" / "paper"
 # W in [8, 20] N, mu = 0.5 (F_w = W): the model is trained on that range; anvil is outside.
 CATALOG = HEADER + "sponge,8,5,4,10,0.5\nbrick,6,6,6,16,0.5\nanvil,5,5,5,40,0.5\n"
 COEFFICIENTS = {"sponge": (30.0, 2.0), "brick": (40.0, 5.0), "anvil": (35.0, 3.0)}
-REQUEST_KEYS = {"object_id", "attempt_index", "grip_force_n", "weight_n", "friction_mu", "size_cm"}
+REQUEST_KEYS = {
+    *("object_id", "attempt_index", "grip_force_n", "weight_n", "friction_mu", "size_cm"),
+    "max_force_n",  # the force ceiling (issue 34 point 4)
+}
 
 
 def _index_table(n: int = 45, seed: int = 0) -> pd.DataFrame:

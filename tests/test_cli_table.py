@@ -86,7 +86,7 @@ def test_build_joins_by_object_id(inputs: tuple[Path, Path], tmp_path: Path) -> 
         str(coef_path): sha256_file(coef_path),
         str(lift_path): sha256_file(lift_path),
     }
-    assert prov.settings == {"allow_unconverged": False}
+    assert prov.settings == {"allow_unconverged": False, "allow_flagged": False}
 
 
 def _index(inputs: tuple[Path, Path], tmp_path: Path) -> tuple[Path, pd.DataFrame]:

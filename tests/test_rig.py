@@ -341,7 +341,8 @@ def test_protocol_doc_examples_match_the_code(tmp_path: Path) -> None:
     doc = (Path(__file__).parents[1] / "docs" / "rig-protocol.md").read_text(encoding="utf-8")
     request_text, decided_text, frames_text = _json_blocks(doc)
     request = json.loads(request_text)
-    obj = {k: request[k] for k in ("object_id", "weight_n", "friction_mu", "size_cm")}
+    keys = ("object_id", "weight_n", "friction_mu", "size_cm", "max_force_n")
+    obj = {k: request[k] for k in keys}
     runner = RigRunner("rig", timeout_s=1, object=obj)
     assert runner.request(request["grip_force_n"], request["attempt_index"]) == request
     assert parse_rig_response(decided_text)["lifted"] is True

@@ -54,7 +54,8 @@ IDS = ["B", "A", "C", "D"]
 
 def test_join_columns_order_and_values() -> None:
     t = build_index_table(_coefficients(IDS), _lift(IDS))
-    assert tuple(t.columns) == (*INDEX_COLUMNS, "source")
+    assert tuple(t.columns) == (*INDEX_COLUMNS, "source", "quality")
+    assert set(t["quality"]) == {"ok"}  # coefficients without a quality column
     assert list(t["object_id"]) == ["A", "B", "C", "D"]  # sorted
     row_b = t.set_index("object_id").loc["B"]
     assert row_b["weight_n"] == 20.0
@@ -78,6 +79,7 @@ def test_join_matches_by_id_not_by_row_order() -> None:
 def test_f_w_computed_from_weight_and_mu_when_absent() -> None:
     lift = _lift(IDS).drop(columns=["f_w_n"])
     lift["friction_mu"] = [0.25, 0.5, 0.8, 1.0]
+    lift["lift_force_n"] = lift["weight_n"] / (2 * lift["friction_mu"]) * 1.5  # L_f = 1.5 F_w
     t = build_index_table(_coefficients(IDS), lift).set_index("object_id")
     expected = lift.set_index("object_id")
     for oid in IDS:
@@ -116,7 +118,7 @@ def test_unconverged_refused_unless_allowed() -> None:
 def test_unconverged_without_force_still_refused_when_allowed() -> None:
     lift = _lift(IDS, converged=[True, False, True, True])
     lift.loc[1, "lift_force_n"] = math.nan  # nothing lifted
-    with pytest.raises(InputDataError, match="lift_force_n is not a finite number for A"):
+    with pytest.raises(InputDataError, match="lift_force_n not a finite number for A"):
         build_index_table(_coefficients(IDS), lift, allow_unconverged=True)
 
 

@@ -88,7 +88,9 @@ def _detect(data: bytes, path: PathArg) -> tuple[str, str]:
     name = display_name(path)
     fmt = sniff_format(data)
     if fmt == "mcap":
-        return fmt, load_mcap(data, path).kind or GENERIC_MCAP
+        contents = load_mcap(data, path)
+        contents.check_declared_kind()  # inspect shows no log under a false label
+        return fmt, contents.kind or GENERIC_MCAP
     if fmt == "skops":
         _load_model_bytes(data, path)
         return fmt, KIND_MODEL
@@ -444,7 +446,9 @@ def describe(path: PathArg, *, data: bytes | None = None) -> dict[str, Any]:
     name = display_name(path)
     fmt = sniff_format(data)
     if fmt == "mcap":
-        summary = _mcap_summary(load_mcap(data, path))
+        contents = load_mcap(data, path)
+        contents.check_declared_kind()  # no log shown under a false label
+        summary = _mcap_summary(contents)
     elif fmt == "skops":
         summary = _model_summary(data, path)
     elif fmt == "parquet":

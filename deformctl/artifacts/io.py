@@ -28,12 +28,20 @@ import os
 import re
 import secrets
 import shutil
+import stat
 import sys
 from collections.abc import Iterator
 from contextvars import ContextVar
 from pathlib import Path
+from typing import Any
 
-from deformctl.errors import DeformctlError, MissingInputError, OutputExistsError, UsageError
+from deformctl.errors import (
+    DeformctlError,
+    InputDataError,
+    MissingInputError,
+    OutputExistsError,
+    UsageError,
+)
 
 STDIO = "-"  #: the path that means stdin or stdout
 
@@ -118,19 +126,70 @@ def check_input_path(path: PathArg) -> Path | str:
     return p
 
 
+#: The most bytes one input is read into memory: an artifact deformctl writes (a log, a table,
+#: a model) is far smaller; a larger one, or a device that never ends (``/dev/zero``), is refused
+#: instead of filling the memory. ``DEFORMCTL_READ_BUDGET_GIB`` raises it.
+READ_BUDGET_BYTES = 2 << 30
+_BLOCK_BYTES = 1 << 20
+
+
+def read_budget_bytes() -> int:
+    """:data:`READ_BUDGET_BYTES`, or ``DEFORMCTL_READ_BUDGET_GIB`` GiB when set to a number > 0."""
+    raw = os.environ.get("DEFORMCTL_READ_BUDGET_GIB")
+    try:
+        gib = float(raw) if raw else 0.0
+    except ValueError:
+        gib = 0.0
+    return int(gib * (1 << 30)) if gib > 0 and gib < 1 << 20 else READ_BUDGET_BYTES
+
+
 def read_input_bytes(path: PathArg) -> bytes:
-    """Read a whole input file (or stdin for ``-``) into memory.
+    """Read a whole input file (or stdin for ``-``) into memory, within the reading budget.
+
+    The file type and size come first: a device (``/dev/zero``, a terminal, a socket) is refused
+    before any read, a regular file larger than :func:`read_budget_bytes` too; stdin and pipes
+    are read up to the budget.
 
     Raises:
         MissingInputError: the input does not exist or cannot be opened (exit 66).
+        InputDataError: a device, or more bytes than the budget (exit 65).
     """
     checked = check_input_path(path)
+    budget = read_budget_bytes()
     if isinstance(checked, str):
-        return sys.stdin.buffer.read()
+        return _read_capped(sys.stdin.buffer, budget, "<stdin>")
     try:
-        return checked.read_bytes()
+        mode = checked.stat()
+        if stat.S_ISCHR(mode.st_mode) or stat.S_ISBLK(mode.st_mode) or stat.S_ISSOCK(mode.st_mode):
+            raise InputDataError("is a device, not a file: refused before reading", path=checked)
+        if stat.S_ISREG(mode.st_mode) and mode.st_size > budget:
+            raise InputDataError(
+                f"is {mode.st_size / (1 << 30):.3g} GiB, more than the reading budget of "
+                f"{budget / (1 << 30):.3g} GiB (DEFORMCTL_READ_BUDGET_GIB raises it)",
+                path=checked,
+            )
+        with checked.open("rb") as fh:
+            return _read_capped(fh, budget, checked)
     except OSError as err:
         raise MissingInputError(f"cannot be read: {err.strerror or err}", path=checked) from err
+
+
+def _read_capped(fh: Any, budget: int, name: PathArg) -> bytes:
+    """Everything ``fh`` holds, refusing more than ``budget`` bytes."""
+    chunks: list[bytes] = []
+    total = 0
+    while True:
+        block = fh.read(_BLOCK_BYTES)
+        if not block:
+            return b"".join(chunks)
+        total += len(block)
+        if total > budget:
+            raise InputDataError(
+                f"more than the reading budget of {budget / (1 << 30):.3g} GiB "
+                "(DEFORMCTL_READ_BUDGET_GIB raises it)",
+                path=name,
+            )
+        chunks.append(block)
 
 
 def check_output_path(path: PathArg, force: bool, *, binary: bool = True) -> Path | str:

@@ -300,7 +300,26 @@ def load_model(path: str | os.PathLike[str]) -> tuple[LiftForceModel, dict[str, 
     if not isinstance(metadata, dict):
         raise InputDataError("the model file's metadata is not a JSON object", path=p)
     check_structure(model, path=p)
+    _predictor(model, metadata, p)  # its output at its own training points (grip.sanity)
     return model, metadata
+
+
+def _predictor(model: LiftForceModel, metadata: Mapping[str, Any], path: Path) -> Any:
+    """The model as a :class:`deformctl.grip.fast.Predictor` (its numpy export), which refuses
+    a model whose prediction at its own training points is not a lifting force."""
+    from deformctl.grip.export import export_model
+    from deformctl.grip.fast import Predictor
+
+    meta = dict(metadata)
+    if isinstance(model, ScaledTargetRegressor):
+        meta.setdefault(
+            "training_range",
+            {
+                c: [float(lo), float(hi)]
+                for c, lo, hi in zip(FEATURES, model.feature_min_, model.feature_max_, strict=True)
+            },
+        )
+    return Predictor.from_export(export_model(model), meta, path, check_points=False)
 
 
 def _finite_array(value: Any, shape: tuple[int, ...], what: str) -> str | None:
@@ -429,17 +448,5 @@ def load_predictor(path: str | os.PathLike[str]) -> Any:
     Raises:
         as :func:`load_model`.
     """
-    from deformctl.grip.export import export_model
-    from deformctl.grip.fast import Predictor
-
     model, metadata = load_model(path)
-    meta = dict(metadata)
-    if isinstance(model, ScaledTargetRegressor):
-        meta.setdefault(
-            "training_range",
-            {
-                c: [float(lo), float(hi)]
-                for c, lo, hi in zip(FEATURES, model.feature_min_, model.feature_max_, strict=True)
-            },
-        )
-    return Predictor.from_export(export_model(model), meta, Path(path), check_points=False)
+    return _predictor(model, metadata, Path(path))

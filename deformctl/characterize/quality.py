@@ -70,6 +70,11 @@ RECORDING_FLAGS: dict[str, str] = {
     "logging_gap": "the recording has a gap of more than 5 sample intervals",
     "coarse_force": "the force's resolution is coarser than 2 % of its peak",
     "force_lag": "the force lags the position; λ is low by D × the lag (measure --lag-s auto)",
+    "force_unit_doubtful": "the peak force is implausible for a soft object (below 50 mN or "
+    "above 3 kN): a unit slip such as kN read as N",
+    "compression_unit_doubtful": "the peak compression is below 20 µm: a unit slip such as m "
+    "read as mm",
+    "time_unit_doubtful": "no time unit stated and a sample rate below 10 Hz: ms stamps read as s",
 }
 #: Every flag, in the order ``quality`` lists them.
 FLAGS: tuple[str, ...] = (
@@ -373,5 +378,7 @@ def thresholds_help() -> str:
         "than 2x), relaxation (the force decayed at constant compression), secant_misfit "
         f"(where D is stated the law misses the recorded force by > "
         f"{100 * SECANT_MISFIT_FRAC:g} % of the operating force); the recording's defects "
-        "found by measure: logging_gap, coarse_force, force_lag."
+        "found by measure: logging_gap, coarse_force, force_lag, and the unit doubts "
+        "force_unit_doubtful (peak < 50 mN or > 3 kN), compression_unit_doubtful (< 20 µm), "
+        "time_unit_doubtful (no time unit, < 10 Hz)."
     )

@@ -121,6 +121,14 @@ SizeCm = Annotated[
     tuple[float, float, float] | None,
     typer.Option("--size-cm", metavar="X Y Z", help="Size of the object, cm (x = squeeze axis)."),
 ]
+NoCrcCheck = Annotated[
+    bool,
+    typer.Option(
+        "--no-crc-check",
+        help="Bag: read a damaged bag anyway: chunks whatever their CRC, a cut file up to its "
+        "last complete record (a warning says so).",
+    ),
+]
 FrictionMu = Annotated[
     float | None,
     typer.Option("--friction-mu", metavar="MU", help="Palm-object friction coefficient."),
@@ -142,6 +150,7 @@ class RigOptions:
     segment: bool | None
     phase: str | None = None
     position_increases_when: str | None = None
+    crc_check: bool = True
 
     def given(self) -> dict[str, object]:
         """Flag → value of the source-specific options (for refusing them elsewhere)."""
@@ -155,6 +164,7 @@ class RigOptions:
             "--phase": self.phase,
             "--position-increases-when": self.position_increases_when,
             "--object-id": self.object_id,
+            "--no-crc-check": not self.crc_check,
         }
 
 
@@ -176,6 +186,8 @@ def _from_bag(
         "phase": opts.phase or "all",
         "position_increases_when": opts.position_increases_when,
     }
+    if not opts.crc_check:  # recorded only when off: the logs of checked bags are unchanged
+        settings["crc_check"] = False
     return _read(read_ros2_bag, path, opts, size_x_cm, settings), settings
 
 
@@ -216,6 +228,8 @@ def run(
     check_output_path(output, force)
     rec, settings = READERS[flag](source, opts, None if size_cm is None else size_cm[0])
     recording_log(source, rec, obj, settings, output=output, force=force)
+    for line in rec.warnings:  # e.g. a bag read without CRC checks (each names the file)
+        typer.echo(f"warning: {line}", err=True)
     for r in rec.ruptures:  # each squeeze is kept up to its rupture, recorded in the log
         warning = f"warning: {source}: object {object_id!r}: rupture in {r.describe()}: cut off"
         typer.echo(warning, err=True)

@@ -16,6 +16,9 @@ Failures, decided here:
   written first, then exit 1 with one line. A rig failure stops the run: the objects after it
   are not run (rows with ``attempts = 0`` and ``error`` "not run: ..."), since a rig that failed
   usually needs a person. A search that runs out of attempts does not stop the others.
+* with ``--rig``, the table and the log are also kept on disk as the run goes
+  (:mod:`deformctl.lift.journal`): a run killed or stopped by an error after its first attempt
+  keeps every attempt and the finished objects, and its error line says so.
 """
 
 from __future__ import annotations
@@ -38,16 +41,19 @@ from deformctl.cli._lift_runner import (
     LiftHeight,
     LiftHoldS,
     LiftSpeed,
+    MaxForceN,
     PalmMarkerIds,
     PalmRegions,
     RigTimeout,
     SlipCriterionOption,
     SlipToleranceM,
+    check_max_force,
     choose_runner,
     lift_dataset,
     sim_parts,
 )
 from deformctl.cli._lift_start import (
+    CatalogArg,
     Coefficients,
     StartInterpolate,
     StartMargin,
@@ -74,14 +80,7 @@ from deformctl.parallel import SweepOptions
 @translate_errors
 @opt.with_sweep_options
 def lift(
-    catalog: Annotated[
-        str,
-        typer.Argument(
-            help="Object catalog, CSV or Parquet; - for stdin. Or a coefficients table from "
-            "characterize: its objects' size, weight and μ, with the measured D and λ as the "
-            "material (--sim lifts the measured object)."
-        ),
-    ],
+    catalog: CatalogArg,
     output: Annotated[
         str, typer.Option("-o", "--output", help="Lift results table (Parquet); - for stdout.")
     ],
@@ -147,6 +146,7 @@ def lift(
     max_attempts: Annotated[
         int, typer.Option("--max-attempts", help="Most attempts per object (>= 1).")
     ] = DEFAULT_MAX_ATTEMPTS,
+    max_force_n: MaxForceN = None,
     log_epoch: opt.LogEpoch = None,
     scene_hz: SceneHz = None,
     quiet: Quiet = False,
@@ -228,6 +228,7 @@ def lift(
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
     )
+    check_max_force(max_force_n, dataset=dataset)
     object_ids = opt.parse_object_ids(objects)
     seed = start_seed(start_model, start_table, start_interpolate, start_margin, coefficients,
                       protocol=protocol, dataset=dataset)  # fmt: skip
@@ -242,7 +243,7 @@ def lift(
             protocol=cast(SearchProtocol, protocol),  # checked by validate_search_options
             growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts,
             progress=progress, force=force, log_epoch_ns=opt.parse_log_epoch(log_epoch),
-            seed=seed, warn=warn, workers=sweep.workers,
+            seed=seed, warn=warn, workers=sweep.workers, max_force_n=max_force_n,
         )  # fmt: skip
     report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)),
                summary=None if quiet else run_summary(run, clock, output, log))  # fmt: skip

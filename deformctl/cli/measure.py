@@ -30,7 +30,9 @@ from deformctl.parallel import SweepOptions
 RIG, IMAGES = ("--bag", "--csv"), ("--images",)
 #: Every option that only some sources take → those sources (``--sim`` takes the sweep options).
 SOURCES: dict[str, tuple[str, ...]] = {
-    **dict.fromkeys(("--wrench-topic", "--position-topic", "--joint"), ("--bag",)),
+    **dict.fromkeys(
+        ("--wrench-topic", "--position-topic", "--joint", "--no-crc-check"), ("--bag",)
+    ),
     **dict.fromkeys(("--columns", "--units", *_measure_csv.FLAGS), ("--csv",)),
     **dict.fromkeys(("--segment/--no-segment", "--phase", "--position-increases-when"), RIG),
     **dict.fromkeys(("--object-id", "--weight-n", "--friction-mu"), (*RIG, *IMAGES)),
@@ -78,6 +80,7 @@ def measure(
     segment: rec.Segment = None,
     phase: rec.Phase = None,
     position_increases_when: rec.PositionIncreasesWhen = None,
+    no_crc_check: rec.NoCrcCheck = False,
     skip_rows: csvo.SkipRows = None,
     delimiter: csvo.Delimiter = None,
     decimal: csvo.Decimal = None,
@@ -163,7 +166,7 @@ def measure(
     )
     rig_opts = _measure_rig.RigOptions(
         object_id, list(wrench_topics), position_topic, joint, axis, position_is, columns, units,
-        segment, phase, position_increases_when,
+        segment, phase, position_increases_when, crc_check=not no_crc_check,
     )  # fmt: skip
     given: dict[str, object] = {
         **rig_opts.given(), "--weight-n": weight_n, "--size-cm": size_cm,

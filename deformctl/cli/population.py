@@ -11,11 +11,15 @@ from deformctl.errors import UsageError
 from deformctl.population import (
     DEFAULT_FRICTION_MU,
     PAPER_POPULATION_SIZE,
+    check_population_size,
     golden_population,
     grip_population,
     make_population,
     paper_objects,
 )
+
+#: The columns whose ranges are options (``--weight-n`` for ``weight_n``, ...).
+RANGE_COLUMNS = ("weight_n", "deformability_n_per_cm", "damping_ns_per_cm", "friction_mu")
 
 
 def parse_range(option: str, text: str) -> tuple[float, float]:
@@ -82,6 +86,7 @@ def population(
 
     Example: deformctl population -n 73 --seed 0 -o population.csv
     """
+    check_population_size(n, "-n")  # before anything: exit 2 naming the flag
     chosen = [
         flag for flag, on in (("--golden", golden), ("--paper", paper), ("--grip", grip)) if on
     ]
@@ -97,15 +102,23 @@ def population(
         catalog = paper_objects()
     else:
         mu_low, mu_high = parse_range("--friction-mu", friction_mu)
-        catalog = make_population(
-            n,
-            seed=seed,
-            weight_n=parse_range("--weight-n", weight_n),
-            deformability_n_per_cm=parse_range("--deformability-n-per-cm", deformability_n_per_cm),
-            damping_ns_per_cm=parse_range("--damping-ns-per-cm", damping_ns_per_cm),
-            friction_mu=mu_low if mu_low == mu_high else (mu_low, mu_high),
-            id_prefix=id_prefix,
-        )
+        try:
+            catalog = make_population(
+                n,
+                seed=seed,
+                weight_n=parse_range("--weight-n", weight_n),
+                deformability_n_per_cm=parse_range(
+                    "--deformability-n-per-cm", deformability_n_per_cm
+                ),
+                damping_ns_per_cm=parse_range("--damping-ns-per-cm", damping_ns_per_cm),
+                friction_mu=mu_low if mu_low == mu_high else (mu_low, mu_high),
+                id_prefix=id_prefix,
+            )
+        except UsageError as err:  # the library names the column: name the flag too
+            column = err.message.split(" ", 1)[0]
+            if column in RANGE_COLUMNS:
+                err.message = f"--{column.replace('_', '-')}: {err.message}"
+            raise
     provenance = Provenance.from_invocation(
         seed=None if golden or paper else seed,
         settings={"golden": golden, "paper": paper, "grip": grip, "n": len(catalog)},

@@ -29,7 +29,9 @@ from deformctl.table import (
     INDEX_COLUMNS,
     LOOKUP_KEYS,
     MIN_LOOKUP_ROWS,
+    QUALITY_COLUMN,
     build_index_table,
+    format_ids,
     interpolate,
     keys_without_spread,
     lookup_mapping,
@@ -100,7 +102,9 @@ def _lookup(path: str, text: str, interpolate_k: int | None, as_json: bool) -> N
     nearest = lookup_mapping(index, query)
     out: dict[str, Any] = {
         "query": query,
-        "nearest": {k: nearest.row[k] for k in INDEX_COLUMNS if k in nearest.row},
+        "nearest": {
+            k: nearest.row[k] for k in (*INDEX_COLUMNS, QUALITY_COLUMN) if k in nearest.row
+        },
         "distance_std": nearest.distance,
         "keys_in_raw_units": unspread,
     }
@@ -114,6 +118,9 @@ def _lookup(path: str, text: str, interpolate_k: int | None, as_json: bool) -> N
                 for i, d, w in zip(est.object_ids, est.distances, est.weights, strict=True)
             ],
         }
+    quality = out["nearest"].get(QUALITY_COLUMN)
+    if quality not in (None, "ok") and not (isinstance(quality, float) and math.isnan(quality)):
+        warn(f"the nearest entry {out['nearest']['object_id']} has flagged coefficients: {quality}")
     if as_json:
         typer.echo(json.dumps(out, indent=2, allow_nan=False))
         return
@@ -150,6 +157,12 @@ def table(
         "--allow-unconverged",
         help="Build: keep objects whose lift search did not converge (with a finite force).",
     ),
+    allow_flagged: bool = typer.Option(
+        False,
+        "--allow-flagged",
+        help="Build: keep objects with impossible coefficients (D <= 0, λ < 0), flagged in "
+        "the quality column, instead of exit 65.",
+    ),
     force: bool = typer.Option(False, "--force", help="Build: overwrite an existing output."),
     lookup_text: str | None = typer.Option(
         None,
@@ -180,6 +193,8 @@ def table(
           weight_n=40,deformability_n_per_cm=40,damping_ns_per_cm=5 --interpolate 4
     """
     mode = _check_mode(inputs, output, lookup_text, interpolate_k, allow_unconverged, force)
+    if mode == "lookup" and allow_flagged:
+        raise UsageError("--allow-flagged is for building the index table, not with --lookup")
     if mode == "lookup":
         assert lookup_text is not None
         _lookup(inputs[0], lookup_text, interpolate_k, as_json)
@@ -192,12 +207,20 @@ def table(
     coefficients = read_table_any(coefficients_path, "coefficients")  # a file or a dataset dir
     lift = read_table_any(lift_path, "lift_results")
     with error_context(f"{coefficients_path} + {lift_path}"):
-        index = build_index_table(coefficients, lift, allow_unconverged=allow_unconverged)
-    provenance = Provenance.from_invocation(
-        [coefficients_path, lift_path], settings={"allow_unconverged": allow_unconverged}
-    )
+        index = build_index_table(
+            coefficients, lift, allow_unconverged=allow_unconverged, allow_flagged=allow_flagged
+        )
+    settings = {"allow_unconverged": allow_unconverged, "allow_flagged": allow_flagged}
+    provenance = Provenance.from_invocation([coefficients_path, lift_path], settings=settings)
     write_table(index, output, "index_table", provenance=provenance, force=force)
     if output != "-":
         unconverged = int((~index["converged"]).sum())
         note = f", {unconverged} unconverged kept" if unconverged else ""
+        kept = index[QUALITY_COLUMN].str.contains("impossible_coefficients", regex=False)
+        flagged = sorted(index["object_id"][kept.fillna(False).to_numpy(dtype=bool)])
+        if flagged:
+            warn(
+                f"{len(flagged)} object(s) kept with impossible coefficients (flagged): "
+                f"{format_ids(flagged)}"
+            )
         typer.echo(f"wrote {output}: {len(index)} objects{note}", err=True)

@@ -43,6 +43,7 @@ import numpy as np
 
 from deformctl import jsonsafe
 from deformctl.errors import InputDataError, MissingInputError, UsageError
+from deformctl.grip.activations import _activation, _activation_scalar
 from deformctl.grip.conformal import (
     check_coverage,
     conformal_margin,
@@ -50,6 +51,7 @@ from deformctl.grip.conformal import (
     conformal_rank,
 )
 from deformctl.grip.groups import GRIP_FEATURES, NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM, ZETA_SHIFT
+from deformctl.grip.sanity import implausible, implausible_line, output_problem
 from deformctl.units import GRAVITY_M_S2
 
 __all__ = [
@@ -262,6 +264,7 @@ class Estimates:
     max_safe_force_n: np.ndarray
     window_ok: np.ndarray
     warnings: list[str] = field(default_factory=list)
+    prediction_implausible: np.ndarray | None = None  # deformctl.grip.sanity.implausible
 
 
 @dataclass(frozen=True)
@@ -277,26 +280,7 @@ class Estimate:
     max_safe_force_n: float
     window_ok: bool
     warnings: tuple[str, ...] = ()
-
-
-def _activation_scalar(name: str, x: float) -> float:
-    if name == "tanh":
-        return math.tanh(x)
-    if name == "relu":
-        return max(x, 0.0)
-    if name == "logistic":
-        return 1.0 / (1.0 + math.exp(-x)) if x >= -700 else 0.0
-    return x
-
-
-def _activation(name: str, x: np.ndarray) -> np.ndarray:
-    if name == "tanh":
-        return np.tanh(x, out=x)
-    if name == "relu":
-        return np.maximum(x, 0, out=x)
-    if name == "logistic":
-        return np.divide(1.0, 1.0 + np.exp(-x, out=x), out=x)
-    return x
+    prediction_implausible: bool = False
 
 
 @dataclass(frozen=True)
@@ -438,6 +422,9 @@ class Predictor:
         )
         if check_points:
             predictor._check_stored_points()
+        problem = output_problem(predictor)  # a lifting force at its own training points?
+        if problem is not None:
+            raise InputDataError(f"not a usable lifting-force model: {problem}", path=path)
         return predictor
 
     def _check_stored_points(self) -> None:
@@ -650,6 +637,8 @@ class Predictor:
         window_ok, line = _window(name, lift, upper, safe)
         if line:
             warnings.append(line)
+        odd = bool(implausible(np.array([lift]), np.array([f_w]))[0])
+        warnings += [implausible_line(name, lift, f_w)] if odd else []
         return Estimate(
             lift_force_n=lift,
             f_w_n=f_w,
@@ -660,6 +649,7 @@ class Predictor:
             max_safe_force_n=safe,
             window_ok=window_ok,
             warnings=tuple(warnings),
+            prediction_implausible=odd,
         )
 
     def _paper_scalar(
@@ -761,6 +751,8 @@ class Predictor:
             window_ok[i], line = _window(str(labels[i]), lift[i], upper[i], safe[i])
             if line:
                 warnings.append(line)
+        odd = implausible(lift, f_w)
+        warnings += [implausible_line(str(labels[i]), lift[i], f_w[i]) for i in np.flatnonzero(odd)]
         return Estimates(
             names=labels,
             lift_force_n=lift,
@@ -774,6 +766,7 @@ class Predictor:
             max_safe_force_n=safe,
             window_ok=window_ok,
             warnings=warnings,
+            prediction_implausible=odd,
         )
 
 

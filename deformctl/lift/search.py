@@ -28,6 +28,12 @@ Two protocols:
     is never reported.
 
 Both start at ``F_w``; the search never tries a force below it (the paper defines ``L_f >= F_w``).
+
+Every protocol takes a force ceiling ``max_force_n`` (:mod:`deformctl.lift.ceiling`; infinite
+by default here, ``lift`` always gives one): no attempt is ever requested above it. A ramp step
+or a seeded step up that would pass it tries the ceiling itself once; if that slips (or F_w is
+already above it), the search stops with ``converged = False`` and a message "no safe grip". A
+seeded start above it is clamped to it.
 If ``F_w`` itself lifts, ``L_f = F_w`` with bracket ``(F_w, F_w)`` and ``converged = True``.
 
 A third protocol starts from a *predicted* L_f instead (the paper's closing proposal: use the
@@ -179,6 +185,8 @@ class LiftSearchResult:
             range (or the table's attribute range); False means the search fell back to the
             ``refine`` ramp from F_w. None when no start was given.
         start_source: ``"model"`` or ``"table"`` when a start was given, else None.
+        max_force_n: the force ceiling of the search, N (inf: none).
+        start_clamped: True when a seeded start above the ceiling was lowered to it.
     """
 
     object_id: str
@@ -201,6 +209,8 @@ class LiftSearchResult:
     start_force_n: float = math.nan
     start_in_training_range: bool | None = None
     start_source: str | None = None
+    max_force_n: float = math.inf
+    start_clamped: bool = False
 
     @property
     def seeded(self) -> bool:
@@ -264,6 +274,7 @@ class LiftSearchResult:
             "start_force_n": self.start_force_n,
             "start_in_training_range": self.start_in_training_range,
             "start_source": self.start_source,
+            "max_force_n": self.max_force_n,
         }
 
     def table_row(self, *, runner: str, error: str | None = None) -> dict[str, object]:
@@ -285,6 +296,8 @@ class LiftSearchResult:
             del row[key]
         if not math.isfinite(self.bracket_n[1]):
             row["bracket_high_n"] = math.nan
+        if not math.isfinite(self.max_force_n):
+            row["max_force_n"] = math.nan
         if self.protocol == "paper":
             row["tolerance_rel"] = math.nan
         row["runner"] = runner
@@ -337,8 +350,13 @@ def _validate(
     tolerance_rel: float,
     max_attempts: int,
     object_id: str,
+    max_force_n: float = math.inf,
 ) -> None:
     where = f"object {object_id!r}: "
+    if isinstance(max_force_n, bool) or not (
+        isinstance(max_force_n, int | float) and max_force_n > 0
+    ):
+        raise UsageError(f"{where}force ceiling must be a number > 0 N, got {max_force_n!r}")
     if not (math.isfinite(weight_n) and weight_n > 0):
         raise UsageError(f"{where}weight must be a finite number > 0 N, got {weight_n!r}")
     if not (math.isfinite(friction_mu) and friction_mu > 0):
@@ -365,6 +383,7 @@ class _Search:
     low_n: float = math.nan  # largest force that slipped below high_n
     high_n: float = math.nan  # smallest force that lifted
     seed: dict[str, Any] = field(default_factory=dict)  # the result's start_* fields
+    max_force_n: float = math.inf  # no attempt above it (module doc)
 
     @property
     def obj(self) -> str:
@@ -399,12 +418,34 @@ class _Search:
             friction_mu=self.friction_mu,
             max_attempts=self.max_attempts,
             ramp_attempts=self.ramp_attempts,
+            max_force_n=self.max_force_n,
             **self.seed,
         )
+
+    def no_safe_grip(self, why: str) -> LiftSearchResult:
+        """The result of a search that would need a force above its ceiling."""
+        return self.result(
+            converged=False,
+            message=(
+                f"{self.obj}: no safe grip below the force ceiling {self.max_force_n:.6g} N: "
+                f"{why} (F_w = {self.f_w_n:.6g} N, {len(self.trials)} attempts)"
+            ),
+        )
+
+    def capped(self, force_n: float) -> float | None:
+        """``force_n``, or the ceiling when it is above it and the ceiling was not tried yet
+        (None: the ceiling slipped already, or the search is at it)."""
+        if force_n <= self.max_force_n:
+            return force_n
+        if math.isfinite(self.low_n) and self.low_n >= self.max_force_n:
+            return None
+        return self.max_force_n
 
     def attempt(self, runner: TrialRunner, force_n: float) -> bool:
         """Run one trial at ``force_n`` and book it; True when it lifted."""
         index = len(self.trials)
+        if not force_n <= self.max_force_n:  # the callers cap every force: a bug otherwise
+            raise AssertionError(f"{force_n!r} N above the ceiling {self.max_force_n!r} N")
         try:
             outcome = runner(force_n, index)
         except DeformctlError as err:
@@ -432,11 +473,17 @@ class _Search:
         Returns None when a force lifted, else the (unconverged) result to return.
         """
         k = 0
+        if start_n > self.max_force_n:
+            return self.no_safe_grip("F_w is above it")
         while True:
             try:
                 force_n = start_n * self.growth**k
             except OverflowError:
                 force_n = math.inf
+            capped = self.capped(force_n)
+            if capped is None:
+                return self.no_safe_grip("the object slipped at the ceiling")
+            force_n = capped
             if not math.isfinite(force_n):  # only with a huge budget and growth
                 return self.result(
                     converged=False,
@@ -496,6 +543,7 @@ def find_min_lift_force(
     tolerance_rel: float = DEFAULT_TOLERANCE_REL,
     max_attempts: int = DEFAULT_MAX_ATTEMPTS,
     object_id: str = "object",
+    max_force_n: float = math.inf,
 ) -> LiftSearchResult:
     """Find the minimum grip force that lifts one object, by iterative lifting.
 
@@ -509,6 +557,7 @@ def find_min_lift_force(
         tolerance_rel: ``refine`` stops when ``(high - low) / high <= tolerance_rel``; in (0, 1).
         max_attempts: the most trials to run in total (>= 1).
         object_id: the object's catalog id, used in messages and the result.
+        max_force_n: the force ceiling, N (> 0; inf: none); see the module docstring.
 
     Returns:
         A :class:`LiftSearchResult`. A search that runs out of attempts returns
@@ -528,8 +577,10 @@ def find_min_lift_force(
         tolerance_rel=tolerance_rel,
         max_attempts=max_attempts,
         object_id=object_id,
+        max_force_n=max_force_n,
     )
     s = _new_search(object_id, weight_n, friction_mu, protocol, growth, tolerance_rel, max_attempts)
+    s.max_force_n = float(max_force_n)
     # Phase 1: the paper's ramp F_w * growth**k until a force lifts.
     failed = s.ramp_up(runner, s.f_w_n)
     if failed is not None:
@@ -564,6 +615,7 @@ def find_min_lift_force_seeded(
     max_attempts: int = DEFAULT_MAX_ATTEMPTS,
     object_id: str = "object",
     source: str = "model",
+    max_force_n: float = math.inf,
 ) -> LiftSearchResult:
     """The minimum lifting force, searched from a predicted L_f instead of from F_w.
 
@@ -597,6 +649,8 @@ def find_min_lift_force_seeded(
         predicted_lift_force_n: the predicted L_f, N (finite, > 0).
         margin: the first attempt is at the prediction times this (>= 1).
         source: what predicted it (``"model"``, ``"table"``), recorded as ``start_source``.
+        max_force_n: the force ceiling, N (module docstring); a start above it is clamped to it
+            (``start_clamped``).
 
     Raises:
         UsageError: a parameter out of range (one-line message).
@@ -619,6 +673,7 @@ def find_min_lift_force_seeded(
         tolerance_rel=tolerance_rel,
         max_attempts=max_attempts,
         object_id=object_id,
+        max_force_n=max_force_n,
     )
     validate_start_margin(margin)
     where = f"object {object_id!r}: "
@@ -632,13 +687,18 @@ def find_min_lift_force_seeded(
             f"got {predicted_lift_force_n!r}"
         )
     s = _new_search(object_id, weight_n, friction_mu, "seeded", growth, tolerance_rel, max_attempts)
-    start_n = max(s.f_w_n, float(predicted_lift_force_n) * float(margin))
+    s.max_force_n = float(max_force_n)
+    wanted_n = max(s.f_w_n, float(predicted_lift_force_n) * float(margin))
+    start_n = min(wanted_n, s.max_force_n)
     s.seed = {
         "predicted_lift_force_n": float(predicted_lift_force_n),
         "start_force_n": start_n,
         "start_in_training_range": True,
         "start_source": source,
+        "start_clamped": start_n < wanted_n,
     }
+    if s.f_w_n > s.max_force_n:
+        return s.no_safe_grip("F_w is above it")
     s.attempt(runner, start_n)
     # the smallest step: one that leaves a bracket within the tolerance (with room for rounding)
     step = min(s.growth, max(float(margin) ** 2, 1 / (1 - 0.999 * s.tolerance_rel)))
@@ -648,6 +708,10 @@ def find_min_lift_force_seeded(
         if going_down and s.high_n <= s.f_w_n:  # F_w lifted: L_f = F_w
             break
         force_n = max(s.f_w_n, s.high_n / step) if going_down else s.low_n * step
+        capped = s.capped(force_n)
+        if capped is None:
+            return s.no_safe_grip("the object slipped at the ceiling")
+        force_n = capped
         if s.out_of_attempts or not math.isfinite(force_n):
             last = s.trials[-1].grip_force_n
             why = (
@@ -698,6 +762,7 @@ def _found_message(s: _Search) -> str:
         seeded = (
             f" from the {s.seed['start_source']}'s {s.seed['predicted_lift_force_n']:.6g} N, "
             f"first attempt {s.seed['start_force_n']:.6g} N"
+            + (" (clamped to the force ceiling)" if s.seed.get("start_clamped") else "")
         )
     return (
         f"{s.obj}: lifted at L_f = {s.high_n:.6g} N (F_w = {s.f_w_n:.6g} N, "

@@ -43,7 +43,9 @@ from deformctl.artifacts import (
 )
 from deformctl.artifacts.io import committed_together, is_stdio
 from deformctl.catalog import CatalogObject, catalog_objects, select_objects
-from deformctl.errors import UsageError
+from deformctl.errors import DeformctlError, UsageError
+from deformctl.lift.ceiling import CEILING_COLUMN, ForceCeiling, force_ceiling
+from deformctl.lift.journal import LiftJournal
 from deformctl.lift.objects import read_lift_objects
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
@@ -59,6 +61,7 @@ from deformctl.lift.search import (
     validate_search_options,
 )
 from deformctl.parallel import map_in_order, single_file_workers
+from deformctl.series import TrialOutcome
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the seed sources import sklearn when used
     from deformctl.lift.seeded import StartEstimate, StartSeed
@@ -107,6 +110,8 @@ class RunnerFactory:
         material_features: the catalog's material values are this runner's ground truth for
             D and λ (the simulator), so a seeded search may predict its start from them when
             no measured D and λ are given (:func:`deformctl.lift.seeded.object_features`).
+        journal: every attempt is costly (a real rig): :func:`lift_catalog_files` keeps the
+            table and the log on disk as the run goes (:mod:`deformctl.lift.journal`).
     """
 
     name: str
@@ -116,6 +121,7 @@ class RunnerFactory:
     settings: Mapping[str, Any] = field(default_factory=dict)
     check: Callable[[Sequence[CatalogObject], str | None], None] | None = None
     material_features: bool = False
+    journal: bool = False
 
 
 @dataclass(frozen=True)
@@ -196,6 +202,8 @@ def lift_catalog(
     seed: StartSeed | None = None,
     warn: Warn | None = None,
     workers: int = 1,
+    journal: LiftJournal | None = None,
+    max_force_n: float | None = None,
 ) -> CatalogLiftResult:
     """Search the minimum lifting force of every object of a catalog, one after another.
 
@@ -230,6 +238,12 @@ def lift_catalog(
         workers: local processes to run the objects on (:func:`deformctl.parallel.map_in_order`;
             results in catalog order, the same as one process); a runner that stops on failure
             (the rig) always runs in this process, one object after another.
+        journal: record every attempt and every finished row in it as they happen
+            (:mod:`deformctl.lift.journal`); the objects then run in this process.
+        max_force_n: the force ceiling of every object, N (``--max-force-n``); None: the
+            catalog's ``max_force_n`` or the default of :mod:`deformctl.lift.ceiling`. No
+            attempt requests more; the runner gets it as the row's ``max_force_n`` (the rig
+            request carries it); a seeded start above it is clamped and ``warn`` says so.
 
     Returns:
         A :class:`CatalogLiftResult`.
@@ -239,6 +253,9 @@ def lift_catalog(
         InputDataError: an object the lift cannot use, e.g. ``friction_mu = 0``, one the
             runner refuses (``factory.check``), or (``seed``) one without D and λ (before
             anything runs; exit 65).
+        SchemaError: an object's row holds a value its table refuses (raised as the object
+            finishes; with a ``journal``, the attempts made and the rows of the objects before
+            it are on disk).
     """
     validate_search_options(
         protocol=protocol, growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts
@@ -260,6 +277,17 @@ def lift_catalog(
         for estimate in starts.values():
             if estimate.warning is not None and warn is not None:
                 warn(estimate.warning)
+    ceilings = _ceilings(objects, f_w, max_force_n, seed, path)
+    for obj, f_w_n in zip(objects, f_w, strict=True):
+        clamp = _clamp_warning(obj.object_id, f_w_n, starts.get(obj.object_id), seed, ceilings)
+        if clamp is not None and warn is not None:
+            warn(clamp)
+    objects = [
+        dataclasses.replace(
+            obj, row={**obj.row, CEILING_COLUMN: ceilings[obj.object_id].max_force_n}
+        )
+        for obj in objects
+    ]
     rows: list[dict[str, object]] = []
     attempts: list[LiftAttempt] = []
     results: list[LiftSearchResult] = []
@@ -272,6 +300,13 @@ def lift_catalog(
         max_attempts,
     )  # fmt: skip
     jobs = [(obj, starts.get(obj.object_id)) for obj in objects]
+    if journal is not None:
+
+        def placeholder(i: int, error: str, n: int) -> dict[str, object]:
+            row = _not_run_row(objects[i], f_w[i], factory, protocol, tolerance_rel, error, n)
+            return {**row, **_start_columns(jobs[i][1], math.nan)}
+
+        journal.begin([obj.record() for obj in objects], placeholder)
 
     def record(obj: CatalogObject, outcome: tuple[LiftSearchResult, str | None, bool]) -> None:
         result, error, aborted = outcome
@@ -281,6 +316,7 @@ def lift_catalog(
         attempts.extend(LiftAttempt(obj.object_id, i, t) for i, t in enumerate(result.trials))
         row = result.table_row(runner=factory.name, error=error)
         row.update(factory.row_fields(obj))
+        validate_frame(pd.DataFrame([row]), "lift_results", path=path)  # refused as it finishes
         rows.append(row)
         start = starts.get(obj.object_id)
         if start is not None:
@@ -290,7 +326,7 @@ def lift_catalog(
         if progress is not None:
             progress(objects[i].object_id, i + 1, len(objects))
 
-    if workers > 1 and not factory.stop_on_failure:
+    if workers > 1 and not factory.stop_on_failure and journal is None:
         outcomes = map_in_order(search, jobs, workers=workers, on_result=lambda i, _: done(i))
         for obj, outcome in zip(objects, outcomes, strict=True):
             record(obj, outcome)
@@ -298,14 +334,19 @@ def lift_catalog(
         for i, (job, f_w_n) in enumerate(zip(jobs, f_w, strict=True)):
             obj, start = job
             if stopped_at is not None:
-                row = _not_run_row(obj, f_w_n, factory, protocol, tolerance_rel, stopped_at)
+                why = f"not run: the run stopped at object {stopped_at!r} after a runner failure"
+                row = _not_run_row(obj, f_w_n, factory, protocol, tolerance_rel, why)
                 rows.append({**row, **_start_columns(start, math.nan)})
                 not_run.append(obj.object_id)
             else:
-                outcome = search(job)
+                if journal is not None:
+                    journal.start_object(i)
+                outcome = search.run(job, on_attempt=None if journal is None else journal.attempt)
                 record(obj, outcome)
                 if outcome[2] and factory.stop_on_failure:
                     stopped_at = obj.object_id
+            if journal is not None:
+                journal.object_done(i, rows[-1])
             done(i)
     table = validate_frame(pd.DataFrame(rows), "lift_results")
     return CatalogLiftResult(
@@ -338,12 +379,17 @@ def lift_catalog_files(
     seed: StartSeed | None = None,
     warn: Warn | None = None,
     workers: int | None = None,
+    max_force_n: float | None = None,
 ) -> CatalogLiftResult:
     """:func:`lift_catalog` from a catalog file: the lift_results table and the lift log written.
 
     Both are written (atomically, with provenance) before the caller decides the exit code, so
     a failed run keeps every attempt it made; they are renamed into place together
-    (:func:`~deformctl.artifacts.io.committed_together`), so a killed run leaves both or neither.
+    (:func:`~deformctl.artifacts.io.committed_together`). A runner whose attempts are costly
+    (``factory.journal``, the rig) also keeps both files on disk while the run goes
+    (:mod:`deformctl.lift.journal`): a run killed or stopped by an error after its first attempt
+    leaves every attempt in the log and the finished objects in the table, and an error's line
+    ends with what was kept.
 
     Args:
         catalog_path: the catalog (CSV or Parquet; ``-`` for stdin), or a coefficients table
@@ -353,8 +399,8 @@ def lift_catalog_files(
         output: the lift_results table (``-`` for stdout).
         log: the lift log with every attempt (``-`` for stdout), or None.
         object_ids: these objects, in this order (None: all).
-        protocol, growth, tolerance_rel, max_attempts, progress, seed, warn: as for
-            :func:`lift_catalog`.
+        protocol, growth, tolerance_rel, max_attempts, progress, seed, warn, max_force_n: as
+            for :func:`lift_catalog`.
         force: overwrite existing outputs.
         log_epoch_ns: where the log's attempts without a wall clock (simulated ones) begin, ns
             since the Unix epoch (None: the log writer's fixed epoch, 2000-01-01).
@@ -385,30 +431,40 @@ def lift_catalog_files(
             "growth": growth,
             "tolerance_rel": tolerance_rel,
             "max_attempts": max_attempts,
+            **({"max_force_n": max_force_n} if max_force_n is not None else {}),
             "objects": list(selected["object_id"]),
             **({"start": {"source": seed.source, **seed.settings}} if seed is not None else {}),
         },
     )
-    run = lift_catalog(
-        selected,
-        factory,
-        protocol=protocol,
-        growth=growth,
-        tolerance_rel=tolerance_rel,
-        max_attempts=max_attempts,
-        progress=progress,
-        path=catalog_path,
-        seed=seed,
-        warn=warn,
-        workers=single_file_workers(workers, len(selected)),  # the rig runs in-process anyway
-    )
-    with committed_together():  # a kill leaves both outputs or neither (the table last)
+    epoch = {} if log_epoch_ns is None else {"epoch_ns": log_epoch_ns}
+    journal = LiftJournal(output, log, provenance, epoch) if factory.journal else None
+    try:
+        run = lift_catalog(
+            selected,
+            factory,
+            protocol=protocol,
+            growth=growth,
+            tolerance_rel=tolerance_rel,
+            max_attempts=max_attempts,
+            progress=progress,
+            path=catalog_path,
+            seed=seed,
+            warn=warn,
+            workers=single_file_workers(workers, len(selected)),  # the rig runs in-process anyway
+            journal=journal if journal is not None and journal.active else None,
+            max_force_n=max_force_n,
+        )
+    except DeformctlError as err:
+        if journal is not None and journal.written:  # say what survived the failure
+            err.message = f"{err.message} ({journal.kept()})"
+        raise
+    mine = force or (journal is not None and journal.written)  # the journal's files are ours
+    with committed_together():  # the finished run replaces the journal's files (the table last)
         if log is not None:
-            epoch = {} if log_epoch_ns is None else {"epoch_ns": log_epoch_ns}
             write_lift_log(
-                log, run.objects, run.attempts, provenance=provenance, force=force, **epoch
+                log, run.objects, run.attempts, provenance=provenance, force=mine, **epoch
             )
-        write_table(run.table, output, "lift_results", provenance=provenance, force=force)
+        write_table(run.table, output, "lift_results", provenance=provenance, force=mine)
     return run
 
 
@@ -476,8 +532,10 @@ def _not_run_row(
     factory: RunnerFactory,
     protocol: SearchProtocol,
     tolerance_rel: float,
-    stopped_at: str,
+    error: str,
+    attempts: int = 0,
 ) -> dict[str, object]:
+    """The row of an object without a result (not run, or interrupted after ``attempts``)."""
     row: dict[str, object] = {
         "object_id": obj.object_id,
         "weight_n": obj.weight_n,
@@ -485,17 +543,24 @@ def _not_run_row(
         "f_w_n": f_w_n,
         "lift_force_n": math.nan,
         "f_d_n": math.nan,
-        "attempts": 0,
+        "attempts": int(attempts),
         "converged": False,
         "protocol": protocol,
         "bracket_low_n": math.nan,
         "bracket_high_n": math.nan,
         "tolerance_rel": math.nan if protocol == "paper" else float(tolerance_rel),
         "runner": factory.name,
-        "error": f"not run: the run stopped at object {stopped_at!r} after a runner failure",
+        "error": error,
+        "max_force_n": float(obj.get(CEILING_COLUMN, math.nan)),
     }
     row.update(factory.row_fields(obj))
     return row
+
+
+def _recordable(predicted_n: float) -> float:
+    """A prediction as the table records it: NaN when it is not a finite force > 0 (the
+    warning line of the fallback names the value; the table holds forces only)."""
+    return predicted_n if math.isfinite(predicted_n) and predicted_n > 0 else math.nan
 
 
 def _fallback(result: LiftSearchResult, start: StartEstimate | None) -> LiftSearchResult:
@@ -504,7 +569,7 @@ def _fallback(result: LiftSearchResult, start: StartEstimate | None) -> LiftSear
         return result
     return dataclasses.replace(
         result,
-        predicted_lift_force_n=start.predicted_lift_force_n,
+        predicted_lift_force_n=_recordable(start.predicted_lift_force_n),
         start_force_n=result.f_w_n,
         start_in_training_range=start.in_range,
         start_source=start.source,
@@ -517,7 +582,7 @@ def _start_columns(start: StartEstimate | None, start_force_n: float) -> dict[st
         return {}
     return {
         **({"protocol": "seeded"} if start.in_range else {}),
-        "predicted_lift_force_n": start.predicted_lift_force_n,
+        "predicted_lift_force_n": _recordable(start.predicted_lift_force_n),
         "start_force_n": start_force_n,
         "start_in_training_range": start.in_range,
         "start_source": start.source,
@@ -545,15 +610,55 @@ class _ObjectSearch:
     def __call__(
         self, job: tuple[CatalogObject, StartEstimate | None]
     ) -> tuple[LiftSearchResult, str | None, bool]:
+        return self.run(job)
+
+    def run(
+        self,
+        job: tuple[CatalogObject, StartEstimate | None],
+        on_attempt: Callable[[LiftAttempt], None] | None = None,
+    ) -> tuple[LiftSearchResult, str | None, bool]:
+        """The search; ``on_attempt`` gets every attempt as its answer arrives."""
         obj, start = job
+        runner = self.factory.make(obj)
+        if on_attempt is not None:
+            runner = _Reporting(runner, obj.object_id, on_attempt)
         try:
             result = _search(
-                self.factory.make(obj), obj, start, self.margin, self.protocol, self.growth,
+                runner, obj, start, self.margin, self.protocol, self.growth,
                 self.tolerance_rel, self.max_attempts,
             )  # fmt: skip
+        except _RecordingFailed as failed:  # not the runner's failure: the run stops
+            raise failed.error from None
         except SearchAbortedError as err:
             return _fallback(err.partial, start), str(err), True
         return result, (None if result.converged else result.message), False
+
+
+class _RecordingFailed(Exception):
+    """Recording an attempt failed (not a runner failure, which the search would keep going
+    from): carries the error past the search to the caller."""
+
+    def __init__(self, error: DeformctlError) -> None:
+        self.error = error
+        super().__init__(str(error))
+
+
+@dataclass(frozen=True)
+class _Reporting:
+    """A runner that hands every outcome to ``on_attempt`` before the search sees it."""
+
+    runner: TrialRunner
+    object_id: str
+    on_attempt: Callable[[LiftAttempt], None]
+
+    def __call__(self, grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
+        outcome = self.runner(grip_force_n, attempt_index)
+        if isinstance(outcome, TrialOutcome):  # anything else: the search refuses it
+            try:
+                self.on_attempt(LiftAttempt(self.object_id, attempt_index, outcome))
+            except DeformctlError as err:
+                raise _RecordingFailed(err) from err
+        return outcome
 
 
 def _search(
@@ -579,6 +684,7 @@ def _search(
             max_attempts=max_attempts,
             object_id=obj.object_id,
             source=start.source,
+            max_force_n=float(obj[CEILING_COLUMN]),
         )
     result = find_min_lift_force(
         runner,
@@ -589,5 +695,55 @@ def _search(
         tolerance_rel=tolerance_rel,
         max_attempts=max_attempts,
         object_id=obj.object_id,
+        max_force_n=float(obj.get(CEILING_COLUMN, math.inf)),
     )
     return _fallback(result, start)
+
+
+def _ceilings(
+    objects: Sequence[CatalogObject],
+    f_w: Sequence[float],
+    max_force_n: float | None,
+    seed: StartSeed | None,
+    path: str | None,
+) -> dict[str, ForceCeiling]:
+    """Each object's force ceiling (:func:`~deformctl.lift.ceiling.force_ceiling`)."""
+    coefficients: dict[str, Mapping[str, Any]] = {}
+    if seed is not None and seed.coefficients is not None:
+        coefficients = {str(r["object_id"]): r for r in seed.coefficients.to_dict("records")}
+    return {
+        obj.object_id: force_ceiling(
+            obj.object_id,
+            f_w_n,
+            row=obj.row,
+            max_force_n=max_force_n,
+            coefficients=coefficients.get(obj.object_id),
+            path=path,
+        )
+        for obj, f_w_n in zip(objects, f_w, strict=True)
+    }
+
+
+def _clamp_warning(
+    object_id: str,
+    f_w_n: float,
+    start: StartEstimate | None,
+    seed: StartSeed | None,
+    ceilings: Mapping[str, ForceCeiling],
+) -> str | None:
+    """The warning of a seeded start (or an F_w) above the object's ceiling, else None."""
+    ceiling = ceilings[object_id]
+    if f_w_n > ceiling.max_force_n:
+        return (
+            f"object {object_id!r}: F_w = {f_w_n:.6g} N is above its {ceiling.describe()}: "
+            "no safe grip, not lifted"
+        )
+    if start is None or seed is None or not start.in_range:
+        return None
+    wanted = max(f_w_n, start.predicted_lift_force_n * seed.margin)
+    if wanted <= ceiling.max_force_n:
+        return None
+    return (
+        f"object {object_id!r}: the {start.source}'s start {wanted:.6g} N is above its "
+        f"{ceiling.describe()}: clamped to the ceiling"
+    )

@@ -59,7 +59,13 @@ from deformctl.measure.segment import (
     _to_squeezes,
 )
 from deformctl.plausibility import (
+    DOUBTFUL_PEAK_FORCE_N,
+    MAX_COMPRESSION_M,
     MAX_PEAK_FORCE_N,
+    MAX_RATE_HZ,
+    MIN_PEAK_COMPRESSION_M,
+    MIN_PEAK_FORCE_N,
+    MIN_UNSTATED_RATE_HZ,
     check_peak_compression,
     check_peak_force,
     check_sample_rate,
@@ -67,6 +73,7 @@ from deformctl.plausibility import (
     compression_target_m,
     rate_ok,
     suggest_unit,
+    unit_doubts,
 )
 from deformctl.series import FloatArray, SqueezeSeries
 from deformctl.units import GIB, NS_PER_S, UNITS
@@ -290,8 +297,9 @@ def _read(
         found = lag_defect(lag, float(np.median(np.diff(time_s))))
         if found is not None:
             defects.append(found)
-    warnings.extend(d.text for d in defects)
     rate_hz = _rate_hz(time_s)
+    defects += _unit_doubts(rate_hz, force_n, compression_m, roles, pos_role)
+    warnings.extend(d.text for d in defects)
     absolute = float(time_s[0]) >= ABSOLUTE_TIME_MIN_S
     squeezes, ruptures = _to_squeezes(
         time_s - time_s[0],
@@ -408,6 +416,46 @@ def _check_time_and_force(
     )
     what = f"column {f_role.name!r}"
     check_peak_force(peak_n, what=what, path=where, hint=_unit_hint(f_role, unit, what))
+
+
+def _unit_doubts(
+    rate_hz: float,
+    force_n: FloatArray,
+    compression_m: FloatArray,
+    roles: Mapping[str, ColumnRole],
+    pos_role: str,
+) -> list[Defect]:
+    """The two-sided plausibility flags (:func:`deformctl.plausibility.unit_doubts`), each
+    line naming the column and the unit that would make its values plausible."""
+    scale = {"time": roles["time"], "force": roles["force"], "length": roles[pos_role]}
+    targets = {"time": (lambda dt: 1.0 / dt, 1000.0), "force": (lambda f: f, 10.0),
+               "length": (lambda m: m, compression_target_m(None))}  # fmt: skip
+    oks = {
+        "time": lambda hz: MIN_UNSTATED_RATE_HZ <= hz <= MAX_RATE_HZ,
+        "force": lambda f: MIN_PEAK_FORCE_N <= f <= DOUBTFUL_PEAK_FORCE_N,
+        "length": lambda m: MIN_PEAK_COMPRESSION_M <= m <= MAX_COMPRESSION_M,
+    }
+
+    def suggest(kind: str, value: float) -> str | None:
+        to_value, target = targets[kind]
+        unit = suggest_unit(
+            value / scale[kind].unit.si, SUGGESTED_UNITS[kind], to_value=to_value,
+            ok=oks[kind], target=target,
+        )  # fmt: skip
+        return None if unit == scale[kind].unit.name else unit
+
+    doubts = unit_doubts(
+        rate_hz=rate_hz,
+        time_unit_stated=roles["time"].unit_from != "default",
+        peak_force_n=float(np.max(np.abs(force_n))),
+        peak_compression_m=float(np.max(compression_m)),
+        suggest=suggest,
+    )
+    column = {"time_unit_doubtful": "time", "force_unit_doubtful": "force"}
+    return [
+        Defect(flag, f"column {roles[column.get(flag, pos_role)].name!r}: {line}", numbers)
+        for flag, line, numbers in doubts
+    ]
 
 
 def _check_compression(

@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from deformctl.plausibility import DOUBT_FLAGS
 from deformctl.series import FloatArray
 from deformctl.signals import sg_smooth, sg_window_length
 
@@ -43,7 +44,8 @@ LOGGING_GAP = "logging_gap"
 COARSE_FORCE = "coarse_force"
 FORCE_LAG = "force_lag"
 #: Every recording flag, in the order ``quality`` lists them.
-RECORDING_FLAGS: tuple[str, ...] = (LOGGING_GAP, COARSE_FORCE, FORCE_LAG)
+#: The two-sided plausibility flags (:data:`deformctl.plausibility.DOUBT_FLAGS`) come last.
+RECORDING_FLAGS: tuple[str, ...] = (LOGGING_GAP, COARSE_FORCE, FORCE_LAG, *DOUBT_FLAGS)
 
 #: ``logging_gap``: an interval longer than this many median intervals.
 GAP_INTERVALS = 5.0

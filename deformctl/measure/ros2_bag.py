@@ -22,14 +22,17 @@ from __future__ import annotations
 
 import contextlib
 import io
-from collections.abc import Mapping, Sequence
+import struct
+from collections.abc import Iterator, Mapping, Sequence
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
+import zstandard
 
 from deformctl.artifacts.io import note_input
+from deformctl.artifacts.mcap.integrity import complete_prefix, locate_damage, tail_problem
 from deformctl.characterize.rupture import Phase
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.measure.recording import (
@@ -143,7 +146,13 @@ def _decode(decode: Any, data: bytes, index: int, where: str, path: Path) -> Any
 
 
 def _read_topics(
-    path: Path, roles: Mapping[str, tuple[str, ...]], joint: str | None, axis: Axis
+    path: Path,
+    roles: Mapping[str, tuple[str, ...]],
+    joint: str | None,
+    axis: Axis,
+    *,
+    crc_check: bool = True,
+    notes: list[str] | None = None,
 ) -> dict[str, tuple[list[int], list[Any]]]:
     """Read ``(stamp_ns list, value list)`` per topic: the force vector, position.axis or joint.
 
@@ -151,29 +160,30 @@ def _read_topics(
     the fields the reader needs (:data:`_REQUIRED_FIELDS`) before use; a mismatch names the
     topic, the type and the field (exit 65).
 
+    Integrity (:mod:`deformctl.artifacts.mcap.integrity`): the footer and the summary CRC are
+    checked first, every chunk read is checked against its CRC by the mcap reader; a damaged or
+    cut file is refused naming the byte offset of the damage. ``crc_check=False``
+    (``--no-crc-check``) reads chunks whatever their CRC and reads a cut file up to its last
+    complete record, with a line in ``notes``.
+
     Args:
         path: the bag.
         roles: topic → the message types accepted on it.
         joint: JointState joint name.
         axis: squeeze axis.
+        crc_check: check CRCs (see above).
+        notes: receives a warning line for a cut file read without CRC checks.
     """
     from mcap.exceptions import McapError
-    from mcap.reader import make_reader
-    from mcap_ros2.decoder import DecoderFactory
 
     topics = list(roles)
     out: dict[str, tuple[list[int], list[Any]]] = {t: ([], []) for t in topics}
+    size = path.stat().st_size
     with path.open("rb") as fh:
-        try:
-            reader = make_reader(fh)
-            summary = reader.get_summary()
-        except (McapError, ValueError, OSError) as err:
-            raise InputDataError(f"not a readable MCAP file ({err})", path=path) from err
-        if summary is None:
-            raise InputDataError("MCAP file has no summary (unindexed bag)", path=path)
+        bag = _open_bag(fh, size, path, crc_check, notes)
         types: dict[str, str] = {}
-        for ch in summary.channels.values():
-            schema = summary.schemas.get(ch.schema_id)
+        for ch in bag.channels.values():
+            schema = bag.schemas.get(ch.schema_id)
             types[ch.topic] = schema.name if schema is not None else ""
         available = ", ".join(sorted(types)) or "none"
         for topic in topics:
@@ -191,11 +201,13 @@ def _read_topics(
                 )
             if want == JOINT_STATE_TYPE and joint is None:
                 raise UsageError(f"topic {topic!r} is {JOINT_STATE_TYPE}: pass a joint name")
+        from mcap_ros2.decoder import DecoderFactory
+
         factory = DecoderFactory()
         decoders: dict[int, Any] = {}
         counts = dict.fromkeys(topics, 0)
         try:
-            for schema, channel, message in reader.iter_messages(topics=topics):
+            for schema, channel, message in bag.messages(topics):
                 where = f"topic {channel.topic!r} ({types[channel.topic]})"
                 if channel.id not in decoders:
                     decoders[channel.id] = _decoder(factory, schema, channel, where, path)
@@ -205,9 +217,122 @@ def _read_topics(
                 stamps, values = out[channel.topic]
                 stamps.append(_stamp_ns(msg, where, path))
                 values.append(_extract(msg, types[channel.topic], axis, joint, where, path))
-        except McapError as err:
-            raise InputDataError(f"cannot decode bag ({err})", path=path) from err
+        except (McapError, ValueError, EOFError, OSError, zstandard.ZstdError) as err:
+            raise _damage_error(fh, size, path, crc_check, err) from None
     return out
+
+
+class _Bag:
+    """The channels, schemas and messages of a bag, from its summary or (cut file) its records."""
+
+    def __init__(self, channels: dict[int, Any], schemas: dict[int, Any], reader: Any) -> None:
+        self.channels = channels
+        self.schemas = schemas
+        self._reader = reader  # an mcap reader, or the list of (schema, channel, message)
+
+    def messages(self, topics: Sequence[str]) -> Iterator[tuple[Any, Any, Any]]:
+        """(schema, channel, message) of ``topics``, in log-time order."""
+        if isinstance(self._reader, list):
+            wanted = set(topics)
+            chosen = [m for m in self._reader if m[1].topic in wanted]
+            yield from sorted(chosen, key=lambda m: m[2].log_time)  # stable, as the reader's
+            return
+        yield from self._reader.iter_messages(topics=topics)
+
+
+def _open_bag(
+    fh: BinaryIO, size: int, path: Path, crc_check: bool, notes: list[str] | None
+) -> _Bag:
+    """The bag's index; a damaged footer or summary refused naming the offset (module doc)."""
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+
+    try:
+        problem = tail_problem(fh, size, check_crcs=crc_check)
+    except (struct.error, OSError) as err:
+        problem = f"unreadable end of file ({err})"
+    if problem is not None:
+        detail = locate_damage(fh, size, check_crcs=crc_check) or problem
+        if crc_check or not detail.startswith("the file ends at byte"):
+            raise InputDataError(_damage_text(detail, crc_check), path=path)
+        return _cut_bag(fh, size, path, detail, notes)
+    fh.seek(0)
+    try:
+        reader = make_reader(fh, validate_crcs=crc_check)
+        summary = reader.get_summary()
+    except (McapError, ValueError, OSError, struct.error, EOFError) as err:
+        raise _damage_error(fh, size, path, crc_check, err) from None
+    if summary is None:
+        raise InputDataError("MCAP file has no summary (unindexed bag)", path=path)
+    return _Bag(dict(summary.channels), dict(summary.schemas), reader)
+
+
+def _cut_bag(fh: BinaryIO, size: int, path: Path, detail: str, notes: list[str] | None) -> _Bag:
+    """``--no-crc-check`` on a cut bag: every record before the cut, read in file order."""
+    from mcap.records import Channel, Message, Schema
+    from mcap.stream_reader import StreamReader
+
+    prefix = complete_prefix(fh, size)
+    fh.seek(0)
+    data = fh.read(prefix)
+    channels: dict[int, Any] = {}
+    schemas: dict[int, Any] = {}
+    found: list[tuple[Any, Any, Any]] = []
+    try:
+        for record in StreamReader(io.BytesIO(data), validate_crcs=False).records:
+            if isinstance(record, Schema):
+                schemas[record.id] = record
+            elif isinstance(record, Channel):
+                channels[record.id] = record
+            elif isinstance(record, Message) and record.channel_id in channels:
+                channel = channels[record.channel_id]
+                found.append((schemas.get(channel.schema_id), channel, record))
+    except Exception as err:  # the end of the complete records, or a corrupt chunk in them
+        from mcap.exceptions import EndOfFile
+
+        if not isinstance(err, EndOfFile):
+            more = locate_damage(io.BytesIO(data), len(data), check_crcs=False)
+            raise InputDataError(_damage_text(more or _short(err), False), path=path) from None
+    if not found:
+        raise InputDataError(
+            _damage_text(detail, False) + ": no complete chunk of messages before it", path=path
+        )
+    if notes is not None:
+        notes.append(
+            f"{path}: truncated bag read without CRC checks (--no-crc-check): {detail}; "
+            f"read the {len(found)} messages before byte {prefix}"
+        )
+    return _Bag(channels, schemas, found)
+
+
+def _damage_text(detail: str, crc_check: bool) -> str:
+    """The one line of a damaged bag: what and where, and the way out when there is one."""
+    if detail.startswith("not an MCAP file"):
+        return "not a readable MCAP file (bad magic bytes)"
+    cut = detail.startswith("the file ends at byte")
+    what = "truncated MCAP file" if cut else "damaged MCAP file"
+    hint = ""
+    if crc_check and (cut or "CRC mismatch" in detail):
+        hint = " (--no-crc-check reads it anyway, at your risk)"
+    return f"{what}: {detail}{hint}"
+
+
+def _damage_error(
+    fh: BinaryIO, size: int, path: Path, crc_check: bool, err: BaseException
+) -> InputDataError:
+    """A read that failed: the damage located when the walk finds it, else the reader's words."""
+    try:
+        detail = locate_damage(fh, size, check_crcs=crc_check)
+    except (OSError, struct.error):
+        detail = None
+    if detail is not None:
+        return InputDataError(_damage_text(detail, crc_check), path=path)
+    return InputDataError(f"not a readable MCAP file ({_short(err)})", path=path)
+
+
+def _short(err: BaseException) -> str:
+    text = " ".join(str(err).split()) or type(err).__name__
+    return text if len(text) <= 160 else text[:157] + "..."
 
 
 def _extract(
@@ -259,6 +384,7 @@ def read_ros2_bag(
     phase: Phase = "all",
     position_increases_when: IncreasesWhen | None = None,
     size_x_cm: float | None = None,
+    crc_check: bool = True,
 ) -> Recording:
     """Read the squeezes of one object from a ROS 2 MCAP bag (``ros2msg`` schemas, ``cdr``).
 
@@ -284,6 +410,9 @@ def read_ros2_bag(
             position grows; None: a gap grows when opening, one palm's sign is automatic.
         size_x_cm: the object's size along the squeeze axis, when known (a compression larger
             than it is refused).
+        crc_check: check the summary CRC and every chunk's CRC (a damaged or cut bag is
+            refused naming the byte offset); False (``--no-crc-check``) reads a damaged bag
+            anyway, and a cut one up to its last complete record (``notes`` say so).
 
     Returns:
         The squeezes (time in s from each squeeze's first sample, on the (first) wrench
@@ -314,7 +443,13 @@ def read_ros2_bag(
         raise UsageError(f"topic {position_topic!r} given as both wrench and position topic")
     roles: dict[str, tuple[str, ...]] = dict.fromkeys(wrench_topics, (WRENCH_TYPE,))
     roles[position_topic] = (POSE_TYPE, JOINT_STATE_TYPE)
-    data = _read_topics(p, roles, joint, axis)
+    notes: list[str] = []
+    if not crc_check:
+        notes.append(
+            f"{p}: chunk CRCs not checked (--no-crc-check): a damaged chunk can change samples "
+            "without an error"
+        )
+    data = _read_topics(p, roles, joint, axis, crc_check=crc_check, notes=notes)
     where = str(p)
 
     streams: list[tuple[FloatArray, FloatArray]] = []
@@ -401,6 +536,7 @@ def read_ros2_bag(
         source="ros2_bag",
         phase=phase,
         ruptures=tuple(ruptures),
+        warnings=tuple(notes),
     )
 
 

@@ -34,7 +34,10 @@ def setup(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     d = tmp_path_factory.mktemp("grip")
     index = grip_index(150, seed=8, noise=0.01)
     write_table(index, d / "index.parquet", "index_table", provenance=None)
-    single = index.assign(friction_mu=0.5, f_w_n=index["weight_n"])
+    ratio = index["lift_force_n"] / index["f_w_n"]  # kept: an L_f below F_w is refused
+    single = index.assign(
+        friction_mu=0.5, f_w_n=index["weight_n"], lift_force_n=ratio * index["weight_n"]
+    )
     write_table(single, d / "single.parquet", "index_table", provenance=None)
     args = ["--train-size", "80", "--calibration-size", "40", "--seed", "0"]
     result = runner.invoke(

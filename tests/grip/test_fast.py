@@ -32,7 +32,10 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     table = grip_index(140, seed=5, noise=0.01)
     grip = train_model(table, train_size=90, calibration_size=30, seed=1, restarts=1)
     save_model(out / "grip.skops", grip.model, metadata=model_metadata(grip))
-    single = table.assign(friction_mu=0.5, f_w_n=table["weight_n"])
+    ratio = table["lift_force_n"] / table["f_w_n"]  # kept: an L_f below F_w is refused
+    single = table.assign(
+        friction_mu=0.5, f_w_n=table["weight_n"], lift_force_n=ratio * table["weight_n"]
+    )
     paper = train_model(single, train_size=90, seed=1, restarts=1)
     save_model(out / "paper.skops", paper.model, metadata=model_metadata(paper))
     return {"grip": out / "grip.skops", "paper": out / "paper.skops"}

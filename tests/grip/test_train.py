@@ -117,7 +117,10 @@ def test_too_few_rows_for_train_calibration_and_test(table: pd.DataFrame) -> Non
 
 
 def test_the_paper_form_records_its_single_mu(table: pd.DataFrame) -> None:
-    single = table.assign(friction_mu=0.5, f_w_n=table["weight_n"])
+    ratio = table["lift_force_n"] / table["f_w_n"]  # kept: an L_f below F_w is refused
+    single = table.assign(
+        friction_mu=0.5, f_w_n=table["weight_n"], lift_force_n=ratio * table["weight_n"]
+    )
     result = train_model(single, train_size=120, seed=0, restarts=1)
     assert result.metrics["form"] == "paper"
     assert result.metrics["training_friction_mu"] == 0.5

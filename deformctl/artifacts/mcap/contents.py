@@ -25,12 +25,12 @@ from mcap.stream_reader import StreamReader
 
 from deformctl import jsonsafe
 from deformctl.artifacts.io import PathArg, display_name
+from deformctl.artifacts.mcap.integrity import MCAP_MAGIC, locate_damage
 from deformctl.artifacts.provenance import Provenance
 from deformctl.artifacts.schema import load_json_schema, schema_version, validate_message
 from deformctl.errors import InputDataError, SchemaError
 from deformctl.units import NS_PER_S
 
-MCAP_MAGIC = b"\x89MCAP0\r\n"
 KIND_SQUEEZE = "squeeze_log"
 KIND_LIFT = "lift_log"
 MCAP_KINDS = (KIND_SQUEEZE, KIND_LIFT)
@@ -159,6 +159,31 @@ class McapContents:
                 return kind
         return None
 
+    def kind_from_topics(self) -> str | None:
+        """The kind the channels' topics make (whatever the ``deformctl`` record declares);
+        None without channels or for topics of no deformctl kind."""
+        found = {topic_schema(c.topic) for c in self.channels.values() if c.topic}
+        names = {f[0] if f else None for f in found}
+        for kind, kind_schemas in KIND_SCHEMAS.items():
+            if names and names <= set(kind_schemas):
+                return kind
+        return None
+
+    def check_declared_kind(self) -> None:
+        """Refuse a log whose declared kind its channels contradict (a relabelled log).
+
+        Raises:
+            InputDataError: one line naming both kinds and a topic (exit 65).
+        """
+        declared, found = self.kind, self.kind_from_topics()
+        if declared in MCAP_KINDS and found is not None and found != declared:
+            topic = sorted(c.topic for c in self.channels.values() if c.topic)[0]
+            raise InputDataError(
+                f"declares kind {declared!r} but its channels are a {found}'s ({topic!r}): "
+                "the content does not match the label",
+                path=self.path,
+            )
+
     def message_counts(self) -> dict[str, int]:
         """Topic → number of messages."""
         counts = {c.topic: 0 for c in self.channels.values()}
@@ -186,27 +211,37 @@ def _verify_integrity(data: bytes, name: str) -> bool:
         raise InputDataError("not an MCAP file (bad magic bytes)", path=name)
     min_len = 2 * len(MCAP_MAGIC) + _FOOTER_LEN + _DATA_END_LEN
     if len(data) < min_len or data[-len(MCAP_MAGIC) :] != MCAP_MAGIC:
-        raise InputDataError("truncated or damaged MCAP file (no closing magic)", path=name)
+        raise _damaged(data, name, "truncated or damaged MCAP file (no closing magic)")
     footer_start = len(data) - len(MCAP_MAGIC) - _FOOTER_LEN
     opcode, length, summary_start, _summary_offset_start, summary_crc = struct.unpack_from(
         "<BQQQI", data, footer_start
     )
     if opcode != Opcode.FOOTER or length != 20:
-        raise InputDataError("damaged MCAP file (bad footer record)", path=name)
+        raise _damaged(data, name, "damaged MCAP file (bad footer record)")
     data_end_stop = summary_start if summary_start else footer_start
     data_end_start = data_end_stop - _DATA_END_LEN
     if data_end_start < len(MCAP_MAGIC) or data_end_stop > footer_start:
-        raise InputDataError("damaged MCAP file (bad summary offset)", path=name)
+        raise _damaged(data, name, "damaged MCAP file (bad summary offset)")
     de_opcode, de_length, data_crc = struct.unpack_from("<BQI", data, data_end_start)
     if de_opcode != Opcode.DATA_END or de_length != 4:
-        raise InputDataError("damaged MCAP file (no data end record)", path=name)
+        raise _damaged(data, name, "damaged MCAP file (no data end record)")
     if data_crc != 0 and zlib.crc32(data[:data_end_start]) != data_crc:
-        raise InputDataError("damaged MCAP file (data section CRC mismatch)", path=name)
+        raise _damaged(data, name, "damaged MCAP file (data section CRC mismatch)")
     if summary_crc != 0:
         covered = data[(summary_start or footer_start) : footer_start + _FOOTER_LEN - 4]
         if zlib.crc32(covered) != summary_crc:
-            raise InputDataError("damaged MCAP file (summary CRC mismatch)", path=name)
+            raise _damaged(data, name, "damaged MCAP file (summary CRC mismatch)")
     return data_crc != 0 and summary_crc != 0
+
+
+def _damaged(data: bytes, name: str, what: str) -> InputDataError:
+    """The one line of a damaged log: what failed, and where the walk of
+    :func:`~deformctl.artifacts.mcap.integrity.locate_damage` finds the first damage."""
+    try:
+        where = locate_damage(io.BytesIO(data), len(data))
+    except (OSError, struct.error):
+        where = None
+    return InputDataError(what if where is None else f"{what}: {where}", path=name)
 
 
 def _short(err: BaseException) -> str:
@@ -235,7 +270,7 @@ def load_mcap(data: bytes, path: PathArg) -> McapContents:
             else:
                 _keep(record, contents)
     except _DECODE_ERRORS as err:
-        raise InputDataError(f"damaged MCAP file ({_short(err)})", path=name) from None
+        raise _damaged(data, name, f"damaged MCAP file ({_short(err)})") from None
     for msg in contents.messages:
         if msg.channel_id not in contents.channels:
             raise InputDataError(f"message on unknown channel {msg.channel_id}", path=name)

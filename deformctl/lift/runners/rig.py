@@ -20,6 +20,8 @@ Request (stdin, one JSON object, UTF-8, followed by a newline; then stdin is clo
 * ``grip_force_n`` (number > 0, N): the normal force each palm must apply during the lift.
 * ``weight_n`` (number > 0, N) and ``friction_mu`` (number > 0): the object's catalog values.
 * ``size_cm`` ([x, y, z] numbers, cm): the object's size, present only when the catalog knows it.
+* ``max_force_n`` (number > 0, N): the object's force ceiling (``lift`` always sends one); no
+  request asks for more, and a driver may refuse a ``grip_force_n`` above it.
 
 The rig grips the object with ``grip_force_n``, lifts it (the paper: by half its height), checks
 for slip and answers.
@@ -253,6 +255,13 @@ class RigRunner:
                     f"object {object_id!r}: size_cm must be three numbers > 0, got {size!r}"
                 )
             fields["size_cm"] = [float(v) for v in size]
+        ceiling = obj.get("max_force_n")
+        if ceiling is not None and not (isinstance(ceiling, float) and math.isnan(ceiling)):
+            if not _is_positive(ceiling):
+                raise UsageError(
+                    f"object {object_id!r}: max_force_n must be a number > 0, got {ceiling!r}"
+                )
+            fields["max_force_n"] = float(ceiling)
         return object_id, fields
 
     def request(self, grip_force_n: float, attempt_index: int) -> dict[str, Any]:
@@ -266,6 +275,8 @@ class RigRunner:
         }
         if "size_cm" in self._object_fields:
             req["size_cm"] = list(self._object_fields["size_cm"])
+        if "max_force_n" in self._object_fields:
+            req["max_force_n"] = self._object_fields["max_force_n"]
         return req
 
     def __call__(self, grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
@@ -275,6 +286,9 @@ class RigRunner:
             RigAttemptError: the command could not start, failed, timed out or answered badly.
         """
         where = (attempt_index, grip_force_n)
+        ceiling = self._object_fields.get("max_force_n", math.inf)
+        if not grip_force_n <= ceiling:  # the search never asks: refuse rather than send it
+            raise self._error(where, f"grip force above the force ceiling {ceiling:.6g} N")
         payload = json.dumps(self.request(grip_force_n, attempt_index)) + "\n"
         started_ns = time.time_ns()  # the lift log places the attempt on the wall clock
         stdout = self._run(payload, where)
@@ -379,13 +393,17 @@ class RigRunner:
 
 
 def rig_object(obj: CatalogObject) -> dict[str, Any]:
-    """The object description a :class:`RigRunner` sends: id, W, mu and size (cm)."""
-    return {
+    """The object description a :class:`RigRunner` sends: id, W, mu, size (cm) and, when the
+    lift gave the object one, its force ceiling ``max_force_n`` (N)."""
+    described: dict[str, Any] = {
         "object_id": obj.object_id,
         "weight_n": obj.weight_n,
         "friction_mu": obj.friction_mu,
         "size_cm": list(obj.size_cm),
     }
+    if obj.get("max_force_n") is not None:
+        described["max_force_n"] = obj.get("max_force_n")
+    return described
 
 
 def rig_runner_factory(
@@ -457,4 +475,5 @@ def rig_runner_factory(
         row_fields=row_fields,
         stop_on_failure=True,
         settings=settings,
+        journal=True,  # every attempt costs a grip on a real robot: keep them as they happen
     )

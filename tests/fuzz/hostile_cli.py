@@ -1,0 +1,279 @@
+"""``make fuzz``: seeded hostile inputs through the CLI, and the fraction handled cleanly.
+
+Issue 34 point 8. Good artifacts are written once (a catalog, a squeeze log, a ROS 2 bag, the
+coefficients / lift-results / index tables, the bundled grip model), then each case damages one
+of them the way a disk, a cable, a recorder or a user does (a flipped bit, a cut, zeroed bytes,
+a value replaced by 1e308, -20, 0, NaN, text or nothing, a column scaled by 10^3, a short row)
+and runs the command that reads it, in process (typer's runner). A case is **clean** when:
+
+* the command exits 0, 1, 2, 65 or 66 without an exception other than ``SystemExit``;
+* a failure prints exactly one ``error:`` line (warnings may precede it), no traceback, and
+  leaves no output file behind (``lift`` keeps its attempts: exit 1 only);
+* a success prints no force that is not a force: an interpolated or predicted L_f is finite and
+  > 0, and one outside [F_w, 10 F_w] carries ``prediction_implausible``.
+
+Usage: ``python -m tests.fuzz.hostile_cli --cases 600 --seed 0`` (``make fuzz``); it prints the
+clean fraction and every unclean case, and exits 1 when one is unclean.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import math
+import shutil
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+REPO = Path(__file__).resolve().parents[2]
+KINDS = ("catalog", "squeeze_log", "bag", "tables", "index", "model")
+VALUES = ("1e308", "-20", "0", "nan", "inf", "-1e-300", "abc", "")
+
+
+@dataclass
+class Case:
+    name: str
+    argv: list[str]
+    output: Path | None
+    check: Callable[[str], str | None] | None = None  # stdout -> problem, for exit 0
+
+
+def _write_base(root: Path) -> dict[str, Path]:
+    """The good artifacts every case starts from."""
+    sys.path.insert(0, str(REPO / "tests"))
+    from test_measure_ingest import write_bag
+
+    from deformctl.artifacts import write_table
+    from deformctl.artifacts.mcap import write_squeeze_log
+    from deformctl.measure.recording import SqueezeSeries
+    from deformctl.table import build_index_table
+
+    base = {"catalog": root / "objects.csv"}
+    shutil.copy(REPO / "datasets/paper/objects.csv", base["catalog"])
+    t = np.linspace(0.0, 2.0, 400)
+    comp = 0.004 * np.sin(np.pi * t / 2.0) ** 2
+    force = 3000.0 * comp + 60.0 * np.gradient(comp, t)
+    series = [SqueezeSeries("A", i, t, force, comp) for i in range(2)]
+    base["squeeze_log"] = root / "squeeze.mcap"
+    obj = {"object_id": "A", "size_x_cm": 10.0, "size_y_cm": 10.0, "size_z_cm": 10.0,
+           "weight_n": 2.0, "friction_mu": 0.5}  # fmt: skip
+    write_squeeze_log(base["squeeze_log"], [obj], series, provenance=None)
+    base["bag"] = root / "bag.mcap"
+    write_bag(base["bag"], 30.0, 6.0, seed=1, force_rate_hz=200.0, n_squeezes=2)
+    cat = pd.read_csv(base["catalog"])
+    ids = cat["object_id"].astype(str)
+    w, mu = cat["weight_n"].to_numpy(float), cat["friction_mu"].to_numpy(float)
+    coef = pd.DataFrame({"object_id": ids, "deformability_n_per_cm": cat.iloc[:, 8],
+                         "damping_ns_per_cm": cat.iloc[:, 9], "quality": "ok"})  # fmt: skip
+    f_w = w / (2 * mu)
+    lift = pd.DataFrame({"object_id": ids, "weight_n": w, "friction_mu": mu, "f_w_n": f_w,
+                         "lift_force_n": 1.4 * f_w, "f_d_n": 0.4 * f_w, "attempts": 6,
+                         "converged": True, "protocol": "refine"})  # fmt: skip
+    base["coefficients"], base["lift"] = root / "coef.parquet", root / "lift.parquet"
+    write_table(coef, base["coefficients"], "coefficients", provenance=None)
+    write_table(lift, base["lift"], "lift_results", provenance=None)
+    base["index"] = root / "index.parquet"
+    write_table(build_index_table(coef, lift), base["index"], "index_table", provenance=None)
+    base["model"] = root / "grip.skops"
+    from deformctl.grip.fast import resolve_model_path
+
+    shutil.copy(resolve_model_path("grip"), base["model"])
+    return base
+
+
+def _bytes_damage(data: bytes, rng: np.random.Generator) -> tuple[str, bytes]:
+    how = rng.integers(4)
+    at = int(rng.integers(max(len(data), 1)))
+    if how == 0:
+        out = bytearray(data)
+        out[at] ^= 1 << int(rng.integers(8))
+        return f"bit flip at {at}", bytes(out)
+    if how == 1:
+        return f"cut at {at}", data[:at]
+    if how == 2:
+        out = bytearray(data)
+        out[at : at + 16] = bytes(min(16, len(data) - at))
+        return f"16 zero bytes at {at}", bytes(out)
+    return "junk appended", data + bytes(rng.integers(0, 256, 64, dtype=np.uint8))
+
+
+def _frame_damage(df: pd.DataFrame, rng: np.random.Generator) -> tuple[str, pd.DataFrame]:
+    numeric = [c for c in df.columns if df[c].dtype.kind == "f"]
+    col = numeric[int(rng.integers(len(numeric)))]
+    row = int(rng.integers(len(df)))
+    out = df.copy()
+    if rng.random() < 0.3:
+        factor = float(rng.choice([1e3, 1e-3, -1.0]))
+        out[col] = out[col] * factor
+        return f"{col} x {factor:g}", out
+    value = float(rng.choice([1e308, -20.0, 0.0, math.nan, math.inf, -1e-300, 1e-300]))
+    out.loc[row, col] = value
+    return f"{col}[{row}] = {value!r}", out
+
+
+def _csv_damage(text: str, rng: np.random.Generator) -> tuple[str, str]:
+    lines = text.splitlines()
+    i = 1 + int(rng.integers(len(lines) - 1))
+    cells = lines[i].split(",")
+    if rng.random() < 0.25:
+        lines[i] = ",".join(cells[:-1])
+        return f"row {i} one field short", "\n".join(lines) + "\n"
+    j = int(rng.integers(len(cells)))
+    value = str(rng.choice(VALUES))
+    cells[j] = value
+    lines[i] = ",".join(cells)
+    return f"row {i} field {j} = {value!r}", "\n".join(lines) + "\n"
+
+
+def _lift_force_ok(low_n: float, high_n: float) -> Callable[[str], str | None]:
+    """A lookup's check: the interpolated L_f is finite and within the good table's
+    [min F_w, 10 x max F_w] (a blend of entries cannot leave it)."""
+
+    def check(stdout: str) -> str | None:
+        for line in stdout.splitlines():
+            if line.startswith("interpolated lift_force_n:"):
+                value = float(line.split(":")[1].split()[0])
+                if not (math.isfinite(value) and low_n <= value <= high_n):
+                    return f"printed L_f {value} outside [{low_n:g}, {high_n:g}] N"
+        return None
+
+    return check
+
+
+def _prediction_ok(stdout: str) -> str | None:
+    table = pd.read_csv(io.StringIO(stdout))
+    lift = table["predicted_lift_force_n"].to_numpy(float)
+    if not np.all(np.isfinite(lift) & (lift > 0)):
+        return f"printed L_f {lift.tolist()}"
+    if "f_w_n" in table.columns:
+        f_w = table["f_w_n"].to_numpy(float)
+        odd = (lift < f_w * 0.995) | (lift > 10 * f_w)
+        flagged = table.get("prediction_implausible", pd.Series(False, index=table.index))
+        if np.any(odd & ~flagged.to_numpy(bool)):
+            return "implausible L_f without prediction_implausible"
+    return None
+
+
+def make_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Generator) -> Case:
+    kind = KINDS[i % len(KINDS)]
+    out = work / f"out{i}"
+    if kind == "catalog":
+        what, text = _csv_damage(base["catalog"].read_text(encoding="utf-8"), rng)
+        path = work / f"cat{i}.csv"
+        path.write_text(text, encoding="utf-8")
+        if rng.random() < 0.5:
+            return Case(f"catalog {what}: inspect", ["inspect", str(path)], None)
+        argv = ["predict", "grip", "--catalog", str(path), str(base["index"]), "-o", f"{out}.csv"]
+        return Case(f"catalog {what}: predict", argv, Path(f"{out}.csv"))
+    if kind in ("squeeze_log", "bag", "model"):
+        what, data = _bytes_damage(base[kind].read_bytes(), rng)
+        path = work / f"{kind}{i}{base[kind].suffix}"
+        path.write_bytes(data)
+        if kind == "squeeze_log":
+            argv = ["characterize", str(path), "-o", f"{out}.parquet"]
+            return Case(f"squeeze log {what}: characterize", argv, Path(f"{out}.parquet"))
+        if kind == "bag":
+            argv = ["measure", "--bag", str(path), "--wrench-topic", "/left/wrench",
+                    "--position-topic", "/left/palm_pose", "--object-id", "A",
+                    "--weight-n", "1", "-o", f"{out}.mcap"]  # fmt: skip
+            return Case(f"bag {what}: measure", argv, Path(f"{out}.mcap"))
+        argv = ["predict", str(path), "--weight-n", "2.9", "--deformability-n-per-cm", "30",
+                "--damping-ns-per-cm", "0.47", "--friction-mu", "0.5"]  # fmt: skip
+        return Case(f"model {what}: predict", argv, None, _prediction_ok)
+    if kind == "tables":
+        side = "coefficients" if rng.random() < 0.5 else "lift"
+        what, frame = _frame_damage(pd.read_parquet(base[side]), rng)
+        path = work / f"{side}{i}.parquet"
+        frame.to_parquet(path)  # a foreign writer: no provenance, any value
+        coef = path if side == "coefficients" else base["coefficients"]
+        lift = path if side == "lift" else base["lift"]
+        argv = ["table", str(coef), str(lift), "-o", f"{out}.parquet"]
+        return Case(f"{side} {what}: table", argv, Path(f"{out}.parquet"))
+    from deformctl.artifacts import write_table
+
+    what, frame = _frame_damage(pd.read_parquet(base["index"]), rng)
+    path = work / f"index{i}.parquet"
+    try:
+        write_table(frame, path, "index_table", provenance=None)
+    except Exception:  # the writer refuses it: a foreign writer does not
+        frame.to_parquet(path)
+    query = "weight_n=3,deformability_n_per_cm=30,damping_ns_per_cm=1"
+    argv = ["table", str(path), "--lookup", query, "--interpolate", "3"]
+    f_w = pd.read_parquet(base["index"])["f_w_n"]
+    check = _lift_force_ok(float(f_w.min()), 10.0 * float(f_w.max()))
+    return Case(f"index {what}: lookup", argv, None, check)
+
+
+def judge(case: Case, result: object) -> str | None:
+    """None when clean, else why not."""
+    code = result.exit_code  # type: ignore[attr-defined]
+    exc = result.exception  # type: ignore[attr-defined]
+    if exc is not None and not isinstance(exc, SystemExit):
+        return f"{type(exc).__name__}: {exc}"
+    if code not in (0, 1, 2, 65, 66):
+        return f"exit {code}"
+    err = result.stderr  # type: ignore[attr-defined]
+    if "Traceback" in err:
+        return "traceback"
+    if code != 0:
+        lines = [ln for ln in err.splitlines() if not ln.startswith("warning: ")]
+        if len(lines) != 1 or not lines[0].startswith("error: "):
+            return f"not one error line: {err[-300:]!r}"
+        if case.output is not None and case.output.exists() and code != 1:
+            return "output written on failure"
+        return None
+    if case.check is not None:
+        return case.check(result.stdout)  # type: ignore[attr-defined]
+    return None
+
+
+def run(cases: int, seed: int, codes: dict[int, int] | None = None) -> tuple[int, list[str]]:
+    from typer.testing import CliRunner
+
+    from deformctl.cli import app
+
+    runner = CliRunner()
+    rng = np.random.default_rng(seed)
+    unclean: list[str] = []
+    with tempfile.TemporaryDirectory(prefix="deformctl-fuzz-") as tmp:
+        root = Path(tmp)
+        base = _write_base(root)
+        for i in range(cases):
+            case = make_case(i, base, root, rng)
+            result = runner.invoke(app, case.argv)
+            if codes is not None:
+                codes[result.exit_code] = codes.get(result.exit_code, 0) + 1
+            problem = judge(case, result)
+            if problem is not None:
+                unclean.append(f"case {i} ({case.name}): {problem}")
+    return cases - len(unclean), unclean
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cases", type=int, default=600)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args(argv)
+    started = time.perf_counter()
+    codes: dict[int, int] = {}
+    clean, unclean = run(args.cases, args.seed, codes)
+    for line in unclean:
+        print(line)
+    seconds = time.perf_counter() - started
+    print(
+        f"fuzz: {clean}/{args.cases} clean ({100.0 * clean / args.cases:.1f} %), seed {args.seed}, "
+        f"{len(KINDS)} artifact kinds, {seconds:.0f} s; exit codes "
+        + ", ".join(f"{k}: {v}" for k, v in sorted(codes.items()))
+    )
+    return 0 if not unclean else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
