@@ -34,6 +34,7 @@ __all__ = [
     "INPUT_KINDS",
     "OBJECT_COLUMNS",
     "SAFE_FORCE_COLUMNS",
+    "assume_damping",
     "csv_text",
     "load_predictor",
     "output_columns",
@@ -66,15 +67,19 @@ def load_predictor(model: str) -> Predictor:
         return predictor
 
 
-def read_prediction_inputs(path: str, catalog: str | None) -> pd.DataFrame:
-    """:func:`prediction_inputs` of a coefficients / index / predictions table file.
+def read_prediction_inputs(
+    path: str, catalog: str | None, warnings: list[str] | None = None
+) -> pd.DataFrame:
+    """:func:`prediction_inputs` of a coefficients / index / predictions table file (``-``:
+    stdin, as from ``characterize - -o -``); lines about values the catalog overrides go to
+    ``warnings``.
 
     Raises:
         SchemaError: another kind of file, or a column missing (naming ``path``; 65).
         InputDataError: see :func:`prediction_inputs`.
     """
     from deformctl.artifacts import detect_kind, read_catalog, read_table
-    from deformctl.artifacts.io import is_stdio
+    from deformctl.artifacts.io import display_name, is_stdio
 
     kind = None if is_stdio(path) else detect_kind(path)
     if kind is not None and kind not in INPUT_KINDS:
@@ -89,9 +94,60 @@ def read_prediction_inputs(path: str, catalog: str | None) -> pd.DataFrame:
         )
     cat = None if catalog is None else read_catalog(catalog)
     try:
-        return prediction_inputs(table, cat)
+        return prediction_inputs(table, cat, warnings=warnings, catalog_name=str(catalog))
     except SchemaError as err:
         raise SchemaError(err.message, path=path) from None
+    except InputDataError as err:
+        if err.path is not None or catalog is not None:  # (a catalog's message names the ids)
+            raise
+        raise InputDataError(err.message, path=display_name(path)) from None
+
+
+#: λ values tried over the model's training range for an object whose λ is unknown.
+_DAMPING_GRID = 65
+
+
+def assume_damping(
+    predictor: Predictor, inputs: Mapping[str, Any], names: Sequence[str] | None = None
+) -> tuple[dict[str, Any], np.ndarray, list[str]]:
+    """Give every object whose λ is unknown (NaN: ``characterize`` cannot identify λ from a
+    test at one speed, ``damping_unidentifiable``) the λ of the model's training range at which
+    its predicted L_f is largest, so that its force and bound are the most conservative the model
+    gives for a λ in that range (in the grip model damping lowers L_f: that is λ = 0).
+
+    Returns:
+        The inputs with those λ filled in, ``[n]`` True where λ was assumed, and one warning
+        line per such object (no ``warning:`` prefix). Other inputs are returned unchanged.
+    """
+    lam = np.asarray(inputs["damping_ns_per_cm"], dtype=np.float64).reshape(-1)
+    unknown = np.isnan(lam)
+    if not unknown.any():
+        return dict(inputs), unknown, []
+    lo, hi = predictor.ranges.get("damping_ns_per_cm", (0.0, 0.0))
+    grid = np.linspace(float(lo), float(hi), _DAMPING_GRID)
+    filled = lam.copy()
+    lines = []
+    for i in np.flatnonzero(unknown):
+        row = {
+            k: np.full(grid.size, float(np.asarray(inputs[k], dtype=np.float64).reshape(-1)[i]))
+            for k in ("weight_n", "deformability_n_per_cm")
+        }
+        mu = inputs.get("friction_mu")
+        mu_row = None if mu is None else np.full(grid.size, float(np.asarray(mu)[i]))
+        try:
+            est = predictor.predict_many(
+                row["weight_n"], row["deformability_n_per_cm"], grid, mu_row
+            )
+        except InputDataError:  # another input is bad: predict_many names it below
+            continue
+        filled[i] = float(grid[int(np.argmax(est.lift_force_n))])
+        label = names[int(i)] if names is not None else f"row {i}"
+        lines.append(
+            f"{label}: damping_ns_per_cm unknown (λ was not identifiable); predicted at "
+            f"λ = {filled[i]:g} N·s/cm, the largest L_f over the model's λ range "
+            f"[{float(lo):g}, {float(hi):g}] (damping_assumed = true)"
+        )
+    return {**inputs, "damping_ns_per_cm": filled}, unknown, lines
 
 
 def predict_objects(
@@ -139,14 +195,19 @@ def predict_objects(
 
 
 def output_columns(
-    est: Estimates, inputs: Mapping[str, Any], *, object_ids: Sequence[str] | None = None
+    est: Estimates,
+    inputs: Mapping[str, Any],
+    *,
+    object_ids: Sequence[str] | None = None,
+    damping_assumed: Any = None,
 ) -> dict[str, Any]:
     """The predictions table's columns, in order (optional ones only when they say something):
     the inputs, ``friction_mu`` and ``f_w_n`` (when μ is an input), ``predicted_lift_force_n``,
     the bound's ``lift_force_upper_n``, ``coverage`` and ``bound_guaranteed`` (with a coverage),
-    ``max_safe_force_n`` and ``window_ok`` (with a safe force), ``outside_training_range``, and
+    ``max_safe_force_n`` and ``window_ok`` (with a safe force), ``outside_training_range``,
     ``prediction_implausible`` when a prediction is not a lifting force
-    (:mod:`deformctl.grip.sanity`)."""
+    (:mod:`deformctl.grip.sanity`) and ``damping_assumed`` (when some λ was unknown,
+    :func:`assume_damping`)."""
     cols: dict[str, Any] = {}
     if object_ids is not None:
         cols["object_id"] = list(object_ids)
@@ -166,6 +227,8 @@ def output_columns(
     cols["outside_training_range"] = est.outside_training_range
     if est.prediction_implausible is not None and est.prediction_implausible.any():
         cols["prediction_implausible"] = est.prediction_implausible
+    if damping_assumed is not None and np.any(damping_assumed):
+        cols["damping_assumed"] = np.asarray(damping_assumed, dtype=bool)
     return cols
 
 
@@ -195,9 +258,15 @@ SAFE_FORCE_COLUMNS: tuple[str, ...] = ("rupture_force_n", "yield_force_n")
 
 
 def _join_catalog_column(
-    frame: pd.DataFrame, catalog: pd.DataFrame, column: str, ids: pd.Series
+    frame: pd.DataFrame,
+    catalog: pd.DataFrame,
+    column: str,
+    ids: pd.Series,
+    warnings: list[str] | None,
+    catalog_name: str,
 ) -> np.ndarray:
-    """``column`` of the catalog row of each id; must agree (relative 1e-6) with the table's."""
+    """``column`` of the catalog row of each id: the catalog wins over the table's value, and a
+    value that differs (relative 1e-6) is one line in ``warnings`` naming the objects."""
     import pandas as pd
 
     from deformctl.table import format_ids
@@ -210,28 +279,77 @@ def _join_catalog_column(
         )
     )
     joined = ids.map(values).to_numpy(dtype=np.float64)
-    if column in frame.columns:
+    if column in frame.columns and warnings is not None:
         own = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=np.float64)
-        bad = ~np.isclose(own, joined, rtol=1e-6, atol=0.0, equal_nan=True)
+        bad = np.isfinite(own) & ~np.isclose(own, joined, rtol=1e-6, atol=0.0, equal_nan=True)
         if bad.any():
-            raise InputDataError(
-                f"{column} differs between the input and the catalog for {format_ids(ids[bad])}"
+            shown = [
+                f"{i} ({a:g} vs {b:g})"
+                for i, a, b in zip(ids[bad], own[bad], joined[bad], strict=True)
+            ]
+            warnings.append(
+                f"{column} differs between the table and {catalog_name} for "
+                f"{format_ids(shown)}; using the catalog's"
             )
     return joined
 
 
-def prediction_inputs(table: pd.DataFrame, catalog: pd.DataFrame | None = None) -> pd.DataFrame:
+def _check_object_values(frame: pd.DataFrame, catalog: pd.DataFrame | None) -> pd.DataFrame:
+    """Refuse a weight the table does not have (an older coefficients table, or a squeeze log
+    without ``--weight-n``), naming ``--catalog``. In a coefficients table (whose object values
+    are NaN where the log had none) a ``friction_mu`` column without any value is dropped (a
+    μ-aware model then asks for μ by name) and one with some values missing is refused.
+    """
+    from deformctl.table import format_ids
+
+    if catalog is not None:
+        return frame
+    if "weight_n" not in frame.columns:
+        raise SchemaError(
+            "the table has no weight_n column (a coefficients table from before weights were "
+            "copied, or from a log without --weight-n); pass --catalog OBJECTS to join the "
+            "weights by object_id",
+            field="weight_n",
+        )
+    if frame.attrs.get("kind") != "coefficients":  # (a NaN elsewhere is a bad value, not unknown)
+        return frame
+    for col, flag in (("weight_n", "--weight-n"), ("friction_mu", "--friction-mu")):
+        if col not in frame.columns:
+            continue
+        values = frame[col].astype("float64").to_numpy()
+        missing = ~np.isfinite(values)
+        if col == "friction_mu" and missing.all():
+            return frame.drop(columns=[col])
+        if missing.any():
+            ids = frame["object_id"][missing] if "object_id" in frame.columns else []
+            raise InputDataError(
+                f"{col} is missing for {format_ids(ids) or 'some rows'} (measure without "
+                f"{flag}); pass --catalog OBJECTS to join it by object_id"
+            )
+    return frame
+
+
+def prediction_inputs(
+    table: pd.DataFrame,
+    catalog: pd.DataFrame | None = None,
+    *,
+    warnings: list[str] | None = None,
+    catalog_name: str = "the catalog",
+) -> pd.DataFrame:
     """The model's inputs per object from a table, taking ``weight_n`` and ``friction_mu`` from
     ``catalog``.
 
     The table (an index table, a predictions table or a coefficients table) must have
     ``deformability_n_per_cm`` and ``damping_ns_per_cm``; ``weight_n`` and ``friction_mu`` come
-    from the table itself or, when ``catalog`` is given, from the catalog row with the same
-    ``object_id``. When both have a value they must agree (relative 1e-6).
+    from the table itself (a coefficients table carries the squeeze log's) or, when ``catalog``
+    is given, from the catalog row with the same ``object_id``: the catalog wins, and a value
+    that differs from the table's (relative 1e-6) is a line in ``warnings``.
 
     Args:
         table: ``[n]`` rows, with ``object_id`` when a catalog is to be joined.
         catalog: a validated object catalog (:func:`deformctl.artifacts.read_catalog`), or None.
+        warnings: where the lines about differing values go (no ``warning:`` prefix).
+        catalog_name: the catalog's file name, for those lines.
 
     Returns:
         ``[n]`` rows in the table's order: ``object_id`` (when the table has it),
@@ -242,8 +360,10 @@ def prediction_inputs(table: pd.DataFrame, catalog: pd.DataFrame | None = None) 
     Raises:
         SchemaError: a feature column is missing and cannot be joined; ``object_id`` missing
             when a catalog is given.
-        InputDataError: an object missing from the catalog, or a weight or friction that
-            differs between the table and the catalog (the messages name the ids).
+        SchemaError: no ``weight_n`` column and no catalog (naming ``--catalog``).
+        InputDataError: an object missing from the catalog; without a catalog, a weight (or
+            some but not all μ) missing for some objects (the messages name the ids and
+            ``--catalog``).
     """
     import pandas as pd
 
@@ -261,9 +381,10 @@ def prediction_inputs(table: pd.DataFrame, catalog: pd.DataFrame | None = None) 
             raise InputDataError(
                 f"{len(missing)} object(s) are not in the catalog: {format_ids(missing)}"
             )
-        frame["weight_n"] = _join_catalog_column(frame, catalog, "weight_n", ids)
-        if "friction_mu" in catalog.columns:
-            frame["friction_mu"] = _join_catalog_column(frame, catalog, "friction_mu", ids)
+        for col in ("weight_n", "friction_mu"):
+            if col in catalog.columns:
+                frame[col] = _join_catalog_column(frame, catalog, col, ids, warnings, catalog_name)
+    frame = _check_object_values(frame, catalog)
     for col in _FEATURES:
         if col not in frame.columns:
             hint = " (pass --catalog to join weights by object_id)" if col == "weight_n" else ""

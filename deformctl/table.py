@@ -170,19 +170,31 @@ def _pick(
     if name in lift.columns and name in coefficients.columns:
         a = joined[lift_col].to_numpy(dtype=float)
         b = joined[coef_col].to_numpy(dtype=float)
-        bad = ~np.isclose(a, b, rtol=1e-6, atol=0.0, equal_nan=True)
+        both = ~np.isnan(a) & ~np.isnan(b)  # (a coefficients table has NaN where the log had none)
+        bad = both & ~np.isclose(a, b, rtol=1e-6, atol=0.0)
         if bad.any():
             ids = joined["object_id"][bad]
             raise InputDataError(
                 f"{name} differs between the coefficients and the lift results for "
                 f"{format_ids(ids)}"
             )
-        return joined[lift_col]
+        return pd.Series(np.where(np.isnan(a), b, a), index=joined.index)
     if name in lift.columns:
         return joined[lift_col]
     if name in coefficients.columns:
         return joined[coef_col]
     raise SchemaError(f"neither the coefficients nor the lift results have {name!r}", field=name)
+
+
+#: The index table's ``source`` of a lift results ``runner``: a simulated or a rig lift.
+SOURCES: dict[str, str] = {"sim": "sim", "rig": "rig"}
+
+
+def _sources(joined: pd.DataFrame) -> np.ndarray:
+    """``sim`` or ``rig`` per row from the lift results' ``runner`` (``""`` when unknown)."""
+    if "runner" not in joined.columns:
+        return np.full(len(joined), "", dtype=object)
+    return joined["runner"].map(lambda r: SOURCES.get(str(r), "")).to_numpy(dtype=object)
 
 
 def build_index_table(
@@ -211,8 +223,9 @@ def build_index_table(
     ``allow_flagged``.
 
     Returns:
-        The index table, columns :data:`INDEX_COLUMNS`, one row per object, sorted by
-        ``object_id``; floats are float64 and ``converged`` is bool.
+        The index table, columns :data:`INDEX_COLUMNS` and ``source`` (``sim`` or ``rig``, from
+        the lift results' ``runner``: rig rows are what ``adapt`` corrects a model with), one
+        row per object, sorted by ``object_id``; floats are float64 and ``converged`` is bool.
 
     Raises:
         SchemaError: a required column is missing.
@@ -281,6 +294,7 @@ def build_index_table(
         },
         columns=list(INDEX_COLUMNS),
     )
+    table["source"] = _sources(joined)
     quality = (
         joined["quality"].astype("string").fillna("ok").to_numpy(dtype=object)
         if "quality" in joined.columns

@@ -129,8 +129,9 @@ def test_coefficients_without_weights_need_a_catalog(
 ) -> None:
     result = runner.invoke(app, ["predict", str(setup["model"]), str(setup["coefficients"])])
     assert _error(result, 65) == (
-        f"error: {setup['coefficients']}: field 'weight_n': the input has no column 'weight_n' "
-        "(pass --catalog to join weights by object_id)"
+        f"error: {setup['coefficients']}: field 'weight_n': the table has no weight_n column (a "
+        "coefficients table from before weights were copied, or from a log without --weight-n); "
+        "pass --catalog OBJECTS to join the weights by object_id"
     )
     catalog = pd.read_csv(setup["catalog"], dtype={"object_id": str})
     write_catalog(catalog[~catalog["object_id"].isin(["P01", "P17"])], tmp_path / "few.csv")

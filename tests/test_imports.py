@@ -24,7 +24,17 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("__main__", "cli"),
     ("repro", "golden"),
     # the stages, each one module or package (they may import each other, never in a cycle)
-    ("population", "measure", "characterize", "lift", "table", "train", "predict", "vision"),
+    (
+        "population",
+        "measure",
+        "characterize",
+        "lift",
+        "table",
+        "train",
+        "predict",
+        "adapt",
+        "vision",
+    ),
     ("parallel",),
     ("artifacts",),
     ("model", "grip", "catalog", "presets"),

@@ -54,7 +54,7 @@ IDS = ["B", "A", "C", "D"]
 
 def test_join_columns_order_and_values() -> None:
     t = build_index_table(_coefficients(IDS), _lift(IDS))
-    assert tuple(t.columns) == (*INDEX_COLUMNS, "quality")
+    assert tuple(t.columns) == (*INDEX_COLUMNS, "source", "quality")
     assert set(t["quality"]) == {"ok"}  # coefficients without a quality column
     assert list(t["object_id"]) == ["A", "B", "C", "D"]  # sorted
     row_b = t.set_index("object_id").loc["B"]
@@ -264,3 +264,22 @@ def test_keys_without_spread() -> None:
     assert keys_without_spread(t) == ["deformability_n_per_cm", "damping_ns_per_cm"]
     t["damping_ns_per_cm"] = [0.0, 1e-9]
     assert keys_without_spread(t) == ["deformability_n_per_cm"]
+
+
+def test_source_comes_from_the_lift_runner() -> None:
+    lift = _lift(IDS)
+    assert set(build_index_table(_coefficients(IDS), lift)["source"]) == {""}  # not recorded
+    runners = ["sim", "rig"] * len(IDS)
+    lift["runner"] = runners[: len(IDS)]
+    got = build_index_table(_coefficients(IDS), lift).set_index("object_id")["source"]
+    assert got.to_dict() == dict(zip(lift["object_id"], lift["runner"], strict=True))
+
+
+def test_a_weight_the_squeeze_log_did_not_have_is_taken_from_the_lift() -> None:
+    coefficients = _coefficients(IDS).assign(weight_n=np.nan)  # characterize without a weight
+    t = build_index_table(coefficients, _lift(IDS)).set_index("object_id")
+    lift = _lift(IDS).set_index("object_id")
+    np.testing.assert_array_equal(t.loc[lift.index, "weight_n"], lift["weight_n"])
+    coefficients.loc[0, "weight_n"] = 99.0  # a value that differs is still refused
+    with pytest.raises(InputDataError, match="weight_n differs"):
+        build_index_table(coefficients, _lift(IDS))

@@ -279,6 +279,13 @@ def _mcap_summary(contents: McapContents) -> dict[str, Any]:
             "attempts_per_object": per_object,
             "lifted": sum(att.outcome.lifted for att in attempts),
         }
+        starts = [  # a seeded run (lift --start-model): each object's prediction and outcome
+            {"object_id": o["object_id"], **o["start"]}
+            for o in decode_objects(contents)
+            if isinstance(o.get("start"), dict)
+        ]
+        if starts:
+            extra["starts"] = starts
     objects = decode_objects(contents) if kind != GENERIC_MCAP else []
     counts = contents.message_counts()
     channels = []
@@ -407,6 +414,7 @@ def _model_summary(data: bytes, path: PathArg) -> dict[str, Any]:
         "metrics": metrics,
         "conformal": conformal,
         "notes": {str(k): str(v) for k, v in notes.items()},
+        "adapted": meta.get("adapted") if isinstance(meta.get("adapted"), dict) else None,
         "tool_version": str(meta.get("tool_version", "unknown")),
         "blas": blas_record(meta.get("blas")),
         "provenance": None if prov is None else Provenance.from_dict(prov, path=name).to_dict(),

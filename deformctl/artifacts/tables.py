@@ -37,6 +37,7 @@ from deformctl.artifacts.io import (
     atomic_output,
     display_name,
     forget_inputs,
+    is_stdio,
     read_input_bytes,
 )
 from deformctl.artifacts.provenance import Provenance, to_json
@@ -197,6 +198,13 @@ def read_parquet_bytes(data: bytes, path: PathArg) -> tuple[pa.Table, dict[str, 
         SchemaError: the digest or the metadata does not match.
     """
     name = display_name(path)
+    if not data:
+        raise InputDataError(
+            "empty input: no table on stdin (did the command before the pipe fail?)"
+            if is_stdio(path)
+            else "empty file: not a Parquet table",
+            path=name,
+        )
     if len(data) < 12 or data[:4] != PARQUET_MAGIC or data[-4:] != PARQUET_MAGIC:
         raise InputDataError("not a Parquet file (bad magic bytes)", path=name)
     try:

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 
 import pandas as pd
 
+from deformctl.catalog import SIZE_COLUMNS
 from deformctl.characterize.columns import (
     MATERIAL_COLUMNS,
     MATERIAL_DTYPES,
@@ -25,6 +26,13 @@ from deformctl.characterize.columns import (
 from deformctl.characterize.quality import SECANT_MISFIT_FRAC, assess, quality_text
 from deformctl.series import Rupture
 from deformctl.units import CM, N_PER_CM, NS_PER_CM
+
+#: The object's own values ``characterize`` copies from the squeeze log into its row (NaN, or
+#: ``""`` for ``source``, when the log does not have them), so that ``predict`` and
+#: ``lift --sim`` need no catalog: the weight, the size and μ the log's object row stores
+#: (``measure --weight-n``, ``--size-cm``, ``--friction-mu`` or the catalog of ``measure --sim``)
+#: and where the squeezes came from (the log's ``source``: ``sim``, ``ros2_bag``, ``csv``).
+OBJECT_COLUMNS: tuple[str, ...] = ("weight_n", *SIZE_COLUMNS, "friction_mu", "source")
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from deformctl.characterize.objectfit import ObjectFit
@@ -55,7 +63,7 @@ BASE_COLUMNS = (
     "rupture_time_s",
     "rupture_force_n",
 )
-COEFFICIENT_COLUMNS = (*BASE_COLUMNS, *MATERIAL_COLUMNS)
+COEFFICIENT_COLUMNS = (*BASE_COLUMNS, *MATERIAL_COLUMNS, *OBJECT_COLUMNS)
 
 
 @dataclass(frozen=True)
@@ -226,13 +234,37 @@ class CoefficientFit:
         }
 
 
+def _positive(value: object) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return math.nan
+    number = float(value)
+    return number if math.isfinite(number) and number > 0 else math.nan
+
+
+def object_fields(obj: Mapping[str, object] | None) -> dict[str, object]:
+    """The :data:`OBJECT_COLUMNS` of an object row of a squeeze log.
+
+    A value that is missing, not a number or not > 0 is NaN. ``source`` is the log's own
+    (``ros2_bag``, ``csv``, ...); a ``measure --sim`` object row, which stores the simulated
+    peak force rather than a source, is ``sim``; ``""`` when the log does not say.
+    """
+    obj = obj or {}
+    out: dict[str, object] = {c: _positive(obj.get(c)) for c in OBJECT_COLUMNS[:-1]}
+    source = obj.get("source")
+    if not isinstance(source, str) or not source:
+        source = "sim" if "sim_peak_force_n" in obj else ""
+    out["source"] = source
+    return out
+
+
 def _coefficient_frame(rows: Sequence[Mapping[str, object]]) -> pd.DataFrame:
     """The coefficient table of :meth:`CoefficientFit.row` rows.
 
     Every row holds the same types (str, float, int, bool; never None), so one frame of many
     rows equals the concatenation of their one-row frames, at a fraction of the cost.
     """
-    df = pd.DataFrame(list(rows), columns=list(COEFFICIENT_COLUMNS))
+    blank = object_fields(None)
+    df = pd.DataFrame([{**blank, **r} for r in rows], columns=list(COEFFICIENT_COLUMNS))
     return df.astype(
         {
             "n_samples": "int64",

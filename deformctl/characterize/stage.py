@@ -31,7 +31,7 @@ from deformctl.artifacts.dataset import (
     table_schema,
 )
 from deformctl.artifacts.provenance import Provenance, sha256_file
-from deformctl.characterize.coefficients import _coefficient_frame
+from deformctl.characterize.coefficients import _coefficient_frame, object_fields
 from deformctl.characterize.fit import PRELOADS, Method, Preload, _fit_rows, default_window_s
 from deformctl.characterize.material_options import (
     DEFAULT_MATERIALS,
@@ -136,6 +136,7 @@ def _fit_object(
     )
     row = rows[0]
     row["quality"] = with_recording_flags(str(row["quality"]), (obj or {}).get("recording_flags"))
+    row.update(object_fields(obj))
     return row, mode
 
 

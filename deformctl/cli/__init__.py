@@ -39,6 +39,7 @@ COMMAND_NAMES: tuple[str, ...] = (
     "table",
     "train",
     "predict",
+    "adapt",
     "inspect",
 )
 

@@ -49,6 +49,20 @@ def _model_lines(info: dict[str, Any]) -> list[str]:
             f"upper bound P = {p}: margin {_pct(c.get('margin'))}, on the test rows coverage "
             f"{_num(c.get('coverage'), '.3f')}, mean margin {_pct(c.get('mean_margin'))}"
         )
+    adapted = info.get("adapted")
+    if adapted:  # a model corrected by `adapt` with rig lifts
+        rows = adapted.get("rows") or []
+        alpha = adapted.get("alpha")
+        lines.append(
+            f"adapted: from {adapted.get('base_model')} with {len(rows)} rig rows of "
+            f"{adapted.get('index')} (ridge alpha {'inf' if alpha is None else f'{alpha:.3g}'}, "
+            f"correction {adapted.get('coefficients')}); bound: {adapted.get('bound_rule')}"
+        )
+        lines.extend(
+            f"  {r['object_id']}: L_f {r['lift_force_n']:.4g} N, predicted "
+            f"{r['predicted_before_n']:.4g} N before, {r['predicted_after_n']:.4g} N after"
+            for r in rows
+        )
     if info.get("notes"):
         lines.append("notes: " + ", ".join(f"{k}={v}" for k, v in sorted(info["notes"].items())))
     return lines
@@ -89,7 +103,31 @@ def _per_object_lines(info: dict[str, Any]) -> list[str]:
             f"λ {_num(c['damping_ns_per_cm'], '.4g', 'NaN')} N·s/cm, R² {_num(c['r2'], '.4f')}, "
             f"quality {c['quality'] if c['quality'] is not None else 'not recorded (v1 table)'}"
         )
+    lines.extend(_start_lines(info.get("starts") or []))
     return (["per object:", *lines]) if lines else []
+
+
+def _start_lines(starts: list[dict[str, Any]]) -> list[str]:
+    """A seeded lift log's objects: the prediction, its bound, what the search found and the
+    attempts it saved against a search from F_w (replayed against the L_f found)."""
+    lines = []
+    for s in starts:
+        bound = (
+            f"bound {_num(s.get('lift_force_upper_n'), '.4g')} N (P = {s['coverage']:g})"
+            if s.get("coverage") is not None
+            else "no bound"
+        )
+        outcome = "converged" if s.get("converged") else "NOT converged"
+        saved = s.get("attempts_saved")
+        lines.append(
+            f"  {s['object_id']}: predicted L_f {_num(s.get('predicted_lift_force_n'), '.4g')} N, "
+            f"{bound}, found L_f {_num(s.get('lift_force_n'), '.4g')} N, "
+            f"{s.get('attempts')} attempts ({outcome}"
+            + ("" if s.get("in_training_range") else ", outside the range: from F_w")
+            + f"), from F_w {_num(s.get('attempts_from_f_w'), 'd')}, saved "
+            + (f"{saved:d}" if isinstance(saved, int) else "-")
+        )
+    return lines
 
 
 def render_text(info: dict[str, Any]) -> str:

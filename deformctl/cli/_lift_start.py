@@ -21,6 +21,15 @@ if TYPE_CHECKING:  # pragma: no cover - the seed sources import scikit-learn whe
     from deformctl.lift.seeded import StartSeed
     from deformctl.lift.stage import CatalogLiftResult
 
+#: ``lift``'s first argument: a catalog, or a coefficients table whose objects carry their values.
+CatalogArg = Annotated[
+    str,
+    typer.Argument(
+        help="Object catalog, CSV or Parquet; - for stdin. Or a coefficients table from "
+        "characterize: its objects' size, weight and μ, with the measured D and λ as the "
+        "material (--sim lifts the measured object).",
+    ),
+]
 StartModel = Annotated[
     str | None,
     typer.Option(

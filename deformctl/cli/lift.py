@@ -53,6 +53,7 @@ from deformctl.cli._lift_runner import (
     sim_parts,
 )
 from deformctl.cli._lift_start import (
+    CatalogArg,
     Coefficients,
     StartInterpolate,
     StartMargin,
@@ -79,7 +80,7 @@ from deformctl.parallel import SweepOptions
 @translate_errors
 @opt.with_sweep_options
 def lift(
-    catalog: Annotated[str, typer.Argument(help="Object catalog, CSV or Parquet; - for stdin.")],
+    catalog: CatalogArg,
     output: Annotated[
         str, typer.Option("-o", "--output", help="Lift results table (Parquet); - for stdout.")
     ],

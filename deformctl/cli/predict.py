@@ -63,7 +63,8 @@ def predict(
     features: str | None = typer.Argument(
         None,
         metavar="[COEFFICIENTS]",
-        help="A coefficients, index or predictions table (Parquet) with the objects to predict.",
+        help="A coefficients, index or predictions table (Parquet) with the objects to predict; "
+        "- for stdin (characterize - -o - | predict grip -).",
     ),
     weight_n: float | None = typer.Option(None, "--weight-n", help="W of one object, N."),
     deformability_n_per_cm: float | None = typer.Option(
@@ -86,7 +87,7 @@ def predict(
         None,
         "--catalog",
         help="Object catalog (CSV/Parquet) whose weight_n and friction_mu are joined by "
-        "object_id, for a coefficients table without them.",
+        "object_id; it wins over the table's values (a warning names each one that differs).",
     ),
     output: str | None = typer.Option(
         None, "-o", "--output", help="Write a predictions table (Parquet; - for stdout)."
@@ -95,10 +96,14 @@ def predict(
 ) -> None:
     """Predict the minimum lifting force L_f (N) from weight, deformability, damping (and μ).
 
-    The objects come either from a table (COEFFICIENTS: a coefficients table plus --catalog for
-    the weights and μ, or any table that has weight_n, deformability_n_per_cm,
-    damping_ns_per_cm and friction_mu, such as an index table) or from the flags for one
-    object. MODEL `grip` is the bundled model for robots (W 0.5-80 N, D 5-60 N/cm, λ 0-15 N·s/cm,
+    The objects come either from a table (COEFFICIENTS: a coefficients table, which carries the
+    weight and μ the squeeze log recorded, or any table that has weight_n,
+    deformability_n_per_cm, damping_ns_per_cm and friction_mu, such as an index table; - reads
+    it from stdin) or from the flags for one object. --catalog joins the weights and μ by
+    object_id instead (for a table without them); where the table has another value, the
+    catalog's is used and a warning names the object.
+
+    MODEL `grip` is the bundled model for robots (W 0.5-80 N, D 5-60 N/cm, λ 0-15 N·s/cm,
     μ 0.2-1.0); it needs μ. Without -o the predictions are printed as CSV on stdout.
 
     --coverage P adds lift_force_upper_n, a split-conformal upper bound (from the model's
@@ -107,6 +112,9 @@ def predict(
     force in the table (rupture_force_n from characterize) adds max_safe_force_n and window_ok,
     false when L_f or its bound exceeds the safe force. Every flag set (outside_training_range,
     window_ok = false, another μ than a single-μ model's) prints a warning naming the object.
+    An object whose λ is unknown (NaN: characterize could not identify it, as from a test at one
+    speed) is predicted at the λ of the model's range with the largest L_f, flagged
+    damping_assumed, with a warning.
 
     Example:
 
@@ -114,8 +122,11 @@ def predict(
       deformctl predict grip --weight-n 2.9 --deformability-n-per-cm 30 \\
           --damping-ns-per-cm 0.47 --friction-mu 0.5 --coverage 0.9
       deformctl predict model.skops coefficients.parquet --catalog objects.csv -o pred.parquet
+      deformctl measure --csv f.csv --weight-n 2.9 --friction-mu 0.6 -o - \\
+          | deformctl characterize - -o - | deformctl predict grip - --coverage 0.9
     """
     from deformctl.predict import (
+        assume_damping,
         csv_text,
         load_predictor,
         output_columns,
@@ -139,15 +150,21 @@ def predict(
     inputs: dict[str, Any] = {k: None if v is None else [v] for k, v in flags.items()}
     ids = None
     if features is not None:
-        frame = read_prediction_inputs(features, catalog)
+        joined: list[str] = []
+        frame = read_prediction_inputs(features, catalog, joined)
+        for line in joined:
+            typer.echo(f"warning: {features if features != '-' else 'stdin'}: {line}", err=True)
         inputs = {c: frame[c].to_numpy(dtype=float) for c in frame.columns if c != "object_id"}
         ids = frame["object_id"].astype(str).tolist() if "object_id" in frame.columns else None
+    inputs, assumed, lines = assume_damping(predictor, inputs, ids)
+    for line in lines:
+        typer.echo(f"warning: {line}", err=True)
     est = predict_objects(
         predictor, inputs, coverage=coverage, names=ids, source=features or "command line"
     )
     for line in est.warnings:
         typer.echo(f"warning: {line}", err=True)
-    columns = output_columns(est, inputs, object_ids=ids)
+    columns = output_columns(est, inputs, object_ids=ids, damping_assumed=assumed)
     if output is None:
         typer.echo(csv_text(columns), nl=False)
         return

@@ -43,6 +43,7 @@ import numpy as np
 
 from deformctl import jsonsafe
 from deformctl.errors import InputDataError, MissingInputError, UsageError
+from deformctl.grip.activations import _activation, _activation_scalar
 from deformctl.grip.conformal import (
     check_coverage,
     conformal_margin,
@@ -282,26 +283,6 @@ class Estimate:
     prediction_implausible: bool = False
 
 
-def _activation_scalar(name: str, x: float) -> float:
-    if name == "tanh":
-        return math.tanh(x)
-    if name == "relu":
-        return max(x, 0.0)
-    if name == "logistic":
-        return 1.0 / (1.0 + math.exp(-x)) if x >= -700 else 0.0
-    return x
-
-
-def _activation(name: str, x: np.ndarray) -> np.ndarray:
-    if name == "tanh":
-        return np.tanh(x, out=x)
-    if name == "relu":
-        return np.maximum(x, 0, out=x)
-    if name == "logistic":
-        return np.divide(1.0, 1.0 + np.exp(-x, out=x), out=x)
-    return x
-
-
 @dataclass(frozen=True)
 class Predictor:
     """A model file's network as numpy arrays, with its ranges and calibration scores.
@@ -326,6 +307,8 @@ class Predictor:
     ranges: Mapping[str, tuple[float, float]]
     training_friction_mu: float | None
     scores: np.ndarray | None
+    #: ``adapt``'s ``[c0, c_j]``: log(L_f / F_w) += c0 + Σ c_j x_j, x the scaled network inputs
+    correction: np.ndarray | None = None
     #: what is worked out once per predictor: the margins per coverage, the plain-float layers
     _cache: dict[Any, Any] = field(default_factory=dict, repr=False, compare=False)
 
@@ -414,6 +397,8 @@ class Predictor:
             raise InputDataError("the numpy export's scale_index is out of range", path=path)
         if mu is not None and not (math.isfinite(mu) and mu > 0):
             raise InputDataError(f"the model's training friction_mu {mu!r} is not > 0", path=path)
+        corr = exp.get("correction")
+        corr = None if corr is None else _float_array(corr, (n_in + 1,), "correction", path)
         raw_scores = meta.get("conformal_scores")
         scores = None
         if raw_scores is not None:
@@ -433,6 +418,7 @@ class Predictor:
             ranges=ranges,
             training_friction_mu=mu,
             scores=scores,
+            correction=corr,
         )
         if check_points:
             predictor._check_stored_points()
@@ -469,13 +455,15 @@ class Predictor:
         """The network on one input row in plain floats: a small network costs less this way
         than numpy's per-call overhead (the same numbers to rounding, tested)."""
         x = [(v - m) / s for v, m, s in zip(z, self._plain[0], self._plain[1], strict=True)]
+        scaled = x
         layers = self._plain[2]
         last = len(layers) - 1
         for i, (columns, biases) in enumerate(layers):
             x = [b + sum(map(operator.mul, col, x)) for col, b in zip(columns, biases, strict=True)]
             if i != last:
                 x = [_activation_scalar(self.activation, v) for v in x]
-        return x[0]
+        c = [0.0] if self.correction is None else self.correction.tolist()
+        return x[0] + c[0] + sum(map(operator.mul, c[1:], scaled))
 
     @property
     def _plain(
@@ -497,14 +485,15 @@ class Predictor:
 
     def _network(self, Z: np.ndarray) -> np.ndarray:
         """The scaler and the network on ``Z`` ``[n, n_in]``, as scikit-learn computes them."""
-        x = (Z - self.mean) / self.scale
+        x = scaled = (Z - self.mean) / self.scale
         last = len(self.weights) - 1
         for i, (w, b) in enumerate(zip(self.weights, self.biases, strict=True)):
             x = x @ w
             x += b
             if i != last:
                 x = _activation(self.activation, x)
-        return x[:, 0]
+        c = self.correction
+        return x[:, 0] if c is None else x[:, 0] + c[0] + scaled @ c[1:]
 
     def _groups(self, W: np.ndarray, D: np.ndarray, lam: np.ndarray) -> np.ndarray:
         mass = W / GRAVITY_M_S2
@@ -538,6 +527,8 @@ class Predictor:
         if self.scores is None:
             raise InputDataError(NO_SCORES_MESSAGE, path=self.path)
         n = self.scores.size
+        if self._thin(p) is not None:  # an adapted model on few rig rows: their largest score
+            return float(self.scores[-1])
         if conformal_rank(n, p) > n:
             need = conformal_min_scores(p)
             raise InputDataError(
@@ -547,6 +538,15 @@ class Predictor:
         q = conformal_margin(self.scores, p)
         self._cache[("margin", coverage)] = q
         return q
+
+    def _thin(self, p: float | None) -> str | None:
+        """The warning of an adapted model asked for a P its n rig rows cannot guarantee."""
+        n = 0 if self.scores is None else self.scores.size
+        if p is None or "adapted" not in self.metadata or not 0 < n < conformal_rank(n, p):
+            return None
+        return (f"the bound at P = {p:g} rests on {n} rig rows, fewer than the "
+                f"{conformal_min_scores(p)} it needs: it is their largest score, guaranteed at "
+                f"n / (n + 1) = {n / (n + 1):.3f} only (bound_guaranteed = false)")  # fmt: skip
 
     def _checked_values(
         self, W: Any, D: Any, lam: Any, mu: Any, f_w: Any
@@ -615,7 +615,7 @@ class Predictor:
             line = input_problem(col, value, name)
             if line is not None:
                 raise InputDataError(line)
-        warnings: list[str] = []
+        warnings: list[str] = [t for t in [self._thin(coverage)] if t]
         outside = False
         if self.form == "grip":
             assert mu is not None
@@ -645,7 +645,7 @@ class Predictor:
             lift_force_upper_n=upper,
             coverage=None if coverage is None else float(coverage),
             outside_training_range=outside,
-            bound_guaranteed=q is not None and not outside,
+            bound_guaranteed=q is not None and not outside and self._thin(coverage) is None,
             max_safe_force_n=safe,
             window_ok=window_ok,
             warnings=tuple(warnings),
@@ -708,7 +708,7 @@ class Predictor:
             raise InputDataError(problems[0][1])
         D, lam = values["deformability_n_per_cm"], values["damping_ns_per_cm"]
         mu = values.get("friction_mu")
-        warnings: list[str] = []
+        warnings: list[str] = [t for t in [self._thin(coverage)] if t]
         outside = np.zeros(n, dtype=bool)
         if self.form == "grip":
             assert mu is not None
@@ -760,7 +760,9 @@ class Predictor:
             lift_force_upper_n=upper,
             coverage=None if coverage is None else float(coverage),
             outside_training_range=outside,
-            bound_guaranteed=~outside if q is not None else np.zeros(n, dtype=bool),
+            bound_guaranteed=~outside & (self._thin(coverage) is None)
+            if q is not None
+            else np.zeros(n, dtype=bool),
             max_safe_force_n=safe,
             window_ok=window_ok,
             warnings=warnings,

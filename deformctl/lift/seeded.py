@@ -72,8 +72,14 @@ FEATURE_COLUMNS: tuple[str, str, str] = ("weight_n", "deformability_n_per_cm", "
 _D, _LAMBDA = FEATURE_COLUMNS[1], FEATURE_COLUMNS[2]
 
 StartSource = Literal["model", "table"]
-#: ``predict(features) -> (predicted L_f [n], outside the range [n], warning per row or None)``
-Predictor = Callable[[pd.DataFrame, np.ndarray], tuple[np.ndarray, np.ndarray, list[str | None]]]
+#: ``predict(features, f_w_n) -> (predicted L_f [n], outside the range [n], warning per row or
+#: None, upper bound at :data:`START_BOUND_COVERAGE` [n], NaN when the source has none)``
+Predictor = Callable[
+    [pd.DataFrame, np.ndarray],
+    tuple[np.ndarray, np.ndarray, list[str | None], np.ndarray],
+]
+#: The coverage of the bound a model's start records in the lift log (with the prediction).
+START_BOUND_COVERAGE = 0.9
 
 
 @dataclass(frozen=True)
@@ -88,6 +94,9 @@ class StartEstimate:
         source: ``"model"`` or ``"table"``.
         warning: one line (no ``warning:`` prefix) naming the object and the feature(s) outside
             the range, when ``in_range`` is False.
+        lift_force_upper_n: the model's split-conformal upper bound on L_f at
+            :data:`START_BOUND_COVERAGE`, N (NaN for a table, or a model without enough
+            calibration scores).
     """
 
     object_id: str
@@ -95,6 +104,17 @@ class StartEstimate:
     in_range: bool
     source: StartSource
     warning: str | None = None
+    lift_force_upper_n: float = math.nan
+
+    def record(self) -> dict[str, Any]:
+        """The start as the lift log stores it with the object (JSON values)."""
+        return {
+            "source": self.source,
+            "predicted_lift_force_n": self.predicted_lift_force_n,
+            "lift_force_upper_n": _finite(self.lift_force_upper_n),
+            "coverage": START_BOUND_COVERAGE if _finite(self.lift_force_upper_n) else None,
+            "in_training_range": self.in_range,
+        }
 
 
 def _finite(value: Any) -> float | None:
@@ -228,7 +248,9 @@ class StartSeed:
         Returns:
             object_id -> :class:`StartEstimate`, in the rows' order.
         """
-        predicted, outside, warnings = self.predictor(features, np.asarray(f_w_n, dtype=np.float64))
+        predicted, outside, warnings, upper = self.predictor(
+            features, np.asarray(f_w_n, dtype=np.float64)
+        )
         out: dict[str, StartEstimate] = {}
         for i, oid in enumerate(features["object_id"].astype(str)):
             p = float(predicted[i])
@@ -237,7 +259,7 @@ class StartSeed:
             if fallback:
                 why = warnings[i] or f"predicted L_f {p!r} N is not a positive number"
                 warning = f"object {oid!r}: {why}; starting at F_w (refine)"
-            out[oid] = StartEstimate(oid, p, not fallback, self.source, warning)
+            out[oid] = StartEstimate(oid, p, not fallback, self.source, warning, float(upper[i]))
         return out
 
     @classmethod
@@ -265,10 +287,15 @@ class StartSeed:
                 export_model(model), {"training_range": train_range}, "model", check_points=False
             )
         fast: FastPredictor = model
+        coverage: float | None = START_BOUND_COVERAGE
+        try:
+            fast.margin(START_BOUND_COVERAGE)
+        except InputDataError:  # no (or too few) calibration scores: no bound to record
+            coverage = None
 
         def predictor(
             features: pd.DataFrame, f_w_n: np.ndarray
-        ) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
+        ) -> tuple[np.ndarray, np.ndarray, list[str | None], np.ndarray]:
             ids = features["object_id"].astype(str).tolist()
             w = features[FEATURE_COLUMNS[0]].to_numpy(dtype=np.float64)
             mu = w / (2.0 * f_w_n) if fast.needs_friction else None
@@ -278,12 +305,18 @@ class StartSeed:
                 features[_LAMBDA].to_numpy(dtype=np.float64),
                 mu,
                 names=ids,
+                coverage=coverage,
             )
             notes: dict[str, str] = {}
             for line in est.warnings:  # "ID: outside the training range: ..."
                 oid, _, rest = line.partition(": ")
                 notes[oid] = rest.replace("the training range", "the model's training range", 1)
-            return est.lift_force_n, est.outside_training_range, [notes.get(i) for i in ids]
+            return (
+                est.lift_force_n,
+                est.outside_training_range,
+                [notes.get(i) for i in ids],
+                est.lift_force_upper_n,
+            )
 
         return cls("model", predictor, float(margin), dict(settings or {}))
 
@@ -322,7 +355,7 @@ class StartSeed:
 
         def predictor(
             features: pd.DataFrame, f_w_n: np.ndarray
-        ) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
+        ) -> tuple[np.ndarray, np.ndarray, list[str | None], np.ndarray]:
             q = features[list(FEATURE_COLUMNS)].to_numpy(dtype=np.float64)
             dist = standardized_distances(table, q) if len(q) else np.empty((0, len(table)))
             values = forces / f_w if use_ratio else forces
@@ -345,7 +378,7 @@ class StartSeed:
                 notes.append(
                     f"outside the index table's range: {'; '.join(parts)}" if parts else None
                 )
-            return predicted, outside.any(axis=1), notes
+            return predicted, outside.any(axis=1), notes, np.full(len(q), np.nan)
 
         info = {"interpolate_k": k, "ratio_to_f_w": use_ratio, **dict(settings or {})}
         return cls("table", predictor, float(margin), info)

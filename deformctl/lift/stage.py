@@ -37,7 +37,6 @@ import pandas as pd
 from deformctl.artifacts import (
     Provenance,
     check_output_path,
-    read_catalog,
     validate_frame,
     write_lift_log,
     write_table,
@@ -47,6 +46,7 @@ from deformctl.catalog import CatalogObject, catalog_objects, select_objects
 from deformctl.errors import DeformctlError, UsageError
 from deformctl.lift.ceiling import CEILING_COLUMN, ForceCeiling, force_ceiling
 from deformctl.lift.journal import LiftJournal
+from deformctl.lift.objects import read_lift_objects
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
     DEFAULT_MAX_ATTEMPTS,
@@ -294,6 +294,7 @@ def lift_catalog(
     failures: list[ObjectFailure] = []
     not_run: list[str] = []
     stopped_at: str | None = None
+    story: dict[str, dict[str, Any]] = {}  # a seeded run: each start and its outcome, for the log
     search = _ObjectSearch(
         factory, None if seed is None else seed.margin, protocol, growth, tolerance_rel,
         max_attempts,
@@ -317,6 +318,9 @@ def lift_catalog(
         row.update(factory.row_fields(obj))
         validate_frame(pd.DataFrame([row]), "lift_results", path=path)  # refused as it finishes
         rows.append(row)
+        start = starts.get(obj.object_id)
+        if start is not None:
+            story[obj.object_id] = start_story(start, result, growth, tolerance_rel, max_attempts)
 
     def done(i: int) -> None:
         if progress is not None:
@@ -349,7 +353,10 @@ def lift_catalog(
         table=table,
         attempts=tuple(attempts),
         results=tuple(results),
-        objects=tuple(obj.record() for obj in objects),
+        objects=tuple(
+            {**obj.record(), **({"start": story[obj.object_id]} if obj.object_id in story else {})}
+            for obj in objects
+        ),
         failures=tuple(failures),
         not_run=tuple(not_run),
     )
@@ -385,7 +392,9 @@ def lift_catalog_files(
     ends with what was kept.
 
     Args:
-        catalog_path: the catalog (CSV or Parquet; ``-`` for stdin).
+        catalog_path: the catalog (CSV or Parquet; ``-`` for stdin), or a coefficients table
+            whose objects carry their weight, size and μ (measured D and λ as the material,
+            :func:`~deformctl.lift.objects.read_lift_objects`).
         factory: builds the runner of each object.
         output: the lift_results table (``-`` for stdout).
         log: the lift log with every attempt (``-`` for stdout), or None.
@@ -412,7 +421,7 @@ def lift_catalog_files(
             raise UsageError(f"-o and --log are the same file: {log!r}")
         check_output_path(log, force)
     check_output_path(output, force)
-    selected = select_objects(read_catalog(catalog_path), object_ids)
+    selected = select_objects(read_lift_objects(catalog_path), object_ids)
     provenance = Provenance.from_invocation(
         [catalog_path, *(seed.inputs if seed is not None else ())],
         settings={
@@ -457,6 +466,64 @@ def lift_catalog_files(
             )
         write_table(run.table, output, "lift_results", provenance=provenance, force=mine)
     return run
+
+
+def attempts_from_f_w(
+    lift_force_n: float,
+    *,
+    weight_n: float,
+    friction_mu: float,
+    growth: float,
+    tolerance_rel: float,
+    max_attempts: int,
+) -> int | None:
+    """How many attempts the ``refine`` search from F_w takes on an object that lifts exactly
+    from ``lift_force_n`` on (the search replayed against that threshold; None when
+    ``lift_force_n`` is not a finite number). What a seeded search is compared with."""
+    from deformctl.series import TrialOutcome
+
+    if not (math.isfinite(lift_force_n) and lift_force_n > 0):
+        return None
+    replay = find_min_lift_force(
+        lambda force, _i: TrialOutcome(force, force >= lift_force_n, math.nan),
+        weight_n=weight_n,
+        friction_mu=friction_mu,
+        protocol="refine",
+        growth=growth,
+        tolerance_rel=tolerance_rel,
+        max_attempts=max_attempts,
+    )
+    return replay.attempts
+
+
+def start_story(
+    start: StartEstimate,
+    result: LiftSearchResult,
+    growth: float,
+    tolerance_rel: float,
+    max_attempts: int,
+) -> dict[str, Any]:
+    """One object of a seeded run as its lift log tells it: the prediction and its bound
+    (:meth:`StartEstimate.record`), the first force tried, the attempts, the outcome (converged,
+    the L_f found) and the attempts a search from F_w would have taken
+    (:func:`attempts_from_f_w`, against the L_f found)."""
+    from_f_w = attempts_from_f_w(
+        result.lift_force_n,
+        weight_n=result.weight_n,
+        friction_mu=result.friction_mu,
+        growth=growth,
+        tolerance_rel=tolerance_rel,
+        max_attempts=max_attempts,
+    )
+    return {
+        **start.record(),
+        "start_force_n": result.trials[0].grip_force_n if result.trials else None,
+        "attempts": result.attempts,
+        "converged": result.converged,
+        "lift_force_n": result.lift_force_n if math.isfinite(result.lift_force_n) else None,
+        "attempts_from_f_w": from_f_w,
+        "attempts_saved": None if from_f_w is None else from_f_w - result.attempts,
+    }
 
 
 def _not_run_row(

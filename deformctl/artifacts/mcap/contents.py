@@ -203,6 +203,10 @@ class McapContents:
 
 def _verify_integrity(data: bytes, name: str) -> bool:
     """Check magic, footer, data-section CRC and summary CRC; return True when both CRCs exist."""
+    if not data:
+        what = "no log on stdin (did the command before the pipe fail?)"
+        message = f"empty input: {what}" if name == "<stdin>" else "empty file"
+        raise InputDataError(message, path=name)
     if len(data) < len(MCAP_MAGIC) or data[: len(MCAP_MAGIC)] != MCAP_MAGIC:
         raise InputDataError("not an MCAP file (bad magic bytes)", path=name)
     min_len = 2 * len(MCAP_MAGIC) + _FOOTER_LEN + _DATA_END_LEN

@@ -36,7 +36,6 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from deformctl.artifacts import read_catalog
 from deformctl.artifacts.dataset import (
     LogPartWriter,
     dataset_fingerprint,
@@ -46,6 +45,7 @@ from deformctl.artifacts.dataset import (
 from deformctl.artifacts.provenance import Provenance, input_digest
 from deformctl.catalog import CatalogObject, select_objects
 from deformctl.errors import InputDataError
+from deformctl.lift.objects import read_lift_objects
 from deformctl.lift.search import (
     DEFAULT_GROWTH,
     DEFAULT_MAX_ATTEMPTS,
@@ -284,7 +284,7 @@ def lift_sweep(
         force: overwrite the sweep files of an existing directory.
     """
     factory = sim_runner_factory(preset=task.preset, scene_hz=task.scene_hz)
-    catalog = select_objects(read_catalog(catalog_path), object_ids)
+    catalog = select_objects(read_lift_objects(catalog_path), object_ids)
     _check_budgets(catalog, task)
     search = {
         "protocol": task.protocol,

@@ -1,0 +1,112 @@
+"""What ``lift`` lifts: a catalog, or a coefficients table whose objects carry their own values.
+
+:func:`read_lift_objects` reads either. A coefficients table from ``characterize`` (issue 36)
+carries each object's weight, size and μ as the squeeze log recorded them; as a catalog its
+measured D and λ become the object's material (``material_stiffness_n_per_cm``,
+``material_damping_ns_per_cm``), so ``lift coefficients.parquet --sim`` lifts, in the simulator,
+the object that was measured: what a user checks a prediction against before the rig. They are
+kept as ``deformability_n_per_cm`` and ``damping_ns_per_cm`` too, what ``--start-model``
+predicts from (:func:`deformctl.lift.seeded.object_features`), on the rig as in the simulator.
+
+Example:
+    >>> import pandas as pd
+    >>> table = pd.DataFrame({"object_id": ["A"], "deformability_n_per_cm": [30.0],
+    ...     "damping_ns_per_cm": [0.5], "weight_n": [2.9], "size_x_cm": [6.0],
+    ...     "size_y_cm": [6.0], "size_z_cm": [8.0], "friction_mu": [0.6]})
+    >>> row = catalog_from_coefficients(table).iloc[0]
+    >>> row["material_stiffness_n_per_cm"], row["weight_n"]
+    (30.0, 2.9)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from deformctl.artifacts.io import display_name, read_input_bytes
+from deformctl.catalog import MATERIAL_COLUMNS, SIZE_COLUMNS
+from deformctl.errors import InputDataError, SchemaError
+
+__all__ = ["OBJECT_FLAGS", "catalog_from_coefficients", "read_lift_objects"]
+
+#: Each catalog value a coefficients table must carry to be lifted, and the ``measure`` flag that
+#: records it in the squeeze log (and so, through ``characterize``, in the table).
+OBJECT_FLAGS: dict[str, str] = {
+    **dict.fromkeys(SIZE_COLUMNS, "--size-cm"),
+    "weight_n": "--weight-n",
+    "friction_mu": "--friction-mu",
+}
+_MEASURED = ("deformability_n_per_cm", "damping_ns_per_cm")
+_MATERIAL = dict(zip(_MEASURED, MATERIAL_COLUMNS, strict=True))
+
+
+def catalog_from_coefficients(table: pd.DataFrame, path: str | None = None) -> pd.DataFrame:
+    """The catalog rows of a coefficients table's objects (measured D and λ as their material).
+
+    Raises:
+        InputDataError: an object without one of :data:`OBJECT_FLAGS`' values (the column
+            missing, or NaN for some objects), naming the column, the objects and the
+            ``measure`` flag that records it (exit 65).
+    """
+    from deformctl.table import format_ids
+
+    ids = table["object_id"].astype(str)
+    out = pd.DataFrame({"object_id": ids})
+    for column, flag in OBJECT_FLAGS.items():
+        values = (
+            pd.to_numeric(table[column], errors="coerce").to_numpy(dtype=np.float64)
+            if column in table.columns
+            else np.full(len(table), math.nan)
+        )
+        bad = ~(np.isfinite(values) & (values > 0))
+        if bad.any():
+            raise InputDataError(
+                f"{column} is missing for {format_ids(ids[bad])}: a coefficients table lifts "
+                f"only objects whose squeeze log recorded it (measure {flag}, or a catalog "
+                "with it to measure --sim)",
+                path=path,
+            )
+        out[column] = values
+    for measured, material in _MATERIAL.items():
+        values = pd.to_numeric(table[measured], errors="coerce").to_numpy(dtype=np.float64)
+        out[material] = values
+        out[measured] = values  # what a start model predicts from, with a rig too
+    return out
+
+
+def read_lift_objects(path: str) -> pd.DataFrame:
+    """The objects to lift from ``path``: a catalog (CSV or Parquet; ``-`` for stdin), or a
+    coefficients table (:func:`catalog_from_coefficients`), validated as a catalog.
+
+    Raises:
+        MissingInputError: ``path`` does not exist (exit 66).
+        InputDataError, SchemaError: not a catalog nor a coefficients table, or an object
+            without a value it needs (exit 65).
+    """
+    from deformctl.artifacts.schema import validate_frame
+    from deformctl.artifacts.tables import (
+        PARQUET_MAGIC,
+        _frame_from_arrow,
+        read_catalog_bytes,
+        read_parquet_bytes,
+    )
+
+    data = read_input_bytes(path)
+    name = display_name(path)
+    if data[:4] == PARQUET_MAGIC:
+        arrow, meta = read_parquet_bytes(data, path)
+        if meta is not None and meta.get("kind") == "coefficients":
+            table = _frame_from_arrow(arrow, meta, "coefficients", path)
+            if len(table) == 0:
+                raise InputDataError("the coefficients table holds no objects", path=name)
+            catalog = validate_frame(catalog_from_coefficients(table, name), "catalog", path=name)
+            catalog.attrs = {"kind": "catalog", "from": "coefficients"}
+            return catalog
+        if meta is not None and meta.get("kind") not in ("catalog", None):
+            raise SchemaError(
+                f"is a {meta.get('kind')} table; lift reads a catalog or a coefficients table",
+                path=name,
+            )
+    return read_catalog_bytes(data, path)
