@@ -26,6 +26,19 @@ DENSE = {
 }
 
 
+# λ with the material-law estimator of issue 33 (lsq in integral form, D as the secant at the
+# operating force), on the sparse path whose D and L_f still match the dense values above within
+# 8e-5 and the bisection: the estimator moved λ by -0.54 % on the cube and -0.15 % on the sponge
+# (the golden objects moved by the same order). The solver is what this file checks; λ against the
+# dense path's own number would test the old estimator instead.
+LAMBDA_ISSUE_33 = {
+    ("cube", 5): 1.025583811530476,
+    ("sponge", 5): 6.5273391327305115,
+    ("cube", 8): 1.0276383991502152,
+    ("sponge", 8): 6.515148456500074,
+}
+
+
 def _system_matrix(spec: ObjectSpec, settings: SimSettings) -> np.ndarray:
     model = build_model(spec, settings, gripped=True)
     lat = model.lattice
@@ -72,7 +85,8 @@ def test_squeeze_coefficients_and_lifting_force_match_the_dense_path(name: str, 
     peak = spec.stiffness_n_per_m * 0.01 * spec.size_m[0]
     runs = squeeze_many(spec, 3, peak_force_n=peak, settings=settings, ramp_s=0.25, hold_s=1.0)
     coeffs = characterize({spec.object_id: runs})
-    d_ref, lam_ref, lf_ref = DENSE[(name, n)]
+    d_ref, _, lf_ref = DENSE[(name, n)]
+    lam_ref = LAMBDA_ISSUE_33[(name, n)]
     assert float(coeffs.deformability_n_per_cm[0]) == pytest.approx(d_ref, rel=0.005)
     assert float(coeffs.damping_ns_per_cm[0]) == pytest.approx(lam_ref, rel=0.005)
     assert _lift_force_n(spec, settings) == pytest.approx(lf_ref, rel=0.005)
