@@ -137,7 +137,8 @@ def test_the_stage_warns_for_a_clamped_start_and_gives_the_runner_the_ceiling() 
 
     def predictor(features: pd.DataFrame, f_w: np.ndarray) -> tuple[np.ndarray, ...]:
         n = len(features)
-        return np.array([3.5e301, 17.1][:n]), np.zeros(n, dtype=bool), [None] * n  # type: ignore[return-value]
+        no_bound = np.full(n, np.nan)  # a model without calibration scores
+        return np.array([3.5e301, 17.1][:n]), np.zeros(n, dtype=bool), [None] * n, no_bound
 
     seed = StartSeed("model", predictor, margin=1.005)  # type: ignore[arg-type]
     warnings: list[str] = []
