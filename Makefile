@@ -81,7 +81,7 @@ _report: $(R)/lift.parquet $(R)/coefficients.parquet $(R)/predictions.parquet \
 	  --require-beat-constant-ratio --require-ratio-span 1.2 1.7
 
 # Fit the paper preset's two parameters to the paper's 13 simulated lifting forces and write them
-# to the file the preset reads (about 10 minutes on 2 cores; prints ours vs paper, the worst and
+# to the file the preset reads (about 2 minutes on 2 cores; prints ours vs paper, the worst and
 # the leave-one-out worst error, the density check and the dt / lattice convergence).
 calibrate: install
 	$(BIN)/python -m deformctl.repro.calibrate --write datasets/calibration/paper.json --convergence

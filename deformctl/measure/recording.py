@@ -74,7 +74,7 @@ class Recording:
         ``force_rate_hz`` and ``position_rate_hz``; ``source`` (``ros2_bag`` or ``csv``: the
         log is a rig recording, which ``characterize`` fits with a preload by default),
         ``phase`` and ``ruptures`` (the points where squeezes were cut, see
-        :class:`deformctl.phases.Rupture`).
+        :class:`deformctl.series.Rupture`).
         """
         out: dict[str, Any] = {
             "force_rate_hz": self.force_rate_hz,

@@ -262,9 +262,9 @@ def read_ros2_bag(
 ) -> Recording:
     """Read the squeezes of one object from a ROS 2 MCAP bag (``ros2msg`` schemas, ``cdr``).
 
-    The recording is checked for plausibility (:mod:`deformctl.plausibility`: sample rates,
-    peak force, the force's axis, the compression's sign and size); every squeeze is cut at a
-    rupture (recorded in the result) and reduced to ``phase`` (:mod:`deformctl.phases`).
+    The recording is checked for plausibility (:mod:`deformctl.plausibility`: sample rates, peak
+    force, the force's axis, the compression's sign and size); every squeeze is cut at a rupture
+    (recorded in the result) and reduced to ``phase`` (:mod:`deformctl.characterize.rupture`).
 
     Args:
         path: the bag, one ``.mcap`` file.
