@@ -385,8 +385,8 @@ def test_output_and_log_must_differ(catalog: Path, tmp_path: Path) -> None:
 
 
 def _readme_lift_commands() -> list[str]:
-    readme = (REPO / "README.md").read_text(encoding="utf-8")
-    section = readme.split("\n## lift", 1)[1].split("\n## ", 1)[0]
+    guide = (REPO / "docs" / "guide" / "gripper.md").read_text(encoding="utf-8")
+    section = guide.split("\n## Lifting on the rig", 1)[1].split("\n## ", 1)[0]
     block = section.split("```sh\n", 1)[1].split("```", 1)[0]
     return [line.replace("\\\n", " ") for line in block.replace("\\\n", " ").splitlines()]
 

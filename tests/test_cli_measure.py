@@ -383,7 +383,10 @@ def test_default_window_matters_for_100_hz_positions(bag_run: tuple[Path, Path, 
 
 
 def _readme_invocations(command: str) -> list[list[str]]:
-    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    repo = Path(__file__).resolve().parents[1]
+    generated = repo / "docs" / "reference" / "cli.md"
+    pages = [repo / "README.md", *sorted(set((repo / "docs").rglob("*.md")) - {generated})]
+    text = "\n".join(p.read_text(encoding="utf-8") for p in pages)
     joined = text.replace("\\\n", " ")
     out = []
     for line in joined.splitlines():
@@ -396,7 +399,7 @@ def _readme_invocations(command: str) -> list[list[str]]:
 
 @pytest.mark.parametrize("command", ["measure", "characterize"])
 def test_readme_examples_parse(command: str) -> None:
-    """Every README invocation of the command uses options the command has."""
+    """Every invocation of the command in the README and docs/ uses options the command has."""
     import typer.main
 
     group = typer.main.get_command(app)

@@ -247,9 +247,9 @@ def test_existing_output_needs_force(setup: dict[str, Path], tmp_path: Path) -> 
 
 
 def _readme_commands() -> list[list[str]]:
-    """The shell commands of the README's table, train and predict sections, split into words."""
-    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    start, end = text.index("\n## table\n"), text.index("\n## inspect\n")
+    """The shell commands of the simulator guide's table, train and predict sections, in words."""
+    text = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "simulator.md").read_text()
+    start, end = text.index("\n## The index table"), text.index("\n## Looking at any artifact")
     commands: list[list[str]] = []
     for block in re.findall(r"```sh\n(.*?)```", text[start:end], flags=re.DOTALL):
         for command in block.replace("\\\n", " ").splitlines():
@@ -260,7 +260,7 @@ def _readme_commands() -> list[list[str]]:
 
 
 def test_readme_examples_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """Docs are executed: every README command of these sections, in order, in-process."""
+    """Docs are executed: every command of these sections, in order, in-process."""
     monkeypatch.chdir(tmp_path)
     commands = _readme_commands()
     assert [c[:2] for c in commands[:2]] == [
