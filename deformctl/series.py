@@ -23,6 +23,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from deformctl.reprs import short_repr
+
 FloatArray = NDArray[np.float64]
 
 
@@ -51,6 +53,8 @@ class SqueezeSeries:
             the recording has one (a ROS 2 bag's header stamps, a CSV export's absolute times);
             a squeeze log places the squeeze there. None for a simulated squeeze.
     """
+
+    __repr__ = short_repr
 
     object_id: str
     squeeze_index: int
@@ -90,6 +94,8 @@ class LiftAttemptSeries:
         normal_force_n: normal force of each palm (force felt), N, ``[n]``.
     """
 
+    __repr__ = short_repr
+
     time_s: FloatArray
     palm_z_m: FloatArray
     object_com_z_m: FloatArray
@@ -123,6 +129,8 @@ class TrialOutcome:
             for a simulated attempt.
     """
 
+    __repr__ = short_repr
+
     grip_force_n: float
     lifted: bool
     slip_m: float
@@ -141,6 +149,8 @@ class LiftAttempt:
         outcome: what the attempt found (``outcome.series`` is the attempt's time series, when
             recorded; ``outcome.details`` must be JSON-serialisable).
     """
+
+    __repr__ = short_repr
 
     object_id: str
     attempt_index: int

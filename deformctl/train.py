@@ -67,6 +67,7 @@ from deformctl.model import (
     TargetMode,
     make_model,
 )
+from deformctl.reprs import short_repr
 from deformctl.table import format_ids, standard_scales, standardized_distances
 
 #: Defaults of :func:`train_model` besides the network's: the paper's split, our restarts.
@@ -97,6 +98,8 @@ def regression_metrics(y_true: np.ndarray, y_pred: np.ndarray) -> dict[str, floa
 class Split:
     """The train/test split, as object ids in the order the seeded permutation drew them."""
 
+    __repr__ = short_repr
+
     train: tuple[str, ...]
     test: tuple[str, ...]
 
@@ -117,6 +120,8 @@ class TrainResult:
             ``nearest_lift_force_n``, ``f_w_n`` (NaN when unknown).
         training_range: feature -> (min, max) over the training rows.
     """
+
+    __repr__ = short_repr
 
     model: ScaledTargetRegressor
     metrics: dict[str, Any]
@@ -386,6 +391,8 @@ class Prediction:
             ``predicted_lift_force_n`` (N) and ``outside_training_range`` (bool).
         warnings: one line per input row outside the training range, naming the feature(s).
     """
+
+    __repr__ = short_repr
 
     frame: pd.DataFrame
     warnings: list[str]

@@ -283,7 +283,7 @@ def test_bad_squeezes_raise_one_line_input_errors(make, match, fit) -> None:  # 
 
 
 def test_unknown_method_and_mixed_objects() -> None:
-    with pytest.raises(UsageError, match="unknown method 'best'"):
+    with pytest.raises(UsageError, match="--method must be lsq or paper, got 'best'"):
         characterize({"a": [_good()]}, method="best")  # type: ignore[arg-type]
     other = _replace(_good(), object_id="other")
     with pytest.raises(InputDataError, match="several objects"):

@@ -14,6 +14,8 @@ A squeeze is modelled as one Kelvin–Voigt element between the palms, ``f = D �
   (rupture, the loading and unloading phases), used by ``measure`` too;
 * :mod:`~deformctl.characterize.models`: the exact Kelvin–Voigt response and synthetic squeezes
   with known D and λ (ground truth for tests and examples);
+* :mod:`~deformctl.characterize.options`: the options the command builds and the stage takes
+  (:class:`FitOptions`, :class:`QualityPolicy`), checked when built;
 * :mod:`~deformctl.characterize.stage`: the ``characterize`` stage over squeeze logs, dataset
   directories and sweeps.
 
@@ -22,7 +24,10 @@ The public names of the estimators, models and stage are re-exported here.
 
 from __future__ import annotations
 
-from deformctl.characterize.coefficients import COEFFICIENT_COLUMNS, CoefficientFit
+from deformctl.characterize.coefficients import (
+    COEFFICIENT_COLUMNS,
+    CoefficientFit,
+)
 from deformctl.characterize.fit import (
     COLLINEAR_COND,
     DEFAULT_MIN_COMPRESSION_FRAC,
@@ -33,10 +38,7 @@ from deformctl.characterize.fit import (
     MIN_SAMPLES,
     NO_COMPRESSION_M,
     NO_COMPRESSION_NOISE_MULT,
-    PRELOADS,
     UNIFORM_DT_RTOL,
-    Method,
-    Preload,
     characterize,
     damping_excitation,
     default_window_s,
@@ -49,6 +51,19 @@ from deformctl.characterize.models import (
     kelvin_voigt_piecewise_linear,
     kelvin_voigt_response,
     synthetic_kelvin_voigt_squeeze,
+)
+from deformctl.characterize.options import (
+    DEFAULT_FIT,
+    DEFAULT_POLICY,
+    METHODS,
+    PRELOADS,
+    FitOptions,
+    Method,
+    Preload,
+    QualityPolicy,
+    check_method,
+    check_paper_options,
+    check_preload,
 )
 from deformctl.characterize.stage import (
     RIG_SOURCES,
@@ -67,11 +82,14 @@ from deformctl.characterize.stage import (
 __all__ = [
     "COEFFICIENT_COLUMNS",
     "COLLINEAR_COND",
+    "DEFAULT_FIT",
     "DEFAULT_MIN_COMPRESSION_FRAC",
     "DEFAULT_MIN_RATE_FRAC",
+    "DEFAULT_POLICY",
     "DEFAULT_POLYORDER",
     "DEFAULT_WINDOW_RATE_HZ",
     "DEFAULT_WINDOW_S",
+    "METHODS",
     "MIN_SAMPLES",
     "NO_COMPRESSION_M",
     "NO_COMPRESSION_NOISE_MULT",
@@ -80,15 +98,20 @@ __all__ = [
     "UNIFORM_DT_RTOL",
     "CharacterizeTask",
     "CoefficientFit",
+    "FitOptions",
     "LogCoefficients",
     "Method",
     "Preload",
     "Profile",
+    "QualityPolicy",
     "characterize",
     "characterize_dir",
     "characterize_file",
     "characterize_items",
     "characterize_sweep",
+    "check_method",
+    "check_paper_options",
+    "check_preload",
     "damping_excitation",
     "default_preload",
     "default_window_s",

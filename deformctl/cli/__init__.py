@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import typer
 
-from deformctl import __version__
 from deformctl.cli import (
     characterize,
     inspect,
@@ -24,6 +23,7 @@ from deformctl.cli import (
     train,
 )
 from deformctl.cli._common import OneLineErrorGroup
+from deformctl.version import __version__
 
 app = typer.Typer(
     name="deformctl",

@@ -1,26 +1,26 @@
 """``deformctl measure --bag | --csv``: one object's squeeze log from a rig recording.
 
-Each recording source has a reader (:func:`deformctl.measure.read_ros2_bag`,
-:func:`deformctl.measure.read_csv_export`) behind :data:`READERS`, which checks its own options
-and returns the recording and the settings the provenance records;
-:func:`deformctl.measure.recording_log` writes the log.
+The flags become the library's options (:class:`~deformctl.catalog.MeasuredObject`, a
+:class:`~deformctl.measure.options.BagSource` or
+:class:`~deformctl.measure.options.CsvSource`, a :class:`~deformctl.measure.options.Segmentation`,
+each checked when built) and :func:`deformctl.measure.stage.measure_recording` reads the
+recording and writes its log.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
-from deformctl.artifacts import check_input_path, check_output_path
 from deformctl.artifacts.io import is_stdio
-from deformctl.catalog import object_record
+from deformctl.catalog import MeasuredObject
 from deformctl.cli._common import parse_mapping
 from deformctl.errors import UsageError
-from deformctl.measure import Recording, read_csv_export, read_ros2_bag, recording_log
+from deformctl.measure.options import BagSource, CsvSource, Segmentation
+from deformctl.measure.stage import measure_recording
 
 Bag = Annotated[
     str | None,
@@ -141,104 +141,74 @@ class RigOptions:
     phase: str | None = None
     position_increases_when: str | None = None
 
-    def given(self) -> dict[str, object]:
-        """Flag → value of the source-specific options (for refusing them elsewhere)."""
-        return {
-            "--wrench-topic": self.wrench_topics,
-            "--position-topic": self.position_topic,
-            "--joint": self.joint,
-            "--columns": self.columns,
-            "--units": self.units,
-            "--segment/--no-segment": self.segment,
-            "--phase": self.phase,
-            "--position-increases-when": self.position_increases_when,
-            "--object-id": self.object_id,
-        }
+    def given(self) -> list[str]:
+        """The flags of the source-specific options given (to refuse them elsewhere)."""
+        values = [
+            ("--wrench-topic", self.wrench_topics),
+            ("--position-topic", self.position_topic),
+            ("--joint", self.joint),
+            ("--columns", self.columns),
+            ("--units", self.units),
+            ("--segment/--no-segment", self.segment),
+            ("--phase", self.phase),
+            ("--position-increases-when", self.position_increases_when),
+            ("--object-id", self.object_id),
+        ]
+        return [flag for flag, value in values if value not in (None, [], False)]
 
 
-def _from_bag(
-    path: str, opts: RigOptions, size_x_cm: float | None
-) -> tuple[Recording, dict[str, Any]]:
-    if not opts.wrench_topics:
-        raise UsageError("--bag needs --wrench-topic (one, or two for two palms)")
-    if opts.position_topic is None:
-        raise UsageError("--bag needs --position-topic (PoseStamped or JointState)")
-    settings: dict[str, Any] = {
-        "source": "ros2_bag",
-        "wrench_topics": opts.wrench_topics,
-        "position_topic": opts.position_topic,
-        "joint": opts.joint,
-        "axis": opts.axis,
-        "position_is": opts.position_is,
-        "segment": True if opts.segment is None else opts.segment,
-        "phase": opts.phase or "all",
-        "position_increases_when": opts.position_increases_when,
-    }
-    return _read(read_ros2_bag, path, opts, size_x_cm, settings), settings
+def _source(flag: str, opts: RigOptions) -> BagSource | CsvSource:
+    """The recording's source options of ``--bag`` or ``--csv``.
 
-
-def _from_csv(
-    path: str, opts: RigOptions, size_x_cm: float | None
-) -> tuple[Recording, dict[str, Any]]:
+    Raises:
+        UsageError: a source option missing, or one out of its rule (exit 2).
+    """
+    if flag == "--bag":
+        if not opts.wrench_topics:
+            raise UsageError("--bag needs --wrench-topic (one, or two for two palms)")
+        if opts.position_topic is None:
+            raise UsageError("--bag needs --position-topic (PoseStamped or JointState)")
+        return BagSource(
+            wrench_topics=tuple(opts.wrench_topics),
+            position_topic=opts.position_topic,
+            joint=opts.joint,
+            axis=opts.axis,  # type: ignore[arg-type]
+            position_is=opts.position_is,  # type: ignore[arg-type]
+            position_increases_when=opts.position_increases_when,  # type: ignore[arg-type]
+        )
     if opts.columns is None:
         raise UsageError("--csv needs --columns time=COL,force=COL,position=COL")
-    settings: dict[str, Any] = {
-        "source": "csv",
-        "columns": parse_mapping(opts.columns, "--columns"),
-        "units": parse_mapping(opts.units, "--units") if opts.units is not None else {},
-        "position_is": opts.position_is,
-        "segment": False if opts.segment is None else opts.segment,
-        "phase": opts.phase or "all",
-        "position_increases_when": opts.position_increases_when,
-    }
-    return _read(read_csv_export, path, opts, size_x_cm, settings), settings
-
-
-def _read(
-    reader: Callable[..., Recording],
-    path: str,
-    opts: RigOptions,
-    size_x_cm: float | None,
-    settings: dict[str, Any],
-) -> Recording:
-    """``reader`` with the recorded settings (all but ``source``) as its keyword arguments."""
-    options = {k: v for k, v in settings.items() if k != "source"}
-    return reader(path, object_id=str(opts.object_id), size_x_cm=size_x_cm, **options)
-
-
-#: source option → its reader; exactly one source is given per run.
-READERS: dict[str, Callable[[str, RigOptions, float | None], tuple[Recording, dict[str, Any]]]] = {
-    "--bag": _from_bag,
-    "--csv": _from_csv,
-}
+    return CsvSource(
+        columns=parse_mapping(opts.columns, "--columns"),
+        units=parse_mapping(opts.units, "--units") if opts.units is not None else {},
+        position_is=opts.position_is,  # type: ignore[arg-type]
+        position_increases_when=opts.position_increases_when,  # type: ignore[arg-type]
+    )
 
 
 def run(
     flag: str,
-    source: str,
+    path: str,
     opts: RigOptions,
-    weight_n: float,
-    size_cm: tuple[float, float, float] | None,
-    friction_mu: float | None,
+    obj: MeasuredObject,
     output: str,
     force: bool,
 ) -> None:
-    """Read the recording ``source`` of ``--bag`` / ``--csv`` and write its squeeze log."""
-    if is_stdio(source):
+    """Read the recording ``path`` of ``--bag`` / ``--csv`` and write its squeeze log."""
+    if is_stdio(path):
         raise UsageError(f"{flag}: cannot read from stdin; give a file")
-    object_id = str(opts.object_id)
-    obj = object_record(object_id, weight_n, size_cm=size_cm, friction_mu=friction_mu)
-    check_input_path(source)
-    check_output_path(output, force)
-    rec, settings = READERS[flag](source, opts, None if size_cm is None else size_cm[0])
-    recording_log(source, rec, obj, settings, output=output, force=force)
+    source = _source(flag, opts)
+    segmentation = Segmentation(segment=opts.segment, phase=opts.phase or "all")  # type: ignore[arg-type]
+    rec = measure_recording(
+        path, source, obj, output=output, segmentation=segmentation, force=force
+    )
     for r in rec.ruptures:  # each squeeze is kept up to its rupture, recorded in the log
-        warning = f"warning: {source}: object {object_id!r}: rupture in {r.describe()}: cut off"
+        warning = f"warning: {path}: object {obj.object_id!r}: rupture in {r.describe()}: cut off"
         typer.echo(warning, err=True)
     duration_s = sum(float(s.time_s[-1]) for s in rec.squeezes)
     where = "stdout" if is_stdio(output) else output
     typer.echo(
-        f"{where}: {len(rec.squeezes)} squeeze(s) of {object_id!r}, {duration_s:.1f} s, "
+        f"{where}: {len(rec.squeezes)} squeeze(s) of {obj.object_id!r}, {duration_s:.1f} s, "
         f"force {_hz(rec.force_rate_hz)}, position {_hz(rec.position_rate_hz)}",
         err=True,
     )

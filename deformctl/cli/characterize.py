@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any
+from typing import Annotated
 
 import pandas as pd
 import typer
@@ -12,15 +12,18 @@ from deformctl.artifacts.io import is_stdio
 from deformctl.characterize import (
     DEFAULT_WINDOW_S,
     CharacterizeTask,
+    FitOptions,
     LogCoefficients,
+    QualityPolicy,
     characterize_file,
     characterize_sweep,
+    check_method,
+    check_preload,
     sweep_warnings,
 )
 from deformctl.characterize.quality import thresholds_help
 from deformctl.cli import _options as opt
 from deformctl.cli._common import finish_sweep, translate_errors
-from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
 
 Preload = Annotated[
@@ -137,23 +140,20 @@ def characterize(
 
     Example: deformctl characterize squeeze.mcap -o coefficients.parquet --method lsq
     """
-    if method not in ("lsq", "paper"):
-        raise UsageError(f"--method must be lsq or paper, got {method!r}")
-    options: dict[str, Any] = {
-        "preload": preload,
-        "constrain_damping": constrain_damping,
-        "strict": strict,
-        "allow_flagged": allow_flagged,
-    }
+    fit = FitOptions(
+        method=check_method(method), window_s=window_s,
+        preload=None if preload is None else check_preload(preload),
+        constrain_damping=constrain_damping,
+    )  # fmt: skip
+    policy = QualityPolicy(strict=strict, allow_flagged=allow_flagged)
     if sweep.check(output):
-        task = CharacterizeTask(method, window_s, **options)
+        task = CharacterizeTask(fit=fit, policy=policy)
         summary = characterize_sweep(log, task, output=output, sweep=sweep, force=force)
         for line in sweep_warnings(summary.out_dir):
             typer.echo(f"warning: {line}", err=True)
         finish_sweep(summary, "characterize")
         return
-    result = characterize_file(log, method, output=output, window_s=window_s, force=force,  # type: ignore[arg-type]
-                               **options)  # fmt: skip
+    result = characterize_file(log, fit, policy, output=output, force=force)
     for line in result.warnings:
         typer.echo(f"warning: {line}", err=True)
     typer.echo(render_summary(result), err=is_stdio(output))

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
 import pandas as pd
 import typer
 
@@ -19,10 +17,17 @@ from deformctl.artifacts.io import is_stdio
 from deformctl.cli._common import translate_errors
 from deformctl.cli._options import Force
 from deformctl.errors import SchemaError, UsageError, error_context
+from deformctl.quantities import DAMPING_NS_PER_CM, STIFFNESS_N_PER_CM, WEIGHT_N
 
 #: Table kinds ``predict`` reads features from.
 INPUT_KINDS = ("coefficients", "index_table", "predictions")
 
+#: Each flag's quantity (its rule, :mod:`deformctl.quantities`).
+QUANTITIES = {
+    "weight_n": WEIGHT_N,
+    "deformability_n_per_cm": STIFFNESS_N_PER_CM,
+    "damping_ns_per_cm": DAMPING_NS_PER_CM,
+}
 FLAGS = {
     "weight_n": "--weight-n",
     "deformability_n_per_cm": "--deformability-n-per-cm",
@@ -112,8 +117,7 @@ def predict(
     if catalog is not None and features is None:
         raise UsageError("--catalog joins weights to a COEFFICIENTS table; give the table")
     for key, value in flags.items():
-        if value is not None and not math.isfinite(value):
-            raise UsageError(f"{FLAGS[key]} must be a finite number, got {value}")
+        QUANTITIES[key].check_optional(value)
     if output is not None:
         check_output_path(output, force)  # fail before any work
 

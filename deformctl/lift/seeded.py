@@ -53,7 +53,9 @@ import numpy as np
 import pandas as pd
 
 from deformctl.catalog import CatalogObject
-from deformctl.errors import InputDataError, UsageError
+from deformctl.errors import InputDataError
+from deformctl.quantities import START_INTERPOLATE
+from deformctl.reprs import short_repr
 
 __all__ = [
     "FEATURE_COLUMNS",
@@ -87,6 +89,8 @@ class StartEstimate:
         warning: one line (no ``warning:`` prefix) naming the object and the feature(s) outside
             the range, when ``in_range`` is False.
     """
+
+    __repr__ = short_repr
 
     object_id: str
     predicted_lift_force_n: float
@@ -184,6 +188,8 @@ class StartSeed:
         coefficients_path: its file name, for messages.
         inputs: the files the seed was read from (hashed into the outputs' provenance).
     """
+
+    __repr__ = short_repr
 
     source: StartSource
     predictor: Predictor
@@ -283,8 +289,7 @@ class StartSeed:
         """
         from deformctl.table import standardized_distances, validate_index_table
 
-        if k is not None and k < 1:
-            raise UsageError(f"--start-interpolate must be >= 1, got {k}")
+        START_INTERPOLATE.check_optional(k)
         validate_index_table(table)
         keys = table[list(FEATURE_COLUMNS)].to_numpy(dtype=np.float64)
         lo, hi = keys.min(axis=0), keys.max(axis=0)
@@ -397,8 +402,7 @@ def load_start_table(
     from deformctl.lift.search import validate_start_margin
 
     validate_start_margin(margin)
-    if k is not None and k < 1:
-        raise UsageError(f"--start-interpolate must be >= 1, got {k}")
+    START_INTERPOLATE.check_optional(k)
     table = read_table(path, "index_table")
     coefficients_table = _coefficients(coefficients)
     settings = {"table": path, "margin": float(margin), "coefficients": coefficients}

@@ -21,21 +21,30 @@ import numpy as np
 
 from deformctl.artifacts.io import note_input
 from deformctl.characterize.rupture import Phase
-from deformctl.errors import InputDataError, MissingInputError, UsageError
-from deformctl.measure.recording import (
+from deformctl.errors import InputDataError, MissingInputError
+from deformctl.measure.options import (
+    DEFAULT_FORCE_THRESHOLD_FRAC,
+    DEFAULT_MIN_GAP_S,
+    DEFAULT_MIN_SQUEEZE_S,
+    DEFAULT_SEGMENTATION,
+    FORCE_UNITS_N,
+    LENGTH_UNITS_M,
+    TIME_UNITS_S,
+    UNITS_BY_KEY,
     CompressionZero,
+    CsvSource,
     IncreasesWhen,
     PositionIs,
+    Segmentation,
+    norm_unit,
+)
+from deformctl.measure.recording import (
     Recording,
-    _check_recording_options,
     _check_stream,
     _compression,
     _rate_hz,
 )
 from deformctl.measure.segment import (
-    DEFAULT_FORCE_THRESHOLD_FRAC,
-    DEFAULT_MIN_GAP_S,
-    DEFAULT_MIN_SQUEEZE_S,
     _detection_window_s,
     _to_squeezes,
 )
@@ -52,25 +61,6 @@ from deformctl.plausibility import (
 from deformctl.series import FloatArray, SqueezeSeries
 from deformctl.units import NS_PER_S
 
-#: Multiply a value in the unit by the factor to get SI; keys are lower-case unit names.
-TIME_UNITS_S: dict[str, float] = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9}
-FORCE_UNITS_N: dict[str, float] = {"n": 1.0, "kn": 1e3, "mn": 1e-3, "lbf": 4.4482216152605}
-LENGTH_UNITS_M: dict[str, float] = {
-    "m": 1.0,
-    "cm": 1e-2,
-    "mm": 1e-3,
-    "um": 1e-6,
-    "µm": 1e-6,
-    "in": 0.0254,
-}
-_UNITS_BY_KEY: dict[str, dict[str, float]] = {
-    "time": TIME_UNITS_S,
-    "force": FORCE_UNITS_N,
-    "position": LENGTH_UNITS_M,
-    "gap": LENGTH_UNITS_M,
-    "compression": LENGTH_UNITS_M,
-}
-_POSITION_KEYS = ("position", "gap", "compression")
 #: A CSV time column whose first value (in s, after ``--units``) is at least this is Unix time
 #: (2000-01-01T00:00:00Z): the squeeze log keeps those times as its ``log_time``.
 ABSOLUTE_TIME_MIN_S = 946_684_800.0
@@ -88,10 +78,6 @@ def _unit_hint(key: str, unit: str | None, what: str, stated: str | None = None)
     if stated is not None:
         return f"the file's units row says {stated!r}; is {what} in {spelled}?"
     return f"did you mean --units {key}={spelled}?"
-
-
-def _norm_unit(text: str) -> str:
-    return text.strip().strip("[]()").strip().lower()
 
 
 def _is_number(text: str) -> bool:
@@ -154,32 +140,54 @@ def read_csv_export(
         UsageError: a bad ``columns`` mapping, a ``units`` key that names no mapped column or an
             unknown unit in ``units``.
     """
+    source = CsvSource(
+        columns=columns,
+        units=units or {},
+        position_is=position_is,
+        compression_zero=compression_zero,
+        position_increases_when=position_increases_when,
+    )
+    segmentation = Segmentation(
+        segment=segment,
+        force_threshold_frac=force_threshold_frac,
+        min_gap_s=min_gap_s,
+        min_squeeze_s=min_squeeze_s,
+        phase=phase,
+    )
+    return read_csv(
+        path, source, object_id=object_id, segmentation=segmentation, size_x_cm=size_x_cm
+    )
+
+
+def read_csv(
+    path: str | PathLike[str],
+    source: CsvSource,
+    *,
+    object_id: str,
+    segmentation: Segmentation = DEFAULT_SEGMENTATION,
+    size_x_cm: float | None = None,
+) -> Recording:
+    """:func:`read_csv_export` with its options as the checked objects the command builds.
+
+    Args:
+        path: the CSV file.
+        source: the columns, their units and the position signal
+            (:class:`~deformctl.measure.options.CsvSource`).
+        object_id: catalog id written into the squeezes.
+        segmentation: how the file is cut (one squeeze unless ``segmentation.segment``).
+        size_x_cm: the object's size along the squeeze axis, when known.
+
+    Raises:
+        see :func:`read_csv_export`.
+    """
     p = Path(path)
-    _check_recording_options(phase, position_increases_when)
     if not p.is_file():
         raise MissingInputError("no such CSV file", path=p)
     note_input(p)
-    pos_keys = [k for k in _POSITION_KEYS if k in columns]
-    unknown = sorted(set(columns) - {"time", "force", *_POSITION_KEYS})
-    if unknown or "time" not in columns or "force" not in columns or len(pos_keys) != 1:
-        raise UsageError(
-            "columns must map time, force and exactly one of position, gap, compression; got "
-            + ",".join(f"{k}={v}" for k, v in columns.items())
-        )
-    pos_key = pos_keys[0]
+    columns = source.columns
+    pos_key = source.position_key
     keys = ("time", "force", pos_key)
-    opt_units = {k: _norm_unit(v) for k, v in (units or {}).items()}
-    for k, u in opt_units.items():
-        if k not in keys:
-            given = ",".join(f"{key}={columns[key]}" for key in keys)
-            raise UsageError(
-                f"--units: {k!r} names no column of --columns ({given}); valid keys: "
-                f"{', '.join(keys)}"
-            )
-        if u not in _UNITS_BY_KEY[k]:
-            raise UsageError(
-                f"units: unknown {k} unit {u!r}; supported: {', '.join(_UNITS_BY_KEY[k])}"
-            )
+    opt_units = {k: norm_unit(v) for k, v in source.units.items()}
 
     try:
         with p.open(newline="", encoding="utf-8-sig") as fh:
@@ -204,19 +212,19 @@ def read_csv_export(
     file_units: dict[str, str] = {}
     if body and all(not _is_number(_cell(body[0], idx[k])) for k in keys):
         for k in keys:
-            u = _norm_unit(_cell(body[0], idx[k]))
+            u = norm_unit(_cell(body[0], idx[k]))
             if not u:
                 continue
-            if u not in _UNITS_BY_KEY[k]:
+            if u not in UNITS_BY_KEY[k]:
                 raise InputDataError(
                     f"column {columns[k]!r}: unknown {k} unit {u!r} in the units row; "
-                    f"supported: {', '.join(_UNITS_BY_KEY[k])}",
+                    f"supported: {', '.join(UNITS_BY_KEY[k])}",
                     path=p,
                 )
             file_units[k] = u
         body = body[1:]
     for k, u in file_units.items():
-        if k in opt_units and _UNITS_BY_KEY[k][opt_units[k]] != _UNITS_BY_KEY[k][u]:
+        if k in opt_units and UNITS_BY_KEY[k][opt_units[k]] != UNITS_BY_KEY[k][u]:
             raise InputDataError(
                 f"column {columns[k]!r}: the file says unit {u!r}, the option says "
                 f"{opt_units[k]!r}",
@@ -241,26 +249,26 @@ def read_csv_export(
                     f"column {columns[k]!r}: non-numeric value {cell!r} in data row {i + 1}",
                     path=p,
                 ) from err
-        arrays[k] = vals * _UNITS_BY_KEY[k][u]
+        arrays[k] = vals * UNITS_BY_KEY[k][u]
     where = str(p)
     time_s = arrays["time"]
     for k in keys:
         _check_stream(f"column {columns[k]!r}", time_s, arrays[k], where)
     rate_hz = _rate_hz(time_s)
     _check_time_and_force(arrays, used, columns, where, file_units)
-    kind = position_is if pos_key == "position" else pos_key
+    kind = source.position_is if pos_key == "position" else pos_key
     compression_m = _compression(
         arrays[pos_key],
         arrays["force"],
         kind,
         where,
-        force_threshold_frac,
-        compression_zero,
-        position_increases_when,
+        segmentation.force_threshold_frac,
+        source.compression_zero,
+        source.position_increases_when,
         f"column {columns[pos_key]!r}",
     )
     peak_m = float(np.max(compression_m))
-    factor = _UNITS_BY_KEY[pos_key][used[pos_key]]
+    factor = UNITS_BY_KEY[pos_key][used[pos_key]]
     unit = suggest_unit(
         peak_m / factor,
         LENGTH_UNITS_M,
@@ -281,17 +289,19 @@ def read_csv_export(
         arrays["force"],
         compression_m,
         object_id=object_id,
-        segment=segment,
+        segmentation=segmentation,
+        segment=segmentation.segments(False),
         path=where,
-        force_threshold_frac=force_threshold_frac,
-        min_gap_s=min_gap_s,
-        min_squeeze_s=min_squeeze_s,
-        phase=phase,
         window_s=_detection_window_s(rate_hz),
         clock_origin_ns=round(float(time_s[0]) * NS_PER_S) if absolute else None,
     )
     return Recording(
-        squeezes, rate_hz, rate_hz, source="csv", phase=phase, ruptures=tuple(ruptures)
+        squeezes,
+        rate_hz,
+        rate_hz,
+        source=source.kind,
+        phase=segmentation.phase,
+        ruptures=tuple(ruptures),
     )
 
 

@@ -31,20 +31,14 @@ still measured from its unloaded shape.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
-from deformctl.characterize.rupture import PHASES
-from deformctl.errors import InputDataError, UsageError
+from deformctl.errors import InputDataError
 from deformctl.plausibility import compression_has_wrong_sign
+from deformctl.reprs import short_repr
 from deformctl.series import FloatArray, Rupture, SqueezeSeries
-
-Axis = Literal["x", "y", "z"]
-PositionIs = Literal["gap", "palm"]
-CompressionZero = Literal["first", "lead_in"]
-IncreasesWhen = Literal["closing", "opening"]
-INCREASES_WHEN: tuple[str, ...] = ("closing", "opening")
 
 
 @dataclass(frozen=True)
@@ -60,6 +54,8 @@ class Recording:
             independent samples than the squeezes have; ``characterize`` widens its
             differentiation window for it (see :func:`deformctl.characterize.default_window_s`).
     """
+
+    __repr__ = short_repr
 
     squeezes: list[SqueezeSeries]
     force_rate_hz: float
@@ -129,10 +125,6 @@ def _unloaded_reference(position: FloatArray, force_n: FloatArray, threshold_fra
 def _convention(kind: str, increases_when: str | None) -> str | None:
     """When the position grows for a position kind: ``closing``, ``opening`` or None (auto)."""
     if increases_when is not None:
-        if increases_when not in INCREASES_WHEN:
-            raise UsageError(
-                f"position_increases_when must be closing or opening, got {increases_when!r}"
-            )
         return increases_when
     return {"gap": "opening", "compression": "closing"}.get(kind)
 
@@ -159,12 +151,8 @@ def _compression(
     """
     if zero == "first":
         rel = position - position[0]
-    elif zero == "lead_in":
+    else:  # lead_in
         rel = position - _unloaded_reference(position, force_n, threshold_frac)
-    else:
-        raise UsageError(f"compression_zero must be 'first' or 'lead_in', got {zero!r}")
-    if kind not in ("gap", "palm", "compression"):
-        raise UsageError(f"unknown position kind {kind!r}; expected 'gap' or 'palm'")
     convention = _convention(kind, increases_when)
     if convention is None:  # one palm, auto: positive at the peak force
         peak = int(np.argmax(force_n))
@@ -187,12 +175,3 @@ def _compression(
             path=path,
         )
     return np.asarray(d, dtype=np.float64)
-
-
-def _check_recording_options(phase: str, increases_when: str | None) -> None:
-    if phase not in PHASES:
-        raise UsageError(f"--phase must be one of {', '.join(PHASES)}, got {phase!r}")
-    if increases_when is not None and increases_when not in INCREASES_WHEN:
-        raise UsageError(
-            f"--position-increases-when must be closing or opening, got {increases_when!r}"
-        )

@@ -28,6 +28,7 @@ from deformctl.artifacts.io import PathArg, display_name
 from deformctl.artifacts.provenance import Provenance
 from deformctl.artifacts.schema import load_json_schema, schema_version, validate_message
 from deformctl.errors import InputDataError, SchemaError
+from deformctl.reprs import short_repr
 from deformctl.units import NS_PER_S
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -123,6 +124,8 @@ class McapContents:
         messages: every message record, in file order.
         crcs_present: True when both the data-section and the summary CRC were written.
     """
+
+    __repr__ = short_repr
 
     path: str
     header: Header | None = None

@@ -46,12 +46,8 @@ from deformctl.artifacts.dataset import (
 from deformctl.artifacts.provenance import Provenance, input_digest
 from deformctl.catalog import CatalogObject, select_objects
 from deformctl.errors import InputDataError
-from deformctl.lift.search import (
-    DEFAULT_GROWTH,
-    DEFAULT_MAX_ATTEMPTS,
-    DEFAULT_TOLERANCE_REL,
-    TrialRunner,
-)
+from deformctl.lift.options import DEFAULT_SEARCH, SearchOptions
+from deformctl.lift.search import TrialRunner
 from deformctl.lift.stage import RunnerFactory, lift_catalog
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
 
@@ -191,16 +187,13 @@ class LiftTask:
 
     Attributes:
         preset: the :class:`~deformctl.presets.SimPreset` (model, profile, slip, release).
-        protocol, growth, tolerance_rel, max_attempts: the search options.
+        search: the search options.
         log_epoch_ns: where each part's lift log begins, ns since the Unix epoch (None: the
             log writer's fixed epoch, 2000-01-01).
     """
 
     preset: SimPreset
-    protocol: str = "refine"
-    growth: float = DEFAULT_GROWTH
-    tolerance_rel: float = DEFAULT_TOLERANCE_REL
-    max_attempts: int = DEFAULT_MAX_ATTEMPTS
+    search: SearchOptions = DEFAULT_SEARCH
     log_epoch_ns: int | None = None
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
@@ -210,14 +203,7 @@ class LiftTask:
             InputDataError: the object cannot be lifted or simulated (recorded as failed).
         """
         factory = sim_runner_factory(preset=self.preset)
-        run = lift_catalog(
-            [CatalogObject.from_row(item)],
-            factory,
-            protocol=self.protocol,  # type: ignore[arg-type]
-            growth=self.growth,
-            tolerance_rel=self.tolerance_rel,
-            max_attempts=self.max_attempts,
-        )
+        run = lift_catalog([CatalogObject.from_row(item)], factory, search=self.search)
         error = run.error_message()
         return TaskOutput(
             rows=spec_rows(run.table, "lift_results"),
@@ -273,13 +259,7 @@ def lift_sweep(
     factory = sim_runner_factory(preset=task.preset)
     catalog = select_objects(read_catalog(catalog_path), object_ids)
     _check_budgets(catalog, task)
-    search = {
-        "protocol": task.protocol,
-        "growth": task.growth,
-        "tolerance_rel": task.tolerance_rel,
-        "max_attempts": task.max_attempts,
-    }
-    run_settings = {"runner": factory.name, **factory.settings, **search}
+    run_settings = {"runner": factory.name, **factory.settings, **task.search.as_dict()}
     if task.log_epoch_ns is not None:
         run_settings["log_epoch_ns"] = task.log_epoch_ns
     provenance = Provenance.from_invocation([catalog_path], settings=run_settings)
