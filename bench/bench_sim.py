@@ -29,8 +29,8 @@ from deformctl.sim import (
     squeeze_many,
 )
 from deformctl.sim.engine import build_model, memory_estimate_bytes, run_model
-from deformctl.sim.kernels import spring_forces, spring_forces_numpy
 from deformctl.sim.lattice import build_lattice
+from deformctl.sim.step import spring_forces, spring_forces_numpy
 
 SPONGE = ObjectSpec("sponge", (17.8, 19.1, 9.2), 0.7, 0.5, 49.18, 6.47)
 
@@ -269,7 +269,7 @@ def v_cycle_cost(sizes: tuple[int, ...] = (8, 11, 16, 21), rounds: int = 20) -> 
         model = build_model(CUBE, SimSettings(particles_per_side=n), gripped=True)
         h = model.hierarchy
         assert h is not None
-        n0, tot, c = int(h.n[0]), int(h.n.sum()), h.coarse
+        n0, tot = int(h.n[0]), int(h.n.sum())
         fixed, cf = h.fixed_levels(np.zeros(n0, dtype=bool))
         b = np.random.default_rng(0).normal(size=n0)
         out = np.empty(n0)
@@ -281,11 +281,8 @@ def v_cycle_cost(sizes: tuple[int, ...] = (8, 11, 16, 21), rounds: int = 20) -> 
         for k in range(3):
             hk = dataclasses.replace(h, stencils=h.stencils[:k])
             args = (
-                hk.n, hk.vec_off, hk.row_off, hk.a_ptr, hk.a_idx, hk.a_val, hk.a_diag,
-                hk.inv_diag, hk.p_row_off, hk.p_ptr, hk.p_idx, hk.p_val, c.colptr, c.rowidx,
-                c.values, c.diag, c.perm, *hk.stencil_args(), fixed, b, np.empty(n0),
-                np.empty(n0), np.empty(tot), np.empty(tot), np.empty(tot),
-                np.empty(hk.work_size), cf,
+                hk.kernel_args(), fixed, b, np.empty(n0), np.empty(n0), np.empty(tot),
+                np.empty(tot), np.empty(tot), np.empty(hk.work_size), cf,
             )  # fmt: skip
             runs[str(k)] = lambda args=args: v_cycle(*args)
         best = dict.fromkeys(runs, float("inf"))

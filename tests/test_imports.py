@@ -45,15 +45,6 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ),
 )
 
-#: Known cycles, each a set of modules, allowed until they are removed.
-KNOWN_CYCLES: tuple[frozenset[str], ...] = (
-    # sim/lattice -> sim/multigrid -> sim/stencil -> sim/lattice: being removed on branch
-    # i31-sim (issue 31 point 3, ``sim/statics.py``); delete this entry when it lands.
-    frozenset({"deformctl.sim.lattice", "deformctl.sim.multigrid", "deformctl.sim.stencil"}),
-)
-#: The only folder whose modules may still exceed :data:`MAX_LINES`: being split on branch
-#: i31-sim (issue 31 point 1, ``sim/step/``); delete this exemption when it lands.
-LINE_LIMIT_EXEMPT = ("sim",)
 MAX_LINES = 800
 
 
@@ -183,7 +174,7 @@ def test_imports_only_go_down() -> None:
 
 
 def test_no_import_cycle_between_modules() -> None:
-    cycles = [c for c in strongly_connected(import_graph()) if frozenset(c) not in KNOWN_CYCLES]
+    cycles = strongly_connected(import_graph())
     assert not cycles, "import cycles:\n" + "\n".join(" <-> ".join(sorted(c)) for c in cycles)
 
 
@@ -222,8 +213,7 @@ def test_the_checks_fail_on_an_upward_import_and_a_cycle() -> None:
 def test_no_module_is_too_long() -> None:
     long = [
         f"{path.relative_to(PACKAGE.parent)}: {n} lines"
-        for name, path in _modules().items()
+        for path in _modules().values()
         if (n := len(path.read_text().splitlines())) > MAX_LINES
-        and _unit(name) not in LINE_LIMIT_EXEMPT
     ]
     assert not long, f"modules over {MAX_LINES} lines:\n" + "\n".join(long)

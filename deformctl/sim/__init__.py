@@ -11,6 +11,8 @@ integrator are described in :mod:`deformctl.sim.engine`.
 
 from __future__ import annotations
 
+# first: numba's cache of every kernel is keyed by all the kernel sources (see the module)
+from deformctl.sim import _kernel_cache  # noqa: F401
 from deformctl.sim.engine import SimSettings
 from deformctl.sim.objects import ObjectSpec, f_w_n
 from deformctl.sim.protocols import (

@@ -56,11 +56,11 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       The step's row loops visit only the rows that can act: a table or palm-plane row that is
       inactive and at least half an element from its surface is left out until the lattice has
       moved 0.2 element or a velocity could close that gap in one step
-      (``ROW_MARGIN_FRACTION``, :func:`kernels._choose_rows`; bit-identical results; a 21^3
-      lift attempt checks 117 of its 25,143 rows per round on average). A table row whose
-      impulse, extrapolated from the last two steps, is not positive is released before the
-      first round (``PREDICT_RELEASE``): the support peels off the table in fewer rounds (21^3:
-      0.69 -> 0.66 CG iterations per step).
+      (``ROW_MARGIN_FRACTION``, :func:`deformctl.sim.step.contact._choose_rows`; bit-identical
+      results; a 21^3 lift attempt checks 117 of its 25,143 rows per round on average). A table row
+      whose impulse, extrapolated from the last two steps, is not positive is released before the
+      first round (``PREDICT_RELEASE``): the support peels off the table in fewer rounds (21^3: 0.69
+      -> 0.66 CG iterations per step).
     * Measured candidates (``bench/bench_sim.py``, 10 cm cube, one lift attempt, 2-core machine
       under load): SuperLU's MMD ordering fills 2x more than nested dissection (24 M at 21^3),
       COLAMD 3.4x; CHOLMOD (``scikit-sparse``) has no wheel on PyPI (source only, needs the
@@ -84,7 +84,7 @@ lifting force by 0.0 % (sponge), 0.1 % (cotton), 0.0 % (sand), 0.4 % (undamped w
 doubling it to 2 ms by <= 0.7 %. Halving alpha (9 instead of 5 particles per longest side) moves
 it by 0.0-2.8 %, so the default is 5 particles per longest side.
 
-Contacts are velocity-level constraints solved each step (:mod:`deformctl.sim.kernels`): unilateral
+Contacts are velocity-level constraints solved each step (:mod:`deformctl.sim.step`): unilateral
 table contact on the bottom layer, and Coulomb friction between each palm and its face patch with
 a true static regime (exact stick, impulse bounded by ``mu N dt``) and a kinetic regime (impulse at
 the bound, opposing sliding). There is no regularised friction, so a hold inside the cone does not
@@ -136,14 +136,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 import scipy.sparse
 from numpy.typing import NDArray
 
 from deformctl.errors import UsageError
-from deformctl.sim import kernels
 from deformctl.sim.lattice import (
     Lattice,
     build_lattice,
@@ -151,13 +150,23 @@ from deformctl.sim.lattice import (
     palm_dof_map,
     particles_per_axis,
     reduced_stiffness,
-    resting_positions_m,
-    unit_squeeze_stiffness_n_per_m,
 )
 from deformctl.sim.multigrid import Hierarchy, build_hierarchy
 from deformctl.sim.objects import ObjectSpec
 from deformctl.sim.solver import LDLFactor, estimate_factor_entries, ldl_columns
+from deformctl.sim.statics import resting_positions_m, unit_squeeze_stiffness_n_per_m
 from deformctl.sim.stencil import build_stencil
+from deformctl.sim.step import (
+    N_REC,
+    Body,
+    Contacts,
+    DirectSolver,
+    Drive,
+    IterativeSolver,
+    Palms,
+    integrate,
+    integrate_iterative,
+)
 from deformctl.units import CM, GRAVITY_M_S2
 
 FloatArray = NDArray[np.float64]
@@ -168,32 +177,34 @@ IntArray = NDArray[np.int64]
 #: recorded state (a 1e-12 s step would ask for hundreds of GiB), above 50 ms the contact and
 #: slip events of a lift are not resolved.
 DT_BOUNDS_S = (1e-5, 0.05)
-#: velocity changes the iterative solver's warm start combines (:func:`kernels._warm_start`).
+#: velocity changes the iterative solver's warm start combines
+#: (:func:`deformctl.sim.step.iterative._warm_start`).
 #: CG iterations per solve, one lift attempt of the 10 cm cube at 8^3 / 16^3 / 21^3: linear
 #: extrapolation of two 1.24 / 1.97 / 2.47; least squares over 2: 0.63 / 1.06 / 1.47; over 3:
 #: 0.51 / 0.93 / 1.23; over 4: 0.47 / 0.88 / 1.16, over 6: 0.43 / - / 1.06 (3 is the fastest:
 #: each kept vector costs two passes over the DOFs per step). Since the coarse levels also fix
 #: what the fine level fixes (fewer iterations), at 16^3 per step: over 3 0.64, over 4 0.61,
 #: over 5 0.59, over 8 0.54 (a scratch variant of the warm start; still not worth the passes)
-WARM_HISTORY = 3  # kernels._warm_start takes at most 3
+WARM_HISTORY = 3  # step.iterative._warm_start takes at most 3
 #: the error a carried product ``A dv`` may have, as a fraction of the CG tolerance, before the
-#: iterative solver forms it again (:func:`kernels.integrate_iterative`): CG's stopping test then
-#: holds for the true residual within 1 %.
+#: iterative solver forms it again (:func:`deformctl.sim.step.iterative.integrate_iterative`):
+#: CG's stopping test then holds for the true residual within 1 %.
 PRODUCT_CARRY_FRACTION = 0.01
 #: the gap, as a fraction of the lattice's shortest element, beyond which the iterative solver's
 #: row loops leave out an inactive table or palm-plane row until the lattice moves
-#: (:func:`kernels._choose_rows`; results do not depend on it). Half an element keeps the bottom
-#: layer's table rows (and any palm-plane row a squeeze brings that close) and leaves out the
-#: rest; it is chosen again after 0.2 element of motion.
+#: (:func:`deformctl.sim.step.contact._choose_rows`; results do not depend on it). Half an
+#: element keeps the bottom layer's table rows (and any palm-plane row a squeeze brings that
+#: close) and leaves out the rest; it is chosen again after 0.2 element of motion.
 ROW_MARGIN_FRACTION = 0.5
 #: the iterative solver releases a table row before a step's first round when its impulse,
-#: extrapolated from the last two steps, is not positive (:func:`kernels.integrate_iterative`):
-#: fewer rounds while the support peels off the table, the same solution up to the CG tolerance
+#: extrapolated from the last two steps, is not positive
+#: (:func:`deformctl.sim.step.iterative.integrate_iterative`): fewer rounds while the support
+#: peels off the table, the same solution up to the CG tolerance
 PREDICT_RELEASE = True
 
-#: Bytes each simulated step keeps: the record row (``kernels.N_REC`` doubles), the commanded force
+#: Bytes each simulated step keeps: the record row (``N_REC`` doubles), the commanded force
 #: and palm velocity, and the series built from them (about three copies).
-STEP_BYTES = 8 * (kernels.N_REC + 2) * 3
+STEP_BYTES = 8 * (N_REC + 2) * 3
 
 
 @dataclass(frozen=True)
@@ -334,7 +345,8 @@ class Model:
         factor: sparse ``L D L^T`` of the implicit matrix ``A = M + dt C + dt^2 K``.
         contact_cols: ``A^-1 e_d`` for the DOFs of the rows that are live in most steps (palm
             DOFs, bottom layer), 1/kg, ``[n_cols, n_dof]``; col_of_dof: column of each DOF or -1.
-        row_dof, row_dof2, row_particle, row_type, row_link: contact rows (see kernels);
+        row_dof, row_dof2, row_particle, row_type, row_link: contact rows
+            (see :mod:`deformctl.sim.step`);
         bottom_particles, bottom_row: table contact map (every particle).
         gravity_m_s2: gravity along -z (0 when off).
     """
@@ -631,15 +643,7 @@ def build_model(
         col_dof_arr = col_dof_arr[:0]
     contact_cols = np.empty((col_dof_arr.size, n_dof))
     if factor is not None:
-        ldl_columns(
-            factor.colptr,
-            factor.rowidx,
-            factor.values,
-            factor.diag,
-            factor.perm,
-            col_dof_arr,
-            contact_cols,
-        )
+        ldl_columns(factor, col_dof_arr, contact_cols)
     col_of_dof = np.full(n_dof, -1, dtype=np.int64)
     col_of_dof[col_dof_arr] = np.arange(col_dof_arr.size)
     return Model(
@@ -690,7 +694,7 @@ def run_model(
     """Integrate ``len(force_cmd_n) - 1`` steps.
 
     The run starts from rest history: with BDF2 the state before the first step is taken equal to
-    the start state (exact for a body at rest; see :mod:`deformctl.sim.kernels`).
+    the start state (exact for a body at rest; see :mod:`deformctl.sim.step`).
 
     Args:
         force_cmd_n: commanded normal force per palm at each step end, N, ``[n_steps + 1]``
@@ -704,7 +708,7 @@ def run_model(
         q, v: initial DOF displacement (m) and velocity (m/s), ``[n_dof]``; zero by default.
 
     Returns:
-        final q, final v and the record matrix ``[n_run, kernels.N_REC]`` (``n_run`` is
+        final q, final v and the record matrix ``[n_run, N_REC]`` (``n_run`` is
         ``n_steps`` unless the run stopped early).
     """
     s = model.settings
@@ -712,93 +716,49 @@ def run_model(
     q0 = np.zeros(model.n_dof) if q is None else np.asarray(q, dtype=np.float64)
     v0 = np.zeros(model.n_dof) if v is None else np.asarray(v, dtype=np.float64)
     lat = model.lattice
-    common_head: tuple[Any, ...] = (
-        model.base_x,
-        q0,
-        v0,
-        model.dof_of,
-        model.particle_masses_kg,
-        lat.edges,
-        lat.rest_length_m,
-        lat.direction,
-        model.stiffness_n_per_m,
-        model.retardation_s,
-    )
-    common_tail: tuple[Any, ...] = (
-        model.gravity_m_s2,
-        model.palm_x_dof,
-        model.palm_z_dof,
-        model.palm_x0,
-        model.palm_stop_m,
-        s.palm_mass_kg,
+    body = Body(
+        model.base_x, model.dof_of, model.particle_masses_kg, lat.edges, lat.rest_length_m,
+        lat.direction, model.stiffness_n_per_m, model.retardation_s, s.nonlinear_springs,
+    )  # fmt: skip
+    palms = Palms(
+        model.palm_x_dof, model.palm_z_dof, model.palm_x0, model.palm_stop_m, s.palm_mass_kg,
         model.width_damping_ns_per_m,
+    )  # fmt: skip
+    contacts = Contacts(
+        model.row_dof, model.row_dof2, model.row_type, model.row_link, model.row_particle,
+        model.bottom_particles, model.bottom_row, model.spec.friction_mu, s.table_mu,
+    )  # fmt: skip
+    drive = Drive(
         np.ascontiguousarray(force_cmd_n, dtype=np.float64),
         np.ascontiguousarray(palm_vz_m_s, dtype=np.float64),
         np.ones(n_steps + 1)
         if gravity_scale is None
         else np.ascontiguousarray(gravity_scale, dtype=np.float64),
-        model.spec.friction_mu,
-        s.table_mu,
-        model.row_dof,
-        model.row_dof2,
-        model.row_type,
-        model.row_link,
-        model.row_particle,
-        model.bottom_particles,
-        model.bottom_row,
+        model.gravity_m_s2,
         s.dt_s,
         n_steps,
-        s.nonlinear_springs,
         s.integrator == "bdf2",
         -1.0 if stop_slip_m is None else float(stop_slip_m),
         int(stop_from_step),
     )
     if model.hierarchy is not None:
-        h = model.hierarchy
-        c = h.coarse
         tol = s.cg_tolerance_m_s * model.particle_mass_kg * math.sqrt(model.n_dof)
-        solver_args: tuple[Any, ...] = (
-            h.n,
-            h.vec_off,
-            h.row_off,
-            h.a_ptr,
-            h.a_idx,
-            h.a_val,
-            h.a_diag,
-            h.inv_diag,
-            h.p_row_off,
-            h.p_ptr,
-            h.p_idx,
-            h.p_val,
-            c.colptr,
-            c.rowidx,
-            c.values,
-            c.diag,
-            c.perm,
-            *h.stencil_args(),
+        iterative = IterativeSolver(
+            model.hierarchy.kernel_args(),
             tol,
             s.cg_max_iterations,
             WARM_HISTORY,
             PRODUCT_CARRY_FRACTION * tol,
             ROW_MARGIN_FRACTION * float(model.lattice.rest_length_m.min()),
             PREDICT_RELEASE,
+            model.solver_stats,
         )
-        return kernels.integrate_iterative(
-            *(common_head + solver_args + common_tail + (model.solver_stats,))
-        )
-    f = model.factor
-    assert f is not None
-    direct_args: tuple[Any, ...] = (
-        f.colptr,
-        f.rowidx,
-        f.values,
-        f.diag,
-        f.perm,
-        model.contact_cols,
-        model.col_of_dof,
+        return integrate_iterative(body, palms, contacts, drive, iterative, q0, v0)
+    assert model.factor is not None
+    direct = DirectSolver(
+        model.factor, model.contact_cols, model.col_of_dof, s.pgs_iterations, s.pgs_tolerance_m_s
     )
-    pgs: tuple[Any, ...] = (s.pgs_iterations, s.pgs_tolerance_m_s)
-    return kernels.integrate(*(common_head + direct_args + common_tail + pgs))
+    return integrate(body, palms, contacts, drive, direct, q0, v0)
 
 
 def positions_m(model: Model, q: FloatArray) -> FloatArray:

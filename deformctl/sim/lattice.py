@@ -1,4 +1,4 @@
-"""Particle lattice of a box, its Kelvin elements, and the stiffness calibration.
+"""Particle lattice of a box, its Kelvin elements and generalised DOFs, and its stiffness matrix.
 
 The box ``[-sx/2, sx/2] x [-sy/2, sy/2] x [0, sz]`` (m) is sampled by ``n_x x n_y x n_z`` particles
 with ``n_a = max(2, round(s_a / alpha) + 1)``. The spacing along each axis is ``s_a / (n_a - 1)``
@@ -11,7 +11,8 @@ by four lattice cells, one on an edge of the box by one; a face diagonal by two 
 Assembling cell by cell this way gives a uniform material, so boundary layers are not stiffer
 than the interior. The per-element stiffness is ``k_e = kappa * w_e`` with one scale ``kappa``
 (N/m) calibrated so that the lattice's squeeze stiffness between two rigid palms equals the
-object's D exactly, whatever alpha: see :func:`unit_squeeze_stiffness_n_per_m`. Dampers are
+object's D exactly, whatever alpha: see
+:func:`deformctl.sim.statics.unit_squeeze_stiffness_n_per_m`. Dampers are
 ``c_e = k_e * lambda / D`` (damping matrix proportional to the stiffness matrix), which makes the
 lattice an exact Kelvin–Voigt body in the quasi-static limit (the engine can move part of the
 squeeze damping onto a damper across the gripped width, see
@@ -282,81 +283,3 @@ def lattice_factor(
         perm = local[perm]
         perm = perm[perm >= 0]
     return ldl_factor(a, perm)
-
-
-#: calibration solves above this many DOFs use multigrid CG instead of a sparse factor
-DIRECT_CALIBRATION_MAX_DOFS = 1000
-
-
-def _regularised_solve(
-    lattice: Lattice,
-    element_coef: FloatArray,
-    load: FloatArray,
-    dof_of: IntArray,
-    n_dof: int,
-    fixed: IntArray,
-    gripped: bool,
-) -> FloatArray:
-    """Solve ``K u = f`` with ``u = 0`` on the DOFs ``fixed``, for a self-equilibrated load; rigid
-    modes are removed by ``eps I`` (unit masses). ``K`` is assembled from the elements'
-    ``element_coef`` (:func:`reduced_stiffness`). Returns ``u [n_dof]``.
-
-    Sparse ``L D L^T`` of the free DOFs' submatrix (nested dissection) up to
-    :data:`DIRECT_CALIBRATION_MAX_DOFS`, multigrid-preconditioned CG to a relative residual of
-    ``1e-13`` above (:mod:`deformctl.sim.multigrid`).
-    """
-    k = reduced_stiffness(lattice, element_coef, dof_of, n_dof)
-    keep = np.setdiff1d(np.arange(n_dof), fixed)
-    eps = 1e-10 * float(k.diagonal()[keep].sum()) / float(keep.size)
-    u = np.zeros(n_dof)
-    _, _, px, pz = shape_dof_map(lattice.shape, gripped)
-    if n_dof <= DIRECT_CALIBRATION_MAX_DOFS:
-        a = k[keep][:, keep] + eps * scipy.sparse.identity(keep.size, format="csr")
-        last = np.concatenate([px, pz])
-        factor = lattice_factor(lattice, a, dof_of, n_dof, last=last[last >= 0], keep=keep)
-        u[keep] = factor.solve(load[keep])
-        return u
-    from deformctl.sim.multigrid import build_hierarchy, solve  # a cycle at module level
-    from deformctl.sim.stencil import build_stencil
-
-    a = (k + eps * scipy.sparse.identity(n_dof, format="csr")).tocsr()
-    mask = np.zeros(n_dof, dtype=bool)
-    mask[fixed] = True
-    rhs = np.where(mask, 0.0, load)
-    stencil = build_stencil(
-        lattice, element_coef, np.full(lattice.n_particles, eps), dof_of, n_dof, px, pz
-    )
-    hierarchy = build_hierarchy(lattice.shape, gripped, a, stencil=stencil)
-    return solve(hierarchy, mask, rhs, rel_tol=1e-13)
-
-
-def unit_squeeze_stiffness_n_per_m(lattice: Lattice) -> float:
-    """Squeeze stiffness of the lattice with unit element scale (``k_e = w_e`` N/m).
-
-    Same boundary conditions as the squeeze protocol: each face layer bonded to its rigid palm in
-    x and z (friction sticking, palms fixed in z), free in y; equal and opposite palm forces.
-    Returns force / change of the palm gap.
-    """
-    dof_of, n_dof, px, pz = palm_dof_map(lattice, gripped=True)
-    load = np.zeros(n_dof)
-    load[px[0]] = 1.0
-    load[px[1]] = -1.0
-    u = _regularised_solve(lattice, lattice.unit_stiffness, load, dof_of, n_dof, pz, gripped=True)
-    closing = u[px[0]] - u[px[1]]
-    return 1.0 / closing
-
-
-def resting_positions_m(
-    lattice: Lattice, stiffness: FloatArray, particle_weight_n: FloatArray | float
-) -> FloatArray:
-    """Linear static equilibrium of the object on a frictionless table under gravity, m, ``[n, 3]``.
-
-    The bottom layer is held at z = 0; the rest of the lattice sags under its weight.
-    """
-    n = lattice.n_particles
-    dof_of, n_dof, _, _ = palm_dof_map(lattice, gripped=False)
-    fixed = dof_of[3 * np.flatnonzero(lattice.bottom_mask()) + 2]
-    load = np.zeros(n_dof)
-    load[dof_of[3 * np.arange(n) + 2]] = -np.broadcast_to(particle_weight_n, (n,))
-    u = _regularised_solve(lattice, stiffness, load, dof_of, n_dof, fixed, gripped=False)
-    return np.asarray(lattice.positions_m + u[dof_of].reshape(n, 3))

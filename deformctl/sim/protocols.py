@@ -15,9 +15,9 @@ from numpy.typing import NDArray
 
 from deformctl.errors import SimulationError, UsageError
 from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
-from deformctl.sim import kernels as K
 from deformctl.sim.engine import SimSettings, build_model, check_run_steps, run_model
 from deformctl.sim.objects import ObjectSpec
+from deformctl.sim.step import record as K
 from deformctl.units import GRAVITY_M_S2
 
 FloatArray = NDArray[np.float64]

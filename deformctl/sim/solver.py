@@ -17,7 +17,7 @@ run in numba (:func:`ldl_solve`), so the time-stepping kernel calls them without
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse
@@ -30,9 +30,10 @@ IntArray = NDArray[np.int64]
 Int32Array = NDArray[np.int32]
 
 
-@dataclass(frozen=True, eq=False)
-class LDLFactor:
+class LDLFactor(NamedTuple):
     """``P A P^T = L D L^T`` of a symmetric positive definite matrix ``A``.
+
+    A named tuple of arrays, so the numba kernels take it as one argument (:func:`ldl_solve`).
 
     Attributes:
         colptr, rowidx, values: strictly lower part of the unit lower factor ``L``, CSC
@@ -60,16 +61,7 @@ class LDLFactor:
     def solve(self, b: FloatArray) -> FloatArray:
         """``A^-1 b`` for a vector ``b`` ``[n]`` (numba kernel)."""
         out = np.empty(self.n)
-        ldl_solve(
-            self.colptr,
-            self.rowidx,
-            self.values,
-            self.diag,
-            self.perm,
-            np.ascontiguousarray(b, dtype=np.float64),
-            np.empty(self.n),
-            out,
-        )
+        ldl_solve(self, np.ascontiguousarray(b, dtype=np.float64), np.empty(self.n), out)
         return out
 
 
@@ -167,20 +159,12 @@ def ldl_factor(a: scipy.sparse.spmatrix, perm: IntArray) -> LDLFactor:
 
 
 @njit(cache=True)
-def ldl_solve(
-    colptr: IntArray,
-    rowidx: Int32Array,
-    values: FloatArray,
-    diag: FloatArray,
-    perm: IntArray,
-    b: FloatArray,
-    work: FloatArray,
-    out: FloatArray,
-) -> None:
-    """``out = A^-1 b`` from the factor arrays of :class:`LDLFactor` (``work``: scratch ``[n]``).
+def ldl_solve(f: LDLFactor, b: FloatArray, work: FloatArray, out: FloatArray) -> None:
+    """``out = A^-1 b`` from the factor ``f`` (``work``: scratch ``[n]``).
 
     ``b`` and ``out`` may be the same array.
     """
+    colptr, rowidx, values, diag, perm = f.colptr, f.rowidx, f.values, f.diag, f.perm
     n = diag.shape[0]
     for i in range(n):
         work[i] = b[perm[i]]
@@ -201,22 +185,14 @@ def ldl_solve(
 
 
 @njit(cache=True)
-def ldl_columns(
-    colptr: IntArray,
-    rowidx: Int32Array,
-    values: FloatArray,
-    diag: FloatArray,
-    perm: IntArray,
-    dofs: IntArray,
-    out: FloatArray,
-) -> None:
+def ldl_columns(f: LDLFactor, dofs: IntArray, out: FloatArray) -> None:
     """``out[c] = A^-1 e_{dofs[c]}`` for every ``c`` (``out``: ``[len(dofs), n]``)."""
-    n = diag.shape[0]
+    n = f.diag.shape[0]
     b = np.zeros(n)
     work = np.empty(n)
     for c in range(dofs.shape[0]):
         b[dofs[c]] = 1.0
-        ldl_solve(colptr, rowidx, values, diag, perm, b, work, out[c])
+        ldl_solve(f, b, work, out[c])
         b[dofs[c]] = 0.0
 
 

@@ -12,10 +12,10 @@ Every kernel is reached through the public protocols with the argument types of 
 squeeze and a lift attempt with the direct solver (the ``table`` preset's lattice) and with the
 iterative one (multigrid CG), backward Euler and BDF2.
 
-numba's cache is keyed on each function's own source file: after editing
-:mod:`deformctl.sim.multigrid` or :mod:`deformctl.sim.solver`, the cached step loops of
-:mod:`deformctl.sim.kernels` that call into them are stale until ``deformctl/sim/__pycache__/
-*.nbi`` is removed (``make clean`` does).
+Every kernel's cache is keyed by a hash of all the simulator's kernel sources
+(:mod:`deformctl.sim._kernel_cache`), not by its own file only as numba's is: after an edit of
+any kernel module (the multigrid, the stencil sweeps, the step loops...) every kernel compiles
+afresh, so a stale kernel is never loaded; run the warm-up again after such an edit.
 """
 
 from __future__ import annotations

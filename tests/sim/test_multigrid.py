@@ -19,9 +19,6 @@ from deformctl.sim.engine import build_model
 from deformctl.sim.lattice import shape_dof_map
 from deformctl.sim.multigrid import (
     Hierarchy,
-    _cholesky_into,
-    _grid_prolong_add,
-    _grid_restrict,
     build_hierarchy,
     interpolation,
     pcg,
@@ -29,6 +26,8 @@ from deformctl.sim.multigrid import (
     stencil_scratch_offsets,
     v_cycle,
 )
+from deformctl.sim.multigrid.levels import _cholesky_into
+from deformctl.sim.multigrid.transfer import _grid_prolong_add, _grid_restrict
 
 CUBE = ObjectSpec("cube", (10.0, 10.0, 10.0), 5.0, 0.5, 30.0, 1.0)
 
@@ -51,14 +50,11 @@ def _v_cycle(h: Hierarchy, fixed: np.ndarray, b: np.ndarray) -> tuple[np.ndarray
     n0 = int(h.n[0])
     tot = int(h.n.sum())
     z, az = np.empty(n0), np.empty(n0)
-    c = h.coarse
-    st_shape, st_halo = h.stencil_args()[:2]
-    grid = int(stencil_scratch_offsets(st_shape, st_halo)[-1])
+    sts = h.stencil_args()
+    grid = int(stencil_scratch_offsets(sts.shape, sts.halo)[-1])
     fixed_all, cf = h.fixed_levels(fixed)
     v_cycle(
-        h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag, h.p_row_off,
-        h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
-        *h.stencil_args(), fixed_all, b, z, az, np.empty(tot), np.empty(tot), np.empty(tot),
+        h.kernel_args(), fixed_all, b, z, az, np.empty(tot), np.empty(tot), np.empty(tot),
         np.empty(grid), cf,
     )  # fmt: skip
     return z, az
@@ -67,14 +63,9 @@ def _v_cycle(h: Hierarchy, fixed: np.ndarray, b: np.ndarray) -> tuple[np.ndarray
 def _cg(h: Hierarchy, fixed: np.ndarray, b: np.ndarray, rel_tol: float) -> tuple[int, np.ndarray]:
     """CG from zero to ``rel_tol`` of the free right-hand side: its iterations and solution."""
     x = np.zeros(b.size)
-    c = h.coarse
     work = np.zeros(h.work_size)
-    its = pcg(
-        h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag,
-        h.p_row_off, h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
-        *h.stencil_args(), fixed, b, x, rel_tol * float(np.linalg.norm(np.where(fixed, 0, b))),
-        100, work, work[:0], False,
-    )  # fmt: skip
+    tol = rel_tol * float(np.linalg.norm(np.where(fixed, 0, b)))
+    its = pcg(h.kernel_args(), fixed, b, x, tol, 100, work, work[:0], False)
     return int(its), x
 
 
@@ -164,17 +155,12 @@ def test_cg_with_a_known_initial_product_skips_nothing_it_needs() -> None:
     fixed = rng.random(n0) < 0.1
     b = rng.normal(size=n0)
     x0 = rng.normal(size=n0)
-    c = h.coarse
     tol = 1e-9 * float(np.linalg.norm(b))
 
     def run(ax: np.ndarray, known: bool) -> tuple[int, np.ndarray, np.ndarray]:
         x = x0.copy()
         work = np.zeros(h.work_size)
-        its = pcg(
-            h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag,
-            h.p_row_off, h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
-            *h.stencil_args(), fixed, b, x, tol, 100, work, ax, known,
-        )  # fmt: skip
+        its = pcg(h.kernel_args(), fixed, b, x, tol, 100, work, ax, known)
         return its, x, work[:n0].copy()
 
     its_self, x_self, _ = run(np.empty(0), False)

@@ -1,5 +1,5 @@
 """The iterative solver's row loops leave out far, inactive table and palm-plane rows
-(deformctl.sim.kernels._choose_rows): the results are bit-identical to visiting every row."""
+(deformctl.sim.step.contact._choose_rows): the results are bit-identical to visiting every row."""
 
 from __future__ import annotations
 

@@ -15,19 +15,13 @@ import pytest
 import scipy.sparse
 
 from deformctl.sim.lattice import build_lattice, palm_dof_map, reduced_stiffness, shape_dof_map
-from deformctl.sim.multigrid import (
-    _scalar_interpolation,
-    build_hierarchy,
-    interpolation,
-    product,
-    v_cycle,
-)
+from deformctl.sim.multigrid import build_hierarchy, interpolation, product, v_cycle
+from deformctl.sim.multigrid.hierarchy import _scalar_interpolation
 from deformctl.sim.stencil import (
     DIRECTIONS,
     UPPER_OFFSETS,
+    Rows,
     Stencil,
-    _offsets,
-    _upper_offsets,
     add_dofs,
     backward_sweep,
     build_block_stencil,
@@ -38,6 +32,7 @@ from deformctl.sim.stencil import (
     residual_after_forward,
     stencil_product,
 )
+from deformctl.sim.stencil.sums import _offsets, _upper_offsets
 
 CASES = [
     # (particles along x, gripped, palm surface layers, palm z DOFs fixed)
@@ -164,23 +159,15 @@ def test_block_stencil_sweeps_are_exact_block_gauss_seidel(
     dense = a.toarray()
     xg = np.zeros(st.grid_len)
     wk = np.zeros(st.grid_len)
-    forward_sweep_from_zero(
-        st.shape, st.halo, st.coef, st.block, st.block_inv, st.dof_of, st.rep, st.palm, ptr, idx,
-        val, none, b, xg,
-    )  # fmt: skip
+    forward_sweep_from_zero(st, Rows(ptr, idx, val), none, b, xg)
     want = np.zeros(n_dof)
     _dense_block_gs(dense, st, none, b, want, reverse=False)
     np.testing.assert_allclose(xg[3 * st.halo + st.rep], want, rtol=0, atol=1e-12 * abs(want).max())
     r = np.empty(n_dof)
-    residual_after_forward(
-        st.shape, st.halo, st.coef, st.dof_of, st.rep, st.palm, ptr, idx, val, none, b, xg, wk, r
-    )
+    residual_after_forward(st, Rows(ptr, idx, val), none, b, xg, wk, r)
     np.testing.assert_allclose(r, b - a @ want, rtol=0, atol=1e-12 * abs(b).max())
     out_x, out_ax = np.empty(n_dof), np.empty(n_dof)
-    backward_sweep(
-        st.shape, st.halo, st.coef, st.block, st.block_inv, st.dof_of, st.rep, st.palm, ptr, idx,
-        val, none, b, xg, wk, out_x, out_ax, True,
-    )  # fmt: skip
+    backward_sweep(st, Rows(ptr, idx, val), none, b, xg, wk, out_x, out_ax, True)
     _dense_block_gs(dense, st, none, b, want, reverse=True)
     np.testing.assert_allclose(out_x, want, rtol=0, atol=1e-12 * abs(want).max())
     np.testing.assert_allclose(out_ax, a @ out_x, rtol=0, atol=1e-12 * abs(out_ax).max())
@@ -198,10 +185,7 @@ def test_sweeps_are_exact_block_gauss_seidel(
     dense = a.toarray()
     xg = np.zeros(st.grid_len)
     axg = np.empty(st.grid_len)
-    forward_sweep_from_zero(
-        st.shape, st.halo, st.coef, st.block, st.block_inv, st.dof_of, st.rep, st.palm, ptr, idx,
-        val, fixed, b, xg,
-    )  # fmt: skip
+    forward_sweep_from_zero(st, Rows(ptr, idx, val), fixed, b, xg)
     want = np.zeros(n_dof)
     _dense_block_gs(dense, st, fixed, b, want, reverse=False)
     x = xg[3 * st.halo + st.rep]
@@ -211,19 +195,13 @@ def test_sweeps_are_exact_block_gauss_seidel(
     np.testing.assert_array_equal(coords, x[st.dof_of])
     # the residual right after the sweep (half a pass) is b - A x
     r = np.empty(n_dof)
-    residual_after_forward(
-        st.shape, st.halo, st.coef, st.dof_of, st.rep, st.palm, ptr, idx, val, fixed, b, xg,
-        axg, r,
-    )  # fmt: skip
+    residual_after_forward(st, Rows(ptr, idx, val), fixed, b, xg, axg, r)
     np.testing.assert_allclose(
         r, np.where(fixed, 0.0, b - a @ want), rtol=0, atol=1e-12 * abs(b).max()
     )
     # the backward sweep is the exact reverse, and returns A x without a product
     out_x, out_ax = np.empty(n_dof), np.empty(n_dof)
-    backward_sweep(
-        st.shape, st.halo, st.coef, st.block, st.block_inv, st.dof_of, st.rep, st.palm, ptr, idx,
-        val, fixed, b, xg, axg, out_x, out_ax, True,
-    )  # fmt: skip
+    backward_sweep(st, Rows(ptr, idx, val), fixed, b, xg, axg, out_x, out_ax, True)
     _dense_block_gs(dense, st, fixed, b, want, reverse=True)
     np.testing.assert_allclose(out_x, want, rtol=0, atol=1e-12 * abs(want).max())
     ax = np.where(fixed, 0.0, a @ out_x)
@@ -248,7 +226,6 @@ def test_v_cycle_with_stencils_is_the_multigrid_cycle_and_symmetric(
     )
     assert h.levels == levels
     assert len(h.stencils) == levels - 1
-    c = h.coarse
     tot = int(h.n.sum())
 
     fixed_all, cf = h.fixed_levels(fixed)
@@ -256,9 +233,7 @@ def test_v_cycle_with_stencils_is_the_multigrid_cycle_and_symmetric(
     def cycle(b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         z, az = np.empty(n_dof), np.empty(n_dof)
         v_cycle(
-            h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, h.a_diag, h.inv_diag,
-            h.p_row_off, h.p_ptr, h.p_idx, h.p_val, c.colptr, c.rowidx, c.values, c.diag, c.perm,
-            *h.stencil_args(), fixed_all, b, z, az, np.empty(tot), np.empty(tot), np.empty(tot),
+            h.kernel_args(), fixed_all, b, z, az, np.empty(tot), np.empty(tot), np.empty(tot),
             np.empty(h.work_size), cf,
         )  # fmt: skip
         return z, az
@@ -340,8 +315,7 @@ def test_stencil_product_is_the_matrix_product(
     x = np.random.default_rng(nx).normal(size=a.shape[0])
     out = np.full(a.shape[0], np.nan)
     xg = np.full(st.grid_len, np.nan)
-    stencil_product(st.shape, st.halo, st.coef, st.block, st.dof_of, st.palm, ptr, idx, val, x,
-                    xg, out)  # fmt: skip
+    stencil_product(st, Rows(ptr, idx, val), x, xg, out)
     want = a @ x
     np.testing.assert_allclose(out, want, rtol=0, atol=1e-12 * np.abs(want).max())
 
@@ -356,6 +330,6 @@ def test_hierarchy_product_is_the_finest_matrix_product(stencils: int) -> None:
     x = np.random.default_rng(2).normal(size=a.shape[0])
     out = np.full(a.shape[0], np.nan)
     work = np.full(h.work_size, np.nan)
-    product(h.n, h.vec_off, h.row_off, h.a_ptr, h.a_idx, h.a_val, *h.stencil_args(), work, x, out)
+    product(h.kernel_args(), work, x, out)
     want = a @ x
     np.testing.assert_allclose(out, want, rtol=0, atol=1e-12 * np.abs(want).max())

@@ -1,4 +1,4 @@
-"""The iterative solver's warm start (deformctl.sim.kernels._warm_start) and what it buys."""
+"""The iterative solver's warm start (deformctl.sim.step.iterative._warm_start) and what it buys."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 
 from deformctl.sim import LiftProfile, ObjectSpec, SimSettings, lift_attempt, rigid_lift_force_n
 from deformctl.sim.engine import build_model
-from deformctl.sim.kernels import _warm_start
+from deformctl.sim.step.iterative import _warm_start
 
 CUBE = ObjectSpec("cube", (10.0, 10.0, 10.0), 5.0, 0.5, 30.0, 1.0)
 

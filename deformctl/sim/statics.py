@@ -1,0 +1,102 @@
+"""Static solves on the lattice: the squeeze-stiffness calibration and the rest shape.
+
+Both are linear statics of the lattice's stiffness (:func:`deformctl.sim.lattice.
+reduced_stiffness`) with some DOFs held: small lattices by a sparse factor
+(:mod:`deformctl.sim.solver`), larger ones by the multigrid CG of the iterative step solver
+(:mod:`deformctl.sim.multigrid`). They sit above the lattice, the stencil and the multigrid
+levels, which know nothing of them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse
+from numpy.typing import NDArray
+
+from deformctl.sim.lattice import (
+    Lattice,
+    lattice_factor,
+    palm_dof_map,
+    reduced_stiffness,
+    shape_dof_map,
+)
+from deformctl.sim.multigrid import build_hierarchy, solve
+from deformctl.sim.stencil import build_stencil
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+#: calibration solves above this many DOFs use multigrid CG instead of a sparse factor
+DIRECT_CALIBRATION_MAX_DOFS = 1000
+
+
+def _regularised_solve(
+    lattice: Lattice,
+    element_coef: FloatArray,
+    load: FloatArray,
+    dof_of: IntArray,
+    n_dof: int,
+    fixed: IntArray,
+    gripped: bool,
+) -> FloatArray:
+    """Solve ``K u = f`` with ``u = 0`` on the DOFs ``fixed``, for a self-equilibrated load; rigid
+    modes are removed by ``eps I`` (unit masses). ``K`` is assembled from the elements'
+    ``element_coef`` (:func:`reduced_stiffness`). Returns ``u [n_dof]``.
+
+    Sparse ``L D L^T`` of the free DOFs' submatrix (nested dissection) up to
+    :data:`DIRECT_CALIBRATION_MAX_DOFS`, multigrid-preconditioned CG to a relative residual of
+    ``1e-13`` above (:mod:`deformctl.sim.multigrid`).
+    """
+    k = reduced_stiffness(lattice, element_coef, dof_of, n_dof)
+    keep = np.setdiff1d(np.arange(n_dof), fixed)
+    eps = 1e-10 * float(k.diagonal()[keep].sum()) / float(keep.size)
+    u = np.zeros(n_dof)
+    _, _, px, pz = shape_dof_map(lattice.shape, gripped)
+    if n_dof <= DIRECT_CALIBRATION_MAX_DOFS:
+        a = k[keep][:, keep] + eps * scipy.sparse.identity(keep.size, format="csr")
+        last = np.concatenate([px, pz])
+        factor = lattice_factor(lattice, a, dof_of, n_dof, last=last[last >= 0], keep=keep)
+        u[keep] = factor.solve(load[keep])
+        return u
+    a = (k + eps * scipy.sparse.identity(n_dof, format="csr")).tocsr()
+    mask = np.zeros(n_dof, dtype=bool)
+    mask[fixed] = True
+    rhs = np.where(mask, 0.0, load)
+    stencil = build_stencil(
+        lattice, element_coef, np.full(lattice.n_particles, eps), dof_of, n_dof, px, pz
+    )
+    hierarchy = build_hierarchy(lattice.shape, gripped, a, stencil=stencil)
+    return solve(hierarchy, mask, rhs, rel_tol=1e-13)
+
+
+def unit_squeeze_stiffness_n_per_m(lattice: Lattice) -> float:
+    """Squeeze stiffness of the lattice with unit element scale (``k_e = w_e`` N/m).
+
+    Same boundary conditions as the squeeze protocol: each face layer bonded to its rigid palm in
+    x and z (friction sticking, palms fixed in z), free in y; equal and opposite palm forces.
+    Returns force / change of the palm gap.
+    """
+    dof_of, n_dof, px, pz = palm_dof_map(lattice, gripped=True)
+    load = np.zeros(n_dof)
+    load[px[0]] = 1.0
+    load[px[1]] = -1.0
+    u = _regularised_solve(lattice, lattice.unit_stiffness, load, dof_of, n_dof, pz, gripped=True)
+    closing = u[px[0]] - u[px[1]]
+    return 1.0 / closing
+
+
+def resting_positions_m(
+    lattice: Lattice, stiffness: FloatArray, particle_weight_n: FloatArray | float
+) -> FloatArray:
+    """Linear static equilibrium of the object on a frictionless table under gravity, m, ``[n, 3]``.
+
+    The bottom layer is held at z = 0; the rest of the lattice sags under its weight.
+    """
+    n = lattice.n_particles
+    dof_of, n_dof, _, _ = palm_dof_map(lattice, gripped=False)
+    fixed = dof_of[3 * np.flatnonzero(lattice.bottom_mask()) + 2]
+    load = np.zeros(n_dof)
+    load[dof_of[3 * np.arange(n) + 2]] = -np.broadcast_to(particle_weight_n, (n,))
+    u = _regularised_solve(lattice, stiffness, load, dof_of, n_dof, fixed, gripped=False)
+    return np.asarray(lattice.positions_m + u[dof_of].reshape(n, 3))
