@@ -8,7 +8,8 @@ against the command line's):
 * ``measure --sim``: :func:`simulate_squeezes` (a :class:`SqueezeProtocol`; the ``paper``
   preset's simulator settings);
 * ``measure --bag`` / ``--csv``: :func:`read_recording` with a :class:`BagSource` or a
-  :class:`CsvSource` and a :class:`Segmentation`; the object is a :class:`MeasuredObject`;
+  :class:`CsvOptions` (with its :class:`CsvDialect`) and a :class:`Segmentation`; the object
+  is a :class:`MeasuredObject`;
 * ``measure --images``: :func:`measure_images` (a :class:`ScaleReference`, an
   :class:`ObjectMask`);
 * ``characterize``: :func:`read_and_characterize` (:class:`FitOptions`, :class:`QualityPolicy`;
@@ -16,7 +17,8 @@ against the command line's):
 * ``lift``: :func:`lift_catalog` with :func:`sim_runner_factory` (the ``paper`` preset;
   :class:`SimOptions` changes it) or :func:`rig_runner_factory`, and a :class:`SearchOptions`;
 * ``table``: :func:`build_index_table`; ``train``: :func:`train_model` (the paper's 3-2-1
-  network, 40 training rows, seed 0); ``predict``: :func:`predict`; ``inspect``:
+  network, 40 training rows, seed 0); ``predict``: :func:`load_predictor` (a model file or the
+  bundled ``grip``), :func:`read_prediction_inputs` and :func:`predict_objects`; ``inspect``:
   :func:`describe`.
 
 Files: :func:`read_catalog`, :func:`read_table`, :func:`read_squeeze_log`,
@@ -33,10 +35,12 @@ them. ``docs/development.md`` says what each package owns.
 from __future__ import annotations
 
 import importlib
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from deformctl.errors import DeformctlError
-from deformctl.version import __version__
+
+if TYPE_CHECKING:  # pragma: no cover - read on first use (module __getattr__)
+    __version__: str
 
 #: Each library call exported here → the module that defines it.
 _API: dict[str, str] = {
@@ -46,7 +50,8 @@ _API: dict[str, str] = {
     "read_recording": "deformctl.measure.stage",
     "measure_images": "deformctl.measure.images",
     "BagSource": "deformctl.measure.options",
-    "CsvSource": "deformctl.measure.options",
+    "CsvOptions": "deformctl.measure.csv_options",
+    "CsvDialect": "deformctl.measure.csv_options",
     "Segmentation": "deformctl.measure.options",
     "SqueezeProtocol": "deformctl.measure.options",
     "ScaleReference": "deformctl.measure.options",
@@ -63,7 +68,9 @@ _API: dict[str, str] = {
     "sim_preset": "deformctl.presets",
     "build_index_table": "deformctl.table",
     "train_model": "deformctl.train",
-    "predict": "deformctl.train",
+    "load_predictor": "deformctl.predict",
+    "predict_objects": "deformctl.predict",
+    "read_prediction_inputs": "deformctl.predict",
     "describe": "deformctl.artifacts",
     "read_catalog": "deformctl.artifacts",
     "read_table": "deformctl.artifacts",
@@ -75,7 +82,13 @@ __all__ = ["DeformctlError", "__version__", *sorted(_API)]
 
 
 def __getattr__(name: str) -> Any:
-    """The library call ``name``, imported on first use."""
+    """The library call ``name``, imported on first use (``__version__`` too: reading the
+    installed distribution's metadata costs a good part of a one-object ``predict``'s start)."""
+    if name == "__version__":
+        from deformctl.version import version_string
+
+        globals()[name] = value = version_string()
+        return value
     module = _API.get(name)
     if module is None:
         raise AttributeError(f"module 'deformctl' has no attribute {name!r}")
@@ -85,4 +98,4 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted({*globals(), *_API})
+    return sorted({*globals(), *_API, "__version__"})

@@ -94,6 +94,7 @@ __all__ = [
     "catalog_objects",
     "catalog_row",
     "catalog_weights",
+    "check_object_values",
     "object_record",
     "rigid_grip_force_n",
     "select_objects",
@@ -316,6 +317,28 @@ def select_objects(catalog: pd.DataFrame, object_ids: Sequence[str] | None) -> p
     return catalog.iloc[[position[oid] for oid in wanted]].reset_index(drop=True)
 
 
+def check_object_values(
+    size_cm: Sequence[float] | None, friction_mu: float | None, weight_n: float | None = None
+) -> tuple[float, float, float] | None:
+    """The rules of a measured object's values (each :mod:`deformctl.quantities` entry's);
+    ``size_cm`` as a tuple. None: not given.
+
+    ``measure --csv`` checks the command line's values with it once, before the files (whose
+    ``--objects-from`` rows may override them), so a bad flag gets the same line as elsewhere.
+
+    Raises:
+        UsageError: not three sizes, or a value outside its rule (exit 2).
+    """
+    WEIGHT_N.check_optional(weight_n)
+    FRICTION_MU.check_optional(friction_mu)
+    if size_cm is None:
+        return None
+    if len(size_cm) != 3:
+        raise UsageError(f"--size-cm takes three sizes (x, y, z), got {list(size_cm)}")
+    x, y, z = (SIZE_CM.check(v) for v in size_cm)
+    return (x, y, z)
+
+
 @dataclass(frozen=True)
 class MeasuredObject:
     """An object measured on a rig (``measure --bag/--csv/--images``), checked when built.
@@ -340,11 +363,7 @@ class MeasuredObject:
         if not self.object_id or not self.object_id.strip():
             raise UsageError("--object-id must not be empty")
         WEIGHT_N.check(self.weight_n)
-        if self.size_cm is not None:
-            if len(self.size_cm) != 3:
-                raise UsageError(f"--size-cm takes three sizes (x, y, z), got {list(self.size_cm)}")
-            object.__setattr__(self, "size_cm", tuple(SIZE_CM.check(v) for v in self.size_cm))
-        FRICTION_MU.check_optional(self.friction_mu)
+        object.__setattr__(self, "size_cm", check_object_values(self.size_cm, self.friction_mu))
 
     @property
     def size_x_cm(self) -> float | None:

@@ -8,22 +8,22 @@ from __future__ import annotations
 import sys
 
 from deformctl.repro.golden import (
-    ABS_TOLERANCES,
     EXPECTED_PATH,
     GOLDEN_SEED,
     GOLDEN_TRAIN_SIZE,
     TOLERANCES,
+    Tolerance,
     compare,
     compute_golden,
     main,
 )
 
 __all__ = [
-    "ABS_TOLERANCES",
     "EXPECTED_PATH",
     "GOLDEN_SEED",
     "GOLDEN_TRAIN_SIZE",
     "TOLERANCES",
+    "Tolerance",
     "compare",
     "compute_golden",
     "main",

@@ -12,7 +12,7 @@ import numpy as np
 
 from deformctl.units import GRAVITY_M_S2
 
-__all__ = ["damping_ratio", "rigid_grip_force_n"]
+__all__ = ["damping_ratio", "natural_frequency_rad_s", "rigid_grip_force_n"]
 
 
 @overload
@@ -41,3 +41,16 @@ def damping_ratio(weight_n: Any, stiffness_n_per_cm: Any, damping_ns_per_cm: Any
     lam_ns_per_m = np.asarray(damping_ns_per_cm, dtype=np.float64) * 100.0
     zeta = lam_ns_per_m / (2.0 * np.sqrt(d_n_per_m * mass_kg))
     return float(zeta) if np.ndim(zeta) == 0 else zeta
+
+
+def natural_frequency_rad_s(weight_n: Any, stiffness_n_per_cm: Any) -> Any:
+    """ω_n = √(D / m) with m = W / g: the lumped object's natural angular frequency, rad/s.
+
+    With :func:`damping_ratio`, the second axis of the simulated landscape: L_f / F_w depends on
+    W and D only through ω_n (objects of equal ω_n and ζ lift alike, docs/explanation/model.md).
+    Computed in SI (D given in the paper's N/cm). Works elementwise on arrays.
+    """
+    mass_kg = np.asarray(weight_n, dtype=np.float64) / GRAVITY_M_S2
+    d_n_per_m = np.asarray(stiffness_n_per_cm, dtype=np.float64) * 100.0
+    omega = np.sqrt(d_n_per_m / mass_kg)
+    return float(omega) if np.ndim(omega) == 0 else omega

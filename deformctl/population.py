@@ -32,10 +32,12 @@ Example:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
 
-from deformctl.catalog import CATALOG_COLUMNS, SIZE_COLUMNS
+from deformctl.catalog import CATALOG_COLUMNS, MATERIAL_COLUMNS, SIZE_COLUMNS
 from deformctl.errors import UsageError
 from deformctl.quantities import (
     DAMPING_NS_PER_CM,
@@ -175,3 +177,89 @@ def paper_objects() -> pd.DataFrame:
     from deformctl.resources import dataset_path
 
     return read_catalog(dataset_path("paper", "objects.csv"))
+
+
+#: The bundled grip model's ranges (``make model``, ``population --grip``): what robots meet,
+#: wider than the paper's population in every attribute and with a friction range.
+GRIP_WEIGHT_N: Range = (0.5, 80.0)
+GRIP_DEFORMABILITY_N_PER_CM: Range = (5.0, 60.0)
+GRIP_DAMPING_NS_PER_CM: Range = (0.0, 15.0)
+GRIP_FRICTION_MU: Range = (0.2, 1.0)
+#: λ is drawn log-uniformly shifted by this much (N·s/cm): (λ + λ0) is log-uniform on
+#: [λ0, 15 + λ0], so λ = 0 is reachable and each decade of λ above λ0 gets a similar share.
+GRIP_DAMPING_SHIFT_NS_PER_CM = 0.01
+#: The grippability rule: an object whose compression at F_w, F_w / D, exceeds this fraction of
+#: its size along the squeeze axis cannot be gripped (the palms would squeeze it flat before it
+#: lifts; L_f is up to about 2 F_w, so the compression at L_f is then up to half its width).
+GRIP_MAX_STRAIN_AT_F_W = 0.25
+
+
+def grip_strain_at_f_w(catalog: pd.DataFrame) -> np.ndarray:
+    """``[n]`` compression at F_w = W / (2 μ) over the squeeze-axis size: F_w / (D · size_x).
+
+    D is the catalog's ``material_stiffness_n_per_cm`` (N/cm), size_x ``size_x_cm``.
+    """
+    from deformctl.physics import rigid_grip_force_n
+
+    f_w = rigid_grip_force_n(
+        catalog["weight_n"].to_numpy(dtype=np.float64),
+        catalog["friction_mu"].to_numpy(dtype=np.float64),
+    )
+    d = catalog[MATERIAL_COLUMNS[0]].to_numpy(dtype=np.float64)
+    return np.asarray(f_w / (d * catalog[SIZE_COLUMNS[0]].to_numpy(dtype=np.float64)))
+
+
+def grip_population(n: int, *, seed: int, id_prefix: str = "P") -> pd.DataFrame:
+    """The bundled grip model's population: ``n`` grippable objects over the grip ranges.
+
+    Drawn from ``numpy.random.default_rng(seed)`` in batches of ``n`` candidates (each batch
+    in a fixed order: W, D, λ, μ, sizes x, y, z), keeping those that can be gripped
+    (:data:`GRIP_MAX_STRAIN_AT_F_W`), until ``n`` are kept; ids are numbered in the order kept.
+    The law:
+
+    * W log-uniform on :data:`GRIP_WEIGHT_N` (0.5-80 N), D log-uniform on
+      :data:`GRIP_DEFORMABILITY_N_PER_CM` (5-60 N/cm): each decade counts alike, so light and
+      soft objects are not crowded out by the heavy ones;
+    * λ with (λ + 0.01) log-uniform on [0.01, 15.01] N·s/cm (:data:`GRIP_DAMPING_NS_PER_CM`);
+    * μ uniform on :data:`GRIP_FRICTION_MU` (0.2-1.0);
+    * sizes as :func:`make_population`'s defaults (x, y 10-20 cm, z 8-20 cm).
+
+    Raises:
+        UsageError: ``n`` < 1.
+    """
+    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+        raise UsageError(f"population size must be an integer >= 1, got {n!r}")
+    n = int(n)
+    rng = np.random.default_rng(seed)
+    shift = GRIP_DAMPING_SHIFT_NS_PER_CM
+
+    def log_uniform(bounds: Range, size: int) -> np.ndarray:
+        return np.exp(rng.uniform(math.log(bounds[0]), math.log(bounds[1]), size=size))
+
+    kept: list[pd.DataFrame] = []
+    count = 0
+    while count < n:
+        weight = log_uniform(GRIP_WEIGHT_N, n)
+        stiffness = log_uniform(GRIP_DEFORMABILITY_N_PER_CM, n)
+        damping = log_uniform((shift, GRIP_DAMPING_NS_PER_CM[1] + shift), n) - shift
+        damping = np.clip(damping, *GRIP_DAMPING_NS_PER_CM)
+        mu = rng.uniform(*GRIP_FRICTION_MU, size=n)
+        sx, sy, sz = (
+            rng.uniform(lo, hi, size=n) for lo, hi in ((10.0, 20.0),) * 2 + ((8.0, 20.0),)
+        )
+        batch = pd.DataFrame(
+            dict(
+                zip(
+                    CATALOG_COLUMNS,
+                    ([""] * n, sx, sy, sz, weight, mu, stiffness, damping),
+                    strict=True,
+                )
+            )
+        )
+        batch = batch[grip_strain_at_f_w(batch) <= GRIP_MAX_STRAIN_AT_F_W]
+        kept.append(batch)
+        count += len(batch)
+    out = pd.concat(kept, ignore_index=True).iloc[:n].reset_index(drop=True)
+    width = max(2, len(str(n - 1)))
+    out["object_id"] = [f"{id_prefix}{i:0{width}d}" for i in range(n)]
+    return out

@@ -32,14 +32,17 @@ from typing import Any
 from deformctl.errors import InputDataError, UsageError
 
 __all__ = [
+    "COVERAGE",
     "DAMPING_NS_PER_CM",
     "FORCE_THRESHOLD_FRAC",
     "FRICTION_MU",
     "GROWTH",
     "HOLD_S",
+    "LAG_S",
     "MARKER_ID",
     "MARKER_SIZE_CM",
     "MAX_ATTEMPTS",
+    "MEMORY_BUDGET_GIB",
     "MIN_GAP_S",
     "MIN_SQUEEZE_S",
     "NOISE_FORCE_N",
@@ -228,6 +231,11 @@ FORCE_THRESHOLD_FRAC = Quantity(
 )
 MIN_GAP_S = Quantity("min_gap_s", "min_gap_s", " s", 0.0)
 MIN_SQUEEZE_S = Quantity("min_squeeze_s", "min_squeeze_s", " s", 0.0)
+#: A CSV export's force lag (``measure --csv --lag-s``): larger shifts are a mistake.
+LAG_S = Quantity("lag_s", "--lag-s", " s", -10.0, 10.0)
+#: The memory a run may use (``measure --sim`` and ``--csv``, ``lift --sim``): the simulator's
+#: settings and a CSV export's reader check it here.
+MEMORY_BUDGET_GIB = Quantity("memory_budget_gib", "--memory-budget-gib", " GiB", 0.0, low_open=True)
 MARKER_SIZE_CM = Quantity("marker_size_cm", "--marker-size-cm", " cm", 0.0, low_open=True)
 SQUARE_SIZE_CM = Quantity("square_size_cm", "--square-size-cm", " cm", 0.0, low_open=True)
 MARKER_ID = Quantity("marker_id", "--marker-id", "", 0, integer=True)
@@ -243,3 +251,8 @@ START_MARGIN = Quantity("start_margin", "--start-margin", "", 1.0)
 START_INTERPOLATE = Quantity("start_interpolate", "--start-interpolate", "", 1, integer=True)
 RIG_TIMEOUT_S = Quantity("rig_timeout_s", "--rig-timeout", " s", 0.0, low_open=True)
 SLIP_TOLERANCE_M = Quantity("slip_tolerance_m", "--slip-tolerance-m", " m", 0.0, low_open=True)
+
+# ---------------------------------------------------------------------------- predicting
+#: The probability an upper bound must hold with (``predict --coverage``, the split-conformal
+#: bound of :mod:`deformctl.grip.conformal`).
+COVERAGE = Quantity("coverage", "--coverage", "", 0.0, 1.0, low_open=True, high_open=True)

@@ -24,6 +24,10 @@ it is chosen for a tiny data set and a tiny network:
 * **alpha** (L2 penalty) small (1e-4): 11 weights on 40 rows cannot overfit much.
 * **One BLAS thread** while fitting and predicting (``threadpoolctl``): the matrices are
   ``[40, 3]``, threads only cost time, and a fixed thread count keeps results bit-identical.
+  The BLAS kernel is another matter: OpenBLAS picks one per CPU, and ``lbfgs`` amplifies its
+  last bits (``make golden-spread``: the chosen restart and the test errors move between
+  kernels), so ``metrics["blas"]`` records the libraries, kernels and thread count of the fit
+  (:func:`deformctl.blas.blas_info`); the model file and ``--metrics`` keep it.
 
 Everything random is seeded from ``seed``: the train/test split (a permutation of the rows
 sorted by ``object_id``) and the restarts' initial weights, so the same table and seed give
@@ -44,7 +48,7 @@ import itertools
 import math
 import warnings
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
@@ -52,8 +56,16 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
-from deformctl.catalog import catalog_weights, rigid_grip_force_n
+from deformctl.blas import blas_info
+from deformctl.catalog import rigid_grip_force_n
 from deformctl.errors import InputDataError, SchemaError, UsageError
+from deformctl.grip.conformal import coverage_report, relative_scores
+from deformctl.grip.groups import (
+    GRIP_FEATURES,
+    NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM,
+    group_values,
+)
+from deformctl.grip.model import DEFAULT_GRIP_HIDDEN, GripForceRegressor, make_grip_model
 from deformctl.model import (
     DEFAULT_ACTIVATION,
     DEFAULT_ALPHA,
@@ -73,6 +85,21 @@ from deformctl.table import format_ids, standard_scales, standardized_distances
 #: Defaults of :func:`train_model` besides the network's: the paper's split, our restarts.
 DEFAULT_TRAIN_SIZE = 40
 DEFAULT_RESTARTS = 8
+
+#: ``paper``: the paper's network on (W, D, λ) (a table with one μ); ``grip``: L_f / F_w from
+#: the groups (ω_n, ζ), μ as an input (:class:`deformctl.grip.model.GripForceRegressor`).
+ModelForm = Literal["paper", "grip"]
+#: How many training rows ``train`` stores with their predictions, for checking a loaded model.
+N_CHECK_POINTS = 5
+
+
+def model_form(table: pd.DataFrame) -> ModelForm:
+    """``"grip"`` when the table's ``friction_mu`` varies, else ``"paper"``."""
+    if "friction_mu" not in table.columns:
+        return "paper"
+    mu = pd.to_numeric(table["friction_mu"], errors="coerce").to_numpy(dtype=np.float64)
+    finite = mu[np.isfinite(mu)]
+    return "grip" if finite.size and not np.all(finite == finite[0]) else "paper"
 
 
 def regression_metrics(y_true: np.ndarray, y_pred: np.ndarray) -> dict[str, float]:
@@ -96,12 +123,13 @@ def regression_metrics(y_true: np.ndarray, y_pred: np.ndarray) -> dict[str, floa
 
 @dataclass(frozen=True)
 class Split:
-    """The train/test split, as object ids in the order the seeded permutation drew them."""
+    """The train/calibration/test split, as object ids in the order the permutation drew them."""
 
     __repr__ = short_repr
 
     train: tuple[str, ...]
     test: tuple[str, ...]
+    calibration: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -109,42 +137,58 @@ class TrainResult:
     """What :func:`train_model` returns.
 
     Attributes:
-        model: the fitted :class:`ScaledTargetRegressor`; its core ``model.regressor_`` is
-            ``Pipeline(StandardScaler, MLPRegressor)``.
+        model: the fitted :class:`ScaledTargetRegressor` (paper form) or
+            :class:`~deformctl.grip.model.GripForceRegressor` (grip form); its core
+            ``model.regressor_`` is ``Pipeline(StandardScaler, MLPRegressor)``.
         metrics: JSON-friendly dict: seed, hyper-parameters, features, split sizes, the restarts'
             training losses and the chosen one, and ``model`` / ``baseline_nearest`` /
-            ``baseline_f_w`` metrics, each ``{"train": {...}, "test": {...}}``.
-        split: train / test object ids.
-        predictions: one row per object: ``object_id``, ``split`` ("train"/"test"), the
+            ``baseline_f_w`` metrics, each ``{"train": {...}, "test": {...}}``; ``blas``:
+            the BLAS libraries, kernels and thread count of the fit (:func:`~deformctl.blas.
+            blas_info`).
+        split: train / calibration / test object ids.
+        predictions: one row per object: ``object_id``, ``split`` (train, calibration, test), the
             features, ``lift_force_n``, ``predicted_lift_force_n``, ``rel_error``,
             ``nearest_lift_force_n``, ``f_w_n`` (NaN when unknown).
-        training_range: feature -> (min, max) over the training rows.
+        training_range: feature (and, grip form, group) -> (min, max) over the training rows.
+        calibration_scores: the relative scores ``(L_f - pred) / pred`` of the calibration rows
+            (:mod:`deformctl.grip.conformal`), empty without calibration rows.
     """
 
     __repr__ = short_repr
 
-    model: ScaledTargetRegressor
+    model: ScaledTargetRegressor | GripForceRegressor
     metrics: dict[str, Any]
     split: Split
     predictions: pd.DataFrame
     training_range: dict[str, tuple[float, float]] = field(default_factory=dict)
+    calibration_scores: tuple[float, ...] = ()
 
 
-def _validate_table(table: pd.DataFrame, train_size: int) -> pd.DataFrame:
-    for col in ("object_id", *FEATURES, TARGET):
+def _validate_table(
+    table: pd.DataFrame,
+    train_size: int,
+    features: tuple[str, ...] = FEATURES,
+    calibration_size: int = 0,
+) -> pd.DataFrame:
+    for col in ("object_id", *features, TARGET):
         if col not in table.columns:
             raise SchemaError(f"the index table has no column {col!r}", field=col)
     n = len(table)
-    if n < train_size + 1:
+    if n < train_size + calibration_size + 1:
+        what = (
+            f"{train_size} train + {calibration_size} calibration"
+            if calibration_size
+            else (f"{train_size} train")
+        )
         raise InputDataError(
             f"the index table has {n} rows; a training set of {train_size} needs at least "
-            f"{train_size + 1} ({train_size} train + at least 1 test)"
+            f"{train_size + calibration_size + 1} ({what} + at least 1 test)"
         )
     ids = table["object_id"].astype(str)
     dup = sorted(ids[ids.duplicated()].unique())
     if dup:
         raise InputDataError(f"the index table lists object(s) more than once: {format_ids(dup)}")
-    for col in (*FEATURES, TARGET):
+    for col in (*features, TARGET):
         values = pd.to_numeric(table[col], errors="coerce").to_numpy(dtype=np.float64)
         bad = ~np.isfinite(values)
         if bad.any():
@@ -152,11 +196,22 @@ def _validate_table(table: pd.DataFrame, train_size: int) -> pd.DataFrame:
                 f"{col} is NaN or not a finite number for {bad.sum()} row(s): "
                 f"{format_ids(ids[bad])}"
             )
-    for col in ("weight_n", TARGET):
+    positive: tuple[str, ...] = ("weight_n", TARGET)
+    if "friction_mu" in features:
+        positive = ("weight_n", "deformability_n_per_cm", "friction_mu", TARGET)
+    for col in positive:
         bad = table[col].to_numpy(dtype=np.float64) <= 0
         if bad.any():
             raise InputDataError(f"{col} must be > 0; it is not for {format_ids(ids[bad])}")
-    for col in FEATURES:
+    if "friction_mu" in features:
+        lam = table["damping_ns_per_cm"].to_numpy(dtype=np.float64)
+        bad = lam < -NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM
+        if bad.any():
+            raise InputDataError(
+                f"damping_ns_per_cm must be >= 0 (a fit's -{NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM:g}"
+                f" reads as 0); it is {lam[bad][0]:g} for {format_ids(ids[bad])}"
+            )
+    for col in features:
         values = table[col].to_numpy(dtype=np.float64)
         if np.all(values == values[0]):
             raise InputDataError(
@@ -187,26 +242,71 @@ def constant_ratio(lift_force_n: np.ndarray, f_w_n: np.ndarray) -> float:
     return float(np.median(ratio)) if ratio.size else math.nan
 
 
-def _nearest_baseline(train: pd.DataFrame, test: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
-    """Nearest training row's L_f for test rows, and leave-one-out for training rows."""
+def _nearest_baseline(
+    train: pd.DataFrame, test: pd.DataFrame, *, ratio: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
+    """Nearest training row's L_f for test rows, and leave-one-out for training rows.
+
+    Nearest in standardized (W, D, λ). With ``ratio`` (the grip form, whose rows have other μ)
+    the entry's L_f / F_w times the row's own F_w, as ``lift --start-table`` predicts.
+    """
     scales = standard_scales(train)
     y_train = train[TARGET].to_numpy(dtype=np.float64)
     d_test = standardized_distances(train, test[list(FEATURES)].to_numpy(), scales)
     d_train = standardized_distances(train, train[list(FEATURES)].to_numpy(), scales)
     np.fill_diagonal(d_train, np.inf)
-    return y_train[np.argmin(d_train, axis=1)], y_train[np.argmin(d_test, axis=1)]
+    i_train, i_test = np.argmin(d_train, axis=1), np.argmin(d_test, axis=1)
+    if not ratio:
+        return y_train[i_train], y_train[i_test]
+    r = y_train / _f_w(train)
+    return r[i_train] * _f_w(train), r[i_test] * _f_w(test)
 
 
-def _rms_rel_error(model: ScaledTargetRegressor, X: pd.DataFrame, y: np.ndarray) -> float:
+def _rms_rel_error(model: Any, X: pd.DataFrame, y: np.ndarray) -> float:
     rel = (model.predict(X) - y) / y
     return float(np.sqrt(np.mean(rel * rel)))
+
+
+def _check_points(model: Any, X: pd.DataFrame) -> dict[str, Any]:
+    """The first :data:`N_CHECK_POINTS` training rows and the model's predictions for them."""
+    rows = X.iloc[:N_CHECK_POINTS]
+    with threadpool_limits(limits=1):
+        pred = model.predict(rows)
+    return {
+        "inputs": rows.to_numpy(dtype=np.float64).tolist(),
+        "lift_force_n": [float(v) for v in pred],
+    }
+
+
+def _training_range(
+    model: Any, form: ModelForm, features: tuple[str, ...], X: pd.DataFrame
+) -> dict[str, tuple[float, float]]:
+    """Feature -> (min, max) over the training rows; the grip form adds its groups' ranges."""
+    out = {
+        col: (float(lo), float(hi))
+        for col, lo, hi in zip(features, model.feature_min_, model.feature_max_, strict=True)
+    }
+    if form == "grip":  # λ below 0 (a fit's noise) counts as 0, in the range as in the model
+        lam = X["damping_ns_per_cm"].to_numpy(dtype=np.float64)
+        out["damping_ns_per_cm"] = (float(max(lam.min(), 0.0)), float(max(lam.max(), 0.0)))
+        w, d, lam, mu = (X[c].to_numpy(dtype=np.float64) for c in GRIP_FEATURES)
+        omega, zeta = group_values(w, d, lam)
+        compression = rigid_grip_force_n(w, mu) / d
+        for name, values in (
+            ("natural_frequency_rad_s", omega),
+            ("damping_ratio", zeta),
+            ("compression_at_f_w_cm", compression),
+        ):
+            out[name] = (float(values.min()), float(values.max()))
+    return out
 
 
 def train_model(
     index_table: pd.DataFrame,
     *,
-    hidden: tuple[int, ...] = DEFAULT_HIDDEN,
+    hidden: tuple[int, ...] | None = None,
     train_size: int = DEFAULT_TRAIN_SIZE,
+    calibration_size: int = 0,
     seed: int = 0,
     max_iter: int = DEFAULT_MAX_ITER,
     solver: str = DEFAULT_SOLVER,
@@ -215,18 +315,35 @@ def train_model(
     tol: float = DEFAULT_TOL,
     restarts: int = DEFAULT_RESTARTS,
     target: TargetMode = "ratio",
+    form: ModelForm | None = None,
 ) -> TrainResult:
     """Train the lifting-force model on a seeded split of ``index_table`` and score it.
 
+    Two forms (:func:`model_form` chooses when ``form`` is None):
+
+    * ``paper`` (the table has one μ): the paper's network on (W, D, λ), learning L_f / W
+      (:class:`ScaledTargetRegressor`);
+    * ``grip`` (μ varies): inputs (W, D, λ, μ), the network learns log(L_f / F_w) from the
+      dimensionless groups (ω_n, ζ) (:class:`~deformctl.grip.model.GripForceRegressor`).
+
+    The rows (sorted by ``object_id``) are split by a seeded permutation: the first
+    ``train_size`` train the network, the next ``calibration_size`` are held out to calibrate
+    the split-conformal bound (:mod:`deformctl.grip.conformal`; their relative scores are
+    returned and stored in the model file), the rest are the test rows, on which the metrics,
+    the baselines and the bound's empirical coverage (P = 0.9, 0.95) are reported.
+
     Args:
-        index_table: an index table (:mod:`deformctl.table`): ``object_id``, :data:`FEATURES`,
+        index_table: an index table (:mod:`deformctl.table`): ``object_id``, the features,
             :data:`TARGET`, and ``f_w_n`` or ``friction_mu`` for the F_w baseline.
-        hidden: hidden layer sizes; the paper's network is ``(2,)``.
-        train_size: number of training rows (paper: 40); the rest is the test set.
+        hidden: hidden layer sizes; default ``(2,)`` (the paper's) for the paper form and
+            :data:`DEFAULT_GRIP_HIDDEN` for the grip form.
+        train_size: number of training rows (paper: 40).
+        calibration_size: rows held out for the conformal bound (default 0: no bound).
         seed: seeds the split and the restarts' initial weights.
         max_iter, solver, activation, alpha, tol: passed to ``MLPRegressor``.
         restarts: number of seeded initialisations; the best on the training rows is kept.
-        target: ``"ratio"`` (learn L_f / W, default) or ``"direct"`` (learn L_f).
+        target: paper form only: ``"ratio"`` (learn L_f / W, default) or ``"direct"``.
+        form: ``"paper"``, ``"grip"`` or None (by the table).
 
     Returns:
         A :class:`TrainResult`.
@@ -234,13 +351,15 @@ def train_model(
     Raises:
         UsageError: a hyper-parameter out of range.
         SchemaError: a required column is missing.
-        InputDataError: fewer than ``train_size + 1`` rows, a duplicated object, a NaN or
-            non-finite feature or lifting force, a non-positive weight or lifting force, or a
-            constant feature column (the message names it).
+        InputDataError: too few rows, a duplicated object, a NaN or non-finite feature or
+            lifting force, a non-positive weight or lifting force (grip form: also D, μ; a λ
+            below -0.05 N·s/cm), or a constant feature column (the message names it).
     """
     if train_size < 2:
         raise UsageError(f"train size must be >= 2, got {train_size}")
-    if not hidden or any(int(h) < 1 for h in hidden):
+    if calibration_size < 0:
+        raise UsageError(f"calibration size must be >= 0, got {calibration_size}")
+    if hidden is not None and (not hidden or any(int(h) < 1 for h in hidden)):
         raise UsageError(f"hidden layer sizes must be >= 1, got {hidden}")
     if restarts < 1:
         raise UsageError(f"restarts must be >= 1, got {restarts}")
@@ -248,26 +367,37 @@ def train_model(
         raise UsageError(f"max_iter must be >= 1, got {max_iter}")
     if target not in ("ratio", "direct"):
         raise UsageError(f"target must be 'ratio' or 'direct', got {target!r}")
-    table = _validate_table(index_table, train_size)
+    if form not in (None, "paper", "grip"):
+        raise UsageError(f"form must be 'paper' or 'grip', got {form!r}")
+    chosen: ModelForm = form or model_form(index_table)
+    features = GRIP_FEATURES if chosen == "grip" else FEATURES
+    if hidden is None:
+        hidden = DEFAULT_GRIP_HIDDEN if chosen == "grip" else DEFAULT_HIDDEN
+    table = _validate_table(index_table, train_size, features, calibration_size)
 
     rng = np.random.default_rng(seed)
     order = rng.permutation(len(table))
     restart_seeds = [int(s) for s in rng.integers(0, 2**31 - 1, size=restarts)]
+    n_fit = train_size + calibration_size
     train = table.iloc[order[:train_size]].reset_index(drop=True)
-    test = table.iloc[order[train_size:]].reset_index(drop=True)
-    for col in FEATURES:
+    calib = table.iloc[order[train_size:n_fit]].reset_index(drop=True)
+    test = table.iloc[order[n_fit:]].reset_index(drop=True)
+    # μ is constant on purpose in a paper-form table; every other feature must vary
+    for col in (c for c in features if c != "friction_mu"):
         values = train[col].to_numpy(dtype=np.float64)
         if np.all(values == values[0]):
             raise InputDataError(
                 f"feature {col} is constant ({values[0]:g}) over the {train_size} training rows"
             )
 
-    X_train = train[list(FEATURES)].astype(np.float64)
-    X_test = test[list(FEATURES)].astype(np.float64)
+    X_train = train[list(features)].astype(np.float64)
+    X_calib = calib[list(features)].astype(np.float64)
+    X_test = test[list(features)].astype(np.float64)
     y_train = train[TARGET].to_numpy(dtype=np.float64)
+    y_calib = calib[TARGET].to_numpy(dtype=np.float64)
     y_test = test[TARGET].to_numpy(dtype=np.float64)
 
-    params = {
+    params: dict[str, Any] = {
         "hidden": [int(h) for h in hidden],
         "activation": activation,
         "solver": solver,
@@ -275,23 +405,36 @@ def train_model(
         "max_iter": int(max_iter),
         "tol": float(tol),
         "restarts": int(restarts),
-        "target": target,
+        "target": target if chosen == "paper" else "log_ratio_f_w",
     }
     losses: list[float] = []
-    best: ScaledTargetRegressor | None = None
+    best: ScaledTargetRegressor | GripForceRegressor | None = None
     best_loss = math.inf
     best_index = -1
     best_converged = False
     for i, rs in enumerate(restart_seeds):
-        candidate = make_model(
-            hidden=tuple(int(h) for h in hidden),
-            activation=activation,
-            solver=solver,
-            alpha=alpha,
-            max_iter=max_iter,
-            tol=tol,
-            random_state=rs,
-            target=target,
+        sizes = tuple(int(h) for h in hidden)
+        candidate: ScaledTargetRegressor | GripForceRegressor = (
+            make_grip_model(
+                hidden=sizes,
+                activation=activation,
+                solver=solver,
+                alpha=alpha,
+                max_iter=max_iter,
+                tol=tol,
+                random_state=rs,
+            )
+            if chosen == "grip"
+            else make_model(
+                hidden=sizes,
+                activation=activation,
+                solver=solver,
+                alpha=alpha,
+                max_iter=max_iter,
+                tol=tol,
+                random_state=rs,
+                target=target,
+            )
         )
         # One BLAS thread: the matrices are tiny, so threads only add overhead (20x slower on a
         # loaded 2-core machine) and a thread-count-dependent summation order.
@@ -301,7 +444,7 @@ def train_model(
                 candidate.fit(X_train, y_train)
             except ValueError as err:  # e.g. an invalid solver / activation name
                 raise UsageError(f"cannot train the network: {err}") from None
-        loss = _rms_rel_error(candidate, X_train, y_train)
+            loss = _rms_rel_error(candidate, X_train, y_train)
         losses.append(loss)
         if loss < best_loss:  # strict: ties keep the earlier restart
             best, best_loss, best_index = candidate, loss, i
@@ -310,8 +453,10 @@ def train_model(
 
     with threadpool_limits(limits=1):
         pred_train = best.predict(X_train)
+        pred_calib = best.predict(X_calib) if len(X_calib) else np.empty(0)
         pred_test = best.predict(X_test)
-    nn_train, nn_test = _nearest_baseline(train, test)
+        blas = blas_info()  # the kernel and the 1 thread the fit and these predictions ran on
+    nn_train, nn_test = _nearest_baseline(train, test, ratio=chosen == "grip")
     fw_train, fw_test = _f_w(train), _f_w(test)
     ratio = constant_ratio(y_train, fw_train)
     cr_train, cr_test = ratio * fw_train, ratio * fw_test
@@ -324,17 +469,32 @@ def train_model(
             "test": regression_metrics(y_test, p_test),
         }
 
-    training_range = {
-        col: (float(lo), float(hi))
-        for col, lo, hi in zip(FEATURES, best.feature_min_, best.feature_max_, strict=True)
-    }
+    training_range = _training_range(best, chosen, features, X_train)
+    scores: tuple[float, ...] = ()
+    conformal = None
+    if calibration_size:
+        if not (np.all(np.isfinite(pred_calib)) and np.all(pred_calib > 0)):
+            raise InputDataError("the network predicts a lifting force <= 0 for a calibration row")
+        scores = tuple(float(v) for v in relative_scores(y_calib, pred_calib))
+        conformal = coverage_report(np.asarray(scores), y_test, pred_test)
+    mu_values = table["friction_mu"].to_numpy(dtype=np.float64) if "friction_mu" in table else None
+    single_mu = (
+        float(mu_values[0])
+        if mu_values is not None
+        and np.all(np.isfinite(mu_values))
+        and np.all(mu_values == mu_values[0])
+        else None
+    )
+    lam_all = table["damping_ns_per_cm"].to_numpy(dtype=np.float64)
     metrics: dict[str, Any] = {
         "seed": int(seed),
+        "form": chosen,
         "hyperparameters": params,
-        "features": list(FEATURES),
+        "features": list(features),
         "target": TARGET,
         "n_rows": len(table),
         "n_train": len(train),
+        "n_calibration": len(calib),
         "n_test": len(test),
         "restart_seeds": restart_seeds,
         "restart_train_rms_rel_error": losses,
@@ -342,25 +502,34 @@ def train_model(
         "n_iter": int(best.regressor_[-1].n_iter_),
         "converged": bool(best_converged),
         "training_range": {k: list(v) for k, v in training_range.items()},
+        "training_friction_mu": single_mu,
+        "negative_damping_read_as_zero": int(np.sum(lam_all < 0)) if chosen == "grip" else 0,
         "model": both(pred_train, pred_test),
         "baseline_nearest": both(nn_train, nn_test),
         "baseline_f_w": both(fw_train, fw_test),
         "baseline_constant_ratio": both(cr_train, cr_test),
         "constant_ratio": None if not math.isfinite(ratio) else ratio,
+        "conformal": conformal,
+        "blas": blas,
     }
 
     frames = []
-    for name, part, pred, nn, fw, cr in (
+    parts = [
         ("train", train, pred_train, nn_train, fw_train, cr_train),
         ("test", test, pred_test, nn_test, fw_test, cr_test),
-    ):
+    ]
+    if len(calib):
+        fw_calib = _f_w(calib)
+        nan = np.full(len(calib), np.nan)
+        parts.insert(1, ("calibration", calib, pred_calib, nan, fw_calib, ratio * fw_calib))
+    for name, part, pred, nn, fw, cr in parts:
         y = part[TARGET].to_numpy(dtype=np.float64)
         frames.append(
             pd.DataFrame(
                 {
                     "object_id": part["object_id"].to_numpy(),
                     "split": name,
-                    **{col: part[col].to_numpy(dtype=np.float64) for col in FEATURES},
+                    **{col: part[col].to_numpy(dtype=np.float64) for col in features},
                     TARGET: y,
                     "predicted_lift_force_n": pred,
                     "rel_error": np.abs(pred - y) / y,
@@ -375,11 +544,32 @@ def train_model(
         model=best,
         metrics=metrics,
         split=Split(
-            train=tuple(train["object_id"].tolist()), test=tuple(test["object_id"].tolist())
+            train=tuple(train["object_id"].tolist()),
+            test=tuple(test["object_id"].tolist()),
+            calibration=tuple(calib["object_id"].tolist()),
         ),
         predictions=predictions,
         training_range=training_range,
+        calibration_scores=scores,
     )
+
+
+def model_metadata(result: TrainResult) -> dict[str, Any]:
+    """What a model file stores besides the estimator: :func:`train_report` without the
+    per-row predictions, plus the numpy export (:mod:`deformctl.grip.export`), the check points
+    (a few training rows and their predictions, which a loaded model must reproduce) and the
+    calibration scores (when there were calibration rows)."""
+    from deformctl.grip.export import export_model
+
+    report = train_report(result)
+    meta = {k: v for k, v in report.items() if k != "predictions"}
+    features = list(result.metrics["features"])
+    X = result.predictions.loc[result.predictions["split"] == "train", features]
+    meta["numpy_model"] = export_model(result.model)
+    meta["check_points"] = _check_points(result.model, X.astype(np.float64))
+    if result.calibration_scores:
+        meta["conformal_scores"] = list(result.calibration_scores)
+    return meta
 
 
 @dataclass(frozen=True)
@@ -531,57 +721,11 @@ def train_report(result: TrainResult) -> dict[str, Any]:
     return json_safe(
         {
             **result.metrics,
-            "split": {"train": list(result.split.train), "test": list(result.split.test)},
+            "split": {
+                "train": list(result.split.train),
+                "calibration": list(result.split.calibration),
+                "test": list(result.split.test),
+            },
             "predictions": records,
         }
     )
-
-
-def prediction_inputs(table: pd.DataFrame, catalog: pd.DataFrame | None = None) -> pd.DataFrame:
-    """The :data:`FEATURES` per object from a table, taking ``weight_n`` from ``catalog``.
-
-    The table (an index table, a predictions table or a coefficients table) must have
-    ``deformability_n_per_cm`` and ``damping_ns_per_cm``; ``weight_n`` comes from the table
-    itself or, when ``catalog`` is given, from the catalog row with the same ``object_id``.
-    When both have a weight they must agree (relative 1e-6).
-
-    Args:
-        table: ``[n]`` rows, with ``object_id`` when a catalog is to be joined.
-        catalog: a validated object catalog (:func:`deformctl.artifacts.read_catalog`), or None.
-
-    Returns:
-        ``[n]`` rows in the table's order: ``object_id`` (when the table has it) and
-        :data:`FEATURES`.
-
-    Raises:
-        SchemaError: a feature column is missing and cannot be joined; ``object_id`` missing
-            when a catalog is given.
-        InputDataError: an object missing from the catalog, or a weight that differs between
-            the table and the catalog (the messages name the ids).
-    """
-    frame = table.copy()
-    if catalog is not None:
-        if "object_id" not in frame.columns:
-            raise SchemaError("the input has no column 'object_id' to join on", field="object_id")
-        weights = catalog_weights(catalog)
-        ids = frame["object_id"].astype(str)
-        missing = sorted(set(ids) - set(weights))
-        if missing:
-            raise InputDataError(
-                f"{len(missing)} object(s) are not in the catalog: {format_ids(missing)}"
-            )
-        joined = ids.map(weights).to_numpy(dtype=np.float64)
-        if "weight_n" in frame.columns:
-            own = pd.to_numeric(frame["weight_n"], errors="coerce").to_numpy(dtype=np.float64)
-            bad = ~np.isclose(own, joined, rtol=1e-6, atol=0.0, equal_nan=True)
-            if bad.any():
-                raise InputDataError(
-                    f"weight_n differs between the input and the catalog for {format_ids(ids[bad])}"
-                )
-        frame["weight_n"] = joined
-    for col in FEATURES:
-        if col not in frame.columns:
-            hint = " (pass --catalog to join weights by object_id)" if col == "weight_n" else ""
-            raise SchemaError(f"the input has no column {col!r}{hint}", field=col)
-    keep = (["object_id"] if "object_id" in frame.columns else []) + list(FEATURES)
-    return frame[keep].reset_index(drop=True)

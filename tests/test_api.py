@@ -65,7 +65,8 @@ def test_every_command_has_its_library_call() -> None:
         "sim_runner_factory",
         "build_index_table",
         "train_model",
-        "predict",
+        "load_predictor",
+        "predict_objects",
         "describe",
     ):
         assert callable(getattr(deformctl, name)), name
@@ -93,15 +94,37 @@ def test_measure_sim_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -
     assert task.seed == api["seed"]
 
 
-def test_measure_recording_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+def test_measure_bag_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     seen = _record(monkeypatch, "deformctl.cli._measure_rig.measure_recording")
+    _run(["measure", "--bag", str(tmp_path / "r.mcap"), "--wrench-topic", "/w",
+          "--position-topic", "/p", "--object-id", "a", "--weight-n", "1",
+          "-o", str(tmp_path / "s.mcap")])  # fmt: skip
+    assert seen["args"][1] == deformctl.BagSource(wrench_topics=("/w",), position_topic="/p")
+    assert seen["segmentation"] == _defaults(deformctl.read_recording)["segmentation"]
+    assert seen["segmentation"] == deformctl.Segmentation()
+
+
+def test_measure_csv_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    seen = _record(monkeypatch, "deformctl.cli._measure_csv.measure_csv_files")
     columns = "time=t,force=f,compression=c"
     _run(["measure", "--csv", str(tmp_path / "r.csv"), "--columns", columns,
           "--object-id", "a", "--weight-n", "1", "-o", str(tmp_path / "s.mcap")])  # fmt: skip
-    source = seen["args"][1]
-    assert source == deformctl.CsvSource(columns={"time": "t", "force": "f", "compression": "c"})
-    assert seen["segmentation"] == _defaults(deformctl.read_recording)["segmentation"]
-    assert seen["segmentation"] == deformctl.Segmentation()
+    task = seen["args"][1]
+    assert task.options == deformctl.CsvOptions(
+        columns={"time": "t", "force": "f", "compression": "c"}
+    )
+    assert task.options.dialect == deformctl.CsvDialect()
+    assert task.segmentation == _defaults(deformctl.read_recording)["segmentation"]
+    assert task.segmentation == deformctl.Segmentation()
+
+
+def test_predict_defaults(monkeypatch: pytest.MonkeyPatch) -> None:
+    seen = _record(monkeypatch, "deformctl.predict.predict_objects")
+    _run(["predict", "grip", "--weight-n", "2.9", "--deformability-n-per-cm", "30",
+          "--damping-ns-per-cm", "0.5", "--friction-mu", "0.5"])  # fmt: skip
+    api = _defaults(deformctl.predict_objects)
+    assert seen["coverage"] == api["coverage"] is None
+    assert seen["args"][0].path == deformctl.load_predictor("grip").path
 
 
 def test_characterize_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:

@@ -288,7 +288,8 @@ def test_csv_missing_mapped_column(plain_csv: Path, tmp_path: Path) -> None:
     _fails(
         csv_args(plain_csv, out, "time=t,force=Force,position=width"),
         EXIT_DATAERR,
-        "mapped column force='Force' not in the file; columns: t, load, width",
+        "--columns force='Force' names no column of the header (line 1: 't', 'load', 'width'); "
+        "if the header is another line, pass --skip-rows N",
         out,
     )
 
@@ -296,9 +297,9 @@ def test_csv_missing_mapped_column(plain_csv: Path, tmp_path: Path) -> None:
 def test_csv_unknown_unit(plain_csv: Path, tmp_path: Path) -> None:
     out = tmp_path / "o.mcap"
     _fails(
-        csv_args(plain_csv, out, "time=t,force=load,position=width", "--units", "force=kgf"),
+        csv_args(plain_csv, out, "time=t,force=load,position=width", "--units", "force=kgm"),
         EXIT_USAGE,
-        "units: unknown force unit 'kgf'; supported: n, kn, mn, lbf",
+        "--units: unknown force unit 'kgm' for force; known: N, kN, mN, daN, lbf, ozf, kgf, gf",
         out,
     )
     machine = tmp_path / "in" / "m.csv"
@@ -307,7 +308,7 @@ def test_csv_unknown_unit(plain_csv: Path, tmp_path: Path) -> None:
     _fails(
         csv_args(machine, out, "time=Zeit,force=Kraft,gap=Weg"),
         EXIT_DATAERR,
-        "column 'Kraft': unknown force unit 'furlong' in the units row",
+        "column 'Kraft' (force): unit 'furlong' in the units row is not a known force unit",
         out,
     )
 

@@ -47,7 +47,7 @@ def test_units_key_that_names_no_column(tmp_path: Path) -> None:
     csv = _fruit_csv(_in(tmp_path) / "fruit.csv")
     out = tmp_path / "o.mcap"
     args = csv_args(csv, out, "time=t,force=load,compression=Pos", "--units", "position=mm")
-    msg = _fails(args, EXIT_USAGE, "--units: 'position' names no column of --columns", out)
+    msg = _fails(args, EXIT_USAGE, "--units: 'position' names no column (time='t'", out)
     assert msg.endswith("valid keys: time, force, compression")
 
 
@@ -230,7 +230,8 @@ def test_rupture_is_cut_recorded_and_flagged(tmp_path: Path) -> None:
     csv = _in(tmp_path) / "apple.csv"
     csv.write_text(csv_text(rupture(13.0, 0.33)))
     log, coef = tmp_path / "apple.mcap", tmp_path / "c.parquet"
-    args = csv_args(csv, log, "time=t,force=load,compression=pos", "--units", "compression=mm")
+    units = "time=s,force=N,compression=mm"  # (a unit not stated is a warning of its own)
+    args = csv_args(csv, log, "time=t,force=load,compression=pos", "--units", units)
     res = runner.invoke(app, args)
     assert res.exit_code == 0, res.stderr
     warnings = [ln for ln in res.stderr.splitlines() if ln.startswith("warning:")]
@@ -286,4 +287,6 @@ def test_a_unit_stated_by_the_file_is_questioned(tmp_path: Path) -> None:
         "peak compression 5",
         out,
     )
-    assert msg.endswith("the file's units row says 'm'; is column 'Pos' in mm?")
+    assert msg.endswith(
+        "the file's units row says m; the values are plausible in mm: is the units row wrong?"
+    )

@@ -76,7 +76,10 @@ def test_paper_and_golden_together_is_a_usage_error(tmp_path: Path) -> None:
     out = tmp_path / "p.csv"
     result = runner.invoke(app, ["population", "--paper", "--golden", "-o", str(out)])
     assert result.exit_code == 2
-    assert result.stderr == "error: give --golden or --paper, not both\n"
+    assert (
+        result.stderr
+        == "error: give one of --golden, --paper and --grip, not --golden and --paper\n"
+    )
     assert not out.exists()
 
 
@@ -122,3 +125,19 @@ def test_existing_output_needs_force(tmp_path: Path) -> None:
     assert "exists already" in result.stderr
     assert out.read_text() == "keep me\n"
     assert runner.invoke(app, ["population", "-o", str(out), "--force"]).exit_code == 0
+
+
+def test_grip_writes_n_grippable_objects(tmp_path: Path) -> None:
+    out = tmp_path / "grip.csv"
+    result = runner.invoke(app, ["population", "--grip", "-n", "30", "--seed", "4", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    cat = read_catalog(out)
+    assert len(cat) == 30
+    assert cat["friction_mu"].nunique() == 30
+    assert (cat["weight_n"] / (2 * cat["friction_mu"]) / cat["material_stiffness_n_per_cm"]
+            <= 0.25 * cat["size_x_cm"]).all()  # fmt: skip
+    result = runner.invoke(app, ["population", "--grip", "--paper", "-o", str(tmp_path / "x.csv")])
+    assert result.exit_code == 2
+    assert (
+        result.stderr == "error: give one of --golden, --paper and --grip, not --paper and --grip\n"
+    )

@@ -116,6 +116,8 @@ def test_metrics_agree_with_reported_predictions(trained: dict[str, object]) -> 
             mean_absolute_error(y, fw), rel=1e-12
         )
     # The synthetic L_f is smooth in (W, D, λ): the 3-2-1 network must beat both baselines.
+    # Across the OpenBLAS kernels (make golden-spread's 5): max 2.49-2.60 %, MAE 0.61-0.67 N
+    # against the baselines' 6.78 and 20.17 N.
     assert m["model"]["test"]["max_rel_error"] < 0.10
     assert m["model"]["test"]["mae_n"] < m["baseline_nearest"]["test"]["mae_n"]
     assert m["model"]["test"]["mae_n"] < m["baseline_f_w"]["test"]["mae_n"]
@@ -274,7 +276,7 @@ def test_inspect_model_json_and_text(trained: dict[str, object]) -> None:
     assert result.exit_code == 0, result.stderr
     info = json.loads(result.stdout)
     assert (info["format"], info["kind"]) == ("skops", "model")
-    assert info["schema"] == {"name": "deformctl-lift-force-model", "version": 1}
+    assert info["schema"] == {"name": "deformctl-lift-force-model", "version": 2}
     assert info["features"] == list(FEATURES)
     assert info["seed"] == SEED
     assert info["training_range"] == m["training_range"]

@@ -25,10 +25,10 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("__init__", "__main__", "cli"),
     ("repro", "golden"),
     # the stages, each one module or package (they may import each other, never in a cycle)
-    ("population", "measure", "characterize", "lift", "table", "train", "vision"),
+    ("population", "measure", "characterize", "lift", "table", "train", "predict", "vision"),
     ("parallel",),
     ("artifacts",),
-    ("model", "catalog", "presets"),
+    ("model", "grip", "catalog", "presets"),
     ("sim",),
     (
         "version",
@@ -42,6 +42,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "resources",
         "quantities",
         "reprs",
+        "blas",
     ),
 )
 

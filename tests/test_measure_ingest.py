@@ -419,22 +419,24 @@ def test_csv_missing_column(tmp_path: Path) -> None:
             path, columns={"time": "Zeit", "force": "Force", "gap": "Weg"}, object_id="x"
         ),
         InputDataError,
-        "mapped column force='Force' not in the file; columns: Zeit, Kraft, Weg",
+        "--columns force='Force' names no column of the header \\(line 1: 'Zeit', 'Kraft', "
+        "'Weg'\\)",
     )
     assert msg.startswith(str(path))
 
 
 def test_csv_unknown_unit_in_file_and_option(tmp_path: Path) -> None:
     path = tmp_path / "u.csv"
-    _two_header_csv(path, ("s", "kgf", "in"))
+    _two_header_csv(path, ("s", "kgm", "in"))
     cols = {"time": "Zeit", "force": "Kraft", "gap": "Weg"}
     _err(
         lambda: squeeze_from_csv(path, columns=cols, object_id="x"),
         InputDataError,
-        "column 'Kraft': unknown force unit 'kgf' in the units row; supported: n, kn, mn, lbf",
+        "column 'Kraft' \\(force\\): unit 'kgm' in the units row is not a known force unit; known: "
+        "N, kN, mN, daN, lbf, ozf, kgf, gf",
     )
-    with pytest.raises(UsageError, match="unknown time unit 'min'") as info:
-        squeeze_from_csv(path, columns=cols, units={"time": "min"}, object_id="x")
+    with pytest.raises(UsageError, match="unknown time unit 'fortnight'") as info:
+        squeeze_from_csv(path, columns=cols, units={"time": "fortnight"}, object_id="x")
     assert info.value.exit_code == EXIT_USAGE
 
 
@@ -448,8 +450,8 @@ def test_csv_conflicting_units(tmp_path: Path) -> None:
             units={"gap": "mm"},
             object_id="x",
         ),
-        InputDataError,
-        "the file says unit 'in', the option says 'mm'",
+        UsageError,
+        "--units gap=mm contradicts the file: column 'Weg' is in in \\(its units row says 'in'\\)",
     )
 
 
@@ -460,7 +462,7 @@ def test_csv_bad_columns_mapping_and_missing_file(tmp_path: Path) -> None:
         )
     path = tmp_path / "c.csv"
     _two_header_csv(path, ("s", "kN", "in"))
-    with pytest.raises(UsageError, match="exactly one of position, gap, compression"):
+    with pytest.raises(UsageError, match="--columns maps position and gap: give one position"):
         squeeze_from_csv(
             path,
             columns={"time": "Zeit", "force": "Kraft", "gap": "Weg", "position": "Weg"},

@@ -91,3 +91,47 @@ def test_golden_population_is_fixed_and_in_range() -> None:
     ):
         assert g[col].min() == lo
         assert g[col].max() == hi
+
+
+def test_grip_population_spans_the_grip_ranges_and_keeps_only_grippable_objects() -> None:
+    from deformctl.population import (
+        GRIP_MAX_STRAIN_AT_F_W,
+        grip_population,
+        grip_strain_at_f_w,
+    )
+
+    cat = grip_population(400, seed=5)
+    assert len(cat) == 400
+    assert cat["object_id"].is_unique
+    assert tuple(cat.columns) == CATALOG_COLUMNS
+    assert cat["weight_n"].between(0.5, 80).all()
+    assert cat["material_stiffness_n_per_cm"].between(5, 60).all()
+    assert cat["material_damping_ns_per_cm"].between(0, 15).all()
+    assert cat["friction_mu"].between(0.2, 1.0).all()
+    strain = grip_strain_at_f_w(cat)
+    assert strain.max() <= GRIP_MAX_STRAIN_AT_F_W
+    # the ranges are spanned: log-uniform W puts about a tenth of the objects in each end decile
+    # of log W (fewer at the heavy end, where the rule leaves out the soft and slippery ones)
+    log_w = np.log(cat["weight_n"].to_numpy())
+    edges = np.log([0.5, 0.5 * 1.66, 80 / 1.66, 80])
+    assert np.mean(log_w < edges[1]) > 0.06
+    assert np.mean(log_w > edges[2]) > 0.03
+    # undamped-like objects (λ < 0.05 N·s/cm) and heavily damped ones (λ > 5) both occur
+    lam = cat["material_damping_ns_per_cm"].to_numpy()
+    assert np.mean(lam < 0.05) > 0.1
+    assert np.mean(lam > 5) > 0.05
+
+
+def test_grip_population_rule_leaves_out_what_cannot_be_gripped() -> None:
+    """The same draws without the rule: exactly the objects with F_w / D > 0.25 size_x go."""
+    from deformctl.population import grip_population, grip_strain_at_f_w
+
+    a = grip_population(50, seed=11)
+    pd.testing.assert_frame_equal(a, grip_population(50, seed=11))
+    assert not np.allclose(a["weight_n"], grip_population(50, seed=12)["weight_n"])
+    f_w = a["weight_n"] / (2 * a["friction_mu"])
+    np.testing.assert_allclose(
+        grip_strain_at_f_w(a), f_w / (a["material_stiffness_n_per_cm"] * a["size_x_cm"])
+    )
+    with pytest.raises(UsageError):
+        grip_population(0, seed=1)

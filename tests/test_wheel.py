@@ -128,7 +128,8 @@ def test_the_wheel_brings_its_data(wheel_dir: Path, tmp_path: Path) -> None:
         "from deformctl.artifacts.schema import load_table_spec; load_table_spec('catalog'); "
         "print(deformctl.__file__); print(dataset_path('paper', 'table2.csv')); "
         "print(g.EXPECTED_PATH); print(dataset_path('examples', 'gripper.mcap')); "
-        "print(dataset_path('examples', 'utm_export.csv'))",
+        "print(dataset_path('examples', 'utm_export.csv')); "
+        "from deformctl.grip.fast import resolve_model_path; print(resolve_model_path('grip'))",
     )
     for line in where.split():
         assert Path(line).is_relative_to(wheel_dir), line
@@ -145,6 +146,10 @@ def test_commands_run_from_the_wheel(wheel_dir: Path, tmp_path: Path) -> None:
     shutil.copy(REPO / "tests/data/lift_results.parquet", tmp_path / "lift.parquet")
     table = _run(wheel_dir, tmp_path, "-m", "deformctl.repro.paper", "lift.parquet")
     assert "A (sponge)" in table
+    grip = _run(wheel_dir, tmp_path, "-m", "deformctl", "predict", "grip", "--weight-n", "2.9",
+                "--deformability-n-per-cm", "30", "--damping-ns-per-cm", "0.47",
+                "--friction-mu", "0.5", "--coverage", "0.9")  # fmt: skip
+    assert grip.splitlines()[0].startswith("weight_n,deformability_n_per_cm,")
 
 
 def test_the_paper_preset_calibration_comes_with_the_wheel(wheel_dir: Path, tmp_path: Path) -> None:

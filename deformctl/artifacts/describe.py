@@ -43,6 +43,7 @@ from deformctl.artifacts.tables import (
     read_catalog_bytes,
     read_parquet_bytes,
 )
+from deformctl.blas import blas_record
 from deformctl.errors import DeformctlError, InputDataError, SchemaError
 from deformctl.series import SqueezeSeries, ruptures_from_object
 from deformctl.units import NS_PER_S
@@ -190,7 +191,8 @@ def coefficient_rows(df: pd.DataFrame) -> list[dict[str, Any]]:
 def squeeze_summaries(
     objects: list[dict[str, Any]], squeezes: list[SqueezeSeries]
 ) -> list[dict[str, Any]]:
-    """Per object of a squeeze log: squeezes, peak force and compression, rates, phase, ruptures.
+    """Per object of a squeeze log: squeezes, peak force and compression, rates, phase, ruptures,
+    and for a CSV recording its columns and the recording's defects.
 
     The sample rates are those ``measure`` stored (``force_rate_hz``, ``position_rate_hz``), or
     the squeezes' own median rate when the log does not say.
@@ -214,9 +216,24 @@ def squeeze_summaries(
                 "position_rate_hz": obj.get("position_rate_hz", own_rate),
                 "phase": obj.get("phase", "all"),
                 "ruptures": [r.to_record() for r in ruptures_from_object(obj)],
+                "columns": _csv_columns(obj),
+                "recording_flags": list(obj.get("recording_flags") or []),
             }
         )
     return out
+
+
+def _csv_columns(obj: dict[str, Any]) -> str | None:
+    """A CSV recording's columns as ``measure`` read them: ``time='Time (s)' [s], ...``."""
+    csv = obj.get("csv")
+    columns = csv.get("columns") if isinstance(csv, dict) else None
+    if not isinstance(columns, dict):
+        return None
+    return ", ".join(
+        f"{role}={c.get('column')!r} [{c.get('unit')}]"
+        for role, c in columns.items()
+        if isinstance(c, dict)
+    )
 
 
 def _fields(schema_name: str) -> list[dict[str, Any]]:
@@ -340,8 +357,22 @@ def _model_summary(data: bytes, path: PathArg) -> dict[str, Any]:
     training_range: dict[str, list[float] | None] = {}
     if lo is not None and hi is not None and len(lo) == len(hi) == len(features):
         training_range = {f: _float_pair(a, b) for f, a, b in zip(features, lo, hi, strict=True)}
+    stored = meta.get("training_range")  # format 2: the checked ranges, inputs and groups
+    if isinstance(stored, dict) and all(
+        isinstance(v, list) and len(v) == 2 for v in stored.values()
+    ):
+        training_range.update({str(k): _float_pair(*v) for k, v in stored.items()})
+    conformal = {}
+    if isinstance(meta.get("conformal"), dict):
+        for p, entry in meta["conformal"].items():
+            if isinstance(entry, dict):
+                conformal[str(p)] = {
+                    k: v for k, v in entry.items() if isinstance(v, int | float) or v is None
+                }
+    raw_notes = meta.get("notes")
+    notes: dict[Any, Any] = raw_notes if isinstance(raw_notes, dict) else {}
     metrics = {}
-    for key in ("model", "baseline_nearest", "baseline_f_w"):
+    for key in ("model", "baseline_nearest", "baseline_f_w", "baseline_constant_ratio"):
         entry = meta.get(key)
         if isinstance(entry, dict):
             metrics[key] = {
@@ -365,10 +396,17 @@ def _model_summary(data: bytes, path: PathArg) -> dict[str, Any]:
         "hyperparameters": meta.get("hyperparameters")
         if isinstance(meta.get("hyperparameters"), dict)
         else None,
+        "form": str(meta.get("form", "paper")),
         "n_train": meta.get("n_train") if isinstance(meta.get("n_train"), int) else None,
+        "n_calibration": meta.get("n_calibration")
+        if isinstance(meta.get("n_calibration"), int)
+        else 0,
         "n_test": meta.get("n_test") if isinstance(meta.get("n_test"), int) else None,
         "metrics": metrics,
+        "conformal": conformal,
+        "notes": {str(k): str(v) for k, v in notes.items()},
         "tool_version": str(meta.get("tool_version", "unknown")),
+        "blas": blas_record(meta.get("blas")),
         "provenance": None if prov is None else Provenance.from_dict(prov, path=name).to_dict(),
     }
 
@@ -384,8 +422,11 @@ def describe(path: PathArg) -> dict[str, Any]:
         for a squeeze log ``squeeze_summary`` (per object: squeezes, peak force and compression,
         sample rates, phase, ruptures); for a coefficients table ``coefficients`` (per object: D,
         λ, R², quality); for a model file (kind ``model``) ``features``, ``target``,
-        ``training_range`` (feature -> [min, max]), ``seed``, ``hyperparameters``, ``n_train``,
-        ``n_test``, ``metrics`` (model and baselines, train and test) and ``tool_version``.
+        ``training_range`` (feature, and for a grip model group, -> [min, max]), ``seed``,
+        ``hyperparameters``, ``form``, ``n_train``, ``n_calibration``, ``n_test``, ``metrics``
+        (model and baselines, train and test), ``conformal`` (the bound's coverage and margins
+        on the test rows), ``notes``, ``tool_version`` and ``blas`` (the BLAS libraries, kernels
+        and thread count of the fit; None for older files).
 
     Raises:
         MissingInputError: ``path`` does not exist (exit 66).

@@ -3,7 +3,7 @@
 A model file is a `skops <https://skops.readthedocs.io>`_ archive (a zip of ``schema.json`` and
 ``.npy`` arrays; no pickle) holding one dict::
 
-    {"format": MODEL_FORMAT, "metadata_json": "<JSON text>", "model": ScaledTargetRegressor(...)}
+    {"format": MODEL_FORMAT, "metadata_json": "<JSON text>", "model": <estimator>}
 
 The metadata (seed, features, training ranges, metrics summary, tool version, ...) is stored as
 JSON *text*, so reading it back is ``json.loads`` and can never build an object.
@@ -13,13 +13,13 @@ Loading never trusts the file. Before anything is imported or constructed,
 node's type (``module.Class``) must be in :data:`ALLOWED_TYPES` and every node's loader in
 :data:`ALLOWED_LOADERS` -- the handful of types the model is made of (builtins containers and
 scalars, numpy arrays, ``RandomState``, ``Pipeline``, ``StandardScaler``, ``MLPRegressor`` and
-:class:`deformctl.model.ScaledTargetRegressor`, which files written before it moved there name
-``deformctl.train.ScaledTargetRegressor``, still re-exported there). A file with anything else (a
-function such as ``os.system``, any other class) is refused with
-:class:`~deformctl.errors.InputDataError` (exit 65) naming the type(s). Only then is
-``skops.io.load`` called, with ``trusted`` set to the types ``skops.io.get_untrusted_types``
-reports, after checking that they too are in the allow-list; ``trusted=True`` is never used. A
-truncated or non-zip file is refused the same way.
+:class:`deformctl.model.ScaledTargetRegressor` (which files written before it moved there name
+``deformctl.train.ScaledTargetRegressor``, still re-exported there) or
+:class:`deformctl.grip.model.GripForceRegressor`). A file with anything else (a function such as
+``os.system``, any other class) is refused with :class:`~deformctl.errors.InputDataError` (exit
+65) naming the type(s). Only then is ``skops.io.load`` called, with ``trusted`` set to the types
+``skops.io.get_untrusted_types`` reports, after checking that they too are in the allow-list;
+``trusted=True`` is never used. A truncated or non-zip file is refused the same way.
 
 Writes are atomic: the archive is written to a temporary file in the target directory and moved
 into place with :func:`os.replace`; an existing file is only replaced with ``force=True``.
@@ -45,7 +45,12 @@ from sklearn.preprocessing import StandardScaler
 from deformctl import jsonsafe
 from deformctl.artifacts.io import atomic_output, note_input
 from deformctl.errors import InputDataError, MissingInputError, OutputExistsError, UsageError
+from deformctl.grip.groups import GRIP_FEATURES
+from deformctl.grip.model import GripForceRegressor
 from deformctl.model import FEATURES, ScaledTargetRegressor
+
+#: The estimator classes a model file may hold.
+LiftForceModel = ScaledTargetRegressor | GripForceRegressor
 
 
 def _import_skops() -> Any:
@@ -83,8 +88,12 @@ sio = _import_skops()
 #: The hidden-layer activations of scikit-learn's MLP.
 ACTIVATIONS = frozenset({"identity", "logistic", "tanh", "relu"})
 
-#: The ``format`` tag of a deformctl model file.
-MODEL_FORMAT = "deformctl-lift-force-model/1"
+#: The ``format`` tag of the model files :func:`save_model` writes. Format 2 adds to 1's
+#: metadata the model's ``form`` (paper or grip), its numpy export (``numpy_model``), check
+#: points and, when trained with calibration rows, the conformal scores; format 1 files still load.
+MODEL_FORMAT = "deformctl-lift-force-model/2"
+#: Every format :func:`load_model` reads.
+READABLE_FORMATS = ("deformctl-lift-force-model/1", MODEL_FORMAT)
 
 #: Every type a model file may contain, as ``module.Class`` (the form skops reports).
 ALLOWED_TYPES: frozenset[str] = frozenset(
@@ -106,6 +115,7 @@ ALLOWED_TYPES: frozenset[str] = frozenset(
         "sklearn.neural_network._multilayer_perceptron.MLPRegressor",
         "deformctl.model.ScaledTargetRegressor",
         "deformctl.train.ScaledTargetRegressor",  # files written before the class moved
+        "deformctl.grip.model.GripForceRegressor",
     }
 )
 
@@ -186,7 +196,7 @@ def inspect_types(path: str | os.PathLike[str]) -> tuple[set[str], set[str]]:
 
 def save_model(
     path: str | os.PathLike[str],
-    model: ScaledTargetRegressor,
+    model: LiftForceModel,
     *,
     metadata: Mapping[str, Any],
     force: bool = False,
@@ -214,7 +224,7 @@ def save_model(
         raise OutputExistsError(out)
     if not out.parent.is_dir():
         raise UsageError("output directory does not exist", path=out.parent)
-    if not isinstance(model, ScaledTargetRegressor):
+    if not isinstance(model, ScaledTargetRegressor | GripForceRegressor):
         raise UsageError(f"not a lifting-force model: {type(model).__name__}")
     meta = {"format": MODEL_FORMAT, "tool_version": _tool_version(), **dict(metadata)}
     try:
@@ -234,7 +244,7 @@ def save_model(
     return out
 
 
-def load_model(path: str | os.PathLike[str]) -> tuple[ScaledTargetRegressor, dict[str, Any]]:
+def load_model(path: str | os.PathLike[str]) -> tuple[LiftForceModel, dict[str, Any]]:
     """Load a model file written by :func:`save_model`, trusting only :data:`ALLOWED_TYPES`.
 
     Returns:
@@ -273,10 +283,10 @@ def load_model(path: str | os.PathLike[str]) -> tuple[ScaledTargetRegressor, dic
             f"unreadable model file ({type(err).__name__}: {err})", path=p
         ) from None
 
-    if not isinstance(payload, dict) or payload.get("format") != MODEL_FORMAT:
+    if not isinstance(payload, dict) or payload.get("format") not in READABLE_FORMATS:
         raise InputDataError(f"not a deformctl model file (expected format {MODEL_FORMAT})", path=p)
     model = payload.get("model")
-    if not isinstance(model, ScaledTargetRegressor):
+    if not isinstance(model, ScaledTargetRegressor | GripForceRegressor):
         raise InputDataError(
             f"the model file holds a {type(model).__name__}, not a lifting-force model", path=p
         )
@@ -314,26 +324,38 @@ def _short(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def _structure_problem(model: ScaledTargetRegressor) -> str | None:
+def _structure_problem(model: LiftForceModel) -> str | None:
     """What is wrong with a loaded model's structure (None: it can predict)."""
-    n = len(FEATURES)
+    grip = isinstance(model, GripForceRegressor)
+    features = GRIP_FEATURES if grip else FEATURES
+    n = len(features)
     attrs = vars(model)
     if not _is_int(attrs.get("n_features_in_"), n):
         return f"the model takes {_short(attrs.get('n_features_in_'))} features, expected {n}"
     names = attrs.get("feature_names_in_")
     if names is not None and not (
-        isinstance(names, np.ndarray | list | tuple) and [str(x) for x in names] == list(FEATURES)
+        isinstance(names, np.ndarray | list | tuple) and [str(x) for x in names] == list(features)
     ):
-        return f"the model's features are {_short(names)}, expected {list(FEATURES)}"
-    if "scale_index" not in attrs:
-        return "the model has no scale_index"
-    index = attrs["scale_index"]
-    if index is not None and not (_is_int(index) and 0 <= index < n):
-        return f"scale_index {_short(index)} is out of range (0..{n - 1})"
+        return f"the model's features are {_short(names)}, expected {list(features)}"
+    if grip:
+        shift = attrs.get("zeta_shift")
+        if not (isinstance(shift, float | int) and np.isfinite(shift) and shift > 0):
+            return f"zeta_shift {_short(shift)} is not a number > 0"
+        for key in ("group_min_", "group_max_"):
+            problem = _finite_array(attrs.get(key), (2,), key)
+            if problem:
+                return problem
+    else:
+        if "scale_index" not in attrs:
+            return "the model has no scale_index"
+        index = attrs["scale_index"]
+        if index is not None and not (_is_int(index) and 0 <= index < n):
+            return f"scale_index {_short(index)} is out of range (0..{n - 1})"
     for key in ("feature_min_", "feature_max_"):
         problem = _finite_array(attrs.get(key), (n,), key)
         if problem:
             return problem
+    n = 2 if grip else n  # the network's inputs: the groups (grip) or the features
     pipe = attrs.get("regressor_")
     if not isinstance(pipe, Pipeline):
         return f"the regressor is a {type(pipe).__name__}, not a fitted Pipeline"
@@ -378,14 +400,16 @@ def _structure_problem(model: ScaledTargetRegressor) -> str | None:
     return None
 
 
-def check_structure(model: ScaledTargetRegressor, *, path: str | os.PathLike[str]) -> None:
+def check_structure(model: LiftForceModel, *, path: str | os.PathLike[str]) -> None:
     """Refuse a model whose structure cannot predict (the allow-list checks only the types).
 
     Checks: ``n_features_in_`` is 3 (and the feature names are :data:`~deformctl.model.FEATURES`),
     ``scale_index`` in range, the training range finite; the wrapped regressor is a fitted
     ``Pipeline(StandardScaler, MLPRegressor)``: the scaler's ``mean_`` / ``scale_`` of 3 finite
     values, the network's weights and biases finite and chained 3 → ... → 1, a regressor's
-    activations.
+    activations. A grip model (:class:`~deformctl.grip.model.GripForceRegressor`): 4 features
+    (:data:`~deformctl.grip.groups.GRIP_FEATURES`), ``zeta_shift`` > 0, finite group ranges, and
+    a network on its 2 groups.
 
     Raises:
         InputDataError: one line naming what is wrong (exit 65).
@@ -396,3 +420,26 @@ def check_structure(model: ScaledTargetRegressor, *, path: str | os.PathLike[str
         problem = f"malformed attributes ({type(err).__name__}: {err})"
     if problem is not None:
         raise InputDataError(f"not a usable lifting-force model: {problem}", path=path)
+
+
+def load_predictor(path: str | os.PathLike[str]) -> Any:
+    """A :class:`deformctl.grip.fast.Predictor` for a model file without a numpy export (model
+    format 1): the estimator is loaded through the allow-list (:func:`load_model`) and exported.
+
+    Raises:
+        as :func:`load_model`.
+    """
+    from deformctl.grip.export import export_model
+    from deformctl.grip.fast import Predictor
+
+    model, metadata = load_model(path)
+    meta = dict(metadata)
+    if isinstance(model, ScaledTargetRegressor):
+        meta.setdefault(
+            "training_range",
+            {
+                c: [float(lo), float(hi)]
+                for c, lo, hi in zip(FEATURES, model.feature_min_, model.feature_max_, strict=True)
+            },
+        )
+    return Predictor.from_export(export_model(model), meta, Path(path), check_points=False)

@@ -20,6 +20,10 @@ Method = Literal["lsq", "paper"]
 METHODS: tuple[str, ...] = ("lsq", "paper")
 Preload = Literal["fit", "zero"]
 PRELOADS: tuple[str, ...] = ("fit", "zero")
+#: The material models ``characterize --model`` selects by name. ``kv``: Kelvin–Voigt,
+#: ``f = D d + λ d'`` (``+ F0`` with a preload), fitted by ``fit_lsq`` or ``fit_paper``.
+MODELS: tuple[str, ...] = ("kv",)
+DEFAULT_MODEL = "kv"
 
 
 def check_method(method: object) -> Method:
@@ -42,6 +46,17 @@ def check_preload(preload: object) -> Preload:
     if preload not in PRELOADS:
         raise UsageError(f"--preload must be fit or zero, got {preload!r}")
     return preload  # type: ignore[return-value]
+
+
+def check_model(model: object) -> str:
+    """``model`` when it names a model of :data:`MODELS`.
+
+    Raises:
+        UsageError: an unknown model (exit 2).
+    """
+    if model not in MODELS:
+        raise UsageError(f"--model must be one of {', '.join(MODELS)}, got {model!r}")
+    return str(model)
 
 
 def check_paper_options(method: str, preload: object, constrain_damping: bool) -> None:
@@ -67,9 +82,10 @@ class FitOptions:
             ``fit`` for a rig recording, ``zero`` for a simulated squeeze
             (:func:`deformctl.characterize.default_preload`).
         constrain_damping: lsq: fit with λ >= 0.
+        model: the material model (:data:`MODELS`; ``kv``, Kelvin–Voigt).
 
     Raises:
-        UsageError: an unknown method or preload, a window outside its rule, or a preload or
+        UsageError: an unknown method, preload or model, a window outside its rule, or a preload or
             damping bound with the paper method (exit 2).
     """
 
@@ -77,22 +93,31 @@ class FitOptions:
     window_s: float | None = None
     preload: Preload | None = None
     constrain_damping: bool = False
+    model: str = DEFAULT_MODEL
 
     def __post_init__(self) -> None:
         check_method(self.method)
+        check_model(self.model)
         WINDOW_S.check_optional(self.window_s)
         if self.preload is not None:
             check_preload(self.preload)
         check_paper_options(self.method, self.preload, self.constrain_damping)
 
     def as_dict(self) -> dict[str, Any]:
-        """The options as given, for provenance (``*_option``: None means per object)."""
-        return {
+        """The options as given, for provenance (``*_option``: None means per object).
+
+        ``model`` only when it is not the default, so that directories written before it
+        existed stay resumable (their fingerprints hold these settings).
+        """
+        out: dict[str, Any] = {
             "method": self.method,
             "window_s_option": self.window_s,
             "preload_option": self.preload,
             "constrain_damping": self.constrain_damping,
         }
+        if self.model != DEFAULT_MODEL:
+            out["model"] = self.model
+        return out
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,8 @@ wrong sign, wrong units; numbers in each constant's docstring) and stated here o
 ``low_r2``                       R² below :data:`LOW_R2`
 ``few_samples``                  fewer than :data:`FEW_SAMPLES_WINDOWS` SG windows of samples
 ``rupture``                      a squeeze ruptured (it is fitted up to the rupture only)
+``logging_gap``, ``coarse_force``, the recording's defects, found by ``measure`` and stored in
+``force_lag``                    the squeeze log (:mod:`deformctl.measure.defects`)
 ================================ ==============================================================
 
 Policy (:func:`enforce`): each flagged object gives one warning line naming the flags and their
@@ -43,6 +45,13 @@ DAMPING_UNIDENTIFIABLE = "damping_unidentifiable"
 LOW_R2_FLAG = "low_r2"
 FEW_SAMPLES = "few_samples"
 RUPTURE = "rupture"
+#: The recording's defects (:data:`deformctl.measure.defects.RECORDING_FLAGS`, restated here:
+#: imports only go down; a test checks that they agree) and what each means.
+RECORDING_FLAGS: dict[str, str] = {
+    "logging_gap": "the recording has a gap of more than 5 sample intervals",
+    "coarse_force": "the force's resolution is coarser than 2 % of its peak",
+    "force_lag": "the force lags the position; λ is low by D × the lag (measure --lag-s auto)",
+}
 #: Every flag, in the order ``quality`` lists them.
 FLAGS: tuple[str, ...] = (
     NEGATIVE_STIFFNESS,
@@ -52,6 +61,7 @@ FLAGS: tuple[str, ...] = (
     LOW_R2_FLAG,
     FEW_SAMPLES,
     RUPTURE,
+    *RECORDING_FLAGS,
 )
 OK = "ok"
 
@@ -141,6 +151,17 @@ def assess(
     return tuple(flags)
 
 
+def with_recording_flags(quality: str, recording_flags: object) -> str:
+    """``quality`` with the recording's flags (a squeeze log object's ``recording_flags``)."""
+    extra = (
+        [f for f in recording_flags if f in RECORDING_FLAGS]
+        if isinstance(recording_flags, list | tuple)
+        else []
+    )
+    flags = list(parse_quality(quality))
+    return quality_text([*flags, *(f for f in extra if f not in flags)])
+
+
 def quality_text(flags: Sequence[str]) -> str:
     """The ``quality`` column: ``ok`` or the flags joined by commas."""
     return ",".join(flags) if flags else OK
@@ -194,6 +215,8 @@ def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
             f"{flag} ({row.get('n_samples')} samples < {FEW_SAMPLES_WINDOWS:g} windows of "
             f"{row.get('window_samples')})"
         )
+    if flag in RECORDING_FLAGS:
+        return f"{flag} ({RECORDING_FLAGS[flag]}; found by measure, details in the squeeze log)"
     if flag == RUPTURE:
         count = row.get("ruptures")
         return (
@@ -283,5 +306,6 @@ def thresholds_help() -> str:
         f"constant-rate test; --method paper: a monotonic loading, the rate of the other sign "
         f"on < {100 * PAPER_MONOTONIC_FRAC:g} % of its samples), low_r2 (R² < {LOW_R2:g}), "
         f"few_samples (< {FEW_SAMPLES_WINDOWS:g} Savitzky-Golay windows of samples), rupture "
-        "(a squeeze ruptured; fitted up to it)."
+        "(a squeeze ruptured; fitted up to it); the recording's defects found by measure: "
+        "logging_gap, coarse_force, force_lag."
     )

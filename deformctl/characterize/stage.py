@@ -39,7 +39,7 @@ from deformctl.characterize.options import (
     Preload,
     QualityPolicy,
 )
-from deformctl.characterize.quality import enforce
+from deformctl.characterize.quality import enforce, with_recording_flags
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, run_sweep
 from deformctl.reprs import short_repr
@@ -114,7 +114,9 @@ def _fit_object(
         recorded_ruptures={oid: ruptures_from_object(dict(obj or {}))},
         window_s=window_s,
     )
-    return rows[0], mode
+    row = rows[0]
+    row["quality"] = with_recording_flags(str(row["quality"]), (obj or {}).get("recording_flags"))
+    return row, mode
 
 
 def read_and_characterize(
@@ -237,6 +239,7 @@ def characterize_file(
         [log],
         settings={
             **options.as_dict(),
+            "model": options.model,
             "window_s": result.window_s,
             "position_rate_hz": result.position_rate_hz,
             "preload": result.preload,

@@ -9,17 +9,19 @@ import sys
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any, ParamSpec, TypeVar
+from typing import TYPE_CHECKING, Any, ParamSpec, TypeVar
 
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from typer._click import exceptions as click_exc  # typer vendors click: its exceptions
 from typer.core import TyperGroup
 
 from deformctl.artifacts.io import command_inputs
 from deformctl.errors import EXIT_FAILURE, EXIT_USAGE, DeformctlError, UsageError
-from deformctl.parallel import SweepSummary
+
+if TYPE_CHECKING:  # pragma: no cover - rich and the executor load where a command uses them
+    from rich.console import Console
+
+    from deformctl.parallel import SweepSummary
 
 P = ParamSpec("P")
 R = TypeVar("R")
@@ -192,11 +194,13 @@ def progress_bar(console: Console, label: str, *, at_least: int = 2) -> Iterator
     if not console.is_terminal:
         yield None
         return
-    bar = Progress(
-        TextColumn(f"{label} {{task.description}}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeElapsedColumn(),
+    from rich import progress as rp
+
+    bar = rp.Progress(
+        rp.TextColumn(f"{label} {{task.description}}"),
+        rp.BarColumn(),
+        rp.MofNCompleteColumn(),
+        rp.TimeElapsedColumn(),
         console=console,
         transient=True,
     )

@@ -25,7 +25,8 @@ StartModel = Annotated[
         "--start-model",
         metavar="MODEL.skops",
         help="Start each search at this model's predicted L_f (× --start-margin), then go down "
-        "or up and bisect to --tolerance; outside its training range: from F_w, with a warning.",
+        "or up and bisect to --tolerance; outside its training range: from F_w, with a warning. "
+        "`grip` is the bundled model (μ from the catalog).",
     ),
 ]
 StartTable = Annotated[

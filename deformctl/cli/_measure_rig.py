@@ -1,10 +1,10 @@
-"""``deformctl measure --bag | --csv``: one object's squeeze log from a rig recording.
+"""``deformctl measure --bag``: one object's squeeze log from a rig recording, and the options
+``--bag`` and ``--csv`` share (``--csv`` runs in :mod:`deformctl.cli._measure_csv`).
 
 The flags become the library's options (:class:`~deformctl.catalog.MeasuredObject`, a
-:class:`~deformctl.measure.options.BagSource` or
-:class:`~deformctl.measure.options.CsvSource`, a :class:`~deformctl.measure.options.Segmentation`,
-each checked when built) and :func:`deformctl.measure.stage.measure_recording` reads the
-recording and writes its log.
+:class:`~deformctl.measure.options.BagSource` and a
+:class:`~deformctl.measure.options.Segmentation`, each checked when built) and
+:func:`deformctl.measure.stage.measure_recording` reads the recording and writes its log.
 """
 
 from __future__ import annotations
@@ -17,9 +17,8 @@ import typer
 
 from deformctl.artifacts.io import is_stdio
 from deformctl.catalog import MeasuredObject
-from deformctl.cli._common import parse_mapping
 from deformctl.errors import UsageError
-from deformctl.measure.options import BagSource, CsvSource, Segmentation
+from deformctl.measure.options import BagSource, Segmentation
 from deformctl.measure.stage import measure_recording
 
 Bag = Annotated[
@@ -33,7 +32,8 @@ Csv = Annotated[
     typer.Option(
         "--csv",
         metavar="FILE",
-        help="Source: a CSV export, plain or with a units row under the names.",
+        help="Source: CSV exports, one object each (more files follow as arguments; - for "
+        "stdin): a preamble, the header, units in the names or a units row are found.",
     ),
 ]
 WrenchTopics = Annotated[
@@ -70,16 +70,18 @@ Columns = Annotated[
     str | None,
     typer.Option(
         "--columns",
-        metavar="time=COL,force=COL,position=COL",
-        help="CSV: the columns; position may be gap=COL or compression=COL instead.",
+        metavar="time=COL,force=COL,compression=COL",
+        help="CSV: the columns of these roles (the others are found by name: time, force, "
+        "compression, position or gap); position may be gap=COL or compression=COL.",
     ),
 ]
 Units = Annotated[
     str | None,
     typer.Option(
         "--units",
-        metavar="time=s,force=N,position=mm",
-        help="CSV: units of columns whose unit the file does not state (default s, N, m).",
+        metavar="time=s,force=N,compression=mm",
+        help="CSV: units of the columns whose unit the file does not state (default s, N, m, "
+        "with a warning); one that contradicts the file is an error.",
     ),
 ]
 Segment = Annotated[
@@ -157,50 +159,44 @@ class RigOptions:
         return [flag for flag, value in values if value not in (None, [], False)]
 
 
-def _source(flag: str, opts: RigOptions) -> BagSource | CsvSource:
-    """The recording's source options of ``--bag`` or ``--csv``.
+def bag_source(opts: RigOptions) -> BagSource:
+    """The ``--bag`` source options.
 
     Raises:
-        UsageError: a source option missing, or one out of its rule (exit 2).
+        UsageError: a topic missing, or an option out of its rule (exit 2).
     """
-    if flag == "--bag":
-        if not opts.wrench_topics:
-            raise UsageError("--bag needs --wrench-topic (one, or two for two palms)")
-        if opts.position_topic is None:
-            raise UsageError("--bag needs --position-topic (PoseStamped or JointState)")
-        return BagSource(
-            wrench_topics=tuple(opts.wrench_topics),
-            position_topic=opts.position_topic,
-            joint=opts.joint,
-            axis=opts.axis,  # type: ignore[arg-type]
-            position_is=opts.position_is,  # type: ignore[arg-type]
-            position_increases_when=opts.position_increases_when,  # type: ignore[arg-type]
-        )
-    if opts.columns is None:
-        raise UsageError("--csv needs --columns time=COL,force=COL,position=COL")
-    return CsvSource(
-        columns=parse_mapping(opts.columns, "--columns"),
-        units=parse_mapping(opts.units, "--units") if opts.units is not None else {},
+    if not opts.wrench_topics:
+        raise UsageError("--bag needs --wrench-topic (one, or two for two palms)")
+    if opts.position_topic is None:
+        raise UsageError("--bag needs --position-topic (PoseStamped or JointState)")
+    return BagSource(
+        wrench_topics=tuple(opts.wrench_topics),
+        position_topic=opts.position_topic,
+        joint=opts.joint,
+        axis=opts.axis,  # type: ignore[arg-type]
         position_is=opts.position_is,  # type: ignore[arg-type]
         position_increases_when=opts.position_increases_when,  # type: ignore[arg-type]
     )
 
 
+def segmentation(opts: RigOptions) -> Segmentation:
+    """How ``--bag`` and ``--csv`` cut their recording (``--segment``, ``--phase``)."""
+    return Segmentation(segment=opts.segment, phase=opts.phase or "all")  # type: ignore[arg-type]
+
+
 def run(
-    flag: str,
     path: str,
     opts: RigOptions,
     obj: MeasuredObject,
     output: str,
     force: bool,
 ) -> None:
-    """Read the recording ``path`` of ``--bag`` / ``--csv`` and write its squeeze log."""
+    """Read the ``--bag`` recording ``path`` and write its squeeze log."""
     if is_stdio(path):
-        raise UsageError(f"{flag}: cannot read from stdin; give a file")
-    source = _source(flag, opts)
-    segmentation = Segmentation(segment=opts.segment, phase=opts.phase or "all")  # type: ignore[arg-type]
+        raise UsageError("--bag: cannot read from stdin; give a file")
+    source = bag_source(opts)
     rec = measure_recording(
-        path, source, obj, output=output, segmentation=segmentation, force=force
+        path, source, obj, output=output, segmentation=segmentation(opts), force=force
     )
     for r in rec.ruptures:  # each squeeze is kept up to its rupture, recorded in the log
         warning = f"warning: {path}: object {obj.object_id!r}: rupture in {r.describe()}: cut off"

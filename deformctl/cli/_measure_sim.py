@@ -18,8 +18,9 @@ from rich.console import Console
 
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli._common import finish_sweep, progress_bar
-from deformctl.cli._options import parse_log_epoch, parse_object_ids
+from deformctl.cli._options import default, parse_log_epoch, parse_object_ids
 from deformctl.errors import UsageError
+from deformctl.measure.csv_options import DEFAULT_CSV_MEMORY_BUDGET_GIB
 from deformctl.measure.options import (
     DEFAULT_SIM_HOLD_S,
     DEFAULT_SIM_RAMP_S,
@@ -34,6 +35,17 @@ from deformctl.measure.stage import (
 )
 from deformctl.parallel import SweepOptions
 
+#: ``measure``'s budget: the simulator's lattice, or the rows of a CSV export and its log.
+MemoryBudgetGib = Annotated[
+    float | None,
+    typer.Option(
+        "--memory-budget-gib",
+        metavar="GIB",
+        help="Sim: refuse a lattice whose estimated memory exceeds this, GiB "
+        f"{default('SimSettings.memory_budget_gib')}. CSV: refuse a file (or one log of all "
+        f"files) whose estimated memory exceeds this [default: {DEFAULT_CSV_MEMORY_BUDGET_GIB:g}].",
+    ),
+]
 Squeezes = Annotated[
     int | None,
     typer.Option(

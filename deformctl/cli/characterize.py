@@ -21,6 +21,7 @@ from deformctl.characterize import (
     check_preload,
     sweep_warnings,
 )
+from deformctl.characterize.options import DEFAULT_MODEL, MODELS, check_model
 from deformctl.characterize.quality import thresholds_help
 from deformctl.cli import _options as opt
 from deformctl.cli._common import finish_sweep, translate_errors
@@ -47,6 +48,14 @@ Strict = Annotated[
     typer.Option(
         "--strict",
         help="Exit 65 (nothing written) if any object is flagged. " + thresholds_help(),
+    ),
+]
+Model = Annotated[
+    str,
+    typer.Option(
+        "--model",
+        metavar="|".join(MODELS),
+        help="The material model: kv, Kelvin-Voigt, f = D d + λ d' (+ F0 with a preload).",
     ),
 ]
 AllowFlagged = Annotated[
@@ -116,6 +125,7 @@ def characterize(
             f"rate, {DEFAULT_WINDOW_S:g} s at >= 1 kHz, 0.43 s at 100 Hz).",
         ),
     ] = None,
+    model: Model = DEFAULT_MODEL,
     preload: Preload = None,
     constrain_damping: ConstrainDamping = False,
     strict: Strict = False,
@@ -143,7 +153,7 @@ def characterize(
     fit = FitOptions(
         method=check_method(method), window_s=window_s,
         preload=None if preload is None else check_preload(preload),
-        constrain_damping=constrain_damping,
+        constrain_damping=constrain_damping, model=check_model(model),
     )  # fmt: skip
     policy = QualityPolicy(strict=strict, allow_flagged=allow_flagged)
     if sweep.check(output):

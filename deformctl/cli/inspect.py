@@ -12,6 +12,7 @@ import typer
 from deformctl.artifacts.dataset import describe_dataset
 from deformctl.artifacts.describe import describe
 from deformctl.artifacts.io import stale_temporaries
+from deformctl.blas import blas_summary
 from deformctl.cli._common import translate_errors
 
 
@@ -36,7 +37,11 @@ def _model_lines(info: dict[str, Any]) -> list[str]:
     hp = info.get("hyperparameters") or {}
     if hp:
         lines.append(f"hyperparameters: {json.dumps(hp, sort_keys=True)}")
-    lines.append(f"split: {info['n_train']} train / {info['n_test']} test")
+    cal = f"{info['n_calibration']} calibration / " if info.get("n_calibration") else ""
+    lines.append(f"form: {info.get('form', 'paper')}; split: {info['n_train']} train / {cal}"
+                 f"{info['n_test']} test")  # fmt: skip
+    if info.get("blas") is not None:  # older model files did not record it
+        lines.append(f"BLAS of the fit: {blas_summary(info['blas'])}")
     for key, entry in info["metrics"].items():
         for split, m in entry.items():
             lines.append(
@@ -44,6 +49,13 @@ def _model_lines(info: dict[str, Any]) -> list[str]:
                 f"median {_pct(m.get('median_rel_error'))}, MAE {_num(m.get('mae_n'), '.3f')} N, "
                 f"R2 {_num(m.get('r2'), '.4f')}"
             )
+    for p, c in (info.get("conformal") or {}).items():
+        lines.append(
+            f"upper bound P = {p}: margin {_pct(c.get('margin'))}, on the test rows coverage "
+            f"{_num(c.get('coverage'), '.3f')}, mean margin {_pct(c.get('mean_margin'))}"
+        )
+    if info.get("notes"):
+        lines.append("notes: " + ", ".join(f"{k}={v}" for k, v in sorted(info["notes"].items())))
     return lines
 
 
@@ -69,6 +81,12 @@ def _per_object_lines(info: dict[str, Any]) -> list[str]:
             f"{_num(o['peak_compression_m'], '.4g')} m, force {_num(o['force_rate_hz'], '.4g')} "
             f"Hz, position {_num(o['position_rate_hz'], '.4g')} Hz, phase {o['phase']}"
             + (f"; {rupt}" if rupt else "")
+            + (f"; columns {o['columns']}" if o.get("columns") else "")
+            + (
+                f"; recording flags {','.join(o['recording_flags'])}"
+                if o.get("recording_flags")
+                else ""
+            )
         )
     for c in info.get("coefficients") or []:
         lines.append(

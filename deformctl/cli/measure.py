@@ -17,7 +17,8 @@ from rich.console import Console
 
 from deformctl.catalog import MeasuredObject
 from deformctl.cli import _image_options as img
-from deformctl.cli import _measure_images, _measure_rig, _measure_sim
+from deformctl.cli import _measure_csv, _measure_images, _measure_rig, _measure_sim
+from deformctl.cli import _measure_csv as csvo
 from deformctl.cli import _measure_rig as rec
 from deformctl.cli import _measure_sim as sq
 from deformctl.cli import _options as opt
@@ -29,12 +30,13 @@ RIG, IMAGES = ("--bag", "--csv"), ("--images",)
 #: Every option that only some sources take → those sources (``--sim`` takes the sweep options).
 SOURCES: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(("--wrench-topic", "--position-topic", "--joint"), ("--bag",)),
-    **dict.fromkeys(("--columns", "--units"), ("--csv",)),
+    **dict.fromkeys(("--columns", "--units", *_measure_csv.FLAGS), ("--csv",)),
     **dict.fromkeys(("--segment/--no-segment", "--phase", "--position-increases-when"), RIG),
     **dict.fromkeys(("--object-id", "--weight-n", "--friction-mu"), (*RIG, *IMAGES)),
     "--size-cm": RIG,
     **dict.fromkeys(img.FLAGS, IMAGES),
     **dict.fromkeys(_measure_sim.FLAGS, ("--sim",)),
+    "--memory-budget-gib": ("--sim", "--csv"),
 }
 
 
@@ -46,14 +48,39 @@ def _refuse_foreign(source: str, given: list[str]) -> None:
         raise UsageError(f"{', '.join(foreign)} cannot be used with {source}{why}")
 
 
+def _source(
+    bag: str | None, csv: str | None, images: list[str] | None, sim: bool, inputs: list[str]
+) -> tuple[str, str]:
+    """The one source given (its flag and its value: a catalog for ``--sim``).
+
+    Raises:
+        UsageError: no source, several, or arguments the source does not take (exit 2).
+    """
+    if inputs and not sim and csv is None:
+        raise UsageError(f"an argument ({inputs[0]!r}) needs --sim (a catalog) or --csv (files)")
+    if sim and len(inputs) > 1:
+        raise UsageError(f"--sim takes one catalog, got {len(inputs)}: {', '.join(inputs)}")
+    catalog = inputs[0] if sim and inputs else None
+    sources = {"--bag": bag, "--csv": csv, "--images": images and images[0]}
+    sources["--sim"] = (catalog or "") if sim else None
+    chosen = [(flag, value) for flag, value in sources.items() if value is not None]
+    if len(chosen) != 1:
+        what = (
+            "several sources (" + ", ".join(f for f, _ in chosen) + ")" if chosen else "no source"
+        )
+        raise UsageError(f"{what}: give exactly one of {', '.join(sources)}")
+    return chosen[0]
+
+
 @translate_errors
 @opt.with_sweep_options
 def measure(
-    catalog: Annotated[
-        str | None,
+    inputs: Annotated[
+        list[str] | None,
         typer.Argument(
-            metavar="[CATALOG]",
-            help="--sim: the object catalog (CSV or Parquet, with material values); - for stdin.",
+            metavar="[CATALOG | FILE...]",
+            help="--sim: the object catalog (CSV or Parquet, with material values); - for stdin. "
+            "--csv: more CSV files (a shell glob after --csv: --csv data/*.csv).",
         ),
     ] = None,
     sim: Annotated[
@@ -73,6 +100,14 @@ def measure(
     segment: rec.Segment = None,
     phase: rec.Phase = None,
     position_increases_when: rec.PositionIncreasesWhen = None,
+    skip_rows: csvo.SkipRows = None,
+    delimiter: csvo.Delimiter = None,
+    decimal: csvo.Decimal = None,
+    thousands: csvo.Thousands = None,
+    encoding: csvo.Encoding = None,
+    force_sign: csvo.ForceSign = None,
+    lag_s: csvo.LagS = None,
+    objects_from: csvo.ObjectsFrom = None,
     marker_size_cm: img.MarkerSizeCm = None,
     marker_dict: img.MarkerDict = None,
     marker_id: img.MarkerId = None,
@@ -106,7 +141,7 @@ def measure(
     floating: sq.Floating = None,
     alpha_cm: opt.AlphaCm = None,
     dt_s: opt.DtS = None,
-    memory_budget_gib: opt.MemoryBudgetGib = None,
+    memory_budget_gib: sq.MemoryBudgetGib = None,
     seed: sq.Seed = None,
     noise_force_n: sq.NoiseForceN = None,
     noise_position_m: sq.NoisePositionM = None,
@@ -146,41 +181,40 @@ def measure(
         checkerboard=checkerboard, square_size_cm=square_size_cm, color_range=color_range,
         background=background, debug_dir=debug_dir, append=append, camera_matrix=camera_matrix,
     )  # fmt: skip
+    csv_flags = csvo.CsvFlags(
+        skip_rows=skip_rows, delimiter=delimiter, decimal=decimal, thousands=thousands,
+        encoding=encoding, force_sign=force_sign, lag_s=lag_s, objects_from=objects_from,
+    )  # fmt: skip
     rig_opts = _measure_rig.RigOptions(
         object_id=object_id, wrench_topics=list(wrench_topics), position_topic=position_topic,
         joint=joint, axis=axis, position_is=position_is, columns=columns, units=units,
         segment=segment, phase=phase, position_increases_when=position_increases_when,
     )  # fmt: skip
-    object_flags = [
-        ("--weight-n", weight_n),
-        ("--size-cm", size_cm),
-        ("--friction-mu", friction_mu),
-    ]
+    object_flags = {"--weight-n": weight_n, "--size-cm": size_cm, "--friction-mu": friction_mu}
     given = [
-        *rig_opts.given(), *(flag for flag, value in object_flags if value is not None),
-        *image_opts.given(), *sim_opts.given(),
+        *rig_opts.given(), *(flag for flag, value in object_flags.items() if value is not None),
+        *image_opts.given(), *sim_opts.given(), *csv_flags.given(),
     ]  # fmt: skip
-    if catalog is not None and not sim:
-        raise UsageError(f"a catalog argument ({catalog!r}) needs --sim")
-    sources = {"--bag": bag, "--csv": csv, "--images": images and images[0]}
-    sources["--sim"] = (catalog or "") if sim else None
-    chosen = [(flag, value) for flag, value in sources.items() if value is not None]
-    if len(chosen) != 1:
-        what = (
-            "several sources (" + ", ".join(f for f, _ in chosen) + ")" if chosen else "no source"
-        )
-        raise UsageError(f"{what}: give exactly one of {', '.join(sources)}")
-    flag, source = chosen[0]
+    inputs = list(inputs or [])
+    flag, source = _source(bag, csv, images, sim, inputs)
     _refuse_foreign(flag, given)
     if flag == "--sim":
         _measure_sim.run(source, sim_opts, output, force, sweep, Console(stderr=True))
         return
+    if flag == "--csv":
+        named = csvo.ObjectFlags(
+            object_id=object_id, weight_n=weight_n, size_cm=size_cm, friction_mu=friction_mu
+        )
+        _measure_csv.run(
+            [source, *inputs], csv_flags, rig_opts, named, memory_budget_gib, output, force, sweep
+        )
+        return
     if sweep.given():
-        raise UsageError(f"{sweep.given()[0]} needs --sim")
+        raise UsageError(f"{sweep.given()[0]} needs --sim or --csv")
     if object_id is None or weight_n is None:
         raise UsageError(f"{flag} needs --object-id and --weight-n")
     obj = MeasuredObject(object_id, weight_n, size_cm=size_cm, friction_mu=friction_mu)
     if images is not None:
         _measure_images.measure_images(images, image_opts, obj, output=output, force=force)
         return
-    _measure_rig.run(flag, source, rig_opts, obj, output, force)
+    _measure_rig.run(source, rig_opts, obj, output, force)

@@ -12,6 +12,7 @@ from deformctl.population import (
     DEFAULT_FRICTION_MU,
     PAPER_POPULATION_SIZE,
     golden_population,
+    grip_population,
     make_population,
     paper_objects,
 )
@@ -59,6 +60,12 @@ def population(
         help="Write the paper's four Table I objects A-D with Table II's D and λ (the bundled "
         "datasets/paper/objects.csv; ignores the ranges).",
     ),
+    grip: bool = typer.Option(
+        False,
+        "--grip",
+        help="Write -n grippable objects of the bundled grip model's law (W 0.5-80 N and D "
+        "5-60 N/cm log-uniform, λ 0-15 N·s/cm, μ 0.2-1.0; ignores the ranges).",
+    ),
     force: Force = False,
 ) -> None:
     """Write a seeded catalog of objects with W, D, λ drawn uniformly from stated ranges.
@@ -68,13 +75,23 @@ def population(
     carries the simulator's ground truth in material_stiffness_n_per_cm and
     material_damping_ns_per_cm.
 
-    --paper writes the paper's four Table I objects instead, --golden the CI population.
+    --paper writes the paper's four Table I objects instead, --golden the CI population,
+    --grip the population of the bundled grip model (`make model`): W and D log-uniform, λ with
+    (λ + 0.01) log-uniform, μ uniform, and only objects whose compression at F_w = W / (2 μ) is
+    at most a quarter of their size along the squeeze axis (F_w / D <= 0.25 size_x).
 
     Example: deformctl population -n 73 --seed 0 -o population.csv
     """
-    if golden and paper:
-        raise UsageError("give --golden or --paper, not both")
-    if golden:
+    chosen = [
+        flag for flag, on in (("--golden", golden), ("--paper", paper), ("--grip", grip)) if on
+    ]
+    if len(chosen) > 1:
+        raise UsageError(f"give one of --golden, --paper and --grip, not {' and '.join(chosen)}")
+    if grip:
+        if n < 1:
+            raise UsageError(f"-n must be >= 1, got {n}")
+        catalog = grip_population(n, seed=seed, id_prefix=id_prefix)
+    elif golden:
         catalog = golden_population()
     elif paper:
         catalog = paper_objects()
@@ -91,7 +108,7 @@ def population(
         )
     provenance = Provenance.from_invocation(
         seed=None if golden or paper else seed,
-        settings={"golden": golden, "paper": paper, "n": len(catalog)},
+        settings={"golden": golden, "paper": paper, "grip": grip, "n": len(catalog)},
     )
     write_catalog(catalog, output, provenance=provenance, force=force)
     typer.echo(f"wrote {len(catalog)} objects to {output}", err=True)

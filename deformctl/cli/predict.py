@@ -1,65 +1,66 @@
-"""``deformctl predict``: the minimum lifting force of new objects from a trained model."""
+"""``deformctl predict``: the minimum lifting force of new objects, its bound and the force window.
+
+A thin layer over :mod:`deformctl.predict`. One object given by flags and printed to stdout
+imports neither pandas nor scikit-learn (a table, an older model file and a Parquet output do).
+"""
 
 from __future__ import annotations
 
-import pandas as pd
+from typing import Any
+
 import typer
 
-from deformctl.artifacts import (
-    Provenance,
-    check_output_path,
-    detect_kind,
-    read_catalog,
-    read_table,
-    write_table,
-)
-from deformctl.artifacts.io import is_stdio
 from deformctl.cli._common import translate_errors
 from deformctl.cli._options import Force
-from deformctl.errors import SchemaError, UsageError, error_context
-from deformctl.quantities import DAMPING_NS_PER_CM, STIFFNESS_N_PER_CM, WEIGHT_N
+from deformctl.errors import UsageError
+from deformctl.quantities import (
+    COVERAGE,
+    DAMPING_NS_PER_CM,
+    FRICTION_MU,
+    STIFFNESS_N_PER_CM,
+    WEIGHT_N,
+    Quantity,
+)
 
-#: Table kinds ``predict`` reads features from.
-INPUT_KINDS = ("coefficients", "index_table", "predictions")
-
-#: Each flag's quantity (its rule, :mod:`deformctl.quantities`).
-QUANTITIES = {
+#: Each flag's quantity (its one rule, :mod:`deformctl.quantities`).
+QUANTITIES: dict[str, Quantity] = {
     "weight_n": WEIGHT_N,
     "deformability_n_per_cm": STIFFNESS_N_PER_CM,
     "damping_ns_per_cm": DAMPING_NS_PER_CM,
-}
-FLAGS = {
-    "weight_n": "--weight-n",
-    "deformability_n_per_cm": "--deformability-n-per-cm",
-    "damping_ns_per_cm": "--damping-ns-per-cm",
+    "friction_mu": FRICTION_MU,
 }
 
 
-def _read_features(path: str, catalog: str | None) -> pd.DataFrame:
-    """Features from a coefficients / index / predictions table, weights joined from a catalog."""
-    kind = None if is_stdio(path) else detect_kind(path)
-    if kind is not None and kind not in INPUT_KINDS:
-        raise SchemaError(
-            f"is a {kind} file; predict reads {', '.join(INPUT_KINDS)} tables", path=path
-        )
-    table = read_table(path, kind)
-    if table.attrs.get("kind") not in INPUT_KINDS:
-        raise SchemaError(
-            f"is a {table.attrs.get('kind')} table; predict reads {', '.join(INPUT_KINDS)} tables",
-            path=path,
-        )
-    cat = None if catalog is None else read_catalog(catalog)
-    try:
-        from deformctl.train import prediction_inputs  # deferred: scikit-learn
+def _check_flags(flags: dict[str, float | None], coverage: float | None) -> None:
+    """Exit 2 naming the flag for a value outside its quantity's rule
+    (:mod:`deformctl.quantities`, the rule every command uses) and for a coverage outside
+    (0, 1)."""
+    for key, value in flags.items():
+        QUANTITIES[key].check_optional(value)
+    COVERAGE.check_optional(coverage)
 
-        return prediction_inputs(table, cat)
-    except SchemaError as err:
-        raise SchemaError(err.message, path=path) from None
+
+def _check_usage(flags: dict[str, float | None], features: str | None, catalog: str | None) -> None:
+    given = [QUANTITIES[k].flag for k, v in flags.items() if v is not None]
+    if features is not None and given:
+        raise UsageError(f"give either a COEFFICIENTS table or the flags, not both ({given[0]})")
+    if features is None and not given:
+        raise UsageError(
+            "nothing to predict: give a COEFFICIENTS table or --weight-n, "
+            "--deformability-n-per-cm and --damping-ns-per-cm"
+        )
+    missing = [QUANTITIES[k].flag for k in list(QUANTITIES)[:3] if flags[k] is None]
+    if given and missing:
+        raise UsageError(f"one object needs all three flags; missing {', '.join(missing)}")
+    if catalog is not None and features is None:
+        raise UsageError("--catalog joins weights to a COEFFICIENTS table; give the table")
 
 
 @translate_errors
 def predict(
-    model_path: str = typer.Argument(..., metavar="MODEL", help="A model file from `train`."),
+    model_path: str = typer.Argument(
+        ..., metavar="MODEL", help="A model file from `train`, or `grip`: the bundled model."
+    ),
     features: str | None = typer.Argument(
         None,
         metavar="[COEFFICIENTS]",
@@ -72,81 +73,114 @@ def predict(
     damping_ns_per_cm: float | None = typer.Option(
         None, "--damping-ns-per-cm", help="λ of one object, N·s/cm."
     ),
+    friction_mu: float | None = typer.Option(
+        None,
+        "--friction-mu",
+        help=f"μ of one object ({FRICTION_MU.rule}); a μ-aware model needs it.",
+    ),
+    coverage: float | None = typer.Option(
+        None,
+        "--coverage",
+        metavar="P",
+        help="Add lift_force_upper_n: an upper bound that at least P (0 < P < 1) of the true "
+        "L_f lie below, for objects drawn like the model's training objects.",
+    ),
     catalog: str | None = typer.Option(
         None,
         "--catalog",
-        help="Object catalog (CSV/Parquet) whose weight_n is joined by object_id, for a "
-        "coefficients table without weights.",
+        help="Object catalog (CSV/Parquet) whose weight_n and friction_mu are joined by "
+        "object_id, for a coefficients table without them.",
     ),
     output: str | None = typer.Option(
         None, "-o", "--output", help="Write a predictions table (Parquet; - for stdout)."
     ),
     force: Force = False,
 ) -> None:
-    """Predict the minimum lifting force L_f (N) from weight, deformability and damping.
+    """Predict the minimum lifting force L_f (N) from weight, deformability, damping (and μ).
 
     The objects come either from a table (COEFFICIENTS: a coefficients table plus --catalog for
-    the weights, or any table that has weight_n, deformability_n_per_cm and damping_ns_per_cm,
-    such as an index table) or from the three flags for one object. Without -o the predictions
-    are printed as CSV on stdout. An input outside the model's training range is predicted
-    anyway, with a warning on stderr and outside_training_range = true.
+    the weights and μ, or any table that has weight_n, deformability_n_per_cm,
+    damping_ns_per_cm and friction_mu, such as an index table) or from the flags for one
+    object. MODEL `grip` is the bundled model for robots (W 0.5-80 N, D 5-60 N/cm, λ 0-15 N·s/cm,
+    μ 0.2-1.0); it needs μ. Without -o the predictions are printed as CSV on stdout.
+
+    --coverage P adds lift_force_upper_n, a split-conformal upper bound (from the model's
+    calibration rows): at least P of the true L_f lie below it for objects drawn like the
+    training ones; bound_guaranteed is false outside the training ranges. A rupture or yield
+    force in the table (rupture_force_n from characterize) adds max_safe_force_n and window_ok,
+    false when L_f or its bound exceeds the safe force. Every flag set (outside_training_range,
+    window_ok = false, another μ than a single-μ model's) prints a warning naming the object.
 
     Example:
 
     \b
+      deformctl predict grip --weight-n 2.9 --deformability-n-per-cm 30 \\
+          --damping-ns-per-cm 0.47 --friction-mu 0.5 --coverage 0.9
       deformctl predict model.skops coefficients.parquet --catalog objects.csv -o pred.parquet
-      deformctl predict model.skops --weight-n 40 --deformability-n-per-cm 40 \\
-          --damping-ns-per-cm 5
     """
+    from deformctl.predict import (
+        csv_text,
+        load_predictor,
+        output_columns,
+        predict_objects,
+        read_prediction_inputs,
+    )
+
     flags = {
         "weight_n": weight_n,
         "deformability_n_per_cm": deformability_n_per_cm,
         "damping_ns_per_cm": damping_ns_per_cm,
+        "friction_mu": friction_mu,
     }
-    given = [FLAGS[k] for k, v in flags.items() if v is not None]
-    if features is not None and given:
-        raise UsageError(f"give either a COEFFICIENTS table or the flags, not both ({given[0]})")
-    if features is None and not given:
-        raise UsageError(
-            "nothing to predict: give a COEFFICIENTS table or --weight-n, "
-            "--deformability-n-per-cm and --damping-ns-per-cm"
-        )
-    if given and len(given) < len(FLAGS):
-        missing = [FLAGS[k] for k, v in flags.items() if v is None]
-        raise UsageError(f"one object needs all three flags; missing {', '.join(missing)}")
-    if catalog is not None and features is None:
-        raise UsageError("--catalog joins weights to a COEFFICIENTS table; give the table")
-    for key, value in flags.items():
-        QUANTITIES[key].check_optional(value)
+    _check_usage(flags, features, catalog)
+    _check_flags(flags, coverage)
     if output is not None:
+        from deformctl.artifacts import check_output_path
+
         check_output_path(output, force)  # fail before any work
-
-    from deformctl.artifacts.model import load_model  # deferred: skops, scikit-learn
-    from deformctl.train import FEATURES
-    from deformctl.train import predict as predict_lift_force
-
-    model, metadata = load_model(model_path)
-    if features is None:
-        frame = pd.DataFrame({k: [float(v)] for k, v in flags.items() if v is not None})
-        inputs = [model_path]
-    else:
-        frame = _read_features(features, catalog)
-        inputs = [model_path, features, *([catalog] if catalog else [])]
-    with error_context(features if features is not None else "command line"):
-        result = predict_lift_force(
-            model, frame[[c for c in ("object_id", *FEATURES) if c in frame]]
-        )
-    for line in result.warnings:
-        typer.echo(f"warning: {line}", err=True)
-
-    if output is None:
-        typer.echo(result.frame.to_csv(index=False, float_format="%.6g"), nl=False)
-        return
-    provenance = Provenance.from_invocation(
-        inputs,
-        seed=metadata.get("seed") if isinstance(metadata.get("seed"), int) else None,
-        settings={"model_format": str(metadata.get("format"))},
+    predictor = load_predictor(model_path)
+    inputs: dict[str, Any] = {k: None if v is None else [v] for k, v in flags.items()}
+    ids = None
+    if features is not None:
+        frame = read_prediction_inputs(features, catalog)
+        inputs = {c: frame[c].to_numpy(dtype=float) for c in frame.columns if c != "object_id"}
+        ids = frame["object_id"].astype(str).tolist() if "object_id" in frame.columns else None
+    est = predict_objects(
+        predictor, inputs, coverage=coverage, names=ids, source=features or "command line"
     )
-    write_table(result.frame, output, "predictions", provenance=provenance, force=force)
+    for line in est.warnings:
+        typer.echo(f"warning: {line}", err=True)
+    columns = output_columns(est, inputs, object_ids=ids)
+    if output is None:
+        typer.echo(csv_text(columns), nl=False)
+        return
+    _write(columns, output, predictor, [model_path, features, catalog], coverage, force)
+
+
+def _write(
+    columns: dict[str, Any],
+    output: str,
+    predictor: Any,
+    args: list[str | None],
+    coverage: float | None,
+    force: bool,
+) -> None:
+    import pandas as pd
+
+    from deformctl.artifacts import Provenance, write_table
+    from deformctl.artifacts.io import is_stdio
+
+    seed = predictor.metadata.get("seed")
+    provenance = Provenance.from_invocation(
+        [str(predictor.path), *(a for a in args[1:] if a)],
+        seed=seed if isinstance(seed, int) else None,
+        settings={
+            "model_format": str(predictor.metadata.get("format")),
+            "model": args[0],
+            "coverage": coverage,
+        },
+    )
+    write_table(pd.DataFrame(columns), output, "predictions", provenance=provenance, force=force)
     if not is_stdio(output):
-        typer.echo(f"wrote {output}: {len(result.frame)} prediction(s)", err=True)
+        n = len(columns["predicted_lift_force_n"])
+        typer.echo(f"wrote {output}: {n} prediction(s)", err=True)

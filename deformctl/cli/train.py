@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import typer
 from rich.console import Console
@@ -38,9 +38,15 @@ def _num(value: Any, fmt: str) -> str:
 def metrics_table(report: dict[str, Any]) -> Table:
     """The rich table of max / median relative error, MAE and R² per predictor and split."""
     hp = report["hyperparameters"]
+    form = report.get("form", "paper")
+    calibration = report.get("n_calibration") or 0
+    sizes = f"{report['n_train']} train / " + (
+        f"{calibration} calibration / " if calibration else ""
+    )
     title = (
-        f"lifting-force model: hidden {','.join(str(h) for h in hp['hidden'])}, "
-        f"seed {report['seed']}, {report['n_train']} train / {report['n_test']} test"
+        f"lifting-force model ({form}: {', '.join(report['features'])}): hidden "
+        f"{','.join(str(h) for h in hp['hidden'])}, seed {report['seed']}, "
+        f"{sizes}{report['n_test']} test"
     )
     out = Table(
         title=title,
@@ -70,16 +76,68 @@ def metrics_table(report: dict[str, Any]) -> Table:
     return out
 
 
+def coverage_lines(report: dict[str, Any]) -> list[str]:
+    """One line per coverage P: the bound's margin, empirical coverage and mean margin on the
+    test rows (empty without calibration rows)."""
+    lines = []
+    for p, entry in (report.get("conformal") or {}).items():
+        if entry["coverage"] is None:
+            lines.append(
+                f"upper bound P = {p}: no finite bound from {entry['n_calibration']} "
+                f"calibration rows (rank {entry['rank']})"
+            )
+            continue
+        lines.append(
+            f"upper bound P = {p}: margin {entry['margin']:+.2%} over the prediction "
+            f"({entry['n_calibration']} calibration rows); on the {entry['n_test']} test rows "
+            f"coverage {entry['coverage']:.3f}, mean margin (upper / L_f - 1) "
+            f"{entry['mean_margin']:.2%}"
+        )
+    return lines
+
+
+def parse_notes(notes: list[str] | None) -> dict[str, str]:
+    """``KEY=VALUE`` pairs of ``--note`` (exit 2 for a note without ``=`` or an empty key)."""
+    out: dict[str, str] = {}
+    for note in notes or []:
+        key, sep, value = note.partition("=")
+        if not sep or not key.strip():
+            raise UsageError(f"--note takes KEY=VALUE, got {note!r}")
+        out[key.strip()] = value.strip()
+    return out
+
+
 @translate_errors
 def train(
     index: str = typer.Argument(..., help="The index table (Parquet) written by `table`."),
     output: str = typer.Option(..., "-o", "--output", help="The model file to write (.skops)."),
-    hidden: str = typer.Option(
-        "2", "--hidden", help="Hidden layer sizes: 2 (the paper's 3-2-1 network) or a list: 8,4."
+    hidden: str | None = typer.Option(
+        None,
+        "--hidden",
+        help="Hidden layer sizes: 2 or a list such as 8,8 [default: 2, the paper's 3-2-1 "
+        "network, for a table with one μ; 8,8 for the grip model, when μ varies].",
     ),
     train_size: int = typer.Option(
-        DEFAULT_TRAIN_SIZE, "--train-size", help="Training rows; the rest is the test set."
+        DEFAULT_TRAIN_SIZE,
+        "--train-size",
+        help="Training rows; the rest (after the calibration rows) is the test set.",
     ),
+    calibration_size: int = typer.Option(
+        0,
+        "--calibration-size",
+        min=0,
+        help="Rows held out to calibrate the split-conformal upper bound (predict --coverage); "
+        "0: no bound.",
+    ),
+    note: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--note",
+            metavar="KEY=VALUE",
+            help="Record a fact about the data in the model's metadata (repeatable), e.g. "
+            "--note sim_preset=paper.",
+        ),
+    ] = None,
     seed: int = typer.Option(0, "--seed", help="Seeds the split and the initial weights.", min=0),
     metrics: str | None = typer.Option(
         None, "--metrics", help="Also write the metrics as JSON here (- for stdout)."
@@ -89,27 +147,36 @@ def train(
     ),
     force: Force = False,
 ) -> None:
-    """Train Pipeline(StandardScaler, MLPRegressor) on (W, D, λ) -> L_f and save it with skops.
+    """Train Pipeline(StandardScaler, MLPRegressor) on an index table and save it with skops.
 
-    The network learns L_f / W and its output is scaled back by W (inputs stay (W, D, λ)); the
-    best of 8 seeded restarts is picked on the training rows. The rows are split by a seeded
-    permutation into --train-size training rows and a test set. Prints max and median
-    relative error, MAE and R² on train and test for the model and for
-    three baselines on the same split: the nearest index-table entry, F_w = W / (2 μ) alone, and
-    the constant ratio (the training rows' median L_f / F_w times F_w).
-    The model file's metadata records the seed, features, hyper-parameters, training ranges,
-    split ids and metrics; the same seed gives identical predictions.
+    When the table has one friction μ (the paper's population), the model is the paper's
+    network on (W, D, λ): it learns L_f / W and scales back by W. When friction_mu varies, it is
+    the grip model: inputs (W, D, λ, μ), the network learns log(L_f / F_w) with F_w = W / (2 μ)
+    from the damping ratio ζ and the natural frequency ω_n (docs/explanation/model.md). The best
+    of 8 seeded restarts is picked on the training rows. A seeded permutation splits the rows
+    into --train-size training rows, --calibration-size calibration rows (their relative
+    errors calibrate the upper bound of predict --coverage) and the test rows. Prints max and
+    median relative error, MAE and R² on train and test for the model and for three baselines
+    on the same split: the nearest index-table entry (grip model: its L_f / F_w times F_w),
+    F_w = W / (2 μ) alone, and the constant ratio (the training rows' median L_f / F_w times
+    F_w); with calibration rows, the bound's empirical coverage and mean margin on the test
+    rows for P = 0.9 and 0.95. The model file's metadata records the seed, form, features,
+    hyper-parameters, training ranges, split ids, metrics, the calibration scores and a numpy
+    export of the network (what predict evaluates); the same seed gives identical predictions.
 
     Example:
 
     \b
       deformctl train index.parquet -o model.skops --seed 0 --metrics metrics.json
+      deformctl train grip-index.parquet -o grip.skops --train-size 250 \\
+          --calibration-size 150 --note sim_preset=paper
     """
     # deferred: scikit-learn and skops take seconds to import and only training needs them
     from deformctl.artifacts.model import save_model
-    from deformctl.train import parse_hidden, train_model, train_report
+    from deformctl.train import model_metadata, parse_hidden, train_model, train_report
 
-    sizes = parse_hidden(hidden, max_parameters=max_parameters)
+    sizes = None if hidden is None else parse_hidden(hidden, max_parameters=max_parameters)
+    notes = parse_notes(note)
     if is_stdio(output):
         raise UsageError("the model file cannot be stdout; give a file name with -o")
     if metrics is not None and not is_stdio(metrics) and Path(metrics) == Path(output):
@@ -119,13 +186,26 @@ def train(
         check_output_path(metrics, force, binary=False)
 
     table = read_table(index, "index_table")
-    result = train_model(table, hidden=sizes, train_size=train_size, seed=seed)
+    result = train_model(
+        table,
+        hidden=sizes,
+        train_size=train_size,
+        calibration_size=calibration_size,
+        seed=seed,
+    )
     report = train_report(result)
     provenance = Provenance.from_invocation(
-        [index], seed=seed, settings={"hidden": list(sizes), "train_size": train_size}
+        [index],
+        seed=seed,
+        settings={
+            "hidden": report["hyperparameters"]["hidden"],
+            "train_size": train_size,
+            "calibration_size": calibration_size,
+        },
     )
     report["provenance"] = provenance.to_dict()
-    metadata = {k: v for k, v in report.items() if k != "predictions"}
+    report["notes"] = notes
+    metadata = {**model_metadata(result), "provenance": report["provenance"], "notes": notes}
 
     with committed_together():  # the model and the metrics file: both or neither
         save_model(output, result.model, metadata=metadata, force=force)
@@ -139,6 +219,8 @@ def train(
         highlight=False,
     )
     console.print(metrics_table(report))
+    for line in coverage_lines(report):  # unwrapped: one line per coverage
+        typer.echo(line, err=console.file is sys.stderr)
     if not report["converged"]:
         typer.echo(
             "warning: the chosen network stopped at max_iter before converging; "

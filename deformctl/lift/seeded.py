@@ -4,9 +4,11 @@ On a real rig every lift attempt costs a grip, a lift, a check and a reset. The 
 :func:`deformctl.lift.search.find_min_lift_force_seeded` starts at a predicted L_f instead of at
 F_w; this module makes the predictions (``lift --start-model`` / ``--start-table``):
 
-* :func:`load_start_model`: a model file from ``train`` (loaded through the skops allow-list,
-  :func:`deformctl.artifacts.model.load_model`); the model must take exactly
-  :data:`deformctl.train.FEATURES`, else the file is refused (exit 65). An object outside the
+* :func:`load_start_model`: a model file from ``train`` or a bundled model such as ``grip``,
+  evaluated by the numpy predictor (:class:`deformctl.grip.fast.Predictor`; a model file without
+  a numpy export is loaded through the skops allow-list); the model must take
+  :data:`deformctl.train.FEATURES` or, a grip model, those and ``friction_mu`` (taken from the
+  catalog's F_w), else the file is refused (exit 65). An object outside the
   model's training range is not predicted from: its search falls back to ``refine`` from F_w,
   with one warning line naming the object and the feature(s).
 * :func:`load_start_table`: an index table from ``table``: the nearest entry (in standardized
@@ -248,24 +250,46 @@ class StartSeed:
     def from_model(
         cls, model: Any, *, margin: float = 1.0, settings: Mapping[str, Any] | None = None
     ) -> StartSeed:
-        """A seed from a fitted lifting-force model (:func:`deformctl.train.train_model`)."""
-        from deformctl.train import predict  # deferred: scikit-learn
+        """A seed from a lifting-force model: a :class:`deformctl.grip.fast.Predictor` (any
+        model file, :func:`load_start_model`) or a fitted estimator from
+        :func:`deformctl.train.train_model`.
+
+        A μ-aware model (the grip model) gets each object's μ from its F_w (μ = W / (2 F_w)).
+        """
+        from deformctl.grip.fast import Predictor as FastPredictor
+
+        if not isinstance(model, FastPredictor):
+            from deformctl.grip.export import export_model
+
+            train_range = {
+                c: [float(lo), float(hi)]
+                for c, lo, hi in zip(
+                    model.feature_names_in_, model.feature_min_, model.feature_max_, strict=True
+                )
+            }
+            model = FastPredictor.from_export(
+                export_model(model), {"training_range": train_range}, "model", check_points=False
+            )
+        fast: FastPredictor = model
 
         def predictor(
             features: pd.DataFrame, f_w_n: np.ndarray
         ) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
-            result = predict(model, features[["object_id", *FEATURE_COLUMNS]])
-            frame = result.frame
+            ids = features["object_id"].astype(str).tolist()
+            w = features[FEATURE_COLUMNS[0]].to_numpy(dtype=np.float64)
+            mu = w / (2.0 * f_w_n) if fast.needs_friction else None
+            est = fast.predict_many(
+                w,
+                features[_D].to_numpy(dtype=np.float64),
+                features[_LAMBDA].to_numpy(dtype=np.float64),
+                mu,
+                names=ids,
+            )
             notes: dict[str, str] = {}
-            for line in result.warnings:  # "ID: outside the training range: ..."
+            for line in est.warnings:  # "ID: outside the training range: ..."
                 oid, _, rest = line.partition(": ")
                 notes[oid] = rest.replace("the training range", "the model's training range", 1)
-            ids = frame["object_id"].astype(str)
-            return (
-                frame["predicted_lift_force_n"].to_numpy(dtype=np.float64),
-                frame["outside_training_range"].to_numpy(dtype=bool),
-                [notes.get(oid) for oid in ids],
-            )
+            return est.lift_force_n, est.outside_training_range, [notes.get(i) for i in ids]
 
         return cls("model", predictor, float(margin), dict(settings or {}))
 
@@ -341,10 +365,10 @@ def _coefficients(path: str | None) -> pd.DataFrame | None:
 
 
 def load_start_model(path: str, *, margin: float, coefficients: str | None = None) -> StartSeed:
-    """:meth:`StartSeed.from_model` from a model file, refusing a model for other features.
+    """:meth:`StartSeed.from_model` from a model file (or a bundled name such as ``grip``).
 
     Args:
-        path: the model file (``train -o``).
+        path: the model file (``train -o``) or a bundled model's name.
         margin: the start margin (>= 1).
         coefficients: a coefficients table with the objects' D and λ, or None.
 
@@ -352,32 +376,35 @@ def load_start_model(path: str, *, margin: float, coefficients: str | None = Non
         UsageError: ``margin`` < 1 (exit 2).
         MissingInputError: no such file (exit 66).
         InputDataError: not a model file, a type outside the allow-list, or a model whose
-            features are not :data:`FEATURE_COLUMNS` (exit 65); see also :func:`_coefficients`.
+            features are neither :data:`FEATURE_COLUMNS` nor the grip model's (exit 65); see
+            also :func:`_coefficients`.
     """
-    from deformctl.artifacts.model import load_model  # deferred: skops, scikit-learn
+    from deformctl.grip.fast import NoNumpyExportError, resolve_model_path
+    from deformctl.grip.fast import Predictor as FastPredictor
+    from deformctl.grip.groups import GRIP_FEATURES
     from deformctl.lift.search import validate_start_margin
 
     validate_start_margin(margin)
-    model, metadata = load_model(path)
-    declared = metadata.get("features")
-    names = getattr(model, "feature_names_in_", None)
-    seen = [str(n) for n in names] if names is not None else declared
-    n_in = getattr(model, "n_features_in_", None)
-    if declared != list(FEATURE_COLUMNS) or seen != list(FEATURE_COLUMNS) or n_in != 3:
-        got = seen if isinstance(seen, list) else f"{n_in} unnamed features"
+    try:
+        predictor = FastPredictor.load(path)
+    except NoNumpyExportError:  # a model file from before the numpy export (format 1)
+        from deformctl.artifacts.model import load_predictor
+
+        predictor = load_predictor(resolve_model_path(path))
+    if predictor.features not in (FEATURE_COLUMNS, GRIP_FEATURES):
         raise InputDataError(
-            f"the model takes {got}, not the features a start is predicted from "
-            f"({', '.join(FEATURE_COLUMNS)})",
+            f"the model takes {list(predictor.features)}, not the features a start is predicted "
+            f"from ({', '.join(FEATURE_COLUMNS)}, and friction_mu for a grip model)",
             path=path,
         )
     coefficients_table = _coefficients(coefficients)
     settings = {"model": path, "margin": float(margin), "coefficients": coefficients}
-    seed = StartSeed.from_model(model, margin=margin, settings=settings)
+    seed = StartSeed.from_model(predictor, margin=margin, settings=settings)
     return dataclasses.replace(
         seed,
         coefficients=coefficients_table,
         coefficients_path=coefficients,
-        inputs=(path, *([coefficients] if coefficients else [])),
+        inputs=(str(predictor.path), *([coefficients] if coefficients else [])),
     )
 
 

@@ -4,14 +4,18 @@ images.
 One module per source, each a reader the ``measure`` command calls:
 
 * :mod:`~deformctl.measure.ros2_bag`: :func:`read_ros2_bag` (``--bag``);
-* :mod:`~deformctl.measure.csv`: :func:`read_csv_export` (``--csv``);
+* :mod:`~deformctl.measure.csv`: :func:`read_csv_export` (``--csv``), with the text of an
+  export in :mod:`~deformctl.measure.csv_table`, its columns and units in
+  :mod:`~deformctl.measure.csv_columns`, its options in :mod:`~deformctl.measure.csv_options`
+  and many files per call in :mod:`~deformctl.measure.csv_batch`;
 * :mod:`~deformctl.measure.sim`: :func:`simulate_squeezes` (``--sim``), squeezing catalog objects
   in :mod:`deformctl.sim`;
 * :mod:`~deformctl.measure.images`: :func:`~deformctl.measure.images.measure_images`
   (``--images``), an object-catalog row from a top and a side image (OpenCV, imported when used).
 
 The options the command builds and the library takes are in :mod:`~deformctl.measure.options`
-(:class:`BagSource`, :class:`CsvSource`, :class:`Segmentation`, :class:`SqueezeProtocol`; the
+(:class:`BagSource`, :class:`Segmentation`, :class:`SqueezeProtocol`; a CSV's
+:class:`CsvOptions` are in :mod:`~deformctl.measure.csv_options`; the
 readers :func:`read_bag` and :func:`read_csv` take them, :func:`read_ros2_bag` and
 :func:`read_csv_export` build them from keyword arguments). Both recording readers return a
 :class:`Recording` (:mod:`~deformctl.measure.recording`: the
@@ -21,7 +25,9 @@ cut into squeezes by :mod:`~deformctl.measure.segment` (segmentation, rupture an
 :func:`simulate_catalog_file` for a catalog and, at scale, :class:`SimulateCatalogTask` (the sweep
 task of one object) and :func:`simulate_catalog_sweep` (a dataset directory).
 
-Every reader checks the recording's plausibility (:mod:`deformctl.plausibility`: a sample rate,
+A recording's defects (a logging gap, a coarse force, a force that lags the position) are
+reported, not fitted over (:mod:`~deformctl.measure.defects`). Every reader checks the
+recording's plausibility (:mod:`deformctl.plausibility`: a sample rate,
 peak force, peak compression, force axis or compression sign that a unit, axis or sign mistake
 explains is refused with the likely fix), and every squeeze is cut at a rupture and reduced to the
 ``phase`` asked for (:mod:`deformctl.characterize.rupture`); the :class:`Recording` carries the
@@ -38,10 +44,22 @@ from deformctl.measure.csv import (
     read_csv_export,
     squeeze_from_csv,
 )
-from deformctl.measure.images import (
-    ImagesResult,
-    measure_images,
+from deformctl.measure.csv_batch import (
+    CSV_MEASURE_SCHEMA,
+    CsvBatchResult,
+    CsvFile,
+    CsvFileTask,
+    csv_objects,
+    measure_csv_files,
+    measure_csv_sweep,
+    read_objects_from,
 )
+from deformctl.measure.csv_options import (
+    DEFAULT_CSV_MEMORY_BUDGET_GIB,
+    CsvDialect,
+    CsvOptions,
+)
+from deformctl.measure.images import ImagesResult, measure_images
 from deformctl.measure.options import (
     DEFAULT_FORCE_THRESHOLD_FRAC,
     DEFAULT_MIN_GAP_S,
@@ -52,25 +70,16 @@ from deformctl.measure.options import (
     DEFAULT_SIM_SQUEEZES,
     DEFAULT_SQUEEZE_PROTOCOL,
     DEFAULT_SQUEEZE_STRAIN,
-    FORCE_UNITS_N,
     INCREASES_WHEN,
-    LENGTH_UNITS_M,
-    POSITION_KEYS,
-    TIME_UNITS_S,
-    UNITS_BY_KEY,
     Axis,
     BagSource,
     CompressionZero,
-    CsvSource,
     IncreasesWhen,
     PositionIs,
     Segmentation,
     SqueezeProtocol,
-    norm_unit,
 )
-from deformctl.measure.recording import (
-    Recording,
-)
+from deformctl.measure.recording import Recording
 from deformctl.measure.ros2_bag import (
     JOINT_STATE_TYPE,
     POSE_TYPE,
@@ -99,6 +108,8 @@ from deformctl.measure.stage import (
 
 __all__ = [
     "ABSOLUTE_TIME_MIN_S",
+    "CSV_MEASURE_SCHEMA",
+    "DEFAULT_CSV_MEMORY_BUDGET_GIB",
     "DEFAULT_FORCE_THRESHOLD_FRAC",
     "DEFAULT_MIN_GAP_S",
     "DEFAULT_MIN_SQUEEZE_S",
@@ -108,21 +119,20 @@ __all__ = [
     "DEFAULT_SIM_SQUEEZES",
     "DEFAULT_SQUEEZE_PROTOCOL",
     "DEFAULT_SQUEEZE_STRAIN",
-    "FORCE_UNITS_N",
     "INCREASES_WHEN",
     "JOINT_STATE_TYPE",
-    "LENGTH_UNITS_M",
     "LOG_SAMPLE_BYTES",
     "MEASURE_SCHEMA",
     "POSE_TYPE",
-    "POSITION_KEYS",
-    "TIME_UNITS_S",
-    "UNITS_BY_KEY",
     "WRENCH_TYPE",
     "Axis",
     "BagSource",
     "CompressionZero",
-    "CsvSource",
+    "CsvBatchResult",
+    "CsvDialect",
+    "CsvFile",
+    "CsvFileTask",
+    "CsvOptions",
     "ImagesResult",
     "IncreasesWhen",
     "PositionIs",
@@ -131,12 +141,15 @@ __all__ = [
     "SimulateCatalogTask",
     "SqueezeProgress",
     "SqueezeProtocol",
+    "csv_objects",
     "default_peak_force_n",
+    "measure_csv_files",
+    "measure_csv_sweep",
     "measure_images",
-    "norm_unit",
     "read_bag",
     "read_csv",
     "read_csv_export",
+    "read_objects_from",
     "read_ros2_bag",
     "recording_log",
     "segment_squeezes",

@@ -1,42 +1,55 @@
 """The CSV source of ``measure``: one object's squeezes from a testing machine's or a gripper's
 export (``--csv``).
 
-A file is plain (names in row one) or carries its units in row two; the mapped columns give time,
-force and one position signal (:mod:`deformctl.measure.recording`). Units come from the file, or
-``units`` for the columns whose unit the file does not state, else SI. A recording whose sample
-rate, peak force or peak compression a unit mistake explains is refused with the unit that would
-make it plausible (:mod:`deformctl.plausibility`).
+The file is read as it comes (:mod:`deformctl.measure.csv_table`: encoding, delimiter, decimal
+mark, preamble, header, units row), the time, force and position columns are found by name with
+their units (:mod:`deformctl.measure.csv_columns`), and the numbers are converted to SI. Then:
+
+1. time must not go back (the row is named); repeated timestamps are merged;
+2. a sample rate, peak force or peak compression that a unit mistake explains is refused with
+   the unit that would make it plausible (:mod:`deformctl.plausibility`);
+3. the force's sign: compressive force is the sign that grows with the compression
+   (``force_sign="auto"``; a flip is reported and recorded);
+4. the recording's defects are found and reported (:mod:`deformctl.measure.defects`), and the
+   force's lag behind the position is estimated and, with ``lag_s``, shifted out;
+5. the recording is cut into squeezes (:mod:`deformctl.measure.segment`).
+
+What was found (layout, preamble, columns and units, force sign, lag) is returned in
+:attr:`Recording.details`, which the squeeze log stores with the object.
 """
 
 from __future__ import annotations
 
-import csv
-import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from os import PathLike
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from deformctl.artifacts.io import note_input
 from deformctl.characterize.rupture import Phase
-from deformctl.errors import InputDataError, MissingInputError
+from deformctl.errors import DeformctlError, InputDataError, UsageError
+from deformctl.measure.csv_columns import ColumnRole, column_roles, describe_roles
+from deformctl.measure.csv_options import CsvOptions
+from deformctl.measure.csv_table import CsvLayout, CsvSource, read_columns, read_layout
+from deformctl.measure.defects import (
+    Defect,
+    coarse_force,
+    estimate_lag,
+    first_backwards,
+    lag_defect,
+    logging_gaps,
+    merge_duplicate_times,
+    shift_force,
+)
 from deformctl.measure.options import (
     DEFAULT_FORCE_THRESHOLD_FRAC,
     DEFAULT_MIN_GAP_S,
     DEFAULT_MIN_SQUEEZE_S,
     DEFAULT_SEGMENTATION,
-    FORCE_UNITS_N,
-    LENGTH_UNITS_M,
-    TIME_UNITS_S,
-    UNITS_BY_KEY,
     CompressionZero,
-    CsvSource,
     IncreasesWhen,
     PositionIs,
     Segmentation,
-    norm_unit,
 )
 from deformctl.measure.recording import (
     Recording,
@@ -44,10 +57,7 @@ from deformctl.measure.recording import (
     _compression,
     _rate_hz,
 )
-from deformctl.measure.segment import (
-    _detection_window_s,
-    _to_squeezes,
-)
+from deformctl.measure.segment import _detection_window_s, _to_squeezes
 from deformctl.plausibility import (
     MAX_PEAK_FORCE_N,
     check_peak_compression,
@@ -59,40 +69,63 @@ from deformctl.plausibility import (
     suggest_unit,
 )
 from deformctl.series import FloatArray, SqueezeSeries
-from deformctl.units import NS_PER_S
+from deformctl.units import GIB, NS_PER_S, UNITS
 
+#: Multiply a value in the unit by the factor to get SI; keys are lower-case unit names.
+TIME_UNITS_S: dict[str, float] = {k.lower(): u.si for k, u in UNITS["time"].items()}
+FORCE_UNITS_N: dict[str, float] = {k.lower(): u.si for k, u in UNITS["force"].items()}
+LENGTH_UNITS_M: dict[str, float] = {k.lower(): u.si for k, u in UNITS["length"].items()}
+#: The units a hint may suggest: the slips of a factor 10³ (an imperial unit is not a slip).
+SUGGESTED_UNITS: dict[str, dict[str, float]] = {
+    "time": {"s": 1.0, "ms": 1e-3, "µs": 1e-6},
+    "force": {"N": 1.0, "kN": 1e3, "mN": 1e-3},
+    "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "µm": 1e-6},
+}
 #: A CSV time column whose first value (in s, after ``--units``) is at least this is Unix time
 #: (2000-01-01T00:00:00Z): the squeeze log keeps those times as its ``log_time``.
 ABSOLUTE_TIME_MIN_S = 946_684_800.0
+#: Memory one data row of a CSV export costs until its squeeze log is written, bytes: measured
+#: 204 and 210 B per row (peak RSS above a 10,000-row run's; 1 and 3 million rows of three
+#: columns into one squeeze log), rounded up. The budget refuses a file before it is read.
+CSV_ROW_BYTES = 250
+#: Fewest data rows a recording must have.
+MIN_ROWS = 2
 
 
-#: How the units are spelled in messages (the tables above key them in lower case).
-_UNIT_SPELLING = {"n": "N", "kn": "kN", "mn": "mN"}
-
-
-def _unit_hint(key: str, unit: str | None, what: str, stated: str | None = None) -> str:
-    """``did you mean --units key=unit?``; ``stated``: the unit the file's units row gives."""
+def _unit_hint(role: ColumnRole, unit: str | None, what: str) -> str:
+    """The fix a hint names: ``--units compression=mm``, or the file's own unit questioned."""
     if unit is None:
         return f"check the unit of {what}"
-    spelled = _UNIT_SPELLING.get(unit, unit)
-    if stated is not None:
-        return f"the file's units row says {stated!r}; is {what} in {spelled}?"
-    return f"did you mean --units {key}={spelled}?"
+    if role.unit_from in ("header", "units row"):
+        return (
+            f"the file's {role.unit_from} says {role.unit.name}; the values are plausible in "
+            f"{unit}: is the {role.unit_from} wrong?"
+        )
+    return f"did you mean --units {role.role}={unit}?"
 
 
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
+def _options(
+    columns: Mapping[str, str] | None,
+    units: Mapping[str, str] | None,
+    position_is: PositionIs,
+    compression_zero: CompressionZero,
+    position_increases_when: IncreasesWhen | None,
+) -> CsvOptions:
+    return CsvOptions(
+        columns=dict(columns or {}),
+        units=dict(units or {}),
+        position_is=position_is,
+        compression_zero=compression_zero,
+        position_increases_when=position_increases_when,
+    )
 
 
 def read_csv_export(
     path: str | PathLike[str],
     *,
-    columns: Mapping[str, str],
     object_id: str,
+    options: CsvOptions | None = None,
+    columns: Mapping[str, str] | None = None,
     units: Mapping[str, str] | None = None,
     position_is: PositionIs = "palm",
     compression_zero: CompressionZero = "first",
@@ -104,49 +137,45 @@ def read_csv_export(
     position_increases_when: IncreasesWhen | None = None,
     size_x_cm: float | None = None,
 ) -> Recording:
-    """Read squeezes from a CSV export: plain, or names in row one and units in row two.
-
-    The file is a two-header-row export when every mapped column's second row is not a number;
-    that row is then read as the columns' units (``N``, ``[mm]``, ``(s)`` are all accepted).
-    Units given in ``units`` apply to columns whose unit the file does not state; a unit stated
-    in both places must agree. Columns with no unit anywhere are taken as SI (s, N, m).
+    """Read one object's squeezes from a CSV export (see the module docstring).
 
     Args:
-        path: the CSV file (comma-separated; UTF-8, a BOM is accepted).
-        columns: mapping of ``time``, ``force`` and exactly one of ``position`` (one palm's
-            travel, see ``position_is``), ``gap`` (between the palms) or ``compression`` (the
-            compression itself, e.g. a testing machine's crosshead travel) to CSV column names.
+        path: the CSV file, or ``-`` for stdin.
         object_id: catalog id written into the squeezes.
-        units: mapping of the same keys to units: time s/ms/us/ns, force N/kN/mN/lbf,
-            lengths m/cm/mm/um/in.
+        options: how to read the file and what its columns are (:class:`CsvOptions`); when
+            None, built from ``columns``, ``units``, ``position_is``, ``compression_zero``
+            and ``position_increases_when`` (the other fields found in the file).
+        columns: role → column name for the roles not to find by name: ``time``, ``force``
+            and one of ``position`` (one palm's travel, see ``position_is``), ``gap`` (between
+            the palms) or ``compression`` (e.g. a testing machine's crosshead travel).
+        units: role → unit for the roles whose unit the file does not state (time
+            s/ms/µs/ns/min, force N/kN/mN/daN/lbf/ozf/kgf/gf, lengths m/cm/mm/µm/in).
         position_is: meaning of a ``position`` column: ``"palm"`` or ``"gap"``.
-        compression_zero: ``"first"`` (the first row) or ``"lead_in"`` (module docstring).
+        compression_zero: ``"first"`` (the first row) or ``"lead_in"``.
         segment: split the file into squeezes (default: one squeeze per file).
-        force_threshold_frac, min_gap_s, min_squeeze_s: segmentation (module docstring).
+        force_threshold_frac, min_gap_s, min_squeeze_s: segmentation
+            (:mod:`deformctl.measure.segment`).
         phase, position_increases_when, size_x_cm: as :func:`read_ros2_bag` (a compression
             column grows when closing unless ``position_increases_when="opening"``).
 
     Returns:
-        The squeezes in SI, the file's median sample rate (for force and position alike) and
-        the ruptures.
+        The squeezes in SI, the file's median sample rate (for force and position alike), the
+        ruptures, the recording's defects and what was found in the file.
 
     Raises:
-        MissingInputError: the file does not exist.
-        InputDataError: a mapped column missing from the file, an unknown unit in the file,
-            file and option units that disagree, non-numeric or NaN cells, non-monotonic time,
-            no compression, or an implausible recording: a sample rate, peak force or peak
-            compression that a unit mistake explains (the message suggests the ``--units``), a
-            compression of the wrong sign (it names ``--position-increases-when``).
-        UsageError: a bad ``columns`` mapping, a ``units`` key that names no mapped column or an
-            unknown unit in ``units``.
+        MissingInputError: the file does not exist (exit 66).
+        InputDataError: an empty file, text that does not decode, no header, a column that is
+            not found, a unit the file states that is unknown, non-numeric or empty cells,
+            time going back, fewer than two rows, or an implausible recording (a sample rate,
+            peak force or peak compression a unit mistake explains, the force or compression
+            of the wrong sign); the message names the file (exit 65).
+        UsageError: a bad option, ambiguous columns, a ``units`` value that contradicts the
+            file, a file above the memory budget (exit 2).
     """
-    source = CsvSource(
-        columns=columns,
-        units=units or {},
-        position_is=position_is,
-        compression_zero=compression_zero,
-        position_increases_when=position_increases_when,
-    )
+    if options is None:
+        options = _options(columns, units, position_is, compression_zero, position_increases_when)
+    elif columns or units:
+        raise UsageError("give columns and units in options, not beside it")
     segmentation = Segmentation(
         segment=segment,
         force_threshold_frac=force_threshold_frac,
@@ -155,13 +184,13 @@ def read_csv_export(
         phase=phase,
     )
     return read_csv(
-        path, source, object_id=object_id, segmentation=segmentation, size_x_cm=size_x_cm
+        path, options, object_id=object_id, segmentation=segmentation, size_x_cm=size_x_cm
     )
 
 
 def read_csv(
     path: str | PathLike[str],
-    source: CsvSource,
+    options: CsvOptions,
     *,
     object_id: str,
     segmentation: Segmentation = DEFAULT_SEGMENTATION,
@@ -170,182 +199,254 @@ def read_csv(
     """:func:`read_csv_export` with its options as the checked objects the command builds.
 
     Args:
-        path: the CSV file.
-        source: the columns, their units and the position signal
-            (:class:`~deformctl.measure.options.CsvSource`).
+        path: the CSV file, or ``-`` for stdin.
+        options: how to read the file and what its columns are (:class:`CsvOptions`).
         object_id: catalog id written into the squeezes.
-        segmentation: how the file is cut (one squeeze unless ``segmentation.segment``).
+        segmentation: how the file is cut (one squeeze per file unless
+            ``segmentation.segment``; :class:`~deformctl.measure.options.Segmentation`).
         size_x_cm: the object's size along the squeeze axis, when known.
 
     Raises:
         see :func:`read_csv_export`.
     """
-    p = Path(path)
-    if not p.is_file():
-        raise MissingInputError("no such CSV file", path=p)
-    note_input(p)
-    columns = source.columns
-    pos_key = source.position_key
-    keys = ("time", "force", pos_key)
-    opt_units = {k: norm_unit(v) for k, v in source.units.items()}
-
+    source = CsvSource.open(path)
     try:
-        with p.open(newline="", encoding="utf-8-sig") as fh:
-            rows = [r for r in csv.reader(fh) if any(cell.strip() for cell in r)]
-    except UnicodeDecodeError as err:
-        raise InputDataError(f"not UTF-8 text (byte {err.start})", path=p) from None
-    except csv.Error as err:
-        raise InputDataError(f"not a readable CSV file: {err}", path=p) from None
-    if not rows:
-        raise InputDataError("empty CSV file", path=p)
-    header = [h.strip() for h in rows[0]]
-    idx: dict[str, int] = {}
-    for k in keys:
-        name = columns[k]
-        if name not in header:
-            raise InputDataError(
-                f"mapped column {k}={name!r} not in the file; columns: {', '.join(header)}",
-                path=p,
-            )
-        idx[k] = header.index(name)
-    body = rows[1:]
-    file_units: dict[str, str] = {}
-    if body and all(not _is_number(_cell(body[0], idx[k])) for k in keys):
-        for k in keys:
-            u = norm_unit(_cell(body[0], idx[k]))
-            if not u:
-                continue
-            if u not in UNITS_BY_KEY[k]:
-                raise InputDataError(
-                    f"column {columns[k]!r}: unknown {k} unit {u!r} in the units row; "
-                    f"supported: {', '.join(UNITS_BY_KEY[k])}",
-                    path=p,
-                )
-            file_units[k] = u
-        body = body[1:]
-    for k, u in file_units.items():
-        if k in opt_units and UNITS_BY_KEY[k][opt_units[k]] != UNITS_BY_KEY[k][u]:
-            raise InputDataError(
-                f"column {columns[k]!r}: the file says unit {u!r}, the option says "
-                f"{opt_units[k]!r}",
-                path=p,
-            )
-    arrays: dict[str, FloatArray] = {}
-    used: dict[str, str] = {}
-    for k in keys:
-        u = (
-            file_units.get(k)
-            or opt_units.get(k)
-            or ("s" if k == "time" else "n" if k == "force" else "m")
+        return _read(
+            source, options, object_id=object_id, segmentation=segmentation, size_x_cm=size_x_cm
         )
-        used[k] = u
-        vals = np.empty(len(body))
-        for i, row in enumerate(body):
-            cell = _cell(row, idx[k]).strip()
-            try:
-                vals[i] = float(cell) if cell else math.nan
-            except ValueError as err:
-                raise InputDataError(
-                    f"column {columns[k]!r}: non-numeric value {cell!r} in data row {i + 1}",
-                    path=p,
-                ) from err
-        arrays[k] = vals * UNITS_BY_KEY[k][u]
-    where = str(p)
+    except DeformctlError as err:
+        if err.path is None:
+            err.path = source.name
+        raise
+
+
+def _check_budget(layout: CsvLayout, options: CsvOptions, name: str) -> None:
+    need = layout.rows_estimate * CSV_ROW_BYTES
+    if need > options.memory_budget_gib * GIB:
+        raise UsageError(
+            f"about {layout.rows_estimate:,} data rows, an estimated {need / GIB:.3g} GiB "
+            f"in memory, above the memory budget of {options.memory_budget_gib:g} GiB "
+            f"({CSV_ROW_BYTES} B per row); split the file or raise --memory-budget-gib"
+        )
+
+
+def _read(
+    source: CsvSource,
+    options: CsvOptions,
+    *,
+    object_id: str,
+    segmentation: Segmentation,
+    size_x_cm: float | None,
+) -> Recording:
+    name = source.name
+    layout = read_layout(source, options.dialect)
+    _check_budget(layout, options, name)
+    roles = column_roles(layout, options)
+    raw = read_columns(source, layout, [r.index for r in roles.values()])
+    n = raw[roles["time"].index].shape[0]
+    if n < MIN_ROWS:
+        raise InputDataError(
+            f"only {n} data row (line {layout.data_line}): a squeeze needs at least {MIN_ROWS}"
+        )
+    arrays = {role: raw[r.index] * r.unit.si for role, r in roles.items()}
+    pos_role = next(r for r in ("position", "gap", "compression") if r in roles)
     time_s = arrays["time"]
-    for k in keys:
-        _check_stream(f"column {columns[k]!r}", time_s, arrays[k], where)
+    back = first_backwards(time_s)
+    if back is not None:
+        t = roles["time"]
+        raise InputDataError(
+            f"time goes back at data row {back + 1} (line {_line_of_row(source, layout, back)}): "
+            f"{t.name!r} is {raw[t.index][back]:.9g} after {raw[t.index][back - 1]:.9g}"
+        )
+    notes = [f"columns: {describe_roles(roles)}"]
+    warnings: list[str] = []
+    for r in roles.values():
+        if r.unit_from == "default":
+            warnings.append(
+                f"column {r.name!r} ({r.role}) states no unit: read in {r.unit.name} (pass --units "
+                f"{r.role}=UNIT to say which)"
+            )
+    time_s, (force_n, position), merged = merge_duplicate_times(
+        time_s, arrays["force"], arrays[pos_role]
+    )
+    if merged:
+        warnings.append(
+            f"{merged} sample(s) repeat the timestamp of the one before: merged (averaged)"
+        )
+    if time_s.shape[0] < MIN_ROWS:
+        raise InputDataError(f"every row has the same time: a squeeze needs at least {MIN_ROWS}")
+    for role, values in (("time", time_s), ("force", force_n), (pos_role, position)):
+        _check_stream(f"column {roles[role].name!r}", time_s, values, name)
+    _check_time_and_force(time_s, force_n, roles, name)
+    force_n, sign = _force_sign(force_n, position, options, roles["force"])
+    if sign["flipped"]:
+        notes.append(
+            f"the force is negative under compression in column {roles['force'].name!r}: sign "
+            f"flipped (--force-sign {options.force_sign})"
+        )
+    defects: list[Defect] = [d for d in (logging_gaps(time_s), coarse_force(force_n)) if d]
+    kind = options.position_is if pos_role == "position" else pos_role
+    threshold_frac = segmentation.force_threshold_frac
+    what = f"column {roles[pos_role].name!r}"
+
+    def compression_of(t: FloatArray, f: FloatArray, p: FloatArray) -> FloatArray:
+        return _compression(
+            p, f, kind, name, threshold_frac, options.compression_zero,
+            options.position_increases_when, what,
+        )  # fmt: skip
+
+    compression_m = compression_of(time_s, force_n, position)
+    _check_compression(compression_m, roles[pos_role], size_x_cm, name)
+    lag = estimate_lag(time_s, force_n, compression_m)
+    shift_s = 0.0
+    if options.lag_s == "auto":
+        if lag.lag_s is not None and lag.lag_s > 0:
+            shift_s = lag.lag_s
+        else:
+            warnings.append(f"--lag-s auto: the force's lag is {lag.describe()}: not shifted")
+    elif isinstance(options.lag_s, float):
+        shift_s = options.lag_s
+    if shift_s:
+        time_s, force_n, position = shift_force(time_s, force_n, position, shift_s)
+        compression_m = compression_of(time_s, force_n, position)
+        notes.append(f"force shifted {shift_s:.3g} s earlier (--lag-s {options.lag_s})")
+    else:
+        found = lag_defect(lag, float(np.median(np.diff(time_s))))
+        if found is not None:
+            defects.append(found)
+    warnings.extend(d.text for d in defects)
     rate_hz = _rate_hz(time_s)
-    _check_time_and_force(arrays, used, columns, where, file_units)
-    kind = source.position_is if pos_key == "position" else pos_key
-    compression_m = _compression(
-        arrays[pos_key],
-        arrays["force"],
-        kind,
-        where,
-        segmentation.force_threshold_frac,
-        source.compression_zero,
-        source.position_increases_when,
-        f"column {columns[pos_key]!r}",
-    )
-    peak_m = float(np.max(compression_m))
-    factor = UNITS_BY_KEY[pos_key][used[pos_key]]
-    unit = suggest_unit(
-        peak_m / factor,
-        LENGTH_UNITS_M,
-        to_value=lambda m: m,
-        ok=lambda m: m <= compression_limit_m(size_x_cm),
-        target=compression_target_m(size_x_cm),
-    )
-    check_peak_compression(
-        peak_m,
-        size_x_cm=size_x_cm,
-        what=f"column {columns[pos_key]!r}",
-        path=where,
-        hint=_unit_hint(pos_key, unit, f"column {columns[pos_key]!r}", file_units.get(pos_key)),
-    )
     absolute = float(time_s[0]) >= ABSOLUTE_TIME_MIN_S
     squeezes, ruptures = _to_squeezes(
         time_s - time_s[0],
-        arrays["force"],
+        force_n,
         compression_m,
         object_id=object_id,
         segmentation=segmentation,
         segment=segmentation.segments(False),
-        path=where,
+        path=name,
         window_s=_detection_window_s(rate_hz),
         clock_origin_ns=round(float(time_s[0]) * NS_PER_S) if absolute else None,
     )
+    details: dict[str, Any] = {
+        "layout": layout.as_dict(),
+        "columns": {role: r.as_dict() for role, r in roles.items()},
+        "preamble": dict(layout.preamble),
+        "preamble_lines": list(layout.preamble_lines),
+        "force_sign": sign,
+        "merged_timestamps": merged,
+        "lag": {**lag.as_dict(), "shifted_s": shift_s},
+    }
     return Recording(
         squeezes,
         rate_hz,
         rate_hz,
-        source=source.kind,
+        source=CsvOptions.kind,
         phase=segmentation.phase,
         ruptures=tuple(ruptures),
+        flags=tuple(d.flag for d in defects),
+        defects=tuple(d.as_dict() for d in defects),
+        details=details,
+        notes=tuple(notes),
+        warnings=tuple(warnings),
     )
 
 
-def _check_time_and_force(
-    arrays: Mapping[str, FloatArray],
-    used: Mapping[str, str],
-    columns: Mapping[str, str],
-    where: str,
-    stated: Mapping[str, str],
-) -> None:
-    """Refuse a CSV whose sample rate or peak force a unit mistake explains (names the unit).
+def _line_of_row(source: CsvSource, layout: CsvLayout, row: int) -> int:
+    """The file line of data row ``row`` (0-based; blank lines are not rows)."""
+    import io
 
-    ``stated``: the units the file's units row gives (the hint then questions the file).
+    with source.stream(layout.data_offset) as fh:
+        text = io.TextIOWrapper(fh, encoding=layout.encoding, newline="")
+        seen = -1
+        for k, line in enumerate(text):
+            if line.strip():
+                seen += 1
+                if seen == row:
+                    return layout.data_line + k
+    return layout.data_line + row
+
+
+def _force_sign(
+    force_n: FloatArray, position: FloatArray, options: CsvOptions, role: ColumnRole
+) -> tuple[FloatArray, dict[str, Any]]:
+    """The force with compression positive, and what was decided.
+
+    The compressive sign is the one that grows with the compression: the sign of the
+    covariance of the force with the position's distance from its start (whichever way the
+    position runs).
+
+    Raises:
+        InputDataError: an explicit ``force_sign`` under which the force falls as the
+            compression grows (names ``--force-sign``).
     """
-    time_s, force_n = arrays["time"], arrays["force"]
+    travel = np.abs(position - position[0])
+    cov = float(np.mean((force_n - force_n.mean()) * (travel - travel.mean())))
+    grows = cov >= 0
+    if options.force_sign == "auto":
+        flipped = not grows
+    else:
+        flipped = options.force_sign == "negative"
+        if grows == flipped and cov != 0:
+            other = "positive" if flipped else "negative"
+            raise InputDataError(
+                f"column {role.name!r}: with --force-sign {options.force_sign} the force falls "
+                f"as the compression grows; the compressive force is {other} in this file: pass "
+                f"--force-sign {other} (or auto)"
+            )
+    decided = {
+        "option": options.force_sign,
+        "compressive": "negative" if flipped else "positive",
+        "flipped": bool(flipped),
+    }
+    return (-force_n if flipped else force_n), decided
+
+
+def _check_time_and_force(
+    time_s: FloatArray, force_n: FloatArray, roles: Mapping[str, ColumnRole], where: str
+) -> None:
+    """Refuse a CSV whose sample rate or peak force a unit mistake explains (names the unit)."""
     dt_s = float(np.median(np.diff(time_s)))
     rate_hz = 1.0 / dt_s
+    t_role, f_role = roles["time"], roles["force"]
     if not rate_ok(rate_hz):
         unit = suggest_unit(
-            dt_s / TIME_UNITS_S[used["time"]],
-            TIME_UNITS_S,
+            dt_s / t_role.unit.si,
+            SUGGESTED_UNITS["time"],
             to_value=lambda dt: 1.0 / dt,
             ok=rate_ok,
             target=1000.0,
         )
-        what = f"column {columns['time']!r}"
-        hint = _unit_hint("time", unit, what, stated.get("time"))
-        check_sample_rate(rate_hz, what=what, path=where, hint=hint)
+        what = f"column {t_role.name!r}"
+        check_sample_rate(rate_hz, what=what, path=where, hint=_unit_hint(t_role, unit, what))
     peak_n = float(np.max(np.abs(force_n)))
-    factor = FORCE_UNITS_N[used["force"]]
     unit = suggest_unit(
-        peak_n / factor,
-        FORCE_UNITS_N,
+        peak_n / f_role.unit.si,
+        SUGGESTED_UNITS["force"],
         to_value=lambda f: f,
         ok=lambda f: f <= MAX_PEAK_FORCE_N,
         target=10.0,
     )
-    what = f"column {columns['force']!r}"
-    hint = _unit_hint("force", unit, what, stated.get("force"))
-    check_peak_force(peak_n, what=what, path=where, hint=hint)
+    what = f"column {f_role.name!r}"
+    check_peak_force(peak_n, what=what, path=where, hint=_unit_hint(f_role, unit, what))
 
 
-def _cell(row: Sequence[str], i: int) -> str:
-    return row[i] if i < len(row) else ""
+def _check_compression(
+    compression_m: FloatArray, role: ColumnRole, size_x_cm: float | None, where: str
+) -> None:
+    """Refuse a peak compression larger than the object (or 0.5 m); the hint names the unit."""
+    peak_m = float(np.max(compression_m))
+    unit = suggest_unit(
+        peak_m / role.unit.si,
+        SUGGESTED_UNITS["length"],
+        to_value=lambda m: m,
+        ok=lambda m: m <= compression_limit_m(size_x_cm),
+        target=compression_target_m(size_x_cm),
+    )
+    what = f"column {role.name!r}"
+    check_peak_compression(
+        peak_m, size_x_cm=size_x_cm, what=what, path=where, hint=_unit_hint(role, unit, what)
+    )
 
 
 def squeeze_from_csv(path: str | PathLike[str], **options: Any) -> list[SqueezeSeries]:

@@ -4,8 +4,8 @@ simulated squeeze protocol.
 The command builds them from its flags and the library takes them (each number's rule is its
 :mod:`deformctl.quantities` entry); :meth:`as_dict` is what the squeeze log's provenance records:
 
-* :class:`BagSource` and :class:`CsvSource`: where force and position are in a recording, and
-  what the position is;
+* :class:`BagSource`: where force and position are in a ROS 2 bag, and what the position is
+  (a CSV export's are :class:`deformctl.measure.csv_options.CsvOptions`);
 * :class:`Segmentation`: how a recording is cut into squeezes and which phase is kept;
 * :class:`SqueezeProtocol`: the force-controlled squeezes ``measure --sim`` simulates;
 * :class:`ScaleReference` and :class:`ObjectMask`: the scale reference in the photos of
@@ -16,8 +16,8 @@ The command builds them from its flags and the library takes them (each number's
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any, Literal
 
 from deformctl.characterize.rupture import Phase, check_phase
@@ -43,34 +43,6 @@ PositionIs = Literal["gap", "palm"]
 CompressionZero = Literal["first", "lead_in"]
 IncreasesWhen = Literal["closing", "opening"]
 INCREASES_WHEN: tuple[str, ...] = ("closing", "opening")
-#: The position keys of a CSV's ``columns`` mapping (one of them, besides time and force).
-POSITION_KEYS = ("position", "gap", "compression")
-
-#: Multiply a value in the unit by the factor to get SI; keys are lower-case unit names.
-TIME_UNITS_S: dict[str, float] = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9}
-FORCE_UNITS_N: dict[str, float] = {"n": 1.0, "kn": 1e3, "mn": 1e-3, "lbf": 4.4482216152605}
-LENGTH_UNITS_M: dict[str, float] = {
-    "m": 1.0,
-    "cm": 1e-2,
-    "mm": 1e-3,
-    "um": 1e-6,
-    "µm": 1e-6,
-    "in": 0.0254,
-}
-UNITS_BY_KEY: dict[str, dict[str, float]] = {
-    "time": TIME_UNITS_S,
-    "force": FORCE_UNITS_N,
-    "position": LENGTH_UNITS_M,
-    "gap": LENGTH_UNITS_M,
-    "compression": LENGTH_UNITS_M,
-}
-
-
-def norm_unit(text: str) -> str:
-    """A unit as the tables key it: lower case, without brackets (``[mm]`` -> ``mm``)."""
-    return text.strip().strip("[]()").strip().lower()
-
-
 #: Segmentation defaults (see :mod:`deformctl.measure.segment`).
 DEFAULT_FORCE_THRESHOLD_FRAC = 0.1
 DEFAULT_MIN_GAP_S = 0.1
@@ -97,6 +69,19 @@ def _choice(value: object, choices: Sequence[str], flag: str, *, optional: bool 
 def _increases_when(value: object) -> None:
     if value is not None and value not in INCREASES_WHEN:
         raise UsageError(f"--position-increases-when must be closing or opening, got {value!r}")
+
+
+def check_position_options(
+    position_is: object, compression_zero: object, position_increases_when: object
+) -> None:
+    """What a recording's position signal is (a bag's and a CSV export's alike).
+
+    Raises:
+        UsageError: an unknown position kind, compression zero or direction (exit 2).
+    """
+    _choice(position_is, ("gap", "palm"), "--position-is")
+    _choice(compression_zero, ("first", "lead_in"), "compression_zero")
+    _increases_when(position_increases_when)
 
 
 @dataclass(frozen=True)
@@ -175,9 +160,9 @@ class BagSource:
             raise UsageError(f"give one or two wrench topics, got {len(self.wrench_topics)}")
         if self.axis not in ("x", "y", "z"):
             raise UsageError(f"--axis must be x, y or z, got {self.axis!r}")
-        _choice(self.position_is, ("gap", "palm"), "--position-is")
-        _choice(self.compression_zero, ("first", "lead_in"), "compression_zero")
-        _increases_when(self.position_increases_when)
+        check_position_options(
+            self.position_is, self.compression_zero, self.position_increases_when
+        )
         if self.position_topic in self.wrench_topics:
             raise UsageError(
                 f"topic {self.position_topic!r} given as both wrench and position topic"
@@ -188,81 +173,6 @@ class BagSource:
         out = dataclasses.asdict(self)
         out["wrench_topics"] = list(self.wrench_topics)
         return out
-
-
-@dataclass(frozen=True)
-class CsvSource:
-    """Which columns of a CSV export hold the squeeze, and in which units (``measure --csv``).
-
-    Attributes:
-        columns: ``time``, ``force`` and exactly one of ``position`` (one palm's travel, see
-            ``position_is``), ``gap`` (between the palms) or ``compression`` (the compression
-            itself, e.g. a testing machine's crosshead) → the CSV column names.
-        units: the same keys → units, for columns whose unit the file does not state (time
-            s/ms/us/ns, force N/kN/mN/lbf, lengths m/cm/mm/um/in); others are SI.
-        position_is: what a ``position`` column is: ``"palm"`` or ``"gap"``.
-        compression_zero: ``"first"`` (the first row) or ``"lead_in"``.
-        position_increases_when: as :class:`BagSource` (a compression column grows when
-            closing unless ``"opening"``).
-
-    Raises:
-        UsageError: a bad ``columns`` mapping, a ``units`` key that names no mapped column, or
-            an unknown position kind or direction (exit 2). An unknown unit is refused where the
-            units are read (:mod:`deformctl.measure.csv`).
-    """
-
-    columns: Mapping[str, str]
-    units: Mapping[str, str] = field(default_factory=dict)
-    position_is: PositionIs = "palm"
-    compression_zero: CompressionZero = "first"
-    position_increases_when: IncreasesWhen | None = None
-
-    kind = "csv"  #: the ``source`` a squeeze log's object row records
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "columns", dict(self.columns))
-        object.__setattr__(self, "units", dict(self.units or {}))
-        pos_keys = [k for k in POSITION_KEYS if k in self.columns]
-        unknown = sorted(set(self.columns) - {"time", "force", *POSITION_KEYS})
-        if unknown or "time" not in self.columns or "force" not in self.columns:
-            pos_keys = []
-        if len(pos_keys) != 1:
-            raise UsageError(
-                "columns must map time, force and exactly one of position, gap, compression; got "
-                + ",".join(f"{k}={v}" for k, v in self.columns.items())
-            )
-        keys = ("time", "force", pos_keys[0])
-        for k in self.units:
-            if k not in keys:
-                given = ",".join(f"{key}={self.columns[key]}" for key in keys)
-                raise UsageError(
-                    f"--units: {k!r} names no column of --columns ({given}); valid keys: "
-                    f"{', '.join(keys)}"
-                )
-        for k, u in self.units.items():
-            if norm_unit(u) not in UNITS_BY_KEY[k]:
-                raise UsageError(
-                    f"units: unknown {k} unit {norm_unit(u)!r}; supported: "
-                    f"{', '.join(UNITS_BY_KEY[k])}"
-                )
-        _choice(self.position_is, ("gap", "palm"), "--position-is")
-        _choice(self.compression_zero, ("first", "lead_in"), "compression_zero")
-        _increases_when(self.position_increases_when)
-
-    @property
-    def position_key(self) -> str:
-        """The ``columns`` key of the position signal: position, gap or compression."""
-        return next(k for k in POSITION_KEYS if k in self.columns)
-
-    def as_dict(self) -> dict[str, Any]:
-        """The options by name, for provenance."""
-        return {
-            "columns": dict(self.columns),
-            "units": dict(self.units),
-            "position_is": self.position_is,
-            "compression_zero": self.compression_zero,
-            "position_increases_when": self.position_increases_when,
-        }
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,8 @@ still measured from its unloaded shape.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -53,6 +54,14 @@ class Recording:
             interpolated onto the force timestamps, so a slow position stream carries fewer
             independent samples than the squeezes have; ``characterize`` widens its
             differentiation window for it (see :func:`deformctl.characterize.default_window_s`).
+        source, phase, ruptures: see :meth:`log_fields`.
+        flags: the recording's defects (:mod:`deformctl.measure.defects`), which
+            ``characterize`` adds to the object's quality.
+        defects: each defect's flag, line and numbers.
+        details: what the reader found in the file and did (a CSV's layout, columns, units,
+            preamble, force sign, lag), stored with the object under the source's name.
+        notes: lines for stderr about what was found (the columns chosen, a sign flipped).
+        warnings: lines for stderr about doubtful input (a unit assumed, each defect).
     """
 
     __repr__ = short_repr
@@ -63,6 +72,11 @@ class Recording:
     source: str = ""
     phase: str = "all"
     ruptures: tuple[Rupture, ...] = ()
+    flags: tuple[str, ...] = ()
+    defects: tuple[Mapping[str, Any], ...] = ()
+    details: Mapping[str, Any] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
 
     def log_fields(self) -> dict[str, Any]:
         """What a squeeze log stores with the object besides its catalog values.
@@ -70,7 +84,8 @@ class Recording:
         ``force_rate_hz`` and ``position_rate_hz``; ``source`` (``ros2_bag`` or ``csv``: the
         log is a rig recording, which ``characterize`` fits with a preload by default),
         ``phase`` and ``ruptures`` (the points where squeezes were cut, see
-        :class:`deformctl.series.Rupture`).
+        :class:`deformctl.series.Rupture`); ``recording_flags`` and ``recording_defects`` (the
+        recording's defects) and, under the source's name (``csv``), the :attr:`details`.
         """
         out: dict[str, Any] = {
             "force_rate_hz": self.force_rate_hz,
@@ -82,6 +97,11 @@ class Recording:
             out["phase"] = self.phase
         if self.ruptures:
             out["ruptures"] = [r.to_record() for r in self.ruptures]
+        if self.flags:
+            out["recording_flags"] = list(self.flags)
+            out["recording_defects"] = [dict(d) for d in self.defects]
+        if self.details:
+            out[self.source or "recording"] = dict(self.details)
         return out
 
 

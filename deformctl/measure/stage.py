@@ -24,10 +24,10 @@ from deformctl.artifacts.provenance import Provenance, input_digest
 from deformctl.catalog import CatalogObject, MeasuredObject, select_objects
 from deformctl.errors import InputDataError, UsageError
 from deformctl.measure.csv import read_csv
+from deformctl.measure.csv_options import CsvOptions
 from deformctl.measure.options import (
     DEFAULT_SEGMENTATION,
     BagSource,
-    CsvSource,
     Segmentation,
     SqueezeProtocol,
 )
@@ -328,7 +328,7 @@ def recording_log(
 
 def read_recording(
     path: str,
-    source: BagSource | CsvSource,
+    source: BagSource | CsvOptions,
     *,
     object_id: str,
     segmentation: Segmentation = DEFAULT_SEGMENTATION,
@@ -351,7 +351,7 @@ def read_recording(
 
 def measure_recording(
     path: str,
-    source: BagSource | CsvSource,
+    source: BagSource | CsvOptions,
     obj: MeasuredObject,
     *,
     output: str,
@@ -365,7 +365,7 @@ def measure_recording(
 
     Args:
         path: the recording (a bag or a CSV file; not stdin).
-        source: what and where the streams are (:class:`BagSource`, :class:`CsvSource`).
+        source: what and where the streams are (:class:`BagSource`, :class:`CsvOptions`).
         obj: the object measured (its id, weight and, when known, size and friction).
         output: the squeeze log (``-`` for stdout).
         segmentation: how the recording is cut into squeezes.

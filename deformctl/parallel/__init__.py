@@ -29,19 +29,55 @@ re-exported here.
 
 from __future__ import annotations
 
-from deformctl.parallel.backends import TaskOutput, connect_dask
-from deformctl.parallel.options import (
-    DEFAULT_CONNECT_TIMEOUT_S,
-    DEFAULT_PARTITION_SIZE,
-    SweepOptions,
-)
-from deformctl.parallel.sweep import (
-    MIN_PARALLEL_OBJECTS,
-    SweepSummary,
-    map_in_order,
-    run_sweep,
-    single_file_workers,
-)
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # the names below, for type checkers; at run time they load on first use
+    from deformctl.parallel.backends import TaskOutput, connect_dask
+    from deformctl.parallel.options import (
+        DEFAULT_CONNECT_TIMEOUT_S,
+        DEFAULT_PARTITION_SIZE,
+        SweepOptions,
+    )
+    from deformctl.parallel.sweep import (
+        MIN_PARALLEL_OBJECTS,
+        SweepSummary,
+        map_in_order,
+        run_sweep,
+        single_file_workers,
+    )
+
+#: Public name -> the submodule that defines it. Importing this package imports none of them,
+#: so a command that needs one module (the CLI's sweep options) does not pay
+#: for pyarrow and the dataset writer the executor brings.
+_EXPORTS: dict[str, str] = {
+    "TaskOutput": "deformctl.parallel.backends",
+    "connect_dask": "deformctl.parallel.backends",
+    "DEFAULT_CONNECT_TIMEOUT_S": "deformctl.parallel.options",
+    "DEFAULT_PARTITION_SIZE": "deformctl.parallel.options",
+    "SweepOptions": "deformctl.parallel.options",
+    "MIN_PARALLEL_OBJECTS": "deformctl.parallel.sweep",
+    "SweepSummary": "deformctl.parallel.sweep",
+    "map_in_order": "deformctl.parallel.sweep",
+    "run_sweep": "deformctl.parallel.sweep",
+    "single_file_workers": "deformctl.parallel.sweep",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """Import the submodule that defines ``name`` on first use (PEP 562)."""
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_EXPORTS])
+
 
 __all__ = [
     "DEFAULT_CONNECT_TIMEOUT_S",

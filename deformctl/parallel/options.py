@@ -11,7 +11,6 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from deformctl.artifacts.dataset import is_dataset_output
 from deformctl.errors import UsageError
 
 DEFAULT_CONNECT_TIMEOUT_S = 10.0  #: time allowed to reach a Dask scheduler, s
@@ -60,6 +59,8 @@ class SweepOptions:
                 ``file_workers``), ``--workers`` < 1, both ``--workers`` and ``--scheduler``,
                 ``--connect-timeout`` without ``--scheduler`` or <= 0, ``--partition-size`` < 1.
         """
+        from deformctl.artifacts.dataset import is_dataset_output  # deferred: pyarrow
+
         dataset = is_dataset_output(output)
         needs_dir = [f for f in self.given() if not (file_workers and f == "--workers")]
         if not dataset and needs_dir:
