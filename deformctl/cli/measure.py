@@ -49,7 +49,11 @@ def _refuse_foreign(source: str, given: list[str]) -> None:
 
 
 def _source(
-    bag: str | None, csv: str | None, images: list[str] | None, sim: bool, inputs: list[str]
+    bag: str | None,
+    csv: str | None,
+    images: tuple[str, str] | None,
+    sim: bool,
+    inputs: list[str],
 ) -> tuple[str, str]:
     """The one source given (its flag and its value: a catalog for ``--sim``).
 
@@ -61,7 +65,7 @@ def _source(
     if sim and len(inputs) > 1:
         raise UsageError(f"--sim takes one catalog, got {len(inputs)}: {', '.join(inputs)}")
     catalog = inputs[0] if sim and inputs else None
-    sources = {"--bag": bag, "--csv": csv, "--images": images and images[0]}
+    sources = {"--bag": bag, "--csv": csv, "--images": None if images is None else images[0]}
     sources["--sim"] = (catalog or "") if sim else None
     chosen = [(flag, value) for flag, value in sources.items() if value is not None]
     if len(chosen) != 1:
