@@ -203,3 +203,16 @@ def test_results_print_on_a_few_lines() -> None:
     assert "table=DataFrame[40 x" in _short(run)
     assert "trials=(" in _short(run.results[0])
     _short(run.attempts[0])
+
+
+def test_the_predictor_and_the_csv_options_print_on_a_few_lines() -> None:
+    from deformctl.measure.csv_batch import CsvFileTask
+
+    predictor = deformctl.load_predictor("grip")
+    assert "weights=(array[" in _short(predictor)  # was 19,648 characters of metadata
+    many = predictor.predict_many([10.0] * 50, [20.0] * 50, [1.0] * 50, [0.5] * 50)
+    assert "lift_force_n=array[50]" in _short(many)
+    _short(predictor.predict(10.0, 20.0, 1.0, 0.5))
+    _short(CsvFileTask(deformctl.CsvOptions(), deformctl.Segmentation()))
+    _short(deformctl.SearchOptions())
+    _short(deformctl.FitOptions())

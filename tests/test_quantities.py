@@ -21,6 +21,7 @@ from deformctl.cli import app
 from deformctl.errors import EXIT_USAGE, InputDataError, UsageError
 from deformctl.lift.options import SearchOptions
 from deformctl.lift.search import find_min_lift_force
+from deformctl.measure import CsvOptions, csv_objects
 from deformctl.measure.options import SqueezeProtocol
 from deformctl.population import make_population
 from deformctl.quantities import (
@@ -153,8 +154,14 @@ def test_friction_is_refused_alike_by_every_command(tmp_path: Path) -> None:
     assert _error(_images(tmp_path, *mu)) == want
     assert _error(_population(tmp_path, "--friction-mu", "0")) == want
     assert _error(_population(tmp_path, "--friction-mu", "0,0.5")) == want
+    assert _error(_predict(tmp_path, "--friction-mu", "0")) == want
     assert _lib(lambda: MeasuredObject("a", 1.0, friction_mu=0.0)) == want
     assert _lib(lambda: make_population(3, seed=0, friction_mu=0.0)) == want
+    assert _lib(lambda: csv_objects(["r.csv"], weight_n=1.0, friction_mu=0.0)) == want
+    # read from a file: the same rule, as a data error naming where it was read (exit 65)
+    rule = f"friction_mu = 0 is outside its physical bounds [{FRICTION_MU.low:g}, 10]"
+    assert _mapped(tmp_path, "friction_mu", "0") == f"line 2: {rule}"
+    assert _predicted(friction_mu=0.0) == f"friction_mu must be {FRICTION_MU.rule}; it is 0 for A"
 
 
 def test_weight_is_refused_alike_by_every_command(tmp_path: Path) -> None:
@@ -165,6 +172,10 @@ def test_weight_is_refused_alike_by_every_command(tmp_path: Path) -> None:
     assert _error(_population(tmp_path, "--weight-n", "0")) == want
     assert _error(_predict(tmp_path, "--weight-n", "0")) == want
     assert _lib(lambda: MeasuredObject("a", 0.0)) == want
+    assert _mapped(tmp_path, "weight_n", "0") == (
+        "line 2: weight_n = 0 is outside its physical bounds [0.001, 5000]"
+    )
+    assert _predicted(weight_n=0.0) == f"weight_n must be {WEIGHT_N.rule}; it is 0 for A"
 
 
 def test_size_is_refused_alike_by_every_command(tmp_path: Path) -> None:
@@ -182,6 +193,12 @@ def test_deformability_and_damping_are_refused_alike(tmp_path: Path) -> None:
     want_l = "error: --damping-ns-per-cm must be a number in [0, 10000] N·s/cm, got -1"
     assert _error(_population(tmp_path, "--damping-ns-per-cm", "-1,5")) == want_l
     assert _error(_predict(tmp_path, "--damping-ns-per-cm", "-1")) == want_l
+    line = _predicted(deformability_n_per_cm=0.0)
+    assert line == f"deformability_n_per_cm must be {STIFFNESS_N_PER_CM.rule}; it is 0 for A"
+    # a fitted λ within 0.05 N·s/cm of 0 is noise and counts as 0; below it, the same rule
+    assert _predicted(damping_ns_per_cm=-1.0).startswith(
+        f"damping_ns_per_cm must be {DAMPING_NS_PER_CM.rule} (a fitted -0.05 counts as 0)"
+    )
 
 
 def test_the_window_has_one_text(tmp_path: Path) -> None:
@@ -231,3 +248,44 @@ def test_the_simulator_settings_have_one_text(tmp_path: Path, flag: str) -> None
     measure = ["measure", catalog, "--sim", flag, "-1", "-o", str(tmp_path / "s.mcap")]
     lift = ["lift", catalog, "--sim", flag, "-1", "-o", str(tmp_path / "l.parquet")]
     assert _error(measure) == _error(lift)
+    if flag == "--memory-budget-gib":  # the CSV reader's budget is the same quantity
+        want = "error: --memory-budget-gib must be a finite number > 0 GiB, got -1"
+        assert _error(_csv(tmp_path, "--weight-n", "1", flag, "-1")) == _error(lift) == want
+        assert _lib(lambda: CsvOptions(memory_budget_gib=-1)) == want
+
+
+def test_the_coverage_and_the_lag_have_one_text(tmp_path: Path) -> None:
+    from deformctl.predict import load_predictor
+
+    want = "error: --coverage must be a number in (0, 1), got 1"
+    assert _error([*_predict(tmp_path, "--friction-mu", "0.5"), "--coverage", "1"]) == want
+    assert _lib(lambda: load_predictor("grip").margin(1.0)) == want
+    want = "error: --lag-s must be auto or a number in [-10, 10] s, got 11"
+    assert _error(_csv(tmp_path, "--weight-n", "1", "--lag-s", "11")) == want
+    assert _lib(lambda: CsvOptions(lag_s=11.0)) == want
+
+
+def _mapped(tmp: Path, column: str, value: str) -> str:
+    """The error line of ``measure --csv --objects-from`` with ``column`` = ``value``."""
+    mapping = tmp / "map.csv"
+    mapping.write_text(f"file,{column}\nr.csv,{value}\n")
+    argv = [*_csv(tmp, "--weight-n", "1"), "--objects-from", str(mapping)]
+    argv.remove("--object-id")
+    argv.remove("a")
+    result = runner.invoke(app, argv)
+    assert result.exit_code == 65, result.stderr
+    prefix = f"error: {mapping}: "
+    (line,) = result.stderr.splitlines()
+    assert line.startswith(prefix), line
+    return line.removeprefix(prefix)
+
+
+def _predicted(**bad: float) -> str:
+    """The bundled model's refusal of one object with ``bad`` values (a data error)."""
+    from deformctl.predict import load_predictor
+
+    values = {"weight_n": 10.0, "deformability_n_per_cm": 20.0, "damping_ns_per_cm": 1.0}
+    values |= {"friction_mu": 0.5, **bad}
+    with pytest.raises(InputDataError) as info:
+        load_predictor("grip").predict(**values, name="A")
+    return info.value.message

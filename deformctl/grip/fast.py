@@ -45,19 +45,20 @@ import numpy as np
 from deformctl import jsonsafe
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.grip.conformal import (
-    check_coverage,
     conformal_margin,
     conformal_min_scores,
     conformal_rank,
 )
 from deformctl.grip.groups import GRIP_FEATURES, NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM, ZETA_SHIFT
 from deformctl.quantities import (
+    COVERAGE,
     DAMPING_NS_PER_CM,
     FRICTION_MU,
     STIFFNESS_N_PER_CM,
     WEIGHT_N,
     Quantity,
 )
+from deformctl.reprs import short_repr
 from deformctl.units import GRAVITY_M_S2
 
 __all__ = [
@@ -267,6 +268,8 @@ class Estimates:
         warnings: one line per cause and object (no ``warning:`` prefix).
     """
 
+    __repr__ = short_repr
+
     names: np.ndarray
     lift_force_n: np.ndarray
     f_w_n: np.ndarray
@@ -282,6 +285,8 @@ class Estimates:
 @dataclass(frozen=True)
 class Estimate:
     """One object's prediction (the fields of :class:`Estimates` as scalars)."""
+
+    __repr__ = short_repr
 
     lift_force_n: float
     f_w_n: float
@@ -323,6 +328,8 @@ class Predictor:
     (min, max) over the training rows, inputs and groups), ``training_friction_mu`` (a single-μ
     model's μ, else None) and ``scores`` (the calibration scores, sorted, or None).
     """
+
+    __repr__ = short_repr
 
     path: Path
     metadata: Mapping[str, Any]
@@ -540,10 +547,7 @@ class Predictor:
         cached = self._cache.get(("margin", coverage))
         if cached is not None:
             return float(cached)
-        try:
-            p = check_coverage(coverage)
-        except (TypeError, ValueError):
-            raise UsageError(f"--coverage must be a number in (0, 1), got {coverage}") from None
+        p = COVERAGE.check(coverage)  # the one rule of --coverage
         if self.scores is None:
             raise InputDataError(NO_SCORES_MESSAGE, path=self.path)
         n = self.scores.size

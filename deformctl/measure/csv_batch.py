@@ -30,7 +30,12 @@ from deformctl.artifacts import check_output_path, write_squeeze_log
 from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
 from deformctl.artifacts.io import display_name
 from deformctl.artifacts.provenance import Provenance, input_digest
-from deformctl.catalog import SIZE_COLUMNS, check_object_values, object_record
+from deformctl.catalog import (
+    COLUMN_QUANTITIES,
+    SIZE_COLUMNS,
+    check_object_values,
+    object_record,
+)
 from deformctl.errors import EXIT_FAILURE, DeformctlError, InputDataError, UsageError
 from deformctl.measure.csv import read_csv
 from deformctl.measure.csv_options import CsvOptions
@@ -38,6 +43,7 @@ from deformctl.measure.options import DEFAULT_SEGMENTATION, Segmentation
 from deformctl.measure.recording import Recording
 from deformctl.measure.stage import LOG_SAMPLE_BYTES, MEASURE_SCHEMA
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, map_in_order, run_sweep
+from deformctl.reprs import short_repr
 from deformctl.series import SqueezeSeries
 from deformctl.units import GIB
 
@@ -85,7 +91,8 @@ def read_objects_from(path: str) -> dict[str, dict[str, Any]]:
     Raises:
         MissingInputError: no such file (exit 66).
         InputDataError: no ``file`` column, an unknown column, a file twice, or a value that
-            is not a number; the message names the row (exit 65).
+            is not a number or outside its quantity's rule (:data:`deformctl.catalog.
+            COLUMN_QUANTITIES`); the message names the row (exit 65).
     """
     import pandas as pd
 
@@ -122,11 +129,15 @@ def read_objects_from(path: str) -> dict[str, dict[str, Any]]:
                 values[column] = text
                 continue
             try:
-                values[column] = float(text)
+                value = float(text)
             except ValueError:
                 raise InputDataError(
                     f"line {n}: {column} = {text!r} is not a number", path=path
                 ) from None
+            # the catalog column's rule, as a value read from a file (exit 65)
+            values[column] = COLUMN_QUANTITIES[column].check_data(
+                value, where=f"line {n}", path=path
+            )
         out[key] = values
     return out
 
@@ -267,6 +278,8 @@ def summary_row(file: CsvFile, rec: Recording) -> dict[str, Any]:
 class FileOutcome:
     """What became of one file: its recording, or the error it raised."""
 
+    __repr__ = short_repr
+
     file: CsvFile
     recording: Recording | None = None
     error: str = ""
@@ -289,6 +302,8 @@ class _Catching:
 @dataclass(frozen=True)
 class CsvBatchResult:
     """The files read into one squeeze log, and those that failed."""
+
+    __repr__ = short_repr
 
     outcomes: list[FileOutcome]
 
