@@ -168,6 +168,12 @@ def test_recovery_errors_are_reported(
         print("\n".join(lines))
     for key, value in worst.items():
         record_property(f"worst_abs_error_{key}", round(value, 5))  # type: ignore[operator]
+    # the report states what the recovery tests hold: one row per grid cell, the least-squares
+    # fit within the tolerances everywhere, and the paper's ratio worse than it in D
+    assert len(lines) == len(grid) + 2
+    assert worst["lsq_d"] <= 100 * D_RTOL
+    assert worst["lsq_l"] <= max(LAMBDA_RTOL * max(LAMBDA_GRID_NS_PER_CM), LAMBDA_ATOL_NS_PER_CM)
+    assert worst["paper_d"] > worst["lsq_d"]
 
 
 def test_paper_method_is_right_when_creep_is_fast_and_biased_when_slow(grid: list) -> None:  # type: ignore[type-arg]
