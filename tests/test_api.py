@@ -176,15 +176,14 @@ def _short(obj: object) -> str:
     return text
 
 
-def test_results_print_on_a_few_lines() -> None:
-    from deformctl.characterize import synthetic_kelvin_voigt_squeeze
+def test_results_print_on_a_few_lines(kv_squeeze: Any, small_lattice: Any) -> None:
     from deformctl.lift.stage import RunnerFactory, lift_catalog
     from deformctl.measure.recording import Recording
     from deformctl.series import TrialOutcome
 
-    squeeze = synthetic_kelvin_voigt_squeeze(20.0, 1.0, duration_s=30.0)
-    assert "time_s=array[30001]" in _short(squeeze)
-    _short(Recording([squeeze] * 20, 1000.0, 1000.0, source="csv"))
+    assert f"time_s=array[{len(kv_squeeze.time_s)}]" in _short(kv_squeeze)
+    _short(Recording([kv_squeeze] * 20, 1000.0, 1000.0, source="csv"))
+    assert "positions_m=array[60 x 3]" in _short(small_lattice)  # was 32,098 characters
     catalog = pd.DataFrame(
         {
             "object_id": [f"o{i}" for i in range(40)],
@@ -216,3 +215,22 @@ def test_the_predictor_and_the_csv_options_print_on_a_few_lines() -> None:
     _short(CsvFileTask(deformctl.CsvOptions(), deformctl.Segmentation()))
     _short(deformctl.SearchOptions())
     _short(deformctl.FitOptions())
+
+
+def test_the_library_reads_an_export_as_the_command_does(kv_csv: Path, tmp_path: Path) -> None:
+    """``measure --csv`` and ``characterize`` with no options, and the library calls with none:
+    the same squeeze and the same D (the known 20 N/cm within 2 %)."""
+    from deformctl.artifacts import read_squeeze_log, read_table
+
+    log, table = tmp_path / "kv.mcap", tmp_path / "kv.parquet"
+    argv = ["measure", "--csv", str(kv_csv), "--object-id", "kv", "--weight-n", "1", "-o", str(log)]
+    assert runner.invoke(app, argv).exit_code == 0
+    assert runner.invoke(app, ["characterize", str(log), "-o", str(table)]).exit_code == 0
+    rec = deformctl.read_recording(str(kv_csv), deformctl.CsvOptions(), object_id="kv")
+    (cli_squeeze,) = read_squeeze_log(log)[1]
+    np.testing.assert_allclose(rec.squeezes[0].force_n, cli_squeeze.force_n)
+    np.testing.assert_allclose(rec.squeezes[0].compression_m, cli_squeeze.compression_m)
+    cli_d = float(read_table(table, "coefficients")["deformability_n_per_cm"].iloc[0])
+    api_d = float(deformctl.read_and_characterize(log).table["deformability_n_per_cm"].iloc[0])
+    assert api_d == cli_d
+    assert cli_d == pytest.approx(20.0, rel=0.02)

@@ -16,7 +16,7 @@ import pytest
 from typer.testing import CliRunner
 
 from deformctl.catalog import MeasuredObject
-from deformctl.characterize import FitOptions, fit_lsq, synthetic_kelvin_voigt_squeeze
+from deformctl.characterize import FitOptions, fit_lsq
 from deformctl.cli import app
 from deformctl.errors import EXIT_USAGE, InputDataError, UsageError
 from deformctl.lift.options import SearchOptions
@@ -37,7 +37,7 @@ from deformctl.quantities import (
     WINDOW_S,
     Quantity,
 )
-from deformctl.series import TrialOutcome
+from deformctl.series import SqueezeSeries, TrialOutcome
 
 runner = CliRunner()
 
@@ -137,10 +137,6 @@ def _lib(call: Callable[[], object]) -> str:
     return f"error: {info.value}"
 
 
-def _squeeze() -> Any:
-    return synthetic_kelvin_voigt_squeeze(20.0, 1.0, seed=1)
-
-
 def _lifted(grip_force_n: float, attempt_index: int) -> TrialOutcome:
     return TrialOutcome(grip_force_n, grip_force_n >= 7.0, 0.0)
 
@@ -201,7 +197,7 @@ def test_deformability_and_damping_are_refused_alike(tmp_path: Path) -> None:
     )
 
 
-def test_the_window_has_one_text(tmp_path: Path) -> None:
+def test_the_window_has_one_text(tmp_path: Path, kv_squeeze: SqueezeSeries) -> None:
     """``--window-s`` had three texts: the file path, the sweep path and the estimators'."""
     want = "error: --window-s must be a finite number > 0 s, got 0"
     log, table = str(tmp_path / "s.mcap"), str(tmp_path / "c.parquet")
@@ -209,7 +205,7 @@ def test_the_window_has_one_text(tmp_path: Path) -> None:
     sweep = ["characterize", str(tmp_path), "--window-s", "0", "-o", str(tmp_path / "out") + "/"]
     assert _error(sweep) == want
     assert _lib(lambda: FitOptions(window_s=0.0)) == want
-    assert _lib(lambda: fit_lsq([_squeeze()], window_s=0.0)) == want
+    assert _lib(lambda: fit_lsq([kv_squeeze], window_s=0.0)) == want
 
 
 def test_the_ramp_is_refused_by_the_library_too(tmp_path: Path) -> None:
