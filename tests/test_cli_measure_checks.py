@@ -230,7 +230,7 @@ def test_rupture_is_cut_recorded_and_flagged(tmp_path: Path) -> None:
     csv = _in(tmp_path) / "apple.csv"
     csv.write_text(csv_text(rupture(13.0, 0.33)))
     log, coef = tmp_path / "apple.mcap", tmp_path / "c.parquet"
-    units = "time=s,force=N,compression=mm"  # (a unit not stated is a warning of its own)
+    units = "time=s,force=N,compression=mm"  # stated, so the only warning is the rupture's
     args = csv_args(csv, log, "time=t,force=load,compression=pos", "--units", units)
     res = runner.invoke(app, args)
     assert res.exit_code == 0, res.stderr

@@ -431,7 +431,7 @@ def test_friction_not_positive_under_sim(tmp_path: Path, command: str) -> None:
         (["lift", "{cat}", "--sim", "--dt-s", "0"], "dt_s must be in [1e-05, 0.05] s"),
         (["measure", "{cat}", "--sim", "--object-id", "x"], "--object-id cannot be used"),
         (["measure", "--csv", "{cat}", "--squeezes", "2"], "--squeezes cannot be used with --csv"),
-        (["measure", "{cat}"], "a catalog argument"),
+        (["measure", "{cat}"], "needs --sim (a catalog) or --csv (files)"),
         (["measure", "--sim"], "--sim needs a CATALOG argument"),
         (["measure", "{cat}", "--sim", "--csv", "x.csv"], "several sources (--csv, --sim)"),
         (["measure", "{cat}", "--sim", "--strain", "0.6"], "strain must be in (0, 0.5)"),
