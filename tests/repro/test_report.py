@@ -23,7 +23,7 @@ from deformctl.repro.report import (
     write_report,
 )
 
-PAPER = Path(__file__).resolve().parent.parent / "datasets" / "paper"
+PAPER = Path(__file__).resolve().parents[2] / "datasets" / "paper"
 runner = CliRunner()
 
 
