@@ -431,8 +431,8 @@ class Predictor:
             and not (isinstance(scale_index, int) and 0 <= scale_index < len(features))
         ):
             raise InputDataError("the numpy export's scale_index is out of range", path=path)
-        if mu is not None and not (math.isfinite(mu) and mu > 0):
-            raise InputDataError(f"the model's training friction_mu {mu!r} is not > 0", path=path)
+        if mu is not None:  # μ's one rule, as a value read from a file
+            FRICTION_MU.check_data(mu, where="the model's training objects", path=path)
         raw_scores = meta.get("conformal_scores")
         scores = None
         if raw_scores is not None:
