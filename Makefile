@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
 .PHONY: install test lint bench golden-spread reproduce _report calibrate examples clean model \
-  _grip_train _grip_eval grip-study
+  _grip_train _grip_eval grip-study materials scene-figure
 
 install: $(STAMP)
 
@@ -26,6 +26,11 @@ lint: install
 
 bench: install
 	$(BIN)/python -m bench
+
+# The material laws' known-truth recovery and BIC choice over 400 seeded draws per law
+# (tests/characterize/test_materials.py; make test runs 20).
+materials: install
+	DEFORMCTL_MATERIAL_DRAWS=400 $(BIN)/python -m pytest -q -s tests/characterize/test_materials.py
 
 # The golden numbers (tests/test_golden.py) recomputed under every OpenBLAS kernel the installed
 # numpy accepts x 1 and 2 BLAS threads, each number's spread beside its tolerance, then
@@ -175,7 +180,17 @@ examples: install
 	cd $(EX) && ../$(DC) characterize phantoms/ -o phantoms.parquet --model kv
 	cd $(EX) && ../$(DC) lift ../datasets/paper/objects.csv \
 	  --rig "../$(BIN)/python ../examples/threshold_rig.py" -o lift-rig.parquet --log lift-rig.mcap
+	cd $(EX) && ../$(DC) lift ../datasets/paper/objects.csv --sim --objects D -o scene.parquet \
+	  --log scene.mcap
+	cd $(EX) && ../$(BIN)/python ../examples/draw_scene_frame.py scene.mcap scene.png --object D
 	@echo "examples ran in $(EX)/"
+
+# The figure of docs/guide/simulator.md: one frame of a lift log's /scene, drawn from the log.
+scene-figure: install
+	rm -rf .scene && mkdir -p .scene
+	$(DC) lift datasets/paper/objects.csv --sim -o .scene/lift.parquet --log .scene/lift.mcap
+	$(BIN)/python examples/draw_scene_frame.py .scene/lift.mcap docs/foxglove/scene-frame.png \
+	  --object D --index 0 --frame -1
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache build *.egg-info $(EX)

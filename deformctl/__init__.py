@@ -12,8 +12,9 @@ against the command line's):
   is a :class:`MeasuredObject`;
 * ``measure --images``: :func:`measure_images` (a :class:`ScaleReference`, an
   :class:`ObjectMask`);
-* ``characterize``: :func:`read_and_characterize` (:class:`FitOptions`, :class:`QualityPolicy`;
-  the preload is fitted for rig recordings, as the command does);
+* ``characterize``: :func:`read_and_characterize` (:class:`FitOptions` with its
+  :class:`MaterialOptions`, :class:`QualityPolicy`; the preload is fitted for rig recordings and
+  the law chosen by BIC, as the command does);
 * ``lift``: :func:`lift_catalog` with :func:`sim_runner_factory` (the ``paper`` preset;
   :class:`SimOptions` changes it) or :func:`rig_runner_factory`, and a :class:`SearchOptions`;
 * ``table``: :func:`build_index_table`; ``train``: :func:`train_model` (the paper's 3-2-1
@@ -60,6 +61,7 @@ _API: dict[str, str] = {
     "read_and_characterize": "deformctl.characterize.stage",
     "FitOptions": "deformctl.characterize.options",
     "QualityPolicy": "deformctl.characterize.options",
+    "MaterialOptions": "deformctl.characterize.material_options",
     "lift_catalog": "deformctl.lift.stage",
     "sim_runner_factory": "deformctl.lift.runners.sim",
     "rig_runner_factory": "deformctl.lift.runners.rig",

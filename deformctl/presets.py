@@ -117,8 +117,11 @@ class SimPreset:
             "release": self.release.as_dict(),
         }
 
-    def lift_attempt(self, spec: ObjectSpec, grip_force_n: float) -> TrialOutcome:
-        """One simulated lift attempt of ``spec`` at ``grip_force_n`` under this preset."""
+    def lift_attempt(
+        self, spec: ObjectSpec, grip_force_n: float, *, scene_hz: float = 0.0
+    ) -> TrialOutcome:
+        """One simulated lift attempt of ``spec`` at ``grip_force_n`` under this preset (with
+        its scene at ``scene_hz`` frames per simulated second; 0: none)."""
         from deformctl.sim import lift_attempt
 
         return lift_attempt(
@@ -128,6 +131,7 @@ class SimPreset:
             settings=self.settings,
             criterion=self.criterion,
             release=self.release,
+            scene_hz=scene_hz,
         )
 
     def replace(

@@ -32,6 +32,7 @@ from typing import Any
 from deformctl.errors import InputDataError, UsageError
 
 __all__ = [
+    "AT_FORCE_N",
     "COVERAGE",
     "DAMPING_NS_PER_CM",
     "FORCE_THRESHOLD_FRAC",
@@ -242,6 +243,9 @@ MARKER_ID = Quantity("marker_id", "--marker-id", "", 0, integer=True)
 
 # ---------------------------------------------------------------------------- characterizing
 WINDOW_S = Quantity("window_s", "--window-s", " s", 0.0, low_open=True)
+#: The force D is stated at (``characterize --at-force-n``); above an object's peak force it is
+#: refused where the object is fitted.
+AT_FORCE_N = Quantity("at_force_n", "--at-force-n", " N", 0.0, low_open=True)
 
 # ---------------------------------------------------------------------------- lifting
 GROWTH = Quantity("growth", "--growth", "", 1.0, low_open=True)

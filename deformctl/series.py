@@ -18,12 +18,15 @@ by :mod:`deformctl.characterize.rupture`) and :class:`LiftAttempt` (one attempt'
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from deformctl.reprs import short_repr
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from deformctl.scene import SceneFrames
 
 FloatArray = NDArray[np.float64]
 
@@ -52,6 +55,9 @@ class SqueezeSeries:
         start_time_ns: the source's clock at the first sample, ns since the Unix epoch, when
             the recording has one (a ROS 2 bag's header stamps, a CSV export's absolute times);
             a squeeze log places the squeeze there. None for a simulated squeeze.
+        scene: the squeeze's scene (:class:`deformctl.scene.SceneFrames`, on the time base of
+            ``time_s``), when the simulator recorded one; a squeeze log writes it on ``/scene``
+            and ``/palms``.
     """
 
     __repr__ = short_repr
@@ -65,6 +71,7 @@ class SqueezeSeries:
     palm_left_x_m: FloatArray | None = None
     palm_right_x_m: FloatArray | None = None
     start_time_ns: int | None = None
+    scene: SceneFrames | None = None
 
     def __post_init__(self) -> None:
         t = _as_1d("time_s", self.time_s, None)
@@ -127,6 +134,9 @@ class TrialOutcome:
         start_time_ns: the wall clock when the attempt started, ns since the Unix epoch, for a
             runner that acts in real time (a rig); a lift log places the attempt there. None
             for a simulated attempt.
+        scene: the attempt's scene (:class:`deformctl.scene.SceneFrames`, on the time base of
+            ``series``), when the simulator recorded one; a lift log writes it on ``/scene``
+            and ``/palms``.
     """
 
     __repr__ = short_repr
@@ -137,6 +147,7 @@ class TrialOutcome:
     series: LiftAttemptSeries | None = None
     details: dict[str, object] = field(default_factory=dict)
     start_time_ns: int | None = None
+    scene: SceneFrames | None = None
 
 
 @dataclass(frozen=True)

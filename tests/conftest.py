@@ -9,6 +9,11 @@
   testing machine's CSV export (time s, force N, compression mm, names with their units).
 * :func:`small_lattice`: the simulator's lattice of a 10 x 7 x 5 cm box at 2.5 cm spacing
   (5 x 4 x 3 particles), built once per session; treat it as read-only.
+
+Hypothesis draws its examples from a fixed seed (``derandomize``) and keeps no example database,
+so every run of ``make test`` tries the same cases on every machine: a fuzz test that finds a bug
+finds it on the first run, not on one CI run in fifty. To explore new cases locally, run
+``pytest --hypothesis-profile explore`` (random seeds, examples remembered in ``.hypothesis/``).
 """
 
 from __future__ import annotations
@@ -19,6 +24,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pytest
+from hypothesis import settings
+
+settings.register_profile("deterministic", derandomize=True, database=None)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile("deterministic")
 
 if TYPE_CHECKING:
     from deformctl.series import SqueezeSeries

@@ -143,8 +143,12 @@ def test_lift_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     assert seen["search"] == _defaults(deformctl.lift_catalog)["search"]
     assert seen["search"] == deformctl.SearchOptions()
     factory = seen["args"][1]
-    assert factory.settings == deformctl.sim_runner_factory().settings
+    # the scene is written into a lift log: without --log the command records none (0 Hz)
+    assert factory.settings == deformctl.sim_runner_factory(scene_hz=0.0).settings
     assert factory.settings["sim_preset"] == "paper"
+    log = ["--log", str(tmp_path / "l.mcap")]
+    _run(["lift", str(tmp_path / "cat.csv"), "--sim", "-o", str(tmp_path / "l.parquet"), *log])
+    assert seen["args"][1].settings == deformctl.sim_runner_factory().settings
 
 
 def test_table_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:

@@ -90,7 +90,7 @@ def test_lsq_recovers_every_object(log: Path, tmp_path: Path) -> None:
         assert 0.99 < row["r2"] <= 1.0
     # the summary is on stdout: a header and one line per object, with the window used
     lines = res.stdout.splitlines()
-    assert lines[0].split()[:3] == ["object", "D", "(N/cm)"]
+    assert lines[0].split()[:4] == ["object", "model", "D", "(N/cm)"]
     assert [ln.split()[0] for ln in lines[1:]] == list(TRUTH)
     assert all(ln.endswith("0.2") for ln in lines[1:])  # no position rate in the log: default
     prov = df.attrs["provenance"]

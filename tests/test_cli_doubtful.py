@@ -45,14 +45,16 @@ def _noise_force() -> list[SqueezeSeries]:
     ]
 
 
+def _negative_damping() -> list[SqueezeSeries]:
+    return [position_controlled(20.0, -2.0, seed=i, index=i, object_id="bad") for i in range(2)]
+
+
 #: flag → (the flagged object's squeezes, text the warning must contain)
 CASES: dict[str, tuple[Callable[[], list[SqueezeSeries]], str]] = {
-    "negative_damping": (
-        lambda: [
-            position_controlled(20.0, -2.0, seed=i, index=i, object_id="bad") for i in range(2)
-        ],
-        "negative_damping (λ = -2",
-    ),
+    # issue 33: the lsq fits are bounded, so a negative λ is held at 0 and said so; only the
+    # paper estimator (unbounded) writes λ < 0, flagged whatever its standard error
+    "at_bound": (_negative_damping, "at_bound (damping_ns_per_m of the kv law at its bound)"),
+    "negative_damping": (_negative_damping, "negative_damping (λ = -2"),
     "low_r2": (_noise_force, "low_r2 (R² = "),
     "damping_unidentifiable": (
         lambda: [constant_rate(20.0, 3.0, preload_n=0.5, object_id="bad")],
@@ -68,10 +70,12 @@ CASES: dict[str, tuple[Callable[[], list[SqueezeSeries]], str]] = {
                 20.0, 3.0, duration_s=0.5, profile="sine", object_id="bad"
             )
         ],
-        "few_samples (301 samples < 4 windows of 201)",
+        "few_samples (501 samples < 4 windows of 201)",
     ),
-    "negative_stiffness": (_negative_force, "negative_stiffness (D = -20 N/cm ≤ 0)"),
+    "negative_stiffness": (_negative_force, "negative_stiffness (D = 0 N/cm ≤ 0)"),
 }
+#: flag → extra arguments
+ARGS: dict[str, list[str]] = {"negative_damping": ["--method", "paper"]}
 
 
 def _log(path: Path, bad: list[SqueezeSeries]) -> Path:
@@ -96,7 +100,7 @@ def test_each_flag_warns_once_and_strict_refuses(tmp_path: Path, flag: str) -> N
     make, text = CASES[flag]
     log = _log(tmp_path / "log.mcap", make())
     out = tmp_path / "c.parquet"
-    args = ["characterize", str(log), "-o", str(out)]
+    args = ["characterize", str(log), "-o", str(out), *ARGS.get(flag, [])]
     res = runner.invoke(app, args)
     if flag == "negative_stiffness":  # always an error, unless --allow-flagged
         line = _one_error(res, EXIT_DATAERR)
@@ -110,9 +114,9 @@ def test_each_flag_warns_once_and_strict_refuses(tmp_path: Path, flag: str) -> N
     assert warnings[0].startswith(f"warning: {log}: object 'bad': ")
     assert text in warnings[0], warnings[0]  # the flag and its number
     df = read_table(out, "coefficients").set_index("object_id")
-    assert df.loc["good", "quality"] == "ok"
+    assert df.loc["good", "quality"] == "ok", df.loc["good", "quality"]
     assert flag in df.loc["bad", "quality"].split(",")
-    assert df.attrs["schema_version"] == 2
+    assert df.attrs["schema_version"] == 3
     # the summary shows the quality column too
     assert "quality" in res.stdout.splitlines()[0].split()
     out.unlink()
@@ -133,17 +137,18 @@ def test_unidentifiable_damping_is_nan_in_the_table(tmp_path: Path) -> None:
 
 
 def test_constrain_damping(tmp_path: Path) -> None:
-    log = _log(tmp_path / "log.mcap", CASES["negative_damping"][0]())
+    # kept for old scripts: the lsq fits are always bounded, with or without it
+    log = _log(tmp_path / "log.mcap", _negative_damping())
     out = tmp_path / "c.parquet"
     res = runner.invoke(app, ["characterize", str(log), "-o", str(out), "--constrain-damping"])
     assert res.exit_code == 0, res.stderr
     df = read_table(out, "coefficients").set_index("object_id")
     assert df.loc["bad", "damping_ns_per_cm"] == 0.0
     assert bool(df.loc["bad", "damping_bound_active"])
-    assert df.loc["bad", "quality"] == "damping_at_bound"
+    assert df.loc["bad", "quality"] == "at_bound"
     assert not bool(df.loc["good", "damping_bound_active"])
     assert df.loc["good", "quality"] == "ok"
-    assert "damping_at_bound (λ held at 0 by --constrain-damping" in res.stderr
+    assert "at_bound (damping_ns_per_m of the kv law at its bound)" in res.stderr
     assert df.attrs["provenance"].settings["constrain_damping"] is True
 
 
@@ -247,15 +252,15 @@ def test_coefficients_v1_files_are_still_read(
 def test_sweep_writes_flagged_rows_warns_and_strict_fails_them(tmp_path: Path) -> None:
     logs = tmp_path / "squeeze"
     logs.mkdir()
-    _log(logs / "part-00000.mcap", CASES["negative_damping"][0]())
+    _log(logs / "part-00000.mcap", _negative_damping())
     out = tmp_path / "coef"
     res = runner.invoke(app, ["characterize", str(logs), "-o", f"{out}/", "--workers", "1"])
     assert res.exit_code == 0, res.stderr
     warnings = [ln for ln in res.stderr.splitlines() if ln.startswith("warning: ")]
     assert len(warnings) == 1
-    assert "object 'bad': negative_damping (λ = -2" in warnings[0]
+    assert "object 'bad': at_bound (" in warnings[0]
     df = read_dataset(out).set_index("object_id")
-    assert df.loc["bad", "quality"] == "negative_damping"
+    assert df.loc["bad", "quality"] == "at_bound"
     strict = tmp_path / "strict"
     res = runner.invoke(
         app, ["characterize", str(logs), "-o", f"{strict}/", "--workers", "1", "--strict"]
@@ -263,4 +268,4 @@ def test_sweep_writes_flagged_rows_warns_and_strict_fails_them(tmp_path: Path) -
     assert res.exit_code == 1  # a sweep records the refused object as failed and goes on
     assert list(read_dataset(strict)["object_id"]) == ["good"]
     (failure,) = read_failures(strict).to_dict("records")
-    assert "--strict: object 'bad' is flagged: negative_damping" in str(failure)
+    assert "--strict: object 'bad' is flagged: at_bound" in str(failure)

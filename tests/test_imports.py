@@ -35,6 +35,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "errors",
         "units",
         "series",
+        "scene",
         "physics",
         "signals",
         "plausibility",

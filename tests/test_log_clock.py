@@ -149,7 +149,8 @@ def test_simulated_logs_start_at_a_fixed_epoch_one_channel_per_object(tmp_path: 
     assert logged[0][1] == LOG_EPOCH_NS == 946_684_800 * 10**9  # 2000-01-01T00:00:00Z
     times = [ns for _, ns in logged]
     assert times == sorted(times)
-    assert {t for t, _ in logged} == {"/squeeze/a", "/squeeze/b"}
+    # one channel per object, beside the scene's two shared topics (deformctl.artifacts.mcap.scene)
+    assert {t for t, _ in logged} == {"/squeeze/a", "/squeeze/b", "/scene", "/palms"}
     # squeezes one after another: b's first sample comes after a's last
     last_a = max(ns for t, ns in logged if t == "/squeeze/a")
     assert min(ns for t, ns in logged if t == "/squeeze/b") == last_a + 10**9

@@ -1,9 +1,9 @@
 """Rupture detection and the loading/unloading phases (``deformctl.characterize.rupture``).
 
-The rupture criterion must fire on a force collapse while the gripper keeps closing, at the
-collapse, and stay silent on every Kelvin–Voigt squeeze, including heavily damped ones whose
-compression still grows while their force falls (the reason for its third condition), and on the
-simulator's squeezes.
+The rupture criterion must fire on a force collapse while the gripper keeps closing or holds
+still, at the collapse, and stay silent on every Kelvin–Voigt squeeze, including heavily damped
+ones whose compression still grows while their force falls (the reason for its third condition),
+and on the simulator's squeezes.
 """
 
 from __future__ import annotations
@@ -36,9 +36,14 @@ def test_rupture_found_at_the_collapse(d: float, lam: float, keep: float, closin
     assert len(cut) < len(s)
 
 
-def test_a_force_drop_with_the_gripper_stopped_is_not_a_rupture() -> None:
+def test_a_sudden_force_drop_with_the_gripper_stopped_is_a_rupture() -> None:
+    # issue 33: a collapse while the compression holds is a rupture (a force-controlled gripper
+    # that backs off after it keeps its fingers still); a smooth decay is relaxation
+    # (tests/characterize/test_rupture.py)
     s = rupture(30.0, 6.47, keep=0.3, closing=0.0)
-    assert cut_rupture(s, window_s=WINDOW_S)[1] is None
+    _, r = cut_rupture(s, window_s=WINDOW_S)
+    assert r is not None
+    assert r.time_s == pytest.approx(2.0, abs=0.01)
 
 
 def test_no_rupture_in_kelvin_voigt_squeezes() -> None:

@@ -30,9 +30,8 @@ from deformctl.characterize.quality import (
     FEW_SAMPLES_WINDOWS,
     FLAGS,
     LOW_R2,
-    NEGATIVE_DAMPING_ATOL_NS_PER_CM,
-    NEGATIVE_DAMPING_SE_MULT,
     PAPER_MONOTONIC_FRAC,
+    assess,
     damping_identifiable,
     describe_row,
     enforce,
@@ -56,36 +55,54 @@ def test_clean_squeezes_are_ok_with_every_option() -> None:
         assert fit.deformability_n_per_cm == pytest.approx(20.0, rel=0.01)
         assert fit.damping_ns_per_cm == pytest.approx(3.0, rel=0.01)
         assert not fit.damping_bound_active
-        assert fit.damping_excitation > 0.9  # a load-unload cycle excites λ fully
+        # a haversine's rate is 85 % explained by its direction of motion, the rest excites λ
+        assert fit.damping_excitation > 3 * DAMPING_EXCITATION_MIN
     assert fit_paper(squeezes).quality == "ok"
 
 
-def test_negative_damping_flag_and_the_bound() -> None:
+def test_negative_damping_is_held_at_the_bound() -> None:
+    # issue 33: λ is never negative with ok; the lsq fits are bounded (λ >= 0) and say so
     squeezes = _two(d_n_per_cm=20.0, lam_ns_per_cm=-2.0)
-    fit = fit_lsq(squeezes)
-    assert fit.damping_ns_per_cm == pytest.approx(-2.0, rel=0.02)
-    assert fit.flags == ("negative_damping",)
-    bounded = fit_lsq(squeezes, constrain_damping=True)
-    assert bounded.damping_ns_per_cm == 0.0
-    assert bounded.damping_bound_active
-    assert math.isnan(bounded.damping_se_ns_per_cm)
-    assert bounded.flags == ("damping_at_bound",)
-    assert bounded.deformability_n_per_cm == pytest.approx(20.0, rel=0.02)
+    for kw in ({}, {"constrain_damping": True}):
+        fit = fit_lsq(squeezes, **kw)  # type: ignore[arg-type]
+        assert fit.damping_ns_per_cm == 0.0
+        assert fit.damping_bound_active
+        assert math.isnan(fit.damping_se_ns_per_cm)
+        assert fit.flags == ("at_bound",)
+        assert fit.material["params_at_bound"] == "damping_ns_per_m"
+        assert fit.deformability_n_per_cm == pytest.approx(20.0, rel=0.02)
 
 
-def test_small_negative_damping_within_noise_is_not_flagged() -> None:
-    # λ = 0 objects fit slightly negative (the simulator: -0.05 ± 0.08 at worst)
-    fit = fit_lsq(_two(d_n_per_cm=60.0, lam_ns_per_cm=-0.05))
-    assert fit.damping_ns_per_cm < 0
-    assert fit.quality == "ok"
+def test_a_negative_damping_is_flagged_whatever_its_standard_error() -> None:
+    # the paper estimator is not bounded: any λ < 0 is flagged (the rule before issue 33 needed
+    # λ < -0.1 N·s/cm and 2 standard errors, and let 11 of 14 fruit loadings through as ok)
+    assert assess(
+        deformability_n_per_cm=20.0, damping_ns_per_cm=-0.01, damping_se_ns_per_cm=5.0,
+        r2=0.99, n_samples=1000, window_samples=10,
+    ) == ("negative_damping",)  # fmt: skip
+    assert assess(
+        deformability_n_per_cm=20.0, damping_ns_per_cm=0.0, damping_se_ns_per_cm=5.0,
+        r2=0.99, n_samples=1000, window_samples=10,
+    ) == ()  # fmt: skip
+
+
+def test_a_lambda_zero_object_is_ok_or_at_bound_never_negative() -> None:
+    # λ = 0 objects: the free fit lands either side of 0; the bounded one at 0 or above
+    for seed in range(4):
+        sq = [position_controlled(60.0, 0.0, seed=10 * seed + i, index=i) for i in range(2)]
+        fit = fit_lsq(sq)
+        assert fit.damping_ns_per_cm >= 0.0
+        assert fit.quality in ("ok", "at_bound")
+        assert (fit.quality == "at_bound") == (fit.damping_ns_per_cm == 0.0)
 
 
 def test_negative_stiffness_from_a_force_of_the_wrong_sign() -> None:
     s = position_controlled(20.0, 3.0)
     flipped = SqueezeSeries("obj", 0, s.time_s, -s.force_n, s.compression_m)
     fit = fit_lsq([flipped])
-    assert fit.deformability_n_per_cm == pytest.approx(-20.0, rel=0.01)
+    assert fit.deformability_n_per_cm == 0.0  # held at its bound: the force falls as d grows
     assert fit.flags[0] == "negative_stiffness"
+    assert "at_bound" in fit.flags
 
 
 def test_low_r2_when_the_force_is_sensor_noise() -> None:
@@ -108,6 +125,7 @@ def test_constant_rate_makes_damping_unidentifiable() -> None:
         assert fit.damping_excitation < DAMPING_EXCITATION_MIN
         assert fit.flags == ("damping_unidentifiable",)
         assert fit.deformability_n_per_cm == pytest.approx(20.0, rel=0.02)  # D is still fine
+        assert math.isnan(fit.material["hysteresis_energy_j"])  # a ramp: no loop closes
 
 
 def test_slow_heavily_damped_creep_stays_identifiable() -> None:
@@ -128,7 +146,7 @@ def test_slow_heavily_damped_creep_stays_identifiable() -> None:
         for i in range(3)
     ]
     fit = fit_lsq(squeezes)
-    assert fit.damping_excitation < DAMPING_EXCITATION_MIN
+    assert fit.damping_excitation < 2 * DAMPING_EXCITATION_MIN  # measured 0.061
     assert fit.quality == "ok"
     assert fit.damping_ns_per_cm == pytest.approx(15.0, rel=0.03)
 
@@ -161,10 +179,12 @@ def test_paper_method_flags_a_monotonic_loading() -> None:
     assert "damping_unidentifiable" in fit.flags
     row = characterize({"obj": ramps}, "paper").iloc[0]
     assert "not identifiable by the paper estimator" in describe_row(row)
-    # lsq on the same ramps: the transient at the start identifies λ
+    # lsq on the same ramps (issue 33): one speed cannot tell a material's rate dependence from
+    # a preload, however exactly the start's transient pins a Kelvin-Voigt λ; D is still right
     lsq = fit_lsq(ramps)
-    assert lsq.quality == "ok"
-    assert lsq.damping_ns_per_cm == pytest.approx(3.0, rel=0.05)
+    assert lsq.quality == "damping_unidentifiable"
+    assert math.isnan(lsq.damping_ns_per_cm)
+    assert lsq.deformability_n_per_cm == pytest.approx(20.0, rel=0.05)
 
 
 def test_rupture_is_cut_and_flagged() -> None:
@@ -262,8 +282,7 @@ def test_thresholds_are_stated_in_the_docs_and_the_help() -> None:
     )
     stated = {
         "low_r2": f"R² < {LOW_R2:g}",
-        "negative_damping": f"{NEGATIVE_DAMPING_ATOL_NS_PER_CM:g} N·s/cm",
-        "negative_damping se": f"{NEGATIVE_DAMPING_SE_MULT:g}",
+        "negative_damping": "λ < 0",
         "excitation": f"{DAMPING_EXCITATION_MIN:g}",
         "sensitivity": f"{100 * DAMPING_PRELOAD_SENSITIVITY:g} %",
         "monotonic": f"{100 * PAPER_MONOTONIC_FRAC:g} %",
@@ -285,4 +304,4 @@ def test_swapped_force_and_position_columns_are_flagged_when_damped() -> None:
     swapped = SqueezeSeries("obj", 0, s.time_s, s.compression_m * 1e3, s.force_n * 1e-3)
     fit = fit_lsq([swapped])
     assert fit.r2 < 0
-    assert fit.flags == ("negative_damping", "low_r2")
+    assert fit.flags == ("low_r2", "at_bound")  # λ held at 0: the free fit was negative

@@ -160,6 +160,18 @@ def test_friction_is_refused_alike_by_every_command(tmp_path: Path) -> None:
     assert _predicted(friction_mu=0.0) == f"friction_mu must be {FRICTION_MU.rule}; it is 0 for A"
 
 
+def test_the_operating_force_has_one_rule(tmp_path: Path) -> None:
+    """``characterize --at-force-n`` and ``MaterialOptions(at_force_n=...)``: AT_FORCE_N's words."""
+    from deformctl.characterize import MaterialOptions
+
+    want = "error: --at-force-n must be a finite number > 0 N, got 0"
+    log, out = str(tmp_path / "s.mcap"), str(tmp_path / "c.parquet")
+    assert _error(["characterize", log, "-o", out, "--at-force-n", "0"]) == want
+    assert _lib(lambda: MaterialOptions(at_force_n=0.0)) == want
+    assert _lib(lambda: MaterialOptions(at_force_n=math.nan)).endswith("got nan")
+    assert MaterialOptions(at_force_n=5).at_force_n == 5.0
+
+
 def test_weight_is_refused_alike_by_every_command(tmp_path: Path) -> None:
     want = "error: --weight-n must be a number in [0.001, 5000] N, got 0"
     assert _error(_csv(tmp_path, "--weight-n", "0")) == want

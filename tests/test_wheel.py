@@ -129,7 +129,9 @@ def test_the_wheel_brings_its_data(wheel_dir: Path, tmp_path: Path) -> None:
         "print(deformctl.__file__); print(dataset_path('paper', 'table2.csv')); "
         "print(g.EXPECTED_PATH); print(dataset_path('examples', 'gripper.mcap')); "
         "print(dataset_path('examples', 'utm_export.csv')); "
-        "from deformctl.grip.fast import resolve_model_path; print(resolve_model_path('grip'))",
+        "from deformctl.grip.fast import resolve_model_path; print(resolve_model_path('grip')); "
+        "from importlib.resources import files; from deformctl.artifacts.mcap import scene; "
+        "scene.foxglove_schema(); print(files('deformctl.schemas') / 'foxglove' / 'LICENSE')",
     )
     for line in where.split():
         assert Path(line).is_relative_to(wheel_dir), line

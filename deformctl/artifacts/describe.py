@@ -411,8 +411,8 @@ def _model_summary(data: bytes, path: PathArg) -> dict[str, Any]:
     }
 
 
-def describe(path: PathArg) -> dict[str, Any]:
-    """Read, validate and summarise any artifact.
+def describe(path: PathArg, *, data: bytes | None = None) -> dict[str, Any]:
+    """Read, validate and summarise any artifact (``data``: its bytes, when already read).
 
     Returns:
         A JSON-serialisable dict: ``path``, ``format``, ``kind``, ``schema`` (name, version),
@@ -432,7 +432,7 @@ def describe(path: PathArg) -> dict[str, Any]:
         MissingInputError: ``path`` does not exist (exit 66).
         InputDataError, SchemaError: damaged or invalid (exit 65).
     """
-    data = read_input_bytes(path)
+    data = read_input_bytes(path) if data is None else data
     name = display_name(path)
     fmt = sniff_format(data)
     if fmt == "mcap":

@@ -39,6 +39,7 @@ MESSAGE_SCHEMAS = (
     "lift_attempt_result",
     "rig_request",
     "rig_response",
+    "palm_contact",
 )
 DTYPES = ("string", "float64", "int64", "bool")
 

@@ -215,7 +215,7 @@ def read_parquet_bytes(data: bytes, path: PathArg) -> tuple[pa.Table, dict[str, 
         table = pf.read(use_threads=False)
     except _DECODE_ERRORS as err:
         raise InputDataError(f"not a readable Parquet file ({_short(err)})", path=name) from None
-    if (not created_by or created_by.startswith("parquet-cpp-arrow")) and (
+    if (not created_by or created_by.startswith("parquet-cpp-arrow") or _garbled(created_by)) and (
         b"ARROW:schema" not in kv_keys
     ):
         # pyarrow always stores its schema (and every writer names itself); without them the
@@ -247,6 +247,21 @@ def read_parquet_bytes(data: bytes, path: PathArg) -> tuple[pa.Table, dict[str, 
                 field="content_sha256",
             )
     return table, meta
+
+
+#: The longest writer name a Parquet footer's ``created_by`` plausibly holds ("parquet-mr version
+#: 1.13.1 (build db4183109d5b734ec5930d870cdae161e408ddba)" is 65 characters).
+MAX_CREATED_BY_CHARS = 200
+
+
+def _garbled(created_by: str) -> bool:
+    """True when ``created_by`` is not a writer's name but other footer bytes read in its place.
+
+    One flipped byte in a footer's field header shifts the Thrift decoder, which then reads the
+    key/value metadata's values (the base64 Arrow schema, several kB) as ``created_by`` and the
+    key/value list as absent (found by tests/artifacts/test_corruption.py).
+    """
+    return len(created_by) > MAX_CREATED_BY_CHARS or not created_by.isprintable()
 
 
 def _looks_like_ours(table: pa.Table) -> bool:

@@ -1,10 +1,19 @@
-"""Deformability D and damping λ from squeeze logs (the paper's Kelvin model, section III.B).
+"""Deformability D and damping λ from squeeze logs: the paper's Kelvin model and the material laws
+real objects follow (issue 33).
 
-A squeeze is modelled as one Kelvin–Voigt element between the palms, ``f = D · d + λ · d'``
-(:mod:`~deformctl.characterize.fit` says how it is fitted). The package:
+A squeeze is fitted with a material law (:mod:`~deformctl.characterize.laws`: Kelvin–Voigt
+``f = F0 + D d + λ ḋ``, Hunt–Crossley ``f = F0 + k dⁿ + λ dⁿ ḋ`` or a standard linear solid),
+chosen by BIC with ``auto``; D is the secant stiffness at a stated operating force. The package:
 
-* :mod:`~deformctl.characterize.fit`: the estimators, :func:`fit_lsq` (the default, one joint
-  least-squares fit with robust standard errors) and :func:`fit_paper` (the paper's ratios), and
+* :mod:`~deformctl.characterize.laws`, :mod:`~deformctl.characterize.materials`: the laws and
+  their bounded window fit with a lag; :mod:`~deformctl.characterize.objectfit`: one object's fit
+  end to end; :mod:`~deformctl.characterize.stiffness`: operating force, loading slopes, speeds,
+  hysteresis; :mod:`~deformctl.characterize.columns`: the table's material columns;
+  :mod:`~deformctl.characterize.material_options`: ``--model`` and ``--at-force-n``;
+  :mod:`~deformctl.characterize.plot`: one PNG per object; :mod:`~deformctl.characterize.synthetic`:
+  recordings of each law, a rupture with back-off and a relaxation, with known truth;
+* :mod:`~deformctl.characterize.fit`: the estimators, :func:`fit_lsq` (one object's bounded
+  least-squares fit of a law) and :func:`fit_paper` (the paper's ratios), and
   :func:`characterize` (a table of many objects);
 * :mod:`~deformctl.characterize.coefficients`: one object's result, :class:`CoefficientFit`, and
   the table's columns;
@@ -35,16 +44,19 @@ from deformctl.characterize.fit import (
     DEFAULT_POLYORDER,
     DEFAULT_WINDOW_RATE_HZ,
     DEFAULT_WINDOW_S,
-    MIN_SAMPLES,
-    NO_COMPRESSION_M,
-    NO_COMPRESSION_NOISE_MULT,
     UNIFORM_DT_RTOL,
     characterize,
     damping_excitation,
     default_window_s,
     fit_lsq,
     fit_paper,
-    validate_squeeze,
+)
+from deformctl.characterize.laws import MODEL_CHOICES, MODELS
+from deformctl.characterize.material_options import (
+    DEFAULT_MATERIALS,
+    MaterialOptions,
+    check_at_force_n,
+    default_lag,
 )
 from deformctl.characterize.models import (
     Profile,
@@ -52,6 +64,7 @@ from deformctl.characterize.models import (
     kelvin_voigt_response,
     synthetic_kelvin_voigt_squeeze,
 )
+from deformctl.characterize.objectfit import ObjectFit, fit_object
 from deformctl.characterize.options import (
     DEFAULT_FIT,
     DEFAULT_POLICY,
@@ -64,6 +77,12 @@ from deformctl.characterize.options import (
     check_method,
     check_paper_options,
     check_preload,
+)
+from deformctl.characterize.prepare import (
+    MIN_SAMPLES,
+    NO_COMPRESSION_M,
+    NO_COMPRESSION_NOISE_MULT,
+    validate_squeeze,
 )
 from deformctl.characterize.stage import (
     RIG_SOURCES,
@@ -78,11 +97,17 @@ from deformctl.characterize.stage import (
     squeeze_log_parts,
     sweep_warnings,
 )
+from deformctl.characterize.synthetic import (
+    synthetic_law_squeeze,
+    synthetic_relaxation_hold,
+    synthetic_rupture_backoff,
+)
 
 __all__ = [
     "COEFFICIENT_COLUMNS",
     "COLLINEAR_COND",
     "DEFAULT_FIT",
+    "DEFAULT_MATERIALS",
     "DEFAULT_MIN_COMPRESSION_FRAC",
     "DEFAULT_MIN_RATE_FRAC",
     "DEFAULT_POLICY",
@@ -91,6 +116,8 @@ __all__ = [
     "DEFAULT_WINDOW_S",
     "METHODS",
     "MIN_SAMPLES",
+    "MODELS",
+    "MODEL_CHOICES",
     "NO_COMPRESSION_M",
     "NO_COMPRESSION_NOISE_MULT",
     "PRELOADS",
@@ -100,7 +127,9 @@ __all__ = [
     "CoefficientFit",
     "FitOptions",
     "LogCoefficients",
+    "MaterialOptions",
     "Method",
+    "ObjectFit",
     "Preload",
     "Profile",
     "QualityPolicy",
@@ -109,13 +138,16 @@ __all__ = [
     "characterize_file",
     "characterize_items",
     "characterize_sweep",
+    "check_at_force_n",
     "check_method",
     "check_paper_options",
     "check_preload",
     "damping_excitation",
+    "default_lag",
     "default_preload",
     "default_window_s",
     "fit_lsq",
+    "fit_object",
     "fit_paper",
     "kelvin_voigt_piecewise_linear",
     "kelvin_voigt_response",
@@ -123,5 +155,8 @@ __all__ = [
     "squeeze_log_parts",
     "sweep_warnings",
     "synthetic_kelvin_voigt_squeeze",
+    "synthetic_law_squeeze",
+    "synthetic_relaxation_hold",
+    "synthetic_rupture_backoff",
     "validate_squeeze",
 ]

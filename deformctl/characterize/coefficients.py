@@ -11,15 +11,27 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import pandas as pd
 
-from deformctl.characterize.quality import assess, quality_text
+from deformctl.characterize.columns import (
+    MATERIAL_COLUMNS,
+    MATERIAL_DTYPES,
+    empty_values,
+    material_values,
+)
+from deformctl.characterize.quality import SECANT_MISFIT_FRAC, assess, quality_text
 from deformctl.series import Rupture
-from deformctl.units import N_PER_CM, NS_PER_CM
+from deformctl.units import CM, N_PER_CM, NS_PER_CM
 
-COEFFICIENT_COLUMNS = (
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from deformctl.characterize.objectfit import ObjectFit
+
+#: The columns of schema version 2, then the material columns of version 3
+#: (:data:`deformctl.characterize.columns.MATERIAL_COLUMNS`).
+BASE_COLUMNS = (
     "object_id",
     "deformability_n_per_cm",
     "damping_ns_per_cm",
@@ -43,6 +55,7 @@ COEFFICIENT_COLUMNS = (
     "rupture_time_s",
     "rupture_force_n",
 )
+COEFFICIENT_COLUMNS = (*BASE_COLUMNS, *MATERIAL_COLUMNS)
 
 
 @dataclass(frozen=True)
@@ -69,6 +82,12 @@ class CoefficientFit:
         force_min_n, force_max_n: range of f over the samples used, N.
         window_samples: the SG window, samples.
         ruptures: the ruptures found in the squeezes (each fitted up to its rupture).
+        material: the material columns (:mod:`deformctl.characterize.columns`).
+        at_bound: a physical parameter of the chosen law sits at its bound.
+        nonlinear_stiffness: the loading curve's tangent stiffness varies by more than 2×.
+        relaxations: squeezes whose force relaxed at constant compression.
+        secant_misfit: the law misses the recording where D is stated
+            (:data:`deformctl.characterize.quality.SECANT_MISFIT_FRAC`).
     """
 
     deformability_n_per_cm: float
@@ -90,6 +109,46 @@ class CoefficientFit:
     force_max_n: float = math.nan
     window_samples: int = 0
     ruptures: tuple[Rupture, ...] = ()
+    material: dict[str, object] = field(default_factory=empty_values)
+    at_bound: bool = False
+    nonlinear_stiffness: bool = False
+    relaxations: int = 0
+    secant_misfit: bool = False
+
+    @classmethod
+    def from_object(cls, obj: ObjectFit) -> CoefficientFit:
+        """The coefficients of a material fit (``objectfit.fit_object``)."""
+        chosen = obj.chosen
+        damping_names = {"damping_ns_per_m", "damping_ns_per_m_pow_n_plus_1"}
+        damping_names |= {"arm_stiffness_n_per_m"} if chosen.model == "sls" else set()
+        at_bound = tuple(chosen.at_bound)
+        design = chosen.covariance
+        return cls(
+            deformability_n_per_cm=obj.deformability_n_per_m / N_PER_CM,
+            damping_ns_per_cm=obj.damping_ns_per_m / NS_PER_CM,
+            method="lsq",
+            deformability_se_n_per_cm=obj.deformability_se_n_per_m / N_PER_CM,
+            damping_se_ns_per_cm=obj.damping_se_ns_per_m / NS_PER_CM,
+            r2=obj.sample_r2.get(chosen.model, chosen.r2),
+            n_samples=obj.n_samples,
+            n_squeezes=len(obj.grids),
+            preload_n=chosen.params["preload_n"] if obj.fit_preload else math.nan,
+            damping_excitation=obj.damping_excitation,
+            design_condition=float(_condition(design)),
+            damping_bound_active=bool(damping_names & set(at_bound)),
+            damping_unidentifiable=not obj.damping_identifiable,
+            compression_min_cm=obj.compression_range_m[0] / CM,
+            compression_max_cm=obj.compression_range_m[1] / CM,
+            force_min_n=obj.force_range_n[0],
+            force_max_n=obj.force_range_n[1],
+            window_samples=obj.window_samples,
+            ruptures=obj.ruptures,
+            material=material_values(obj),
+            at_bound=bool(at_bound),
+            nonlinear_stiffness=obj.loading.nonlinear,
+            relaxations=len(obj.relaxations),
+            secant_misfit=abs(obj.secant_residual_frac) > SECANT_MISFIT_FRAC,
+        )
 
     @property
     def stiffness_n_per_m(self) -> float:
@@ -113,8 +172,12 @@ class CoefficientFit:
             n_samples=self.n_samples,
             window_samples=self.window_samples,
             damping_unidentifiable=self.damping_unidentifiable,
-            damping_bound_active=self.damping_bound_active,
+            damping_bound_active=self.damping_bound_active and self.method != "lsq",
             ruptures=len(self.ruptures),
+            at_bound=self.at_bound,
+            nonlinear_stiffness=self.nonlinear_stiffness,
+            relaxations=self.relaxations,
+            secant_misfit=self.secant_misfit,
         )
 
     @property
@@ -158,6 +221,8 @@ class CoefficientFit:
             "ruptures": len(self.ruptures),
             "rupture_time_s": math.nan if first is None else first.time_s,
             "rupture_force_n": math.nan if first is None else first.force_n,
+            **self.material,
+            "yield_compression_cm": math.nan if first is None else first.compression_m / CM,
         }
 
 
@@ -175,5 +240,19 @@ def _coefficient_frame(rows: Sequence[Mapping[str, object]]) -> pd.DataFrame:
             "window_samples": "int64",
             "ruptures": "int64",
             "damping_bound_active": "bool",
+            **MATERIAL_DTYPES,
         }
     )
+
+
+def _condition(covariance: object) -> float:
+    """Condition number of the fitted parameters' covariance (NaN when there is none)."""
+    import numpy as np
+
+    c = np.asarray(covariance, dtype=np.float64)
+    if c.size == 0 or not np.all(np.isfinite(c)):
+        return math.nan
+    d = np.sqrt(np.abs(np.diag(c)))
+    if not np.all(d > 0):
+        return math.nan
+    return float(np.linalg.cond(c / np.outer(d, d)))

@@ -59,6 +59,8 @@ import numpy as np
 import pandas as pd
 
 from deformctl.characterize.coefficients import CoefficientFit, _coefficient_frame
+from deformctl.characterize.laws import check_model
+from deformctl.characterize.objectfit import ObjectFit, fit_object
 from deformctl.characterize.options import (
     Method,
     Preload,
@@ -66,12 +68,14 @@ from deformctl.characterize.options import (
     check_paper_options,
     check_preload,
 )
-from deformctl.characterize.quality import PAPER_MONOTONIC_FRAC, damping_identifiable
+from deformctl.characterize.prepare import _where, validate_squeeze
+from deformctl.characterize.quality import PAPER_MONOTONIC_FRAC
 from deformctl.characterize.rupture import Rupture, cut_rupture_smoothed
+from deformctl.characterize.stiffness import damping_excitation
 from deformctl.errors import InputDataError, UsageError
 from deformctl.quantities import WINDOW_S
 from deformctl.series import FloatArray, SqueezeSeries
-from deformctl.signals import noise_std, sg_smooth, sg_window_length, uniform_grid
+from deformctl.signals import sg_smooth, sg_window_length, uniform_grid
 from deformctl.units import N_PER_CM, NS_PER_CM
 
 #: Default Savitzky–Golay window, s. Long enough that the derivative of 0.05 mm position noise is
@@ -86,12 +90,6 @@ DEFAULT_POLYORDER = 3
 DEFAULT_MIN_COMPRESSION_FRAC = 0.02
 #: Paper method: samples with |d'| below this fraction of the peak |d'| are not used for λ.
 DEFAULT_MIN_RATE_FRAC = 0.05
-#: A squeeze whose peak compression is at or below this is "no compression", m.
-NO_COMPRESSION_M = 1e-6
-#: ... or at or below this multiple of the estimated position noise std (max of pure noise ≈ 4σ).
-NO_COMPRESSION_NOISE_MULT = 6.0
-#: Fewest samples a squeeze must have (before trimming).
-MIN_SAMPLES = 10
 #: Relative spread of the sampling interval above which a log is resampled to a uniform grid.
 UNIFORM_DT_RTOL = 1e-3
 #: Condition number of ``XᵀX`` of ``[d, d']`` above which D cannot be estimated at all.
@@ -111,57 +109,6 @@ class _Prepared:
     rate_m_per_s: FloatArray
     window_samples: int
     rupture: Rupture | None = None
-
-
-def _where(s: SqueezeSeries) -> str:
-    return f"squeeze {s.object_id!r} #{s.squeeze_index}"
-
-
-def validate_squeeze(s: SqueezeSeries, *, min_samples: int = MIN_SAMPLES) -> None:
-    """Refuse a squeeze that cannot be characterised.
-
-    Raises:
-        InputDataError: too few samples, NaN/inf samples, timestamps that do not strictly
-            increase, or no compression (peak compression ≤ :data:`NO_COMPRESSION_M`); a
-            compression that is mostly negative is named as having the wrong sign.
-    """
-    if len(s) < min_samples:
-        raise InputDataError(f"{_where(s)}: only {len(s)} samples, need at least {min_samples}")
-    for name in ("time_s", "force_n", "compression_m"):
-        arr: FloatArray = getattr(s, name)
-        bad = np.flatnonzero(~np.isfinite(arr))
-        if bad.size:
-            raise InputDataError(
-                f"{_where(s)}: {bad.size} non-finite (NaN/inf) {name} sample(s), first at index "
-                f"{int(bad[0])}"
-            )
-    dt = np.diff(s.time_s)
-    bad = np.flatnonzero(dt <= 0)
-    if bad.size:
-        i = int(bad[0]) + 1
-        raise InputDataError(
-            f"{_where(s)}: non-monotonic timestamps, time_s[{i}]={s.time_s[i]:.9g} s does not "
-            f"follow time_s[{i - 1}]={s.time_s[i - 1]:.9g} s"
-        )
-    peak_m = float(np.max(s.compression_m))
-    noise_m = _noise_std_m(s.compression_m)
-    low_m = float(np.min(s.compression_m))
-    if -low_m > max(peak_m, NO_COMPRESSION_NOISE_MULT * noise_m, NO_COMPRESSION_M):
-        raise InputDataError(
-            f"{_where(s)}: no compression: it has the wrong sign (down to {low_m:.3g} m, at most "
-            f"{peak_m:.3g} m): it must be positive when squeezed; re-measure with the "
-            "position direction flipped (measure --position-increases-when)"
-        )
-    if peak_m <= max(NO_COMPRESSION_M, NO_COMPRESSION_NOISE_MULT * noise_m):
-        raise InputDataError(
-            f"{_where(s)}: no compression (peak compression {peak_m:.3g} m, position noise "
-            f"{noise_m:.3g} m); the palms did not squeeze the object, or compression has the "
-            "wrong sign (it must be positive when squeezed)"
-        )
-
-
-#: Robust white-noise std of a sampled signal, m (see :func:`deformctl.signals.noise_std`).
-_noise_std_m = noise_std
 
 
 def _uniform(s: SqueezeSeries) -> tuple[float, FloatArray, FloatArray]:
@@ -288,22 +235,6 @@ def _hac_cov(x: FloatArray, resid: FloatArray, prepared: Sequence[_Prepared]) ->
     return np.asarray(cov / np.outer(scale, scale), dtype=np.float64)
 
 
-def damping_excitation(compression_m: FloatArray, rate_m_per_s: FloatArray) -> float:
-    """Share of the rate's mean square not explained by a constant and by d, in [0, 1].
-
-    ``‖d' − P d'‖² / ‖d'‖²`` with ``P`` the projection onto ``[1, d]``: 0 for a constant rate
-    (``λ d'`` is then a constant force) or a rate that follows d, 1 for a rate independent of
-    both (a load–unload cycle). See :func:`deformctl.characterize.quality.damping_identifiable`.
-    """
-    total = float(rate_m_per_s @ rate_m_per_s)
-    if not total > 0:
-        return 0.0
-    a = np.column_stack([np.ones_like(compression_m), compression_m])
-    coef, *_ = np.linalg.lstsq(a, rate_m_per_s, rcond=None)
-    resid = rate_m_per_s - a @ coef
-    return float(min(1.0, (resid @ resid) / total))
-
-
 def _relative_change(a: float, b: float) -> float:
     big = max(abs(a), abs(b))
     return abs(a - b) / big if big > 0 else 0.0
@@ -327,109 +258,45 @@ def fit_lsq(
     squeezes: Sequence[SqueezeSeries],
     *,
     window_s: float = DEFAULT_WINDOW_S,
-    polyorder: int = DEFAULT_POLYORDER,
-    min_compression_frac: float = DEFAULT_MIN_COMPRESSION_FRAC,
     preload: Preload = "zero",
     constrain_damping: bool = False,
+    model: str = "kv",
+    lag_s: float | None = 0.0,
+    at_force_n: float | None = None,
 ) -> CoefficientFit:
-    """Joint least-squares fit of ``f = D d + λ d'`` (``+ F0`` with a preload) over all squeezes.
+    """One object's least-squares fit: a material law (Kelvin–Voigt by default), bounded.
 
-    Besides D, λ and their standard errors the fit reports its diagnostics: R², the damping
-    excitation and design condition, the loading range used, and whether λ is identifiable. λ
-    is unidentifiable (NaN, flag ``damping_unidentifiable``) when it cannot be told from a
-    constant force or from D (:func:`deformctl.characterize.quality.damping_identifiable`): to
-    judge, the fit is made both with and without the preload intercept. A squeeze that ruptured
-    is fitted up to its rupture (:func:`deformctl.characterize.rupture.cut_rupture`).
+    The fit of :func:`deformctl.characterize.objectfit.fit_object` (window means of the law's
+    integral over the whole squeeze, λ ≥ 0, a lag when asked for), as a :class:`CoefficientFit`.
 
     Args:
-        squeezes: the object's squeezes (same ``object_id``), each with ``time_s``, ``force_n``
-            and ``compression_m`` of shape ``[n]``.
-        window_s: Savitzky–Golay window, s (rounded to an odd number of samples).
-        polyorder: Savitzky–Golay polynomial order.
-        min_compression_frac: drop samples with compression below this fraction of the
-            squeeze's peak.
-        preload: ``"zero"`` (the force is 0 at zero compression) or ``"fit"`` (an intercept
-            F0: a contact preload at the start of the squeeze, reported as ``preload_n``).
-        constrain_damping: fit with λ ≥ 0 (bounded least squares, ``scipy.optimize.lsq_linear``);
-            ``damping_bound_active`` says whether the bound held λ at 0.
-
-    Returns:
-        The fit in N/cm and N·s/cm with Newey–West standard errors and its diagnostics.
+        squeezes: the object's squeezes (same ``object_id``), arrays ``[n]``.
+        window_s: averaging window, s.
+        preload: ``"zero"`` or ``"fit"`` (an intercept F0, reported as ``preload_n``).
+        constrain_damping: kept for old callers; λ ≥ 0 always holds.
+        model: ``kv`` (default), ``hc``, ``sls`` or ``auto``.
+        lag_s: the force's lag behind the compression, s; None fits it.
+        at_force_n: the operating force D is stated at, N (None: the median loading force).
 
     Raises:
-        InputDataError: a squeeze that fails :func:`validate_squeeze`, is shorter than two
-            filter windows, or a set of samples that cannot separate D from λ at all.
+        InputDataError: a squeeze that fails :func:`validate_squeeze` or is shorter than two
+            windows.
         UsageError: an invalid option value.
     """
-    _check_options(window_s, polyorder, min_compression_frac)
+    del constrain_damping  # the lsq fits are always bounded
+    _check_options(window_s, DEFAULT_POLYORDER, DEFAULT_MIN_COMPRESSION_FRAC)
     check_preload(preload)
+    check_model(model)
     _require(squeezes)
-    prepared = [
-        _prepare(
-            s, window_s=window_s, polyorder=polyorder, min_compression_frac=min_compression_frac
-        )
-        for s in squeezes
-    ]
-    f = np.concatenate([p.force_n for p in prepared])
-    d = np.concatenate([p.compression_m for p in prepared])
-    v = np.concatenate([p.rate_m_per_s for p in prepared])
-    n = f.shape[0]
-    if n < 3:
-        raise InputDataError(f"object {squeezes[0].object_id!r}: only {n} usable samples")
-    x2 = np.column_stack([d, v])
-    cond = np.linalg.cond(x2.T @ x2)
-    if not np.isfinite(cond) or cond > COLLINEAR_COND:
-        raise InputDataError(
-            f"object {squeezes[0].object_id!r}: compression and its rate are collinear "
-            "(the force profile does not excite the damping term); cannot separate D from λ"
-        )
-    x3 = np.column_stack([np.ones(n), d, v])
-    excitation = damping_excitation(d, v)
-    sensitivity = _relative_change(float(_lstsq(x2, f)[1]), float(_lstsq(x3, f)[2]))
-    identifiable = damping_identifiable(excitation, sensitivity)
-    x = x3 if preload == "fit" else x2
-    lam_col = x.shape[1] - 1
-    coef = _lstsq(x, f)
-    bound_active = False
-    if constrain_damping and identifiable:
-        from scipy.optimize import lsq_linear
-
-        xs, scale = _unit_rms(x)
-        lower = np.full(x.shape[1], -np.inf)
-        lower[lam_col] = 0.0
-        res = lsq_linear(xs, f, bounds=(lower, np.inf))
-        coef = np.asarray(res.x / scale, dtype=np.float64)
-        bound_active = bool(res.active_mask[lam_col] != 0)
-    if bound_active:  # λ = 0: the rest is the fit without the damping column
-        x_fit = np.delete(x, lam_col, axis=1)
-        coef_fit = _lstsq(x_fit, f)
-        coef = np.insert(coef_fit, lam_col, 0.0)
-        cov = _hac_cov(x_fit, f - x_fit @ coef_fit, prepared)
-        se = np.insert(np.sqrt(np.diag(cov)), lam_col, math.nan)
-    else:
-        cov = _hac_cov(x, f - x @ coef, prepared)
-        se = np.sqrt(np.diag(cov))
-    pred = x @ coef
-    lam, lam_se = float(coef[lam_col]), float(se[lam_col])
-    if not identifiable:
-        lam, lam_se = math.nan, math.nan
-    return CoefficientFit(
-        deformability_n_per_cm=float(coef[lam_col - 1]) / N_PER_CM,
-        damping_ns_per_cm=lam / NS_PER_CM,
-        method="lsq",
-        deformability_se_n_per_cm=float(se[lam_col - 1]) / N_PER_CM,
-        damping_se_ns_per_cm=lam_se / NS_PER_CM,
-        r2=_r2(f, pred),
-        n_samples=n,
-        n_squeezes=len(squeezes),
-        preload_n=float(coef[0]) if preload == "fit" else math.nan,
-        damping_excitation=excitation,
-        design_condition=float(np.linalg.cond(_unit_rms(x)[0])),
-        damping_bound_active=bound_active,
-        damping_unidentifiable=not identifiable,
-        window_samples=max(p.window_samples for p in prepared),
-        ruptures=_ruptures(prepared),
-    ).with_ranges(_ranges(f, d))
+    obj = fit_object(
+        squeezes,
+        model=model,
+        window_s=window_s,
+        fit_preload=preload == "fit",
+        lag_s=lag_s,
+        at_force_n=at_force_n,
+    )
+    return CoefficientFit.from_object(obj)
 
 
 def _monotonic(rate: FloatArray) -> bool:
@@ -547,25 +414,39 @@ def characterize(
     preload: Preload | Mapping[str, Preload] = "zero",
     constrain_damping: bool = False,
     recorded_ruptures: Mapping[str, Sequence[Rupture]] | None = None,
+    model: str = "auto",
+    at_force_n: float | None = None,
+    lag_s: float | Mapping[str, float | None] | None = 0.0,
+    objects: Mapping[str, Mapping[str, object]] | None = None,
     **options: float,
 ) -> pd.DataFrame:
     """Fit every object's squeezes and return the coefficient table.
 
     Args:
         squeezes_by_object: object id → that object's squeezes.
-        method: ``"lsq"`` (default, :func:`fit_lsq`) or ``"paper"`` (:func:`fit_paper`).
+        method: ``"lsq"`` (default: the material laws,
+            :func:`deformctl.characterize.objectfit.fit_object`) or ``"paper"``
+            (:func:`fit_paper`).
         preload: lsq only: ``"zero"`` or ``"fit"``, for every object or per object id.
-        constrain_damping: lsq only: fit with λ ≥ 0.
+        constrain_damping: lsq: kept for old callers; the lsq fits always bound λ ≥ 0.
         recorded_ruptures: object id → the ruptures ``measure`` cut off (from the log); they
             count for the ``rupture`` flag and the rupture columns with those found here.
-        **options: passed to the estimator (``window_s``, ``polyorder``, ...).
+        model: lsq: ``kv``, ``hc``, ``sls`` or ``auto`` (all three, chosen by BIC).
+        at_force_n: lsq: the operating force D is stated at, N (None: F_w, else the median
+            loading force).
+        lag_s: lsq: the force's lag behind the compression, s, for every object or per object
+            id; None fits it. The library's default is 0 (simulated squeezes have none; the
+            stage fits it for rig recordings, :func:`deformctl.characterize.default_lag`).
+        objects: object id → its catalog fields (``weight_n``, ``friction_mu`` for F_w).
+        **options: passed to the estimator (``window_s``, ...).
 
     Returns:
         One row per object, columns :data:`COEFFICIENT_COLUMNS` (coefficients in N/cm, N·s/cm;
         ``quality`` is ``ok`` or the flags of :mod:`deformctl.characterize.quality`).
 
     Raises:
-        UsageError: an unknown method, or a preload or damping bound with ``method="paper"``.
+        UsageError: an unknown method or model, or a preload or damping bound with
+            ``method="paper"``, or ``at_force_n`` above an object's peak force.
         InputDataError: any object whose squeezes cannot be fitted (the message names it).
     """
     rows = _fit_rows(
@@ -574,9 +455,20 @@ def characterize(
         preload=preload,
         constrain_damping=constrain_damping,
         recorded_ruptures=recorded_ruptures,
+        model=model,
+        at_force_n=at_force_n,
+        lag_s=lag_s,
+        objects=objects,
+        fits_out=None,
         **options,
     )
     return _coefficient_frame(rows)
+
+
+def _number(value: object) -> float | None:
+    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
+        return float(value)
+    return None
 
 
 def _fit_rows(
@@ -586,16 +478,37 @@ def _fit_rows(
     preload: Preload | Mapping[str, Preload],
     constrain_damping: bool,
     recorded_ruptures: Mapping[str, Sequence[Rupture]] | None,
+    model: str = "auto",
+    at_force_n: float | None = None,
+    lag_s: float | Mapping[str, float | None] | None = 0.0,
+    objects: Mapping[str, Mapping[str, object]] | None = None,
+    fits_out: dict[str, ObjectFit] | None = None,
     **options: float,
 ) -> list[dict[str, object]]:
-    """The rows of :func:`characterize`, one per object."""
+    """The rows of :func:`characterize`, one per object (lsq: each object's material fit goes
+    into ``fits_out`` when given)."""
     check_method(method)
     check_paper_options(method, preload, constrain_damping)
+    check_model(model)
     rows: list[dict[str, object]] = []
     for object_id, squeezes in squeezes_by_object.items():
         if method == "lsq":
             mode = preload if isinstance(preload, str) else preload.get(object_id, "zero")
-            fit = fit_lsq(squeezes, preload=mode, constrain_damping=constrain_damping, **options)  # type: ignore[arg-type]
+            lag = lag_s if lag_s is None or isinstance(lag_s, float | int) else lag_s.get(object_id)
+            meta = (objects or {}).get(object_id, {})
+            obj = fit_object(
+                squeezes,
+                model=model,
+                window_s=float(options.get("window_s", DEFAULT_WINDOW_S)),
+                fit_preload=mode == "fit",
+                lag_s=None if lag is None else float(lag),
+                at_force_n=at_force_n,
+                weight_n=_number(meta.get("weight_n")),
+                friction_mu=_number(meta.get("friction_mu")),
+            )
+            fit = CoefficientFit.from_object(obj)
+            if fits_out is not None:
+                fits_out[object_id] = obj
         else:
             fit = fit_paper(squeezes, **options)  # type: ignore[arg-type]
         recorded = list((recorded_ruptures or {}).get(object_id, ()))

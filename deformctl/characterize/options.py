@@ -1,10 +1,13 @@
-"""The options of ``characterize``, checked once: :class:`FitOptions` and :class:`QualityPolicy`.
+"""The options of ``characterize``, checked once: :class:`FitOptions` (with its
+:class:`~deformctl.characterize.material_options.MaterialOptions`) and :class:`QualityPolicy`.
 
 The command builds them from its flags; the stage
 (:func:`deformctl.characterize.read_and_characterize`,
 :func:`~deformctl.characterize.characterize_file`), the sweep task
 (:class:`~deformctl.characterize.CharacterizeTask`) and the estimators' checks take them. The
-window's rule is :data:`deformctl.quantities.WINDOW_S`; the method's and the preload's are here.
+window's rule is :data:`deformctl.quantities.WINDOW_S`, the operating force's
+:data:`deformctl.quantities.AT_FORCE_N`, the law's :func:`deformctl.characterize.laws.check_model`;
+the method's and the preload's are here.
 """
 
 from __future__ import annotations
@@ -12,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Literal
 
+from deformctl.characterize.material_options import DEFAULT_MATERIALS, MaterialOptions
 from deformctl.characterize.quality import check_policy
 from deformctl.errors import UsageError
 from deformctl.quantities import WINDOW_S
@@ -20,10 +24,6 @@ Method = Literal["lsq", "paper"]
 METHODS: tuple[str, ...] = ("lsq", "paper")
 Preload = Literal["fit", "zero"]
 PRELOADS: tuple[str, ...] = ("fit", "zero")
-#: The material models ``characterize --model`` selects by name. ``kv``: Kelvin–Voigt,
-#: ``f = D d + λ d'`` (``+ F0`` with a preload), fitted by ``fit_lsq`` or ``fit_paper``.
-MODELS: tuple[str, ...] = ("kv",)
-DEFAULT_MODEL = "kv"
 
 
 def check_method(method: object) -> Method:
@@ -48,17 +48,6 @@ def check_preload(preload: object) -> Preload:
     return preload  # type: ignore[return-value]
 
 
-def check_model(model: object) -> str:
-    """``model`` when it names a model of :data:`MODELS`.
-
-    Raises:
-        UsageError: an unknown model (exit 2).
-    """
-    if model not in MODELS:
-        raise UsageError(f"--model must be one of {', '.join(MODELS)}, got {model!r}")
-    return str(model)
-
-
 def check_paper_options(method: str, preload: object, constrain_damping: bool) -> None:
     """The paper estimator fits neither a preload nor a damping bound.
 
@@ -81,43 +70,44 @@ class FitOptions:
         preload: lsq: ``fit`` (an intercept F0) or ``zero`` for every object; None: per object,
             ``fit`` for a rig recording, ``zero`` for a simulated squeeze
             (:func:`deformctl.characterize.default_preload`).
-        constrain_damping: lsq: fit with λ >= 0.
-        model: the material model (:data:`MODELS`; ``kv``, Kelvin–Voigt).
+        constrain_damping: lsq: kept for old callers (the lsq fits are always bounded, λ >= 0).
+        materials: lsq: the material law (``--model``) and the operating force D is stated at
+            (``--at-force-n``), :class:`~deformctl.characterize.material_options.MaterialOptions`.
 
     Raises:
-        UsageError: an unknown method, preload or model, a window outside its rule, or a preload or
-            damping bound with the paper method (exit 2).
+        UsageError: an unknown method or preload, a window outside its rule, a preload or damping
+            bound with the paper method, or materials that are not a ``MaterialOptions`` (exit 2;
+            the law and the force are checked when the ``MaterialOptions`` is built).
     """
 
     method: Method = "lsq"
     window_s: float | None = None
     preload: Preload | None = None
     constrain_damping: bool = False
-    model: str = DEFAULT_MODEL
+    materials: MaterialOptions = DEFAULT_MATERIALS
 
     def __post_init__(self) -> None:
         check_method(self.method)
-        check_model(self.model)
+        if not isinstance(self.materials, MaterialOptions):
+            raise UsageError(
+                f"materials must be a MaterialOptions (--model, --at-force-n), got "
+                f"{self.materials!r}"
+            )
         WINDOW_S.check_optional(self.window_s)
         if self.preload is not None:
             check_preload(self.preload)
         check_paper_options(self.method, self.preload, self.constrain_damping)
 
     def as_dict(self) -> dict[str, Any]:
-        """The options as given, for provenance (``*_option``: None means per object).
-
-        ``model`` only when it is not the default, so that directories written before it
-        existed stay resumable (their fingerprints hold these settings).
-        """
-        out: dict[str, Any] = {
+        """The options as given, for provenance and a sweep's fingerprint (``*_option``: None
+        means per object; ``model`` and ``at_force_n`` from :attr:`materials`)."""
+        return {
             "method": self.method,
             "window_s_option": self.window_s,
             "preload_option": self.preload,
             "constrain_damping": self.constrain_damping,
+            **self.materials.as_dict(),
         }
-        if self.model != DEFAULT_MODEL:
-            out["model"] = self.model
-        return out
 
 
 @dataclass(frozen=True)

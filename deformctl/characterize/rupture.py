@@ -1,19 +1,27 @@
 """Where a squeeze stops being a Kelvin–Voigt squeeze: rupture, and the loading/unloading phases.
 
 **Rupture.** A soft natural object squeezed too hard gives way: the force collapses while the
-gripper keeps closing. Fitted whole, such a squeeze halves D and flips the sign of λ.
-:func:`find_rupture_index` finds the point where it happened; ``measure`` cuts every squeeze there
-and records the point in the log, ``characterize`` does the same for logs that were not cut and
-flags the object (``rupture``). The point is a :class:`~deformctl.series.Rupture` (a squeeze log
-stores it in the object's row, so the record lives with the series; re-exported here). A rupture
-is a sample ``i`` after the running force peak ``p`` where
+gripper keeps closing, or holds its position while a force-controlled gripper backs off. Fitted
+whole, such a squeeze halves D and flips the sign of λ. :func:`find_rupture_index` finds the
+point where it happened; ``measure`` cuts every squeeze there and records the point in the log,
+``characterize`` does the same for logs that were not cut and flags the object (``rupture``).
+The point is a :class:`~deformctl.series.Rupture` (a squeeze log stores it in the object's row,
+so the record lives with the series; re-exported here). A rupture is a sample ``i`` after the
+running force peak ``p`` where
 
 1. the force has fallen by more than :data:`RUPTURE_DROP_FRAC` of the peak,
    ``f[i] < (1 − RUPTURE_DROP_FRAC) · f[p]`` (with ``f[p]`` at least
    :data:`RUPTURE_MIN_PEAK_FRAC` of the squeeze's peak force, so noise before contact is not a
    peak, and a drop of more than :data:`RUPTURE_NOISE_MULT` force-noise standard deviations);
-2. the compression still grows: the smoothed compression at ``i`` exceeds the one at ``p`` by more
-   than three position-noise standard deviations;
+2. the compression still grows (the smoothed compression at ``i`` exceeds the one at ``p`` by
+   more than three position-noise standard deviations and :data:`HOLD_TOL_FRAC` of ``d[p]``),
+   **or it holds** (it stayed within that tolerance of ``d[p]`` since the peak) and the force
+   fell suddenly: somewhere between ``p`` and ``i`` faster than :data:`RUPTURE_SUDDEN_MULT`
+   times the rate at which it rose over the upper half of the loading (both over spans of
+   :data:`SUDDEN_SPAN_S`). The hold is the
+   force-controlled gripper that backs off after the collapse while its fingers stay put (the
+   pattern the shared fruit recordings show; the rule before it required a growing compression
+   and missed 8 of 25 such ruptures);
 3. the drop is not the object's own Kelvin–Voigt response: the force is more than
    ``RUPTURE_DROP_FRAC · f[p]`` below ``D̂ d[i] + λ̂ d'[i]``, with ``D̂, λ̂ ≥ 0`` fitted to the loading
    before the peak. Conditions 1 and 2 alone also hold for a heavily damped object after its
@@ -23,8 +31,14 @@ is a sample ``i`` after the running force peak ``p`` where
    them, and none of the simulator's squeezes, is a rupture; a force collapse to 30–69 % of the
    peak with the gripper still closing is found within 6–155 ms (``tests/test_phases.py``).
 
-A force drop while the compression stops (a testing machine that holds its crosshead, a load–
-unload cycle) is not a rupture.
+A force that falls while the compression recedes (a load–unload cycle, a release) is not a
+rupture.
+
+**Relaxation.** A force that decays *smoothly* while the compression holds (a testing machine
+holding its crosshead on a viscoelastic object) is stress relaxation, not rupture:
+:func:`find_relaxation` reports it (``characterize`` flags it ``relaxation``) and nothing is
+cut. It is a hold of at least :data:`RELAXATION_HOLD_S` under load during which the smoothed
+force falls by more than :data:`RELAXATION_FRAC` of its value at the start of the hold.
 
 **Phases.** ``loading`` is a squeeze up to its peak force, ``unloading`` from its peak force to
 its end, ``all`` the whole squeeze. The peak is a plateau when the force is held, so it is
@@ -34,6 +48,7 @@ judged on the SG-smoothed force: loading ends at the first sample within
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal
 
@@ -48,17 +63,23 @@ Phase = Literal["loading", "unloading", "all"]
 PHASES: tuple[str, ...] = ("loading", "unloading", "all")
 
 __all__ = [
+    "HOLD_TOL_FRAC",
     "PHASES",
     "PHASE_PEAK_TOL",
+    "RELAXATION_FRAC",
+    "RELAXATION_HOLD_S",
     "RUPTURE_DROP_FRAC",
     "RUPTURE_MIN_PEAK_FRAC",
     "RUPTURE_NOISE_MULT",
+    "RUPTURE_SUDDEN_MULT",
     "Phase",
+    "Relaxation",
     "Rupture",
     "Smoothed",
     "check_phase",
     "cut_rupture",
     "cut_rupture_smoothed",
+    "find_relaxation",
     "find_rupture_index",
     "phase_slice",
     "ruptures_from_object",
@@ -74,6 +95,20 @@ RUPTURE_MIN_PEAK_FRAC = 0.25
 #: ... and the drop must exceed this many force-noise standard deviations (a force that is
 #: mostly sensor noise, e.g. a wrong wrench axis, has noise "peaks" that fall by 30 %).
 RUPTURE_NOISE_MULT = 5.0
+#: Condition 2: the compression "holds" when it stays within this fraction of its value at the
+#: peak (or three position-noise standard deviations, whichever is larger).
+HOLD_TOL_FRAC = 0.01
+#: ... and then the force must fall at least this many times faster than it rose over the upper
+#: half of the loading (a collapse, not a relaxation or a controlled release: the synthetic
+#: rupture with back-off falls 10x faster, a standard linear solid relaxing at a hold at most
+#: 0.6x, a release ramp 1x; ``tests/characterize/test_rupture.py``).
+RUPTURE_SUDDEN_MULT = 5.0
+#: ... both rates measured over this span, s (module docstring, :func:`_sudden`).
+SUDDEN_SPAN_S = 0.02
+#: Relaxation: a hold under load of at least this long, s ...
+RELAXATION_HOLD_S = 0.2
+#: ... whose smoothed force falls by more than this fraction of its value at the hold's start.
+RELAXATION_FRAC = 0.05
 #: SG polynomial order of the smoothing used for rupture and phase detection.
 _POLYORDER = 3
 #: The most candidate peaks examined per squeeze (each costs one small bounded fit).
@@ -157,10 +192,16 @@ def _find_rupture(
         RUPTURE_NOISE_MULT * noise_std(f) / RUPTURE_DROP_FRAC,
     )
     dropped = (f < (1.0 - RUPTURE_DROP_FRAC) * running) & (running >= floor)
-    growing = d > d[peak_idx] + 3.0 * sigma
+    # growth and holds on the raw compression's short local means: a long smoothing window
+    # rounds the corner of a ramp that stops at the peak and overshoots after it
+    m = max(2, round(SUDDEN_SPAN_S / dt_s))
+    d_loc = np.convolve(comp, np.ones(m) / m, mode="same")
+    tol = np.maximum(3.0 * sigma / math.sqrt(m), HOLD_TOL_FRAC * np.abs(d_loc[peak_idx]))
+    growing = d_loc > d_loc[peak_idx] + tol
+    near = d_loc >= d_loc[peak_idx] - tol
     half = wl // 2
     tried: set[int] = set()
-    for i in np.flatnonzero(dropped & growing):
+    for i in np.flatnonzero(dropped & near):
         p = int(peak_idx[i])
         if p in tried:
             continue
@@ -174,12 +215,46 @@ def _find_rupture(
         if kc is None:
             continue
         after = slice(p, n)
+        held = np.minimum.accumulate(near[after])  # still near d[p] at every sample so far
         predicted = kc[0] * d[after] + kc[1] * v[after]
         shortfall = predicted - f[after] > RUPTURE_DROP_FRAC * f[p]
-        if np.any(shortfall & dropped[after] & (d[after] > d[p] + 3.0 * sigma)):
-            # back to the input's samples: the last one at or before the peak's time
-            return int(np.searchsorted(time_s, grid[p], side="right") - 1), smoothed
+        grows = growing[after] & dropped[after]
+        holds = held & dropped[after]
+        if np.any(shortfall & grows):
+            return _back_to_input(time_s, grid, p), smoothed
+        if np.any(shortfall & holds):
+            j = p + int(np.argmax(shortfall & holds))
+            if _sudden(f, dt_s, p, j):
+                return _back_to_input(time_s, grid, p), smoothed
     return None, smoothed
+
+
+def _back_to_input(time_s: FloatArray, grid: FloatArray, p: int) -> int:
+    """The input sample at or before grid sample ``p``."""
+    return int(np.searchsorted(time_s, grid[p], side="right") - 1)
+
+
+def _sudden(f: FloatArray, dt_s: float, p: int, j: int) -> bool:
+    """Whether the force fell between ``p`` and ``j`` faster than :data:`RUPTURE_SUDDEN_MULT`
+    times its rise over the upper half of the loading before ``p``.
+
+    Rates are changes of the force's mean over :data:`SUDDEN_SPAN_S` (at least two samples)
+    across one such span: a collapse within tens of milliseconds stands out, while the sensor's
+    noise, averaged over the span, does not.
+    """
+    m = max(2, round(SUDDEN_SPAN_S / dt_s))
+    if f.shape[0] < 2 * m + 2:
+        return True
+    local = np.convolve(f, np.ones(m) / m, mode="valid")  # local[i]: mean of f[i : i + m]
+    below = np.flatnonzero(f[:p] < 0.5 * f[p])
+    start = int(below[-1]) if below.size else 0
+    rise_idx = np.arange(start, max(start, p - 2 * m))
+    fall_idx = np.arange(max(p - m, 0), min(j, local.shape[0] - m))
+    if rise_idx.size == 0 or fall_idx.size == 0:
+        return True
+    rise = float(np.median(local[rise_idx + m] - local[rise_idx]))
+    fall = float(np.max(local[fall_idx] - local[fall_idx + m]))
+    return rise <= 0 or fall > RUPTURE_SUDDEN_MULT * rise
 
 
 def cut_rupture(
@@ -210,6 +285,76 @@ def cut_rupture_smoothed(
         else float(recording_offset_s + s.time_s[i]),
     )
     return slice_squeeze(s, slice(0, i + 1)), rupture, None
+
+
+@dataclass(frozen=True)
+class Relaxation:
+    """A hold under load during which the force decayed smoothly (stress relaxation).
+
+    Attributes:
+        squeeze_index: the squeeze.
+        time_s: start of the hold since the start of the squeeze, s.
+        duration_s: length of the hold, s.
+        force_start_n: smoothed force at the start of the hold, N.
+        force_drop_n: how much it fell by the end of the hold, N.
+    """
+
+    squeeze_index: int
+    time_s: float
+    duration_s: float
+    force_start_n: float
+    force_drop_n: float
+
+    @property
+    def drop_frac(self) -> float:
+        """The drop as a fraction of the force at the start of the hold."""
+        return self.force_drop_n / self.force_start_n if self.force_start_n > 0 else float("nan")
+
+
+def find_relaxation(s: SqueezeSeries, *, window_s: float) -> Relaxation | None:
+    """The hold of a squeeze whose force relaxed the most (module docstring), or None.
+
+    A hold is a stretch of at least :data:`RELAXATION_HOLD_S` and two SG windows where the
+    smoothed compression moves slower than 2 % of its fastest rate, above 10 % of its peak; it
+    relaxes when the smoothed force, half a window inside each end, falls by more than
+    :data:`RELAXATION_FRAC` of its value at the start and by more than
+    :data:`RUPTURE_NOISE_MULT` force-noise standard deviations.
+    """
+    if len(s) < 10:
+        return None
+    dt_s, grid, (f, comp) = uniform_grid(s.time_s, s.force_n, s.compression_m)
+    n = f.shape[0]
+    wl = sg_window_length(window_s, dt_s, _POLYORDER)
+    if n < 4 * wl:
+        return None
+    d, v = sg_smooth(comp, wl, _POLYORDER, dt_s)
+    fs, _ = sg_smooth(f, wl, _POLYORDER, dt_s)
+    top = float(np.max(np.abs(v)))
+    if not top > 0:
+        return None
+    still = (np.abs(v) < 0.02 * top) & (d > 0.1 * float(np.max(d)))
+    min_len = max(round(RELAXATION_HOLD_S / dt_s), 2 * wl)
+    floor = RUPTURE_NOISE_MULT * noise_std(f)
+    best: Relaxation | None = None
+    edges = np.diff(np.concatenate([[0], still.astype(np.int8), [0]]))
+    half = wl // 2
+    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+        if b - a < min_len:
+            continue
+        i0, i1 = a + half, b - 1 - half
+        start, end = float(fs[i0]), float(fs[i1])
+        drop = start - end
+        if start > 0 and drop > RELAXATION_FRAC * start and drop > floor:
+            cand = Relaxation(
+                squeeze_index=s.squeeze_index,
+                time_s=float(grid[a] - grid[0]),
+                duration_s=float(grid[b - 1] - grid[a]),
+                force_start_n=start,
+                force_drop_n=drop,
+            )
+            if best is None or cand.drop_frac > best.drop_frac:
+                best = cand
+    return best
 
 
 def slice_squeeze(s: SqueezeSeries, sl: slice) -> SqueezeSeries:

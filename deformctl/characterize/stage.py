@@ -15,7 +15,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
@@ -32,6 +32,7 @@ from deformctl.artifacts.dataset import (
 from deformctl.artifacts.provenance import Provenance, sha256_file
 from deformctl.characterize.coefficients import _coefficient_frame
 from deformctl.characterize.fit import _fit_rows, default_window_s
+from deformctl.characterize.material_options import RIG_SOURCES, default_lag
 from deformctl.characterize.options import (
     DEFAULT_FIT,
     DEFAULT_POLICY,
@@ -39,11 +40,15 @@ from deformctl.characterize.options import (
     Preload,
     QualityPolicy,
 )
+from deformctl.characterize.plot import check_plot_dir, plot_fits
 from deformctl.characterize.quality import enforce, with_recording_flags
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, run_sweep
 from deformctl.reprs import short_repr
 from deformctl.series import SqueezeSeries, ruptures_from_object
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from deformctl.characterize.objectfit import ObjectFit
 
 
 @dataclass(frozen=True)
@@ -57,6 +62,8 @@ class LogCoefficients:
             when the log does not say).
         preload: object id → the preload mode used (``fit`` or ``zero``; lsq only).
         warnings: one line per flagged object (``<file>: object 'X': <flags>``), for stderr.
+        fits: object id → its material fit (lsq; for plots), when asked to keep them.
+        plots: the plot files written, in object order.
     """
 
     __repr__ = short_repr
@@ -66,6 +73,8 @@ class LogCoefficients:
     position_rate_hz: dict[str, float | None]
     preload: dict[str, str] = dataclasses.field(default_factory=dict)
     warnings: list[str] = dataclasses.field(default_factory=list)
+    fits: dict[str, ObjectFit] = dataclasses.field(default_factory=dict)
+    plots: list[str] = dataclasses.field(default_factory=list)
 
 
 def _stored_rate(obj: Mapping[str, object] | None) -> float | None:
@@ -73,10 +82,6 @@ def _stored_rate(obj: Mapping[str, object] | None) -> float | None:
     if isinstance(value, int | float) and not isinstance(value, bool):
         return float(value)
     return None
-
-
-#: The ``source`` a squeeze log's object row carries when ``measure`` read a rig recording.
-RIG_SOURCES = ("ros2_bag", "csv")
 
 
 def default_preload(obj: Mapping[str, object] | None) -> Preload:
@@ -101,8 +106,10 @@ def _fit_object(
     options: FitOptions,
     *,
     window_s: float,
+    fits: dict[str, ObjectFit] | None = None,
 ) -> tuple[dict[str, object], str]:
-    """One object's coefficients row (see :func:`characterize`) and the preload mode used."""
+    """One object's coefficients row (see :func:`characterize`) and the preload mode used;
+    its material fit goes into ``fits`` when given."""
     mode: Preload = options.preload if options.preload is not None else default_preload(obj)
     if options.method == "paper":
         mode = "zero"
@@ -112,6 +119,11 @@ def _fit_object(
         preload=mode,
         constrain_damping=options.constrain_damping,
         recorded_ruptures={oid: ruptures_from_object(dict(obj or {}))},
+        model=options.materials.model,
+        at_force_n=options.materials.at_force_n,
+        lag_s=default_lag(obj),
+        objects={oid: dict(obj or {})},
+        fits_out=fits,
         window_s=window_s,
     )
     row = rows[0]
@@ -119,23 +131,57 @@ def _fit_object(
     return row, mode
 
 
+def _read_logs(
+    paths: Sequence[str | PathLike[str]],
+) -> tuple[str, list[dict[str, Any]], list[SqueezeSeries]]:
+    """The logs' objects (the first row of each id) and squeezes, and the name of the first.
+
+    The squeezes of one object in several logs (recordings of one object at several speeds)
+    are numbered on from one log to the next.
+    """
+    from deformctl.artifacts.io import display_name
+    from deformctl.artifacts.mcap import read_squeeze_log
+
+    objects: list[dict[str, Any]] = []
+    seen: set[str] = set()
+    squeezes: list[SqueezeSeries] = []
+    count: dict[str, int] = {}
+    for path in paths:
+        objs, sq = read_squeeze_log(path)
+        if not sq:
+            raise InputDataError("the squeeze log holds no squeezes", path=display_name(path))
+        for o in objs:
+            if str(o["object_id"]) not in seen:
+                seen.add(str(o["object_id"]))
+                objects.append(dict(o))
+        for s in sq:
+            k = count.get(s.object_id, 0)
+            count[s.object_id] = k + 1
+            squeezes.append(s if k == s.squeeze_index else dataclasses.replace(s, squeeze_index=k))
+    return display_name(paths[0]), objects, squeezes
+
+
 def read_and_characterize(
-    path: str | PathLike[str],
+    path: str | PathLike[str] | Sequence[str | PathLike[str]],
     options: FitOptions = DEFAULT_FIT,
     policy: QualityPolicy = DEFAULT_POLICY,
+    *,
+    keep_fits: bool = False,
 ) -> LogCoefficients:
     """Read a squeeze log (validated), group its squeezes by object and fit each object.
 
     Args:
-        path: the squeeze-log ``.mcap``, or ``-`` for stdin (read into memory).
+        path: the squeeze-log ``.mcap``, or ``-`` for stdin (read into memory); or several logs,
+            whose squeezes of one object id are fitted together (one joint fit over speeds).
         options: the method (:func:`fit_lsq` or :func:`fit_paper`), the Savitzky–Golay window
             (None: per object from the ``position_rate_hz`` the log stores for it,
             :func:`default_window_s`), the preload (None: per object, :func:`default_preload`;
-            the paper method never fits one) and the damping bound
+            the paper method never fits one) and, lsq, the material law and the operating force
             (:class:`~deformctl.characterize.options.FitOptions`; the command's defaults).
         policy: what happens to flagged objects: ``strict`` (any flag is an error,
             :func:`deformctl.characterize.quality.enforce`) or ``allow_flagged`` (keep objects
             with negative D instead of refusing them).
+        keep_fits: keep each object's material fit in the result (for plots).
 
     Returns:
         The coefficient table, the window and preload used for each object and the warning
@@ -147,14 +193,11 @@ def read_and_characterize(
             object whose squeezes cannot be fitted (no compression, too short, ...), an object
             with negative D (unless ``allow_flagged``) or any flagged object with ``strict``;
             the message names the file and the object (exit 65).
+        UsageError: an operating force above an object's peak force (exit 2; the options are
+            checked when built).
     """
-    from deformctl.artifacts.io import display_name
-    from deformctl.artifacts.mcap import read_squeeze_log
-
-    name = display_name(path)
-    objects, squeezes = read_squeeze_log(path)
-    if not squeezes:
-        raise InputDataError("the squeeze log holds no squeezes", path=name)
+    paths = [path] if isinstance(path, str | PathLike) else list(path)
+    name, objects, squeezes = _read_logs(paths)
     by_object: dict[str, list[SqueezeSeries]] = {}
     for s in squeezes:
         by_object.setdefault(s.object_id, []).append(s)
@@ -166,9 +209,17 @@ def read_and_characterize(
     }
     rows = []
     modes: dict[str, str] = {}
+    fits: dict[str, ObjectFit] = {}
     for oid, group in by_object.items():
         try:
-            row, modes[oid] = _fit_object(oid, group, meta.get(oid), options, window_s=windows[oid])
+            row, modes[oid] = _fit_object(
+                oid,
+                group,
+                meta.get(oid),
+                options,
+                window_s=windows[oid],
+                fits=fits if keep_fits else None,
+            )
         except InputDataError as err:
             if err.path is None:  # the estimators name the object; add the file
                 raise InputDataError(err.message, path=name) from err
@@ -177,7 +228,12 @@ def read_and_characterize(
     table = _coefficient_frame(rows)
     warnings = enforce(table, strict=policy.strict, allow_flagged=policy.allow_flagged, path=name)
     return LogCoefficients(
-        table=table, window_s=windows, position_rate_hz=rates, preload=modes, warnings=warnings
+        table=table,
+        window_s=windows,
+        position_rate_hz=rates,
+        preload=modes,
+        warnings=warnings,
+        fits=fits,
     )
 
 
@@ -199,53 +255,72 @@ def characterize_dir(
     path: str | PathLike[str],
     options: FitOptions = DEFAULT_FIT,
     policy: QualityPolicy = DEFAULT_POLICY,
+    *,
+    keep_fits: bool = False,
 ) -> LogCoefficients:
     """:func:`read_and_characterize` of every squeeze log of a ``measure`` directory, in order."""
-    parts = [read_and_characterize(p, options, policy) for p in squeeze_log_parts(path)]
+    parts = [
+        read_and_characterize(p, options, policy, keep_fits=keep_fits)
+        for p in squeeze_log_parts(path)
+    ]
     return LogCoefficients(
         table=pd.concat([p.table for p in parts], ignore_index=True),
         window_s={k: v for p in parts for k, v in p.window_s.items()},
         position_rate_hz={k: v for p in parts for k, v in p.position_rate_hz.items()},
         preload={k: v for p in parts for k, v in p.preload.items()},
         warnings=[line for p in parts for line in p.warnings],
+        fits={k: v for p in parts for k, v in p.fits.items()},
     )
 
 
 def characterize_file(
-    log: str,
+    log: str | Sequence[str],
     options: FitOptions = DEFAULT_FIT,
     policy: QualityPolicy = DEFAULT_POLICY,
     *,
     output: str,
     force: bool = False,
+    plot_dir: str | None = None,
 ) -> LogCoefficients:
     """``characterize LOG -o TABLE``: fit a squeeze log (or a ``measure`` directory's logs).
 
     The quality policy is applied before anything is written (see :func:`read_and_characterize`);
     the coefficients table is then written atomically with its provenance (the options as given,
-    the window and preload used for each object and the position sample rates behind them). The
-    caller prints ``result.warnings``.
+    the window and preload used for each object and the position sample rates behind them).
+    With ``plot_dir`` (lsq) each object's fit is drawn into ``plot_dir/<object_id>.png`` after
+    the table is written
+    (:func:`deformctl.characterize.plot.plot_object`). The caller prints ``result.warnings``
+    and ``result.plots``.
 
     Raises:
         OutputExistsError: ``output`` exists and ``force`` is false (exit 1).
-        MissingInputError, InputDataError, UsageError: see :func:`read_and_characterize`.
+        MissingInputError, InputDataError, UsageError: see :func:`read_and_characterize`;
+            ``plot_dir`` with the paper method (exit 2).
     """
     check_output_path(output, force)
-    if os.path.isdir(log):
-        result = characterize_dir(log, options, policy)
+    if plot_dir is not None:
+        if options.method != "lsq":
+            raise UsageError("--plot draws the material laws' fits: use it with --method lsq")
+        check_plot_dir(plot_dir)
+    logs = [log] if isinstance(log, str) else list(log)
+    keep_fits = plot_dir is not None
+    if len(logs) == 1 and os.path.isdir(logs[0]):
+        result = characterize_dir(logs[0], options, policy, keep_fits=keep_fits)
     else:
-        result = read_and_characterize(log, options, policy)
+        result = read_and_characterize(logs, options, policy, keep_fits=keep_fits)
     provenance = Provenance.from_invocation(
-        [log],
+        logs,
         settings={
             **options.as_dict(),
-            "model": options.model,
             "window_s": result.window_s,
             "position_rate_hz": result.position_rate_hz,
             "preload": result.preload,
         },
     )
     write_table(result.table, output, "coefficients", provenance=provenance, force=force)
+    if plot_dir is not None:
+        quality = dict(zip(result.table["object_id"], result.table["quality"], strict=True))
+        result = dataclasses.replace(result, plots=plot_fits(result.fits, quality, plot_dir))
     return result
 
 
@@ -314,7 +389,8 @@ class CharacterizeTask:
     """``characterize`` for one object of a squeeze-log directory (a picklable sweep task).
 
     Attributes:
-        fit: the fit options, as :func:`read_and_characterize`'s.
+        fit: the fit options (the material law and operating force among them), as
+            :func:`read_and_characterize`'s.
         policy: ``strict``: a flagged object fails (recorded in ``_failures/``) instead of being
             written; ``allow_flagged``: write an object with negative D (flagged) instead of
             failing it.

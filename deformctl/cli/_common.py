@@ -186,7 +186,7 @@ def _report_click_error(err: click_exc.ClickException) -> int:
 
 @contextmanager
 def progress_bar(console: Console, label: str, *, at_least: int = 2) -> Iterator[Advance | None]:
-    """A transient rich bar on ``console`` for a run of ``at_least`` steps or more.
+    """A transient rich bar (done/total, elapsed, ETA) on ``console`` for ``at_least``+ steps.
 
     Yields the ``advance(object_id, done, total)`` hook, which draws the bar from its first call
     (when the total is known), or None when ``console`` is not a terminal.
@@ -201,6 +201,8 @@ def progress_bar(console: Console, label: str, *, at_least: int = 2) -> Iterator
         rp.BarColumn(),
         rp.MofNCompleteColumn(),
         rp.TimeElapsedColumn(),
+        rp.TextColumn("ETA"),
+        rp.TimeRemainingColumn(),
         console=console,
         transient=True,
     )
@@ -221,10 +223,11 @@ def progress_bar(console: Console, label: str, *, at_least: int = 2) -> Iterator
             bar.stop()
 
 
-def finish_sweep(summary: SweepSummary, what: str) -> None:
-    """Print a sweep's one-line summary on stderr; exit 1 when any object failed."""
+def finish_sweep(summary: SweepSummary, what: str, *, quiet: bool = False) -> None:
+    """Print a sweep's one-line summary on stderr (unless ``quiet``); exit 1 when any failed."""
     failures = f"; failed objects: {summary.out_dir}/_failures/" if summary.failed_total else ""
-    typer.echo(f"{summary.out_dir}: {what}: {summary.line()}{failures}", err=True)
+    if not quiet:
+        typer.echo(f"{summary.out_dir}: {what}: {summary.line()}{failures}", err=True)
     if summary.exit_code:
         raise typer.Exit(summary.exit_code)
 

@@ -132,6 +132,7 @@ def sim_options(
     slip_tolerance_m: float | None,
     slip_criterion: str | None,
     log_epoch: str | None,
+    scene_hz: float | None = None,
 ) -> SimPreset | None:
     """The simulator preset of ``--sim`` with the single options given (None without ``--sim``).
 
@@ -140,7 +141,8 @@ def sim_options(
         preset_name ... slip_criterion: :class:`~deformctl.presets.SimOptions`'s fields as given
             (None: not given, the preset's value applies); ``hold_s_alias`` is ``--hold-s``,
             the old spelling of ``--lift-hold-s``.
-        log_epoch: ``--log-epoch``, which only a simulated run takes.
+        log_epoch, scene_hz: ``--log-epoch`` and ``--scene-hz``, which only a simulated run
+            takes (checked where they are used).
 
     Raises:
         UsageError: a sim option without ``--sim``, an unknown preset, or a value out of range
@@ -150,18 +152,14 @@ def sim_options(
         raise UsageError("give --lift-hold-s (or its old spelling --hold-s), not both")
     hold = lift_hold_s if lift_hold_s is not None else hold_s_alias
     given = [
-        ("--lift-accel-m-s2", lift_accel_m_s2),
-        ("--lift-speed-m-s", lift_speed_m_s),
+        ("--lift-accel-m-s2", lift_accel_m_s2), ("--lift-speed-m-s", lift_speed_m_s),
         ("--lift-height-m", lift_height_m),
         ("--hold-s" if hold_s_alias is not None else "--lift-hold-s", hold),
-        ("--slip-tolerance-m", slip_tolerance_m),
-        ("--slip-criterion", slip_criterion),
-        ("--sim-preset", preset_name),
-        ("--alpha-cm", alpha_cm),
-        ("--dt-s", dt_s),
-        ("--memory-budget-gib", memory_budget_gib),
-        ("--log-epoch", log_epoch),
-    ]
+        ("--slip-tolerance-m", slip_tolerance_m), ("--slip-criterion", slip_criterion),
+        ("--sim-preset", preset_name), ("--alpha-cm", alpha_cm), ("--dt-s", dt_s),
+        ("--memory-budget-gib", memory_budget_gib), ("--log-epoch", log_epoch),
+        ("--scene-hz", scene_hz),
+    ]  # fmt: skip
     if not sim:
         for flag, value in given:
             if value is not None:
@@ -188,8 +186,10 @@ def choose_runner(
     rig_timeout_s: float | None,
     judge: SlipFromFrames | None,
     sim: SimPreset | None,
+    scene_hz: float = 0.0,
 ) -> RunnerFactory:
-    """The one trial runner the options ask for (``sim``: the parts of ``--sim``, if given).
+    """The one trial runner the options ask for (``sim``: the parts of ``--sim``, if given, with
+    its scene at ``scene_hz``).
 
     Raises:
         UsageError: no runner, more than one, or a runner option without its runner.
@@ -205,7 +205,7 @@ def choose_runner(
     if sim is not None:
         from deformctl.lift.runners.sim import sim_runner_factory
 
-        chosen.append(sim_runner_factory(preset=sim))
+        chosen.append(sim_runner_factory(preset=sim, scene_hz=scene_hz))
     if len(chosen) != 1:
         raise UsageError(
             "choose exactly one trial runner: --rig CMD or --sim"
@@ -221,12 +221,15 @@ def lift_dataset(
     log: str | None,
     search: SearchOptions,
     log_epoch_ns: int | None,
+    scene_hz: float,
     output: str,
     sweep: SweepOptions,
     object_ids: Sequence[str] | None,
     force: bool,
+    quiet: bool = False,
 ) -> None:
-    """``lift --sim -o DIR/``: the search of every object through the sweep executor.
+    """``lift --sim -o DIR/``: the search of every object through the sweep executor, then the
+    sweep's summary line (unless ``quiet``); each part's log records the scene at ``scene_hz``.
 
     Raises:
         UsageError: no ``--sim``, or ``--log`` (each part has its log).
@@ -239,8 +242,8 @@ def lift_dataset(
         )
     from deformctl.lift.runners.sim import LiftTask, lift_sweep
 
-    task = LiftTask(preset=preset, search=search, log_epoch_ns=log_epoch_ns)
+    task = LiftTask(preset=preset, search=search, log_epoch_ns=log_epoch_ns, scene_hz=scene_hz)
     summary = lift_sweep(
         catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
     )
-    finish_sweep(summary, "lift")
+    finish_sweep(summary, "lift", quiet=quiet)

@@ -12,10 +12,12 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from deformctl.artifacts.io import is_stdio
 from deformctl.errors import SearchError, UsageError
 from deformctl.lift.search import DEFAULT_START_MARGIN, validate_start_margin
 
 if TYPE_CHECKING:  # pragma: no cover - the seed sources import scikit-learn when used
+    from deformctl.cli._summary import RunClock
     from deformctl.lift.seeded import StartSeed
     from deformctl.lift.stage import CatalogLiftResult
 
@@ -109,8 +111,28 @@ def start_seed(
     return load_start_table(table, margin=chosen, k=interpolate, coefficients=coefficients)
 
 
-def report_run(run: CatalogLiftResult, *, quiet: bool) -> None:
-    """Each object's line on stdout (unless an output is stdout), then the exit.
+def run_counts(run: CatalogLiftResult) -> tuple[int, int, int]:
+    """``(done, flagged, failed)`` objects of a run: flagged, those whose start fell back to F_w
+    (outside the start model's training range, a warning line each); failed, those that did not
+    converge or were not run."""
+    failed = len(run.failures) + len(run.not_run)
+    flagged = 0
+    if "start_in_training_range" in run.table.columns:
+        outside = run.table["start_in_training_range"].astype("boolean").eq(False)
+        flagged = int(outside.fillna(False).sum())
+    return len(run.table) - failed, flagged, failed
+
+
+def run_summary(run: CatalogLiftResult, clock: RunClock, output: str, log: str | None) -> str:
+    """The line a single-file ``lift`` ends with (:class:`~deformctl.cli._summary.RunClock`)."""
+    done, flagged, failed = run_counts(run)
+    where = ", ".join("stdout" if is_stdio(p) else p for p in (output, log) if p is not None)
+    return clock.line(done=done, flagged=flagged, failed=failed, output=where)
+
+
+def report_run(run: CatalogLiftResult, *, quiet: bool, summary: str | None = None) -> None:
+    """Each object's line on stdout (unless an output is stdout), the ``summary`` line on stderr
+    (when given and every object converged; else the one error line), then the exit.
 
     Raises:
         SearchError: an object did not converge or the runner failed (exit 1; one line).
@@ -121,5 +143,7 @@ def report_run(run: CatalogLiftResult, *, quiet: bool) -> None:
             if result.object_id not in aborted:
                 typer.echo(result.message)
     message = run.error_message()
+    if summary is not None and message is None:  # a failed run's one line is its error
+        typer.echo(summary, err=True)
     if message is not None:
         raise SearchError(message)

@@ -19,6 +19,8 @@ from rich.console import Console
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli._common import finish_sweep, progress_bar
 from deformctl.cli._options import default, parse_log_epoch, parse_object_ids
+from deformctl.cli._scene_options import scene_rate
+from deformctl.cli._summary import RunClock
 from deformctl.errors import UsageError
 from deformctl.measure.csv_options import DEFAULT_CSV_MEMORY_BUDGET_GIB
 from deformctl.measure.options import (
@@ -34,6 +36,7 @@ from deformctl.measure.stage import (
     simulate_catalog_sweep,
 )
 from deformctl.parallel import SweepOptions
+from deformctl.scene import scene_every_steps
 
 #: ``measure``'s budget: the simulator's lattice, or the rows of a CSV export and its log.
 MemoryBudgetGib = Annotated[
@@ -120,6 +123,7 @@ class SimFlags:
     noise_force_n: float | None
     noise_position_m: float | None
     log_epoch: str | None = None
+    scene_hz: float | None = None
 
     def given(self) -> list[str]:
         """The flags of the options given on the command line."""
@@ -156,12 +160,15 @@ class SimFlags:
             dt_s=self.dt_s,
             memory_budget_gib=self.memory_budget_gib,
         ).preset()
+        scene_hz = scene_rate(self.scene_hz)
+        scene_every_steps(scene_hz, preset.settings.dt_s)
         epoch_ns = parse_log_epoch(self.log_epoch)
         return SimulateCatalogTask(
             protocol=protocol,
             settings=preset.settings,
             seed=0 if self.seed is None else self.seed,
             sim_preset=preset.name,
+            scene_hz=scene_hz,
             **({} if epoch_ns is None else {"log_epoch_ns": epoch_ns}),
         )
 
@@ -171,9 +178,16 @@ FLAGS = tuple("--" + f.name.replace("_", "-") for f in dataclasses.fields(SimFla
 
 
 def run(
-    catalog: str, opts: SimFlags, output: str, force: bool, sweep: SweepOptions, console: Console
+    catalog: str,
+    opts: SimFlags,
+    output: str,
+    force: bool,
+    sweep: SweepOptions,
+    console: Console,
+    quiet: bool = False,
 ) -> None:
-    """Squeeze the objects of ``catalog`` into ``output`` (a squeeze log or a dataset directory).
+    """Squeeze the objects of ``catalog`` into ``output`` (a squeeze log or a dataset directory)
+    and end with the summary line (unless ``quiet``).
 
     Raises:
         UsageError: no catalog, or a bad option (see :meth:`SimFlags.task`).
@@ -182,11 +196,12 @@ def run(
         raise UsageError("--sim needs a CATALOG argument (the objects to squeeze)")
     task = opts.task()
     object_ids = parse_object_ids(opts.objects)
+    clock = RunClock("measure")
     if sweep.check(output, file_workers=True):
         summary = simulate_catalog_sweep(
             catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
         )
-        finish_sweep(summary, "measure")
+        finish_sweep(summary, "measure", quiet=quiet)
         return
     with progress_bar(console, "squeeze") as progress:
         objects, series = simulate_catalog_file(
@@ -198,10 +213,14 @@ def run(
             force=force,
             workers=sweep.workers,
         )
-    where = "stdout" if is_stdio(output) else output
     duration_s = sum(float(s.time_s[-1]) for s in series)
-    typer.echo(
-        f"{where}: {len(series)} simulated squeeze(s) of {len(objects)} object(s) "
-        f"({task.protocol.squeezes} each), {duration_s:.1f} s, dt {task.settings.dt_s:g} s",
-        err=True,
+    clock.finish(
+        done=len(objects),
+        flagged=0,  # a simulated squeeze carries no flag; a failure stops the run (exit 65)
+        failed=0,
+        output="stdout" if is_stdio(output) else output,
+        detail=f"{len(series)} simulated squeeze(s) of {len(objects)} object(s), "
+        f"{task.protocol.squeezes} each, {duration_s:.1f} s simulated, "
+        f"dt {task.settings.dt_s:g} s",
+        quiet=quiet,
     )

@@ -11,9 +11,11 @@ import typer
 from deformctl.artifacts.io import is_stdio
 from deformctl.characterize import (
     DEFAULT_WINDOW_S,
+    MODEL_CHOICES,
     CharacterizeTask,
     FitOptions,
     LogCoefficients,
+    MaterialOptions,
     QualityPolicy,
     characterize_file,
     characterize_sweep,
@@ -21,10 +23,11 @@ from deformctl.characterize import (
     check_preload,
     sweep_warnings,
 )
-from deformctl.characterize.options import DEFAULT_MODEL, MODELS, check_model
 from deformctl.characterize.quality import thresholds_help
 from deformctl.cli import _options as opt
 from deformctl.cli._common import finish_sweep, translate_errors
+from deformctl.cli._summary import Quiet, RunClock
+from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
 
 Preload = Annotated[
@@ -54,8 +57,33 @@ Model = Annotated[
     str,
     typer.Option(
         "--model",
-        metavar="|".join(MODELS),
-        help="The material model: kv, Kelvin-Voigt, f = D d + λ d' (+ F0 with a preload).",
+        metavar="|".join(MODEL_CHOICES),
+        help="lsq: the material law. kv: Kelvin-Voigt f = F0 + D d + λ d'; hc: Hunt-Crossley "
+        "f = F0 + k d^n + λ d^n d' (n in [1, 3]); sls: standard linear solid (spring k1 beside "
+        "a spring k2 in series with a dashpot, relaxation time τ); auto: all three, the one "
+        "with the smallest BIC reported, every law's parameters, standard errors, AIC and BIC "
+        "in the table.",
+    ),
+]
+AtForceN = Annotated[
+    float | None,
+    typer.Option(
+        "--at-force-n",
+        metavar="F",
+        help="lsq: state D as the secant stiffness of the law's rate-free force-compression "
+        "curve at this force, N (> 0, at most each object's peak force) [default: F_w = "
+        "W/(2 μ) when the log knows the object's weight and friction, else its median loading "
+        "force; the table records the force used].",
+    ),
+]
+Plot = Annotated[
+    str | None,
+    typer.Option(
+        "--plot",
+        metavar="DIR",
+        help="lsq: draw each object's fit into DIR/<object>.png (force against compression "
+        "with every law's fit, force and compression against time, residuals, flags in the "
+        "title); the paths are printed on stderr.",
     ),
 ]
 AllowFlagged = Annotated[
@@ -75,14 +103,20 @@ def render_summary(result: LogCoefficients) -> str:
     """A short plain-text table of the coefficients: one line per object."""
     df: pd.DataFrame = result.table
     rows = [
-        ("object", "D (N/cm)", "λ (N·s/cm)", "R²", "samples", "squeezes", "quality", "window (s)")
-    ]
+        (
+            "object", "model", "D (N/cm)", "at (N)", "λ (N·s/cm)", "R²", "samples", "squeezes",
+            "quality", "window (s)",
+        )
+    ]  # fmt: skip
     for rec in df.to_dict("records"):
         oid = str(rec["object_id"])
+        at = rec.get("operating_force_n", math.nan)
         rows.append(
             (
                 oid,
+                str(rec.get("model", "")),
                 _pm(rec["deformability_n_per_cm"], rec["deformability_se_n_per_cm"], 3),
+                f"{at:.4g}" if isinstance(at, float) and math.isfinite(at) else "",
                 _pm(rec["damping_ns_per_cm"], rec["damping_se_ns_per_cm"], 3),
                 f"{rec['r2']:.4f}",
                 str(rec["n_samples"]),
@@ -100,7 +134,14 @@ def render_summary(result: LogCoefficients) -> str:
 @translate_errors
 @opt.with_sweep_options
 def characterize(
-    log: Annotated[str, typer.Argument(metavar="SQUEEZE.mcap", help="A squeeze log; - for stdin.")],
+    logs: Annotated[
+        list[str],
+        typer.Argument(
+            metavar="SQUEEZE.mcap...",
+            help="Squeeze logs (- for stdin); the squeezes of one object id in several logs "
+            "(recordings at several speeds) get one joint fit.",
+        ),
+    ],
     output: Annotated[
         str,
         typer.Option(
@@ -125,19 +166,24 @@ def characterize(
             f"rate, {DEFAULT_WINDOW_S:g} s at >= 1 kHz, 0.43 s at 100 Hz).",
         ),
     ] = None,
-    model: Model = DEFAULT_MODEL,
     preload: Preload = None,
     constrain_damping: ConstrainDamping = False,
+    model: Model = "auto",
+    at_force_n: AtForceN = None,
+    plot: Plot = None,
     strict: Strict = False,
     allow_flagged: AllowFlagged = False,
+    quiet: Quiet = False,
     force: opt.Force = False,
     sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
-    """Estimate each object's deformability D (N/cm) and damping λ (N·s/cm) from a squeeze log.
+    """Estimate each object's deformability D (N/cm) and damping λ (N·s/cm) from squeeze logs.
 
-    The squeezes are grouped by object and fitted to f = D·d + λ·d', with d the total
-    compression between the palms. The table goes to the output; a summary goes to stdout, or
-    to stderr when the table itself goes to stdout (-o -).
+    The squeezes are grouped by object and fitted with a material law (--model; d is the total
+    compression between the palms), bounded (stiffness, λ >= 0; a parameter at its bound is
+    flagged at_bound). D is the secant stiffness at the operating force (--at-force-n). The
+    table goes to the output; a summary goes to stdout, or to stderr when the table itself goes
+    to stdout (-o -).
 
     Every row carries the fit's diagnostics and a quality column, ok or the flags (see
     --strict and the README's "When the numbers are doubtful"); each flagged object gives one
@@ -148,22 +194,32 @@ def characterize(
     parallel (--workers, --scheduler; --resume) into DIR/part-*.parquet; an object that cannot
     be fitted is recorded in DIR/_failures/ and the others go on.
 
-    Example: deformctl characterize squeeze.mcap -o coefficients.parquet --method lsq
+    Example: deformctl characterize squeeze.mcap -o coefficients.parquet --model auto
     """
+    clock = RunClock("characterize")
     fit = FitOptions(
         method=check_method(method), window_s=window_s,
         preload=None if preload is None else check_preload(preload),
-        constrain_damping=constrain_damping, model=check_model(model),
+        constrain_damping=constrain_damping,
+        materials=MaterialOptions(model=model, at_force_n=at_force_n),
     )  # fmt: skip
     policy = QualityPolicy(strict=strict, allow_flagged=allow_flagged)
     if sweep.check(output):
+        if len(logs) != 1 or plot is not None:
+            raise UsageError("a dataset directory output (-o DIR/) takes one log directory "
+                             "and no --plot")  # fmt: skip
         task = CharacterizeTask(fit=fit, policy=policy)
-        summary = characterize_sweep(log, task, output=output, sweep=sweep, force=force)
+        summary = characterize_sweep(logs[0], task, output=output, sweep=sweep, force=force)
         for line in sweep_warnings(summary.out_dir):
             typer.echo(f"warning: {line}", err=True)
-        finish_sweep(summary, "characterize")
+        finish_sweep(summary, "characterize", quiet=quiet)
         return
-    result = characterize_file(log, fit, policy, output=output, force=force)
+    result = characterize_file(logs, fit, policy, output=output, force=force, plot_dir=plot)
     for line in result.warnings:
         typer.echo(f"warning: {line}", err=True)
     typer.echo(render_summary(result), err=is_stdio(output))
+    for path in result.plots:
+        typer.echo(f"plot: {path}", err=True)
+    flagged = int((result.table["quality"] != "ok").sum())
+    clock.finish(done=len(result.table), flagged=flagged, failed=0, quiet=quiet,
+                 output="stdout" if is_stdio(output) else output)  # fmt: skip

@@ -54,8 +54,11 @@ from deformctl.cli._lift_start import (
     StartModel,
     StartTable,
     report_run,
+    run_summary,
     start_seed,
 )
+from deformctl.cli._scene_options import SceneHz, scene_rate
+from deformctl.cli._summary import Quiet, RunClock
 from deformctl.errors import UsageError
 from deformctl.lift.options import (
     DEFAULT_GROWTH,
@@ -138,6 +141,8 @@ def lift(
         int, typer.Option("--max-attempts", help="Most attempts per object (>= 1).")
     ] = DEFAULT_MAX_ATTEMPTS,
     log_epoch: opt.LogEpoch = None,
+    scene_hz: SceneHz = None,
+    quiet: Quiet = False,
     start_model: StartModel = None,
     start_table: StartTable = None,
     start_interpolate: StartInterpolate = None,
@@ -175,6 +180,7 @@ def lift(
     Example: deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py"
     -o lift.parquet --log lift.mcap
     """
+    clock = RunClock("lift")
     dataset = sweep.check(output, file_workers=True)
     if not dataset and sweep.workers is not None and not sim:
         raise UsageError(
@@ -186,6 +192,7 @@ def lift(
         lift_speed_m_s=lift_speed_m_s, lift_height_m=lift_height_m, lift_hold_s=lift_hold_s,
         hold_s_alias=hold_s, slip_criterion=slip_criterion, log_epoch=log_epoch,
         slip_tolerance_m=slip_tolerance_m if sim else None,  # else: the frames' option
+        scene_hz=scene_hz,
     )  # fmt: skip
     judge = frames_judge(
         enabled=slip_from_frames, palm_marker_ids=palm_marker_ids, palm_regions=palm_regions,
@@ -193,7 +200,11 @@ def lift(
         slip_tolerance_m=None if sim else slip_tolerance_m,
         marker_dict=frame_marker_dict, debug_dir=debug_dir,
     )  # fmt: skip
-    factory = choose_runner(rig, rig_timeout, judge, preset)
+    if scene_hz is not None and log is None and not dataset:
+        raise UsageError("--scene-hz needs --log FILE: the scene is written into the lift log")
+    # the scene goes into a log: without one, the attempts record none
+    scene = scene_rate(scene_hz) if log is not None or dataset else 0.0
+    factory = choose_runner(rig, rig_timeout, judge, preset, scene)
     search = SearchOptions(
         protocol=cast(SearchProtocol, protocol), growth=growth, tolerance_rel=tolerance,
         max_attempts=max_attempts,
@@ -203,7 +214,8 @@ def lift(
                       protocol=protocol, dataset=dataset)  # fmt: skip
     epoch_ns = opt.parse_log_epoch(log_epoch)
     if dataset:
-        lift_dataset(catalog, preset, log, search, epoch_ns, output, sweep, object_ids, force)
+        lift_dataset(catalog, preset, log, search, epoch_ns, scene, output, sweep, object_ids,
+                     force, quiet)  # fmt: skip
         return
     with progress_bar(Console(stderr=True), "lift") as progress:
         run = lift_catalog_files(
@@ -211,4 +223,5 @@ def lift(
             progress=progress, force=force, log_epoch_ns=epoch_ns, seed=seed, warn=warn,
             workers=sweep.workers,
         )  # fmt: skip
-    report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)))
+    report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)),
+               summary=None if quiet else run_summary(run, clock, output, log))  # fmt: skip

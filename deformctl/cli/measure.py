@@ -23,6 +23,8 @@ from deformctl.cli import _measure_rig as rec
 from deformctl.cli import _measure_sim as sq
 from deformctl.cli import _options as opt
 from deformctl.cli._common import translate_errors
+from deformctl.cli._scene_options import SceneHz
+from deformctl.cli._summary import Quiet
 from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
 
@@ -37,6 +39,7 @@ SOURCES: dict[str, tuple[str, ...]] = {
     **dict.fromkeys(img.FLAGS, IMAGES),
     **dict.fromkeys(_measure_sim.FLAGS, ("--sim",)),
     "--memory-budget-gib": ("--sim", "--csv"),
+    "--quiet": ("--sim",),
 }
 
 
@@ -150,6 +153,8 @@ def measure(
     noise_force_n: sq.NoiseForceN = None,
     noise_position_m: sq.NoisePositionM = None,
     log_epoch: opt.LogEpoch = None,
+    scene_hz: SceneHz = None,
+    quiet: Quiet = False,
     force: opt.Force = False,
     sweep: SweepOptions = opt.NO_SWEEP,
 ) -> None:
@@ -178,7 +183,7 @@ def measure(
         squeezes=squeezes, sim_preset=sim_preset, objects=objects, peak_force_n=peak_force_n,
         strain=strain, ramp_s=ramp_s, hold_s=hold_s, floating=floating, alpha_cm=alpha_cm,
         dt_s=dt_s, memory_budget_gib=memory_budget_gib, seed=seed, noise_force_n=noise_force_n,
-        noise_position_m=noise_position_m, log_epoch=log_epoch,
+        noise_position_m=noise_position_m, log_epoch=log_epoch, scene_hz=scene_hz,
     )  # fmt: skip
     image_opts = img.ImageOptions(
         marker_size_cm=marker_size_cm, marker_dict=marker_dict, marker_id=marker_id,
@@ -198,12 +203,13 @@ def measure(
     given = [
         *rig_opts.given(), *(flag for flag, value in object_flags.items() if value is not None),
         *image_opts.given(), *sim_opts.given(), *csv_flags.given(),
+        *(["--quiet"] if quiet else []),
     ]  # fmt: skip
     inputs = list(inputs or [])
     flag, source = _source(bag, csv, images, sim, inputs)
     _refuse_foreign(flag, given)
     if flag == "--sim":
-        _measure_sim.run(source, sim_opts, output, force, sweep, Console(stderr=True))
+        _measure_sim.run(source, sim_opts, output, force, sweep, Console(stderr=True), quiet)
         return
     if flag == "--csv":
         named = csvo.ObjectFlags(

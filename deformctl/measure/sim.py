@@ -17,6 +17,7 @@ from deformctl.measure.options import (
     DEFAULT_SQUEEZE_STRAIN,
     SqueezeProtocol,
 )
+from deformctl.scene import DEFAULT_SCENE_HZ, scene_every_steps
 from deformctl.series import SqueezeSeries
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported when used
@@ -51,6 +52,7 @@ def simulate_squeezes(
     progress: SqueezeProgress | None = None,
     path: str | None = None,
     first_index: int = 0,
+    scene_hz: float = DEFAULT_SCENE_HZ,
 ) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
     """Simulate ``protocol.squeezes`` force-controlled squeezes of every catalog object.
 
@@ -75,6 +77,8 @@ def simulate_squeezes(
         first_index: the position of ``catalog``'s first row in the whole run's catalog: row
             ``i`` gets the noise stream of object ``first_index + i``, so squeezing a slice of
             a catalog (a sweep's one object) gives the bytes of the whole run.
+        scene_hz: record each squeeze's scene (:mod:`deformctl.scene`, noise-free) at this many
+            frames per simulated second for the log (0: none; at most 1/dt).
 
     Returns:
         ``(objects, squeezes)``: the objects' catalog rows (NaN as None) plus
@@ -97,6 +101,7 @@ def simulate_squeezes(
             f"strain must be in (0, {s.max_squeeze_strain:g}) (the densification limit), "
             f"got {p.strain:g}"
         )
+    scene_every_steps(scene_hz, s.dt_s)  # refuses a bad rate before any squeeze
     objects_in = catalog_objects(catalog, path=path)
     specs = [obj.to_sim_spec(path=path) for obj in objects_in]
     records = [obj.record() for obj in objects_in]
@@ -123,6 +128,7 @@ def simulate_squeezes(
                     noise_force_n=p.noise_force_n,
                     noise_position_m=p.noise_position_m,
                     seed=base_seed + j,
+                    scene_hz=scene_hz,
                 )
             )
             if progress is not None:

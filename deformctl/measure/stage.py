@@ -45,6 +45,7 @@ from deformctl.parallel import (
     run_sweep,
     single_file_workers,
 )
+from deformctl.scene import DEFAULT_SCENE_HZ
 from deformctl.series import SqueezeSeries
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported when used
@@ -78,6 +79,8 @@ class SimulateCatalogTask:
         sim_preset: the name of the preset ``settings`` came from (recorded in the log).
         log_epoch_ns: where the log's squeezes begin, ns since the Unix epoch (they are laid
             end to end from there).
+        scene_hz: scene frames per simulated second in the log (:mod:`deformctl.scene`; 0:
+            none).
     """
 
     protocol: SqueezeProtocol
@@ -85,6 +88,7 @@ class SimulateCatalogTask:
     seed: int = 0
     sim_preset: str | None = None
     log_epoch_ns: int = LOG_EPOCH_NS
+    scene_hz: float = DEFAULT_SCENE_HZ
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """Squeeze one object: its summary row, its (object row, squeezes) as the payload."""
@@ -95,6 +99,7 @@ class SimulateCatalogTask:
             seed=self.seed,
             first_index=int(item["_position"]),
             protocol=self.protocol,
+            scene_hz=self.scene_hz,
         )
         summary = {
             "object_id": str(objects[0]["object_id"]),
@@ -116,6 +121,7 @@ def sim_provenance(
         settings={
             "source": "sim",
             **task.protocol.as_dict(),
+            "scene_hz": task.scene_hz,
             "peak_force_rule": "peak_force_n"
             if task.protocol.peak_force_n is not None
             else "strain",

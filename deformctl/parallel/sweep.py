@@ -74,7 +74,8 @@ class SweepSummary:
 
 
 class _Progress:
-    """One rich bar on stderr (objects done, failed, rate); silent unless stderr is a TTY."""
+    """One rich bar on stderr (objects done, failed, rate, elapsed, ETA); silent unless stderr is
+    a TTY."""
 
     def __init__(self, enabled: bool, total: int, completed: int) -> None:
         self._bar: Any = None
@@ -83,14 +84,17 @@ class _Progress:
         self._finished = 0
         if not (enabled and sys.stderr.isatty()):
             return
+        from rich import progress as rp
         from rich.console import Console
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
-        self._bar = Progress(
-            TextColumn("sweep"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TextColumn("{task.fields[failed]} failed  {task.fields[rate]:.2f} obj/s"),
+        self._bar = rp.Progress(
+            rp.TextColumn("sweep"),
+            rp.BarColumn(),
+            rp.MofNCompleteColumn(),
+            rp.TextColumn("{task.fields[failed]} failed  {task.fields[rate]:.2f} obj/s"),
+            rp.TimeElapsedColumn(),
+            rp.TextColumn("ETA"),
+            rp.TimeRemainingColumn(),
             console=Console(stderr=True),
             transient=False,
         )

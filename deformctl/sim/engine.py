@@ -206,6 +206,9 @@ PREDICT_RELEASE = True
 #: Bytes each simulated step keeps: the record row (``N_REC`` doubles), the commanded force
 #: and palm velocity, and the series built from them (about three copies).
 STEP_BYTES = 8 * (N_REC + 2) * 3
+#: Bytes a scene frame keeps per particle: the copied position (3 doubles) and, for a surface
+#: particle, its JSON sphere in the log writer's messages (about 200 bytes).
+SCENE_FRAME_BYTES_PER_PARTICLE = 24 + 200
 
 
 @dataclass(frozen=True)
@@ -450,8 +453,11 @@ def check_lattice_size(spec: ObjectSpec, settings: SimSettings) -> None:
         )
 
 
-def check_run_steps(spec: ObjectSpec, settings: SimSettings, n_steps: float, what: str) -> None:
-    """Refuse a run whose model and recorded steps exceed ``settings.memory_budget_gib``.
+def check_run_steps(
+    spec: ObjectSpec, settings: SimSettings, n_steps: float, what: str, frame_every: int = 0
+) -> None:
+    """Refuse a run whose model, recorded steps and scene frames (one every ``frame_every``
+    steps; 0: none) exceed ``settings.memory_budget_gib``.
 
     Made before any step is allocated (``n_steps`` comes from the protocol's durations and
     ``dt_s``; a float, so an absurd duration is an estimate, not an overflow).
@@ -462,6 +468,10 @@ def check_run_steps(spec: ObjectSpec, settings: SimSettings, n_steps: float, wha
     """
     check_lattice_size(spec, settings)
     estimate = memory_estimate_bytes(spec, settings) + float(n_steps) * STEP_BYTES
+    if frame_every > 0:
+        n = math.prod(float(k) for k in particles_per_axis(spec.size_m, settings.alpha_m(spec)))
+        frames = float(n_steps) / frame_every + 2.0
+        estimate += frames * n * SCENE_FRAME_BYTES_PER_PARTICLE
     if not estimate <= settings.memory_budget_gib * GIB:  # also refuses inf / nan
         raise UsageError(
             f"object {spec.object_id!r}: a {what} of {float(n_steps):.3g} steps of "
@@ -690,6 +700,8 @@ def run_model(
     stop_from_step: int = 0,
     q: FloatArray | None = None,
     v: FloatArray | None = None,
+    frame_every: int = 0,
+    frames: FloatArray | None = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Integrate ``len(force_cmd_n) - 1`` steps.
 
@@ -706,6 +718,9 @@ def run_model(
         stop_slip_m: stop early once the mean palm slip accumulated since the step before
             ``stop_from_step`` exceeds this, m (None: run every step).
         q, v: initial DOF displacement (m) and velocity (m/s), ``[n_dof]``; zero by default.
+        frame_every, frames: copy the particle positions into ``frames`` (m, ``[n_frames, n,
+            3]``, see :func:`deformctl.sim.scene.frame_buffer`) after steps 0, ``frame_every``,
+            2 ``frame_every``... (0: no copies; what is simulated does not depend on it).
 
     Returns:
         final q, final v and the record matrix ``[n_run, N_REC]`` (``n_run`` is
@@ -740,6 +755,8 @@ def run_model(
         s.integrator == "bdf2",
         -1.0 if stop_slip_m is None else float(stop_slip_m),
         int(stop_from_step),
+        int(frame_every) if frames is not None else 0,
+        np.zeros((0, model.lattice.n_particles, 3)) if frames is None else frames,
     )
     if model.hierarchy is not None:
         tol = s.cg_tolerance_m_s * model.particle_mass_kg * math.sqrt(model.n_dof)

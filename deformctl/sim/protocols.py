@@ -14,9 +14,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from deformctl.errors import SimulationError, UsageError
+from deformctl.scene import scene_every_steps
 from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
 from deformctl.sim.engine import SimSettings, build_model, check_run_steps, run_model
 from deformctl.sim.objects import ObjectSpec
+from deformctl.sim.scene import frame_buffer, scene_frames
 from deformctl.sim.step import record as K
 from deformctl.units import GRAVITY_M_S2
 
@@ -214,6 +216,7 @@ def squeeze(
     noise_force_n: float = 0.0,
     noise_position_m: float = 0.0,
     seed: int | None = None,
+    scene_hz: float = 0.0,
 ) -> SqueezeSeries:
     """Force-controlled squeeze: both palms push with ``F(t)``, a linear ramp to the peak, a hold.
 
@@ -227,24 +230,32 @@ def squeeze(
         hold_s: hold duration at the peak, s.
         noise_force_n, noise_position_m: std of Gaussian sensor noise added to the recorded force
             and palm positions (0: exact). seed: noise seed (``np.random.default_rng``).
+        scene_hz: record the scene (:class:`deformctl.scene.SceneFrames`, noise-free) at this
+            many frames per simulated second, from t = 0 (0: none; at most 1/dt).
 
     Returns:
-        the squeeze series (force felt, compression, commanded force, palm x positions).
+        the squeeze series (force felt, compression, commanded force, palm x positions; its
+        ``scene`` when asked).
     """
     s = settings or SimSettings()
     if not (math.isfinite(peak_force_n) and peak_force_n > 0):
         raise UsageError(f"peak_force_n must be > 0, got {peak_force_n}")
     if ramp_s < 0 or hold_s < 0 or not math.isfinite(ramp_s + hold_s):
         raise UsageError("ramp_s and hold_s must be >= 0")
+    every = scene_every_steps(scene_hz, s.dt_s)
     n_steps = max(1, round((ramp_s + hold_s) / s.dt_s))
-    check_run_steps(spec, s, n_steps, "squeeze")
+    check_run_steps(spec, s, n_steps, "squeeze", every)
     model = build_model(spec, s, gripped=True, gravity=gravity, table=gravity)
     t = np.arange(n_steps + 1, dtype=np.float64) * s.dt_s
     force = peak_force_n * (np.clip(t / ramp_s, 0.0, 1.0) if ramp_s > 0 else np.ones_like(t))
     if ramp_s == 0:
         force[0] = 0.0
-    _, _, rec = run_model(model, force, np.zeros(n_steps + 1))
+    frames = frame_buffer(model, n_steps, every) if every else None
+    q_end, _, rec = run_model(model, force, np.zeros(n_steps + 1), frame_every=every, frames=frames)
     _check_finite(rec, "squeeze", spec)
+    scene = None
+    if frames is not None:
+        scene = scene_frames(model, rec, frames, every, q_end, start=True)
     xl = np.concatenate([[model.palm_x0[0]], rec[:, K.REC_PALM_XL]])
     xr = np.concatenate([[model.palm_x0[1]], rec[:, K.REC_PALM_XR]])
     felt = np.concatenate([[0.0], 0.5 * (rec[:, K.REC_NORMAL_L] + rec[:, K.REC_NORMAL_R])])
@@ -264,6 +275,7 @@ def squeeze(
         commanded_force_n=force,
         palm_left_x_m=xl,
         palm_right_x_m=xr,
+        scene=scene,
     )
 
 
@@ -313,6 +325,7 @@ def lift_attempt(
     criterion: SlipCriterion | None = None,
     release: SupportRelease | None = None,
     stop_when_slipped: bool | None = None,
+    scene_hz: float = 0.0,
 ) -> TrialOutcome:
     """Grip ``spec`` with ``grip_force_n`` per palm, raise the palms along ``profile``, hold.
 
@@ -326,6 +339,10 @@ def lift_attempt(
     With ``stop_when_slipped`` (default: ``criterion.stop_early``) and the contact slip measure,
     the attempt stops as soon as its slip exceeds the tolerance: the verdict is then final (the
     accumulated slip only grows), and the recorded series ends there.
+
+    ``scene_hz`` > 0 records the attempt's scene (:class:`deformctl.scene.SceneFrames`) at that
+    many frames per simulated second, on the series' time base, ending with its last sample (at
+    most 1/dt; it changes no simulated number).
     """
     s = settings or SimSettings()
     p = profile or LiftProfile()
@@ -333,13 +350,14 @@ def lift_attempt(
     r = release or SupportRelease()
     if not (math.isfinite(grip_force_n) and grip_force_n >= 0):
         raise UsageError(f"grip_force_n must be finite and >= 0, got {grip_force_n}")
+    every = scene_every_steps(scene_hz, s.dt_s)
     on_table = r.mode == "table"
     model = build_model(spec, s, gripped=True, resting=on_table, table=on_table)
     dt = s.dt_s
     rise = p.rise_m(spec)
     n_grip = max(1, round((s.grip_ramp_s + s.grip_settle_s) / dt))
     n_steps = n_grip + math.ceil(p.rise_time_s(rise) / dt) + round(p.hold_s / dt)
-    check_run_steps(spec, s, n_steps, "lift attempt")
+    check_run_steps(spec, s, n_steps, "lift attempt", every)
     n_planned = n_steps
     t = np.arange(n_steps + 1, dtype=np.float64) * dt
     if s.grip_ramp_s > 0:
@@ -350,15 +368,19 @@ def lift_attempt(
     palm_vz = p.velocity_m_s(t - t_lift, rise)
     early = c.stop_early if stop_when_slipped is None else stop_when_slipped
     stop = c.tolerance_m if early and c.measure == "contact" else None
-    _, _, rec = run_model(
+    frames = frame_buffer(model, n_steps, every) if every else None
+    q_end, _, rec = run_model(
         model,
         force,
         palm_vz,
         gravity_scale=r.gravity_scale(t, t_lift),
         stop_slip_m=stop,
         stop_from_step=n_grip,
+        frame_every=every,
+        frames=frames,
     )
     _check_finite(rec, "lift attempt", spec)
+    scene = None if frames is None else scene_frames(model, rec, frames, every, q_end)
     n_steps = rec.shape[0]
     slip_l = rec[:, K.REC_SLIP_L] - rec[n_grip - 1, K.REC_SLIP_L]
     slip_r = rec[:, K.REC_SLIP_R] - rec[n_grip - 1, K.REC_SLIP_R]
@@ -404,6 +426,7 @@ def lift_attempt(
         slip_m=measured,
         series=series,
         details=details,
+        scene=scene,
     )
 
 

@@ -23,6 +23,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import pytest
 from builders import PAPER_OBJECTS, make_attempts, make_provenance, make_squeezes, make_tables
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
@@ -156,3 +157,19 @@ def test_corrupted_artifacts_exit_65_with_one_line(
         event(f"{fmt}: accepted, identical content")
     else:
         event("csv: accepted as another valid catalog")
+
+
+def test_a_footer_shifted_by_one_flipped_byte_is_refused_everywhere() -> None:
+    """The case the fuzz test above found: byte 901 of a predictions table's footer flipped
+    (0x26 -> 0x2d) makes the Thrift decoder read the base64 Arrow schema as ``created_by`` and no
+    key/value metadata at all. ``inspect`` took it for a foreign table (kind from its columns)
+    while ``read_table`` refused it; both now refuse it as damaged."""
+    path = Path(__file__).resolve().parents[1] / "data/corrupt/predictions_footer_shifted.parquet"
+    with pytest.raises(DeformctlError) as err:
+        read_table(path)
+    assert err.value.exit_code == EXIT_DATAERR
+    assert "damaged table" in str(err.value)
+    result = runner.invoke(app, ["inspect", str(path)])
+    assert result.exit_code == EXIT_DATAERR
+    assert result.stderr.splitlines() == [f"error: {err.value}"]
+    assert result.stdout == ""

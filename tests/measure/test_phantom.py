@@ -54,7 +54,9 @@ def _check_folder(files: list[Path], tmp_path: Path) -> pd.DataFrame:
         slope = _line_slope_n_per_cm(f, row["compression_min_cm"], row["compression_max_cm"])
         assert row["deformability_n_per_cm"] == pytest.approx(slope, rel=0.02), f.name
         assert row["compression_max_cm"] == pytest.approx(2.0, abs=0.01), f.name  # 20 mm
-        assert set(row["quality"].split(",")) == {"damping_unidentifiable", "low_r2"}, f.name
+        # a straight line is a poor fit of a material that stiffens 20-50x (issue 33): said
+        flags = {"damping_unidentifiable", "low_r2", "nonlinear_stiffness"}
+        assert set(row["quality"].split(",")) == flags, f.name
     return coef
 
 

@@ -42,12 +42,18 @@ LIFT_RESULT_TOPIC = "/lift/attempt_result"  #: every object's results in a first
 SQUEEZE_SAMPLE = "squeeze_sample"
 LIFT_SAMPLE = "lift_attempt_sample"
 LIFT_RESULT = "lift_attempt_result"
+PALM_CONTACT = "palm_contact"
+PALMS_TOPIC = "/palms"  #: every object's palm contacts at the scene frames
+SCENE_TOPIC = "/scene"  #: every object's scene, foxglove.SceneUpdate (not a deformctl schema)
 #: first-layout topic → JSON Schema name
 TOPIC_SCHEMAS = {
     SQUEEZE_TOPIC: SQUEEZE_SAMPLE,
     LIFT_SAMPLE_TOPIC: LIFT_SAMPLE,
     LIFT_RESULT_TOPIC: LIFT_RESULT,
+    PALMS_TOPIC: PALM_CONTACT,
 }
+#: topics of a simulated log's scene: they say nothing about the log's kind
+SCENE_TOPICS = (SCENE_TOPIC, PALMS_TOPIC)
 KIND_SCHEMAS = {
     KIND_SQUEEZE: (SQUEEZE_SAMPLE,),
     KIND_LIFT: (LIFT_SAMPLE, LIFT_RESULT),
@@ -145,7 +151,11 @@ class McapContents:
         records = self.metadata_named("deformctl")
         if records:
             return records[0].get("kind")
-        found = {topic_schema(c.topic) for c in self.channels.values() if c.topic}
+        found = {
+            topic_schema(c.topic)
+            for c in self.channels.values()
+            if c.topic and c.topic not in SCENE_TOPICS
+        }
         names = {f[0] if f else None for f in found}
         for kind, kind_schemas in KIND_SCHEMAS.items():
             if names and names <= set(kind_schemas):

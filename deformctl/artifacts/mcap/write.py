@@ -6,6 +6,7 @@ See :mod:`deformctl.artifacts.mcap` for the layout and the time line (:data:`LOG
 
 from __future__ import annotations
 
+import heapq
 import io
 import json
 import math
@@ -25,14 +26,17 @@ from deformctl.artifacts.mcap.contents import (
     LIFT_RESULT,
     LIFT_SAMPLE,
     LOG_EPOCH_NS,
+    SCENE_TOPIC,
     _check_time,
     lift_topic,
     squeeze_topic,
     topic_schema,
 )
+from deformctl.artifacts.mcap.scene import SCENE_SCHEMA_NAME, foxglove_schema_bytes, scene_messages
 from deformctl.artifacts.provenance import Provenance, _json_default
 from deformctl.artifacts.schema import json_schema_bytes, load_json_schema
 from deformctl.errors import InputDataError
+from deformctl.scene import SceneFrames
 from deformctl.series import LiftAttempt, SqueezeSeries
 from deformctl.units import NS_PER_S
 from deformctl.version import __version__
@@ -82,6 +86,14 @@ class _LogWriter:
             self._w.add_metadata("object", data)
 
     def channel(self, topic: str) -> int:
+        if topic == SCENE_TOPIC and topic not in self._channels:
+            sid = self._w.register_schema(
+                name=SCENE_SCHEMA_NAME, encoding="jsonschema", data=foxglove_schema_bytes()
+            )
+            self._channels[topic] = self._w.register_channel(
+                topic=topic, message_encoding="json", schema_id=sid
+            )
+            self._sequence[topic] = 0
         if topic not in self._channels:
             found = topic_schema(topic)
             assert found is not None, topic
@@ -110,8 +122,11 @@ class _LogWriter:
         times_ns: Sequence[int],
         base: Mapping[str, Any],
         columns: Mapping[str, list[float]],
+        scene: Sequence[tuple[int, str, bytes]] = (),
     ) -> None:
-        """One message per sample: ``base`` plus sample i of every column (finite floats).
+        """One message per sample: ``base`` plus sample i of every column (finite floats), and
+        the ``scene`` messages ``(log time, topic, bytes)`` merged in log-time order (at equal
+        times the sample first).
 
         The JSON text is built from a template instead of ``json.dumps`` per sample: the bytes are
         the same (a finite float's ``repr`` is its JSON form) and a long series encodes several
@@ -120,8 +135,10 @@ class _LogWriter:
         head = json.dumps(dict(base), separators=(",", ":"), allow_nan=False)[:-1]
         fields = ",".join(f"{json.dumps(k)}:%r" for k in columns)
         template = f"{head},{fields}}}" if base else f"{{{fields}}}"
-        for log_time, row in zip(times_ns, zip(*columns.values(), strict=True), strict=True):
-            self.add_encoded(topic, log_time, (template % row).encode())
+        rows = zip(times_ns, zip(*columns.values(), strict=True), strict=True)
+        samples = ((t, topic, (template % row).encode()) for t, row in rows)
+        for log_time, where, data in heapq.merge(samples, scene, key=lambda m: m[0]):
+            self.add_encoded(where, log_time, data)
 
     def add_encoded(self, topic: str, log_time_ns: int, data: bytes) -> None:
         cid = self.channel(topic)
@@ -143,6 +160,18 @@ def _time_line_ns(t: np.ndarray, offset_ns: int) -> list[int]:
     if t.size == 0:
         return []
     return [offset_ns + int(v) for v in np.rint((t - t[0]) * NS_PER_S).astype(np.int64)]
+
+
+def _scene(
+    scene: SceneFrames | None, object_id: str, run: str, index: int, start_ns: int, t: np.ndarray
+) -> list[tuple[int, str, bytes]]:
+    """The ``/scene`` and ``/palms`` messages of a squeeze or attempt whose samples ``t`` start
+    at ``start_ns`` (none without a scene or samples)."""
+    if scene is None or t.size == 0 or len(scene) == 0:
+        return []
+    return scene_messages(
+        scene, object_id=object_id, run=run, index=int(index), start_ns=start_ns, t0_s=float(t[0])
+    )
 
 
 def _finite(label: str, key: str, arr: np.ndarray, path: str) -> list[float]:
@@ -200,9 +229,11 @@ def write_squeeze_log(
                 arr = getattr(sq, key)
                 if arr is not None:
                     columns[key] = _finite(label, key, arr, name)
-            times = _time_line_ns(sq.time_s, log.start_ns(sq.start_time_ns))
+            start = log.start_ns(sq.start_time_ns)
+            times = _time_line_ns(sq.time_s, start)
             base = {"object_id": sq.object_id, "squeeze_index": int(sq.squeeze_index)}
-            log.add_samples(squeeze_topic(sq.object_id), times, base, columns)
+            scene = _scene(sq.scene, sq.object_id, "squeeze", sq.squeeze_index, start, sq.time_s)
+            log.add_samples(squeeze_topic(sq.object_id), times, base, columns, scene)
             if times:
                 log.ended(times[-1])
         log.finish()
@@ -256,7 +287,10 @@ def write_lift_log(
                 for key in _LIFT_FIELDS:
                     columns[key] = _finite(label, key, getattr(s, key), name)
                 times = _time_line_ns(s.time_s, end_ns)
-                log.add_samples(lift_topic(att.object_id, LIFT_SAMPLE), times, base, columns)
+                scene = _scene(
+                    out.scene, att.object_id, "lift", att.attempt_index, end_ns, s.time_s
+                )
+                log.add_samples(lift_topic(att.object_id, LIFT_SAMPLE), times, base, columns, scene)
                 if times:
                     end_ns = times[-1]
             slip = float(out.slip_m)

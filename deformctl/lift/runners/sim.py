@@ -50,6 +50,7 @@ from deformctl.lift.options import DEFAULT_SEARCH, SearchOptions
 from deformctl.lift.search import TrialRunner
 from deformctl.lift.stage import RunnerFactory, lift_catalog
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
+from deformctl.scene import DEFAULT_SCENE_HZ, scene_every_steps
 
 if TYPE_CHECKING:  # pragma: no cover - the simulator is imported where it runs (see below)
     from deformctl.presets import SimPreset
@@ -92,6 +93,7 @@ def sim_runner_factory(
     profile: LiftProfile | None = None,
     settings: SimSettings | None = None,
     criterion: SlipCriterion | None = None,
+    scene_hz: float = DEFAULT_SCENE_HZ,
 ) -> RunnerFactory:
     """A :class:`~deformctl.lift.stage.RunnerFactory` whose attempts run in the simulator.
 
@@ -100,12 +102,17 @@ def sim_runner_factory(
             the object model, lift profile, slip criterion and support release.
         profile, settings, criterion: replace the preset's lift profile, simulator settings or
             slip criterion (the row's ``sim_preset`` then reads ``NAME+overrides``).
+        scene_hz: record each attempt's scene (:mod:`deformctl.scene`) at this many frames per
+            simulated second for the lift log (0: none); it changes no simulated number.
 
     Returns:
         The factory: ``name = "sim"``; each row gets ``sim_preset``, ``lift_accel_m_s2``,
         ``lift_speed_m_s`` (the profile's), ``lift_height_m`` (the rise actually used for that
         object), ``slip_tolerance_m`` and ``slip_criterion`` (``"contact"`` or ``"shortfall"``);
         a simulation failure of one object does not stop the others.
+
+    Raises:
+        UsageError: ``scene_hz`` negative or above the step rate 1/dt (before any attempt).
     """
     from deformctl.presets import sim_preset
 
@@ -117,9 +124,10 @@ def sim_runner_factory(
             criterion=dataclasses.asdict(criterion) if criterion is not None else None,
         )
     p, s, c, r = chosen.profile, chosen.settings, chosen.criterion, chosen.release
+    scene_every_steps(scene_hz, s.dt_s)  # refuses a bad rate before any attempt
     return RunnerFactory(
         name="sim",
-        make=_SimRunnerMaker(chosen),
+        make=_SimRunnerMaker(chosen, float(scene_hz)),
         row_fields=_SimRowFields(chosen),
         stop_on_failure=False,
         settings={
@@ -128,6 +136,7 @@ def sim_runner_factory(
             "lift_profile": p.as_dict(),
             "slip_criterion": dataclasses.asdict(c),
             "support_release": r.as_dict(),
+            "scene_hz": float(scene_hz),
         },
         check=_SimCheck(chosen),
         material_features=True,
@@ -144,17 +153,19 @@ class _SimAttempt:
 
     preset: SimPreset
     spec: Any  # deformctl.sim.ObjectSpec
+    scene_hz: float = 0.0
 
     def __call__(self, grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
-        return self.preset.lift_attempt(self.spec, grip_force_n)
+        return self.preset.lift_attempt(self.spec, grip_force_n, scene_hz=self.scene_hz)
 
 
 @dataclass(frozen=True)
 class _SimRunnerMaker:
     preset: SimPreset
+    scene_hz: float = 0.0
 
     def __call__(self, obj: CatalogObject) -> TrialRunner:
-        return _SimAttempt(self.preset, obj.to_sim_spec())
+        return _SimAttempt(self.preset, obj.to_sim_spec(), self.scene_hz)
 
 
 @dataclass(frozen=True)
@@ -190,11 +201,13 @@ class LiftTask:
         search: the search options.
         log_epoch_ns: where each part's lift log begins, ns since the Unix epoch (None: the
             log writer's fixed epoch, 2000-01-01).
+        scene_hz: scene frames per simulated second in the part logs (0: none).
     """
 
     preset: SimPreset
     search: SearchOptions = DEFAULT_SEARCH
     log_epoch_ns: int | None = None
+    scene_hz: float = DEFAULT_SCENE_HZ
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """One object's search: its lift_results row, its attempts as the payload.
@@ -202,7 +215,7 @@ class LiftTask:
         Raises:
             InputDataError: the object cannot be lifted or simulated (recorded as failed).
         """
-        factory = sim_runner_factory(preset=self.preset)
+        factory = sim_runner_factory(preset=self.preset, scene_hz=self.scene_hz)
         run = lift_catalog([CatalogObject.from_row(item)], factory, search=self.search)
         error = run.error_message()
         return TaskOutput(
@@ -256,7 +269,7 @@ def lift_sweep(
         object_ids: these objects, in this order (None: all).
         force: overwrite the sweep files of an existing directory.
     """
-    factory = sim_runner_factory(preset=task.preset)
+    factory = sim_runner_factory(preset=task.preset, scene_hz=task.scene_hz)
     catalog = select_objects(read_catalog(catalog_path), object_ids)
     _check_budgets(catalog, task)
     run_settings = {"runner": factory.name, **factory.settings, **task.search.as_dict()}

@@ -98,6 +98,10 @@ class Drive(NamedTuple):
         dt: time step, s. n_steps: steps to run. bdf2: BDF2 (else backward Euler).
         stop_slip, stop_from: stop once the mean palm slip since step ``stop_from - 1`` exceeds
             ``stop_slip`` m (never when negative).
+        frame_every: copy the particle positions into ``frames`` after every ``frame_every``-th
+            step (steps 0, k, 2k, ...; 0: never, the default, which costs one comparison per
+            step and changes no simulated number).
+        frames: the copies, m, ``[n_frames, n, 3]`` (``[0, n, 3]`` when ``frame_every`` is 0).
     """
 
     force_cmd: FloatArray
@@ -109,6 +113,8 @@ class Drive(NamedTuple):
     bdf2: bool
     stop_slip: float
     stop_from: int
+    frame_every: int
+    frames: NDArray[np.float64]
 
 
 class DirectSolver(NamedTuple):

@@ -62,7 +62,8 @@ def _record_step(
     h: float,
 ) -> None:
     """Record step ``step`` and advance ``v <- vnew``, ``q <- q + h v`` (palm quantities before
-    the position update use the new velocities).
+    the position update use the new velocities); copy the positions into ``drive.frames`` on
+    every ``drive.frame_every``-th step (a scene frame; nothing simulated reads them).
 
     ``q, v`` hold the step's base state (for BDF2 the predictor, see
     :func:`deformctl.sim.step.direct.integrate`), ``h`` is
@@ -136,3 +137,10 @@ def _record_step(
     rec[step, REC_MIN_Z] = min_z
     rec[step, REC_PENETRATION] = penetration
     rec[step, REC_MAX_SPEED] = max_speed
+    every = drive.frame_every
+    if every > 0 and step % every == 0:  # a scene frame: copy the positions, nothing else
+        frames = drive.frames
+        k = step // every
+        for p in range(n):
+            for a in range(3):
+                frames[k, p, a] = x[p, a]

@@ -1,0 +1,76 @@
+"""The material options of ``characterize``, checked once: :class:`MaterialOptions`.
+
+The command builds one from ``--model`` and ``--at-force-n``; the stage
+(:func:`deformctl.characterize.read_and_characterize`), the sweep task and the estimators take
+it. Which lag is fitted is chosen per object from where its log came from
+(:func:`default_lag`), as the preload is.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from deformctl.characterize.laws import MODEL_CHOICES, check_model
+from deformctl.quantities import AT_FORCE_N
+
+#: The ``source`` a squeeze log's object row carries when ``measure`` read a rig recording.
+RIG_SOURCES = ("ros2_bag", "csv")
+
+
+def check_at_force_n(value: object) -> float | None:
+    """``--at-force-n`` when it is None or a finite force > 0, N (its rule:
+    :data:`deformctl.quantities.AT_FORCE_N`).
+
+    Raises:
+        UsageError: anything else (exit 2).
+    """
+    return AT_FORCE_N.check_optional(value)
+
+
+@dataclass(frozen=True)
+class MaterialOptions:
+    """Which material law is fitted and where its deformability is stated.
+
+    Attributes:
+        model: ``kv``, ``hc``, ``sls``, or ``auto`` (all three, chosen by BIC).
+        at_force_n: the operating force D is the secant stiffness at, N; None: F_w = W/(2μ)
+            when the log knows the object's weight and friction, else its median loading force.
+            Above an object's peak force it is an error (exit 2).
+
+    Raises:
+        UsageError: an unknown model or a force that is not > 0 (exit 2).
+    """
+
+    model: str = "auto"
+    at_force_n: float | None = None
+
+    def __post_init__(self) -> None:
+        check_model(self.model)
+        object.__setattr__(self, "at_force_n", check_at_force_n(self.at_force_n))
+
+    def as_dict(self) -> dict[str, Any]:
+        """The options, for provenance."""
+        return {"model": self.model, "at_force_n": self.at_force_n}
+
+
+#: The command's defaults.
+DEFAULT_MATERIALS = MaterialOptions()
+
+
+def default_lag(obj: Mapping[str, object] | None) -> float | None:
+    """The lag of an object whose log does not choose one: fitted (None) for rig recordings,
+    0 for simulated squeezes (the simulator's force and position share one clock), 0 for logs
+    that do not say where they came from."""
+    source = None if obj is None else obj.get("source")
+    return None if source in RIG_SOURCES else 0.0
+
+
+__all__ = [
+    "DEFAULT_MATERIALS",
+    "MODEL_CHOICES",
+    "MaterialOptions",
+    "check_at_force_n",
+    "default_lag",
+]

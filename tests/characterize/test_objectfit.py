@@ -1,0 +1,159 @@
+"""One object's material fit: damping honesty, the joint fit over speeds, the operating force and
+the stiffness of the loading curve, against squeezes with known truth.
+
+* A load–unload cycle at one rate cannot tell damping from hysteresis: ``damping_unidentifiable``,
+  λ NaN, and the loop's dissipated energy instead, against its closed form ``2 λ v d_max``.
+* Two such cycles of one object at two rates are one joint fit that identifies λ, with each
+  speed's residual reported.
+* D is the secant stiffness at the operating force: F_w = W/(2μ) when the log knows W and μ, the
+  force given, else the median loading force; the Hunt–Crossley secant against its closed form.
+* ``nonlinear_stiffness`` fires on a stiffening law and stays silent on a linear one.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from deformctl.artifacts import read_table, write_squeeze_log
+from deformctl.characterize import characterize, fit_object, synthetic_law_squeeze
+from deformctl.characterize.synthetic import _integrate, _sample, _velocity_profile
+from deformctl.cli import app
+from deformctl.errors import UsageError
+from deformctl.series import SqueezeSeries
+
+from .test_materials import TRUTH
+
+runner = CliRunner()
+KV = TRUTH["kv"]
+PEAK_M = 0.01
+
+
+def _cycle(speed_m_s: float, *, seed: int = 0, index: int = 0, oid: str = "obj") -> SqueezeSeries:
+    """A Kelvin–Voigt object loaded and unloaded at one speed (a triangle, 20 ms corners)."""
+    from deformctl.characterize.laws import law_force
+
+    rate_hz = 500.0
+    h = 1.0 / (rate_hz * 10)
+    ramp = PEAK_M / speed_m_s
+    t = np.arange(round((2 * ramp + 0.5) / h) + 1) * h
+    v = _velocity_profile(t, [(0.0, speed_m_s), (ramp, -speed_m_s), (2 * ramp, 0.0)], 0.02)
+    d = _integrate(v, h)
+    f = law_force("kv", KV, d, v, h)
+    return _sample(
+        t, f, d, rate_hz=rate_hz, lag_s=0.0, force_noise_n=0.005 * float(np.max(f)),
+        position_noise_m=2e-6, seed=seed, object_id=oid, squeeze_index=index,
+    )  # fmt: skip
+
+
+def test_single_speed_cycle_has_no_damping_but_a_loop_energy() -> None:
+    speed = 0.005
+    row = characterize({"obj": [_cycle(speed)]}, lag_s=None, preload="fit").iloc[0]
+    assert "damping_unidentifiable" in row["quality"].split(",")
+    assert math.isnan(row["damping_ns_per_cm"])
+    assert math.isnan(row["kv_damping_ns_per_cm"])
+    loop = 2.0 * KV["damping_ns_per_m"] * speed * PEAK_M  # ∮ λ ḋ dd
+    assert row["hysteresis_energy_j"] == pytest.approx(loop, rel=0.05)
+    assert row["deformability_n_per_cm"] == pytest.approx(KV["stiffness_n_per_m"] / 100, rel=0.02)
+
+
+def test_constant_rate_ramp_has_no_loop() -> None:
+    s = synthetic_law_squeeze("kv", KV, hold_s=0.0, release_s=0.0, rest_s=0.0, lag_s=0.0)
+    row = characterize({"synthetic": [s]}, preload="fit").iloc[0]
+    assert "damping_unidentifiable" in row["quality"].split(",")
+    assert math.isnan(row["hysteresis_energy_j"])
+
+
+def test_two_speeds_of_one_object_are_one_joint_fit(tmp_path: Path) -> None:
+    slow, fast = _cycle(0.002, seed=1, oid="gel"), _cycle(0.01, seed=2, oid="gel")
+    logs = []
+    for k, s in enumerate((slow, fast)):
+        log = tmp_path / f"speed{k}.mcap"
+        write_squeeze_log(log, [{"object_id": "gel", "weight_n": 1.0, "source": "csv"}], [s],
+                          provenance=None)  # fmt: skip
+        logs.append(str(log))
+    out = tmp_path / "c.parquet"
+    res = runner.invoke(app, ["characterize", *logs, "-o", str(out), "--model", "kv"])
+    assert res.exit_code == 0, res.stderr
+    (row,) = read_table(out, "coefficients").to_dict("records")
+    assert row["n_squeezes"] == 2
+    assert row["n_speeds"] == 2
+    assert row["residual_rms_by_speed"].count("mm/s") == 2
+    assert "damping_unidentifiable" not in row["quality"]
+    assert row["damping_ns_per_cm"] == pytest.approx(KV["damping_ns_per_m"] / 100, rel=0.05)
+    assert row["deformability_n_per_cm"] == pytest.approx(KV["stiffness_n_per_m"] / 100, rel=0.02)
+
+
+def _hc_squeezes() -> list[SqueezeSeries]:
+    return [synthetic_law_squeeze("hc", TRUTH["hc"], seed=i, squeeze_index=i, lag_s=0.0,
+                                  object_id="hc") for i in range(2)]  # fmt: skip
+
+
+def _hc_secant(force_n: float) -> float:
+    k, n = TRUTH["hc"]["stiffness_n_per_m_pow_n"], TRUTH["hc"]["exponent"]
+    d = (force_n / k) ** (1.0 / n)
+    return force_n / d
+
+
+def test_d_is_the_secant_at_f_w_when_weight_and_friction_are_known() -> None:
+    objects = {"hc": {"weight_n": 4.0, "friction_mu": 0.5}}  # F_w = 4 N
+    row = characterize({"hc": _hc_squeezes()}, objects=objects, model="hc").iloc[0]
+    assert row["operating_force_source"] == "f_w"
+    assert row["operating_force_n"] == pytest.approx(4.0)
+    assert row["deformability_n_per_cm"] == pytest.approx(_hc_secant(4.0) / 100, rel=0.02)
+    # the damping a grip feels there: λ d(F)^n
+    lam = TRUTH["hc"]["damping_ns_per_m_pow_n_plus_1"] * (4.0 / _hc_secant(4.0)) ** 1.8
+    assert row["damping_ns_per_cm"] == pytest.approx(lam / 100, rel=0.03)
+
+
+def test_at_force_n_and_the_median_loading_force() -> None:
+    squeezes = _hc_squeezes()
+    given = characterize({"hc": squeezes}, model="hc", at_force_n=8.0).iloc[0]
+    assert given["operating_force_source"] == "option"
+    assert given["deformability_n_per_cm"] == pytest.approx(_hc_secant(8.0) / 100, rel=0.02)
+    assert "secant_misfit" not in given["quality"].split(",")  # the law is the material's
+    assert abs(given["secant_residual_frac"]) < 0.01
+    median = characterize({"hc": squeezes}, model="hc").iloc[0]
+    assert median["operating_force_source"] == "median_loading"
+    assert 0 < median["operating_force_n"] < float(max(np.max(s.force_n) for s in squeezes))
+    with pytest.raises(UsageError, match="above the peak force"):
+        characterize({"hc": squeezes}, model="hc", at_force_n=1e3)
+
+
+def test_nonlinear_stiffness_fires_on_a_stiffening_law_only() -> None:
+    hc = fit_object(_hc_squeezes(), model="hc", window_s=0.2, fit_preload=False)
+    assert hc.loading.nonlinear
+    # the stiffening of k d^1.8 between the first and the last tenth of the compression
+    d = np.linspace(0.0, PEAK_M, 2001)
+    f = TRUTH["hc"]["stiffness_n_per_m_pow_n"] * d**1.8
+    lo, hi = d <= 0.1 * PEAK_M, d >= 0.9 * PEAK_M
+    ratio = np.polyfit(d[hi], f[hi], 1)[0] / np.polyfit(d[lo], f[lo], 1)[0]
+    assert hc.loading.stiffening_ratio == pytest.approx(ratio, rel=0.1)
+    kv = fit_object(
+        [synthetic_law_squeeze("kv", KV, seed=i, squeeze_index=i) for i in range(2)],
+        model="kv", window_s=0.2, fit_preload=False,
+    )  # fmt: skip
+    assert not kv.loading.nonlinear
+    assert kv.loading.stiffening_ratio == pytest.approx(1.0, abs=0.1)
+
+
+def test_a_loading_phase_that_ends_at_its_peak_loses_no_sample() -> None:
+    # issue 33 point 5: the stiffest samples are the last ones; none is trimmed, and the secant
+    # near the peak is the closed form's (an undamped HC ramp: the rate force cannot be told)
+    undamped = {**TRUTH["hc"], "damping_ns_per_m_pow_n_plus_1": 0.0}
+    for seed in range(2):
+        s = synthetic_law_squeeze(
+            "hc", undamped, hold_s=0.0, release_s=0.0, rest_s=0.0, lag_s=0.0, seed=seed
+        )
+        peak = float(np.max(s.force_n))
+        row = characterize({"synthetic": [s]}, model="hc", at_force_n=0.9 * peak).iloc[0]
+        assert row["n_samples"] == len(s)
+        assert row["deformability_n_per_cm"] == pytest.approx(
+            _hc_secant(0.9 * peak) / 100, rel=0.02
+        )
+        assert row["hc_exponent"] == pytest.approx(1.8, rel=0.02)
+        assert "damping_unidentifiable" in row["quality"].split(",")
