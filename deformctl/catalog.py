@@ -73,7 +73,8 @@ COLUMN_QUANTITIES: dict[str, Quantity] = {
     "material_stiffness_n_per_cm": STIFFNESS_N_PER_CM,
     "material_damping_ns_per_cm": DAMPING_NS_PER_CM,
 }
-#: Physical bounds of each numeric column, ``(lowest, highest)`` inclusive, in the column's unit:
+#: Physical bounds of each numeric column, ``(lowest, highest)``, in the column's unit (inclusive
+#: but for μ, whose 0 is excluded: :data:`deformctl.quantities.FRICTION_MU`, 0 < μ <= 3):
 #: what a gripper can hold and the simulator can integrate (:mod:`deformctl.quantities` says why).
 #: The catalog spec (``schemas/catalog.columns.json``) states the same numbers as
 #: ``minimum``/``maximum``, so every reader refuses an out-of-bounds row before any numerics

@@ -9,11 +9,11 @@ parser (:mod:`deformctl.catalog`, whose bounds these are) and the population gen
 value gets the same rule and the same words whichever command, or library call, it came through:
 
 * a flag or a library argument: :meth:`Quantity.check` raises a
-  :class:`~deformctl.errors.UsageError` (exit 2), ``--friction-mu must be a number in [0.01, 10],
+  :class:`~deformctl.errors.UsageError` (exit 2), ``--friction-mu must be a number in (0, 3],
   got 0``;
 * a value read from a file: :meth:`Quantity.check_data` raises an
   :class:`~deformctl.errors.InputDataError` (exit 65) naming where it was read, ``object 'A':
-  friction_mu = 0 is outside its physical bounds [0.01, 10]``.
+  friction_mu = 0 is outside its physical bounds (0, 3]``.
 
 The catalog's bounds (``schemas/catalog.columns.json`` states the same numbers, checked by
 ``tests/test_catalog.py``) are what a gripper can hold and the simulator can integrate: outside
@@ -99,7 +99,7 @@ class Quantity:
 
     @property
     def rule(self) -> str:
-        """What a value must be: ``a number in [0.01, 10]``, ``a finite number > 0 s``, ..."""
+        """What a value must be: ``a number in (0, 3]``, ``a finite number > 0 s``, ..."""
         kind = "an integer" if self.integer else "a finite number"
         if math.isfinite(self.low) and math.isfinite(self.high):
             lb, rb = "(" if self.low_open else "[", ")" if self.high_open else "]"
@@ -206,7 +206,9 @@ class Quantity:
 #: Bounds in the catalog's units (see the module docstring): the catalog columns, the flags of a
 #: measured object (``measure --bag/--csv/--images``) and the population ranges.
 
-FRICTION_MU = Quantity("friction_mu", "--friction-mu", "", 0.01, 10.0)
+#: μ: 0 < μ <= 3 (issue 30: μ <= 0 or μ > 3 is bad input; above 3 no palm pair is plausible and
+#: F_w = W / (2μ) would promise a grip no real contact gives).
+FRICTION_MU = Quantity("friction_mu", "--friction-mu", "", 0.0, 3.0, low_open=True)
 WEIGHT_N = Quantity("weight_n", "--weight-n", " N", 0.001, 5000.0)
 SIZE_CM = Quantity("size_cm", "--size-cm", " cm", 0.1, 200.0)
 #: D and λ, measured (``characterize``) or the simulator's material values (the catalog).
