@@ -220,6 +220,7 @@ def simulate_catalog_file(
             progress=progress,
             path=catalog_path,
             protocol=task.protocol,
+            scene_hz=task.scene_hz,
         )
     write_squeeze_log(
         output, objects, series, provenance=provenance, force=force, epoch_ns=task.log_epoch_ns
