@@ -327,8 +327,9 @@ def test_runner_choice(catalog: Path, tmp_path: Path, args: list[str], message: 
 @pytest.mark.parametrize(
     ("mu", "message"),
     [
-        ("0", "field 'friction_mu': object 'flat': must be >= 0.01, got 0.0"),
-        ("-0.1", "field 'friction_mu': object 'flat': must be >= 0.01, got -0.1"),
+        ("0", "field 'friction_mu': object 'flat': must be > 0, got 0.0"),
+        ("-0.1", "field 'friction_mu': object 'flat': must be > 0, got -0.1"),
+        ("3.5", "field 'friction_mu': object 'flat': must be <= 3, got 3.5"),
     ],
 )  # fmt: skip
 def test_friction_not_positive_is_bad_input_data(tmp_path: Path, mu: str, message: str) -> None:

@@ -25,8 +25,16 @@ def _one_line(stderr: str) -> str:
 
 def test_the_catalog_spec_states_the_catalog_bounds() -> None:
     spec = json.loads((SCHEMAS / "catalog.columns.json").read_text())
-    stated = {c["name"]: (c["minimum"], c["maximum"]) for c in spec["columns"] if "maximum" in c}
+    stated = {
+        c["name"]: (c.get("minimum", c.get("exclusive_minimum")), c["maximum"])
+        for c in spec["columns"]
+        if "maximum" in c
+    }
     assert stated == BOUNDS
+    # μ's 0 is excluded (quantities.FRICTION_MU: 0 < μ <= 3), as the spec says
+    mu = next(c for c in spec["columns"] if c["name"] == "friction_mu")
+    assert "minimum" not in mu
+    assert mu["exclusive_minimum"] == 0.0
 
 
 EXTREMES = [
