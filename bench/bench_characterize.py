@@ -53,7 +53,7 @@ def _breakdown(squeeze: Path, out: Path) -> dict[str, float]:
     from deformctl.artifacts import write_table
     from deformctl.artifacts.io import read_input_bytes
     from deformctl.artifacts.mcap import load_mcap, read_squeeze_log, squeezes_from_contents
-    from deformctl.characterize import default_window_s, squeeze_log_parts
+    from deformctl.characterize import FitOptions, default_window_s, squeeze_log_parts
     from deformctl.characterize.coefficients import _coefficient_frame
     from deformctl.characterize.stage import _fit_object, _stored_rate
     from deformctl.signals import sg_smooth
@@ -84,10 +84,7 @@ def _breakdown(squeeze: Path, out: Path) -> dict[str, float]:
             by_object.setdefault(s.object_id, []).append(s)
         for oid, group in by_object.items():
             window = default_window_s(_stored_rate(meta.get(oid)))
-            row, _ = _fit_object(
-                oid, group, meta.get(oid), "lsq", window_s=window, preload=None,
-                constrain_damping=False,
-            )  # fmt: skip
+            row, _ = _fit_object(oid, group, meta.get(oid), FitOptions(), window_s=window)
             rows.append(row)
         t3 = time.perf_counter()
         t["read"] += t1 - t0

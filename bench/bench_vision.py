@@ -2,7 +2,7 @@
 
 Prints, per case and seed, the measured x, y, z sizes and their errors against the rendered
 geometry, then the maximum absolute and relative error and the time per measurement. Then the
-calibrated-camera scenes of tests/test_vision_camera.py (a 13.7 x 9.3 x 6.1 cm orange box on grey
+calibrated-camera scenes of tests/vision/test_camera.py (a 13.7 x 9.3 x 6.1 cm orange box on grey
 from 45 cm, pinhole cameras of 45 and 70 degrees, lighting gradients of 0-20 %), each measured
 with the camera matrix and with the 60-degree guess, with the height correction applied.
 """
@@ -14,7 +14,7 @@ import time
 from deformctl import vision
 from deformctl.vision import synth
 from tests.test_vision import CASES, MARKER_CM, _k, _scenes
-from tests.test_vision_camera import BOX_CM, ORANGE, camera_matrix
+from tests.vision.test_camera import BOX_CM, ORANGE, camera_matrix
 from tests.vision_render import render
 
 SEEDS = (0, 1, 2)

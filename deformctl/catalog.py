@@ -6,9 +6,10 @@ A catalog is the input of ``measure --sim`` and ``lift``: one row per object, in
 against it. This module is the only one that reads a row by its column names: everything else
 takes a :class:`CatalogObject` and its typed attributes. Three rules live here and nowhere else:
 
-* parsing a row (a column missing, not a number, not finite): :meth:`CatalogObject.from_row`;
-* lifting needs ``friction_mu > 0``: :meth:`CatalogObject.f_w_n`, and F_w = W / (2 μ) itself is
-  computed by :func:`rigid_grip_force_n` only;
+* parsing a row (a column missing, not a number, not finite, or outside the bounds of its
+  quantity, :mod:`deformctl.quantities`): :meth:`CatalogObject.from_row`;
+* lifting needs F_w = W / (2 μ): :meth:`CatalogObject.f_w_n`, computed by
+  :func:`rigid_grip_force_n` only;
 * simulating needs the *material values* (the simulator's ground truth for D and λ):
   :meth:`CatalogObject.to_sim_spec`, which turns the row into the simulator's
   :class:`~deformctl.sim.ObjectSpec` (the simulator never sees catalog column names).
@@ -34,6 +35,14 @@ import numpy as np
 
 from deformctl.errors import InputDataError, UsageError
 from deformctl.physics import rigid_grip_force_n
+from deformctl.quantities import (
+    DAMPING_NS_PER_CM,
+    FRICTION_MU,
+    SIZE_CM,
+    STIFFNESS_N_PER_CM,
+    WEIGHT_N,
+    Quantity,
+)
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported when used
     import pandas as pd
@@ -54,33 +63,39 @@ CATALOG_COLUMNS: tuple[str, ...] = (
 SIZE_COLUMNS: tuple[str, str, str] = ("size_x_cm", "size_y_cm", "size_z_cm")
 MATERIAL_COLUMNS: tuple[str, str] = ("material_stiffness_n_per_cm", "material_damping_ns_per_cm")
 
-#: Physical bounds of each numeric column, ``(lowest, highest)`` inclusive, in the column's unit:
-#: what a gripper can hold and the simulator can integrate. Outside them numpy sees underflow and
-#: overflow (a size of 1e-308 cm gives a non-finite lattice, a weight of 1e-300 N or a damping of
-#: 1e308 N·s/cm an indefinite factor) or the run never ends (an object of 1e6 cm). The catalog
-#: spec (``schemas/catalog.columns.json``) states the same numbers as ``minimum``/``maximum``,
-#: so every reader refuses an out-of-bounds row before any numerics (tests/test_catalog.py checks
-#: the two agree).
+#: The quantity of each numeric column: its rule (:mod:`deformctl.quantities`), in its unit.
+COLUMN_QUANTITIES: dict[str, Quantity] = {
+    "size_x_cm": SIZE_CM,
+    "size_y_cm": SIZE_CM,
+    "size_z_cm": SIZE_CM,
+    "weight_n": WEIGHT_N,
+    "friction_mu": FRICTION_MU,
+    "material_stiffness_n_per_cm": STIFFNESS_N_PER_CM,
+    "material_damping_ns_per_cm": DAMPING_NS_PER_CM,
+}
+#: Physical bounds of each numeric column, ``(lowest, highest)``, in the column's unit (inclusive
+#: but for μ, whose 0 is excluded: :data:`deformctl.quantities.FRICTION_MU`, 0 < μ <= 3):
+#: what a gripper can hold and the simulator can integrate (:mod:`deformctl.quantities` says why).
+#: The catalog spec (``schemas/catalog.columns.json``) states the same numbers as
+#: ``minimum``/``maximum``, so every reader refuses an out-of-bounds row before any numerics
+#: (tests/test_hostile_bounds.py checks the two agree).
 BOUNDS: dict[str, tuple[float, float]] = {
-    "size_x_cm": (0.1, 200.0),
-    "size_y_cm": (0.1, 200.0),
-    "size_z_cm": (0.1, 200.0),
-    "weight_n": (0.001, 5000.0),
-    "friction_mu": (0.01, 10.0),
-    "material_stiffness_n_per_cm": (0.01, 1e5),
-    "material_damping_ns_per_cm": (0.0, 1e4),
+    column: (q.low, q.high) for column, q in COLUMN_QUANTITIES.items()
 }
 
 __all__ = [
     "BOUNDS",
     "CATALOG_COLUMNS",
+    "COLUMN_QUANTITIES",
     "MATERIAL_COLUMNS",
     "SIZE_COLUMNS",
     "CatalogObject",
+    "MeasuredObject",
     "catalog_frame",
     "catalog_objects",
     "catalog_row",
     "catalog_weights",
+    "check_object_values",
     "object_record",
     "rigid_grip_force_n",
     "select_objects",
@@ -111,12 +126,8 @@ def _number(row: Mapping[str, Any], key: str, object_id: str) -> float:
         raise InputDataError(f"object {object_id!r}: {key} is not a number: {value!r}") from None
     if not math.isfinite(number):
         raise InputDataError(f"object {object_id!r}: {key} is missing or not finite ({value!r})")
-    low, high = BOUNDS.get(key, (-math.inf, math.inf))
-    if not low <= number <= high:
-        raise InputDataError(
-            f"object {object_id!r}: {key} = {number:g} is outside its physical bounds "
-            f"[{low:g}, {high:g}]"
-        )
+    if key in COLUMN_QUANTITIES:
+        COLUMN_QUANTITIES[key].check_data(number, where=f"object {object_id!r}", name=key)
     return number
 
 
@@ -220,21 +231,12 @@ class CatalogObject(Mapping[str, Any]):
         """F_w = W / (2 μ), N, the rigid-object force a lift search starts at.
 
         Raises:
-            InputDataError: ``friction_mu`` is not > 0 (F_w is undefined), or ``weight_n`` is
-                not > 0; naming the object (exit 65).
+            InputDataError: ``friction_mu`` or ``weight_n`` outside its rule (F_w needs both
+                > 0); naming the object (exit 65).
         """
-        if not self.friction_mu > 0:
-            raise InputDataError(
-                f"object {self.object_id!r}: friction_mu must be > 0 to lift it "
-                f"(F_w = W / (2 mu) is undefined), got {self.friction_mu!r}",
-                path=path,
-            )
-        if not self.weight_n > 0:
-            raise InputDataError(
-                f"object {self.object_id!r}: weight_n must be > 0 to lift it, "
-                f"got {self.weight_n!r}",
-                path=path,
-            )
+        where = f"object {self.object_id!r}"
+        FRICTION_MU.check_data(self.friction_mu, where=where, path=path)
+        WEIGHT_N.check_data(self.weight_n, where=where, path=path)
         return rigid_grip_force_n(self.weight_n, self.friction_mu)
 
     def to_sim_spec(self, *, path: str | None = None) -> ObjectSpec:
@@ -316,6 +318,70 @@ def select_objects(catalog: pd.DataFrame, object_ids: Sequence[str] | None) -> p
     return catalog.iloc[[position[oid] for oid in wanted]].reset_index(drop=True)
 
 
+def check_object_values(
+    size_cm: Sequence[float] | None, friction_mu: float | None, weight_n: float | None = None
+) -> tuple[float, float, float] | None:
+    """The rules of a measured object's values (each :mod:`deformctl.quantities` entry's);
+    ``size_cm`` as a tuple. None: not given.
+
+    ``measure --csv`` checks the command line's values with it once, before the files (whose
+    ``--objects-from`` rows may override them), so a bad flag gets the same line as elsewhere.
+
+    Raises:
+        UsageError: not three sizes, or a value outside its rule (exit 2).
+    """
+    WEIGHT_N.check_optional(weight_n)
+    FRICTION_MU.check_optional(friction_mu)
+    if size_cm is None:
+        return None
+    if len(size_cm) != 3:
+        raise UsageError(f"--size-cm takes three sizes (x, y, z), got {list(size_cm)}")
+    x, y, z = (SIZE_CM.check(v) for v in size_cm)
+    return (x, y, z)
+
+
+@dataclass(frozen=True)
+class MeasuredObject:
+    """An object measured on a rig (``measure --bag/--csv/--images``), checked when built.
+
+    Attributes:
+        object_id: its id, non-empty.
+        weight_n: weight W, N (:data:`deformctl.quantities.WEIGHT_N`).
+        size_cm: ``(x, y, z)`` size, cm, each :data:`deformctl.quantities.SIZE_CM`; x is the
+            squeeze axis. None: not known.
+        friction_mu: palm–object friction μ (:data:`deformctl.quantities.FRICTION_MU`), or None.
+
+    Raises:
+        UsageError: an empty id or a value outside its rule (these come from flags; exit 2).
+    """
+
+    object_id: str
+    weight_n: float
+    size_cm: tuple[float, float, float] | None = None
+    friction_mu: float | None = None
+
+    def __post_init__(self) -> None:
+        if not self.object_id or not self.object_id.strip():
+            raise UsageError("--object-id must not be empty")
+        WEIGHT_N.check(self.weight_n)
+        object.__setattr__(self, "size_cm", check_object_values(self.size_cm, self.friction_mu))
+
+    @property
+    def size_x_cm(self) -> float | None:
+        """The size along the squeeze axis, cm (None when not known)."""
+        return None if self.size_cm is None else self.size_cm[0]
+
+    def record(self) -> dict[str, object]:
+        """The catalog-like row a squeeze log stores for it (see :func:`object_record`)."""
+        row: dict[str, object] = {"object_id": self.object_id, "weight_n": float(self.weight_n)}
+        if self.size_cm is not None:
+            for column, value in zip(SIZE_COLUMNS, self.size_cm, strict=True):
+                row[column] = float(value)
+        if self.friction_mu is not None:
+            row["friction_mu"] = float(self.friction_mu)
+        return row
+
+
 def object_record(
     object_id: str,
     weight_n: float,
@@ -333,29 +399,21 @@ def object_record(
 
     Args:
         object_id: catalog id, non-empty.
-        weight_n: weight W, N, finite and > 0.
-        size_cm: ``(x, y, z)`` size, cm, each finite and > 0; x is the squeeze axis.
-        friction_mu: palm–object Coulomb friction coefficient, finite and >= 0.
+        weight_n, size_cm, friction_mu: as :class:`MeasuredObject`, which checks them.
         force_rate_hz: force stream sample rate, Hz.
         position_rate_hz: position stream sample rate, Hz.
 
     Raises:
         UsageError: an empty id or a value out of range (these come from command-line flags).
     """
-    if not object_id or not object_id.strip():
-        raise UsageError("object id must not be empty")
-    if not (math.isfinite(weight_n) and weight_n > 0):
-        raise UsageError(f"weight must be a finite number > 0 N, got {weight_n}")
-    row: dict[str, object] = {"object_id": object_id, "weight_n": float(weight_n)}
-    if size_cm is not None:
-        if len(size_cm) != 3 or not all(math.isfinite(v) and v > 0 for v in size_cm):
-            raise UsageError(f"size must be three finite numbers > 0 cm, got {list(size_cm)}")
-        for column, value in zip(SIZE_COLUMNS, size_cm, strict=True):
-            row[column] = float(value)
-    if friction_mu is not None:
-        if not (math.isfinite(friction_mu) and friction_mu >= 0):
-            raise UsageError(f"friction coefficient must be finite and >= 0, got {friction_mu}")
-        row["friction_mu"] = float(friction_mu)
+    size = (
+        None
+        if size_cm is None
+        else (size_cm[0], size_cm[1], size_cm[2])
+        if len(size_cm) == 3
+        else tuple(size_cm)
+    )
+    row = MeasuredObject(object_id, weight_n, size, friction_mu).record()  # type: ignore[arg-type]
     if force_rate_hz is not None:
         row["force_rate_hz"] = float(force_rate_hz)
     if position_rate_hz is not None:
@@ -376,18 +434,14 @@ def catalog_row(
         ``"friction_mu"`` when given.
 
     Raises:
-        UsageError: an empty id, a weight that is not > 0 or a friction that is not > 0.
+        UsageError: an empty id, or a weight or friction outside its rule (as
+            :class:`MeasuredObject`).
     """
-    if not object_id:
-        raise UsageError("object_id must not be empty")
-    if not (math.isfinite(weight_n) and weight_n > 0):
-        raise UsageError(f"weight_n must be a positive number of newtons, got {weight_n}")
+    MeasuredObject(object_id, weight_n, friction_mu=friction_mu)
     row: dict[str, object] = {"object_id": object_id}
     for column, value in zip(SIZE_COLUMNS, size_cm, strict=True):
         row[column] = round(float(value), 2)
     row["weight_n"] = float(weight_n)
     if friction_mu is not None:
-        if not (math.isfinite(friction_mu) and friction_mu > 0):
-            raise UsageError(f"friction_mu must be positive, got {friction_mu}")
         row["friction_mu"] = float(friction_mu)
     return row

@@ -39,6 +39,13 @@ import pandas as pd
 
 from deformctl.catalog import CATALOG_COLUMNS, MATERIAL_COLUMNS, SIZE_COLUMNS
 from deformctl.errors import UsageError
+from deformctl.quantities import (
+    DAMPING_NS_PER_CM,
+    FRICTION_MU,
+    SIZE_CM,
+    STIFFNESS_N_PER_CM,
+    WEIGHT_N,
+)
 
 #: The largest population one call draws: a catalog of 10^7 objects is 0.7 GB in memory
 #: (:data:`BYTES_PER_OBJECT`, measured on 10^5 objects) and about 1 GB of CSV; more is a typo.
@@ -75,24 +82,10 @@ DEFAULT_FRICTION_MU = 0.5
 Range = tuple[float, float]
 
 
-def _check_range(name: str, value: Range, *, low_bound: float, strict: bool) -> Range:
-    """Validate a ``(low, high)`` range; ``strict`` requires ``low > low_bound``."""
-    try:
-        low, high = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise UsageError(f"{name} must be a (low, high) pair of numbers, got {value!r}") from None
-    if not (math.isfinite(low) and math.isfinite(high)) or low > high:
-        raise UsageError(f"{name} must be a finite range with low <= high, got ({low}, {high})")
-    if (low <= low_bound) if strict else (low < low_bound):
-        op = ">" if strict else ">="
-        raise UsageError(f"{name} must be {op} {low_bound}, got low = {low}")
-    return (low, high)
-
-
 def make_population(
-    n: int,
+    n: int = PAPER_POPULATION_SIZE,
     *,
-    seed: int,
+    seed: int = 0,
     weight_n: Range = (20.0, 60.0),
     deformability_n_per_cm: Range = (30.0, 50.0),
     damping_ns_per_cm: Range = (0.0, 13.0),
@@ -110,13 +103,15 @@ def make_population(
     are a few to 20 cm like the paper's Table I objects.
 
     Args:
-        n: number of objects (>= 1); the paper uses 73 (:data:`PAPER_POPULATION_SIZE`).
-        seed: seed of the generator.
-        weight_n: range of the weight W, N (> 0).
-        deformability_n_per_cm: range of D, N/cm (> 0), written to ``material_stiffness_n_per_cm``.
-        damping_ns_per_cm: range of λ, N·s/cm (>= 0), written to ``material_damping_ns_per_cm``.
+        n: number of objects (>= 1); the paper's 73 (:data:`PAPER_POPULATION_SIZE`) by default.
+        seed: seed of the generator (default 0, as ``deformctl population``).
+        weight_n: range of the weight W, N.
+        deformability_n_per_cm: range of D, N/cm, written to ``material_stiffness_n_per_cm``.
+        damping_ns_per_cm: range of λ, N·s/cm, written to ``material_damping_ns_per_cm``.
         friction_mu: one μ for every object (default 0.5), or a ``(low, high)`` range to sample.
-        size_x_cm, size_y_cm, size_z_cm: ranges of the box sizes, cm (> 0).
+        size_x_cm, size_y_cm, size_z_cm: ranges of the box sizes, cm.
+        Each end of each range is within its quantity's bounds (:mod:`deformctl.quantities`, the
+        catalog's: a catalog written here is one every command reads).
         id_prefix: prefix of the object ids; ids are ``prefix`` + zero-padded index.
 
     Returns:
@@ -126,15 +121,15 @@ def make_population(
         UsageError: ``n`` < 1, or a range that is empty, reversed, non-finite or out of bounds.
     """
     n = check_population_size(n)
-    w = _check_range("weight_n", weight_n, low_bound=0.0, strict=True)
-    d = _check_range("deformability_n_per_cm", deformability_n_per_cm, low_bound=0.0, strict=True)
-    lam = _check_range("damping_ns_per_cm", damping_ns_per_cm, low_bound=0.0, strict=False)
+    w = WEIGHT_N.check_range(weight_n)
+    d = STIFFNESS_N_PER_CM.check_range(deformability_n_per_cm)
+    lam = DAMPING_NS_PER_CM.check_range(damping_ns_per_cm)
     if isinstance(friction_mu, tuple | list):
-        mu: Range = _check_range("friction_mu", friction_mu, low_bound=0.0, strict=True)
+        mu: Range = FRICTION_MU.check_range(friction_mu)
     else:
-        mu = _check_range("friction_mu", (friction_mu, friction_mu), low_bound=0.0, strict=True)
+        mu = FRICTION_MU.check_range((friction_mu, friction_mu))
     sizes = [
-        _check_range(name, rng_, low_bound=0.0, strict=True)
+        SIZE_CM.check_range(rng_, label=name)
         for name, rng_ in zip(SIZE_COLUMNS, (size_x_cm, size_y_cm, size_z_cm), strict=True)
     ]
 

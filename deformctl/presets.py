@@ -249,3 +249,64 @@ def sim_preset(name: str = DEFAULT_PRESET) -> SimPreset:
         UsageError: an unknown name (exit 2).
     """
     return paper_preset() if check_preset_name(name) == "paper" else table_preset()
+
+
+@dataclass(frozen=True)
+class SimOptions:
+    """The simulator options of ``measure --sim`` and ``lift --sim``: a preset and the single
+    values that override it (None: the preset's).
+
+    Built, it is checked at once: the preset's name here, every value by the simulator's own
+    settings types (:class:`~deformctl.sim.SimSettings`, :class:`~deformctl.sim.LiftProfile`,
+    :class:`~deformctl.sim.SlipCriterion`), which :meth:`preset` builds (so the simulator is
+    imported when one is built). :meth:`as_dict` is what was asked for; the rows and logs record
+    the preset :meth:`preset` returns (``NAME+overrides`` when a value changed it).
+
+    Attributes:
+        preset_name: ``paper`` (the default) or ``table`` (``--sim-preset``).
+        alpha_cm, dt_s, memory_budget_gib: the object model's lattice spacing, time step and
+            memory budget (``--alpha-cm``, ``--dt-s``, ``--memory-budget-gib``).
+        lift_accel_m_s2, lift_speed_m_s, lift_height_m, lift_hold_s: the lift profile
+            (``lift --lift-accel-m-s2`` ...).
+        slip_tolerance_m, slip_criterion: the slip judgement (``lift --slip-tolerance-m``,
+            ``--slip-criterion``).
+
+    Raises:
+        UsageError: an unknown preset, or a value the simulator refuses (exit 2).
+    """
+
+    preset_name: str = DEFAULT_PRESET
+    alpha_cm: float | None = None
+    dt_s: float | None = None
+    memory_budget_gib: float | None = None
+    lift_accel_m_s2: float | None = None
+    lift_speed_m_s: float | None = None
+    lift_height_m: float | None = None
+    lift_hold_s: float | None = None
+    slip_tolerance_m: float | None = None
+    slip_criterion: str | None = None
+
+    def __post_init__(self) -> None:
+        check_preset_name(self.preset_name)
+        self.preset()  # the simulator's settings types check every value
+
+    def preset(self) -> SimPreset:
+        """The preset with the values given (:meth:`SimPreset.replace`)."""
+        return sim_preset(self.preset_name).replace(
+            settings={
+                "alpha_cm": self.alpha_cm,
+                "dt_s": self.dt_s,
+                "memory_budget_gib": self.memory_budget_gib,
+            },
+            profile={
+                "accel_m_s2": self.lift_accel_m_s2,
+                "speed_m_s": self.lift_speed_m_s,
+                "height_m": self.lift_height_m,
+                "hold_s": self.lift_hold_s,
+            },
+            criterion={"tolerance_m": self.slip_tolerance_m, "measure": self.slip_criterion},
+        )
+
+    def as_dict(self) -> dict[str, Any]:
+        """The options as given (None: the preset's value)."""
+        return dataclasses.asdict(self)

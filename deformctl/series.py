@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from deformctl.reprs import short_repr
+
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from deformctl.scene import SceneFrames
 
@@ -57,6 +59,8 @@ class SqueezeSeries:
             ``time_s``), when the simulator recorded one; a squeeze log writes it on ``/scene``
             and ``/palms``.
     """
+
+    __repr__ = short_repr
 
     object_id: str
     squeeze_index: int
@@ -97,6 +101,8 @@ class LiftAttemptSeries:
         normal_force_n: normal force of each palm (force felt), N, ``[n]``.
     """
 
+    __repr__ = short_repr
+
     time_s: FloatArray
     palm_z_m: FloatArray
     object_com_z_m: FloatArray
@@ -133,6 +139,8 @@ class TrialOutcome:
             and ``/palms``.
     """
 
+    __repr__ = short_repr
+
     grip_force_n: float
     lifted: bool
     slip_m: float
@@ -152,6 +160,8 @@ class LiftAttempt:
         outcome: what the attempt found (``outcome.series`` is the attempt's time series, when
             recorded; ``outcome.details`` must be JSON-serialisable).
     """
+
+    __repr__ = short_repr
 
     object_id: str
     attempt_index: int

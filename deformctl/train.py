@@ -79,6 +79,7 @@ from deformctl.model import (
     TargetMode,
     make_model,
 )
+from deformctl.reprs import short_repr
 from deformctl.table import (
     format_ids,
     refuse_impossible_rows,
@@ -129,6 +130,8 @@ def regression_metrics(y_true: np.ndarray, y_pred: np.ndarray) -> dict[str, floa
 class Split:
     """The train/calibration/test split, as object ids in the order the permutation drew them."""
 
+    __repr__ = short_repr
+
     train: tuple[str, ...]
     test: tuple[str, ...]
     calibration: tuple[str, ...] = ()
@@ -155,6 +158,8 @@ class TrainResult:
         calibration_scores: the relative scores ``(L_f - pred) / pred`` of the calibration rows
             (:mod:`deformctl.grip.conformal`), empty without calibration rows.
     """
+
+    __repr__ = short_repr
 
     model: ScaledTargetRegressor | GripForceRegressor
     metrics: dict[str, Any]
@@ -582,6 +587,8 @@ class Prediction:
             ``predicted_lift_force_n`` (N) and ``outside_training_range`` (bool).
         warnings: one line per input row outside the training range, naming the feature(s).
     """
+
+    __repr__ = short_repr
 
     frame: pd.DataFrame
     warnings: list[str]

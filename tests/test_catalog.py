@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Any
 
 import pytest
 
@@ -11,20 +12,9 @@ from deformctl.catalog import CatalogObject, rigid_grip_force_n
 from deformctl.errors import InputDataError
 from deformctl.units import GRAVITY_M_S2
 
-ROW = {
-    "object_id": "sponge",
-    "size_x_cm": 17.8,
-    "size_y_cm": 19.1,
-    "size_z_cm": 9.2,
-    "weight_n": 0.7,
-    "friction_mu": 0.5,
-    "material_stiffness_n_per_cm": 49.18,
-    "material_damping_ns_per_cm": 6.47,
-}
 
-
-def test_from_catalog_row_reads_every_column() -> None:
-    spec = CatalogObject.from_row(ROW).to_sim_spec()
+def test_from_catalog_row_reads_every_column(sponge_row: dict[str, Any]) -> None:
+    spec = CatalogObject.from_row(sponge_row).to_sim_spec()
     assert spec.size_cm == (17.8, 19.1, 9.2)
     assert spec.stiffness_n_per_m == pytest.approx(4918.0)
     assert spec.damping_ns_per_m == pytest.approx(647.0)
@@ -36,30 +26,34 @@ def test_from_catalog_row_reads_every_column() -> None:
     [
         ("material_stiffness_n_per_cm", math.nan, "material_stiffness_n_per_cm is missing"),
         ("material_damping_ns_per_cm", None, "material_damping_ns_per_cm is not a number"),
-        ("friction_mu", 0.0, r"friction_mu = 0 is outside its physical bounds \[0.01, 10\]"),
+        ("friction_mu", 0.0, r"friction_mu = 0 is outside its physical bounds \(0, 3\]"),
         ("friction_mu", -0.3, "friction_mu = -0.3 is outside its physical bounds"),
         ("weight_n", 0.0, "weight_n = 0 is outside its physical bounds"),
     ],
 )
-def test_bad_rows_raise_one_line_input_errors(column: str, value: object, message: str) -> None:
-    row = dict(ROW, **{column: value})
+def test_bad_rows_raise_one_line_input_errors(
+    column: str, value: object, message: str, sponge_row: dict[str, Any]
+) -> None:
+    row = dict(sponge_row, **{column: value})
     with pytest.raises(InputDataError, match=message) as err:
         CatalogObject.from_row(row).to_sim_spec()
     assert "\n" not in str(err.value)
 
 
-def test_missing_column_is_named() -> None:
-    row = {k: v for k, v in ROW.items() if k != "material_damping_ns_per_cm"}
+def test_missing_column_is_named(sponge_row: dict[str, Any]) -> None:
+    row = {k: v for k, v in sponge_row.items() if k != "material_damping_ns_per_cm"}
     with pytest.raises(InputDataError, match="missing column 'material_damping_ns_per_cm'"):
         CatalogObject.from_row(row).to_sim_spec()
 
 
-def test_a_row_is_parsed_once_into_typed_values_and_kept_as_read() -> None:
-    obj = CatalogObject.from_row({**ROW, "name": "sponge", "weight_n": "0.7"})
+def test_a_row_is_parsed_once_into_typed_values_and_kept_as_read(
+    sponge_row: dict[str, Any],
+) -> None:
+    obj = CatalogObject.from_row({**sponge_row, "name": "sponge", "weight_n": "0.7"})
     assert (obj.object_id, obj.weight_n, obj.size_cm) == ("sponge", 0.7, (17.8, 19.1, 9.2))
     assert obj["name"] == "sponge"  # extra columns stay readable
     assert obj.f_w_n() == pytest.approx(rigid_grip_force_n(0.7, 0.5)) == pytest.approx(0.7)
-    real = CatalogObject.from_row({**ROW, "material_stiffness_n_per_cm": math.nan,
+    real = CatalogObject.from_row({**sponge_row, "material_stiffness_n_per_cm": math.nan,
                                    "material_damping_ns_per_cm": math.nan})  # fmt: skip
     assert not real.has_material
     assert real.record()["material_stiffness_n_per_cm"] is None
@@ -76,15 +70,18 @@ def test_a_row_is_parsed_once_into_typed_values_and_kept_as_read() -> None:
     ],
 )
 def test_parse_errors_name_the_object_and_the_column(
-    change: dict[str, object], message: str
+    change: dict[str, object], message: str, sponge_row: dict[str, Any]
 ) -> None:
     with pytest.raises(InputDataError, match=message):
-        CatalogObject.from_row({**ROW, **change})
+        CatalogObject.from_row({**sponge_row, **change})
 
 
-def test_lifting_needs_positive_friction() -> None:
+def test_lifting_needs_positive_friction(sponge_row: dict[str, Any]) -> None:
     with pytest.raises(InputDataError, match="friction_mu = 0 is outside its physical bounds"):
-        CatalogObject.from_row({**ROW, "friction_mu": 0.0})  # F_w = W / (2 mu) would be infinite
-    obj = dataclasses.replace(CatalogObject.from_row(ROW), friction_mu=0.0)
-    with pytest.raises(InputDataError, match=r"friction_mu must be > 0 to lift it \(F_w = W"):
+        CatalogObject.from_row(
+            {**sponge_row, "friction_mu": 0.0}
+        )  # F_w = W / (2 mu) would be infinite
+    obj = dataclasses.replace(CatalogObject.from_row(sponge_row), friction_mu=0.0)
+    outside = "object 'sponge': friction_mu = 0 is outside its physical bounds"
+    with pytest.raises(InputDataError, match=outside):
         obj.f_w_n()

@@ -177,6 +177,12 @@ def test_recovery_errors_are_reported(
         print("\n".join(lines))
     for key, value in worst.items():
         record_property(f"worst_abs_error_{key}", round(value, 5))  # type: ignore[operator]
+    # the report states what the recovery tests hold: one row per grid cell, the least-squares
+    # fit within the tolerances everywhere, and the paper's ratio worse than it in D
+    assert len(lines) == len(grid) + 2
+    assert worst["lsq_d"] <= 100 * D_RTOL
+    assert worst["lsq_l"] <= max(LAMBDA_RTOL * max(LAMBDA_GRID_NS_PER_CM), LAMBDA_ATOL_NS_PER_CM)
+    assert worst["paper_d"] > worst["lsq_d"]
 
 
 def test_paper_method_is_right_when_creep_is_fast_and_biased_when_slow(grid: list) -> None:  # type: ignore[type-arg]
@@ -292,7 +298,7 @@ def test_bad_squeezes_raise_one_line_input_errors(make, match, fit) -> None:  # 
 
 
 def test_unknown_method_and_mixed_objects() -> None:
-    with pytest.raises(UsageError, match="unknown method 'best'"):
+    with pytest.raises(UsageError, match="--method must be lsq or paper, got 'best'"):
         characterize({"a": [_good()]}, method="best")  # type: ignore[arg-type]
     other = _replace(_good(), object_id="other")
     with pytest.raises(InputDataError, match="several objects"):

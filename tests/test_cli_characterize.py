@@ -159,7 +159,7 @@ def test_no_compression(tmp_path: Path) -> None:
     ("extra", "code", "match"),
     [
         (["--method", "ols"], EXIT_USAGE, "--method must be lsq or paper, got 'ols'"),
-        (["--window-s", "0"], EXIT_USAGE, "window must be a finite number > 0 s, got 0.0"),
+        (["--window-s", "0"], EXIT_USAGE, "--window-s must be a finite number > 0 s, got 0"),
     ],
     ids=["method", "window"],
 )

@@ -283,7 +283,7 @@ def test_missing_image_and_existing_output(image_dir: Path, tmp_path: Path) -> N
         (["--checkerboard", "7by5", "--square-size-cm", 2], None),
         (["--color-range", "100,50,50"], "--color-range: expected H,S,V:H,S,V"),
         (["--force", "--append"], "--append and --force cannot be used together"),
-        (["--marker-size-cm", -1], "--marker-size-cm must be a number > 0"),
+        (["--marker-size-cm", -1], "--marker-size-cm must be a finite number > 0 cm, got -1"),
     ],
 )
 def test_usage_errors(extra: list[object], message: str | None, tmp_path: Path) -> None:

@@ -200,7 +200,7 @@ def test_a_model_for_another_feature_set_is_refused(
         (["--start-model", "MODEL", "--protocol", "paper"], 2,
          "error: --start-model bisects to --tolerance as refine does; drop --protocol paper"),
         (["--start-table", "INDEX", "--start-interpolate", "0"], 2,
-         "error: --start-interpolate must be >= 1, got 0"),
+         "error: --start-interpolate must be an integer >= 1, got 0"),
         (["--start-model", "nope.skops"], 66, "error: nope.skops: model file not found"),
         (["--start-model", "MODEL"], 65,
          "error: {catalog}: object 'sponge': no D and λ to predict its start from (the catalog "

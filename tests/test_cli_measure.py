@@ -342,7 +342,7 @@ def test_missing_input(tmp_path: Path, source: str) -> None:
         (lambda a: [*a, "--csv", "x.csv"], "several sources (--bag, --csv)"),
         (lambda a: [*a, "--columns", "time=t"], "--columns cannot be used with --bag"),
         (lambda a: [x for x in a if x != POSE and x != "--position-topic"], "--position-topic"),
-        (lambda a: [*a[:-2], "--weight-n", "0", *a[-2:]], "weight must be a finite number > 0"),
+        (lambda a: [*a[:-2], "--weight-n", "0", *a[-2:]], "--weight-n must be a number in [0.001"),
         (lambda a: [x for x in a if x not in ("--object-id", "sand")], "needs --object-id"),
         (lambda a: [*a, "--axis", "w"], "axis must be x, y or z"),
     ],

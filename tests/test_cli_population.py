@@ -109,7 +109,7 @@ def test_bad_range_is_usage_error_and_writes_nothing(tmp_path: Path) -> None:
     assert result.exit_code == 2
     assert result.stderr.count("\n") == 1
     assert result.stderr.startswith("error: ")
-    assert "weight_n" in result.stderr
+    assert "--weight-n" in result.stderr
     assert not out.exists()
     result = runner.invoke(app, ["population", "--damping-ns-per-cm", "a,b", "-o", str(out)])
     assert result.exit_code == 2

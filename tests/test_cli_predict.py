@@ -173,7 +173,7 @@ def test_out_of_range_warning(setup: dict[str, Path]) -> None:
         (["--weight-n", "40", "--deformability-n-per-cm", "40", "--damping-ns-per-cm", "5",
           "--catalog", "objects.csv"], "--catalog joins weights to a COEFFICIENTS table"),
         (["--weight-n", "nan", "--deformability-n-per-cm", "40", "--damping-ns-per-cm", "5"],
-         "--weight-n must be a finite number"),
+         "--weight-n must be a number in [0.001, 5000] N, got nan"),
     ],
 )  # fmt: skip
 def test_usage_errors(

@@ -145,10 +145,20 @@ def test_catalog_tables(column: str, value: Any) -> None:
     from deformctl.artifacts.schema import validate_frame
 
     frame = pd.DataFrame([{**ROW, column: value}])
+    low, high = BOUNDS[column]
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    inside = number and math.isfinite(float(value)) and low <= float(value) <= high
+    # an optional column (the material values) may be empty: NaN is "not known"
+    optional = not next(c.required for c in load_table_spec("catalog").columns if c.name == column)
+    missing = optional and number and math.isnan(float(value))
+    refused: DeformctlError | None = None
     try:
         validate_frame(frame, "catalog", path="cat.csv")
     except DeformctlError as err:
         _refused(err, 65, column)
+        refused = err
+    # refused exactly when the value is outside its bounds (and not an empty optional cell)
+    assert (refused is None) == (inside or missing), (column, value, str(refused))
 
 
 # --- deep and huge JSON ----------------------------------------------------------------------
@@ -203,21 +213,30 @@ SQUEEZE_FIELDS = ["time_s", "force_n", "compression_m", "commanded_force_n", "pa
 LIFT_FIELDS = ["time_s", "palm_z_m", "object_com_z_m", "slip_m", "friction_force_n"]
 
 
-def _log(kind: str, schema: str, topic: str, messages: list[bytes], objects: str | None) -> bytes:
+def _log(
+    kind: str,
+    schema: str,
+    topic: str,
+    messages: list[bytes],
+    objects: str | None,
+    *more: tuple[str, str, list[bytes]],
+) -> bytes:
+    """A log of ``kind`` with ``messages`` on ``topic`` (and ``more`` (schema, topic, messages))."""
     buffer = io.BytesIO()
     w = Writer(buffer, enable_data_crcs=True)
     w.start()
     w.add_metadata("deformctl", {"kind": kind, "format_version": "1"})
     if objects is not None:
         w.add_metadata("object", {"object_id": '"A"', "weight_n": objects})
-    sid = w.register_schema(
-        f"deformctl.{''.join(p.title() for p in schema.split('_'))}",
-        "jsonschema",
-        json_schema_bytes(schema),
-    )
-    cid = w.register_channel(topic, "json", sid)
-    for i, m in enumerate(messages):
-        w.add_message(cid, i, m, i)
+    for name, channel, payloads in ((schema, topic, messages), *more):
+        sid = w.register_schema(
+            f"deformctl.{''.join(p.title() for p in name.split('_'))}",
+            "jsonschema",
+            json_schema_bytes(name),
+        )
+        cid = w.register_channel(channel, "json", sid)
+        for i, m in enumerate(payloads):
+            w.add_message(cid, i, m, i)
     w.finish()
     return buffer.getvalue()
 
@@ -261,11 +280,46 @@ def test_squeeze_log_samples(data: st.DataObject, objects: str | None) -> None:
 def test_lift_log_samples(data: st.DataObject) -> None:
     base = {"object_id": "A", "attempt_index": 0, "grip_force_n": 1.0, "normal_force_n": 1.0}
     messages = _samples(base, LIFT_FIELDS, data)
-    raw = _log("lift_log", "lift_attempt_sample", "/lift/attempt_sample", messages, None)
+    result = {**{k: base[k] for k in ("object_id", "attempt_index", "grip_force_n")}}
+    result |= {"lifted": True, "slip_m": 0.0, "details": {}}
+    raw = _log(
+        "lift_log", "lift_attempt_sample", "/lift/attempt_sample", messages, None,
+        ("lift_attempt_result", "/lift/attempt_result", [json.dumps(result).encode()]),
+    )  # fmt: skip
     try:
-        lift_attempts_from_contents(load_mcap(raw, "l.mcap"))
+        attempts = lift_attempts_from_contents(load_mcap(raw, "l.mcap"))
     except DeformctlError as err:
-        _refused(err, 65)
+        _refused(err, 65, "l.mcap: ")
+        return
+    # accepted: the attempt's samples were read back, every one finite, time increasing
+    (attempt,) = attempts
+    series = attempt.outcome.series
+    assert series is not None
+    assert len(series) == len(messages)
+    assert np.all(np.diff(series.time_s) > 0)
+    for field in LIFT_FIELDS[1:]:
+        assert np.all(np.isfinite(getattr(series, field))), field
+
+
+def test_a_clean_lift_log_is_read_back() -> None:
+    """The anchor of the fuzzed lift logs: without edits, every sample comes back as written."""
+    base = {"object_id": "A", "attempt_index": 0, "grip_force_n": 1.0, "normal_force_n": 1.0}
+    messages = [
+        json.dumps({**base, "time_s": 0.01 * i, **dict.fromkeys(LIFT_FIELDS[1:], 0.001 * i)})
+        for i in range(5)
+    ]
+    result = {**base, "lifted": False, "slip_m": 0.02, "details": {}}
+    del result["normal_force_n"]
+    raw = _log(
+        "lift_log", "lift_attempt_sample", "/lift/attempt_sample",
+        [m.encode() for m in messages], None,
+        ("lift_attempt_result", "/lift/attempt_result", [json.dumps(result).encode()]),
+    )  # fmt: skip
+    (attempt,) = lift_attempts_from_contents(load_mcap(raw, "l.mcap"))
+    assert attempt.outcome.lifted is False
+    assert attempt.outcome.slip_m == 0.02
+    assert attempt.outcome.series is not None
+    np.testing.assert_allclose(attempt.outcome.series.slip_m, 0.001 * np.arange(5))
 
 
 # --- numeric extremes in Parquet tables ------------------------------------------------------
@@ -392,10 +446,22 @@ def test_ros2_bags(bag_bytes: bytes, data: st.DataObject) -> None:
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "bag.mcap"
         path.write_bytes(out.getvalue())
+        untouched = mode == "none" and schema_edit in (None, WRENCH_STAMPED)
         try:
-            read_ros2_bag(path, wrench_topics=[LEFT], position_topic=POSE, object_id="x")
+            rec = read_ros2_bag(path, wrench_topics=[LEFT], position_topic=POSE, object_id="x")
         except DeformctlError as err:
             _refused(err, 2, 65)
+            rec = None
+    assert rec is not None or not untouched  # the bag as written is read
+    if rec is None:
+        return
+    # accepted: a squeeze with finite, plausible samples
+    assert rec.squeezes
+    for sq in rec.squeezes:
+        assert np.all(np.isfinite(sq.force_n))
+        assert np.all(np.isfinite(sq.compression_m))
+        assert np.all(np.diff(sq.time_s) > 0)
+        assert float(np.max(sq.force_n)) > 0
 
 
 # --- structurally wrong models ---------------------------------------------------------------

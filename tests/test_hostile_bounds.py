@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 from typer.testing import CliRunner
@@ -14,23 +15,6 @@ from deformctl.errors import InputDataError, UsageError
 
 runner = CliRunner()
 SCHEMAS = Path(__file__).parents[1] / "schemas"
-ROW = {
-    "object_id": "A",
-    "size_x_cm": 10.0,
-    "size_y_cm": 10.0,
-    "size_z_cm": 10.0,
-    "weight_n": 1.0,
-    "friction_mu": 0.5,
-    "material_stiffness_n_per_cm": 10.0,
-    "material_damping_ns_per_cm": 1.0,
-}
-
-
-def _csv(path: Path, rows: list[dict[str, object]]) -> Path:
-    header = list(ROW)
-    lines = [",".join(header)] + [",".join(str(r[c]) for c in header) for r in rows]
-    path.write_text("\n".join(lines) + "\n")
-    return path
 
 
 def _one_line(stderr: str) -> str:
@@ -41,8 +25,16 @@ def _one_line(stderr: str) -> str:
 
 def test_the_catalog_spec_states_the_catalog_bounds() -> None:
     spec = json.loads((SCHEMAS / "catalog.columns.json").read_text())
-    stated = {c["name"]: (c["minimum"], c["maximum"]) for c in spec["columns"] if "maximum" in c}
+    stated = {
+        c["name"]: (c.get("minimum", c.get("exclusive_minimum")), c["maximum"])
+        for c in spec["columns"]
+        if "maximum" in c
+    }
     assert stated == BOUNDS
+    # μ's 0 is excluded (quantities.FRICTION_MU: 0 < μ <= 3), as the spec says
+    mu = next(c for c in spec["columns"] if c["name"] == "friction_mu")
+    assert "minimum" not in mu
+    assert mu["exclusive_minimum"] == 0.0
 
 
 EXTREMES = [
@@ -54,33 +46,37 @@ EXTREMES = [
 
 @pytest.mark.parametrize(("column", "value"), EXTREMES)
 def test_out_of_bounds_rows_are_refused_by_every_reader(
-    column: str, value: float, tmp_path: Path
+    column: str, value: float, tmp_path: Path, catalog_row: dict[str, Any], write_catalog: Any
 ) -> None:
     low, high = BOUNDS[column]
     if low <= value <= high:
         pytest.skip("inside the bounds")
-    path = _csv(tmp_path / "cat.csv", [{**ROW, column: value}])
+    path = write_catalog(tmp_path / "cat.csv", [{**catalog_row, column: value}])
     result = runner.invoke(app, ["inspect", str(path)])
     assert result.exit_code == 65
     assert column in _one_line(result.stderr)
     with pytest.raises(InputDataError, match="physical bounds"):
-        CatalogObject.from_row({**ROW, column: value}).to_sim_spec()
+        CatalogObject.from_row({**catalog_row, column: value}).to_sim_spec()
 
 
-def test_sim_settings_refuse_a_tiny_time_step(tmp_path: Path) -> None:
+def test_sim_settings_refuse_a_tiny_time_step(
+    tmp_path: Path, catalog_row: dict[str, Any], write_catalog: Any
+) -> None:
     from deformctl.sim import SimSettings
 
     with pytest.raises(UsageError, match="dt_s"):
         SimSettings(dt_s=1e-12)
-    cat = _csv(tmp_path / "cat.csv", [ROW])
+    cat = write_catalog(tmp_path / "cat.csv", [catalog_row])
     result = runner.invoke(app, ["measure", str(cat), "--sim", "--dt-s", "1e-12", "-o", "x.mcap"])
     assert result.exit_code == 2
     assert "dt_s" in _one_line(result.stderr)
 
 
 @pytest.mark.parametrize("ramp", ["0", "-1", "nan"])
-def test_a_squeeze_needs_a_force_ramp(ramp: str, tmp_path: Path) -> None:
-    cat = _csv(tmp_path / "cat.csv", [ROW])
+def test_a_squeeze_needs_a_force_ramp(
+    ramp: str, tmp_path: Path, catalog_row: dict[str, Any], write_catalog: Any
+) -> None:
+    cat = write_catalog(tmp_path / "cat.csv", [catalog_row])
     out = tmp_path / "x.mcap"
     result = runner.invoke(app, ["measure", str(cat), "--sim", "--ramp-s", ramp, "-o", str(out)])
     assert result.exit_code == 2
@@ -88,17 +84,19 @@ def test_a_squeeze_needs_a_force_ramp(ramp: str, tmp_path: Path) -> None:
     assert not out.exists()
 
 
-def test_steps_are_counted_before_they_are_allocated() -> None:
+def test_steps_are_counted_before_they_are_allocated(catalog_row: dict[str, Any]) -> None:
     from deformctl.sim import SimSettings, squeeze
 
-    spec = CatalogObject.from_row(ROW).to_sim_spec()
+    spec = CatalogObject.from_row(catalog_row).to_sim_spec()
     with pytest.raises(UsageError, match=r"steps .* --memory-budget-gib"):
         squeeze(spec, peak_force_n=1.0, ramp_s=0.1, hold_s=1e6, settings=SimSettings(dt_s=1e-5))
 
 
-def test_a_huge_single_log_is_refused_before_simulating(tmp_path: Path) -> None:
-    rows = [{**ROW, "object_id": f"o{i}"} for i in range(100_000)]
-    cat = _csv(tmp_path / "big.csv", rows)
+def test_a_huge_single_log_is_refused_before_simulating(
+    tmp_path: Path, catalog_row: dict[str, Any], write_catalog: Any
+) -> None:
+    rows = [{**catalog_row, "object_id": f"o{i}"} for i in range(100_000)]
+    cat = write_catalog(tmp_path / "big.csv", rows)
     out = tmp_path / "x.mcap"
     result = runner.invoke(app, ["measure", str(cat), "--sim", "-o", str(out)])
     assert result.exit_code == 2
@@ -133,9 +131,9 @@ def test_a_huge_network_is_refused_before_training(tmp_path: Path) -> None:
 )
 @pytest.mark.parametrize("output", ["l.parquet", "d/"])
 def test_lift_steps_are_budgeted_before_any_attempt(
-    args: list[str], output: str, tmp_path: Path
+    args: list[str], output: str, tmp_path: Path, catalog_row: dict[str, Any], write_catalog: Any
 ) -> None:
-    cat = _csv(tmp_path / "cat.csv", [ROW])
+    cat = write_catalog(tmp_path / "cat.csv", [catalog_row])
     out = tmp_path / output
     result = runner.invoke(app, ["lift", str(cat), "--sim", *args, "-o", str(out)])
     assert result.exit_code == 2, result.stderr
@@ -146,8 +144,10 @@ def test_lift_steps_are_budgeted_before_any_attempt(
 
 
 @pytest.mark.parametrize("output", ["x.mcap", "d/"])
-def test_squeeze_steps_are_budgeted_before_simulating(output: str, tmp_path: Path) -> None:
-    cat = _csv(tmp_path / "cat.csv", [ROW])
+def test_squeeze_steps_are_budgeted_before_simulating(
+    output: str, tmp_path: Path, catalog_row: dict[str, Any], write_catalog: Any
+) -> None:
+    cat = write_catalog(tmp_path / "cat.csv", [catalog_row])
     out = tmp_path / output
     argv = ["measure", str(cat), "--sim", "--ramp-s", "1e308", "--hold-s", "1e308"]
     result = runner.invoke(app, [*argv, "-o", str(out)])
@@ -156,14 +156,16 @@ def test_squeeze_steps_are_budgeted_before_simulating(output: str, tmp_path: Pat
     assert not out.exists()
 
 
-def test_out_of_memory_is_one_line(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_out_of_memory_is_one_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, catalog_row: dict[str, Any], write_catalog: Any
+) -> None:
     from deformctl.measure import stage
 
     def boom(*args: object, **kwargs: object) -> None:
         raise MemoryError("Unable to allocate 22.8 TiB")
 
     monkeypatch.setattr(stage, "simulate_squeezes", boom)
-    cat = _csv(tmp_path / "cat.csv", [ROW])
+    cat = write_catalog(tmp_path / "cat.csv", [catalog_row])
     out = tmp_path / "x.mcap"
     argv = ["measure", str(cat), "--sim", "--memory-budget-gib", "1e9", "-o", str(out)]
     result = runner.invoke(app, argv)

@@ -21,7 +21,8 @@ ROOT = "deformctl"
 
 #: The layers, top to bottom: each entry is a top-level module or package of ``deformctl/``.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("__main__", "cli"),
+    # the package's face (its library calls, imported when used) and the command
+    ("__init__", "__main__", "cli"),
     ("repro", "golden"),
     # the stages, each one module or package (they may import each other, never in a cycle)
     (
@@ -40,7 +41,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("model", "grip", "catalog", "presets"),
     ("sim",),
     (
-        "__init__",
+        "version",
         "errors",
         "units",
         "series",
@@ -50,6 +51,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "plausibility",
         "jsonsafe",
         "resources",
+        "quantities",
+        "reprs",
         "blas",
     ),
 )

@@ -25,6 +25,7 @@ from deformctl.lift import (
     find_min_lift_force,
     find_min_lift_force_seeded,
 )
+from deformctl.lift.options import SearchOptions
 from deformctl.lift.seeded import StartSeed, object_features
 from deformctl.lift.stage import RunnerFactory, lift_catalog
 
@@ -146,8 +147,8 @@ def test_out_of_attempts() -> None:
 @pytest.mark.parametrize(
     ("kw", "message"),
     [
-        ({"margin": 0.9}, "start margin must be a finite number >= 1"),
-        ({"margin": math.inf}, "start margin"),
+        ({"margin": 0.9}, "--start-margin must be a finite number >= 1"),
+        ({"margin": math.inf}, "--start-margin must be"),
         ({"predicted_lift_force_n": math.nan}, "predicted lifting force must be"),
         ({"predicted_lift_force_n": -1.0}, "predicted lifting force must be"),
         ({"growth": 1.0}, "growth"),
@@ -249,8 +250,8 @@ def test_stage_refuses_a_seeded_paper_protocol() -> None:
     factory, _ = _threshold_factory({"A": 17.0})
     seed = StartSeed.from_index_table(INDEX)
     with pytest.raises(UsageError, match="protocol 'paper' cannot start from a prediction"):
-        lift_catalog(_objects({"object_id": "A", "weight_n": 10.0}), factory, protocol="paper",
-                     seed=seed)  # fmt: skip
+        lift_catalog(_objects({"object_id": "A", "weight_n": 10.0}), factory,
+                     search=SearchOptions(protocol="paper"), seed=seed)  # fmt: skip
 
 
 def test_features_come_from_coefficients_then_the_catalog_then_material() -> None:

@@ -457,7 +457,9 @@ def test_csv_conflicting_units(tmp_path: Path) -> None:
 
 def test_csv_bad_columns_mapping_and_missing_file(tmp_path: Path) -> None:
     with pytest.raises(MissingInputError):
-        squeeze_from_csv(tmp_path / "no.csv", columns={}, object_id="x")
+        squeeze_from_csv(
+            tmp_path / "no.csv", columns={"time": "t", "force": "f", "gap": "g"}, object_id="x"
+        )
     path = tmp_path / "c.csv"
     _two_header_csv(path, ("s", "kN", "in"))
     with pytest.raises(UsageError, match="--columns maps position and gap: give one position"):

@@ -215,7 +215,7 @@ def test_preload_fit_recovers_d_that_zero_biases() -> None:
     assert math.isnan(zero.preload_n)
     assert fit.preload_n == pytest.approx(0.5, abs=0.01)
     assert fit.deformability_n_per_cm == pytest.approx(20.0, rel=0.01)
-    with pytest.raises(UsageError, match="preload must be 'fit' or 'zero'"):
+    with pytest.raises(UsageError, match="--preload must be fit or zero"):
         fit_lsq(squeezes, preload="auto")  # type: ignore[arg-type]
 
 

@@ -420,7 +420,7 @@ def test_friction_not_positive_under_sim(tmp_path: Path, command: str) -> None:
     res = run(command, catalog, "--sim", "-o", tmp_path / "out.file")
     assert res.exit_code == EXIT_DATAERR
     line = one_line_error(res)
-    assert line.startswith(f"error: {catalog}: field 'friction_mu': object 'slick': must be >=")
+    assert line.startswith(f"error: {catalog}: field 'friction_mu': object 'slick': must be > 0")
     assert listing(tmp_path) == ["objects.csv"]
 
 
@@ -438,9 +438,9 @@ def test_friction_not_positive_under_sim(tmp_path: Path, command: str) -> None:
         (["measure", "--sim"], "--sim needs a CATALOG argument"),
         (["measure", "{cat}", "--sim", "--csv", "x.csv"], "several sources (--csv, --sim)"),
         (["measure", "{cat}", "--sim", "--strain", "0.6"], "strain must be in (0, 0.5)"),
-        (["measure", "{cat}", "--sim", "--peak-force-n", "-1"], "peak force must be a finite"),
+        (["measure", "{cat}", "--sim", "--peak-force-n", "-1"], "--peak-force-n must be a finite"),
         (["measure", "{cat}", "--sim", "--peak-force-n", "1", "--strain", "0.01"], "not both"),
-        (["measure", "{cat}", "--sim", "--squeezes", "0"], "--squeezes must be >= 1"),
+        (["measure", "{cat}", "--sim", "--squeezes", "0"], "--squeezes must be an integer >= 1"),
         (["measure", "{cat}", "--sim", "--objects", "A,Z"], "unknown object id 'Z'"),
     ],
 )  # fmt: skip

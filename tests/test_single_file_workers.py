@@ -23,7 +23,7 @@ from deformctl.errors import (
 )
 from deformctl.lift.runners.sim import sim_runner_factory
 from deformctl.lift.stage import lift_catalog_files
-from deformctl.measure import SimulateCatalogTask, simulate_catalog_file
+from deformctl.measure import SimulateCatalogTask, SqueezeProtocol, simulate_catalog_file
 from deformctl.parallel import MIN_PARALLEL_OBJECTS, map_in_order, single_file_workers
 from deformctl.presets import sim_preset
 
@@ -43,11 +43,12 @@ def _catalog(tmp_path: Path, n: int = 4) -> Path:
 
 def _fast_task() -> SimulateCatalogTask:
     preset = sim_preset().replace(settings={"alpha_cm": 5.0, "dt_s": 0.002})
-    simulate = {
-        "squeezes": 2, "peak_force_n": None, "strain": 0.1, "ramp_s": 0.05, "hold_s": 0.1,
-        "gravity": True, "noise_force_n": 0.01, "noise_position_m": 0.0,
-    }  # fmt: skip
-    return SimulateCatalogTask(simulate, preset.settings, 7, preset.name)
+    protocol = SqueezeProtocol(
+        squeezes=2, strain=0.1, ramp_s=0.05, hold_s=0.1, noise_force_n=0.01
+    )  # fmt: skip
+    return SimulateCatalogTask(
+        protocol=protocol, settings=preset.settings, seed=7, sim_preset=preset.name
+    )
 
 
 def test_measure_log_is_the_same_bytes_with_one_or_two_workers(tmp_path: Path) -> None:

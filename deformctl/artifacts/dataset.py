@@ -42,11 +42,12 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from deformctl import __version__, jsonsafe
+from deformctl import jsonsafe
 from deformctl.artifacts.io import atomic_output, atomic_write_bytes
 from deformctl.artifacts.schema import load_table_spec, validate_frame
 from deformctl.artifacts.tables import read_table, table_schema
 from deformctl.errors import InputDataError, MissingInputError, OutputExistsError, SchemaError
+from deformctl.version import __version__
 
 if TYPE_CHECKING:
     import pandas as pd

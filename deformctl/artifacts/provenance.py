@@ -18,9 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from deformctl import __version__, jsonsafe
+from deformctl import jsonsafe
 from deformctl.artifacts.io import PathArg, display_name, is_stdio
 from deformctl.errors import MissingInputError, SchemaError
+from deformctl.version import __version__
 
 TOOL = "deformctl"
 STDIN_HASH = "stdin"  #: recorded instead of a hash for an input read from ``-``

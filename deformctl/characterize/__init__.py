@@ -23,6 +23,8 @@ chosen by BIC with ``auto``; D is the secant stiffness at a stated operating for
   (rupture, the loading and unloading phases), used by ``measure`` too;
 * :mod:`~deformctl.characterize.models`: the exact Kelvin–Voigt response and synthetic squeezes
   with known D and λ (ground truth for tests and examples);
+* :mod:`~deformctl.characterize.options`: the options the command builds and the stage takes
+  (:class:`FitOptions`, :class:`QualityPolicy`), checked when built;
 * :mod:`~deformctl.characterize.stage`: the ``characterize`` stage over squeeze logs, dataset
   directories and sweeps.
 
@@ -31,7 +33,10 @@ The public names of the estimators, models and stage are re-exported here.
 
 from __future__ import annotations
 
-from deformctl.characterize.coefficients import COEFFICIENT_COLUMNS, CoefficientFit
+from deformctl.characterize.coefficients import (
+    COEFFICIENT_COLUMNS,
+    CoefficientFit,
+)
 from deformctl.characterize.fit import (
     COLLINEAR_COND,
     DEFAULT_MIN_COMPRESSION_FRAC,
@@ -39,10 +44,7 @@ from deformctl.characterize.fit import (
     DEFAULT_POLYORDER,
     DEFAULT_WINDOW_RATE_HZ,
     DEFAULT_WINDOW_S,
-    PRELOADS,
     UNIFORM_DT_RTOL,
-    Method,
-    Preload,
     characterize,
     damping_excitation,
     default_window_s,
@@ -63,6 +65,19 @@ from deformctl.characterize.models import (
     synthetic_kelvin_voigt_squeeze,
 )
 from deformctl.characterize.objectfit import ObjectFit, fit_object
+from deformctl.characterize.options import (
+    DEFAULT_FIT,
+    DEFAULT_POLICY,
+    METHODS,
+    PRELOADS,
+    FitOptions,
+    Method,
+    Preload,
+    QualityPolicy,
+    check_method,
+    check_paper_options,
+    check_preload,
+)
 from deformctl.characterize.prepare import (
     MIN_SAMPLES,
     NO_COMPRESSION_M,
@@ -91,12 +106,15 @@ from deformctl.characterize.synthetic import (
 __all__ = [
     "COEFFICIENT_COLUMNS",
     "COLLINEAR_COND",
+    "DEFAULT_FIT",
     "DEFAULT_MATERIALS",
     "DEFAULT_MIN_COMPRESSION_FRAC",
     "DEFAULT_MIN_RATE_FRAC",
+    "DEFAULT_POLICY",
     "DEFAULT_POLYORDER",
     "DEFAULT_WINDOW_RATE_HZ",
     "DEFAULT_WINDOW_S",
+    "METHODS",
     "MIN_SAMPLES",
     "MODELS",
     "MODEL_CHOICES",
@@ -107,18 +125,23 @@ __all__ = [
     "UNIFORM_DT_RTOL",
     "CharacterizeTask",
     "CoefficientFit",
+    "FitOptions",
     "LogCoefficients",
     "MaterialOptions",
     "Method",
     "ObjectFit",
     "Preload",
     "Profile",
+    "QualityPolicy",
     "characterize",
     "characterize_dir",
     "characterize_file",
     "characterize_items",
     "characterize_sweep",
     "check_at_force_n",
+    "check_method",
+    "check_paper_options",
+    "check_preload",
     "damping_excitation",
     "default_lag",
     "default_preload",

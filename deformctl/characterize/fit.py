@@ -61,20 +61,22 @@ import pandas as pd
 from deformctl.characterize.coefficients import CoefficientFit, _coefficient_frame
 from deformctl.characterize.laws import check_model
 from deformctl.characterize.objectfit import ObjectFit, fit_object
+from deformctl.characterize.options import (
+    Method,
+    Preload,
+    check_method,
+    check_paper_options,
+    check_preload,
+)
 from deformctl.characterize.prepare import _where, validate_squeeze
 from deformctl.characterize.quality import PAPER_MONOTONIC_FRAC
 from deformctl.characterize.rupture import Rupture, cut_rupture_smoothed
 from deformctl.characterize.stiffness import damping_excitation
 from deformctl.errors import InputDataError, UsageError
+from deformctl.quantities import WINDOW_S
 from deformctl.series import FloatArray, SqueezeSeries
 from deformctl.signals import sg_smooth, sg_window_length, uniform_grid
 from deformctl.units import N_PER_CM, NS_PER_CM
-
-Method = Literal["lsq", "paper"]
-
-
-Preload = Literal["fit", "zero"]
-PRELOADS: tuple[str, ...] = ("fit", "zero")
 
 #: Default Savitzky–Golay window, s. Long enough that the derivative of 0.05 mm position noise is
 #: small against squeeze rates of a few mm/s (noise in ``d'`` biases λ low, see ``fit_lsq``), short
@@ -165,8 +167,7 @@ def _prepare(
 
 
 def _check_options(window_s: float, polyorder: int, min_compression_frac: float) -> None:
-    if not window_s > 0:
-        raise UsageError(f"window_s must be > 0, got {window_s}")
+    WINDOW_S.check(window_s)
     if polyorder < 1:
         raise UsageError(f"polyorder must be >= 1 (the fit needs a derivative), got {polyorder}")
     if not 0 <= min_compression_frac < 1:
@@ -284,8 +285,7 @@ def fit_lsq(
     """
     del constrain_damping  # the lsq fits are always bounded
     _check_options(window_s, DEFAULT_POLYORDER, DEFAULT_MIN_COMPRESSION_FRAC)
-    if preload not in PRELOADS:
-        raise UsageError(f"preload must be 'fit' or 'zero', got {preload!r}")
+    check_preload(preload)
     check_model(model)
     _require(squeezes)
     obj = fit_object(
@@ -487,10 +487,8 @@ def _fit_rows(
 ) -> list[dict[str, object]]:
     """The rows of :func:`characterize`, one per object (lsq: each object's material fit goes
     into ``fits_out`` when given)."""
-    if method not in ("lsq", "paper"):
-        raise UsageError(f"unknown method {method!r}; expected 'lsq' or 'paper'")
-    if method == "paper" and (preload == "fit" or constrain_damping):
-        raise UsageError("the paper estimator has no preload or damping bound; use --method lsq")
+    check_method(method)
+    check_paper_options(method, preload, constrain_damping)
     check_model(model)
     rows: list[dict[str, object]] = []
     for object_id, squeezes in squeezes_by_object.items():

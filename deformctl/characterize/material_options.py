@@ -8,31 +8,25 @@ it. Which lag is fitted is chosen per object from where its log came from
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from deformctl.characterize.laws import MODEL_CHOICES, check_model
-from deformctl.errors import UsageError
+from deformctl.quantities import AT_FORCE_N
 
 #: The ``source`` a squeeze log's object row carries when ``measure`` read a rig recording.
 RIG_SOURCES = ("ros2_bag", "csv")
 
 
 def check_at_force_n(value: object) -> float | None:
-    """``--at-force-n`` when it is None or a finite force > 0, N.
+    """``--at-force-n`` when it is None or a finite force > 0, N (its rule:
+    :data:`deformctl.quantities.AT_FORCE_N`).
 
     Raises:
         UsageError: anything else (exit 2).
     """
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise UsageError(f"--at-force-n must be a force in N, got {value!r}")
-    if not (math.isfinite(value) and value > 0):
-        raise UsageError(f"--at-force-n must be a finite force > 0 N, got {value:g}")
-    return float(value)
+    return AT_FORCE_N.check_optional(value)
 
 
 @dataclass(frozen=True)

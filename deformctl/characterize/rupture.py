@@ -76,6 +76,7 @@ __all__ = [
     "Relaxation",
     "Rupture",
     "Smoothed",
+    "check_phase",
     "cut_rupture",
     "cut_rupture_smoothed",
     "find_relaxation",
@@ -378,14 +379,24 @@ def slice_squeeze(s: SqueezeSeries, sl: slice) -> SqueezeSeries:
     )
 
 
+def check_phase(phase: object) -> Phase:
+    """``phase`` when it is one of :data:`PHASES` (the one rule for ``--phase``).
+
+    Raises:
+        UsageError: an unknown phase (exit 2).
+    """
+    if phase not in PHASES:
+        raise UsageError(f"--phase must be one of {', '.join(PHASES)}, got {phase!r}")
+    return phase  # type: ignore[return-value]
+
+
 def phase_slice(time_s: FloatArray, force_n: FloatArray, phase: str, *, window_s: float) -> slice:
     """The samples of ``phase`` (``loading``, ``unloading`` or ``all``) of one squeeze.
 
     Raises:
         UsageError: an unknown phase.
     """
-    if phase not in PHASES:
-        raise UsageError(f"phase must be one of {', '.join(PHASES)}, got {phase!r}")
+    check_phase(phase)
     n = force_n.shape[0]
     if phase == "all" or n < 3:
         return slice(0, n)

@@ -10,7 +10,6 @@ of one object and :func:`characterize_sweep` writes a coefficients dataset direc
 from __future__ import annotations
 
 import dataclasses
-import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -32,17 +31,20 @@ from deformctl.artifacts.dataset import (
 )
 from deformctl.artifacts.provenance import Provenance, sha256_file
 from deformctl.characterize.coefficients import _coefficient_frame, object_fields
-from deformctl.characterize.fit import PRELOADS, Method, Preload, _fit_rows, default_window_s
-from deformctl.characterize.material_options import (
-    DEFAULT_MATERIALS,
-    RIG_SOURCES,
-    MaterialOptions,
-    default_lag,
+from deformctl.characterize.fit import _fit_rows, default_window_s
+from deformctl.characterize.material_options import RIG_SOURCES, default_lag
+from deformctl.characterize.options import (
+    DEFAULT_FIT,
+    DEFAULT_POLICY,
+    FitOptions,
+    Preload,
+    QualityPolicy,
 )
 from deformctl.characterize.plot import check_plot_dir, plot_fits
-from deformctl.characterize.quality import check_policy, enforce, with_recording_flags
+from deformctl.characterize.quality import enforce, with_recording_flags
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, run_sweep
+from deformctl.reprs import short_repr
 from deformctl.series import SqueezeSeries, ruptures_from_object
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -63,6 +65,8 @@ class LogCoefficients:
         fits: object id → its material fit (lsq; for plots), when asked to keep them.
         plots: the plot files written, in object order.
     """
+
+    __repr__ = short_repr
 
     table: pd.DataFrame
     window_s: dict[str, float]
@@ -95,40 +99,28 @@ def default_preload(obj: Mapping[str, object] | None) -> Preload:
     return "fit" if source in RIG_SOURCES else "zero"
 
 
-def _check_fit_options(method: str, window_s: float | None, preload: str | None) -> None:
-    if method not in ("lsq", "paper"):
-        raise UsageError(f"unknown method {method!r}; expected 'lsq' or 'paper'")
-    if window_s is not None and not (math.isfinite(window_s) and window_s > 0):
-        raise UsageError(f"window must be a finite number > 0 s, got {window_s}")
-    if preload is not None and preload not in PRELOADS:
-        raise UsageError(f"--preload must be fit or zero, got {preload!r}")
-
-
 def _fit_object(
     oid: str,
     group: Sequence[SqueezeSeries],
     obj: Mapping[str, object] | None,
-    method: str,
+    options: FitOptions,
     *,
     window_s: float,
-    preload: Preload | None,
-    constrain_damping: bool,
-    materials: MaterialOptions = DEFAULT_MATERIALS,
     fits: dict[str, ObjectFit] | None = None,
 ) -> tuple[dict[str, object], str]:
     """One object's coefficients row (see :func:`characterize`) and the preload mode used;
     its material fit goes into ``fits`` when given."""
-    mode: Preload = preload if preload is not None else default_preload(obj)
-    if method == "paper":
+    mode: Preload = options.preload if options.preload is not None else default_preload(obj)
+    if options.method == "paper":
         mode = "zero"
     rows = _fit_rows(
         {oid: group},
-        method,  # type: ignore[arg-type]
+        options.method,
         preload=mode,
-        constrain_damping=constrain_damping,
+        constrain_damping=options.constrain_damping,
         recorded_ruptures={oid: ruptures_from_object(dict(obj or {}))},
-        model=materials.model,
-        at_force_n=materials.at_force_n,
+        model=options.materials.model,
+        at_force_n=options.materials.at_force_n,
         lag_s=default_lag(obj),
         objects={oid: dict(obj or {})},
         fits_out=fits,
@@ -172,14 +164,9 @@ def _read_logs(
 
 def read_and_characterize(
     path: str | PathLike[str] | Sequence[str | PathLike[str]],
-    method: Method = "lsq",
+    options: FitOptions = DEFAULT_FIT,
+    policy: QualityPolicy = DEFAULT_POLICY,
     *,
-    window_s: float | None = None,
-    preload: Preload | None = None,
-    constrain_damping: bool = False,
-    strict: bool = False,
-    allow_flagged: bool = False,
-    materials: MaterialOptions = DEFAULT_MATERIALS,
     keep_fits: bool = False,
 ) -> LogCoefficients:
     """Read a squeeze log (validated), group its squeezes by object and fit each object.
@@ -187,15 +174,14 @@ def read_and_characterize(
     Args:
         path: the squeeze-log ``.mcap``, or ``-`` for stdin (read into memory); or several logs,
             whose squeezes of one object id are fitted together (one joint fit over speeds).
-        method: ``"lsq"`` (:func:`fit_lsq`) or ``"paper"`` (:func:`fit_paper`).
-        window_s: Savitzky–Golay window, s, for every object; None picks it per object from
-            the ``position_rate_hz`` the log stores for it (:func:`default_window_s`).
-        preload: lsq: ``"fit"`` or ``"zero"`` for every object; None chooses per object
-            (:func:`default_preload`). The paper method never fits a preload.
-        constrain_damping: lsq: kept for old callers (the fits are always bounded).
-        strict: any quality flag is an error (:func:`deformctl.characterize.quality.enforce`).
-        allow_flagged: keep objects with negative D (flagged) instead of refusing them.
-        materials: lsq: the law and the operating force (:class:`MaterialOptions`).
+        options: the method (:func:`fit_lsq` or :func:`fit_paper`), the Savitzky–Golay window
+            (None: per object from the ``position_rate_hz`` the log stores for it,
+            :func:`default_window_s`), the preload (None: per object, :func:`default_preload`;
+            the paper method never fits one) and, lsq, the material law and the operating force
+            (:class:`~deformctl.characterize.options.FitOptions`; the command's defaults).
+        policy: what happens to flagged objects: ``strict`` (any flag is an error,
+            :func:`deformctl.characterize.quality.enforce`) or ``allow_flagged`` (keep objects
+            with negative D instead of refusing them).
         keep_fits: keep each object's material fit in the result (for plots).
 
     Returns:
@@ -208,14 +194,9 @@ def read_and_characterize(
             object whose squeezes cannot be fitted (no compression, too short, ...), an object
             with negative D (unless ``allow_flagged``) or any flagged object with ``strict``;
             the message names the file and the object (exit 65).
-        UsageError: an unknown method, a window that is not > 0, ``strict`` with
-            ``allow_flagged``, a preload or bound with the paper method, or an operating force
-            above an object's peak force (exit 2).
+        UsageError: an operating force above an object's peak force (exit 2; the options are
+            checked when built).
     """
-    _check_fit_options(method, window_s, preload)
-    check_policy(strict, allow_flagged)
-    if method == "paper" and (preload == "fit" or constrain_damping):
-        raise UsageError("the paper estimator has no preload or damping bound; use --method lsq")
     paths = [path] if isinstance(path, str | PathLike) else list(path)
     name, objects, squeezes = _read_logs(paths)
     by_object: dict[str, list[SqueezeSeries]] = {}
@@ -224,7 +205,8 @@ def read_and_characterize(
     meta = {str(o["object_id"]): o for o in objects}
     rates = {oid: _stored_rate(meta.get(oid)) for oid in by_object}
     windows = {
-        oid: window_s if window_s is not None else default_window_s(rates[oid]) for oid in by_object
+        oid: options.window_s if options.window_s is not None else default_window_s(rates[oid])
+        for oid in by_object
     }
     rows = []
     modes: dict[str, str] = {}
@@ -235,11 +217,8 @@ def read_and_characterize(
                 oid,
                 group,
                 meta.get(oid),
-                method,
+                options,
                 window_s=windows[oid],
-                preload=preload,
-                constrain_damping=constrain_damping,
-                materials=materials,
                 fits=fits if keep_fits else None,
             )
         except InputDataError as err:
@@ -248,7 +227,7 @@ def read_and_characterize(
             raise
         rows.append(row)
     table = _coefficient_frame(rows)
-    warnings = enforce(table, strict=strict, allow_flagged=allow_flagged, path=name)
+    warnings = enforce(table, strict=policy.strict, allow_flagged=policy.allow_flagged, path=name)
     return LogCoefficients(
         table=table,
         window_s=windows,
@@ -274,13 +253,17 @@ def squeeze_log_parts(path: str | PathLike[str]) -> list[Path]:
 
 
 def characterize_dir(
-    path: str | PathLike[str], method: Method = "lsq", **options: Any
+    path: str | PathLike[str],
+    options: FitOptions = DEFAULT_FIT,
+    policy: QualityPolicy = DEFAULT_POLICY,
+    *,
+    keep_fits: bool = False,
 ) -> LogCoefficients:
-    """:func:`read_and_characterize` of every squeeze log of a ``measure`` directory, in order.
-
-    ``options`` are those of :func:`read_and_characterize` (``window_s``, ``preload``, ...).
-    """
-    parts = [read_and_characterize(p, method, **options) for p in squeeze_log_parts(path)]
+    """:func:`read_and_characterize` of every squeeze log of a ``measure`` directory, in order."""
+    parts = [
+        read_and_characterize(p, options, policy, keep_fits=keep_fits)
+        for p in squeeze_log_parts(path)
+    ]
     return LogCoefficients(
         table=pd.concat([p.table for p in parts], ignore_index=True),
         window_s={k: v for p in parts for k, v in p.window_s.items()},
@@ -293,25 +276,20 @@ def characterize_dir(
 
 def characterize_file(
     log: str | Sequence[str],
-    method: Method = "lsq",
+    options: FitOptions = DEFAULT_FIT,
+    policy: QualityPolicy = DEFAULT_POLICY,
     *,
     output: str,
-    window_s: float | None = None,
     force: bool = False,
-    preload: Preload | None = None,
-    constrain_damping: bool = False,
-    strict: bool = False,
-    allow_flagged: bool = False,
-    materials: MaterialOptions = DEFAULT_MATERIALS,
     plot_dir: str | None = None,
 ) -> LogCoefficients:
     """``characterize LOG -o TABLE``: fit a squeeze log (or a ``measure`` directory's logs).
 
-    The quality policy is applied before anything is written (``strict``, ``allow_flagged``:
-    see :func:`read_and_characterize`); the coefficients table is then written atomically with
-    its provenance (the method, the window and preload used for each object and the position
-    sample rates behind them). With ``plot_dir`` (lsq) each object's fit is drawn into
-    ``plot_dir/<object_id>.png`` after the table is written
+    The quality policy is applied before anything is written (see :func:`read_and_characterize`);
+    the coefficients table is then written atomically with its provenance (the options as given,
+    the window and preload used for each object and the position sample rates behind them).
+    With ``plot_dir`` (lsq) each object's fit is drawn into ``plot_dir/<object_id>.png`` after
+    the table is written
     (:func:`deformctl.characterize.plot.plot_object`). The caller prints ``result.warnings``
     and ``result.plots``.
 
@@ -322,34 +300,22 @@ def characterize_file(
     """
     check_output_path(output, force)
     if plot_dir is not None:
-        if method != "lsq":
+        if options.method != "lsq":
             raise UsageError("--plot draws the material laws' fits: use it with --method lsq")
         check_plot_dir(plot_dir)
     logs = [log] if isinstance(log, str) else list(log)
-    options: dict[str, Any] = {
-        "window_s": window_s,
-        "preload": preload,
-        "constrain_damping": constrain_damping,
-        "strict": strict,
-        "allow_flagged": allow_flagged,
-        "materials": materials,
-        "keep_fits": plot_dir is not None,
-    }
+    keep_fits = plot_dir is not None
     if len(logs) == 1 and os.path.isdir(logs[0]):
-        result = characterize_dir(logs[0], method, **options)
+        result = characterize_dir(logs[0], options, policy, keep_fits=keep_fits)
     else:
-        result = read_and_characterize(logs, method, **options)
+        result = read_and_characterize(logs, options, policy, keep_fits=keep_fits)
     provenance = Provenance.from_invocation(
         logs,
         settings={
-            "method": method,
+            **options.as_dict(),
             "window_s": result.window_s,
-            "window_s_option": window_s,
             "position_rate_hz": result.position_rate_hz,
             "preload": result.preload,
-            "preload_option": preload,
-            "constrain_damping": constrain_damping,
-            **materials.as_dict(),
         },
     )
     write_table(result.table, output, "coefficients", provenance=provenance, force=force)
@@ -424,19 +390,15 @@ class CharacterizeTask:
     """``characterize`` for one object of a squeeze-log directory (a picklable sweep task).
 
     Attributes:
-        method, window_s, preload, constrain_damping: as :func:`read_and_characterize`.
-        strict: a flagged object fails (recorded in ``_failures/``) instead of being written.
-        allow_flagged: write an object with negative D (flagged) instead of failing it.
-        materials: the law and the operating force (:class:`MaterialOptions`).
+        fit: the fit options (the material law and operating force among them), as
+            :func:`read_and_characterize`'s.
+        policy: ``strict``: a flagged object fails (recorded in ``_failures/``) instead of being
+            written; ``allow_flagged``: write an object with negative D (flagged) instead of
+            failing it.
     """
 
-    method: str = "lsq"
-    window_s: float | None = None
-    preload: str | None = None
-    constrain_damping: bool = False
-    strict: bool = False
-    allow_flagged: bool = False
-    materials: MaterialOptions = DEFAULT_MATERIALS
+    fit: FitOptions = DEFAULT_FIT
+    policy: QualityPolicy = DEFAULT_POLICY
 
     def __call__(self, item: dict[str, Any]) -> Any:
         """Fit one object; its coefficients row (an Arrow table).
@@ -451,24 +413,15 @@ class CharacterizeTask:
         if not group:
             raise InputDataError(f"object {oid!r} has no squeezes", path=log)
         rate_hz = _stored_rate(meta.get(oid))
-        window = self.window_s if self.window_s is not None else default_window_s(rate_hz)
+        window = self.fit.window_s if self.fit.window_s is not None else default_window_s(rate_hz)
         try:
-            row, _ = _fit_object(
-                oid,
-                group,
-                meta.get(oid),
-                self.method,
-                window_s=window,
-                preload=self.preload,  # type: ignore[arg-type]
-                constrain_damping=self.constrain_damping,
-                materials=self.materials,
-            )
+            row, _ = _fit_object(oid, group, meta.get(oid), self.fit, window_s=window)
         except InputDataError as err:
             if err.path is None:
                 raise InputDataError(err.message, path=log) from err
             raise
         df = _coefficient_frame([row])
-        enforce(df, strict=self.strict, allow_flagged=self.allow_flagged, path=log)
+        enforce(df, strict=self.policy.strict, allow_flagged=self.policy.allow_flagged, path=log)
         return spec_rows(df, "coefficients")
 
 
@@ -484,12 +437,8 @@ def characterize_sweep(
 
     Raises:
         MissingInputError: ``log_dir`` does not exist (exit 66).
-        UsageError: ``log_dir`` is a file, or the window is not > 0 (exit 2).
+        UsageError: ``log_dir`` is a file (exit 2).
     """
-    if task.window_s is not None and not (math.isfinite(task.window_s) and task.window_s > 0):
-        raise UsageError(f"--window-s must be a finite number > 0 s, got {task.window_s}")
-    _check_fit_options(task.method, task.window_s, task.preload)
-    check_policy(task.strict, task.allow_flagged)
     if not os.path.isdir(log_dir):
         if not os.path.exists(log_dir):
             raise MissingInputError("no such file or directory", path=log_dir)
@@ -497,15 +446,7 @@ def characterize_sweep(
             "a dataset directory output (-o DIR/) needs a squeeze-log directory input "
             "(measure --sim -o DIR/)"
         )
-    settings = {
-        "method": task.method,
-        "window_s_option": task.window_s,
-        "preload_option": task.preload,
-        "constrain_damping": task.constrain_damping,
-        "strict": task.strict,
-        "allow_flagged": task.allow_flagged,
-        **task.materials.as_dict(),
-    }
+    settings = {**task.fit.as_dict(), **task.policy.as_dict()}
     fingerprint = dataset_fingerprint(
         "characterize", "coefficients", settings, {"log": sha256_file(log_dir)}
     )

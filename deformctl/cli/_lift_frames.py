@@ -8,7 +8,6 @@ here to the command-line options with :func:`functools.partial`.
 from __future__ import annotations
 
 import functools
-import math
 import os
 import re
 from typing import Any
@@ -16,6 +15,7 @@ from typing import Any
 from deformctl.cli._options import HEAVY_DEFAULTS
 from deformctl.errors import UsageError
 from deformctl.lift.runners.rig import SlipFromFrames
+from deformctl.quantities import MARKER_SIZE_CM, SLIP_TOLERANCE_M
 
 #: Default ``--slip-tolerance-m`` (``detect_slip``'s): the object may fall behind the palms so
 #: far, m.
@@ -67,16 +67,16 @@ def frames_judge(
         UsageError: frame options without ``--slip-from-frames``, neither or both of the palm
             options, no ``--frame-marker-size-cm``, a bad tolerance or marker size.
     """
-    given = {
-        "--palm-marker-ids": palm_marker_ids,
-        "--palm-regions": palm_regions,
-        "--frame-marker-size-cm": frame_marker_size_cm,
-        "--slip-tolerance-m": slip_tolerance_m,
-        "--frame-marker-dict": marker_dict,
-        "--debug-dir": debug_dir,
-    }
+    given = [
+        ("--palm-marker-ids", palm_marker_ids),
+        ("--palm-regions", palm_regions),
+        ("--frame-marker-size-cm", frame_marker_size_cm),
+        ("--slip-tolerance-m", slip_tolerance_m),
+        ("--frame-marker-dict", marker_dict),
+        ("--debug-dir", debug_dir),
+    ]
     if not enabled:
-        used = [flag for flag, value in given.items() if value is not None]
+        used = [flag for flag, value in given if value is not None]
         if used:
             raise UsageError(f"{', '.join(used)} needs --slip-from-frames")
         return None
@@ -87,11 +87,9 @@ def frames_judge(
             "--slip-from-frames needs --frame-marker-size-cm (the side of the markers in view, "
             "for the image scale)"
         )
-    if not (math.isfinite(frame_marker_size_cm) and frame_marker_size_cm > 0):
-        raise UsageError(f"--frame-marker-size-cm must be > 0, got {frame_marker_size_cm:g}")
+    MARKER_SIZE_CM.check(frame_marker_size_cm, label="--frame-marker-size-cm")
     tolerance_m = DEFAULT_SLIP_TOLERANCE_M if slip_tolerance_m is None else slip_tolerance_m
-    if not (math.isfinite(tolerance_m) and tolerance_m > 0):
-        raise UsageError(f"--slip-tolerance-m must be > 0, got {tolerance_m:g}")
+    SLIP_TOLERANCE_M.check(tolerance_m)
     if debug_dir is not None and os.path.exists(debug_dir) and not os.path.isdir(debug_dir):
         raise UsageError(f"--debug-dir {debug_dir!r} exists and is not a directory")
     options: dict[str, Any] = {

@@ -2,20 +2,21 @@
 
 ``--rig CMD`` (an external rig, :func:`deformctl.lift.runners.rig.rig_runner_factory`) or
 ``--sim`` (the simulator, :func:`deformctl.lift.runners.sim.sim_runner_factory`, built from the
-lift-profile, slip and simulator options by :func:`sim_parts`). Options of a runner that was not
+lift-profile, slip and simulator options by :func:`sim_options`). Options of a runner that was not
 chosen are refused by name.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Annotated, Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from deformctl.cli._common import finish_sweep
 from deformctl.cli._options import HEAVY_DEFAULTS, default
 from deformctl.errors import UsageError
+from deformctl.lift.options import SearchOptions
 from deformctl.lift.runners.rig import DEFAULT_RIG_TIMEOUT_S, SlipFromFrames, rig_runner_factory
 from deformctl.lift.stage import RunnerFactory
 from deformctl.parallel import SweepOptions
@@ -137,44 +138,68 @@ DebugDir = Annotated[
 ]
 
 
-def sim_parts(sim: bool, options: Mapping[str, Any]) -> SimPreset | None:
-    """The simulator preset of ``--sim``, with the single options applied (None without ``--sim``).
+def sim_options(
+    sim: bool,
+    *,
+    preset_name: str | None,
+    alpha_cm: float | None,
+    dt_s: float | None,
+    memory_budget_gib: float | None,
+    lift_accel_m_s2: float | None,
+    lift_speed_m_s: float | None,
+    lift_height_m: float | None,
+    lift_hold_s: float | None,
+    hold_s_alias: float | None,
+    slip_tolerance_m: float | None,
+    slip_criterion: str | None,
+    log_epoch: str | None,
+    scene_hz: float | None = None,
+) -> SimPreset | None:
+    """The simulator preset of ``--sim`` with the single options given (None without ``--sim``).
 
     Args:
         sim: ``--sim`` was given.
-        options: the sim options by flag (None: not given, the preset's value applies);
-            ``--sim-preset`` names the preset (default :data:`deformctl.presets.DEFAULT_PRESET`).
+        preset_name ... slip_criterion: :class:`~deformctl.presets.SimOptions`'s fields as given
+            (None: not given, the preset's value applies); ``hold_s_alias`` is ``--hold-s``,
+            the old spelling of ``--lift-hold-s``.
+        log_epoch, scene_hz: ``--log-epoch`` and ``--scene-hz``, which only a simulated run
+            takes (checked where they are used).
 
     Raises:
-        UsageError: a sim option without ``--sim``, an unknown preset, or a value out of range.
+        UsageError: a sim option without ``--sim``, an unknown preset, or a value out of range
+            (the simulator's settings types check each, when the preset is built).
     """
+    if lift_hold_s is not None and hold_s_alias is not None:
+        raise UsageError("give --lift-hold-s (or its old spelling --hold-s), not both")
+    hold = lift_hold_s if lift_hold_s is not None else hold_s_alias
+    given = [
+        ("--lift-accel-m-s2", lift_accel_m_s2), ("--lift-speed-m-s", lift_speed_m_s),
+        ("--lift-height-m", lift_height_m),
+        ("--hold-s" if hold_s_alias is not None else "--lift-hold-s", hold),
+        ("--slip-tolerance-m", slip_tolerance_m), ("--slip-criterion", slip_criterion),
+        ("--sim-preset", preset_name), ("--alpha-cm", alpha_cm), ("--dt-s", dt_s),
+        ("--memory-budget-gib", memory_budget_gib), ("--log-epoch", log_epoch),
+        ("--scene-hz", scene_hz),
+    ]  # fmt: skip
     if not sim:
-        given = [flag for flag, value in options.items() if value is not None]
-        if given:
-            raise UsageError(f"{given[0]} needs --sim")
+        for flag, value in given:
+            if value is not None:
+                raise UsageError(f"{flag} needs --sim")
         return None
-    from deformctl.presets import DEFAULT_PRESET, sim_preset
+    from deformctl.presets import DEFAULT_PRESET, SimOptions
 
-    values = dict(options)
-    hold = values.get("--lift-hold-s", values.get("--hold-s"))
-    preset = sim_preset(values.get("--sim-preset") or DEFAULT_PRESET)
-    return preset.replace(
-        profile={
-            "accel_m_s2": values.get("--lift-accel-m-s2"),
-            "speed_m_s": values.get("--lift-speed-m-s"),
-            "height_m": values.get("--lift-height-m"),
-            "hold_s": hold,
-        },
-        criterion={
-            "tolerance_m": values.get("--slip-tolerance-m"),
-            "measure": values.get("--slip-criterion"),
-        },
-        settings={
-            "alpha_cm": values.get("--alpha-cm"),
-            "dt_s": values.get("--dt-s"),
-            "memory_budget_gib": values.get("--memory-budget-gib"),
-        },
-    )
+    return SimOptions(
+        preset_name=preset_name or DEFAULT_PRESET,
+        alpha_cm=alpha_cm,
+        dt_s=dt_s,
+        memory_budget_gib=memory_budget_gib,
+        lift_accel_m_s2=lift_accel_m_s2,
+        lift_speed_m_s=lift_speed_m_s,
+        lift_height_m=lift_height_m,
+        lift_hold_s=hold,
+        slip_tolerance_m=slip_tolerance_m,
+        slip_criterion=slip_criterion,
+    ).preset()
 
 
 def choose_runner(
@@ -213,9 +238,11 @@ def choose_runner(
 
 def lift_dataset(
     catalog: str,
-    parts: SimPreset | None,
+    preset: SimPreset | None,
     log: str | None,
-    search: tuple[object, ...],
+    search: SearchOptions,
+    log_epoch_ns: int | None,
+    scene_hz: float,
     output: str,
     sweep: SweepOptions,
     object_ids: Sequence[str] | None,
@@ -223,15 +250,12 @@ def lift_dataset(
     quiet: bool = False,
 ) -> None:
     """``lift --sim -o DIR/``: the search of every object through the sweep executor, then the
-    sweep's summary line (unless ``quiet``).
-
-    ``search`` is (protocol, growth, tolerance, max_attempts, log_epoch_ns, scene_hz), as
-    :class:`~deformctl.lift.runners.sim.LiftTask` takes them.
+    sweep's summary line (unless ``quiet``); each part's log records the scene at ``scene_hz``.
 
     Raises:
         UsageError: no ``--sim``, or ``--log`` (each part has its log).
     """
-    if parts is None:
+    if preset is None:
         raise UsageError("a dataset directory output (-o DIR/) needs --sim")
     if log is not None:
         raise UsageError(
@@ -239,7 +263,7 @@ def lift_dataset(
         )
     from deformctl.lift.runners.sim import LiftTask, lift_sweep
 
-    task = LiftTask(parts, *search)  # type: ignore[arg-type]
+    task = LiftTask(preset=preset, search=search, log_epoch_ns=log_epoch_ns, scene_hz=scene_hz)
     summary = lift_sweep(
         catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
     )

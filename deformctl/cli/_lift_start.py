@@ -111,10 +111,7 @@ def start_seed(
     if dataset:
         raise UsageError(f"{flag} writes a table file, not a dataset directory output (-o DIR/)")
     chosen = DEFAULT_START_MARGIN if margin is None else margin
-    try:
-        validate_start_margin(chosen)
-    except UsageError:
-        raise UsageError(f"--start-margin must be a finite number >= 1, got {margin}") from None
+    validate_start_margin(chosen)
     from deformctl.lift.seeded import load_start_model, load_start_table
 
     if model is not None:

@@ -11,19 +11,17 @@ printed here, once per distinct line.
 from __future__ import annotations
 
 import dataclasses
-from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
-from os import PathLike
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
-from deformctl.artifacts.io import display_name
 from deformctl.cli._common import finish_sweep, parse_mapping
+from deformctl.cli._measure_csv_report import report_dataset, report_files
+from deformctl.cli._measure_rig import RigOptions, segmentation
 from deformctl.measure import DEFAULT_CSV_MEMORY_BUDGET_GIB as DEFAULT_BUDGET
 from deformctl.measure import (
-    CsvBatchResult,
     CsvDialect,
     CsvFileTask,
     CsvOptions,
@@ -31,6 +29,7 @@ from deformctl.measure import (
     measure_csv_files,
     measure_csv_sweep,
 )
+from deformctl.measure.options import Segmentation
 from deformctl.parallel import SweepOptions, single_file_workers
 
 SkipRows = Annotated[
@@ -110,18 +109,39 @@ class CsvFlags:
     lag_s: str | None = None
     objects_from: str | None = None
 
-    def given(self) -> dict[str, object]:
-        """Flag → value (for refusing them with another source)."""
-        return {"--" + k.replace("_", "-"): v for k, v in dataclasses.asdict(self).items()}
+    def given(self) -> list[str]:
+        """The flags given (for refusing them with another source)."""
+        return [
+            _flag(f.name) for f in dataclasses.fields(self) if getattr(self, f.name) is not None
+        ]
 
 
-FLAGS = tuple(CsvFlags().given())
+def _flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+#: The ``--csv``-only flags.
+FLAGS = tuple(_flag(f.name) for f in dataclasses.fields(CsvFlags))
+
+
+@dataclass(frozen=True)
+class ObjectFlags:
+    """What the command line says of the objects (each file's ``--objects-from`` row wins).
+
+    The values are checked per file, when the file's object is built
+    (:func:`deformctl.measure.csv_objects`, :class:`deformctl.catalog.MeasuredObject`).
+    """
+
+    object_id: str | None = None
+    weight_n: float | None = None
+    size_cm: tuple[float, float, float] | None = None
+    friction_mu: float | None = None
 
 
 def csv_options(
-    flags: CsvFlags, rig: Any, memory_budget_gib: float | None
-) -> tuple[CsvOptions, dict[str, Any]]:
-    """The options every file is read with, and the reader's other arguments."""
+    flags: CsvFlags, rig: RigOptions, memory_budget_gib: float | None
+) -> tuple[CsvOptions, Segmentation]:
+    """The options every file is read with, and how each is cut into squeezes."""
     dialect = CsvDialect(
         delimiter=flags.delimiter,
         decimal=flags.decimal,
@@ -135,116 +155,37 @@ def csv_options(
         units=parse_mapping(rig.units, "--units") if rig.units else {},
         force_sign=flags.force_sign or "auto",  # type: ignore[arg-type]
         lag_s=flags.lag_s,  # type: ignore[arg-type]  # checked by CsvOptions
-        position_is=rig.position_is,
-        position_increases_when=rig.position_increases_when,
+        position_is=rig.position_is,  # type: ignore[arg-type]
+        position_increases_when=rig.position_increases_when,  # type: ignore[arg-type]
         memory_budget_gib=DEFAULT_BUDGET if memory_budget_gib is None else memory_budget_gib,
     )
-    reader = {"segment": bool(rig.segment), "phase": rig.phase or "all"}
-    return options, reader
+    return options, segmentation(rig)
 
 
 def run(
     paths: Sequence[str],
     flags: CsvFlags,
-    rig: Any,
-    obj: dict[str, Any],
+    rig: RigOptions,
+    named: ObjectFlags,
     memory_budget_gib: float | None,
     output: str,
     force: bool,
     sweep: SweepOptions,
 ) -> None:
     """Read every CSV file of ``paths`` and write their squeeze log or dataset directory."""
-    options, reader = csv_options(flags, rig, memory_budget_gib)
-    task = CsvFileTask(options, reader)
-    files = csv_objects(paths, objects_from=flags.objects_from, **obj)
+    options, cut = csv_options(flags, rig, memory_budget_gib)
+    task = CsvFileTask(options, cut)
+    files = csv_objects(
+        paths, objects_from=flags.objects_from, object_id=named.object_id,
+        weight_n=named.weight_n, size_cm=named.size_cm, friction_mu=named.friction_mu,
+    )  # fmt: skip
     if sweep.check(output, file_workers=True):
         summary = measure_csv_sweep(files, task, output=output, sweep=sweep, force=force)
-        _report_dataset(summary.out_dir)
+        report_dataset(summary.out_dir)
         finish_sweep(summary, "measure")
         return
     workers = single_file_workers(sweep.workers, len(files))
     result = measure_csv_files(files, task, output=output, force=force, workers=workers)
-    _report_files(result, output)
+    report_files(result, output)
     if result.exit_code:
         raise typer.Exit(result.exit_code)
-
-
-def _counted(lines: Sequence[str], of: int) -> list[str]:
-    """Each distinct line once, with ``(all M files)`` or ``(N of M files)``."""
-    counts = Counter(lines)
-    return [
-        line if of == 1 else f"{line} ({'all ' if n == of else f'{n} of '}{of} files)"
-        for line, n in counts.items()
-    ]
-
-
-def _report_files(result: CsvBatchResult, output: str) -> None:
-    read = result.read
-    total = len(result.outcomes)
-    notes: list[str] = []
-    for o in read:
-        rec = o.recording
-        assert rec is not None
-        notes.append(rec.notes[0])
-        for line in rec.notes[1:]:
-            typer.echo(f"{display_name(o.file.path)}: {line}", err=True)
-        for line in rec.warnings:
-            typer.echo(
-                f"warning: {display_name(o.file.path)}: object {o.file.object_id!r}: {line}",
-                err=True,
-            )
-        for r in rec.ruptures:
-            typer.echo(
-                f"warning: {display_name(o.file.path)}: object {o.file.object_id!r}: rupture in "
-                f"{r.describe()}: cut off",
-                err=True,
-            )
-    for line in _counted(notes, len(read)):
-        typer.echo(line if total > 1 else f"{display_name(read[0].file.path)}: {line}", err=True)
-    for o in result.failed:
-        typer.echo(f"error: {o.error}", err=True)
-    if not read:
-        return
-    where = "stdout" if output == "-" else output
-    squeezes = [s for o in read for s in o.recording.squeezes]  # type: ignore[union-attr]
-    duration_s = sum(float(s.time_s[-1]) for s in squeezes)
-    rec = read[0].recording
-    assert rec is not None
-    if total == 1:
-        typer.echo(
-            f"{where}: {len(squeezes)} squeeze(s) of {read[0].file.object_id!r}, {duration_s:.1f} "
-            f"s, force {rec.force_rate_hz:.4g} Hz, position {rec.position_rate_hz:.4g} Hz",
-            err=True,
-        )
-        return
-    failed = f"; {len(result.failed)} file(s) failed (recorded in the log)" if result.failed else ""
-    typer.echo(
-        f"{where}: {len(read)} object(s) from {total} files, {len(squeezes)} squeeze(s), "
-        f"{duration_s:.1f} s{failed}",
-        err=True,
-    )
-
-
-def _report_dataset(out_dir: str | PathLike[str]) -> None:
-    """The columns, warnings and failures of a ``measure --csv -o DIR/`` run, from its parts."""
-    from deformctl.artifacts.dataset import read_dataset, read_failures
-    from deformctl.errors import DeformctlError
-
-    try:
-        rows = read_dataset(out_dir)
-    except DeformctlError:
-        rows = None
-    if rows is not None and len(rows):
-        for line in _counted([f"columns: {c}" for c in rows["columns"]], len(rows)):
-            typer.echo(f"{out_dir}: {line}", err=True)
-        for rec in rows.to_dict("records"):
-            for text in filter(None, str(rec["warnings"]).split("\n")):
-                typer.echo(
-                    f"warning: {rec['source_file']}: object {rec['object_id']!r}: {text}", err=True
-                )
-    try:
-        failures = read_failures(out_dir)
-    except (DeformctlError, ValueError):
-        return
-    for rec in failures.to_dict("records"):
-        typer.echo(f"error: {rec['error_message']}", err=True)

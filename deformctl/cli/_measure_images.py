@@ -12,19 +12,13 @@ from collections.abc import Sequence
 import typer
 
 from deformctl.artifacts.io import is_stdio
+from deformctl.catalog import MeasuredObject
 from deformctl.cli._image_options import ImageOptions, check_image_options
 from deformctl.measure.images import measure_images as measure_images_to_catalog
 
 
 def measure_images(
-    images: Sequence[str],
-    opts: ImageOptions,
-    *,
-    object_id: str,
-    weight_n: float,
-    friction_mu: float | None,
-    output: str,
-    force: bool,
+    images: Sequence[str], opts: ImageOptions, obj: MeasuredObject, *, output: str, force: bool
 ) -> None:
     """Measure the object in ``images = (top, side)`` and write (or append) its catalog row.
 
@@ -32,16 +26,15 @@ def measure_images(
         UsageError, MissingInputError, OutputExistsError, InputDataError: see
             :func:`deformctl.measure.images.measure_images`.
     """
+    reference, mask = check_image_options(opts)
     result = measure_images_to_catalog(
         images,
-        check_image_options(opts),
-        object_id=object_id,
-        weight_n=weight_n,
-        friction_mu=friction_mu,
+        obj,
+        reference=reference,
+        mask=mask,
         output=output,
         force=force,
         append=opts.append,
-        background=opts.background,
         camera_matrix=opts.camera_matrix,
         debug_dir=opts.debug_dir,
     )
@@ -56,7 +49,7 @@ def measure_images(
         )
     where = "stdout" if is_stdio(output) else output
     typer.echo(
-        f"{where}: {object_id!r} {round(size.size_x_cm, 2)} x {round(size.size_y_cm, 2)} x "
+        f"{where}: {obj.object_id!r} {round(size.size_x_cm, 2)} x {round(size.size_y_cm, 2)} x "
         f"{round(size.size_z_cm, 2)} cm "
         f"(x, y from the top view, z from the side view; {result.rows} row(s) in the catalog)",
         err=True,

@@ -1,25 +1,25 @@
 """``deformctl measure --bag``: one object's squeeze log from a rig recording, and the options
 ``--bag`` and ``--csv`` share (``--csv`` runs in :mod:`deformctl.cli._measure_csv`).
 
-The bag reader (:func:`deformctl.measure.read_ros2_bag`) is behind :data:`READERS`, which checks
-its own options and returns the recording and the settings the provenance records;
-:func:`deformctl.measure.recording_log` writes the log.
+The flags become the library's options (:class:`~deformctl.catalog.MeasuredObject`, a
+:class:`~deformctl.measure.options.BagSource` and a
+:class:`~deformctl.measure.options.Segmentation`, each checked when built) and
+:func:`deformctl.measure.stage.measure_recording` reads the recording and writes its log.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
-from deformctl.artifacts import check_input_path, check_output_path
 from deformctl.artifacts.io import is_stdio
-from deformctl.catalog import object_record
+from deformctl.catalog import MeasuredObject
 from deformctl.errors import UsageError
-from deformctl.measure import Recording, read_ros2_bag, recording_log
+from deformctl.measure.options import BagSource, Segmentation
+from deformctl.measure.stage import measure_recording
 
 Bag = Annotated[
     str | None,
@@ -152,91 +152,72 @@ class RigOptions:
     position_increases_when: str | None = None
     crc_check: bool = True
 
-    def given(self) -> dict[str, object]:
-        """Flag → value of the source-specific options (for refusing them elsewhere)."""
-        return {
-            "--wrench-topic": self.wrench_topics,
-            "--position-topic": self.position_topic,
-            "--joint": self.joint,
-            "--columns": self.columns,
-            "--units": self.units,
-            "--segment/--no-segment": self.segment,
-            "--phase": self.phase,
-            "--position-increases-when": self.position_increases_when,
-            "--object-id": self.object_id,
-            "--no-crc-check": not self.crc_check,
-        }
+    def given(self) -> list[str]:
+        """The flags of the source-specific options given (to refuse them elsewhere)."""
+        values = [
+            ("--wrench-topic", self.wrench_topics),
+            ("--position-topic", self.position_topic),
+            ("--joint", self.joint),
+            ("--columns", self.columns),
+            ("--units", self.units),
+            ("--segment/--no-segment", self.segment),
+            ("--phase", self.phase),
+            ("--position-increases-when", self.position_increases_when),
+            ("--object-id", self.object_id),
+            ("--no-crc-check", not self.crc_check),
+        ]
+        return [flag for flag, value in values if value not in (None, [], False)]
 
 
-def _from_bag(
-    path: str, opts: RigOptions, size_x_cm: float | None
-) -> tuple[Recording, dict[str, Any]]:
+def bag_source(opts: RigOptions) -> BagSource:
+    """The ``--bag`` source options.
+
+    Raises:
+        UsageError: a topic missing, or an option out of its rule (exit 2).
+    """
     if not opts.wrench_topics:
         raise UsageError("--bag needs --wrench-topic (one, or two for two palms)")
     if opts.position_topic is None:
         raise UsageError("--bag needs --position-topic (PoseStamped or JointState)")
-    settings: dict[str, Any] = {
-        "source": "ros2_bag",
-        "wrench_topics": opts.wrench_topics,
-        "position_topic": opts.position_topic,
-        "joint": opts.joint,
-        "axis": opts.axis,
-        "position_is": opts.position_is,
-        "segment": True if opts.segment is None else opts.segment,
-        "phase": opts.phase or "all",
-        "position_increases_when": opts.position_increases_when,
-    }
-    if not opts.crc_check:  # recorded only when off: the logs of checked bags are unchanged
-        settings["crc_check"] = False
-    return _read(read_ros2_bag, path, opts, size_x_cm, settings), settings
+    return BagSource(
+        wrench_topics=tuple(opts.wrench_topics),
+        position_topic=opts.position_topic,
+        joint=opts.joint,
+        axis=opts.axis,  # type: ignore[arg-type]
+        position_is=opts.position_is,  # type: ignore[arg-type]
+        position_increases_when=opts.position_increases_when,  # type: ignore[arg-type]
+        crc_check=opts.crc_check,
+    )
 
 
-def _read(
-    reader: Callable[..., Recording],
-    path: str,
-    opts: RigOptions,
-    size_x_cm: float | None,
-    settings: dict[str, Any],
-) -> Recording:
-    """``reader`` with the recorded settings (all but ``source``) as its keyword arguments."""
-    options = {k: v for k, v in settings.items() if k != "source"}
-    return reader(path, object_id=str(opts.object_id), size_x_cm=size_x_cm, **options)
-
-
-#: source option → its reader; exactly one source is given per run.
-READERS: dict[str, Callable[[str, RigOptions, float | None], tuple[Recording, dict[str, Any]]]] = {
-    "--bag": _from_bag,
-}
+def segmentation(opts: RigOptions) -> Segmentation:
+    """How ``--bag`` and ``--csv`` cut their recording (``--segment``, ``--phase``)."""
+    return Segmentation(segment=opts.segment, phase=opts.phase or "all")  # type: ignore[arg-type]
 
 
 def run(
-    flag: str,
-    source: str,
+    path: str,
     opts: RigOptions,
-    weight_n: float,
-    size_cm: tuple[float, float, float] | None,
-    friction_mu: float | None,
+    obj: MeasuredObject,
     output: str,
     force: bool,
 ) -> None:
-    """Read the recording ``source`` of ``--bag`` / ``--csv`` and write its squeeze log."""
-    if is_stdio(source):
-        raise UsageError(f"{flag}: cannot read from stdin; give a file")
-    object_id = str(opts.object_id)
-    obj = object_record(object_id, weight_n, size_cm=size_cm, friction_mu=friction_mu)
-    check_input_path(source)
-    check_output_path(output, force)
-    rec, settings = READERS[flag](source, opts, None if size_cm is None else size_cm[0])
-    recording_log(source, rec, obj, settings, output=output, force=force)
+    """Read the ``--bag`` recording ``path`` and write its squeeze log."""
+    if is_stdio(path):
+        raise UsageError("--bag: cannot read from stdin; give a file")
+    source = bag_source(opts)
+    rec = measure_recording(
+        path, source, obj, output=output, segmentation=segmentation(opts), force=force
+    )
     for line in rec.warnings:  # e.g. a bag read without CRC checks (each names the file)
         typer.echo(f"warning: {line}", err=True)
     for r in rec.ruptures:  # each squeeze is kept up to its rupture, recorded in the log
-        warning = f"warning: {source}: object {object_id!r}: rupture in {r.describe()}: cut off"
+        warning = f"warning: {path}: object {obj.object_id!r}: rupture in {r.describe()}: cut off"
         typer.echo(warning, err=True)
     duration_s = sum(float(s.time_s[-1]) for s in rec.squeezes)
     where = "stdout" if is_stdio(output) else output
     typer.echo(
-        f"{where}: {len(rec.squeezes)} squeeze(s) of {object_id!r}, {duration_s:.1f} s, "
+        f"{where}: {len(rec.squeezes)} squeeze(s) of {obj.object_id!r}, {duration_s:.1f} s, "
         f"force {_hz(rec.force_rate_hz)}, position {_hz(rec.position_rate_hz)}",
         err=True,
     )

@@ -1,6 +1,8 @@
 """``deformctl measure CATALOG --sim``: simulated squeezes of every (selected) catalog object.
 
-The options become a :class:`deformctl.measure.SimulateCatalogTask`; one library function runs
+The options become a :class:`deformctl.measure.SimulateCatalogTask` (a
+:class:`~deformctl.measure.options.SqueezeProtocol` and the preset of a
+:class:`~deformctl.presets.SimOptions`); one library function runs
 it: :func:`deformctl.measure.simulate_catalog_file` (one squeeze log) or, for a dataset directory
 output, :func:`deformctl.measure.simulate_catalog_sweep`.
 """
@@ -8,7 +10,6 @@ output, :func:`deformctl.measure.simulate_catalog_sweep`.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 from typing import Annotated, Any
 
@@ -21,12 +22,15 @@ from deformctl.cli._options import default, parse_log_epoch, parse_object_ids
 from deformctl.cli._scene_options import scene_rate
 from deformctl.cli._summary import RunClock
 from deformctl.errors import UsageError
-from deformctl.measure import (
-    DEFAULT_CSV_MEMORY_BUDGET_GIB,
+from deformctl.measure.csv_options import DEFAULT_CSV_MEMORY_BUDGET_GIB
+from deformctl.measure.options import (
     DEFAULT_SIM_HOLD_S,
     DEFAULT_SIM_RAMP_S,
     DEFAULT_SIM_SQUEEZES,
     DEFAULT_SQUEEZE_STRAIN,
+    SqueezeProtocol,
+)
+from deformctl.measure.stage import (
     SimulateCatalogTask,
     simulate_catalog_file,
     simulate_catalog_sweep,
@@ -101,7 +105,7 @@ NoisePositionM = Annotated[
 
 
 @dataclass(frozen=True)
-class SimOptions:
+class SimFlags:
     """The ``--sim`` options as given (None: not given, the documented default applies)."""
 
     squeezes: int | None
@@ -121,72 +125,61 @@ class SimOptions:
     log_epoch: str | None = None
     scene_hz: float | None = None
 
-    def given(self) -> dict[str, object]:
-        """Option flag → value for the options given on the command line."""
-        return {
-            "--" + name.replace("_", "-"): value
-            for name, value in vars(self).items()
-            if value is not None
-        }
+    def given(self) -> list[str]:
+        """The flags of the options given on the command line."""
+        return [
+            "--" + name.replace("_", "-") for name, value in vars(self).items() if value is not None
+        ]
 
     def task(self) -> SimulateCatalogTask:
         """The squeezes, simulator settings and seed these options ask for.
 
         Raises:
-            UsageError: both ``--peak-force-n`` and ``--strain``, or ``--squeezes`` < 1.
+            UsageError: both ``--peak-force-n`` and ``--strain``, or a value outside its rule
+                (:class:`~deformctl.measure.options.SqueezeProtocol`,
+                :class:`~deformctl.presets.SimOptions`).
         """
-        from deformctl.presets import DEFAULT_PRESET, sim_preset
+        from deformctl.presets import DEFAULT_PRESET, SimOptions
 
         if self.peak_force_n is not None and self.strain is not None:
             raise UsageError("give --peak-force-n or --strain, not both")
-        if self.ramp_s is not None and not (math.isfinite(self.ramp_s) and self.ramp_s > 0):
-            raise UsageError(
-                f"--ramp-s must be a finite number of seconds > 0 (a force step does not "
-                f"excite the damping), got {self.ramp_s:g}"
-            )
-        if self.hold_s is not None and not (math.isfinite(self.hold_s) and self.hold_s >= 0):
-            raise UsageError(
-                f"--hold-s must be a finite number of seconds >= 0, got {self.hold_s:g}"
-            )
-        squeezes = DEFAULT_SIM_SQUEEZES if self.squeezes is None else self.squeezes
-        if squeezes < 1:
-            raise UsageError(f"--squeezes must be >= 1, got {squeezes}")
-        preset = sim_preset(self.sim_preset or DEFAULT_PRESET).replace(
-            settings={
-                "alpha_cm": self.alpha_cm,
-                "dt_s": self.dt_s,
-                "memory_budget_gib": self.memory_budget_gib,
-            }
-        )
-        simulate: dict[str, Any] = {
-            "squeezes": squeezes,
+        given: dict[str, Any] = {
+            "squeezes": self.squeezes,
             "peak_force_n": self.peak_force_n,
-            "strain": DEFAULT_SQUEEZE_STRAIN if self.strain is None else self.strain,
-            "ramp_s": DEFAULT_SIM_RAMP_S if self.ramp_s is None else self.ramp_s,
-            "hold_s": DEFAULT_SIM_HOLD_S if self.hold_s is None else self.hold_s,
-            "gravity": not self.floating,
-            "noise_force_n": self.noise_force_n or 0.0,
-            "noise_position_m": self.noise_position_m or 0.0,
-            "scene_hz": scene_rate(self.scene_hz),
+            "strain": self.strain,
+            "ramp_s": self.ramp_s,
+            "hold_s": self.hold_s,
+            "gravity": None if self.floating is None else not self.floating,
+            "noise_force_n": self.noise_force_n,
+            "noise_position_m": self.noise_position_m,
         }
-        scene_every_steps(simulate["scene_hz"], preset.settings.dt_s)
+        protocol = SqueezeProtocol(**{k: v for k, v in given.items() if v is not None})
+        preset = SimOptions(
+            preset_name=self.sim_preset or DEFAULT_PRESET,
+            alpha_cm=self.alpha_cm,
+            dt_s=self.dt_s,
+            memory_budget_gib=self.memory_budget_gib,
+        ).preset()
+        scene_hz = scene_rate(self.scene_hz)
+        scene_every_steps(scene_hz, preset.settings.dt_s)
         epoch_ns = parse_log_epoch(self.log_epoch)
         return SimulateCatalogTask(
-            simulate,
-            preset.settings,
-            0 if self.seed is None else self.seed,
-            preset.name,
+            protocol=protocol,
+            settings=preset.settings,
+            seed=0 if self.seed is None else self.seed,
+            sim_preset=preset.name,
+            scene_hz=scene_hz,
             **({} if epoch_ns is None else {"log_epoch_ns": epoch_ns}),
         )
 
 
-#: The flags of :class:`SimOptions` (only ``--sim`` takes them).
-FLAGS = tuple("--" + f.name.replace("_", "-") for f in dataclasses.fields(SimOptions))
+#: The flags of :class:`SimFlags` (only ``--sim`` takes them).
+FLAGS = tuple("--" + f.name.replace("_", "-") for f in dataclasses.fields(SimFlags))
 
 
 def run(
     catalog: str,
-    opts: SimOptions,
+    opts: SimFlags,
     output: str,
     force: bool,
     sweep: SweepOptions,
@@ -197,7 +190,7 @@ def run(
     and end with the summary line (unless ``quiet``).
 
     Raises:
-        UsageError: no catalog, or a bad option (see :meth:`SimOptions.task`).
+        UsageError: no catalog, or a bad option (see :meth:`SimFlags.task`).
     """
     if not catalog:
         raise UsageError("--sim needs a CATALOG argument (the objects to squeeze)")
@@ -227,7 +220,7 @@ def run(
         failed=0,
         output="stdout" if is_stdio(output) else output,
         detail=f"{len(series)} simulated squeeze(s) of {len(objects)} object(s), "
-        f"{task.simulate['squeezes']} each, {duration_s:.1f} s simulated, "
+        f"{task.protocol.squeezes} each, {duration_s:.1f} s simulated, "
         f"dt {task.settings.dt_s:g} s",
         quiet=quiet,
     )

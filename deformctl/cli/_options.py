@@ -212,13 +212,13 @@ Resume = Annotated[
 ]
 
 
-#: The sweep options' parameters: (name, alias, default), in the order of ``SweepOptions``.
-_SWEEP_PARAMETERS: tuple[tuple[str, Any, Any], ...] = (
-    ("workers", Workers, None),
-    ("scheduler", Scheduler, None),
-    ("connect_timeout", ConnectTimeout, None),
-    ("partition_size", PartitionSize, None),
-    ("resume", Resume, False),
+#: The sweep options' parameters: (parameter name, ``SweepOptions`` field, alias, default).
+_SWEEP_PARAMETERS: tuple[tuple[str, str, Any, Any], ...] = (
+    ("workers", "workers", Workers, None),
+    ("scheduler", "scheduler", Scheduler, None),
+    ("connect_timeout", "connect_timeout_s", ConnectTimeout, None),
+    ("partition_size", "partition_size", PartitionSize, None),
+    ("resume", "resume", Resume, False),
 )
 #: What a command wrapped by :func:`with_sweep_options` receives when called directly.
 NO_SWEEP = SweepOptions()
@@ -234,13 +234,13 @@ def with_sweep_options(command: Callable[..., R]) -> Callable[..., R]:
     kept = [p for p in signature.parameters.values() if p.name != "sweep"]
     added = [
         inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=value, annotation=alias)
-        for name, alias, value in _SWEEP_PARAMETERS
+        for name, _, alias, value in _SWEEP_PARAMETERS
     ]
 
     @functools.wraps(command)
     def wrapper(*args: Any, **kwargs: Any) -> R:
-        values = [kwargs.pop(name, value) for name, _, value in _SWEEP_PARAMETERS]
-        return command(*args, sweep=SweepOptions(*values), **kwargs)
+        given = {field: kwargs.pop(name, value) for name, field, _, value in _SWEEP_PARAMETERS}
+        return command(*args, sweep=SweepOptions(**given), **kwargs)
 
     wrapper.__signature__ = signature.replace(parameters=[*kept, *added])  # type: ignore[attr-defined]
     return wrapper

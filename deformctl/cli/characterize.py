@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any
+from typing import Annotated
 
 import pandas as pd
 import typer
@@ -13,10 +13,14 @@ from deformctl.characterize import (
     DEFAULT_WINDOW_S,
     MODEL_CHOICES,
     CharacterizeTask,
+    FitOptions,
     LogCoefficients,
     MaterialOptions,
+    QualityPolicy,
     characterize_file,
     characterize_sweep,
+    check_method,
+    check_preload,
     sweep_warnings,
 )
 from deformctl.characterize.quality import thresholds_help
@@ -193,28 +197,24 @@ def characterize(
     Example: deformctl characterize squeeze.mcap -o coefficients.parquet --model auto
     """
     clock = RunClock("characterize")
-    if method not in ("lsq", "paper"):
-        raise UsageError(f"--method must be lsq or paper, got {method!r}")
-    materials = MaterialOptions(model=model, at_force_n=at_force_n)
-    options: dict[str, Any] = {
-        "preload": preload,
-        "constrain_damping": constrain_damping,
-        "strict": strict,
-        "allow_flagged": allow_flagged,
-        "materials": materials,
-    }
+    fit = FitOptions(
+        method=check_method(method), window_s=window_s,
+        preload=None if preload is None else check_preload(preload),
+        constrain_damping=constrain_damping,
+        materials=MaterialOptions(model=model, at_force_n=at_force_n),
+    )  # fmt: skip
+    policy = QualityPolicy(strict=strict, allow_flagged=allow_flagged)
     if sweep.check(output):
         if len(logs) != 1 or plot is not None:
             raise UsageError("a dataset directory output (-o DIR/) takes one log directory "
                              "and no --plot")  # fmt: skip
-        task = CharacterizeTask(method, window_s, **options)
+        task = CharacterizeTask(fit=fit, policy=policy)
         summary = characterize_sweep(logs[0], task, output=output, sweep=sweep, force=force)
         for line in sweep_warnings(summary.out_dir):
             typer.echo(f"warning: {line}", err=True)
         finish_sweep(summary, "characterize", quiet=quiet)
         return
-    result = characterize_file(logs, method, output=output, window_s=window_s, force=force,  # type: ignore[arg-type]
-                               plot_dir=plot, **options)  # fmt: skip
+    result = characterize_file(logs, fit, policy, output=output, force=force, plot_dir=plot)
     for line in result.warnings:
         typer.echo(f"warning: {line}", err=True)
     typer.echo(render_summary(result), err=is_stdio(output))

@@ -50,7 +50,7 @@ from deformctl.cli._lift_runner import (
     check_max_force,
     choose_runner,
     lift_dataset,
-    sim_parts,
+    sim_options,
 )
 from deformctl.cli._lift_start import (
     CatalogArg,
@@ -66,12 +66,12 @@ from deformctl.cli._lift_start import (
 from deformctl.cli._scene_options import SceneHz, scene_rate
 from deformctl.cli._summary import Quiet, RunClock
 from deformctl.errors import UsageError
-from deformctl.lift.search import (
+from deformctl.lift.options import (
     DEFAULT_GROWTH,
     DEFAULT_MAX_ATTEMPTS,
     DEFAULT_TOLERANCE_REL,
+    SearchOptions,
     SearchProtocol,
-    validate_search_options,
 )
 from deformctl.lift.stage import lift_catalog_files
 from deformctl.parallel import SweepOptions
@@ -193,27 +193,14 @@ def lift(
         raise UsageError(
             "--workers with a single-file output needs --sim (a rig lifts one object at a time)"
         )
-    if lift_hold_s is not None and hold_s is not None:
-        raise UsageError("give --lift-hold-s (or its old spelling --hold-s), not both")
-    parts = sim_parts(
-        sim,
-        {
-            "--lift-accel-m-s2": lift_accel_m_s2,
-            "--lift-speed-m-s": lift_speed_m_s,
-            "--lift-height-m": lift_height_m,
-            "--hold-s" if hold_s is not None else "--lift-hold-s": (
-                hold_s if hold_s is not None else lift_hold_s
-            ),
-            "--slip-tolerance-m": slip_tolerance_m if sim else None,  # else: frames' option
-            "--slip-criterion": slip_criterion,
-            "--sim-preset": sim_preset,
-            "--alpha-cm": alpha_cm,
-            "--dt-s": dt_s,
-            "--memory-budget-gib": memory_budget_gib,
-            "--log-epoch": log_epoch,
-            "--scene-hz": scene_hz,
-        },
-    )
+    preset = sim_options(
+        sim, preset_name=sim_preset, alpha_cm=alpha_cm, dt_s=dt_s,
+        memory_budget_gib=memory_budget_gib, lift_accel_m_s2=lift_accel_m_s2,
+        lift_speed_m_s=lift_speed_m_s, lift_height_m=lift_height_m, lift_hold_s=lift_hold_s,
+        hold_s_alias=hold_s, slip_criterion=slip_criterion, log_epoch=log_epoch,
+        slip_tolerance_m=slip_tolerance_m if sim else None,  # else: the frames' option
+        scene_hz=scene_hz,
+    )  # fmt: skip
     judge = frames_judge(
         enabled=slip_from_frames, palm_marker_ids=palm_marker_ids, palm_regions=palm_regions,
         frame_marker_size_cm=frame_marker_size_cm,
@@ -224,26 +211,25 @@ def lift(
         raise UsageError("--scene-hz needs --log FILE: the scene is written into the lift log")
     # the scene goes into a log: without one, the attempts record none
     scene = scene_rate(scene_hz) if log is not None or dataset else 0.0
-    factory = choose_runner(rig, rig_timeout, judge, parts, scene)
-    validate_search_options(
-        protocol=protocol, growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts
-    )
+    factory = choose_runner(rig, rig_timeout, judge, preset, scene)
+    search = SearchOptions(
+        protocol=cast(SearchProtocol, protocol), growth=growth, tolerance_rel=tolerance,
+        max_attempts=max_attempts,
+    )  # fmt: skip
     check_max_force(max_force_n, dataset=dataset)
     object_ids = opt.parse_object_ids(objects)
     seed = start_seed(start_model, start_table, start_interpolate, start_margin, coefficients,
                       protocol=protocol, dataset=dataset)  # fmt: skip
+    epoch_ns = opt.parse_log_epoch(log_epoch)
     if dataset:
-        search = (protocol, growth, tolerance, max_attempts, opt.parse_log_epoch(log_epoch),
-                  scene_rate(scene_hz))  # fmt: skip
-        lift_dataset(catalog, parts, log, search, output, sweep, object_ids, force, quiet)
+        lift_dataset(catalog, preset, log, search, epoch_ns, scene, output, sweep, object_ids,
+                     force, quiet)  # fmt: skip
         return
     with progress_bar(Console(stderr=True), "lift") as progress:
         run = lift_catalog_files(
-            catalog, factory, output=output, log=log, object_ids=object_ids,
-            protocol=cast(SearchProtocol, protocol),  # checked by validate_search_options
-            growth=growth, tolerance_rel=tolerance, max_attempts=max_attempts,
-            progress=progress, force=force, log_epoch_ns=opt.parse_log_epoch(log_epoch),
-            seed=seed, warn=warn, workers=sweep.workers, max_force_n=max_force_n,
+            catalog, factory, output=output, log=log, object_ids=object_ids, search=search,
+            progress=progress, force=force, log_epoch_ns=epoch_ns, seed=seed, warn=warn,
+            workers=sweep.workers, max_force_n=max_force_n,
         )  # fmt: skip
     report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)),
                summary=None if quiet else run_summary(run, clock, output, log))  # fmt: skip

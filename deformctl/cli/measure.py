@@ -15,6 +15,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from deformctl.catalog import MeasuredObject
 from deformctl.cli import _image_options as img
 from deformctl.cli import _measure_csv, _measure_images, _measure_rig, _measure_sim
 from deformctl.cli import _measure_csv as csvo
@@ -44,12 +45,40 @@ SOURCES: dict[str, tuple[str, ...]] = {
 }
 
 
-def _refuse_foreign(source: str, given: dict[str, object]) -> None:
-    """Refuse the options given that ``source`` does not take, by name."""
-    foreign = [flag for flag, v in given.items() if flag in SOURCES and source not in SOURCES[flag]]
+def _refuse_foreign(source: str, given: list[str]) -> None:
+    """Refuse the options given (their flags) that ``source`` does not take, by name."""
+    foreign = [flag for flag in given if flag in SOURCES and source not in SOURCES[flag]]
     if foreign:
         why = " (the catalog describes the objects)" if source == "--sim" else ""
         raise UsageError(f"{', '.join(foreign)} cannot be used with {source}{why}")
+
+
+def _source(
+    bag: str | None,
+    csv: str | None,
+    images: tuple[str, str] | None,
+    sim: bool,
+    inputs: list[str],
+) -> tuple[str, str]:
+    """The one source given (its flag and its value: a catalog for ``--sim``).
+
+    Raises:
+        UsageError: no source, several, or arguments the source does not take (exit 2).
+    """
+    if inputs and not sim and csv is None:
+        raise UsageError(f"an argument ({inputs[0]!r}) needs --sim (a catalog) or --csv (files)")
+    if sim and len(inputs) > 1:
+        raise UsageError(f"--sim takes one catalog, got {len(inputs)}: {', '.join(inputs)}")
+    catalog = inputs[0] if sim and inputs else None
+    sources = {"--bag": bag, "--csv": csv, "--images": None if images is None else images[0]}
+    sources["--sim"] = (catalog or "") if sim else None
+    chosen = [(flag, value) for flag, value in sources.items() if value is not None]
+    if len(chosen) != 1:
+        what = (
+            "several sources (" + ", ".join(f for f, _ in chosen) + ")" if chosen else "no source"
+        )
+        raise UsageError(f"{what}: give exactly one of {', '.join(sources)}")
+    return chosen[0]
 
 
 @translate_errors
@@ -153,61 +182,53 @@ def measure(
         --position-topic /left/palm_pose --object-id sand --weight-n 2.9 -o squeeze.mcap
       deformctl measure datasets/paper/objects.csv --sim -o squeeze.mcap
     """
-    sim_opts = _measure_sim.SimOptions(
-        squeezes, sim_preset, objects, peak_force_n, strain, ramp_s, hold_s, floating, alpha_cm,
-        dt_s, memory_budget_gib, seed, noise_force_n, noise_position_m, log_epoch, scene_hz,
+    sim_opts = _measure_sim.SimFlags(
+        squeezes=squeezes, sim_preset=sim_preset, objects=objects, peak_force_n=peak_force_n,
+        strain=strain, ramp_s=ramp_s, hold_s=hold_s, floating=floating, alpha_cm=alpha_cm,
+        dt_s=dt_s, memory_budget_gib=memory_budget_gib, seed=seed, noise_force_n=noise_force_n,
+        noise_position_m=noise_position_m, log_epoch=log_epoch, scene_hz=scene_hz,
     )  # fmt: skip
     image_opts = img.ImageOptions(
-        marker_size_cm, marker_dict, marker_id, checkerboard, square_size_cm, color_range,
-        background, debug_dir, append, camera_matrix,
+        marker_size_cm=marker_size_cm, marker_dict=marker_dict, marker_id=marker_id,
+        checkerboard=checkerboard, square_size_cm=square_size_cm, color_range=color_range,
+        background=background, debug_dir=debug_dir, append=append, camera_matrix=camera_matrix,
     )  # fmt: skip
     csv_flags = csvo.CsvFlags(
-        skip_rows, delimiter, decimal, thousands, encoding, force_sign, lag_s, objects_from
-    )
-    rig_opts = _measure_rig.RigOptions(
-        object_id, list(wrench_topics), position_topic, joint, axis, position_is, columns, units,
-        segment, phase, position_increases_when, crc_check=not no_crc_check,
+        skip_rows=skip_rows, delimiter=delimiter, decimal=decimal, thousands=thousands,
+        encoding=encoding, force_sign=force_sign, lag_s=lag_s, objects_from=objects_from,
     )  # fmt: skip
-    given: dict[str, object] = {
-        **rig_opts.given(), "--weight-n": weight_n, "--size-cm": size_cm,
-        "--friction-mu": friction_mu, **image_opts.given(), **sim_opts.given(),
-        **csv_flags.given(), "--quiet": quiet,
-    }  # fmt: skip
-    given = {flag: value for flag, value in given.items() if value not in (None, [], False)}
+    rig_opts = _measure_rig.RigOptions(
+        object_id=object_id, wrench_topics=list(wrench_topics), position_topic=position_topic,
+        joint=joint, axis=axis, position_is=position_is, columns=columns, units=units,
+        segment=segment, phase=phase, position_increases_when=position_increases_when,
+        crc_check=not no_crc_check,
+    )  # fmt: skip
+    object_flags = {"--weight-n": weight_n, "--size-cm": size_cm, "--friction-mu": friction_mu}
+    given = [
+        *rig_opts.given(), *(flag for flag, value in object_flags.items() if value is not None),
+        *image_opts.given(), *sim_opts.given(), *csv_flags.given(),
+        *(["--quiet"] if quiet else []),
+    ]  # fmt: skip
     inputs = list(inputs or [])
-    if inputs and not sim and csv is None:
-        raise UsageError(f"an argument ({inputs[0]!r}) needs --sim (a catalog) or --csv (files)")
-    if sim and len(inputs) > 1:
-        raise UsageError(f"--sim takes one catalog, got {len(inputs)}: {', '.join(inputs)}")
-    catalog = inputs[0] if sim and inputs else None
-    sources = {"--bag": bag, "--csv": csv, "--images": images and images[0]}
-    sources["--sim"] = (catalog or "") if sim else None
-    chosen = [(flag, value) for flag, value in sources.items() if value is not None]
-    if len(chosen) != 1:
-        what = (
-            "several sources (" + ", ".join(f for f, _ in chosen) + ")" if chosen else "no source"
-        )
-        raise UsageError(f"{what}: give exactly one of {', '.join(sources)}")
-    flag, source = chosen[0]
+    flag, source = _source(bag, csv, images, sim, inputs)
     _refuse_foreign(flag, given)
     if flag == "--sim":
         _measure_sim.run(source, sim_opts, output, force, sweep, Console(stderr=True), quiet)
         return
     if flag == "--csv":
-        obj = {"object_id": object_id, "weight_n": weight_n, "size_cm": size_cm,
-               "friction_mu": friction_mu}  # fmt: skip
+        named = csvo.ObjectFlags(
+            object_id=object_id, weight_n=weight_n, size_cm=size_cm, friction_mu=friction_mu
+        )
         _measure_csv.run(
-            [source, *inputs], csv_flags, rig_opts, obj, memory_budget_gib, output, force, sweep
+            [source, *inputs], csv_flags, rig_opts, named, memory_budget_gib, output, force, sweep
         )
         return
     if sweep.given():
         raise UsageError(f"{sweep.given()[0]} needs --sim or --csv")
     if object_id is None or weight_n is None:
         raise UsageError(f"{flag} needs --object-id and --weight-n")
+    obj = MeasuredObject(object_id, weight_n, size_cm=size_cm, friction_mu=friction_mu)
     if images is not None:
-        _measure_images.measure_images(
-            images, image_opts, object_id=object_id, weight_n=weight_n,
-            friction_mu=friction_mu, output=output, force=force,
-        )  # fmt: skip
+        _measure_images.measure_images(images, image_opts, obj, output=output, force=force)
         return
-    _measure_rig.run(flag, source, rig_opts, weight_n, size_cm, friction_mu, output, force)
+    _measure_rig.run(source, rig_opts, obj, output, force)

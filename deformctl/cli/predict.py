@@ -6,7 +6,6 @@ imports neither pandas nor scikit-learn (a table, an older model file and a Parq
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import typer
@@ -14,33 +13,35 @@ import typer
 from deformctl.cli._common import translate_errors
 from deformctl.cli._options import Force
 from deformctl.errors import UsageError
+from deformctl.quantities import (
+    COVERAGE,
+    DAMPING_NS_PER_CM,
+    FRICTION_MU,
+    STIFFNESS_N_PER_CM,
+    WEIGHT_N,
+    Quantity,
+)
 
-FLAGS = {
-    "weight_n": "--weight-n",
-    "deformability_n_per_cm": "--deformability-n-per-cm",
-    "damping_ns_per_cm": "--damping-ns-per-cm",
-    "friction_mu": "--friction-mu",
+#: Each flag's quantity (its one rule, :mod:`deformctl.quantities`).
+QUANTITIES: dict[str, Quantity] = {
+    "weight_n": WEIGHT_N,
+    "deformability_n_per_cm": STIFFNESS_N_PER_CM,
+    "damping_ns_per_cm": DAMPING_NS_PER_CM,
+    "friction_mu": FRICTION_MU,
 }
 
 
 def _check_flags(flags: dict[str, float | None], coverage: float | None) -> None:
-    """Exit 2 naming the flag for a value no object can have (the rule of
-    :func:`deformctl.grip.fast.input_problem`) and for a coverage outside (0, 1)."""
-    from deformctl.grip.fast import input_problem, input_rule
-
+    """Exit 2 naming the flag for a value outside its quantity's rule
+    (:mod:`deformctl.quantities`, the rule every command uses) and for a coverage outside
+    (0, 1)."""
     for key, value in flags.items():
-        if value is None:
-            continue
-        if not math.isfinite(value):
-            raise UsageError(f"{FLAGS[key]} must be a finite number, got {value}")
-        if input_problem(key, float(value), "the command line") is not None:
-            raise UsageError(f"{FLAGS[key]} {input_rule(key)}, got {value:g}")
-    if coverage is not None and not (math.isfinite(coverage) and 0.0 < coverage < 1.0):
-        raise UsageError(f"--coverage must be a number in (0, 1), got {coverage:g}")
+        QUANTITIES[key].check_optional(value)
+    COVERAGE.check_optional(coverage)
 
 
 def _check_usage(flags: dict[str, float | None], features: str | None, catalog: str | None) -> None:
-    given = [FLAGS[k] for k, v in flags.items() if v is not None]
+    given = [QUANTITIES[k].flag for k, v in flags.items() if v is not None]
     if features is not None and given:
         raise UsageError(f"give either a COEFFICIENTS table or the flags, not both ({given[0]})")
     if features is None and not given:
@@ -48,7 +49,7 @@ def _check_usage(flags: dict[str, float | None], features: str | None, catalog: 
             "nothing to predict: give a COEFFICIENTS table or --weight-n, "
             "--deformability-n-per-cm and --damping-ns-per-cm"
         )
-    missing = [FLAGS[k] for k in list(FLAGS)[:3] if flags[k] is None]
+    missing = [QUANTITIES[k].flag for k in list(QUANTITIES)[:3] if flags[k] is None]
     if given and missing:
         raise UsageError(f"one object needs all three flags; missing {', '.join(missing)}")
     if catalog is not None and features is None:
@@ -74,7 +75,9 @@ def predict(
         None, "--damping-ns-per-cm", help="λ of one object, N·s/cm."
     ),
     friction_mu: float | None = typer.Option(
-        None, "--friction-mu", help="μ of one object (0 < μ <= 3); a μ-aware model needs it."
+        None,
+        "--friction-mu",
+        help=f"μ of one object ({FRICTION_MU.rule}); a μ-aware model needs it.",
     ),
     coverage: float | None = typer.Option(
         None,

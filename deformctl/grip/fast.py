@@ -30,6 +30,7 @@ its training μ.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import operator
 import zipfile
@@ -45,13 +46,21 @@ from deformctl import jsonsafe
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.grip.activations import _activation, _activation_scalar
 from deformctl.grip.conformal import (
-    check_coverage,
     conformal_margin,
     conformal_min_scores,
     conformal_rank,
 )
 from deformctl.grip.groups import GRIP_FEATURES, NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM, ZETA_SHIFT
 from deformctl.grip.sanity import implausible, implausible_line, output_problem
+from deformctl.quantities import (
+    COVERAGE,
+    DAMPING_NS_PER_CM,
+    FRICTION_MU,
+    STIFFNESS_N_PER_CM,
+    WEIGHT_N,
+    Quantity,
+)
+from deformctl.reprs import short_repr
 from deformctl.units import GRAVITY_M_S2
 
 __all__ = [
@@ -74,8 +83,6 @@ __all__ = [
 
 #: Model names ``predict`` (and :meth:`Predictor.load`) resolve to a file shipped with deformctl.
 BUNDLED_MODELS: tuple[str, ...] = ("grip",)
-#: The largest friction coefficient accepted (rubber on rubber is about 1-2; above 3 is a typo).
-MAX_FRICTION_MU = 3.0
 #: The model-file format tag (the same as :data:`deformctl.artifacts.model.MODEL_FORMAT`).
 MODEL_FORMATS = ("deformctl-lift-force-model/1", "deformctl-lift-force-model/2")
 #: The most bytes of ``schema.json`` read from a model file (the bundled model's is ~60 kB).
@@ -177,33 +184,44 @@ def _float_array(value: Any, shape: tuple[int, ...] | None, what: str, path: Pat
     return arr
 
 
-#: The accepted range of each input: (lowest, lowest allowed?, highest). λ down to -0.05 N·s/cm
-#: is a fit's noise around 0 and counts as 0 (:data:`~deformctl.grip.groups.
-#: NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM`).
-INPUT_RULES: dict[str, tuple[float, bool, float]] = {
-    "weight_n": (0.0, False, math.inf),
-    "deformability_n_per_cm": (0.0, False, math.inf),
-    "damping_ns_per_cm": (-NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM, True, math.inf),
-    "friction_mu": (0.0, False, MAX_FRICTION_MU),
+#: Each input's rule: its quantity's (:mod:`deformctl.quantities`, the one rule every command
+#: uses), except that λ down to -0.05 N·s/cm is a fit's noise around 0 and counts as 0
+#: (:data:`~deformctl.grip.groups.NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM`).
+INPUT_RULES: dict[str, Quantity] = {
+    "weight_n": WEIGHT_N,
+    "deformability_n_per_cm": STIFFNESS_N_PER_CM,
+    "damping_ns_per_cm": dataclasses.replace(
+        DAMPING_NS_PER_CM, low=-NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM
+    ),
+    "friction_mu": FRICTION_MU,
 }
+#: The largest friction coefficient accepted (:data:`deformctl.quantities.FRICTION_MU`).
+MAX_FRICTION_MU = FRICTION_MU.high
 
 
 def input_rule(col: str) -> str:
-    """The rule of input ``col`` in words, e.g. ``must be > 0 and <= 3``."""
-    low, inclusive, high = INPUT_RULES[col]
+    """The rule of input ``col`` in words, e.g. ``must be a number in (0, 3]``."""
     if col == "damping_ns_per_cm":
-        return f"must be >= 0 (a fitted {low:g} counts as 0)"
-    text = f"must be {'>=' if inclusive else '>'} {low:g}"
-    return text + (f" and <= {high:g}" if math.isfinite(high) else "")
+        rule = DAMPING_NS_PER_CM.rule
+        return f"must be {rule} (a fitted {INPUT_RULES[col].low:g} counts as 0)"
+    return f"must be {INPUT_RULES[col].rule}"
+
+
+def _bad(rule: Quantity, values: np.ndarray) -> np.ndarray:
+    """Where ``values`` break ``rule`` (NaN and infinities too)."""
+    with np.errstate(invalid="ignore"):
+        low = values <= rule.low if rule.low_open else values < rule.low
+        high = values >= rule.high if rule.high_open else values > rule.high
+        bad: np.ndarray = ~np.isfinite(values) | low | high
+    return bad
 
 
 def input_problem(col: str, value: float, ids: str) -> str | None:
-    """The one line for a bad value of input ``col`` (None when it is fine); the one home of the
-    input checks (NaN or not finite; W, D > 0; λ >= -0.05; 0 < μ <= :data:`MAX_FRICTION_MU`)."""
+    """The one line for a bad value of input ``col`` (None when it is fine); the checks are the
+    quantities' rules (:data:`INPUT_RULES`), NaN and infinities refused."""
     if not math.isfinite(value):
         return f"{col} is NaN or not a finite number for {ids}"
-    low, inclusive, high = INPUT_RULES[col]
-    if (value < low if inclusive else value <= low) or value > high:
+    if _bad(INPUT_RULES[col], np.asarray([value], dtype=np.float64))[0]:
         return f"{col} {input_rule(col)}; it is {value:g} for {ids}"
     return None
 
@@ -216,9 +234,7 @@ def input_problems(
     out: list[tuple[str, str]] = []
     labels = np.asarray(names, dtype=object)
     for col, arr in values.items():
-        low, inclusive, high = INPUT_RULES[col]
-        with np.errstate(invalid="ignore"):
-            bad = ~np.isfinite(arr) | (arr < low if inclusive else arr <= low) | (arr > high)
+        bad = _bad(INPUT_RULES[col], arr)
         if bad.any():
             first = int(np.flatnonzero(bad)[0])
             line = input_problem(col, float(arr[first]), _ids(labels[bad]))
@@ -254,6 +270,8 @@ class Estimates:
         warnings: one line per cause and object (no ``warning:`` prefix).
     """
 
+    __repr__ = short_repr
+
     names: np.ndarray
     lift_force_n: np.ndarray
     f_w_n: np.ndarray
@@ -270,6 +288,8 @@ class Estimates:
 @dataclass(frozen=True)
 class Estimate:
     """One object's prediction (the fields of :class:`Estimates` as scalars)."""
+
+    __repr__ = short_repr
 
     lift_force_n: float
     f_w_n: float
@@ -292,6 +312,8 @@ class Predictor:
     (min, max) over the training rows, inputs and groups), ``training_friction_mu`` (a single-μ
     model's μ, else None) and ``scores`` (the calibration scores, sorted, or None).
     """
+
+    __repr__ = short_repr
 
     path: Path
     metadata: Mapping[str, Any]
@@ -395,8 +417,8 @@ class Predictor:
             and not (isinstance(scale_index, int) and 0 <= scale_index < len(features))
         ):
             raise InputDataError("the numpy export's scale_index is out of range", path=path)
-        if mu is not None and not (math.isfinite(mu) and mu > 0):
-            raise InputDataError(f"the model's training friction_mu {mu!r} is not > 0", path=path)
+        if mu is not None:  # μ's one rule, as a value read from a file
+            FRICTION_MU.check_data(mu, where="the model's training objects", path=path)
         corr = exp.get("correction")
         corr = None if corr is None else _float_array(corr, (n_in + 1,), "correction", path)
         raw_scores = meta.get("conformal_scores")
@@ -520,10 +542,7 @@ class Predictor:
         cached = self._cache.get(("margin", coverage))
         if cached is not None:
             return float(cached)
-        try:
-            p = check_coverage(coverage)
-        except (TypeError, ValueError):
-            raise UsageError(f"--coverage must be a number in (0, 1), got {coverage}") from None
+        p = COVERAGE.check(coverage)  # the one rule of --coverage
         if self.scores is None:
             raise InputDataError(NO_SCORES_MESSAGE, path=self.path)
         n = self.scores.size

@@ -80,23 +80,22 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Literal, Protocol
+from typing import Any, Protocol
 
 from deformctl.catalog import rigid_grip_force_n
 from deformctl.errors import DeformctlError, RigError, SearchError, UsageError
+from deformctl.lift.options import (
+    DEFAULT_GROWTH,
+    DEFAULT_MAX_ATTEMPTS,
+    DEFAULT_START_MARGIN,
+    DEFAULT_TOLERANCE_REL,
+    PROTOCOLS,
+    SearchOptions,
+    SearchProtocol,
+)
+from deformctl.quantities import FRICTION_MU, START_MARGIN, WEIGHT_N
+from deformctl.reprs import short_repr
 from deformctl.series import LiftAttempt, TrialOutcome
-
-SearchProtocol = Literal["refine", "paper", "seeded"]
-#: The protocols ``lift --protocol`` chooses from; ``seeded`` is chosen by a start force
-#: (:func:`find_min_lift_force_seeded`, ``lift --start-model`` / ``--start-table``).
-PROTOCOLS: tuple[SearchProtocol, ...] = ("refine", "paper")
-
-DEFAULT_GROWTH = 1.2  #: the paper's +20 % per attempt
-DEFAULT_TOLERANCE_REL = 0.005  #: refine stops when (high - low) / high <= 0.5 %
-DEFAULT_MAX_ATTEMPTS = 50  #: covers F_w * 1.2**40 (about 1500 x F_w) plus the bisection
-#: seeded: the first attempt is at the predicted L_f times this (chosen by measurement:
-#: ``bench/bench_seeded.py``, README "Starting from the model's prediction").
-DEFAULT_START_MARGIN = 1.005
 
 __all__ = [
     "DEFAULT_GROWTH",
@@ -109,12 +108,12 @@ __all__ = [
     "LiftSearchResult",
     "RigSearchAbortedError",
     "SearchAbortedError",
+    "SearchOptions",
     "SearchProtocol",
     "TrialRunner",
     "find_min_lift_force",
     "find_min_lift_force_seeded",
     "rigid_grip_force_n",
-    "validate_search_options",
     "validate_start_margin",
 ]
 
@@ -188,6 +187,8 @@ class LiftSearchResult:
         max_force_n: the force ceiling of the search, N (inf: none).
         start_clamped: True when a seeded start above the ceiling was lowered to it.
     """
+
+    __repr__ = short_repr
 
     object_id: str
     lift_force_n: float
@@ -322,48 +323,18 @@ class RigSearchAbortedError(SearchAbortedError, RigError):
     """A search stopped because the external rig failed (crash, time-out, bad answer)."""
 
 
-def validate_search_options(
-    *, protocol: str, growth: float, tolerance_rel: float, max_attempts: int
-) -> None:
-    """Check the search options that do not depend on the object.
-
-    Raises:
-        UsageError: ``protocol`` unknown, ``growth`` not a finite number > 1, ``tolerance_rel``
-            not in (0, 1), or ``max_attempts`` not an integer >= 1 (exit 2).
-    """
-    if protocol not in PROTOCOLS:
-        raise UsageError(f"protocol must be one of {', '.join(PROTOCOLS)}, got {protocol!r}")
-    if not (math.isfinite(growth) and growth > 1):
-        raise UsageError(f"growth must be a finite number > 1, got {growth!r}")
-    if not (math.isfinite(tolerance_rel) and 0 < tolerance_rel < 1):
-        raise UsageError(f"tolerance must be a relative value in (0, 1), got {tolerance_rel!r}")
-    if isinstance(max_attempts, bool) or not isinstance(max_attempts, int) or max_attempts < 1:
-        raise UsageError(f"max attempts must be an integer >= 1, got {max_attempts!r}")
-
-
 def _validate(
-    *,
-    weight_n: float,
-    friction_mu: float,
-    protocol: str,
-    growth: float,
-    tolerance_rel: float,
-    max_attempts: int,
-    object_id: str,
-    max_force_n: float = math.inf,
+    *, weight_n: float, friction_mu: float, object_id: str, max_force_n: float = math.inf
 ) -> None:
-    where = f"object {object_id!r}: "
+    """The object's W and μ under their rules (:mod:`deformctl.quantities`), and its ceiling."""
     if isinstance(max_force_n, bool) or not (
         isinstance(max_force_n, int | float) and max_force_n > 0
     ):
-        raise UsageError(f"{where}force ceiling must be a number > 0 N, got {max_force_n!r}")
-    if not (math.isfinite(weight_n) and weight_n > 0):
-        raise UsageError(f"{where}weight must be a finite number > 0 N, got {weight_n!r}")
-    if not (math.isfinite(friction_mu) and friction_mu > 0):
-        raise UsageError(f"{where}friction mu must be a finite number > 0, got {friction_mu!r}")
-    validate_search_options(
-        protocol=protocol, growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts
-    )
+        raise UsageError(
+            f"object {object_id!r}: force ceiling must be a number > 0 N, got {max_force_n!r}"
+        )
+    WEIGHT_N.check(weight_n, label=f"object {object_id!r}: weight_n")
+    FRICTION_MU.check(friction_mu, label=f"object {object_id!r}: friction_mu")
 
 
 @dataclass
@@ -570,14 +541,10 @@ def find_min_lift_force(
             runner's error is a :class:`~deformctl.errors.RigError`).
     """
     _validate(
-        weight_n=weight_n,
-        friction_mu=friction_mu,
-        protocol=protocol,
-        growth=growth,
-        tolerance_rel=tolerance_rel,
-        max_attempts=max_attempts,
-        object_id=object_id,
-        max_force_n=max_force_n,
+        weight_n=weight_n, friction_mu=friction_mu, object_id=object_id, max_force_n=max_force_n
+    )
+    SearchOptions(
+        protocol=protocol, growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts
     )
     s = _new_search(object_id, weight_n, friction_mu, protocol, growth, tolerance_rel, max_attempts)
     s.max_force_n = float(max_force_n)
@@ -592,15 +559,12 @@ def find_min_lift_force(
 
 
 def validate_start_margin(margin: float) -> None:
-    """Check a seeded search's start margin.
+    """Check a seeded search's start margin (:data:`deformctl.quantities.START_MARGIN`).
 
     Raises:
         UsageError: ``margin`` is not a finite number >= 1 (exit 2).
     """
-    if isinstance(margin, bool) or not (
-        isinstance(margin, int | float) and math.isfinite(margin) and margin >= 1
-    ):
-        raise UsageError(f"start margin must be a finite number >= 1, got {margin!r}")
+    START_MARGIN.check(margin)
 
 
 def find_min_lift_force_seeded(
@@ -666,15 +630,9 @@ def find_min_lift_force_seeded(
         (5, True, True)
     """
     _validate(
-        weight_n=weight_n,
-        friction_mu=friction_mu,
-        protocol="refine",
-        growth=growth,
-        tolerance_rel=tolerance_rel,
-        max_attempts=max_attempts,
-        object_id=object_id,
-        max_force_n=max_force_n,
+        weight_n=weight_n, friction_mu=friction_mu, object_id=object_id, max_force_n=max_force_n
     )
+    SearchOptions(growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts)
     validate_start_margin(margin)
     where = f"object {object_id!r}: "
     if isinstance(predicted_lift_force_n, bool) or not (

@@ -55,7 +55,9 @@ import numpy as np
 import pandas as pd
 
 from deformctl.catalog import CatalogObject
-from deformctl.errors import InputDataError, UsageError
+from deformctl.errors import InputDataError
+from deformctl.quantities import START_INTERPOLATE
+from deformctl.reprs import short_repr
 
 __all__ = [
     "FEATURE_COLUMNS",
@@ -98,6 +100,8 @@ class StartEstimate:
             :data:`START_BOUND_COVERAGE`, N (NaN for a table, or a model without enough
             calibration scores).
     """
+
+    __repr__ = short_repr
 
     object_id: str
     predicted_lift_force_n: float
@@ -206,6 +210,8 @@ class StartSeed:
         coefficients_path: its file name, for messages.
         inputs: the files the seed was read from (hashed into the outputs' provenance).
     """
+
+    __repr__ = short_repr
 
     source: StartSource
     predictor: Predictor
@@ -340,8 +346,7 @@ class StartSeed:
         """
         from deformctl.table import standardized_distances, validate_index_table
 
-        if k is not None and k < 1:
-            raise UsageError(f"--start-interpolate must be >= 1, got {k}")
+        START_INTERPOLATE.check_optional(k)
         validate_index_table(table)
         keys = table[list(FEATURE_COLUMNS)].to_numpy(dtype=np.float64)
         lo, hi = keys.min(axis=0), keys.max(axis=0)
@@ -457,8 +462,7 @@ def load_start_table(
     from deformctl.lift.search import validate_start_margin
 
     validate_start_margin(margin)
-    if k is not None and k < 1:
-        raise UsageError(f"--start-interpolate must be >= 1, got {k}")
+    START_INTERPOLATE.check_optional(k)
     table = read_table(path, "index_table")
     coefficients_table = _coefficients(coefficients)
     settings = {"table": path, "margin": float(margin), "coefficients": coefficients}

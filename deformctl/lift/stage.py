@@ -47,20 +47,17 @@ from deformctl.errors import DeformctlError, UsageError
 from deformctl.lift.ceiling import CEILING_COLUMN, ForceCeiling, force_ceiling
 from deformctl.lift.journal import LiftJournal
 from deformctl.lift.objects import read_lift_objects
+from deformctl.lift.options import DEFAULT_SEARCH, SearchOptions
 from deformctl.lift.search import (
-    DEFAULT_GROWTH,
-    DEFAULT_MAX_ATTEMPTS,
-    DEFAULT_TOLERANCE_REL,
     LiftAttempt,
     LiftSearchResult,
     SearchAbortedError,
-    SearchProtocol,
     TrialRunner,
     find_min_lift_force,
     find_min_lift_force_seeded,
-    validate_search_options,
 )
 from deformctl.parallel import map_in_order, single_file_workers
+from deformctl.reprs import short_repr
 from deformctl.series import TrialOutcome
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the seed sources import sklearn when used
@@ -158,6 +155,8 @@ class CatalogLiftResult:
         not_run: ids of the objects skipped after a runner failure.
     """
 
+    __repr__ = short_repr
+
     table: pd.DataFrame
     attempts: tuple[LiftAttempt, ...]
     results: tuple[LiftSearchResult, ...]
@@ -193,10 +192,7 @@ def lift_catalog(
     catalog: pd.DataFrame | Sequence[CatalogObject],
     factory: RunnerFactory,
     *,
-    protocol: SearchProtocol = "refine",
-    growth: float = DEFAULT_GROWTH,
-    tolerance_rel: float = DEFAULT_TOLERANCE_REL,
-    max_attempts: int = DEFAULT_MAX_ATTEMPTS,
+    search: SearchOptions = DEFAULT_SEARCH,
     progress: LiftProgress | None = None,
     path: str | None = None,
     seed: StartSeed | None = None,
@@ -222,16 +218,14 @@ def lift_catalog(
         catalog: a validated catalog (see :func:`deformctl.artifacts.read_catalog`), already cut
             to the objects to lift (:func:`~deformctl.catalog.select_objects`), or its objects.
         factory: builds the runner of each object.
-        protocol: ``"refine"`` or ``"paper"``.
-        growth: ramp factor (> 1).
-        tolerance_rel: ``refine``'s relative bracket width, in (0, 1).
-        max_attempts: attempt budget per object (>= 1).
+        search: the search's protocol, growth, tolerance and attempt budget
+            (:class:`~deformctl.lift.options.SearchOptions`, checked when built).
         progress: called after each object as ``progress(object_id, done, total)``.
         path: the catalog's file name, for error messages.
         seed: start each search from a predicted L_f (a model or an index table,
             :mod:`deformctl.lift.seeded`) with
-            :func:`~deformctl.lift.search.find_min_lift_force_seeded`; an object outside the
-            seed's range is searched by ``protocol`` from F_w instead, and ``warn`` gets one line
+            :func:`~deformctl.lift.search.find_min_lift_force_seeded`; an object outside the seed's
+            range is searched by ``search.protocol`` from F_w instead, and ``warn`` gets one line
             for it before any attempt. The rows' ``predicted_lift_force_n``, ``start_force_n``,
             ``start_in_training_range`` and ``start_source`` are filled (null without a seed).
         warn: receives warning lines (None: they are dropped).
@@ -249,7 +243,7 @@ def lift_catalog(
         A :class:`CatalogLiftResult`.
 
     Raises:
-        UsageError: a search option out of range (before anything runs; exit 2).
+        UsageError: a seed with the ``paper`` protocol (before anything runs; exit 2).
         InputDataError: an object the lift cannot use, e.g. ``friction_mu = 0``, one the
             runner refuses (``factory.check``), or (``seed``) one without D and λ (before
             anything runs; exit 65).
@@ -257,10 +251,7 @@ def lift_catalog(
             finishes; with a ``journal``, the attempts made and the rows of the objects before
             it are on disk).
     """
-    validate_search_options(
-        protocol=protocol, growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts
-    )
-    if seed is not None and protocol == "paper":
+    if seed is not None and search.protocol == "paper":
         raise UsageError(
             "a seeded search bisects to the tolerance as refine does; protocol 'paper' "
             "cannot start from a prediction"
@@ -295,15 +286,12 @@ def lift_catalog(
     not_run: list[str] = []
     stopped_at: str | None = None
     story: dict[str, dict[str, Any]] = {}  # a seeded run: each start and its outcome, for the log
-    search = _ObjectSearch(
-        factory, None if seed is None else seed.margin, protocol, growth, tolerance_rel,
-        max_attempts,
-    )  # fmt: skip
+    search_one = _ObjectSearch(factory, None if seed is None else seed.margin, search)
     jobs = [(obj, starts.get(obj.object_id)) for obj in objects]
     if journal is not None:
 
         def placeholder(i: int, error: str, n: int) -> dict[str, object]:
-            row = _not_run_row(objects[i], f_w[i], factory, protocol, tolerance_rel, error, n)
+            row = _not_run_row(objects[i], f_w[i], factory, search, error, n)
             return {**row, **_start_columns(jobs[i][1], math.nan)}
 
         journal.begin([obj.record() for obj in objects], placeholder)
@@ -320,14 +308,16 @@ def lift_catalog(
         rows.append(row)
         start = starts.get(obj.object_id)
         if start is not None:
-            story[obj.object_id] = start_story(start, result, growth, tolerance_rel, max_attempts)
+            story[obj.object_id] = start_story(
+                start, result, search.growth, search.tolerance_rel, search.max_attempts
+            )
 
     def done(i: int) -> None:
         if progress is not None:
             progress(objects[i].object_id, i + 1, len(objects))
 
     if workers > 1 and not factory.stop_on_failure and journal is None:
-        outcomes = map_in_order(search, jobs, workers=workers, on_result=lambda i, _: done(i))
+        outcomes = map_in_order(search_one, jobs, workers=workers, on_result=lambda i, _: done(i))
         for obj, outcome in zip(objects, outcomes, strict=True):
             record(obj, outcome)
     else:
@@ -335,13 +325,14 @@ def lift_catalog(
             obj, start = job
             if stopped_at is not None:
                 why = f"not run: the run stopped at object {stopped_at!r} after a runner failure"
-                row = _not_run_row(obj, f_w_n, factory, protocol, tolerance_rel, why)
+                row = _not_run_row(obj, f_w_n, factory, search, why)
                 rows.append({**row, **_start_columns(start, math.nan)})
                 not_run.append(obj.object_id)
             else:
                 if journal is not None:
                     journal.start_object(i)
-                outcome = search.run(job, on_attempt=None if journal is None else journal.attempt)
+                on_attempt = None if journal is None else journal.attempt
+                outcome = search_one.run(job, on_attempt=on_attempt)
                 record(obj, outcome)
                 if outcome[2] and factory.stop_on_failure:
                     stopped_at = obj.object_id
@@ -369,10 +360,7 @@ def lift_catalog_files(
     output: str,
     log: str | None = None,
     object_ids: Sequence[str] | None = None,
-    protocol: SearchProtocol = "refine",
-    growth: float = DEFAULT_GROWTH,
-    tolerance_rel: float = DEFAULT_TOLERANCE_REL,
-    max_attempts: int = DEFAULT_MAX_ATTEMPTS,
+    search: SearchOptions = DEFAULT_SEARCH,
     progress: LiftProgress | None = None,
     force: bool = False,
     log_epoch_ns: int | None = None,
@@ -399,8 +387,7 @@ def lift_catalog_files(
         output: the lift_results table (``-`` for stdout).
         log: the lift log with every attempt (``-`` for stdout), or None.
         object_ids: these objects, in this order (None: all).
-        protocol, growth, tolerance_rel, max_attempts, progress, seed, warn, max_force_n: as
-            for :func:`lift_catalog`.
+        search, progress, seed, warn, max_force_n: as for :func:`lift_catalog`.
         force: overwrite existing outputs.
         log_epoch_ns: where the log's attempts without a wall clock (simulated ones) begin, ns
             since the Unix epoch (None: the log writer's fixed epoch, 2000-01-01).
@@ -427,10 +414,7 @@ def lift_catalog_files(
         settings={
             "runner": factory.name,
             **factory.settings,
-            "protocol": protocol,
-            "growth": growth,
-            "tolerance_rel": tolerance_rel,
-            "max_attempts": max_attempts,
+            **search.as_dict(),
             **({"max_force_n": max_force_n} if max_force_n is not None else {}),
             "objects": list(selected["object_id"]),
             **({"start": {"source": seed.source, **seed.settings}} if seed is not None else {}),
@@ -442,10 +426,7 @@ def lift_catalog_files(
         run = lift_catalog(
             selected,
             factory,
-            protocol=protocol,
-            growth=growth,
-            tolerance_rel=tolerance_rel,
-            max_attempts=max_attempts,
+            search=search,
             progress=progress,
             path=catalog_path,
             seed=seed,
@@ -530,8 +511,7 @@ def _not_run_row(
     obj: CatalogObject,
     f_w_n: float,
     factory: RunnerFactory,
-    protocol: SearchProtocol,
-    tolerance_rel: float,
+    search: SearchOptions,
     error: str,
     attempts: int = 0,
 ) -> dict[str, object]:
@@ -545,10 +525,10 @@ def _not_run_row(
         "f_d_n": math.nan,
         "attempts": int(attempts),
         "converged": False,
-        "protocol": protocol,
+        "protocol": search.protocol,
         "bracket_low_n": math.nan,
         "bracket_high_n": math.nan,
-        "tolerance_rel": math.nan if protocol == "paper" else float(tolerance_rel),
+        "tolerance_rel": math.nan if search.protocol == "paper" else float(search.tolerance_rel),
         "runner": factory.name,
         "error": error,
         "max_force_n": float(obj.get(CEILING_COLUMN, math.nan)),
@@ -597,15 +577,12 @@ class _ObjectSearch:
     Attributes:
         factory: the runner factory (picklable for a parallel run).
         margin: the seed's start margin; None without a seed.
-        protocol, growth, tolerance_rel, max_attempts: the search options.
+        search: the search options.
     """
 
     factory: RunnerFactory
     margin: float | None
-    protocol: SearchProtocol
-    growth: float
-    tolerance_rel: float
-    max_attempts: int
+    search: SearchOptions
 
     def __call__(
         self, job: tuple[CatalogObject, StartEstimate | None]
@@ -623,10 +600,7 @@ class _ObjectSearch:
         if on_attempt is not None:
             runner = _Reporting(runner, obj.object_id, on_attempt)
         try:
-            result = _search(
-                runner, obj, start, self.margin, self.protocol, self.growth,
-                self.tolerance_rel, self.max_attempts,
-            )  # fmt: skip
+            result = _search(runner, obj, start, self.margin, self.search)
         except _RecordingFailed as failed:  # not the runner's failure: the run stops
             raise failed.error from None
         except SearchAbortedError as err:
@@ -666,12 +640,9 @@ def _search(
     obj: CatalogObject,
     start: StartEstimate | None,
     margin: float | None,
-    protocol: SearchProtocol,
-    growth: float,
-    tolerance_rel: float,
-    max_attempts: int,
+    search: SearchOptions,
 ) -> LiftSearchResult:
-    """One object's search: from its start when it has a usable one, else ``protocol``."""
+    """One object's search: from its start when it has a usable one, else ``search.protocol``."""
     if start is not None and start.in_range and margin is not None:
         return find_min_lift_force_seeded(
             runner,
@@ -679,9 +650,9 @@ def _search(
             friction_mu=obj.friction_mu,
             predicted_lift_force_n=start.predicted_lift_force_n,
             margin=margin,
-            growth=growth,
-            tolerance_rel=tolerance_rel,
-            max_attempts=max_attempts,
+            growth=search.growth,
+            tolerance_rel=search.tolerance_rel,
+            max_attempts=search.max_attempts,
             object_id=obj.object_id,
             source=start.source,
             max_force_n=float(obj[CEILING_COLUMN]),
@@ -690,12 +661,9 @@ def _search(
         runner,
         weight_n=obj.weight_n,
         friction_mu=obj.friction_mu,
-        protocol=protocol,
-        growth=growth,
-        tolerance_rel=tolerance_rel,
-        max_attempts=max_attempts,
         object_id=obj.object_id,
         max_force_n=float(obj.get(CEILING_COLUMN, math.inf)),
+        **search.as_dict(),
     )
     return _fallback(result, start)
 

@@ -13,7 +13,12 @@ One module per source, each a reader the ``measure`` command calls:
 * :mod:`~deformctl.measure.images`: :func:`~deformctl.measure.images.measure_images`
   (``--images``), an object-catalog row from a top and a side image (OpenCV, imported when used).
 
-Both recording readers return a :class:`Recording` (:mod:`~deformctl.measure.recording`: the
+The options the command builds and the library takes are in :mod:`~deformctl.measure.options`
+(:class:`BagSource`, :class:`Segmentation`, :class:`SqueezeProtocol`; a CSV's
+:class:`CsvOptions` are in :mod:`~deformctl.measure.csv_options`; the
+readers :func:`read_bag` and :func:`read_csv` take them, :func:`read_ros2_bag` and
+:func:`read_csv_export` build them from keyword arguments). Both recording readers return a
+:class:`Recording` (:mod:`~deformctl.measure.recording`: the
 squeezes in SI, the source sample rates and the ruptures; the compression from a position signal),
 cut into squeezes by :mod:`~deformctl.measure.segment` (segmentation, rupture and phase cuts).
 :mod:`~deformctl.measure.stage` writes the squeeze logs: :func:`recording_log` for a recording,
@@ -35,9 +40,7 @@ from __future__ import annotations
 
 from deformctl.measure.csv import (
     ABSOLUTE_TIME_MIN_S,
-    FORCE_UNITS_N,
-    LENGTH_UNITS_M,
-    TIME_UNITS_S,
+    read_csv,
     read_csv_export,
     squeeze_from_csv,
 )
@@ -57,32 +60,38 @@ from deformctl.measure.csv_options import (
     CsvOptions,
 )
 from deformctl.measure.images import ImagesResult, measure_images
-from deformctl.measure.recording import (
+from deformctl.measure.options import (
+    DEFAULT_FORCE_THRESHOLD_FRAC,
+    DEFAULT_MIN_GAP_S,
+    DEFAULT_MIN_SQUEEZE_S,
+    DEFAULT_SEGMENTATION,
+    DEFAULT_SIM_HOLD_S,
+    DEFAULT_SIM_RAMP_S,
+    DEFAULT_SIM_SQUEEZES,
+    DEFAULT_SQUEEZE_PROTOCOL,
+    DEFAULT_SQUEEZE_STRAIN,
     INCREASES_WHEN,
     Axis,
+    BagSource,
     CompressionZero,
     IncreasesWhen,
     PositionIs,
-    Recording,
+    Segmentation,
+    SqueezeProtocol,
 )
+from deformctl.measure.recording import Recording
 from deformctl.measure.ros2_bag import (
     JOINT_STATE_TYPE,
     POSE_TYPE,
     WRENCH_TYPE,
+    read_bag,
     read_ros2_bag,
     squeeze_from_ros2_bag,
 )
 from deformctl.measure.segment import (
-    DEFAULT_FORCE_THRESHOLD_FRAC,
-    DEFAULT_MIN_GAP_S,
-    DEFAULT_MIN_SQUEEZE_S,
     segment_squeezes,
 )
 from deformctl.measure.sim import (
-    DEFAULT_SIM_HOLD_S,
-    DEFAULT_SIM_RAMP_S,
-    DEFAULT_SIM_SQUEEZES,
-    DEFAULT_SQUEEZE_STRAIN,
     SqueezeProgress,
     default_peak_force_n,
     simulate_squeezes,
@@ -104,20 +113,20 @@ __all__ = [
     "DEFAULT_FORCE_THRESHOLD_FRAC",
     "DEFAULT_MIN_GAP_S",
     "DEFAULT_MIN_SQUEEZE_S",
+    "DEFAULT_SEGMENTATION",
     "DEFAULT_SIM_HOLD_S",
     "DEFAULT_SIM_RAMP_S",
     "DEFAULT_SIM_SQUEEZES",
+    "DEFAULT_SQUEEZE_PROTOCOL",
     "DEFAULT_SQUEEZE_STRAIN",
-    "FORCE_UNITS_N",
     "INCREASES_WHEN",
     "JOINT_STATE_TYPE",
-    "LENGTH_UNITS_M",
     "LOG_SAMPLE_BYTES",
     "MEASURE_SCHEMA",
     "POSE_TYPE",
-    "TIME_UNITS_S",
     "WRENCH_TYPE",
     "Axis",
+    "BagSource",
     "CompressionZero",
     "CsvBatchResult",
     "CsvDialect",
@@ -128,13 +137,17 @@ __all__ = [
     "IncreasesWhen",
     "PositionIs",
     "Recording",
+    "Segmentation",
     "SimulateCatalogTask",
     "SqueezeProgress",
+    "SqueezeProtocol",
     "csv_objects",
     "default_peak_force_n",
     "measure_csv_files",
     "measure_csv_sweep",
     "measure_images",
+    "read_bag",
+    "read_csv",
     "read_csv_export",
     "read_objects_from",
     "read_ros2_bag",

@@ -41,23 +41,23 @@ from deformctl.measure.defects import (
     merge_duplicate_times,
     shift_force,
 )
-from deformctl.measure.recording import (
+from deformctl.measure.options import (
+    DEFAULT_FORCE_THRESHOLD_FRAC,
+    DEFAULT_MIN_GAP_S,
+    DEFAULT_MIN_SQUEEZE_S,
+    DEFAULT_SEGMENTATION,
     CompressionZero,
     IncreasesWhen,
     PositionIs,
+    Segmentation,
+)
+from deformctl.measure.recording import (
     Recording,
-    _check_recording_options,
     _check_stream,
     _compression,
     _rate_hz,
 )
-from deformctl.measure.segment import (
-    DEFAULT_FORCE_THRESHOLD_FRAC,
-    DEFAULT_MIN_GAP_S,
-    DEFAULT_MIN_SQUEEZE_S,
-    _detection_window_s,
-    _to_squeezes,
-)
+from deformctl.measure.segment import _detection_window_s, _to_squeezes
 from deformctl.plausibility import (
     DOUBTFUL_PEAK_FORCE_N,
     MAX_COMPRESSION_M,
@@ -179,21 +179,47 @@ def read_csv_export(
         UsageError: a bad option, ambiguous columns, a ``units`` value that contradicts the
             file, a file above the memory budget (exit 2).
     """
-    _check_recording_options(phase, position_increases_when)
     if options is None:
         options = _options(columns, units, position_is, compression_zero, position_increases_when)
     elif columns or units:
         raise UsageError("give columns and units in options, not beside it")
+    segmentation = Segmentation(
+        segment=segment,
+        force_threshold_frac=force_threshold_frac,
+        min_gap_s=min_gap_s,
+        min_squeeze_s=min_squeeze_s,
+        phase=phase,
+    )
+    return read_csv(
+        path, options, object_id=object_id, segmentation=segmentation, size_x_cm=size_x_cm
+    )
+
+
+def read_csv(
+    path: str | PathLike[str],
+    options: CsvOptions,
+    *,
+    object_id: str,
+    segmentation: Segmentation = DEFAULT_SEGMENTATION,
+    size_x_cm: float | None = None,
+) -> Recording:
+    """:func:`read_csv_export` with its options as the checked objects the command builds.
+
+    Args:
+        path: the CSV file, or ``-`` for stdin.
+        options: how to read the file and what its columns are (:class:`CsvOptions`).
+        object_id: catalog id written into the squeezes.
+        segmentation: how the file is cut (one squeeze per file unless
+            ``segmentation.segment``; :class:`~deformctl.measure.options.Segmentation`).
+        size_x_cm: the object's size along the squeeze axis, when known.
+
+    Raises:
+        see :func:`read_csv_export`.
+    """
     source = CsvSource.open(path)
     try:
         return _read(
-            source,
-            options,
-            object_id=object_id,
-            segment=segment,
-            segmentation=(force_threshold_frac, min_gap_s, min_squeeze_s),
-            phase=phase,
-            size_x_cm=size_x_cm,
+            source, options, object_id=object_id, segmentation=segmentation, size_x_cm=size_x_cm
         )
     except DeformctlError as err:
         if err.path is None:
@@ -216,9 +242,7 @@ def _read(
     options: CsvOptions,
     *,
     object_id: str,
-    segment: bool,
-    segmentation: tuple[float, float, float],
-    phase: Phase,
+    segmentation: Segmentation,
     size_x_cm: float | None,
 ) -> Recording:
     name = source.name
@@ -269,7 +293,7 @@ def _read(
         )
     defects: list[Defect] = [d for d in (logging_gaps(time_s), coarse_force(force_n)) if d]
     kind = options.position_is if pos_role == "position" else pos_role
-    threshold_frac, min_gap_s, min_squeeze_s = segmentation
+    threshold_frac = segmentation.force_threshold_frac
     what = f"column {roles[pos_role].name!r}"
 
     def compression_of(t: FloatArray, f: FloatArray, p: FloatArray) -> FloatArray:
@@ -306,12 +330,9 @@ def _read(
         force_n,
         compression_m,
         object_id=object_id,
-        segment=segment,
+        segmentation=segmentation,
+        segment=segmentation.segments(False),
         path=name,
-        force_threshold_frac=threshold_frac,
-        min_gap_s=min_gap_s,
-        min_squeeze_s=min_squeeze_s,
-        phase=phase,
         window_s=_detection_window_s(rate_hz),
         clock_origin_ns=round(float(time_s[0]) * NS_PER_S) if absolute else None,
     )
@@ -328,8 +349,8 @@ def _read(
         squeezes,
         rate_hz,
         rate_hz,
-        source="csv",
-        phase=phase,
+        source=CsvOptions.kind,
+        phase=segmentation.phase,
         ruptures=tuple(ruptures),
         flags=tuple(d.flag for d in defects),
         defects=tuple(d.as_dict() for d in defects),

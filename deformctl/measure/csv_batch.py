@@ -17,9 +17,10 @@ friction. A file that cannot be read does not stop the others: it is recorded wi
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -29,13 +30,20 @@ from deformctl.artifacts import check_output_path, write_squeeze_log
 from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
 from deformctl.artifacts.io import display_name
 from deformctl.artifacts.provenance import Provenance, input_digest
-from deformctl.catalog import SIZE_COLUMNS, object_record
+from deformctl.catalog import (
+    COLUMN_QUANTITIES,
+    SIZE_COLUMNS,
+    check_object_values,
+    object_record,
+)
 from deformctl.errors import EXIT_FAILURE, DeformctlError, InputDataError, UsageError
-from deformctl.measure.csv import read_csv_export
+from deformctl.measure.csv import read_csv
 from deformctl.measure.csv_options import CsvOptions
+from deformctl.measure.options import DEFAULT_SEGMENTATION, Segmentation
 from deformctl.measure.recording import Recording
 from deformctl.measure.stage import LOG_SAMPLE_BYTES, MEASURE_SCHEMA
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, map_in_order, run_sweep
+from deformctl.reprs import short_repr
 from deformctl.series import SqueezeSeries
 from deformctl.units import GIB
 
@@ -83,7 +91,8 @@ def read_objects_from(path: str) -> dict[str, dict[str, Any]]:
     Raises:
         MissingInputError: no such file (exit 66).
         InputDataError: no ``file`` column, an unknown column, a file twice, or a value that
-            is not a number; the message names the row (exit 65).
+            is not a number or outside its quantity's rule (:data:`deformctl.catalog.
+            COLUMN_QUANTITIES`); the message names the row (exit 65).
     """
     import pandas as pd
 
@@ -120,11 +129,15 @@ def read_objects_from(path: str) -> dict[str, dict[str, Any]]:
                 values[column] = text
                 continue
             try:
-                values[column] = float(text)
+                value = float(text)
             except ValueError:
                 raise InputDataError(
                     f"line {n}: {column} = {text!r} is not a number", path=path
                 ) from None
+            # the catalog column's rule, as a value read from a file (exit 65)
+            values[column] = COLUMN_QUANTITIES[column].check_data(
+                value, where=f"line {n}", path=path
+            )
         out[key] = values
     return out
 
@@ -163,6 +176,7 @@ def csv_objects(
         )
     if "-" in paths and len(paths) > 1:
         raise UsageError("--csv -: stdin is one file; give it alone")
+    check_object_values(size_cm, friction_mu, weight_n)  # the flags' own lines, once
     mapping = read_objects_from(objects_from) if objects_from is not None else {}
     files: list[CsvFile] = []
     seen: dict[str, str] = {}
@@ -213,21 +227,22 @@ class CsvFileTask:
 
     Attributes:
         options: how to read every file (:class:`CsvOptions`).
-        reader: the other keyword arguments of :func:`read_csv_export` (segmentation, phase).
+        segmentation: how each file is cut into squeezes (one squeeze per file unless
+            ``segmentation.segment``).
     """
 
     options: CsvOptions
-    reader: Mapping[str, Any] = field(default_factory=dict)
+    segmentation: Segmentation = DEFAULT_SEGMENTATION
 
     def read(self, file: CsvFile) -> Recording:
-        """The file's recording (raises what :func:`read_csv_export` raises)."""
+        """The file's recording (raises what :func:`read_csv` raises)."""
         size = file.row.get(SIZE_COLUMNS[0])
-        return read_csv_export(
+        return read_csv(
             file.path,
+            self.options,
             object_id=file.object_id,
-            options=self.options,
+            segmentation=self.segmentation,
             size_x_cm=None if size is None else float(size),
-            **self.reader,
         )
 
     def __call__(self, item: Mapping[str, Any]) -> TaskOutput:
@@ -239,7 +254,8 @@ class CsvFileTask:
 
     def settings(self) -> dict[str, Any]:
         """What the provenance records of the options."""
-        return {"source": "csv", **self.options.as_dict(), **dict(self.reader)}
+        cut = dataclasses.replace(self.segmentation, segment=self.segmentation.segments(False))
+        return {"source": "csv", **self.options.as_dict(), **cut.as_dict()}
 
 
 def summary_row(file: CsvFile, rec: Recording) -> dict[str, Any]:
@@ -261,6 +277,8 @@ def summary_row(file: CsvFile, rec: Recording) -> dict[str, Any]:
 @dataclass(frozen=True)
 class FileOutcome:
     """What became of one file: its recording, or the error it raised."""
+
+    __repr__ = short_repr
 
     file: CsvFile
     recording: Recording | None = None
@@ -284,6 +302,8 @@ class _Catching:
 @dataclass(frozen=True)
 class CsvBatchResult:
     """The files read into one squeeze log, and those that failed."""
+
+    __repr__ = short_repr
 
     outcomes: list[FileOutcome]
 

@@ -10,12 +10,13 @@ found is recorded next to what was given (:class:`deformctl.measure.csv_table.Cs
 from __future__ import annotations
 
 import codecs
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from deformctl.errors import UsageError
+from deformctl.measure.options import check_position_options
+from deformctl.quantities import LAG_S, MEMORY_BUDGET_GIB
 from deformctl.units import parse_unit, unit_names
 
 #: The delimiters a file's rows are tried with, in order of preference on a tie.
@@ -40,7 +41,7 @@ ROLE_DIMENSION: dict[str, str] = {
     "compression": "length",
 }
 #: A shift of the force against the position larger than this is refused, s.
-MAX_LAG_S = 10.0
+MAX_LAG_S = LAG_S.high
 #: The memory a CSV run may use by default, GiB (the simulator's default budget).
 DEFAULT_CSV_MEMORY_BUDGET_GIB = 2.0
 
@@ -123,10 +124,11 @@ class CsvDialect:
 
 
 def parse_lag(text: str | float | None) -> float | Literal["auto"] | None:
-    """``--lag-s``: ``auto``, a number of seconds, or None (not given).
+    """``--lag-s``: ``auto``, a number of seconds (:data:`deformctl.quantities.LAG_S`), or None
+    (not given).
 
     Raises:
-        UsageError: neither ``auto`` nor a finite number within ±:data:`MAX_LAG_S` (exit 2).
+        UsageError: neither ``auto`` nor a number within the rule (exit 2).
     """
     if text is None:
         return None
@@ -135,9 +137,10 @@ def parse_lag(text: str | float | None) -> float | Literal["auto"] | None:
     try:
         value = float(text)
     except (TypeError, ValueError):
-        raise UsageError(f"--lag-s must be auto or a number of seconds, got {text!r}") from None
-    if not (math.isfinite(value) and abs(value) <= MAX_LAG_S):
-        raise UsageError(f"--lag-s must be a number in [-{MAX_LAG_S:g}, {MAX_LAG_S:g}] s or auto")
+        raise UsageError(f"{LAG_S.flag} must be auto or {LAG_S.rule}, got {text!r}") from None
+    problem = LAG_S.problem(value)
+    if problem is not None:
+        raise UsageError(f"{LAG_S.flag} must be auto or {problem.removeprefix('must be ')}")
     return value
 
 
@@ -181,6 +184,8 @@ class CsvOptions:
     position_increases_when: Literal["closing", "opening"] | None = None
     memory_budget_gib: float = DEFAULT_CSV_MEMORY_BUDGET_GIB
 
+    kind = "csv"  #: the ``source`` a squeeze log's object row records
+
     def __post_init__(self) -> None:
         object.__setattr__(self, "columns", {k.strip(): v for k, v in self.columns.items()})
         object.__setattr__(self, "units", {k.strip(): v for k, v in self.units.items()})
@@ -210,22 +215,10 @@ class CsvOptions:
                 f"--force-sign must be one of {', '.join(FORCE_SIGNS)}, got {self.force_sign!r}"
             )
         object.__setattr__(self, "lag_s", parse_lag(self.lag_s))
-        if self.position_is not in ("palm", "gap"):
-            raise UsageError(f"--position-is must be palm or gap, got {self.position_is!r}")
-        if self.compression_zero not in ("first", "lead_in"):
-            raise UsageError(
-                f"compression_zero must be first or lead_in, got {self.compression_zero!r}"
-            )
-        if self.position_increases_when not in (None, "closing", "opening"):
-            raise UsageError(
-                "--position-increases-when must be closing or opening, got "
-                f"{self.position_increases_when!r}"
-            )
-        budget = self.memory_budget_gib
-        if isinstance(budget, bool) or not (
-            isinstance(budget, int | float) and math.isfinite(budget) and budget > 0
-        ):
-            raise UsageError(f"--memory-budget-gib must be a number > 0, got {budget!r}")
+        check_position_options(
+            self.position_is, self.compression_zero, self.position_increases_when
+        )
+        MEMORY_BUDGET_GIB.check(self.memory_budget_gib)
 
     def unit_for(self, role: str) -> str | None:
         """The unit given for ``role`` (as written), or None."""

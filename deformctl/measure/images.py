@@ -9,11 +9,10 @@ rewrite that keeps the file's format and extra columns and refuses an ``object_i
 
 from __future__ import annotations
 
-import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import pandas as pd
 
@@ -26,10 +25,16 @@ from deformctl.artifacts import (
 )
 from deformctl.artifacts.io import is_stdio
 from deformctl.artifacts.tables import append_catalog_row
+from deformctl.catalog import MeasuredObject
 from deformctl.errors import DeformctlError, InputDataError, UsageError
+from deformctl.measure.options import ObjectMask, ScaleReference
+from deformctl.reprs import short_repr
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; OpenCV is imported when used
     from deformctl.vision import SizeMeasurement
+
+
+DEFAULT_MASK = ObjectMask()  #: the difference from a smooth background
 
 
 @dataclass(frozen=True)
@@ -42,21 +47,21 @@ class ImagesResult:
         rows: the rows of the catalog written.
     """
 
+    __repr__ = short_repr
+
     size: SizeMeasurement
     rows: int
 
 
 def measure_images(
     images: Sequence[str],
-    size_options: Mapping[str, Any],
+    obj: MeasuredObject,
     *,
-    object_id: str,
-    weight_n: float,
-    friction_mu: float | None,
+    reference: ScaleReference,
+    mask: ObjectMask = DEFAULT_MASK,
     output: str,
     force: bool = False,
     append: bool = False,
-    background: Sequence[str] | None = None,
     camera_matrix: str | None = None,
     debug_dir: str | None = None,
 ) -> ImagesResult:
@@ -68,13 +73,12 @@ def measure_images(
 
     Args:
         images: the top and the side image.
-        size_options: the scale reference and segmentation keyword arguments of
-            :func:`deformctl.vision.measure_object_size`.
-        object_id, weight_n, friction_mu: the row's values (friction is required).
+        obj: the object's id, weight and friction (required: a catalog row needs it).
+        reference: the scale reference in both photos.
+        mask: how the object is told from the scene (a colour range, or the empty scenes).
         output: the catalog (``-`` for stdout).
         force: overwrite an existing catalog.
         append: add the row to the catalog (created if missing).
-        background: the empty scenes (top, side); the object is what differs.
         camera_matrix: the camera's calibration file.
         debug_dir: write annotated images here.
 
@@ -82,14 +86,14 @@ def measure_images(
         UsageError, MissingInputError, OutputExistsError, InputDataError: see above.
     """
     top, side = images
+    object_id, friction_mu = obj.object_id, obj.friction_mu
     if friction_mu is None:
         raise UsageError("--images needs --friction-mu (the catalog requires friction_mu)")
     if append and force:
         raise UsageError("--append and --force cannot be used together")
     if append and is_stdio(output):
         raise UsageError("--append needs a catalog file, not - (stdout)")
-    _check_row_values(object_id, weight_n, friction_mu)
-    inputs = [top, side, *(background or ())]
+    inputs = [top, side, *(mask.background or ())]
     if camera_matrix is not None:
         inputs.append(camera_matrix)
     for path in inputs:
@@ -122,20 +126,13 @@ def measure_images(
 
     camera = None if camera_matrix is None else load_camera_calibration(camera_matrix)
     size = measure_object_size(
-        top,
-        side,
-        background_image=None if background is None else tuple(background),  # type: ignore[arg-type]
-        debug_dir=debug_dir,
-        camera=camera,
-        **size_options,
+        top, side, debug_dir=debug_dir, camera=camera, **reference.kwargs(), **mask.kwargs()
     )
-    row = catalog_row(size, object_id=object_id, weight_n=weight_n, friction_mu=friction_mu)
+    row = catalog_row(size, object_id=object_id, weight_n=obj.weight_n, friction_mu=friction_mu)
     settings = {
         "source": "images",
-        "reference": "checkerboard" if "checkerboard" in size_options else "aruco",
-        **{k: v for k, v in size_options.items() if k != "color_range"},
-        "color_range": size_options.get("color_range"),
-        "background": list(background) if background else None,
+        **reference.as_dict(),
+        **mask.as_dict(),
         "camera": None
         if camera is None
         else {
@@ -155,12 +152,3 @@ def measure_images(
     else:
         n_rows = len(write_catalog(pd.DataFrame([row]), output, provenance=provenance, force=force))
     return ImagesResult(size=size, rows=n_rows)
-
-
-def _check_row_values(object_id: str, weight: float, mu: float) -> None:
-    if not object_id:
-        raise UsageError("--object-id must not be empty")
-    if not (math.isfinite(weight) and weight > 0):
-        raise UsageError(f"--weight-n must be a number > 0, got {weight}")
-    if not (math.isfinite(mu) and mu > 0):
-        raise UsageError(f"--friction-mu must be a number > 0, got {mu}")

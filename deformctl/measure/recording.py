@@ -32,20 +32,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
-from deformctl.characterize.rupture import PHASES
-from deformctl.errors import InputDataError, UsageError
+from deformctl.errors import InputDataError
 from deformctl.plausibility import compression_has_wrong_sign
+from deformctl.reprs import short_repr
 from deformctl.series import FloatArray, Rupture, SqueezeSeries
-
-Axis = Literal["x", "y", "z"]
-PositionIs = Literal["gap", "palm"]
-CompressionZero = Literal["first", "lead_in"]
-IncreasesWhen = Literal["closing", "opening"]
-INCREASES_WHEN: tuple[str, ...] = ("closing", "opening")
 
 
 @dataclass(frozen=True)
@@ -70,6 +64,8 @@ class Recording:
         warnings: lines for stderr about doubtful input (a unit assumed, each defect).
     """
 
+    __repr__ = short_repr
+
     squeezes: list[SqueezeSeries]
     force_rate_hz: float
     position_rate_hz: float
@@ -88,7 +84,7 @@ class Recording:
         ``force_rate_hz`` and ``position_rate_hz``; ``source`` (``ros2_bag`` or ``csv``: the
         log is a rig recording, which ``characterize`` fits with a preload by default),
         ``phase`` and ``ruptures`` (the points where squeezes were cut, see
-        :class:`deformctl.phases.Rupture`); ``recording_flags`` and ``recording_defects`` (the
+        :class:`deformctl.series.Rupture`); ``recording_flags`` and ``recording_defects`` (the
         recording's defects) and, under the source's name (``csv``), the :attr:`details`.
         """
         out: dict[str, Any] = {
@@ -149,10 +145,6 @@ def _unloaded_reference(position: FloatArray, force_n: FloatArray, threshold_fra
 def _convention(kind: str, increases_when: str | None) -> str | None:
     """When the position grows for a position kind: ``closing``, ``opening`` or None (auto)."""
     if increases_when is not None:
-        if increases_when not in INCREASES_WHEN:
-            raise UsageError(
-                f"position_increases_when must be closing or opening, got {increases_when!r}"
-            )
         return increases_when
     return {"gap": "opening", "compression": "closing"}.get(kind)
 
@@ -179,12 +171,8 @@ def _compression(
     """
     if zero == "first":
         rel = position - position[0]
-    elif zero == "lead_in":
+    else:  # lead_in
         rel = position - _unloaded_reference(position, force_n, threshold_frac)
-    else:
-        raise UsageError(f"compression_zero must be 'first' or 'lead_in', got {zero!r}")
-    if kind not in ("gap", "palm", "compression"):
-        raise UsageError(f"unknown position kind {kind!r}; expected 'gap' or 'palm'")
     convention = _convention(kind, increases_when)
     if convention is None:  # one palm, auto: positive at the peak force
         peak = int(np.argmax(force_n))
@@ -207,12 +195,3 @@ def _compression(
             path=path,
         )
     return np.asarray(d, dtype=np.float64)
-
-
-def _check_recording_options(phase: str, increases_when: str | None) -> None:
-    if phase not in PHASES:
-        raise UsageError(f"--phase must be one of {', '.join(PHASES)}, got {phase!r}")
-    if increases_when is not None and increases_when not in INCREASES_WHEN:
-        raise UsageError(
-            f"--position-increases-when must be closing or opening, got {increases_when!r}"
-        )

@@ -35,21 +35,25 @@ from deformctl.artifacts.io import note_input
 from deformctl.artifacts.mcap.integrity import complete_prefix, locate_damage, tail_problem
 from deformctl.characterize.rupture import Phase
 from deformctl.errors import InputDataError, MissingInputError, UsageError
-from deformctl.measure.recording import (
+from deformctl.measure.options import (
+    DEFAULT_FORCE_THRESHOLD_FRAC,
+    DEFAULT_MIN_GAP_S,
+    DEFAULT_MIN_SQUEEZE_S,
+    DEFAULT_SEGMENTATION,
     Axis,
+    BagSource,
     CompressionZero,
     IncreasesWhen,
     PositionIs,
+    Segmentation,
+)
+from deformctl.measure.recording import (
     Recording,
-    _check_recording_options,
     _check_stream,
     _compression,
     _rate_hz,
 )
 from deformctl.measure.segment import (
-    DEFAULT_FORCE_THRESHOLD_FRAC,
-    DEFAULT_MIN_GAP_S,
-    DEFAULT_MIN_SQUEEZE_S,
     _detection_window_s,
     _to_squeezes,
 )
@@ -388,9 +392,9 @@ def read_ros2_bag(
 ) -> Recording:
     """Read the squeezes of one object from a ROS 2 MCAP bag (``ros2msg`` schemas, ``cdr``).
 
-    The recording is checked for plausibility (:mod:`deformctl.plausibility`: sample rates,
-    peak force, the force's axis, the compression's sign and size); every squeeze is cut at a
-    rupture (recorded in the result) and reduced to ``phase`` (:mod:`deformctl.phases`).
+    The recording is checked for plausibility (:mod:`deformctl.plausibility`: sample rates, peak
+    force, the force's axis, the compression's sign and size); every squeeze is cut at a rupture
+    (recorded in the result) and reduced to ``phase`` (:mod:`deformctl.characterize.rupture`).
 
     Args:
         path: the bag, one ``.mcap`` file.
@@ -428,19 +432,57 @@ def read_ros2_bag(
         UsageError: no or more than two wrench topics, an unknown axis or position kind, a
             JointState topic without ``joint``.
     """
+    source = BagSource(
+        wrench_topics=tuple(wrench_topics),
+        position_topic=position_topic,
+        joint=joint,
+        axis=axis,
+        position_is=position_is,
+        compression_zero=compression_zero,
+        position_increases_when=position_increases_when,
+        crc_check=crc_check,
+    )
+    segmentation = Segmentation(
+        segment=segment,
+        force_threshold_frac=force_threshold_frac,
+        min_gap_s=min_gap_s,
+        min_squeeze_s=min_squeeze_s,
+        phase=phase,
+    )
+    return read_bag(
+        path, source, object_id=object_id, segmentation=segmentation, size_x_cm=size_x_cm
+    )
+
+
+def read_bag(
+    path: str | PathLike[str],
+    source: BagSource,
+    *,
+    object_id: str,
+    segmentation: Segmentation = DEFAULT_SEGMENTATION,
+    size_x_cm: float | None = None,
+) -> Recording:
+    """:func:`read_ros2_bag` with its options as the checked objects the command builds.
+
+    Args:
+        path: the bag, one ``.mcap`` file.
+        source: the topics, axis and position signal
+            (:class:`~deformctl.measure.options.BagSource`).
+        object_id: catalog id written into every squeeze.
+        segmentation: how the recording is cut (a bag is split into squeezes unless
+            ``segmentation.segment`` is False).
+        size_x_cm: the object's size along the squeeze axis, when known.
+
+    Raises:
+        see :func:`read_ros2_bag`.
+    """
     p = Path(path)
-    _check_recording_options(phase, position_increases_when)
     if not p.is_file():
         raise MissingInputError("no such bag file", path=p)
     note_input(p)
-    if not 1 <= len(wrench_topics) <= 2:
-        raise UsageError(f"give one or two wrench topics, got {len(wrench_topics)}")
-    if axis not in ("x", "y", "z"):
-        raise UsageError(f"axis must be x, y or z, got {axis!r}")
-    if position_is not in ("gap", "palm"):
-        raise UsageError(f"position_is must be 'gap' or 'palm', got {position_is!r}")
-    if position_topic in wrench_topics:
-        raise UsageError(f"topic {position_topic!r} given as both wrench and position topic")
+    wrench_topics, position_topic = source.wrench_topics, source.position_topic
+    joint, axis, phase = source.joint, source.axis, segmentation.phase
+    crc_check = source.crc_check
     roles: dict[str, tuple[str, ...]] = dict.fromkeys(wrench_topics, (WRENCH_TYPE,))
     roles[position_topic] = (POSE_TYPE, JOINT_STATE_TYPE)
     notes: list[str] = []
@@ -500,11 +542,11 @@ def read_ros2_bag(
     compression_m = _compression(
         position,
         force_n,
-        position_is,
+        source.position_is,
         where,
-        force_threshold_frac,
-        compression_zero,
-        position_increases_when,
+        segmentation.force_threshold_frac,
+        source.compression_zero,
+        source.position_increases_when,
         f"topic {position_topic!r}",
     )
     check_peak_compression(
@@ -520,12 +562,9 @@ def read_ros2_bag(
         force_n,
         compression_m,
         object_id=object_id,
-        segment=segment,
+        segmentation=segmentation,
+        segment=segmentation.segments(True),
         path=where,
-        force_threshold_frac=force_threshold_frac,
-        min_gap_s=min_gap_s,
-        min_squeeze_s=min_squeeze_s,
-        phase=phase,
         window_s=_detection_window_s(position_rate_hz),
         clock_origin_ns=t_ref_ns,
     )
@@ -533,7 +572,7 @@ def read_ros2_bag(
         squeezes,
         _rate_hz(force_streams[0][0]),
         position_rate_hz,
-        source="ros2_bag",
+        source=source.kind,
         phase=phase,
         ruptures=tuple(ruptures),
         warnings=tuple(notes),

@@ -19,15 +19,16 @@ import itertools
 
 import numpy as np
 
-from deformctl.characterize.rupture import PHASES, cut_rupture, phase_slice, slice_squeeze
-from deformctl.errors import InputDataError, UsageError
+from deformctl.characterize.rupture import cut_rupture, phase_slice, slice_squeeze
+from deformctl.errors import InputDataError
+from deformctl.measure.options import (
+    DEFAULT_FORCE_THRESHOLD_FRAC,
+    DEFAULT_MIN_GAP_S,
+    DEFAULT_MIN_SQUEEZE_S,
+    Segmentation,
+)
 from deformctl.series import FloatArray, Rupture, SqueezeSeries
 from deformctl.units import NS_PER_S
-
-#: Segmentation defaults (see the module docstring).
-DEFAULT_FORCE_THRESHOLD_FRAC = 0.1
-DEFAULT_MIN_GAP_S = 0.1
-DEFAULT_MIN_SQUEEZE_S = 0.2
 
 
 def segment_squeezes(
@@ -83,16 +84,16 @@ def _to_squeezes(
     compression_m: FloatArray,
     *,
     object_id: str,
+    segmentation: Segmentation,
     segment: bool,
     path: str,
-    force_threshold_frac: float,
-    min_gap_s: float,
-    min_squeeze_s: float,
-    phase: str = "all",
     window_s: float | None = None,
     clock_origin_ns: int | None = None,
 ) -> tuple[list[SqueezeSeries], list[Rupture]]:
-    """Cut a recording into squeezes, each up to its rupture and reduced to ``phase``.
+    """Cut a recording into squeezes, each up to its rupture and reduced to the phase asked for.
+
+    ``segmentation`` says how (its ``segment``, None for the source's default, is resolved by the
+    caller into ``segment``).
 
     ``clock_origin_ns`` is the source's clock at ``time_s = 0`` (ns since the Unix epoch) when
     the recording has one: each squeeze then carries its first sample's ``start_time_ns``.
@@ -102,25 +103,24 @@ def _to_squeezes(
 
     Raises:
         InputDataError: no squeeze found, or ``phase="unloading"`` on a squeeze that ruptured.
-        UsageError: an unknown phase.
     """
     from deformctl.characterize.fit import DEFAULT_WINDOW_S
 
-    if phase not in PHASES:
-        raise UsageError(f"--phase must be one of {', '.join(PHASES)}, got {phase!r}")
+    phase = segmentation.phase
     window = DEFAULT_WINDOW_S if window_s is None else window_s
     if segment:
         slices = segment_squeezes(
             time_s,
             force_n,
-            force_threshold_frac=force_threshold_frac,
-            min_gap_s=min_gap_s,
-            min_squeeze_s=min_squeeze_s,
+            force_threshold_frac=segmentation.force_threshold_frac,
+            min_gap_s=segmentation.min_gap_s,
+            min_squeeze_s=segmentation.min_squeeze_s,
         )
         if not slices:
             raise InputDataError(
-                f"no squeeze found: the force never stays above {force_threshold_frac:g} of its "
-                f"peak for {min_squeeze_s:g} s",
+                "no squeeze found: the force never stays above "
+                f"{segmentation.force_threshold_frac:g} of its peak for "
+                f"{segmentation.min_squeeze_s:g} s",
                 path=path,
             )
     else:

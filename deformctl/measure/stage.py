@@ -18,15 +18,22 @@ import pyarrow as pa
 
 from deformctl.artifacts import check_output_path, read_catalog, write_squeeze_log
 from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
+from deformctl.artifacts.io import check_input_path
 from deformctl.artifacts.mcap import LOG_EPOCH_NS
 from deformctl.artifacts.provenance import Provenance, input_digest
-from deformctl.catalog import CatalogObject, select_objects
+from deformctl.catalog import CatalogObject, MeasuredObject, select_objects
 from deformctl.errors import InputDataError, UsageError
+from deformctl.measure.csv import read_csv
+from deformctl.measure.csv_options import CsvOptions
+from deformctl.measure.options import (
+    DEFAULT_SEGMENTATION,
+    BagSource,
+    Segmentation,
+    SqueezeProtocol,
+)
 from deformctl.measure.recording import Recording
+from deformctl.measure.ros2_bag import read_bag
 from deformctl.measure.sim import (
-    DEFAULT_SIM_HOLD_S,
-    DEFAULT_SIM_RAMP_S,
-    DEFAULT_SIM_SQUEEZES,
     SqueezeProgress,
     simulate_squeezes,
 )
@@ -38,6 +45,7 @@ from deformctl.parallel import (
     run_sweep,
     single_file_workers,
 )
+from deformctl.scene import DEFAULT_SCENE_HZ
 from deformctl.series import SqueezeSeries
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported when used
@@ -64,20 +72,23 @@ class SimulateCatalogTask:
     ``"_position"``; the noise stream is derived from (seed, position) as in the serial run.
 
     Attributes:
-        simulate: the keyword arguments of :func:`simulate_squeezes` (squeezes, peak force or
-            strain, ramp, hold, gravity, noise).
+        protocol: the squeezes (:class:`~deformctl.measure.options.SqueezeProtocol`: number,
+            peak force or strain, ramp, hold, gravity, noise).
         settings: the :class:`~deformctl.sim.SimSettings` (a preset's object model).
         seed: the run's noise seed.
         sim_preset: the name of the preset ``settings`` came from (recorded in the log).
         log_epoch_ns: where the log's squeezes begin, ns since the Unix epoch (they are laid
             end to end from there).
+        scene_hz: scene frames per simulated second in the log (:mod:`deformctl.scene`; 0:
+            none).
     """
 
-    simulate: Mapping[str, Any]
+    protocol: SqueezeProtocol
     settings: SimSettings
     seed: int = 0
     sim_preset: str | None = None
     log_epoch_ns: int = LOG_EPOCH_NS
+    scene_hz: float = DEFAULT_SCENE_HZ
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """Squeeze one object: its summary row, its (object row, squeezes) as the payload."""
@@ -87,7 +98,8 @@ class SimulateCatalogTask:
             settings=self.settings,
             seed=self.seed,
             first_index=int(item["_position"]),
-            **self.simulate,
+            protocol=self.protocol,
+            scene_hz=self.scene_hz,
         )
         summary = {
             "object_id": str(objects[0]["object_id"]),
@@ -108,10 +120,11 @@ def sim_provenance(
         seed=task.seed,
         settings={
             "source": "sim",
-            **task.simulate,
-            "peak_force_rule": (
-                "peak_force_n" if task.simulate.get("peak_force_n") is not None else "strain"
-            ),
+            **task.protocol.as_dict(),
+            "scene_hz": task.scene_hz,
+            "peak_force_rule": "peak_force_n"
+            if task.protocol.peak_force_n is not None
+            else "strain",
             "objects": object_ids,
             "sim_preset": task.sim_preset,
             "sim_settings": dataclasses.asdict(task.settings),
@@ -143,13 +156,8 @@ def _check_budgets(
     from deformctl.sim.engine import GIB, check_run_steps
 
     settings = task.settings
-    squeezes = int(task.simulate.get("squeezes", DEFAULT_SIM_SQUEEZES))
-    ramp = task.simulate.get("ramp_s")
-    hold = task.simulate.get("hold_s")
-    duration_s = float(DEFAULT_SIM_RAMP_S if ramp is None else ramp) + float(
-        DEFAULT_SIM_HOLD_S if hold is None else hold
-    )
-    steps = duration_s / settings.dt_s + 1.0
+    squeezes = task.protocol.squeezes
+    steps = task.protocol.duration_s / settings.dt_s + 1.0
     for record in catalog.to_dict("records"):
         try:
             spec = CatalogObject.from_row(record).to_sim_spec(path=path)
@@ -211,7 +219,8 @@ def simulate_catalog_file(
             seed=task.seed,
             progress=progress,
             path=catalog_path,
-            **task.simulate,
+            protocol=task.protocol,
+            scene_hz=task.scene_hz,
         )
     write_squeeze_log(
         output, objects, series, provenance=provenance, force=force, epoch_ns=task.log_epoch_ns
@@ -232,7 +241,7 @@ def _squeeze_in_workers(
 ) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
     """:func:`simulate_squeezes` of ``catalog`` with one task per object on local processes."""
     items = _positioned_items(catalog)
-    per_object = int(task.simulate.get("squeezes", DEFAULT_SIM_SQUEEZES))
+    per_object = task.protocol.squeezes
 
     def done(i: int, _: object) -> None:
         if progress is not None:
@@ -271,7 +280,7 @@ def simulate_catalog_sweep(
     _check_budgets(catalog, task, catalog_path, single_log=False)
     provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
     items = _positioned_items(catalog)
-    settings = {**task.simulate, "sim_settings": dataclasses.asdict(task.settings)}
+    settings = {**task.protocol.as_dict(), "sim_settings": dataclasses.asdict(task.settings)}
     if task.log_epoch_ns != LOG_EPOCH_NS:  # (the default keeps older directories resumable)
         settings["log_epoch_ns"] = task.log_epoch_ns
     fingerprint = dataset_fingerprint(
@@ -322,3 +331,74 @@ def recording_log(
         provenance=provenance,
         force=force,
     )
+
+
+def read_recording(
+    path: str,
+    source: BagSource | CsvOptions,
+    *,
+    object_id: str,
+    segmentation: Segmentation = DEFAULT_SEGMENTATION,
+    size_x_cm: float | None = None,
+) -> Recording:
+    """One object's recording: a ROS 2 bag (:func:`read_bag`) or a CSV export (:func:`read_csv`).
+
+    Raises:
+        see :func:`~deformctl.measure.ros2_bag.read_ros2_bag` and
+        :func:`~deformctl.measure.csv.read_csv_export`.
+    """
+    if isinstance(source, BagSource):
+        return read_bag(
+            path, source, object_id=object_id, segmentation=segmentation, size_x_cm=size_x_cm
+        )
+    return read_csv(
+        path, source, object_id=object_id, segmentation=segmentation, size_x_cm=size_x_cm
+    )
+
+
+def measure_recording(
+    path: str,
+    source: BagSource | CsvOptions,
+    obj: MeasuredObject,
+    *,
+    output: str,
+    segmentation: Segmentation = DEFAULT_SEGMENTATION,
+    force: bool = False,
+) -> Recording:
+    """``measure --bag | --csv``: read one object's recording and write its squeeze log.
+
+    The provenance records the source's and the segmentation's options (their ``as_dict``, the
+    segmentation with the source's default resolved) and the recording's sample rates.
+
+    Args:
+        path: the recording (a bag or a CSV file; not stdin).
+        source: what and where the streams are (:class:`BagSource`, :class:`CsvOptions`).
+        obj: the object measured (its id, weight and, when known, size and friction).
+        output: the squeeze log (``-`` for stdout).
+        segmentation: how the recording is cut into squeezes.
+        force: overwrite an existing output.
+
+    Returns:
+        What was read (the squeezes, the sample rates, the ruptures cut off).
+
+    Raises:
+        MissingInputError (66), OutputExistsError (1), InputDataError (65), UsageError (2): see
+        the readers.
+    """
+    check_input_path(path)
+    check_output_path(output, force)
+    recording = read_recording(
+        path,
+        source,
+        object_id=obj.object_id,
+        segmentation=segmentation,
+        size_x_cm=obj.size_x_cm,
+    )
+    segment = segmentation.segments(isinstance(source, BagSource))
+    settings = {
+        "source": source.kind,
+        **source.as_dict(),
+        **dataclasses.replace(segmentation, segment=segment).as_dict(),
+    }
+    recording_log(path, recording, obj.record(), settings, output=output, force=force)
+    return recording

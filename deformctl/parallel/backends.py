@@ -35,6 +35,7 @@ import pyarrow as pa
 
 from deformctl.artifacts.dataset import ObjectResult, PartPayloads, rows_to_table
 from deformctl.errors import DeformctlError, UsageError
+from deformctl.reprs import short_repr
 
 
 @dataclass(frozen=True)
@@ -51,6 +52,8 @@ class TaskOutput:
             are written and the object is also counted and recorded as failed.
         error_type: the failure's type name in the failures part (with ``error``).
     """
+
+    __repr__ = short_repr
 
     rows: Any
     payload: Any = None

@@ -50,7 +50,6 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from deformctl import __version__
 from deformctl.catalog import CATALOG_COLUMNS, CatalogObject
 from deformctl.errors import DeformctlError
 from deformctl.physics import damping_ratio, rigid_grip_force_n
@@ -58,6 +57,7 @@ from deformctl.presets import CALIBRATED_PARAMETERS, PAPER_FIXED, SimPreset, pap
 from deformctl.resources import dataset_path
 from deformctl.sim.objects import ObjectSpec
 from deformctl.units import GRAVITY_M_S2
+from deformctl.version import __version__
 
 #: Density of Table III's cubes, g/cm³ (the paper gives no sizes), and the alternative checked.
 CUBE_DENSITY_G_CM3 = 1.0

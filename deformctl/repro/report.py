@@ -18,6 +18,12 @@ reads the artifacts back through the validating readers and writes:
   population, with the paper's 13 simulated points (Table II and III, F_w at μ = 0.5) and ours
   for the same 13 objects overlaid.
 
+Before the tables, the report says how it was made and what the simulator was fitted to
+(:mod:`deformctl.repro.disclosure`: version, commit, date, command lines; the calibrated
+parameters, the paper's points they were fitted to, the in-sample and leave-one-out errors); every
+column with a unit names its source (:data:`deformctl.repro.disclosure.LABELS`), and under the
+plots each one's points not shown are named (:mod:`deformctl.repro.plots`).
+
 The run directory holds the files the Makefile names (see :data:`RUN_FILES`). Nothing here is
 tuned to the paper: differences are reported as they are.
 """
@@ -38,8 +44,18 @@ from deformctl.artifacts import read_squeeze_log, read_table
 from deformctl.catalog import catalog_objects
 from deformctl.errors import DeformctlError, MissingInputError
 from deformctl.physics import damping_ratio, rigid_grip_force_n
+from deformctl.presets import paper_calibration
+from deformctl.repro.disclosure import (
+    LABELS,
+    calibration_section,
+    column,
+    provenance_section,
+    run_preset,
+)
 from deformctl.repro.paper import compare_with_paper
+from deformctl.repro.plots import draw_plots
 from deformctl.resources import dataset_path
+from deformctl.version import __version__ as version
 
 #: The artifacts :func:`write_report` reads from the run directory.
 RUN_FILES = {
@@ -71,6 +87,7 @@ class ReportSummary:
     ratio_min: float = float("nan")  #: the population's smallest L_f / F_w
     ratio_max: float = float("nan")  #: the population's largest L_f / F_w
     ratio_zeta_spearman: float = float("nan")  #: rank correlation of L_f / F_w with ζ
+    plot_notes: tuple[str, ...] = ()  #: per plot: every point shown, or the points not shown
 
 
 def _rel(ours: pd.Series, theirs: pd.Series) -> pd.Series:
@@ -170,85 +187,6 @@ def _split_of(predictions: pd.DataFrame, metrics: dict[str, Any]) -> pd.Series:
     return predictions["object_id"].map(lambda i: "test" if i in test_ids else "train")
 
 
-def _plots(
-    out_dir: Path,
-    predictions: pd.DataFrame,
-    index: pd.DataFrame,
-    squeezes_by_object: dict[str, list[Any]],
-    names: dict[str, str],
-    landscape: pd.DataFrame,
-) -> tuple[Path, ...]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    paths = []
-    fig, ax = plt.subplots(figsize=(5, 5))
-    for split, marker in (("train", "o"), ("test", "s")):
-        part = predictions[predictions["split"] == split]
-        ax.scatter(
-            part["lift_force_n"], part["predicted_lift_force_n"], marker=marker, label=split, s=18
-        )
-    lo = float(min(predictions["lift_force_n"].min(), predictions["predicted_lift_force_n"].min()))
-    hi = float(max(predictions["lift_force_n"].max(), predictions["predicted_lift_force_n"].max()))
-    ax.plot([lo, hi], [lo, hi], "k--", lw=1, label="y = x")
-    ax.set_xlabel("simulated L_f (N)")
-    ax.set_ylabel("network L_f (N)")
-    ax.set_title("Predicted vs measured lifting force")
-    ax.legend()
-    fig.tight_layout()
-    paths.append(out_dir / "predicted_vs_measured.png")
-    fig.savefig(paths[-1], dpi=120)
-    plt.close(fig)
-
-    fig, ax = plt.subplots(figsize=(6, 4.5))
-    for oid, series in sorted(squeezes_by_object.items()):
-        for k, s in enumerate(series):
-            ax.plot(
-                s.compression_m * 100.0,
-                s.force_n,
-                lw=1,
-                color=f"C{sorted(squeezes_by_object).index(oid)}",
-                label=f"{oid} ({names.get(oid, oid)})" if k == 0 else None,
-            )
-    ax.set_xlabel("compression d (cm)")
-    ax.set_ylabel("force felt f (N)")
-    ax.set_title("Squeezes of the Table I objects")
-    ax.legend()
-    fig.tight_layout()
-    paths.append(out_dir / "force_compression.png")
-    fig.savefig(paths[-1], dpi=120)
-    plt.close(fig)
-
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    sc = ax.scatter(
-        population_zeta(index), index["lift_force_n"] / index["f_w_n"], c=index["weight_n"],
-        s=16, cmap="viridis", label="our population",
-    )  # fmt: skip
-    fig.colorbar(sc, ax=ax, label="weight W (N)")
-    ax.scatter(
-        landscape["zeta"], landscape["ratio_paper"], marker="*", s=90, color="C3",
-        edgecolor="k", label="paper (Tables II, III)", zorder=3,
-    )  # fmt: skip
-    ax.scatter(
-        landscape["zeta"], landscape["ratio_ours"], marker="x", s=50, color="k",
-        label="ours, same 13 objects", zorder=3,
-    )  # fmt: skip
-    ax.axhline(1.0, color="k", lw=1, ls="--")
-    ax.set_xscale("symlog", linthresh=0.05)  # linear near zeta = 0 (the water bag), log above
-    ax.set_xlim(left=0.0)
-    ax.set_xlabel("damping ratio ζ = λ / (2 √(D m))")
-    ax.set_ylabel("L_f / F_w")
-    ax.set_title("Lifting force over the rigid-object force")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    paths.append(out_dir / "lf_over_fw_vs_zeta.png")
-    fig.savefig(paths[-1], dpi=120)
-    plt.close(fig)
-    return tuple(paths)
-
-
 def population_zeta(index: pd.DataFrame) -> pd.Series:
     """ζ of each index-table row, from its measured D and λ (see ``damping_ratio``)."""
     return pd.Series(
@@ -314,8 +252,15 @@ def compare_landscape(
     return out
 
 
-def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) -> ReportSummary:
+def write_report(
+    run_dir: str | Path,
+    *,
+    datasets_dir: str | Path = DATASETS,
+    argv: Sequence[str] | None = None,
+) -> ReportSummary:
     """Read a reproduce run directory and write ``report.md`` and the plots into it.
+
+    ``argv``: the report's command line as the report states it (default :data:`sys.argv`).
 
     Raises:
         MissingInputError: a file of :data:`RUN_FILES` is missing.
@@ -337,6 +282,14 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
     metrics = json.loads(files["metrics"].read_text())
     objects, squeezes = read_squeeze_log(files["paper_squeeze"])
     table3_lift = read_table(files["table3_lift"], "lift_results")
+    artifacts = {  # their provenance, before anything is merged into them
+        "lift.parquet": lift,
+        "index.parquet": index,
+        "predictions.parquet": predictions,
+        "paper_lift.parquet": paper_lift,
+        "paper_coefficients.parquet": paper_coeffs,
+        "table3_lift.parquet": table3_lift,
+    }
     landscape = compare_landscape(table2, paper_lift, table3, table3_lift)
 
     t2 = compare_table2(paper_coeffs, paper_lift, table2)
@@ -351,7 +304,8 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
     for s in squeezes:
         by_object.setdefault(s.object_id, []).append(s)
     names = {str(o.get("object_id")): str(o.get("interior", o.get("name", ""))) for o in objects}
-    plots = _plots(run, predictions, index, by_object, names, landscape)
+    drawn = draw_plots(run, predictions, index, population_zeta(index), by_object, names, landscape)
+    plots = tuple(p.path for p in drawn)
 
     t2_rows = [
         [
@@ -373,22 +327,29 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
     t2_md = markdown_table(
         [
             "object",
-            "D paper (N/cm)",
-            "D ours",
-            "Δ",
-            "λ paper (N·s/cm)",
-            "λ ours",
-            "Δ",
-            "L_f paper physical (N)",
-            "L_f paper sim (N)",
-            "L_f ours (N)",
-            "Δ vs paper sim",
-            "Δ vs physical",
+            column("D", "N/cm", "rig"),
+            column("D", "N/cm", "ours"),
+            "Δ D",
+            column("λ", "N·s/cm", "rig"),
+            column("λ", "N·s/cm", "ours"),
+            "Δ λ",
+            column("L_f", "N", "rig"),
+            column("L_f", "N", "paper_sim"),
+            column("L_f", "N", "ours"),
+            "Δ vs the paper's simulation",
+            "Δ vs the rig",
         ],
         t2_rows,
     )
     t3_paper = markdown_table(
-        ["W (N)", "D (N/cm)", "λ (N·s/cm)", "expected L_f (N)", "NN L_f (N)", "error"],
+        [
+            column("W", "N", "paper_sim"),
+            column("D", "N/cm", "paper_sim"),
+            column("λ", "N·s/cm", "paper_sim"),
+            column("expected L_f", "N", "paper_sim"),
+            column("NN L_f", "N", "paper_nn"),
+            "error",
+        ],
         [
             [
                 _fmt(r.weight_n),
@@ -405,7 +366,15 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
     )
     sample = test.sort_values("object_id").head(len(table3))
     t3_ours = markdown_table(
-        ["object", "W (N)", "D (N/cm)", "λ (N·s/cm)", "simulated L_f (N)", "NN L_f (N)", "error"],
+        [
+            "object",
+            column("W", "N", "ours"),
+            column("D", "N/cm", "ours"),
+            column("λ", "N·s/cm", "ours"),
+            column("L_f", "N", "ours"),
+            column("NN L_f", "N", "our_nn"),
+            "error",
+        ],
         [
             [
                 str(r.object_id),
@@ -420,8 +389,9 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
         ],
     )
     t3_sim = markdown_table(
-        ["input", "W (N)", "D (N/cm)", "λ (N·s/cm)", "ζ", "expected L_f (N)", "NN L_f (N)",
-         "our simulated L_f (N)", "ours vs expected"],
+        ["input", column("W", "N", "paper_sim"), column("D", "N/cm", "paper_sim"),
+         column("λ", "N·s/cm", "paper_sim"), "ζ", column("expected L_f", "N", "paper_sim"),
+         column("NN L_f", "N", "paper_nn"), column("L_f", "N", "ours"), "ours vs expected"],
         [
             [r.point, _fmt(r.weight_n), _fmt(r.deformability_n_per_cm),
              _fmt(r.damping_ns_per_cm), _fmt(r.zeta, 3), _fmt(r.lift_force_paper_n),
@@ -435,7 +405,8 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
     spearman = float(ratio.rank().corr(zeta.rank())) if len(index) > 2 else float("nan")
     worst = landscape["error"].abs().max()
     landscape_md = markdown_table(
-        ["point", "ζ", "L_f paper (N)", "L_f ours (N)", "paper L_f/F_w", "ours L_f/F_w", "Δ"],
+        ["point", "ζ", column("L_f", "N", "paper_sim"), column("L_f", "N", "ours"),
+         f"L_f/F_w, {LABELS['paper_sim']}", f"L_f/F_w, {LABELS['ours']}", "Δ"],
         [
             [r.point, _fmt(r.zeta, 3), _fmt(r.lift_force_paper_n), _fmt(r.lift_force_ours_n),
              _fmt(r.ratio_paper, 3), _fmt(r.ratio_ours, 3), _pct(r.error)]
@@ -443,7 +414,14 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
         ],
     )  # fmt: skip
     metrics_md = markdown_table(
-        ["predictor", "split", "max rel. error", "median rel. error", "MAE (N)", "R²"],
+        [
+            "predictor",
+            "split",
+            "max rel. error",
+            "median rel. error",
+            column("MAE", "N", "ours"),
+            "R²",
+        ],
         _metrics_rows(metrics),
     )
     test_max = float(test["rel_error"].max()) if len(test) else float("nan")
@@ -453,7 +431,14 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
         [
             "# deformctl reproduction of Howard & Bekey",
             "Produced by `make reproduce`. μ = 0.5 is assumed for every object (the paper gives "
-            "no friction coefficient), so lifting forces compare in shape, not to the newton.",
+            "no friction coefficient), so lifting forces compare in shape, not to the newton. "
+            "Each column's header says where its numbers come from: "
+            + ", ".join(f"*{label}*" for label in LABELS.values())
+            + " (our network: trained on simulated (ours) rows).",
+            "## How this report was made",
+            provenance_section(version, artifacts, argv),
+            "## Calibration",
+            calibration_section(run_preset(paper_lift, table3_lift, lift), paper_calibration()),
             "## Table II: the four Table I objects",
             t2_md,
             "## Table III: network inputs and outputs",
@@ -476,6 +461,8 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
             metrics_md,
             "## Plots",
             "\n".join(f"![{p.stem}]({p.name})" for p in plots),
+            "Points not shown (a plot never drops a point without saying so):\n\n"
+            + "\n".join(f"- {p.note()}" for p in drawn),
         ]
     )
     report_path = run / "report.md"
@@ -515,6 +502,7 @@ def write_report(run_dir: str | Path, *, datasets_dir: str | Path = DATASETS) ->
     return ReportSummary(
         report_path=report_path,
         plots=plots,
+        plot_notes=tuple(p.note() for p in drawn),
         table2=t2,
         model_test_max_rel_error=test_max,
         model_test_median_rel_error=test_median,
@@ -604,8 +592,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if limit is not None and not 0 < limit < 1:
         print(f"error: --require-max-test-error takes a fraction, got {limit!r}", file=sys.stderr)
         return 2
+    given = list(sys.argv[1:] if argv is None else argv)
     try:
-        summary = write_report(args.run_dir)
+        summary = write_report(
+            args.run_dir, argv=["python", "-m", "deformctl.repro.report", *given]
+        )
     except DeformctlError as err:
         print(f"error: {err}", file=sys.stderr)
         return err.exit_code

@@ -143,6 +143,7 @@ import scipy.sparse
 from numpy.typing import NDArray
 
 from deformctl.errors import UsageError
+from deformctl.quantities import MEMORY_BUDGET_GIB
 from deformctl.sim.lattice import (
     Lattice,
     build_lattice,
@@ -294,8 +295,7 @@ class SimSettings:
             raise UsageError(f"dt_s must be in [{low:g}, {high:g}] s, got {self.dt_s}")
         if not (0 < self.max_squeeze_strain < 1):
             raise UsageError(f"max_squeeze_strain must be in (0, 1), got {self.max_squeeze_strain}")
-        if not (math.isfinite(self.memory_budget_gib) and self.memory_budget_gib > 0):
-            raise UsageError(f"memory_budget_gib must be > 0, got {self.memory_budget_gib}")
+        MEMORY_BUDGET_GIB.check(self.memory_budget_gib)
         if self.solver not in ("auto", "direct", "iterative"):
             raise UsageError(f"solver must be auto, direct or iterative, got {self.solver!r}")
         if not (math.isfinite(self.cg_tolerance_m_s) and self.cg_tolerance_m_s > 0):

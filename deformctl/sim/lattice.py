@@ -43,6 +43,7 @@ import numpy as np
 import scipy.sparse
 from numpy.typing import NDArray
 
+from deformctl.reprs import short_repr
 from deformctl.sim.solver import LDLFactor, dof_order, ldl_factor, nested_dissection_order
 
 FloatArray = NDArray[np.float64]
@@ -66,6 +67,8 @@ class Lattice:
         direction: unit rest direction from ``edges[:, 0]`` to ``edges[:, 1]``, ``[m, 3]``.
         unit_stiffness: cell-shared stiffness weight of each element, ``[m]`` (dimensionless).
     """
+
+    __repr__ = short_repr
 
     shape: tuple[int, int, int]
     spacing_m: FloatArray

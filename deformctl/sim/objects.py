@@ -8,11 +8,17 @@ read catalogs.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from deformctl.errors import InputDataError
 from deformctl.physics import rigid_grip_force_n
+from deformctl.quantities import (
+    DAMPING_NS_PER_CM,
+    FRICTION_MU,
+    SIZE_CM,
+    STIFFNESS_N_PER_CM,
+    WEIGHT_N,
+)
 from deformctl.units import CM, GRAVITY_M_S2, N_PER_CM, NS_PER_CM
 
 
@@ -38,22 +44,18 @@ class ObjectSpec:
     damping_ns_per_cm: float
 
     def __post_init__(self) -> None:
-        oid = self.object_id
+        where = f"object {self.object_id!r}"
         size = tuple(float(s) for s in self.size_cm)
-        if len(size) != 3 or not all(math.isfinite(s) and s > 0 for s in size):
-            raise InputDataError(f"object {oid!r}: size must be three positive lengths (cm)")
+        if len(size) != 3:
+            raise InputDataError(f"{where}: size must be three lengths (cm)")
+        for axis, value in zip("xyz", size, strict=True):
+            SIZE_CM.check_data(value, where=where, name=f"size {axis}")
         object.__setattr__(self, "size_cm", size)
-        checks = (
-            ("weight_n", self.weight_n, False),
-            ("friction_mu", self.friction_mu, False),
-            ("stiffness_n_per_cm", self.stiffness_n_per_cm, False),
-            ("damping_ns_per_cm", self.damping_ns_per_cm, True),
-        )
-        for name, value, zero_ok in checks:
-            v = float(value)
-            if not math.isfinite(v) or v < 0 or (v == 0 and not zero_ok):
-                need = ">= 0" if zero_ok else "> 0"
-                raise InputDataError(f"object {oid!r}: {name} must be finite and {need}, got {v}")
+        # each quantity's one rule (deformctl.quantities): the catalog's bounds
+        WEIGHT_N.check_data(float(self.weight_n), where=where)
+        FRICTION_MU.check_data(float(self.friction_mu), where=where)
+        STIFFNESS_N_PER_CM.check_data(float(self.stiffness_n_per_cm), where=where)
+        DAMPING_NS_PER_CM.check_data(float(self.damping_ns_per_cm), where=where)
 
     @property
     def size_m(self) -> tuple[float, float, float]:

@@ -41,7 +41,7 @@ from the camera matrix, and a wrong one moves the result. Pass the calibrated ca
 Without it a pinhole camera with a 60-degree horizontal field of view and the principal point at
 the image centre is assumed: rendered 13.7 x 9.3 x 6.1 cm box, 45 cm away, read 12.85 x 8.70 cm
 through a 45-degree camera (-6 %) and 14.12 x 9.61 cm through a 70-degree one (+3 %); with the
-camera matrix every side came within 0.5 % (tests/test_vision_camera.py).
+camera matrix every side came within 0.5 % (tests/vision/test_camera.py).
 
 *Segmentation.* The object is the largest foreground region that is not the marker: by default
 the difference from a smooth background (a surface per colour channel fitted robustly to the

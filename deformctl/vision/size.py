@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from deformctl.catalog import catalog_row as new_catalog_row
 from deformctl.errors import InputDataError, UsageError
+from deformctl.reprs import short_repr
 from deformctl.vision.camera import CameraCalibration, undistort
 from deformctl.vision.reference import (
     DEFAULT_HFOV_DEG,
@@ -256,6 +257,8 @@ class ViewMeasurement:
         angle_deg: angle of the along-x side from the reference x axis, degrees in (-45, 45].
     """
 
+    __repr__ = short_repr
+
     view: ViewName
     image_shape: tuple[int, int]
     reference: Literal["aruco", "checkerboard"]
@@ -289,6 +292,8 @@ class SizeMeasurement:
         assumed_hfov_deg: the horizontal field of view assumed for want of a camera matrix,
             degrees; None when one was given.
     """
+
+    __repr__ = short_repr
 
     size_x_cm: float
     size_y_cm: float

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from deformctl.errors import InputDataError, UsageError
+from deformctl.reprs import short_repr
 from deformctl.units import CM
 from deformctl.vision.reference import (
     MARKER_MASK_GROWTH,
@@ -67,6 +68,8 @@ class SlipResult:
         scale_px_per_m: the image scale used, px per m.
         palm_rises_px: each tracked palm's rise, px (empty when the palms were not tracked).
     """
+
+    __repr__ = short_repr
 
     lifted: bool
     slipped: bool

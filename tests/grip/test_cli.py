@@ -94,16 +94,21 @@ def test_predict_one_object_with_its_bound(setup: dict[str, Path]) -> None:
     assert half == pytest.approx(row["predicted_lift_force_n"] / 2, rel=1e-5)
 
 
+#: μ's one rule, as every command prints it (deformctl.quantities.FRICTION_MU).
+MU_RULE = "error: --friction-mu must be a number in (0, 3], got "
+
+
 @pytest.mark.parametrize(
     ("extra", "code", "line"),
     [
         ([], 2, "error: the model needs each object's friction: give --friction-mu MU for one "
                 "object, or a friction_mu column (in the table or a --catalog)"),
-        (["--friction-mu", "0"], 2, "error: --friction-mu must be > 0 and <= 3, got 0"),
-        (["--friction-mu", "-0.5"], 2, "error: --friction-mu must be > 0 and <= 3, got -0.5"),
-        (["--friction-mu", "3.5"], 2, "error: --friction-mu must be > 0 and <= 3, got 3.5"),
-        (["--friction-mu", "nan"], 2, "error: --friction-mu must be a finite number, got nan"),
-        (["--friction-mu", "inf"], 2, "error: --friction-mu must be a finite number, got inf"),
+        # μ's one rule, as every command prints it (deformctl.quantities.FRICTION_MU)
+        (["--friction-mu", "0"], 2, MU_RULE + "0"),
+        (["--friction-mu", "-0.5"], 2, MU_RULE + "-0.5"),
+        (["--friction-mu", "3.5"], 2, MU_RULE + "3.5"),
+        (["--friction-mu", "nan"], 2, MU_RULE + "nan"),
+        (["--friction-mu", "inf"], 2, MU_RULE + "inf"),
         (["--friction-mu", "0.5", "--coverage", "0"], 2,
          "error: --coverage must be a number in (0, 1), got 0"),
         (["--friction-mu", "0.5", "--coverage", "1"], 2,
@@ -127,7 +132,9 @@ def test_nan_in_any_feature_flag(setup: dict[str, Path]) -> None:
     args = [*OBJECT, "--friction-mu", "0.5"]
     args[args.index("--damping-ns-per-cm") + 1] = "inf"
     result = runner.invoke(app, ["predict", str(setup["model"]), *args])
-    assert _error(result, 2) == "error: --damping-ns-per-cm must be a finite number, got inf"
+    assert _error(result, 2) == (
+        "error: --damping-ns-per-cm must be a number in [0, 10000] N·s/cm, got inf"
+    )
 
 
 def test_a_model_without_scores_asked_for_a_bound(setup: dict[str, Path], tmp_path: Path) -> None:
@@ -161,7 +168,7 @@ def test_bad_mu_in_a_table_exits_65_naming_the_rows(setup: dict[str, Path], tmp_
     table = read_table(setup["index"], "index_table")
     # (μ <= 0 cannot be written: the index table's schema refuses it on both sides)
     for value, line in (
-        (4.0, "friction_mu must be > 0 and <= 3; it is 4 for P003"),
+        (12.0, "friction_mu must be a number in (0, 3]; it is 12 for P003"),
         (float("nan"), "friction_mu is NaN or not a finite number for P003"),
     ):
         bad = table.copy()

@@ -97,14 +97,18 @@ def test_scalar_and_batch_agree_on_every_field(files: dict[str, Path]) -> None:
 @pytest.mark.parametrize(
     ("args", "line"),
     [
-        ((2.0, 10.0, 0.5, 0.0), "friction_mu must be > 0 and <= 3; it is 0 for A"),
-        ((2.0, 10.0, 0.5, 3.5), "friction_mu must be > 0 and <= 3; it is 3.5 for A"),
+        ((2.0, 10.0, 0.5, 0.0), "friction_mu must be a number in (0, 3]; it is 0 for A"),
+        ((2.0, 10.0, 0.5, 3.5), "friction_mu must be a number in (0, 3]; it is 3.5 for A"),
         ((2.0, 10.0, 0.5, math.nan), "friction_mu is NaN or not a finite number for A"),
         ((math.inf, 10.0, 0.5, 0.5), "weight_n is NaN or not a finite number for A"),
-        ((2.0, -1.0, 0.5, 0.5), "deformability_n_per_cm must be > 0; it is -1 for A"),
+        (
+            (2.0, -1.0, 0.5, 0.5),
+            "deformability_n_per_cm must be a number in [0.01, 100000] N/cm; it is -1 for A",
+        ),
         (
             (2.0, 10.0, -0.2, 0.5),
-            "damping_ns_per_cm must be >= 0 (a fitted -0.05 counts as 0); it is -0.2 for A",
+            "damping_ns_per_cm must be a number in [0, 10000] N·s/cm (a fitted -0.05 counts as 0); "
+            "it is -0.2 for A",
         ),
     ],
 )

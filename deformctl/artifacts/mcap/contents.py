@@ -29,6 +29,7 @@ from deformctl.artifacts.mcap.integrity import MCAP_MAGIC, locate_damage
 from deformctl.artifacts.provenance import Provenance
 from deformctl.artifacts.schema import load_json_schema, schema_version, validate_message
 from deformctl.errors import InputDataError, SchemaError
+from deformctl.reprs import short_repr
 from deformctl.units import NS_PER_S
 
 KIND_SQUEEZE = "squeeze_log"
@@ -129,6 +130,8 @@ class McapContents:
         messages: every message record, in file order.
         crcs_present: True when both the data-section and the summary CRC were written.
     """
+
+    __repr__ = short_repr
 
     path: str
     header: Header | None = None

@@ -16,7 +16,6 @@ from typing import Any
 import numpy as np
 from mcap.writer import CompressionType, Writer
 
-from deformctl import __version__
 from deformctl.artifacts.io import PathArg, atomic_output, display_name
 from deformctl.artifacts.mcap.contents import (
     _LIFT_FIELDS,
@@ -40,6 +39,7 @@ from deformctl.errors import InputDataError
 from deformctl.scene import SceneFrames
 from deformctl.series import LiftAttempt, SqueezeSeries
 from deformctl.units import NS_PER_S
+from deformctl.version import __version__
 
 
 class _LogWriter:

@@ -69,6 +69,7 @@ from deformctl.catalog import CatalogObject
 from deformctl.errors import DeformctlError, RigError, UsageError
 from deformctl.lift.search import AttemptError, TrialRunner
 from deformctl.lift.stage import RunnerFactory
+from deformctl.quantities import FRICTION_MU, RIG_TIMEOUT_S, SIZE_CM, WEIGHT_N
 from deformctl.series import TrialOutcome
 
 RIG_PROTOCOL_VERSION = 1
@@ -223,8 +224,7 @@ class RigRunner:
         argv = shlex.split(command) if isinstance(command, str) else [str(a) for a in command]
         if not argv:
             raise UsageError("rig command is empty")
-        if not _is_positive(timeout_s):
-            raise UsageError(f"rig timeout must be a number > 0 s, got {timeout_s!r}")
+        RIG_TIMEOUT_S.check(timeout_s)
         self.argv: list[str] = argv
         self.timeout_s = float(timeout_s)
         self.cwd: Path | None = None if cwd is None else Path(cwd)
@@ -237,24 +237,16 @@ class RigRunner:
         if not isinstance(object_id, str) or not object_id:
             raise UsageError(f"rig object needs a non-empty string 'object_id', got {object_id!r}")
         fields: dict[str, Any] = {}
-        for key in ("weight_n", "friction_mu"):
-            value = obj.get(key)
-            if not _is_positive(value):
-                raise UsageError(f"object {object_id!r}: {key} must be a number > 0, got {value!r}")
-            fields[key] = float(value)
+        for key, quantity in (("weight_n", WEIGHT_N), ("friction_mu", FRICTION_MU)):
+            fields[key] = quantity.check(obj.get(key), label=f"object {object_id!r}: {key}")
         size = obj.get("size_cm")
         if size is not None:
-            ok = (
-                isinstance(size, Sequence)
-                and not isinstance(size, str)
-                and len(size) == 3
-                and all(_is_positive(v) for v in size)
-            )
-            if not ok:
+            if not (isinstance(size, Sequence) and not isinstance(size, str) and len(size) == 3):
                 raise UsageError(
-                    f"object {object_id!r}: size_cm must be three numbers > 0, got {size!r}"
+                    f"object {object_id!r}: size_cm must be three numbers (x, y, z), got {size!r}"
                 )
-            fields["size_cm"] = [float(v) for v in size]
+            label = f"object {object_id!r}: size_cm"
+            fields["size_cm"] = [SIZE_CM.check(v, label=label) for v in size]
         ceiling = obj.get("max_force_n")
         if ceiling is not None and not (isinstance(ceiling, float) and math.isnan(ceiling)):
             if not _is_positive(ceiling):
@@ -441,10 +433,7 @@ def rig_runner_factory(
         argv = [str(a) for a in command]
     if not argv:
         raise UsageError("rig command is empty")
-    if isinstance(timeout_s, bool) or not (
-        isinstance(timeout_s, int | float) and math.isfinite(timeout_s) and timeout_s > 0
-    ):
-        raise UsageError(f"rig timeout must be a finite number > 0 s, got {timeout_s!r}")
+    RIG_TIMEOUT_S.check(timeout_s)
 
     def make(obj: CatalogObject) -> TrialRunner:
         return RigRunner(

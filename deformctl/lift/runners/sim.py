@@ -46,12 +46,8 @@ from deformctl.artifacts.provenance import Provenance, input_digest
 from deformctl.catalog import CatalogObject, select_objects
 from deformctl.errors import InputDataError
 from deformctl.lift.objects import read_lift_objects
-from deformctl.lift.search import (
-    DEFAULT_GROWTH,
-    DEFAULT_MAX_ATTEMPTS,
-    DEFAULT_TOLERANCE_REL,
-    TrialRunner,
-)
+from deformctl.lift.options import DEFAULT_SEARCH, SearchOptions
+from deformctl.lift.search import TrialRunner
 from deformctl.lift.stage import RunnerFactory, lift_catalog
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
 from deformctl.scene import DEFAULT_SCENE_HZ, scene_every_steps
@@ -202,17 +198,14 @@ class LiftTask:
 
     Attributes:
         preset: the :class:`~deformctl.presets.SimPreset` (model, profile, slip, release).
-        protocol, growth, tolerance_rel, max_attempts: the search options.
+        search: the search options.
         log_epoch_ns: where each part's lift log begins, ns since the Unix epoch (None: the
             log writer's fixed epoch, 2000-01-01).
         scene_hz: scene frames per simulated second in the part logs (0: none).
     """
 
     preset: SimPreset
-    protocol: str = "refine"
-    growth: float = DEFAULT_GROWTH
-    tolerance_rel: float = DEFAULT_TOLERANCE_REL
-    max_attempts: int = DEFAULT_MAX_ATTEMPTS
+    search: SearchOptions = DEFAULT_SEARCH
     log_epoch_ns: int | None = None
     scene_hz: float = DEFAULT_SCENE_HZ
 
@@ -223,14 +216,7 @@ class LiftTask:
             InputDataError: the object cannot be lifted or simulated (recorded as failed).
         """
         factory = sim_runner_factory(preset=self.preset, scene_hz=self.scene_hz)
-        run = lift_catalog(
-            [CatalogObject.from_row(item)],
-            factory,
-            protocol=self.protocol,  # type: ignore[arg-type]
-            growth=self.growth,
-            tolerance_rel=self.tolerance_rel,
-            max_attempts=self.max_attempts,
-        )
+        run = lift_catalog([CatalogObject.from_row(item)], factory, search=self.search)
         error = run.error_message()
         return TaskOutput(
             rows=spec_rows(run.table, "lift_results"),
@@ -286,13 +272,7 @@ def lift_sweep(
     factory = sim_runner_factory(preset=task.preset, scene_hz=task.scene_hz)
     catalog = select_objects(read_lift_objects(catalog_path), object_ids)
     _check_budgets(catalog, task)
-    search = {
-        "protocol": task.protocol,
-        "growth": task.growth,
-        "tolerance_rel": task.tolerance_rel,
-        "max_attempts": task.max_attempts,
-    }
-    run_settings = {"runner": factory.name, **factory.settings, **search}
+    run_settings = {"runner": factory.name, **factory.settings, **task.search.as_dict()}
     if task.log_epoch_ns is not None:
         run_settings["log_epoch_ns"] = task.log_epoch_ns
     provenance = Provenance.from_invocation([catalog_path], settings=run_settings)

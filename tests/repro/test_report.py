@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import re
 from pathlib import Path
 
@@ -22,7 +23,7 @@ from deformctl.repro.report import (
     write_report,
 )
 
-PAPER = Path(__file__).resolve().parent.parent / "datasets" / "paper"
+PAPER = Path(__file__).resolve().parents[2] / "datasets" / "paper"
 runner = CliRunner()
 
 
@@ -162,3 +163,88 @@ def test_reproduce_gates(numbers: dict[str, float], expected: list[str]) -> None
     assert len(failures) == len(expected)
     for message, fragment in zip(failures, expected, strict=True):
         assert fragment in message
+
+
+def _tables(text: str) -> list[list[str]]:
+    """The header cells of every Markdown table in ``text``."""
+    lines = text.splitlines()
+    return [
+        [c.strip() for c in line.strip("|").split("|")]
+        for line, below in itertools.pairwise(lines)
+        if line.startswith("|") and below.startswith("|---")
+    ]
+
+
+def test_the_report_says_how_it_was_made_and_what_each_column_is(run_dir: Path) -> None:
+    """Issue 31 point 6: version, commit, date, command line; the calibration (which parameters,
+    to which of the paper's points, the leave-one-out error); a source on every column with a
+    unit; and no point left out of a plot without a note naming it."""
+    from datetime import UTC, datetime
+
+    from deformctl import __version__
+    from deformctl.presets import paper_calibration
+    from deformctl.repro.disclosure import LABELS
+
+    argv = ["python", "-m", "deformctl.repro.report", str(run_dir)]
+    summary = write_report(run_dir, argv=argv)
+    text = summary.report_path.read_text()
+    # provenance
+    made = text.split("## How this report was made", 1)[1].split("\n## ", 1)[0]
+    assert f"deformctl {__version__}, commit " in made
+    assert re.search(r"commit ([0-9a-f]{40}|unknown)", made)
+    assert datetime.now(UTC).strftime("%Y-%m-%d") in made
+    assert f"`{' '.join(argv)}`" in made
+    for artifact in ("lift", "index", "predictions", "paper_lift", "table3_lift"):
+        assert f"| {artifact}.parquet | `" in made  # the command line each was written by
+    # the calibration: every fitted parameter, the 13 points, in-sample and leave-one-out errors
+    calibration = paper_calibration()
+    section = text.split("## Calibration", 1)[1].split("\n## ", 1)[0]
+    assert "The simulator ran with the `paper` preset." in section
+    for name, value in calibration["fitted"].items():
+        assert f"`{name}` = {value:g}" in section
+    for point in calibration["points"]:
+        in_sample = f"{100 * point['error']:+.1f} %"
+        assert f"| {point['point']} | {point['lift_force_paper_n']:.2f} | {in_sample} |" in section
+    loo = 100 * calibration["leave_one_out"]["worst"]
+    assert f"leave-one-out (each point predicted with the parameters fitted to the other 12): " \
+        f"worst {loo:.1f} %" in section  # fmt: skip
+    assert (
+        f"In-sample worst error over the 13 points: {100 * calibration['worst_error']:.1f} %"
+        in (section)
+    )
+    # every column that holds a quantity with a unit says where its numbers come from
+    headers = [cell for table in _tables(text) for cell in table]
+    with_units = [c for c in headers if re.search(r"\((N|N/cm|N·s/cm)\)", c)]
+    assert len(with_units) >= 25
+    unlabelled = [c for c in with_units if not any(label in c for label in LABELS.values())]
+    assert not unlabelled
+    assert "D (N/cm), measured (the paper's rig)" in headers
+    assert "L_f (N), the paper's simulation" in headers
+    assert "NN L_f (N), the paper's network" in headers
+    # the two Table III cubes lifted here are drawn; the seven others have no L_f: named
+    zeta_note = next(n for n in summary.plot_notes if "lf_over_fw_vs_zeta" in n)
+    for i in range(3, 10):
+        assert f"T3-{i} (ours: no value)" in zeta_note
+    assert "T3-1 (ours" not in zeta_note
+    assert "`predicted_vs_measured.png`: every point is shown." in summary.plot_notes
+    for note in summary.plot_notes:
+        assert f"- {note}" in text
+
+
+def test_a_point_outside_the_axes_is_named() -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from deformctl.repro.plots import Plot, hidden_points
+
+    fig, ax = plt.subplots()
+    ax.scatter([0.5, 1.0, -0.2], [1.0, 1.2, 1.1])
+    ax.set_xlim(left=0.0)
+    hidden = hidden_points(ax, ["a", "b", "c"], [0.5, 1.0, -0.2], [1.0, 1.2, 1.1], "zeta")
+    hidden += hidden_points(ax, ["d"], [float("nan")], [1.0], "zeta")
+    plt.close(fig)
+    assert hidden == ["c (zeta: x -0.2, y 1.1 outside the axes)", "d (zeta: no value)"]
+    note = Plot(Path("p.png"), tuple(hidden)).note()
+    assert note.startswith("`p.png`: 2 point(s) not shown: c (zeta")

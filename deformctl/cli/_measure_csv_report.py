@@ -1,0 +1,94 @@
+"""What ``measure --csv`` prints of a run: the columns and units found (once per distinct line),
+each file's notes and warnings, the ruptures cut off, the failures and the summary line."""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Sequence
+from os import PathLike
+
+import typer
+
+from deformctl.artifacts.io import display_name
+from deformctl.measure import CsvBatchResult
+
+
+def _counted(lines: Sequence[str], of: int) -> list[str]:
+    """Each distinct line once, with ``(all M files)`` or ``(N of M files)``."""
+    counts = Counter(lines)
+    return [
+        line if of == 1 else f"{line} ({'all ' if n == of else f'{n} of '}{of} files)"
+        for line, n in counts.items()
+    ]
+
+
+def report_files(result: CsvBatchResult, output: str) -> None:
+    read = result.read
+    total = len(result.outcomes)
+    notes: list[str] = []
+    for o in read:
+        rec = o.recording
+        assert rec is not None
+        notes.append(rec.notes[0])
+        for line in rec.notes[1:]:
+            typer.echo(f"{display_name(o.file.path)}: {line}", err=True)
+        for line in rec.warnings:
+            typer.echo(
+                f"warning: {display_name(o.file.path)}: object {o.file.object_id!r}: {line}",
+                err=True,
+            )
+        for r in rec.ruptures:
+            typer.echo(
+                f"warning: {display_name(o.file.path)}: object {o.file.object_id!r}: rupture in "
+                f"{r.describe()}: cut off",
+                err=True,
+            )
+    for line in _counted(notes, len(read)):
+        typer.echo(line if total > 1 else f"{display_name(read[0].file.path)}: {line}", err=True)
+    for o in result.failed:
+        typer.echo(f"error: {o.error}", err=True)
+    if not read:
+        return
+    where = "stdout" if output == "-" else output
+    squeezes = [s for o in read for s in o.recording.squeezes]  # type: ignore[union-attr]
+    duration_s = sum(float(s.time_s[-1]) for s in squeezes)
+    rec = read[0].recording
+    assert rec is not None
+    if total == 1:
+        typer.echo(
+            f"{where}: {len(squeezes)} squeeze(s) of {read[0].file.object_id!r}, {duration_s:.1f} "
+            f"s, force {rec.force_rate_hz:.4g} Hz, position {rec.position_rate_hz:.4g} Hz",
+            err=True,
+        )
+        return
+    failed = f"; {len(result.failed)} file(s) failed (recorded in the log)" if result.failed else ""
+    typer.echo(
+        f"{where}: {len(read)} object(s) from {total} files, {len(squeezes)} squeeze(s), "
+        f"{duration_s:.1f} s{failed}",
+        err=True,
+    )
+
+
+def report_dataset(out_dir: str | PathLike[str]) -> None:
+    """The columns, warnings and failures of a ``measure --csv -o DIR/`` run, from its parts."""
+    from deformctl.artifacts.dataset import read_dataset, read_failures
+    from deformctl.errors import DeformctlError
+
+    try:
+        rows = read_dataset(out_dir)
+    except DeformctlError:
+        rows = None
+    if rows is not None and len(rows):
+        for line in _counted([f"columns: {c}" for c in rows["columns"]], len(rows)):
+            typer.echo(f"{out_dir}: {line}", err=True)
+        for rec in rows.to_dict("records"):
+            for text in filter(None, str(rec["warnings"]).split("\n")):
+                typer.echo(
+                    f"warning: {rec['source_file']}: object {rec['object_id']!r}: {text}", err=True
+                )
+    try:
+        failures = read_failures(out_dir)
+    except (DeformctlError, ValueError):
+        return
+    for rec in failures.to_dict("records"):
+        typer.echo(f"error: {rec['error_message']}", err=True)

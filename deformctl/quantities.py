@@ -1,0 +1,264 @@
+"""Every quantity a command or the library takes, with its one validation rule.
+
+A :class:`Quantity` holds the bounds of one physical quantity or numeric option (μ, W, the sizes,
+D, λ, the smoothing window, the squeeze ramp, the search's growth, ...), its unit, its parameter or
+column name and its command-line flag. Every place that takes the value checks it here: the
+options types the commands build and the library takes (:mod:`deformctl.lift.options`,
+:mod:`deformctl.measure.options`, :mod:`deformctl.characterize.options`, ...), the catalog's row
+parser (:mod:`deformctl.catalog`, whose bounds these are) and the population generator. So a bad
+value gets the same rule and the same words whichever command, or library call, it came through:
+
+* a flag or a library argument: :meth:`Quantity.check` raises a
+  :class:`~deformctl.errors.UsageError` (exit 2), ``--friction-mu must be a number in (0, 3],
+  got 0``;
+* a value read from a file: :meth:`Quantity.check_data` raises an
+  :class:`~deformctl.errors.InputDataError` (exit 65) naming where it was read, ``object 'A':
+  friction_mu = 0 is outside its physical bounds (0, 3]``.
+
+The catalog's bounds (``schemas/catalog.columns.json`` states the same numbers, checked by
+``tests/test_catalog.py``) are what a gripper can hold and the simulator can integrate: outside
+them numpy sees underflow and overflow (a size of 1e-308 cm gives a non-finite lattice, a weight of
+1e-300 N or a damping of 1e308 N·s/cm an indefinite factor) or the run never ends (an object of
+1e6 cm).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from os import PathLike
+from typing import Any
+
+from deformctl.errors import InputDataError, UsageError
+
+__all__ = [
+    "AT_FORCE_N",
+    "COVERAGE",
+    "DAMPING_NS_PER_CM",
+    "FORCE_THRESHOLD_FRAC",
+    "FRICTION_MU",
+    "GROWTH",
+    "HOLD_S",
+    "LAG_S",
+    "MARKER_ID",
+    "MARKER_SIZE_CM",
+    "MAX_ATTEMPTS",
+    "MEMORY_BUDGET_GIB",
+    "MIN_GAP_S",
+    "MIN_SQUEEZE_S",
+    "NOISE_FORCE_N",
+    "NOISE_POSITION_M",
+    "PEAK_FORCE_N",
+    "RAMP_S",
+    "RIG_TIMEOUT_S",
+    "SIZE_CM",
+    "SLIP_TOLERANCE_M",
+    "SQUARE_SIZE_CM",
+    "SQUEEZES",
+    "START_INTERPOLATE",
+    "START_MARGIN",
+    "STIFFNESS_N_PER_CM",
+    "STRAIN",
+    "TOLERANCE_REL",
+    "WEIGHT_N",
+    "WINDOW_S",
+    "Quantity",
+]
+
+
+def _number_text(value: Any) -> str:
+    """``0``, ``0.5``, ``nan``, ``1e+308``; a non-number as its repr."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return repr(value)
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One quantity's validation rule: its bounds, its unit and its names.
+
+    Attributes:
+        name: the parameter and column name (``friction_mu``).
+        flag: the command-line flag that gives it (``--friction-mu``).
+        unit: the unit, as messages print it after a number (``" N"``, ``" s"``, ``""``).
+        low, high: the bounds (``-inf`` / ``inf``: none).
+        low_open, high_open: the bound itself is excluded (``> low`` rather than ``>= low``).
+        integer: only whole numbers (counts).
+        why: the reason for the rule, appended to the message when given.
+    """
+
+    name: str
+    flag: str
+    unit: str = ""
+    low: float = -math.inf
+    high: float = math.inf
+    low_open: bool = False
+    high_open: bool = False
+    integer: bool = False
+    why: str = ""
+
+    @property
+    def rule(self) -> str:
+        """What a value must be: ``a number in (0, 3]``, ``a finite number > 0 s``, ..."""
+        kind = "an integer" if self.integer else "a finite number"
+        if math.isfinite(self.low) and math.isfinite(self.high):
+            lb, rb = "(" if self.low_open else "[", ")" if self.high_open else "]"
+            kind = "an integer" if self.integer else "a number"
+            return f"{kind} in {lb}{self.low:g}, {self.high:g}{rb}{self.unit}"
+        if math.isfinite(self.low):
+            return f"{kind} {'>' if self.low_open else '>='} {self.low:g}{self.unit}"
+        if math.isfinite(self.high):
+            return f"{kind} {'<' if self.high_open else '<='} {self.high:g}{self.unit}"
+        return kind
+
+    def ok(self, value: Any) -> bool:
+        """Whether ``value`` satisfies the rule (a real number, finite, within the bounds)."""
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return False
+        if self.integer and (not isinstance(value, int) and not float(value).is_integer()):
+            return False
+        v = float(value)
+        if not math.isfinite(v):
+            return False
+        above = v > self.low if self.low_open else v >= self.low
+        below = v < self.high if self.high_open else v <= self.high
+        return above and below
+
+    def problem(self, value: Any) -> str | None:
+        """``must be <rule>, got <value>`` (with the reason), or None when the value is fine."""
+        if self.ok(value):
+            return None
+        why = f" ({self.why})" if self.why else ""
+        return f"must be {self.rule}{why}, got {_number_text(value)}"
+
+    def check(self, value: Any, *, label: str | None = None) -> Any:
+        """``value`` when it satisfies the rule.
+
+        Args:
+            value: the value given (a flag's or a library argument's).
+            label: who gave it, for the message (default: the flag).
+
+        Raises:
+            UsageError: ``<flag> must be <rule>, got <value>`` (exit 2).
+        """
+        problem = self.problem(value)
+        if problem is not None:
+            raise UsageError(f"{label or self.flag} {problem}")
+        return int(value) if self.integer else float(value)
+
+    def check_optional(self, value: Any, *, label: str | None = None) -> Any:
+        """:meth:`check`, with None (not given: the default applies) passed through."""
+        return None if value is None else self.check(value, label=label)
+
+    def data_problem(self, value: float, *, name: str | None = None) -> str | None:
+        """``<name> = <value> is outside its physical bounds [low, high]``, or None.
+
+        ``name``: the column read (default :attr:`name`; e.g. ``size_x_cm`` for a size).
+        """
+        if self.ok(value):
+            return None
+        column = name or self.name
+        if math.isfinite(self.low) and math.isfinite(self.high):
+            lb, rb = "(" if self.low_open else "[", ")" if self.high_open else "]"
+            bounds = f"{lb}{self.low:g}, {self.high:g}{rb}"
+            return f"{column} = {_number_text(value)} is outside its physical bounds {bounds}"
+        return f"{column} {self.problem(value)}"
+
+    def check_data(
+        self,
+        value: float,
+        *,
+        where: str,
+        path: str | PathLike[str] | None = None,
+        name: str | None = None,
+    ) -> float:
+        """``value`` when it satisfies the rule; else a data error naming where it was read.
+
+        Raises:
+            InputDataError: ``<where>: <name> = <value> is outside its physical bounds [...]``
+                (exit 65).
+        """
+        problem = self.data_problem(value, name=name)
+        if problem is not None:
+            raise InputDataError(f"{where}: {problem}", path=path)
+        return float(value)
+
+    def check_range(self, value: Any, *, label: str | None = None) -> tuple[float, float]:
+        """A ``(low, high)`` range of this quantity (low <= high, each within the rule).
+
+        Raises:
+            UsageError: not a pair of numbers, reversed, or an end outside the rule (exit 2).
+        """
+        who = label or self.flag
+        try:
+            low, high = (float(v) for v in value)
+        except (TypeError, ValueError):
+            what = f"{who} must be a (low, high) pair of numbers, got {value!r}"
+            raise UsageError(what) from None
+        for end in (low, high):
+            self.check(end, label=who)
+        if low > high:
+            raise UsageError(f"{who} must be a range with low <= high, got ({low:g}, {high:g})")
+        return low, high
+
+
+# ---------------------------------------------------------------------------- the object
+#: Bounds in the catalog's units (see the module docstring): the catalog columns, the flags of a
+#: measured object (``measure --bag/--csv/--images``) and the population ranges.
+
+#: μ: 0 < μ <= 3 (issue 30: μ <= 0 or μ > 3 is bad input; above 3 no palm pair is plausible and
+#: F_w = W / (2μ) would promise a grip no real contact gives).
+FRICTION_MU = Quantity("friction_mu", "--friction-mu", "", 0.0, 3.0, low_open=True)
+WEIGHT_N = Quantity("weight_n", "--weight-n", " N", 0.001, 5000.0)
+SIZE_CM = Quantity("size_cm", "--size-cm", " cm", 0.1, 200.0)
+#: D and λ, measured (``characterize``) or the simulator's material values (the catalog).
+STIFFNESS_N_PER_CM = Quantity(
+    "deformability_n_per_cm", "--deformability-n-per-cm", " N/cm", 0.01, 1e5
+)
+DAMPING_NS_PER_CM = Quantity("damping_ns_per_cm", "--damping-ns-per-cm", " N·s/cm", 0.0, 1e4)
+
+# ---------------------------------------------------------------------------- measuring
+SQUEEZES = Quantity("squeezes", "--squeezes", "", 1, integer=True)
+PEAK_FORCE_N = Quantity("peak_force_n", "--peak-force-n", " N", 0.0, low_open=True)
+#: The default rule's static strain; the simulator also refuses one at or above its
+#: densification limit (``SimSettings.max_squeeze_strain``).
+STRAIN = Quantity("strain", "--strain", "", 0.0, 1.0, low_open=True, high_open=True)
+RAMP_S = Quantity(
+    "ramp_s", "--ramp-s", " s", 0.0, low_open=True, why="a force step does not excite the damping"
+)
+HOLD_S = Quantity("hold_s", "--hold-s", " s", 0.0)
+NOISE_FORCE_N = Quantity("noise_force_n", "--noise-force-n", " N", 0.0)
+NOISE_POSITION_M = Quantity("noise_position_m", "--noise-position-m", " m", 0.0)
+FORCE_THRESHOLD_FRAC = Quantity(
+    "force_threshold_frac", "force_threshold_frac", "", 0.0, 1.0, low_open=True, high_open=True
+)
+MIN_GAP_S = Quantity("min_gap_s", "min_gap_s", " s", 0.0)
+MIN_SQUEEZE_S = Quantity("min_squeeze_s", "min_squeeze_s", " s", 0.0)
+#: A CSV export's force lag (``measure --csv --lag-s``): larger shifts are a mistake.
+LAG_S = Quantity("lag_s", "--lag-s", " s", -10.0, 10.0)
+#: The memory a run may use (``measure --sim`` and ``--csv``, ``lift --sim``): the simulator's
+#: settings and a CSV export's reader check it here.
+MEMORY_BUDGET_GIB = Quantity("memory_budget_gib", "--memory-budget-gib", " GiB", 0.0, low_open=True)
+MARKER_SIZE_CM = Quantity("marker_size_cm", "--marker-size-cm", " cm", 0.0, low_open=True)
+SQUARE_SIZE_CM = Quantity("square_size_cm", "--square-size-cm", " cm", 0.0, low_open=True)
+MARKER_ID = Quantity("marker_id", "--marker-id", "", 0, integer=True)
+
+# ---------------------------------------------------------------------------- characterizing
+WINDOW_S = Quantity("window_s", "--window-s", " s", 0.0, low_open=True)
+#: The force D is stated at (``characterize --at-force-n``); above an object's peak force it is
+#: refused where the object is fitted.
+AT_FORCE_N = Quantity("at_force_n", "--at-force-n", " N", 0.0, low_open=True)
+
+# ---------------------------------------------------------------------------- lifting
+GROWTH = Quantity("growth", "--growth", "", 1.0, low_open=True)
+TOLERANCE_REL = Quantity("tolerance_rel", "--tolerance", "", 0.0, 1.0, True, True)
+MAX_ATTEMPTS = Quantity("max_attempts", "--max-attempts", "", 1, integer=True)
+START_MARGIN = Quantity("start_margin", "--start-margin", "", 1.0)
+START_INTERPOLATE = Quantity("start_interpolate", "--start-interpolate", "", 1, integer=True)
+RIG_TIMEOUT_S = Quantity("rig_timeout_s", "--rig-timeout", " s", 0.0, low_open=True)
+SLIP_TOLERANCE_M = Quantity("slip_tolerance_m", "--slip-tolerance-m", " m", 0.0, low_open=True)
+
+# ---------------------------------------------------------------------------- predicting
+#: The probability an upper bound must hold with (``predict --coverage``, the split-conformal
+#: bound of :mod:`deformctl.grip.conformal`).
+COVERAGE = Quantity("coverage", "--coverage", "", 0.0, 1.0, low_open=True, high_open=True)

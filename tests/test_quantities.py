@@ -1,0 +1,328 @@
+"""One rule per quantity (``deformctl.quantities``): its bounds, and the same words everywhere.
+
+The rule itself is checked at its edges; then the same bad value is sent through every command
+that takes the quantity (and through the library calls behind them): each refuses it with exit 2
+and the one line the quantity writes, so no command accepts what another refuses.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+from typer.testing import CliRunner
+
+from deformctl.catalog import CatalogObject, MeasuredObject
+from deformctl.characterize import FitOptions, fit_lsq
+from deformctl.cli import app
+from deformctl.errors import EXIT_USAGE, InputDataError, UsageError
+from deformctl.lift.options import SearchOptions
+from deformctl.lift.search import find_min_lift_force
+from deformctl.measure import CsvOptions, csv_objects
+from deformctl.measure.options import SqueezeProtocol
+from deformctl.population import make_population
+from deformctl.quantities import (
+    DAMPING_NS_PER_CM,
+    FRICTION_MU,
+    GROWTH,
+    MAX_ATTEMPTS,
+    RAMP_S,
+    SIZE_CM,
+    STIFFNESS_N_PER_CM,
+    TOLERANCE_REL,
+    WEIGHT_N,
+    WINDOW_S,
+    Quantity,
+)
+from deformctl.series import SqueezeSeries, TrialOutcome
+
+runner = CliRunner()
+
+
+# ---------------------------------------------------------------------------- the rule
+
+
+@pytest.mark.parametrize(
+    ("quantity", "good", "bad"),
+    [
+        (
+            FRICTION_MU,
+            [1e-9, 0.01, 0.5, 3],
+            [0.0, -1e-9, 3.0001, 10, -1, math.nan, math.inf, "0.5", None],
+        ),
+        (WEIGHT_N, [0.001, 5000], [0.0, -1, 5000.5, math.nan]),
+        (SIZE_CM, [0.1, 200], [0.09, 201, math.inf]),
+        (STIFFNESS_N_PER_CM, [0.01, 1e5], [0.0, 1e5 * 1.01]),
+        (DAMPING_NS_PER_CM, [0.0, 1e4], [-1e-9, 1e4 + 1]),
+        (WINDOW_S, [1e-9, 0.2, 10], [0.0, -0.2, math.nan, math.inf]),
+        (RAMP_S, [1e-9, 0.25], [0.0, -1]),
+        (GROWTH, [1.0001, 2], [1.0, 0.5, math.nan]),
+        (TOLERANCE_REL, [1e-6, 0.5], [0.0, 1.0, -0.01]),
+        (MAX_ATTEMPTS, [1, 50], [0, -1, 2.5, True, math.nan]),
+    ],
+)
+def test_each_rule_holds_at_its_edges(quantity: Quantity, good: list[Any], bad: list[Any]) -> None:
+    for value in good:
+        assert quantity.ok(value), (quantity.name, value)
+        assert quantity.check(value) == value
+    for value in bad:
+        assert not quantity.ok(value), (quantity.name, value)
+        with pytest.raises(UsageError) as info:
+            quantity.check(value)
+        assert str(info.value).startswith(f"{quantity.flag} must be {quantity.rule}"), value
+
+
+def test_a_file_value_gets_the_same_rule_as_a_data_error() -> None:
+    with pytest.raises(InputDataError) as info:
+        FRICTION_MU.check_data(0.0, where="object 'A'", path="cat.csv")
+    assert str(info.value) == (
+        "cat.csv: object 'A': friction_mu = 0 is outside its physical bounds (0, 3]"
+    )
+    assert info.value.exit_code == 65
+    assert FRICTION_MU.check_data(0.5, where="object 'A'") == 0.5
+
+
+def test_the_catalog_bounds_are_the_quantities() -> None:
+    from deformctl.catalog import BOUNDS, COLUMN_QUANTITIES
+
+    assert BOUNDS["friction_mu"] == (FRICTION_MU.low, FRICTION_MU.high)
+    assert COLUMN_QUANTITIES["size_z_cm"] is SIZE_CM
+    assert COLUMN_QUANTITIES["material_damping_ns_per_cm"] is DAMPING_NS_PER_CM
+
+
+# ---------------------------------------------------------------------------- every command
+
+
+def _error(argv: list[str]) -> str:
+    result = runner.invoke(app, argv)
+    assert result.exit_code == EXIT_USAGE, (argv, result.stderr)
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    return lines[0]
+
+
+def _csv(tmp: Path, *flags: str) -> list[str]:
+    recording = ["--columns", "time=t,force=f,compression=c", "--object-id", "a"]
+    return ["measure", "--csv", str(tmp / "r.csv"), *recording, *flags, "-o", str(tmp / "o.mcap")]
+
+
+def _bag(tmp: Path, *flags: str) -> list[str]:
+    topics = ["--wrench-topic", "/w", "--position-topic", "/p", "--object-id", "a"]
+    return ["measure", "--bag", str(tmp / "b.mcap"), *topics, *flags, "-o", str(tmp / "o.mcap")]
+
+
+def _images(tmp: Path, *flags: str) -> list[str]:
+    photos = [str(tmp / "top.png"), str(tmp / "side.png"), "--marker-size-cm", "5"]
+    return ["measure", "--images", *photos, "--object-id", "a", *flags, "-o", str(tmp / "c.csv")]
+
+
+def _population(tmp: Path, *flags: str) -> list[str]:
+    return ["population", *flags, "-o", str(tmp / "c.csv")]
+
+
+def _predict(tmp: Path, *flags: str) -> list[str]:
+    given = dict(zip(flags[::2], flags[1::2], strict=True))
+    features = {
+        "--weight-n": "40",
+        "--deformability-n-per-cm": "40",
+        "--damping-ns-per-cm": "5",
+        **given,
+    }
+    return ["predict", str(tmp / "model.skops"), *(x for kv in features.items() for x in kv)]
+
+
+def _lib(call: Callable[[], object]) -> str:
+    with pytest.raises(UsageError) as info:
+        call()
+    assert info.value.exit_code == EXIT_USAGE
+    return f"error: {info.value}"
+
+
+def _lifted(grip_force_n: float, attempt_index: int) -> TrialOutcome:
+    return TrialOutcome(grip_force_n, grip_force_n >= 7.0, 0.0)
+
+
+def test_friction_is_refused_alike_by_every_command(tmp_path: Path) -> None:
+    """μ = 0: ``measure --csv`` used to accept what ``lift`` refused."""
+    want = "error: --friction-mu must be a number in (0, 3], got 0"
+    mu = ("--weight-n", "1", "--friction-mu", "0")
+    assert _error(_csv(tmp_path, *mu)) == want
+    assert _error(_bag(tmp_path, *mu)) == want
+    assert _error(_images(tmp_path, *mu)) == want
+    assert _error(_population(tmp_path, "--friction-mu", "0")) == want
+    assert _error(_population(tmp_path, "--friction-mu", "0,0.5")) == want
+    assert _error(_predict(tmp_path, "--friction-mu", "0")) == want
+    assert _lib(lambda: MeasuredObject("a", 1.0, friction_mu=0.0)) == want
+    assert _lib(lambda: make_population(3, seed=0, friction_mu=0.0)) == want
+    assert _lib(lambda: csv_objects(["r.csv"], weight_n=1.0, friction_mu=0.0)) == want
+    # read from a file: the same rule, as a data error naming where it was read (exit 65)
+    rule = "friction_mu = 0 is outside its physical bounds (0, 3]"
+    assert _mapped(tmp_path, "friction_mu", "0") == f"line 2: {rule}"
+    assert _predicted(friction_mu=0.0) == f"friction_mu must be {FRICTION_MU.rule}; it is 0 for A"
+
+
+def test_friction_above_3_is_refused_alike_by_every_command(
+    tmp_path: Path, catalog_row: dict[str, Any], write_catalog: Any
+) -> None:
+    """Issue 30: μ > 3 is bad input, from a flag (exit 2) or a file (exit 65); μ = 3 is not."""
+    want = "error: --friction-mu must be a number in (0, 3], got 3.5"
+    assert _error(_csv(tmp_path, "--weight-n", "1", "--friction-mu", "3.5")) == want
+    assert _error(_population(tmp_path, "--friction-mu", "0.5,3.5")) == want
+    assert _error(_predict(tmp_path, "--friction-mu", "3.5")) == want
+    assert _lib(lambda: MeasuredObject("a", 1.0, friction_mu=3.5)) == want
+    assert _mapped(tmp_path, "friction_mu", "3.5") == (
+        "line 2: friction_mu = 3.5 is outside its physical bounds (0, 3]"
+    )
+    assert _predicted(friction_mu=3.5) == "friction_mu must be a number in (0, 3]; it is 3.5 for A"
+    catalog = write_catalog(tmp_path / "cat.csv", [{**catalog_row, "friction_mu": 3.5}])
+    result = runner.invoke(app, ["inspect", str(catalog)])  # the catalog spec states the bound
+    assert result.exit_code == 65
+    assert "'friction_mu'" in result.stderr
+    assert "<= 3, got 3.5" in result.stderr
+    with pytest.raises(
+        InputDataError, match=r"friction_mu = 3.5 is outside its physical bounds \(0, 3\]"
+    ):
+        CatalogObject.from_row({**catalog_row, "friction_mu": 3.5})
+    assert MeasuredObject("a", 1.0, friction_mu=3.0).friction_mu == 3.0
+
+
+def test_the_operating_force_has_one_rule(tmp_path: Path) -> None:
+    """``characterize --at-force-n`` and ``MaterialOptions(at_force_n=...)``: AT_FORCE_N's words."""
+    from deformctl.characterize import MaterialOptions
+
+    want = "error: --at-force-n must be a finite number > 0 N, got 0"
+    log, out = str(tmp_path / "s.mcap"), str(tmp_path / "c.parquet")
+    assert _error(["characterize", log, "-o", out, "--at-force-n", "0"]) == want
+    assert _lib(lambda: MaterialOptions(at_force_n=0.0)) == want
+    assert _lib(lambda: MaterialOptions(at_force_n=math.nan)).endswith("got nan")
+    assert MaterialOptions(at_force_n=5).at_force_n == 5.0
+
+
+def test_weight_is_refused_alike_by_every_command(tmp_path: Path) -> None:
+    want = "error: --weight-n must be a number in [0.001, 5000] N, got 0"
+    assert _error(_csv(tmp_path, "--weight-n", "0")) == want
+    assert _error(_bag(tmp_path, "--weight-n", "0")) == want
+    assert _error(_images(tmp_path, "--weight-n", "0", "--friction-mu", "0.5")) == want
+    assert _error(_population(tmp_path, "--weight-n", "0")) == want
+    assert _error(_predict(tmp_path, "--weight-n", "0")) == want
+    assert _lib(lambda: MeasuredObject("a", 0.0)) == want
+    assert _mapped(tmp_path, "weight_n", "0") == (
+        "line 2: weight_n = 0 is outside its physical bounds [0.001, 5000]"
+    )
+    assert _predicted(weight_n=0.0) == f"weight_n must be {WEIGHT_N.rule}; it is 0 for A"
+
+
+def test_size_is_refused_alike_by_every_command(tmp_path: Path) -> None:
+    want = "error: --size-cm must be a number in [0.1, 200] cm, got 0"
+    size = ("--weight-n", "1", "--size-cm", "0", "5", "5")
+    assert _error(_csv(tmp_path, *size)) == want
+    assert _error(_bag(tmp_path, *size)) == want
+    assert _lib(lambda: MeasuredObject("a", 1.0, (0.0, 5.0, 5.0))) == want
+
+
+def test_deformability_and_damping_are_refused_alike(tmp_path: Path) -> None:
+    want_d = "error: --deformability-n-per-cm must be a number in [0.01, 100000] N/cm, got 0"
+    assert _error(_population(tmp_path, "--deformability-n-per-cm", "0,40")) == want_d
+    assert _error(_predict(tmp_path, "--deformability-n-per-cm", "0")) == want_d
+    want_l = "error: --damping-ns-per-cm must be a number in [0, 10000] N·s/cm, got -1"
+    assert _error(_population(tmp_path, "--damping-ns-per-cm", "-1,5")) == want_l
+    assert _error(_predict(tmp_path, "--damping-ns-per-cm", "-1")) == want_l
+    line = _predicted(deformability_n_per_cm=0.0)
+    assert line == f"deformability_n_per_cm must be {STIFFNESS_N_PER_CM.rule}; it is 0 for A"
+    # a fitted λ within 0.05 N·s/cm of 0 is noise and counts as 0; below it, the same rule
+    assert _predicted(damping_ns_per_cm=-1.0).startswith(
+        f"damping_ns_per_cm must be {DAMPING_NS_PER_CM.rule} (a fitted -0.05 counts as 0)"
+    )
+
+
+def test_the_window_has_one_text(tmp_path: Path, kv_squeeze: SqueezeSeries) -> None:
+    """``--window-s`` had three texts: the file path, the sweep path and the estimators'."""
+    want = "error: --window-s must be a finite number > 0 s, got 0"
+    log, table = str(tmp_path / "s.mcap"), str(tmp_path / "c.parquet")
+    assert _error(["characterize", log, "--window-s", "0", "-o", table]) == want
+    sweep = ["characterize", str(tmp_path), "--window-s", "0", "-o", str(tmp_path / "out") + "/"]
+    assert _error(sweep) == want
+    assert _lib(lambda: FitOptions(window_s=0.0)) == want
+    assert _lib(lambda: fit_lsq([kv_squeeze], window_s=0.0)) == want
+
+
+def test_the_ramp_is_refused_by_the_library_too(tmp_path: Path) -> None:
+    """``--ramp-s 0`` was refused by the command and accepted by the library."""
+    want = (
+        "error: --ramp-s must be a finite number > 0 s (a force step does not excite the "
+        "damping), got 0"
+    )
+    catalog = str(tmp_path / "cat.csv")
+    assert _error(["measure", catalog, "--sim", "--ramp-s", "0", "-o", str(tmp_path / "s")]) == want
+    assert _lib(lambda: SqueezeProtocol(ramp_s=0.0)) == want
+
+
+def test_the_search_options_have_one_text(tmp_path: Path) -> None:
+    catalog = str(tmp_path / "cat.csv")
+    for flag, value, kwargs in (
+        ("--growth", "1", {"growth": 1.0}),
+        ("--tolerance", "0", {"tolerance_rel": 0.0}),
+        ("--max-attempts", "0", {"max_attempts": 0}),
+    ):
+        argv = ["lift", catalog, "--rig", "true", flag, value, "-o", str(tmp_path / "l.parquet")]
+        line = _error(argv)
+        assert line.startswith(f"error: {flag} must be "), line
+        assert _lib(lambda kw=kwargs: SearchOptions(**kw)) == line  # type: ignore[misc]
+        lib = _lib(
+            lambda kw=kwargs: find_min_lift_force(  # type: ignore[misc]
+                _lifted, weight_n=5.0, friction_mu=0.5, **kw
+            )
+        )
+        assert lib == line
+
+
+@pytest.mark.parametrize("flag", ["--alpha-cm", "--dt-s", "--memory-budget-gib"])
+def test_the_simulator_settings_have_one_text(tmp_path: Path, flag: str) -> None:
+    catalog = str(tmp_path / "cat.csv")
+    measure = ["measure", catalog, "--sim", flag, "-1", "-o", str(tmp_path / "s.mcap")]
+    lift = ["lift", catalog, "--sim", flag, "-1", "-o", str(tmp_path / "l.parquet")]
+    assert _error(measure) == _error(lift)
+    if flag == "--memory-budget-gib":  # the CSV reader's budget is the same quantity
+        want = "error: --memory-budget-gib must be a finite number > 0 GiB, got -1"
+        assert _error(_csv(tmp_path, "--weight-n", "1", flag, "-1")) == _error(lift) == want
+        assert _lib(lambda: CsvOptions(memory_budget_gib=-1)) == want
+
+
+def test_the_coverage_and_the_lag_have_one_text(tmp_path: Path) -> None:
+    from deformctl.predict import load_predictor
+
+    want = "error: --coverage must be a number in (0, 1), got 1"
+    assert _error([*_predict(tmp_path, "--friction-mu", "0.5"), "--coverage", "1"]) == want
+    assert _lib(lambda: load_predictor("grip").margin(1.0)) == want
+    want = "error: --lag-s must be auto or a number in [-10, 10] s, got 11"
+    assert _error(_csv(tmp_path, "--weight-n", "1", "--lag-s", "11")) == want
+    assert _lib(lambda: CsvOptions(lag_s=11.0)) == want
+
+
+def _mapped(tmp: Path, column: str, value: str) -> str:
+    """The error line of ``measure --csv --objects-from`` with ``column`` = ``value``."""
+    mapping = tmp / "map.csv"
+    mapping.write_text(f"file,{column}\nr.csv,{value}\n")
+    argv = [*_csv(tmp, "--weight-n", "1"), "--objects-from", str(mapping)]
+    argv.remove("--object-id")
+    argv.remove("a")
+    result = runner.invoke(app, argv)
+    assert result.exit_code == 65, result.stderr
+    prefix = f"error: {mapping}: "
+    (line,) = result.stderr.splitlines()
+    assert line.startswith(prefix), line
+    return line.removeprefix(prefix)
+
+
+def _predicted(**bad: float) -> str:
+    """The bundled model's refusal of one object with ``bad`` values (a data error)."""
+    from deformctl.predict import load_predictor
+
+    values = {"weight_n": 10.0, "deformability_n_per_cm": 20.0, "damping_ns_per_cm": 1.0}
+    values |= {"friction_mu": 0.5, **bad}
+    with pytest.raises(InputDataError) as info:
+        load_predictor("grip").predict(**values, name="A")
+    return info.value.message
