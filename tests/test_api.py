@@ -74,19 +74,21 @@ def test_every_command_has_its_library_call() -> None:
 
 
 def test_population_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    # the library's defaults before the recorder replaces the function (names load lazily)
+    api = _defaults(deformctl.make_population)
     seen = _record(monkeypatch, "deformctl.cli.population.make_population")
     _run(["population", "-o", str(tmp_path / "c.csv")])
-    api = _defaults(deformctl.make_population)
     assert seen["args"] == (api["n"],)
     for name in ("seed", "weight_n", "deformability_n_per_cm", "damping_ns_per_cm", "friction_mu"):
         assert seen[name] == api[name], name
 
 
 def test_measure_sim_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    # the library's defaults before the recorder replaces the function (names load lazily)
+    api = _defaults(deformctl.simulate_squeezes)
     seen = _record(monkeypatch, "deformctl.cli._measure_sim.simulate_catalog_file")
     _run(["measure", str(tmp_path / "cat.csv"), "--sim", "-o", str(tmp_path / "s.mcap")])
     task = seen["args"][1]
-    api = _defaults(deformctl.simulate_squeezes)
     assert task.protocol == api["protocol"]
     assert api["settings"] is None  # the default preset's, as the command's:
     assert task.settings == deformctl.sim_preset().settings
@@ -119,18 +121,20 @@ def test_measure_csv_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -
 
 
 def test_predict_defaults(monkeypatch: pytest.MonkeyPatch) -> None:
+    # the library's defaults before the recorder replaces the function (names load lazily)
+    api = _defaults(deformctl.predict_objects)
     seen = _record(monkeypatch, "deformctl.predict.predict_objects")
     _run(["predict", "grip", "--weight-n", "2.9", "--deformability-n-per-cm", "30",
           "--damping-ns-per-cm", "0.5", "--friction-mu", "0.5"])  # fmt: skip
-    api = _defaults(deformctl.predict_objects)
     assert seen["coverage"] == api["coverage"] is None
     assert seen["args"][0].path == deformctl.load_predictor("grip").path
 
 
 def test_characterize_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    # the library's defaults before the recorder replaces the function (names load lazily)
+    api = _defaults(deformctl.read_and_characterize)
     seen = _record(monkeypatch, "deformctl.cli.characterize.characterize_file")
     _run(["characterize", str(tmp_path / "s.mcap"), "-o", str(tmp_path / "c.parquet")])
-    api = _defaults(deformctl.read_and_characterize)
     _, fit, policy = seen["args"]
     assert fit == api["options"] == deformctl.FitOptions()
     assert fit.preload is None  # per object: fitted for rig recordings, as the command does
@@ -152,18 +156,20 @@ def test_lift_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
 
 
 def test_table_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    # the library's defaults before the recorder replaces the function (names load lazily)
+    api = _defaults(deformctl.build_index_table)
     seen = _record(monkeypatch, "deformctl.cli.table.build_index_table")
     inputs = [str(DATA / "coefficients.parquet"), str(DATA / "lift_results.parquet")]
     _run(["table", *inputs, "-o", str(tmp_path / "i.parquet")])
-    api = _defaults(deformctl.build_index_table)
     for name, value in api.items():
         assert seen.get(name, value) == value, name
 
 
 def test_train_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    # the library's defaults before the recorder replaces the function (names load lazily)
+    api = _defaults(deformctl.train_model)
     seen = _record(monkeypatch, "deformctl.train.train_model")
     _run(["train", str(DATA / "index_table.parquet"), "-o", str(tmp_path / "m.skops")])
-    api = _defaults(deformctl.train_model)
     for name in ("hidden", "train_size", "seed"):
         assert seen[name] == api[name], name
     for name, value in api.items():
