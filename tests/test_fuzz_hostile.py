@@ -41,7 +41,7 @@ from deformctl.artifacts.mcap import (
 )
 from deformctl.artifacts.schema import json_schema_bytes, load_table_spec
 from deformctl.artifacts.tables import _frame_from_arrow, read_parquet_bytes
-from deformctl.catalog import BOUNDS, CatalogObject
+from deformctl.catalog import BOUNDS, COLUMN_QUANTITIES, CatalogObject
 from deformctl.errors import DeformctlError, UsageError
 
 #: Generated cases per class; the suite's total is their sum.
@@ -147,7 +147,10 @@ def test_catalog_tables(column: str, value: Any) -> None:
     frame = pd.DataFrame([{**ROW, column: value}])
     low, high = BOUNDS[column]
     number = isinstance(value, int | float) and not isinstance(value, bool)
-    inside = number and math.isfinite(float(value)) and low <= float(value) <= high
+    rule = COLUMN_QUANTITIES[column]  # an open end (μ > 0) refuses the bound itself
+    inside = number and math.isfinite(float(value)) and rule.low <= float(value) <= high
+    inside = inside and not (rule.low_open and float(value) == low)
+    inside = inside and not (rule.high_open and float(value) == high)
     # an optional column (the material values) may be empty: NaN is "not known"
     optional = not next(c.required for c in load_table_spec("catalog").columns if c.name == column)
     missing = optional and number and math.isnan(float(value))
