@@ -16,10 +16,10 @@ value gets the same rule and the same words whichever command, or library call, 
   friction_mu = 0 is outside its physical bounds (0, 3]``.
 
 The catalog's bounds (``schemas/catalog.columns.json`` states the same numbers, checked by
-``tests/test_catalog.py``) are what a gripper can hold and the simulator can integrate: outside
-them numpy sees underflow and overflow (a size of 1e-308 cm gives a non-finite lattice, a weight of
-1e-300 N or a damping of 1e308 N·s/cm an indefinite factor) or the run never ends (an object of
-1e6 cm).
+``tests/catalog/test_catalog.py``) are what a gripper can hold and the simulator can integrate:
+outside them numpy sees underflow and overflow (a size of 1e-308 cm gives a non-finite lattice,
+a weight of 1e-300 N or a damping of 1e308 N·s/cm an indefinite factor) or the run never ends (an
+object of 1e6 cm).
 """
 
 from __future__ import annotations
