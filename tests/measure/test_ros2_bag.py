@@ -1,4 +1,4 @@
-"""Ingestion of real-rig logs: ROS 2 MCAP bags (written here with mcap_ros2.writer) and CSV.
+"""Ingestion of ROS 2 MCAP bags (written by tests/_helpers/ros2_bags.py) and their segmentation.
 
 The bags hold a known Kelvin–Voigt response: two WrenchStamped palms at 1 kHz (1 % noise) and
 one PoseStamped palm at 100 Hz (0.05 mm noise), three squeezes in one recording. Going through
@@ -7,13 +7,12 @@ one PoseStamped palm at 100 Hz (0.05 mm noise), three squeezes in one recording.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from deformctl.characterize import fit_lsq, kelvin_voigt_piecewise_linear
+from deformctl.characterize import fit_lsq
 from deformctl.errors import (
     EXIT_DATAERR,
     EXIT_NOINPUT,
@@ -22,7 +21,7 @@ from deformctl.errors import (
     MissingInputError,
     UsageError,
 )
-from deformctl.measure import segment_squeezes, squeeze_from_csv, squeeze_from_ros2_bag
+from deformctl.measure import segment_squeezes, squeeze_from_ros2_bag
 from tests._helpers.ros2_bags import (
     JOINTS,
     LEFT,
@@ -32,6 +31,8 @@ from tests._helpers.ros2_bags import (
     _nan_force,
     write_bag,
 )
+
+from ._errors import _err
 
 #: SG window for positions logged at 100 Hz: the default 0.2 s spans only 20 pose samples, and the
 #: derivative of their noise pulls λ ~15 % low (errors in variables, measured); 0.5 s spans 50.
@@ -104,14 +105,6 @@ def test_segmentation_finds_each_squeeze() -> None:
     assert slices[0].start == 0
     assert slices[1].stop == t.size
     assert slices[0].stop == slices[1].start == (3000 + 5001) // 2
-
-
-def _err(fn: Callable[[], object], cls: type[Exception], match: str) -> str:
-    with pytest.raises(cls, match=match) as info:
-        fn()
-    msg = str(info.value)
-    assert "\n" not in msg
-    return msg
 
 
 def test_bag_topic_not_in_bag_lists_topics(good_bag: Path) -> None:
@@ -201,123 +194,3 @@ def test_bag_joint_state_needs_joint(tmp_path: Path) -> None:
         InputDataError,
         "joint 'finger' not in the JointState names",
     )
-
-
-# --- CSV ------------------------------------------------------------------------------------
-
-
-def _csv_rows(rate_hz: float = 500.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    t = np.arange(0.0, 4.0, 1.0 / rate_hz)
-    knots_t = np.array([0.0, 1.0, 2.6, 3.6, 4.0])
-    knots_f = np.array([0.0, 10.0, 10.0, 0.0, 0.0])
-    f = np.interp(t, knots_t, knots_f)
-    d = kelvin_voigt_piecewise_linear(t, knots_t, knots_f, 2000.0, 300.0)  # 20 N/cm, 3 N·s/cm
-    return t, f, d
-
-
-def test_csv_plain_with_option_units(tmp_path: Path) -> None:
-    t, f, d = _csv_rows()
-    path = tmp_path / "plain.csv"
-    lines = ["Time,Load,Crosshead"] + [
-        f"{ti * 1e3:.6f},{fi / 4.4482216152605:.9f},{di * 1e3:.9f}"
-        for ti, fi, di in zip(t, f, d, strict=True)
-    ]
-    path.write_text("\n".join(lines) + "\n")
-    (sq,) = squeeze_from_csv(
-        path,
-        columns={"time": "Time", "force": "Load", "compression": "Crosshead"},
-        units={"time": "ms", "force": "lbf", "compression": "mm"},
-        object_id="foam",
-    )
-    np.testing.assert_allclose(sq.time_s, t, atol=1e-9)
-    np.testing.assert_allclose(sq.force_n, f, atol=1e-7)
-    np.testing.assert_allclose(sq.compression_m, d, atol=1e-11)
-    fit = fit_lsq([sq])
-    assert fit.deformability_n_per_cm == pytest.approx(20.0, rel=1e-3)
-    assert fit.damping_ns_per_cm == pytest.approx(3.0, rel=1e-3)
-
-
-def _two_header_csv(path: Path, units: tuple[str, str, str]) -> None:
-    t, f, d = _csv_rows()
-    gap_in = (0.1 - d) / 0.0254
-    lines = ["Zeit,Kraft,Weg", ",".join(units)] + [
-        f"{ti:.6f},{fi / 1e3:.12f},{gi:.12f}" for ti, fi, gi in zip(t, f, gap_in, strict=True)
-    ]
-    path.write_text("\ufeff" + "\n".join(lines) + "\n")
-
-
-def test_csv_two_header_rows_units_from_file(tmp_path: Path) -> None:
-    path = tmp_path / "machine.csv"
-    _two_header_csv(path, ("s", "[kN]", "(in)"))
-    (sq,) = squeeze_from_csv(
-        path, columns={"time": "Zeit", "force": "Kraft", "gap": "Weg"}, object_id="foam"
-    )
-    _, f, d = _csv_rows()
-    np.testing.assert_allclose(sq.force_n, f, atol=1e-8)
-    np.testing.assert_allclose(sq.compression_m, d, atol=1e-12)
-    # an option that agrees with the file is fine
-    squeeze_from_csv(
-        path,
-        columns={"time": "Zeit", "force": "Kraft", "gap": "Weg"},
-        units={"force": "kN"},
-        object_id="foam",
-    )
-
-
-def test_csv_missing_column(tmp_path: Path) -> None:
-    path = tmp_path / "m.csv"
-    _two_header_csv(path, ("s", "kN", "in"))
-    msg = _err(
-        lambda: squeeze_from_csv(
-            path, columns={"time": "Zeit", "force": "Force", "gap": "Weg"}, object_id="x"
-        ),
-        InputDataError,
-        "--columns force='Force' names no column of the header \\(line 1: 'Zeit', 'Kraft', "
-        "'Weg'\\)",
-    )
-    assert msg.startswith(str(path))
-
-
-def test_csv_unknown_unit_in_file_and_option(tmp_path: Path) -> None:
-    path = tmp_path / "u.csv"
-    _two_header_csv(path, ("s", "kgm", "in"))
-    cols = {"time": "Zeit", "force": "Kraft", "gap": "Weg"}
-    _err(
-        lambda: squeeze_from_csv(path, columns=cols, object_id="x"),
-        InputDataError,
-        "column 'Kraft' \\(force\\): unit 'kgm' in the units row is not a known force unit; known: "
-        "N, kN, mN, daN, lbf, ozf, kgf, gf",
-    )
-    with pytest.raises(UsageError, match="unknown time unit 'fortnight'") as info:
-        squeeze_from_csv(path, columns=cols, units={"time": "fortnight"}, object_id="x")
-    assert info.value.exit_code == EXIT_USAGE
-
-
-def test_csv_conflicting_units(tmp_path: Path) -> None:
-    path = tmp_path / "c.csv"
-    _two_header_csv(path, ("s", "kN", "in"))
-    _err(
-        lambda: squeeze_from_csv(
-            path,
-            columns={"time": "Zeit", "force": "Kraft", "gap": "Weg"},
-            units={"gap": "mm"},
-            object_id="x",
-        ),
-        UsageError,
-        "--units gap=mm contradicts the file: column 'Weg' is in in \\(its units row says 'in'\\)",
-    )
-
-
-def test_csv_bad_columns_mapping_and_missing_file(tmp_path: Path) -> None:
-    with pytest.raises(MissingInputError):
-        squeeze_from_csv(
-            tmp_path / "no.csv", columns={"time": "t", "force": "f", "gap": "g"}, object_id="x"
-        )
-    path = tmp_path / "c.csv"
-    _two_header_csv(path, ("s", "kN", "in"))
-    with pytest.raises(UsageError, match="--columns maps position and gap: give one position"):
-        squeeze_from_csv(
-            path,
-            columns={"time": "Zeit", "force": "Kraft", "gap": "Weg", "position": "Weg"},
-            object_id="x",
-        )
