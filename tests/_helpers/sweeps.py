@@ -7,7 +7,10 @@ against a direct answer. :func:`sweep` runs the executor on the toy task with sm
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,8 +26,6 @@ from deformctl.errors import SearchError
 from deformctl.parallel import TaskOutput, run_sweep
 
 REPO = Path(__file__).resolve().parents[2]
-
-
 SCHEMA = pa.schema(
     [
         pa.field("object_id", pa.string(), nullable=False),
@@ -35,15 +36,22 @@ SCHEMA = pa.schema(
 
 
 FINGERPRINT = {"command": "toy", "settings": {"scale": 2.5}, "version": "test"}
-
-
 FAILING_ID = "obj-07"
 
 # Worker processes (the fork server of Python 3.11 ignores the parent's sys.path, and Dask
-# workers are separate programs) import this module by name, so put the checkout on PYTHONPATH.
-os.environ["PYTHONPATH"] = os.pathsep.join(
-    p for p in (str(REPO), os.environ.get("PYTHONPATH", "")) if p
-)
+# workers are separate programs) import this module by name, so the ``tests`` package goes on
+# PYTHONPATH for the rest of the session, through a folder that holds nothing else: the
+# checkout itself would also offer its deformctl.egg-info, and pip (test_wheel's fresh venv)
+# would then take the wheel's deformctl for installed and skip it.
+# The worker processes that import this module inherit the folder and make none of their own.
+if "DEFORMCTL_TESTS_IMPORT_ROOT" not in os.environ:
+    _import_root = Path(tempfile.mkdtemp(prefix="deformctl-tests-"))
+    (_import_root / "tests").symlink_to(REPO / "tests", target_is_directory=True)
+    atexit.register(shutil.rmtree, _import_root, True)
+    os.environ["DEFORMCTL_TESTS_IMPORT_ROOT"] = str(_import_root)
+    os.environ["PYTHONPATH"] = os.pathsep.join(
+        p for p in (str(_import_root), os.environ.get("PYTHONPATH", "")) if p
+    )
 
 
 def make_items(n: int = 20, sleep_s: float = 0.0) -> list[dict[str, Any]]:
