@@ -5,9 +5,12 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
+
+if TYPE_CHECKING:  # pragma: no cover - rich loads when a command draws its bar
+    from rich.console import Console
 
 Quiet = Annotated[
     bool,
@@ -53,3 +56,10 @@ class RunClock:
                 self.line(done=done, flagged=flagged, failed=failed, output=output, detail=detail),
                 err=True,
             )
+
+
+def stderr_console() -> Console:
+    """The console a command's progress bar draws on (rich, imported when a command runs)."""
+    from rich.console import Console
+
+    return Console(stderr=True)
