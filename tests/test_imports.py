@@ -55,6 +55,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "quantities",
         "reprs",
         "blas",
+        "summary",
     ),
 )
 

@@ -54,12 +54,10 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
         fit_lsq,
         fit_paper,
     )
-    from deformctl.characterize.laws import (
-        MODEL_CHOICES,
-        MODELS,
-    )
     from deformctl.characterize.material_options import (
         DEFAULT_MATERIALS,
+        MODEL_CHOICES,
+        MODELS,
         MaterialOptions,
         check_at_force_n,
         default_lag,
@@ -130,8 +128,8 @@ _EXPORTS: dict[str, str] = {
     "default_window_s": "deformctl.characterize.fit",
     "fit_lsq": "deformctl.characterize.fit",
     "fit_paper": "deformctl.characterize.fit",
-    "MODEL_CHOICES": "deformctl.characterize.laws",
-    "MODELS": "deformctl.characterize.laws",
+    "MODEL_CHOICES": "deformctl.characterize.material_options",
+    "MODELS": "deformctl.characterize.material_options",
     "DEFAULT_MATERIALS": "deformctl.characterize.material_options",
     "MaterialOptions": "deformctl.characterize.material_options",
     "check_at_force_n": "deformctl.characterize.material_options",

@@ -59,7 +59,7 @@ import numpy as np
 import pandas as pd
 
 from deformctl.characterize.coefficients import CoefficientFit, _coefficient_frame
-from deformctl.characterize.laws import check_model
+from deformctl.characterize.material_options import check_model
 from deformctl.characterize.objectfit import ObjectFit, fit_object
 from deformctl.characterize.options import (
     DEFAULT_WINDOW_RATE_HZ,

@@ -8,8 +8,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from deformctl.artifacts.io import is_stdio
-from deformctl.characterize.laws import MODEL_CHOICES
-from deformctl.characterize.material_options import MaterialOptions
+from deformctl.characterize.material_options import MODEL_CHOICES, MaterialOptions
 from deformctl.characterize.options import (
     DEFAULT_WINDOW_S,
     FitOptions,
