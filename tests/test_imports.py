@@ -56,6 +56,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "reprs",
         "blas",
         "summary",
+        "lazy",
     ),
 )
 
