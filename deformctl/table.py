@@ -584,3 +584,15 @@ def lookup_mapping(index_table: pd.DataFrame, query: Mapping[str, float]) -> Loo
 def _plain(value: object) -> object:
     """numpy scalars -> Python scalars, so a row dict is JSON friendly."""
     return value.item() if isinstance(value, np.generic) else value
+
+
+def flagged_rows(index_table: pd.DataFrame) -> int:
+    """Rows of an index table that a model learns from or is scored on although flagged: a
+    :data:`QUALITY_COLUMN` other than ``ok`` (kept by ``table --allow-flagged``) or an
+    unconverged search (kept by ``table --allow-unconverged``)."""
+    flagged = pd.Series(False, index=index_table.index)
+    if "converged" in index_table:
+        flagged |= index_table["converged"].eq(False)
+    if QUALITY_COLUMN in index_table:
+        flagged |= index_table[QUALITY_COLUMN].fillna("ok").ne("ok")
+    return int(flagged.sum())

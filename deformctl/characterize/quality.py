@@ -47,11 +47,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any
-
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from deformctl.errors import InputDataError, UsageError
+
+if TYPE_CHECKING:  # pragma: no cover - a table is handed in; this module does not need pandas
+    import pandas as pd
 
 NEGATIVE_STIFFNESS = "negative_stiffness"
 NEGATIVE_DAMPING = "negative_damping"

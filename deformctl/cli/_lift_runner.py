@@ -16,12 +16,12 @@ import typer
 from deformctl.cli._common import finish_sweep
 from deformctl.cli._options import HEAVY_DEFAULTS, default
 from deformctl.errors import UsageError
-from deformctl.lift.options import SearchOptions
-from deformctl.lift.runners.rig import DEFAULT_RIG_TIMEOUT_S, SlipFromFrames, rig_runner_factory
-from deformctl.lift.stage import RunnerFactory
-from deformctl.parallel import SweepOptions
+from deformctl.lift.options import DEFAULT_RIG_TIMEOUT_S, SearchOptions
 
-if TYPE_CHECKING:  # pragma: no cover - the simulator is imported when --sim is given
+if TYPE_CHECKING:  # pragma: no cover - the runners (numba; pandas, MCAP) load when they run
+    from deformctl.lift.runners.rig import SlipFromFrames
+    from deformctl.lift.stage import RunnerFactory
+    from deformctl.parallel import SweepOptions
     from deformctl.presets import SimPreset
 
 RigTimeout = Annotated[
@@ -196,8 +196,10 @@ def choose_runner(
     """
     chosen: list[RunnerFactory] = []
     if rig is not None:
+        from deformctl.lift.runners.rig import rig_runner_factory as rig_factory
+
         timeout_s = DEFAULT_RIG_TIMEOUT_S if rig_timeout_s is None else rig_timeout_s
-        chosen.append(rig_runner_factory(rig, timeout_s=timeout_s, slip_from_frames=judge))
+        chosen.append(rig_factory(rig, timeout_s=timeout_s, slip_from_frames=judge))
     elif rig_timeout_s is not None or judge is not None:
         raise UsageError(
             f"{'--rig-timeout' if judge is None else '--slip-from-frames'} needs --rig"
@@ -243,7 +245,6 @@ def lift_dataset(
     from deformctl.lift.runners.sim import LiftTask, lift_sweep
 
     task = LiftTask(preset=preset, search=search, log_epoch_ns=log_epoch_ns, scene_hz=scene_hz)
-    summary = lift_sweep(
-        catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
-    )
+    summary = lift_sweep(catalog, task, output=output, sweep=sweep, object_ids=object_ids,
+                         force=force)  # fmt: skip
     finish_sweep(summary, "lift", quiet=quiet)

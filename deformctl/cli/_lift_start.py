@@ -14,7 +14,7 @@ import typer
 
 from deformctl.artifacts.io import is_stdio
 from deformctl.errors import SearchError, UsageError
-from deformctl.lift.search import DEFAULT_START_MARGIN, validate_start_margin
+from deformctl.lift.options import DEFAULT_START_MARGIN
 
 if TYPE_CHECKING:  # pragma: no cover - the seed sources import scikit-learn when used
     from deformctl.cli._summary import RunClock
@@ -110,9 +110,11 @@ def start_seed(
         raise UsageError(f"{flag} bisects to --tolerance as refine does; drop --protocol paper")
     if dataset:
         raise UsageError(f"{flag} writes a table file, not a dataset directory output (-o DIR/)")
+    from deformctl.lift.search import validate_start_margin
+    from deformctl.lift.seeded import load_start_model, load_start_table
+
     chosen = DEFAULT_START_MARGIN if margin is None else margin
     validate_start_margin(chosen)
-    from deformctl.lift.seeded import load_start_model, load_start_table
 
     if model is not None:
         return load_start_model(model, margin=chosen, coefficients=coefficients)

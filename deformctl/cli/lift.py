@@ -26,7 +26,6 @@ from __future__ import annotations
 from typing import Annotated, cast
 
 import typer
-from rich.console import Console
 
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli import _options as opt
@@ -64,7 +63,7 @@ from deformctl.cli._lift_start import (
     start_seed,
 )
 from deformctl.cli._scene_options import SceneHz, scene_rate
-from deformctl.cli._summary import Quiet, RunClock
+from deformctl.cli._summary import Quiet, RunClock, stderr_console
 from deformctl.errors import UsageError
 from deformctl.lift.options import (
     DEFAULT_GROWTH,
@@ -73,7 +72,6 @@ from deformctl.lift.options import (
     SearchOptions,
     SearchProtocol,
 )
-from deformctl.lift.stage import lift_catalog_files
 from deformctl.parallel import SweepOptions
 
 
@@ -225,7 +223,9 @@ def lift(
         lift_dataset(catalog, preset, log, search, epoch_ns, scene, output, sweep, object_ids,
                      force, quiet)  # fmt: skip
         return
-    with progress_bar(Console(stderr=True), "lift") as progress:
+    from deformctl.lift.stage import lift_catalog_files
+
+    with progress_bar(stderr_console(), "lift") as progress:
         run = lift_catalog_files(
             catalog, factory, output=output, log=log, object_ids=object_ids, search=search,
             progress=progress, force=force, log_epoch_ns=epoch_ns, seed=seed, warn=warn,

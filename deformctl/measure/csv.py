@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from deformctl.characterize.rupture import Phase
+from deformctl.characterize.options import Phase
 from deformctl.errors import DeformctlError, InputDataError, UsageError
 from deformctl.measure.csv_columns import ColumnRole, column_roles, describe_roles
 from deformctl.measure.csv_options import CsvOptions

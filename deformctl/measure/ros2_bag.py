@@ -33,7 +33,7 @@ import zstandard
 
 from deformctl.artifacts.io import note_input
 from deformctl.artifacts.mcap.integrity import complete_prefix, locate_damage, tail_problem
-from deformctl.characterize.rupture import Phase
+from deformctl.characterize.options import Phase
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.measure.options import (
     DEFAULT_FORCE_THRESHOLD_FRAC,
