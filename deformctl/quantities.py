@@ -43,6 +43,7 @@ __all__ = [
     "MARKER_ID",
     "MARKER_SIZE_CM",
     "MAX_ATTEMPTS",
+    "MAX_FORCE_N",
     "MEMORY_BUDGET_GIB",
     "MIN_GAP_S",
     "MIN_SQUEEZE_S",
@@ -257,6 +258,9 @@ START_MARGIN = Quantity("start_margin", "--start-margin", "", 1.0)
 START_INTERPOLATE = Quantity("start_interpolate", "--start-interpolate", "", 1, integer=True)
 RIG_TIMEOUT_S = Quantity("rig_timeout_s", "--rig-timeout", " s", 0.0, low_open=True)
 SLIP_TOLERANCE_M = Quantity("slip_tolerance_m", "--slip-tolerance-m", " m", 0.0, low_open=True)
+#: The force ceiling of a lift (``lift --max-force-n``, the catalog's ``max_force_n`` column, the
+#: search's ``max_force_n``; :mod:`deformctl.lift.ceiling`): no attempt requests more.
+MAX_FORCE_N = Quantity("max_force_n", "--max-force-n", " N", 0.0, low_open=True)
 
 # ---------------------------------------------------------------------------- predicting
 #: The probability an upper bound must hold with (``predict --coverage``, the split-conformal

@@ -227,9 +227,10 @@ def lift_dataset(
     object_ids: Sequence[str] | None,
     force: bool,
     quiet: bool = False,
+    max_force_n: float | None = None,
 ) -> None:
-    """``lift --sim -o DIR/``: the search of every object through the sweep executor, then the
-    sweep's summary line (unless ``quiet``); each part's log records the scene at ``scene_hz``.
+    """``lift --sim -o DIR/``: every object's search (under its force ceiling) through the sweep
+    executor, then its summary (unless ``quiet``); each part's log has the scene at ``scene_hz``.
 
     Raises:
         UsageError: no ``--sim``, or ``--log`` (each part has its log).
@@ -242,7 +243,7 @@ def lift_dataset(
         )
     from deformctl.lift.runners.sim import LiftTask, lift_sweep
 
-    task = LiftTask(preset=preset, search=search, log_epoch_ns=log_epoch_ns, scene_hz=scene_hz)
+    task = LiftTask(preset, search, log_epoch_ns, scene_hz, max_force_n)
     summary = lift_sweep(
         catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
     )

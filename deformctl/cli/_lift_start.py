@@ -168,12 +168,3 @@ MaxForceN = Annotated[
         "10 x F_w lowered to a known rupture or yield force (--coefficients).",
     ),
 ]
-
-
-def check_max_force(max_force_n: float | None, *, dataset: bool) -> None:
-    """Refuse a bad ``--max-force-n`` (exit 2), and one with a dataset output (simulated)."""
-    from deformctl.lift.ceiling import validate_max_force
-
-    validate_max_force(max_force_n, "--max-force-n")  # None: the default ceiling
-    if dataset and max_force_n is not None:
-        raise UsageError("--max-force-n is for a single-file output (a dataset is simulated)")
