@@ -150,16 +150,22 @@ def impossible_rows(table: pd.DataFrame, *, coefficients: bool = True) -> list[s
 
 
 def refuse_impossible_rows(
-    table: pd.DataFrame, what: str, *, coefficients: bool = True, hint: str = ""
+    table: pd.DataFrame,
+    what: str,
+    *,
+    coefficients: bool = True,
+    hint: str = "",
+    path: str | None = None,
 ) -> None:
     """Raise when :func:`impossible_rows` finds anything.
 
     Raises:
-        InputDataError: one line, ``"impossible rows in {what}: ...; ..."`` (exit 65).
+        InputDataError: one line, ``"impossible rows in {what}: ...; ..."`` (exit 65; prefixed
+            with ``path`` when given).
     """
     problems = impossible_rows(table, coefficients=coefficients)
     if problems:
-        raise InputDataError(f"impossible rows in {what}: {'; '.join(problems)}{hint}")
+        raise InputDataError(f"impossible rows in {what}: {'; '.join(problems)}{hint}", path=path)
 
 
 def _pick(
