@@ -197,6 +197,7 @@ def adapt_model(model: str, index: Any, *, index_path: str = "index") -> AdaptRe
     export["correction"] = [float(c) for c in coef]
     meta["numpy_model"] = export
     meta["conformal_scores"] = [float(s) for s in scores]
+    meta["target_range"] = _widened_targets(meta, y_true / (W / (2.0 * mu)))
     meta["conformal"] = {}
     meta["n_calibration"] = len(rows)
     check = dict(meta.get("check_points") or {})
@@ -234,6 +235,18 @@ def adapt_model(model: str, index: Any, *, index_path: str = "index") -> AdaptRe
         loo_median_rel_error=float(np.median(np.abs(scores))),
         base_median_rel_error=float(np.median(np.abs(y_true / before - 1.0))),
     )
+
+
+def _widened_targets(meta: dict[str, Any], rig_ratio: np.ndarray) -> dict[str, list[float]]:
+    """The base model's training targets' L_f / F_w range widened to the rig rows' (a
+    prediction far outside both is flagged, :mod:`deformctl.grip.sanity`)."""
+    from deformctl.grip.sanity import target_ratio_range
+
+    base = target_ratio_range(meta)
+    low, high = float(rig_ratio.min()), float(rig_ratio.max())
+    if base is not None:
+        low, high = min(low, base[0]), max(high, base[1])
+    return {"lift_ratio_f_w": [low, high]}
 
 
 def _refuse_non_positive(rows: Any, forces: np.ndarray, what: str, path: str) -> None:
