@@ -6,7 +6,7 @@ nonsense: weights scaled by 10^300 predict 10^301 N. Two checks, on the physics 
 * **On loading** (:func:`output_problem`), the model is evaluated at its own training points
   (the metadata's ``check_points``, training rows ``train`` stored; without them, the middle of
   the stored training range). A prediction there that is not finite, or whose L_f / F_w lies
-  outside the plausible band [1, :data:`~deformctl.plausibility.MAX_LIFT_RATIO`] by more than
+  outside the plausible band [1, :data:`~deformctl.quantities.MAX_LIFT_RATIO`] by more than
   :data:`LOAD_FACTOR`, refuses the model (exit 65): a trained model reproduces its training
   targets far better than that (the grip model: L_f / F_w 1.11–2.04 over its range).
 * **On every prediction** (:func:`implausible`), an L_f that is not finite, ≤ 0, below F_w (by
@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from deformctl.plausibility import MAX_LIFT_RATIO
+from deformctl.quantities import MAX_LIFT_RATIO
 
 __all__ = [
     "BELOW_F_W_REL",

@@ -25,9 +25,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, cast, overload
 
-from deformctl.errors import InputDataError, UsageError
-from deformctl.plausibility import MAX_LIFT_RATIO
-from deformctl.quantities import MAX_FORCE_N
+from deformctl.errors import InputDataError
+from deformctl.quantities import MAX_FORCE_N, MAX_LIFT_RATIO
 
 __all__ = [
     "CEILING_COLUMN",

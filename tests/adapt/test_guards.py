@@ -61,11 +61,12 @@ def _below_f_w(t: pd.DataFrame) -> pd.DataFrame:
     return t
 
 
+L_F = "lift_force_n"
 CASES = [
-    (_set("lift_force_n", {2: 0.0}), "R02", "lift_force_n <= 0 for R02 (0 N)"),
-    (_set("lift_force_n", {0: -3.0, 3: -1.0}), "R00", "lift_force_n <= 0 for R00, R03 (-3 N, ...)"),
-    (_set("lift_force_n", {4: math.inf}), "R04", "lift_force_n not a finite number for R04 (inf N)"),
-    (_set("lift_force_n", {3: 1e308}), "R03", "lift_force_n above 10 x F_w for R03 (1e+308 N, F_w "),
+    (_set(L_F, {2: 0.0}), "R02", "lift_force_n <= 0 for R02 (0 N)"),
+    (_set(L_F, {0: -3.0, 3: -1.0}), "R00", "lift_force_n <= 0 for R00, R03 (-3 N, ...)"),
+    (_set(L_F, {4: math.inf}), "R04", "lift_force_n not a finite number for R04 (inf N)"),
+    (_set(L_F, {3: 1e308}), "R03", "lift_force_n above 10 x F_w for R03 (1e+308 N, F_w "),
     (_below_f_w, "R01", "lift_force_n below F_w for R01"),
     (_set("deformability_n_per_cm", {0: -20.0}), "R00", "deformability_n_per_cm <= 0 for R00 (-20"),
     (_set("damping_ns_per_cm", {1: -5.0}), "R01", "damping_ns_per_cm < 0 for R01 (-5"),
@@ -94,7 +95,8 @@ def test_the_command_says_it_in_one_line_and_writes_nothing(
     res = runner.invoke(app, ["adapt", "grip", str(index), "-o", str(out)])
     assert res.exit_code == 65, res.stderr
     lines = res.stderr.splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"error: {index}: "), res.stderr
+    assert len(lines) == 1, res.stderr
+    assert lines[0].startswith(f"error: {index}: "), res.stderr
     assert row in lines[0], lines[0]
     assert res.stdout == ""
     assert not out.exists()
@@ -142,5 +144,6 @@ def test_good_rig_rows_are_adapted_silently(base: Predictor, tmp_path: Path) -> 
     out = tmp_path / "adapted.skops"
     res = runner.invoke(app, ["adapt", "grip", str(index), "-o", str(out)])
     assert res.exit_code == 0, res.stderr
-    assert "impossible" not in res.stderr and "not a finite force" not in res.stderr
+    assert "impossible" not in res.stderr
+    assert "not a finite force" not in res.stderr
     assert out.exists()

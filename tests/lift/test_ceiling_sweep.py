@@ -80,9 +80,13 @@ def test_every_library_entry_gives_the_rule_s_words(value: float) -> None:
             _lifts, weight_n=1.0, friction_mu=0.5, object_id="A", max_force_n=value
         ),
         "find_min_lift_force_seeded": lambda: find_min_lift_force_seeded(
-            _lifts, weight_n=1.0, friction_mu=0.5, predicted_lift_force_n=2.0, object_id="A",
+            _lifts,
+            weight_n=1.0,
+            friction_mu=0.5,
+            predicted_lift_force_n=2.0,
+            object_id="A",
             max_force_n=value,
-        ),  # fmt: skip
+        ),
         "force_ceiling": lambda: force_ceiling("A", 1.0, max_force_n=value),
         "LiftTask": lambda: LiftTask(sim_preset(), SearchOptions(), max_force_n=value),
     }
@@ -135,7 +139,8 @@ def test_the_sweep_path_applies_the_ceiling(tmp_path: Path) -> None:
     assert res.exit_code == 1, res.stderr  # b does not converge
     rows = read_table_any(str(out), "lift_results").set_index("object_id")
     assert list(rows["max_force_n"]) == [1.5, 1.5]
-    assert bool(rows.loc["a", "converged"]) and rows.loc["a", "lift_force_n"] <= 1.5
+    assert bool(rows.loc["a", "converged"])
+    assert rows.loc["a", "lift_force_n"] <= 1.5
     assert not bool(rows.loc["b", "converged"])
     assert "no safe grip below the force ceiling 1.5 N" in str(rows.loc["b", "error"])
     assert list(read_failures(out)["object_id"]) == ["b"]
@@ -144,8 +149,7 @@ def test_the_sweep_path_applies_the_ceiling(tmp_path: Path) -> None:
         for log in sorted((out / "_logs").glob("part-*.mcap"))
         for a in read_lift_log(log)[1]
     ]
-    assert forces and max(forces) <= 1.5
-    assert max(forces) == 1.5  # b tried the ceiling once
+    assert max(forces, default=0.0) == 1.5  # none above; b tried the ceiling once
 
 
 def test_the_catalog_column_or_the_default_sets_the_ceiling_on_the_sweep_path(
@@ -153,13 +157,12 @@ def test_the_catalog_column_or_the_default_sets_the_ceiling_on_the_sweep_path(
 ) -> None:
     """Without the flag: b's catalog ``max_force_n`` (1.5 N, no safe grip), a's default
     (10 x F_w, lifted), as for a single-file output."""
-    catalog = _catalog(
-        tmp_path, ROWS[1] + ",1.5", ROWS[0] + ",", header=HEADER + ",max_force_n"
-    )
+    catalog = _catalog(tmp_path, ROWS[1] + ",1.5", ROWS[0] + ",", header=HEADER + ",max_force_n")
     out = tmp_path / "out"
     res = cli.invoke(app, ["lift", str(catalog), "--sim", *FAST_LIFT, "-o", f"{out}/"])
     assert res.exit_code == 1, res.stderr
     rows = read_table_any(str(out), "lift_results").set_index("object_id")
     assert rows.loc["b", "max_force_n"] == 1.5  # the catalog's
     assert rows.loc["a", "max_force_n"] == pytest.approx(DEFAULT_CEILING_RATIO * 0.7)  # default
-    assert bool(rows.loc["a", "converged"]) and not bool(rows.loc["b", "converged"])
+    assert bool(rows.loc["a", "converged"])
+    assert not bool(rows.loc["b", "converged"])
