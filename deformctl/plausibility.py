@@ -421,8 +421,10 @@ def damping_ratio_doubt(zeta: float, *, time_unit_stated: bool) -> tuple[str, st
 
     ζ above :data:`MAX_DAMPING_RATIO` (:data:`~deformctl.quantities.IMPLIED_DAMPING_RATIO`):
     ``time_unit_doubtful`` when the recording's time unit was not stated, else
-    ``damping_ratio_implausible``; the text names the time unit (ms, µs) under which ζ would be
-    plausible (λ scales with the time unit, D does not).
+    ``damping_ratio_implausible``; the text names the factor (10³, 10⁶) by which shorter time
+    stamps would make ζ plausible, and the slip it is when the stamps were read as seconds (ms,
+    µs): λ scales with the time unit, D does not. (The coefficients row does not keep the
+    recording's time unit, so the slip is named from seconds.)
     """
     judge = IMPLIED_DAMPING_RATIO
     if not (math.isfinite(zeta) and judge.doubtful(zeta)):
@@ -430,7 +432,11 @@ def damping_ratio_doubt(zeta: float, *, time_unit_stated: bool) -> tuple[str, st
     unit = suggest_unit(
         zeta, SUGGESTED_UNITS["time"], to_value=lambda z: z, ok=judge.plausible, target=judge.target
     )
-    hint = f"plausible with the time in {unit}" if unit and unit != "s" else "no time unit fixes it"
+    if unit and unit != "s":
+        times = round(1.0 / SUGGESTED_UNITS["time"][unit])
+        hint = f"plausible with time stamps {times:,} times shorter ({unit} read as s?)"
+    else:
+        hint = "no time unit fixes it"
     flag = judge.flag if time_unit_stated else "time_unit_doubtful"
     stated = "" if time_unit_stated else "time unit not stated and "
     return flag, (

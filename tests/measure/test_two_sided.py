@@ -84,9 +84,15 @@ def test_the_implied_damping_ratio_is_the_closed_form() -> None:
     stated = damping_ratio_doubt(1000 * expected, time_unit_stated=True)  # ms read as s
     assert stated == (
         "damping_ratio_implausible",
-        "implied damping ratio ζ = λ / (2 √(D m)) = 1.73e+04 is above 1000; plausible with the "
-        "time in ms: is the time unit right?",
+        "implied damping ratio ζ = λ / (2 √(D m)) = 1.73e+04 is above 1000; plausible with time "
+        "stamps 1,000 times shorter (ms read as s?): is the time unit right?",
     )
+    us = damping_ratio_doubt(1e6 * expected, time_unit_stated=True)
+    assert us is not None
+    assert "1,000,000 times shorter (µs read as s?)" in us[1]
+    hopeless = damping_ratio_doubt(1e12, time_unit_stated=True)
+    assert hopeless is not None
+    assert "no time unit fixes it" in hopeless[1]
     unstated = damping_ratio_doubt(1000 * expected, time_unit_stated=False)
     assert unstated is not None
     assert unstated[0] == "time_unit_doubtful"
@@ -125,7 +131,7 @@ def test_ms_stamps_read_as_seconds_are_flagged_by_zeta(
     quality, stderr = _characterize(tmp_path, csv)
     assert flag in quality.split(",")
     assert f"{flag} (" in stderr
-    assert "plausible with the time in ms: is the time unit right?" in stderr
+    assert "plausible with time stamps 1,000 times shorter (ms read as s?)" in stderr
 
 
 def test_the_same_squeeze_in_its_right_units_has_a_plausible_zeta(tmp_path: Path) -> None:
