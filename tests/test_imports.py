@@ -54,6 +54,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "quantities",
         "reprs",
         "blas",
+        "lazy",
     ),
 )
 
