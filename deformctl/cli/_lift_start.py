@@ -163,8 +163,9 @@ MaxForceN = Annotated[
     typer.Option(
         "--max-force-n",
         metavar="N",
-        help="Force ceiling per palm, N, for every object: no attempt asks for more; a search "
-        "that needs more stops with 'no safe grip'. Default: the catalog's max_force_n, else "
-        "10 x F_w lowered to a known rupture or yield force (--coefficients).",
+        help="Force ceiling per palm, N, for every object (a file or a -o DIR/ output): no "
+        "attempt asks for more; a search that needs more stops with 'no safe grip'. Default: "
+        "the catalog's max_force_n, else 10 x F_w lowered to a known rupture or yield force "
+        "(--coefficients).",
     ),
 ]
