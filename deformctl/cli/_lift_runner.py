@@ -229,9 +229,10 @@ def lift_dataset(
     object_ids: Sequence[str] | None,
     force: bool,
     quiet: bool = False,
+    max_force_n: float | None = None,
 ) -> None:
-    """``lift --sim -o DIR/``: the search of every object through the sweep executor, then the
-    sweep's summary line (unless ``quiet``); each part's log records the scene at ``scene_hz``.
+    """``lift --sim -o DIR/``: every object's search (under its force ceiling) through the sweep
+    executor, then its summary (unless ``quiet``); each part's log has the scene at ``scene_hz``.
 
     Raises:
         UsageError: no ``--sim``, or ``--log`` (each part has its log).
@@ -239,12 +240,11 @@ def lift_dataset(
     if preset is None:
         raise UsageError("a dataset directory output (-o DIR/) needs --sim")
     if log is not None:
-        raise UsageError(
-            "--log is not used with a dataset directory output (see DIR/_logs/part-*.mcap)"
-        )
+        raise UsageError("--log is not used with a dataset directory output (DIR/_logs/ has them)")
     from deformctl.lift.runners.sim import LiftTask, lift_sweep
 
-    task = LiftTask(preset=preset, search=search, log_epoch_ns=log_epoch_ns, scene_hz=scene_hz)
+    task = LiftTask(preset=preset, search=search, log_epoch_ns=log_epoch_ns, scene_hz=scene_hz,
+                    max_force_n=max_force_n)  # fmt: skip
     summary = lift_sweep(catalog, task, output=output, sweep=sweep, object_ids=object_ids,
                          force=force)  # fmt: skip
     finish_sweep(summary, "lift", quiet=quiet)

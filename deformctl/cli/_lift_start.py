@@ -165,17 +165,9 @@ MaxForceN = Annotated[
     typer.Option(
         "--max-force-n",
         metavar="N",
-        help="Force ceiling per palm, N, for every object: no attempt asks for more; a search "
-        "that needs more stops with 'no safe grip'. Default: the catalog's max_force_n, else "
-        "10 x F_w lowered to a known rupture or yield force (--coefficients).",
+        help="Force ceiling per palm, N, for every object (a file or a -o DIR/ output): no "
+        "attempt asks for more; a search that needs more stops with 'no safe grip'. Default: "
+        "the catalog's max_force_n, else 10 x F_w lowered to a known rupture or yield force "
+        "(--coefficients).",
     ),
 ]
-
-
-def check_max_force(max_force_n: float | None, *, dataset: bool) -> None:
-    """Refuse a bad ``--max-force-n`` (exit 2), and one with a dataset output (simulated)."""
-    from deformctl.lift.ceiling import validate_max_force
-
-    validate_max_force(max_force_n, "--max-force-n")  # None: the default ceiling
-    if dataset and max_force_n is not None:
-        raise UsageError("--max-force-n is for a single-file output (a dataset is simulated)")

@@ -57,7 +57,6 @@ from deformctl.cli._lift_start import (
     StartMargin,
     StartModel,
     StartTable,
-    check_max_force,
     report_run,
     run_summary,
     start_seed,
@@ -73,6 +72,7 @@ from deformctl.lift.options import (
     SearchProtocol,
 )
 from deformctl.parallel import SweepOptions
+from deformctl.quantities import MAX_FORCE_N
 
 
 @translate_errors
@@ -214,14 +214,14 @@ def lift(
         protocol=cast(SearchProtocol, protocol), growth=growth, tolerance_rel=tolerance,
         max_attempts=max_attempts,
     )  # fmt: skip
-    check_max_force(max_force_n, dataset=dataset)
+    MAX_FORCE_N.check_optional(max_force_n)  # None: the catalog's or the default ceiling
     object_ids = opt.parse_object_ids(objects)
     seed = start_seed(start_model, start_table, start_interpolate, start_margin, coefficients,
                       protocol=protocol, dataset=dataset)  # fmt: skip
     epoch_ns = opt.parse_log_epoch(log_epoch)
     if dataset:
         lift_dataset(catalog, preset, log, search, epoch_ns, scene, output, sweep, object_ids,
-                     force, quiet)  # fmt: skip
+                     force, quiet, max_force_n=max_force_n)  # fmt: skip
         return
     from deformctl.lift.stage import lift_catalog_files
 
