@@ -55,7 +55,6 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from deformctl.errors import InputDataError, UsageError
-from deformctl.plausibility import damping_ratio_doubt, implied_damping_ratio
 
 if TYPE_CHECKING:  # pragma: no cover - a table is handed in; this module does not need pandas
     import pandas as pd
@@ -207,6 +206,10 @@ def with_damping_ratio_flag(quality: str, row: Mapping[str, Any], obj: Mapping[s
     """``quality`` with ``damping_ratio_implausible`` (or ``time_unit_doubtful`` when the
     recording's time unit was not stated) when the implied damping ratio of ``row``'s D and λ
     and the object's weight is above 1000 (:func:`deformctl.plausibility.damping_ratio_doubt`)."""
+    # imported here: plausibility brings numpy, and every --help reads this module's policy
+    # check (tests/cli/test_startup.py)
+    from deformctl.plausibility import damping_ratio_doubt, implied_damping_ratio
+
     zeta = implied_damping_ratio(
         row.get("deformability_n_per_cm"), row.get("damping_ns_per_cm"), obj.get("weight_n")
     )
@@ -298,6 +301,8 @@ def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
             f"{row.get('window_samples')})"
         )
     if flag == DAMPING_RATIO_IMPLAUSIBLE or flag == "time_unit_doubtful":
+        from deformctl.plausibility import damping_ratio_doubt, implied_damping_ratio
+
         zeta = implied_damping_ratio(
             row.get("deformability_n_per_cm"), row.get("damping_ns_per_cm"), row.get("weight_n")
         )
