@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from deformctl.characterize import fit_object, synthetic_law_squeeze
-from deformctl.characterize.laws import MODELS
+from deformctl.characterize.material_options import MODELS
 
 from ._truth import TRUTH
 
