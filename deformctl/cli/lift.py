@@ -189,7 +189,7 @@ def lift(
     """
     clock = RunClock("lift")
     dataset = sweep.check(output, file_workers=True)
-    if not dataset and sweep.workers is not None and not sim:
+    if not dataset and sweep.workers_given and not sim:
         raise UsageError(
             "--workers with a single-file output needs --sim (a rig lifts one object at a time)"
         )

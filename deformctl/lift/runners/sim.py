@@ -32,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import pandas as pd
 
@@ -161,6 +161,9 @@ class _SimAttempt:
 
 @dataclass(frozen=True)
 class _SimRunnerMaker:
+    #: loaded by the fork server of local workers (:mod:`deformctl.sim._warm_worker`)
+    worker_preload: ClassVar[tuple[str, ...]] = ("deformctl.sim._warm_worker",)
+
     preset: SimPreset
     scene_hz: float = 0.0
 
@@ -203,6 +206,9 @@ class LiftTask:
             log writer's fixed epoch, 2000-01-01).
         scene_hz: scene frames per simulated second in the part logs (0: none).
     """
+
+    #: loaded by the fork server of local workers (:mod:`deformctl.sim._warm_worker`)
+    worker_preload: ClassVar[tuple[str, ...]] = ("deformctl.sim._warm_worker",)
 
     preset: SimPreset
     search: SearchOptions = DEFAULT_SEARCH
