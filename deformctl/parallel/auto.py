@@ -11,13 +11,14 @@ the estimated wall time of one process with that of ``n``:
 
 where ``per_object_s`` is measured on the objects the client runs first itself
 (:data:`PROBE_OBJECTS`), ``start_s`` is the start cost measured the last time this kind of task
-ran on local workers on this machine (kept in :func:`costs_path`; :data:`DEFAULT_START_S` until
-then) and ``slowdown(n)`` is how much slower each of ``n`` processes runs than the one process
-did when the other load on the machine (the 1-minute load average) leaves fewer than ``n`` cores
-free (a fair share of the cores: ``n`` runnable processes beside ``busy`` others get
-``min(n, n × cores / (busy + n))`` cores). It picks the ``n`` of least ``wall(n)``, and more than
-one process only when that promises at least :data:`GAIN_MARGIN` less wall time than one, so an
-estimate that is somewhat off still does not make a run slower than ``--workers 1``.
+ran on local workers on this machine (kept in :func:`costs_path`, averaged with the value kept
+before; :data:`DEFAULT_START_S` until then) and ``slowdown(n)`` is how much slower each of
+``n`` processes runs than the one process did when the other load on the machine (the
+1-minute load average) leaves fewer than ``n`` cores free (a fair share of the cores: ``n``
+runnable processes beside ``busy`` others get ``min(n, n × cores / (busy + n))`` cores).
+It picks the ``n`` of least ``wall(n)``, and more than one process only when that promises at
+least :data:`GAIN_MARGIN` less wall time than one, so an estimate that is somewhat off still
+does not make a run slower than ``--workers 1``.
 
 :func:`choose_workers` is the pure rule (tested against known costs); the measuring is done by
 :func:`deformctl.parallel.sweep.map_in_order`, which logs each :class:`WorkerChoice` on the
@@ -206,11 +207,15 @@ def measured_start_s(kind: str) -> float | None:
 
 
 def record_start_s(kind: str, start_s: float, workers: int) -> None:
-    """Keep the start cost measured for ``kind`` (best effort: a read-only cache is skipped)."""
+    """Keep the start cost measured for ``kind``: the mean of the one kept and this one, so one
+    run on a briefly loaded machine does not decide the next alone (best effort: a read-only
+    cache is skipped)."""
     if not (math.isfinite(start_s) and start_s >= 0):
         return
+    before = measured_start_s(kind)
+    kept = start_s if before is None else 0.5 * (before + start_s)
     data = _read_costs()
-    data[kind] = {"start_s": round(start_s, 3), "workers": workers}
+    data[kind] = {"start_s": round(kept, 3), "workers": workers}
     path = costs_path()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -216,6 +216,8 @@ def test_the_cost_cache_survives_a_bad_file_and_a_read_only_home(tmp_path: Path)
     assert measured_start_s("x") == 1.25
     record_start_s("x", math.nan, 2)  # ignored
     assert measured_start_s("x") == 1.25
+    record_start_s("x", 2.25, 2)  # averaged with the one kept
+    assert measured_start_s("x") == 1.75
     path.write_text(json.dumps({"x": {"start_s": -1}}))
     assert measured_start_s("x") is None
     path.unlink()
@@ -271,3 +273,53 @@ def test_a_bad_workers_value_is_one_line_and_exit_2(tmp_path: Path, value: str) 
         assert err.startswith("error: --workers must be"), err
         assert "\n" not in err
     assert sorted(p.name for p in tmp_path.iterdir() if p.name != "cache") == ["cat.csv"]
+
+
+class _Called(Exception):
+    pass
+
+
+@pytest.mark.parametrize(
+    ("target", "library", "argv"),
+    [
+        ("deformctl.cli._measure_sim.simulate_catalog_file",
+         "deformctl.measure.stage.simulate_catalog_file", ["measure", "--sim", "-o", "s.mcap"]),
+        ("deformctl.cli.lift.lift_catalog_files",
+         "deformctl.lift.stage.lift_catalog_files", ["lift", "--sim", "-o", "l.parquet"]),
+        ("deformctl.cli._measure_csv.measure_csv_files",
+         "deformctl.measure.csv_batch.measure_csv_files",
+         ["measure", "--csv", "--columns", "time=t,force=f,compression=c", "--weight-n", "1",
+          "-o", "s.mcap"]),
+    ],
+)  # fmt: skip
+def test_the_commands_default_is_the_librarys(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, target: str, library: str, argv: list[str]
+) -> None:
+    import importlib
+    import inspect
+
+    module, name = library.rsplit(".", 1)
+    default = (
+        inspect.signature(getattr(importlib.import_module(module), name))
+        .parameters["workers"]
+        .default
+    )
+    seen: dict[str, object] = {}
+
+    def recorder(*args: object, **kwargs: object) -> None:
+        seen.update(kwargs)
+        raise _Called
+
+    monkeypatch.setattr(target, recorder)
+    monkeypatch.chdir(tmp_path)
+    for name in ("a.csv", "b.csv"):  # two recordings: a single one is read in the client
+        (tmp_path / name).write_text("t,f,c\n0,0,0\n")
+    command, *rest = argv
+    inputs = [str(_catalog(tmp_path, 2))]
+    if "--csv" in rest:
+        rest.remove("--csv")
+        inputs = ["--csv", "a.csv", "b.csv"]
+    result = runner.invoke(app, [command, *inputs, *rest])
+    assert isinstance(result.exception, _Called), result.stderr
+    assert default == "auto"
+    assert seen["workers"] == default
