@@ -2,21 +2,26 @@
 
 ``measure --sim -o FILE`` and ``lift --sim -o FILE`` at the default preset (paper) on the
 paper's four objects (datasets/paper/objects.csv) and on ``make_population(40, seed=0)``, each
-with ``--workers 1``, ``auto`` and ``2``, one after another in the same run: wall time of the
-whole command (interpreter start-up included, what a user waits for), the ratios auto / 1 and
-2 / 1 (< 1: faster than one process), and what auto chose (from the summary line). Target:
+with ``--workers 1``, ``auto`` and ``2``, interleaved (1, auto, 2, 1, auto, 2, ...: 3 rounds on
+4 objects, 2 on 40) in the same run: the median wall time of the whole command (interpreter
+start-up included, what a user waits for), the ratios of the medians auto / 1 and 2 / 1 (< 1:
+faster than one process), every run's time, the median CPU time of the command's processes
+(which the other load on the machine changes much less than the wall time), and what auto
+chose (from the summary line). Target:
 auto <= 1.10 × one process on both sizes. The commands run with a fresh cost cache
 (``XDG_CACHE_HOME`` in a temporary folder): the 4-object runs and the first 40-object run
 assume the default start cost, later runs use the one measured by the first pool. The load
 average is printed: other processes on the machine change every figure.
 
-Run: ``python -m bench.bench_workers`` (or ``make bench``); about 4-6 minutes.
+Run: ``python -m bench.bench_workers`` (or ``make bench``); about 6-10 minutes.
 """
 
 from __future__ import annotations
 
 import os
 import re
+import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -33,18 +38,22 @@ COUNTS = ("1", "auto", "2")
 
 def _run(
     command: str, catalog: Path, out: Path, workers: str, env: dict[str, str]
-) -> tuple[float, str]:
-    """Wall seconds of one command and what auto chose (from its summary line)."""
+) -> tuple[float, float, str]:
+    """Wall seconds and CPU seconds (user + system, every process of the command) of one
+    command, and what auto chose (from its summary line)."""
     extra = ["--seed", "0"] if command == "measure" else []
     cmd = [sys.executable, "-m", "deformctl", command, str(catalog), "--sim", *extra,
            "-o", str(out), "--workers", workers, "--force"]  # fmt: skip
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.monotonic()
     proc = subprocess.run(cmd, capture_output=True, text=True, env=env, check=False)
     wall = time.monotonic() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     if proc.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed (exit {proc.returncode}): {proc.stderr[-500:]}")
-    match = re.search(r"workers auto: (\d+)[^;)]*(\([^)]*\))?", proc.stderr)
-    return wall, (match.group(0) if match else "")
+    match = re.search(r"(workers auto: .*)\)$", proc.stderr.strip().splitlines()[-1])
+    return wall, cpu, (match.group(1) if match else "")
 
 
 def main() -> None:
@@ -56,24 +65,39 @@ def main() -> None:
         env = {**os.environ, "XDG_CACHE_HOME": str(d / "cache")}
         forty = d / "pop40.csv"
         make_population(40, seed=0).to_csv(forty, index=False)
-        for label, catalog in (("4 objects (paper)", PAPER), ("40 objects", forty)):
+        for label, catalog, rounds in (("4 objects (paper)", PAPER, 3), ("40 objects", forty, 2)):
             for command in ("measure", "lift"):
-                load = os.getloadavg()[0]
-                walls: dict[str, float] = {}
-                chose = ""
+                loads = [os.getloadavg()[0]]
+                walls: dict[str, list[float]] = {w: [] for w in COUNTS}
+                cpus: dict[str, list[float]] = {w: [] for w in COUNTS}
+                chose: list[str] = []
                 suffix = ".mcap" if command == "measure" else ".parquet"
-                for workers in COUNTS:
-                    out = d / f"{command}-{catalog.stem}-{workers}{suffix}"
-                    walls[workers], note = _run(command, catalog, out, workers, env)
-                    chose = note or chose
-                auto_ratio = walls["auto"] / walls["1"]
+                for _ in range(rounds):
+                    for workers in COUNTS:
+                        out = d / f"{command}-{catalog.stem}-{workers}{suffix}"
+                        wall, cpu, note = _run(command, catalog, out, workers, env)
+                        walls[workers].append(wall)
+                        cpus[workers].append(cpu)
+                        chose += [note] if note else []
+                    loads.append(os.getloadavg()[0])
+                med = {w: statistics.median(t) for w, t in walls.items()}
+                auto_ratio = med["auto"] / med["1"]
                 verdict = "ok" if auto_ratio <= TARGET else "MISSED"
                 print(
-                    f"{label}, {command} --sim (wall s): 1 worker {walls['1']:.1f}, auto "
-                    f"{walls['auto']:.1f}, 2 workers {walls['2']:.1f}; auto/1 {auto_ratio:.2f} "
-                    f"({verdict}), 2/1 {walls['2'] / walls['1']:.2f}; load average {load:.2f}"
+                    f"{label}, {command} --sim, median wall s of {rounds}: 1 worker "
+                    f"{med['1']:.1f}, auto {med['auto']:.1f}, 2 workers {med['2']:.1f}; "
+                    f"auto/1 {auto_ratio:.2f} ({verdict}), 2/1 {med['2'] / med['1']:.2f}; "
+                    f"load average {min(loads):.1f}-{max(loads):.1f}"
                 )
-                print(f"  auto: {chose or 'no choice reported'}")
+                runs = "; ".join(f"{w}: " + ", ".join(f"{t:.1f}" for t in walls[w]) for w in COUNTS)
+                print(f"  every run (wall s): {runs}")
+                cpu_med = {w: statistics.median(t) for w, t in cpus.items()}
+                print(
+                    f"  median CPU s (user + system, all processes): 1 worker {cpu_med['1']:.1f}, "
+                    f"auto {cpu_med['auto']:.1f}, 2 workers {cpu_med['2']:.1f}"
+                )
+                for note in chose:
+                    print(f"  {note}")
 
 
 if __name__ == "__main__":
