@@ -2,11 +2,12 @@
 
 ``measure --sim -o FILE`` and ``lift --sim -o FILE`` at the default preset (paper) on the
 paper's four objects (datasets/paper/objects.csv) and on ``make_population(40, seed=0)``, each
-with ``--workers 1``, ``auto`` and ``2``, interleaved (1, auto, 2, 1, auto, 2, ...: 3 rounds on
+with ``--workers 1``, ``auto`` and ``2``, interleaved (each round in another order: 3 rounds on
 4 objects, 2 on 40) in the same run: the median wall time of the whole command (interpreter
 start-up included, what a user waits for), the ratios of the medians auto / 1 and 2 / 1 (< 1:
-faster than one process), every run's time, the median CPU time of the command's processes
-(which the other load on the machine changes much less than the wall time), and what auto
+faster than one process), every run's time, the median CPU time of the command's own process
+(which the other load on the machine changes much less than the wall time; the worker processes
+are not counted), and what auto
 chose (from the summary line). Target:
 auto <= 1.10 × one process on both sizes. The commands run with a fresh cost cache
 (``XDG_CACHE_HOME`` in a temporary folder): the 4-object runs and the first 40-object run
@@ -39,8 +40,9 @@ COUNTS = ("1", "auto", "2")
 def _run(
     command: str, catalog: Path, out: Path, workers: str, env: dict[str, str]
 ) -> tuple[float, float, str]:
-    """Wall seconds and CPU seconds (user + system, every process of the command) of one
-    command, and what auto chose (from its summary line)."""
+    """Wall seconds and CPU seconds (user + system of the command's process; its worker
+    processes, children of a fork server it does not reap, are not counted) of one command,
+    and what auto chose (from its summary line)."""
     extra = ["--seed", "0"] if command == "measure" else []
     cmd = [sys.executable, "-m", "deformctl", command, str(catalog), "--sim", *extra,
            "-o", str(out), "--workers", workers, "--force"]  # fmt: skip
@@ -72,8 +74,8 @@ def main() -> None:
                 cpus: dict[str, list[float]] = {w: [] for w in COUNTS}
                 chose: list[str] = []
                 suffix = ".mcap" if command == "measure" else ".parquet"
-                for _ in range(rounds):
-                    for workers in COUNTS:
+                for r in range(rounds):
+                    for workers in COUNTS[r % 3 :] + COUNTS[: r % 3]:  # no fixed order
                         out = d / f"{command}-{catalog.stem}-{workers}{suffix}"
                         wall, cpu, note = _run(command, catalog, out, workers, env)
                         walls[workers].append(wall)
@@ -93,8 +95,9 @@ def main() -> None:
                 print(f"  every run (wall s): {runs}")
                 cpu_med = {w: statistics.median(t) for w, t in cpus.items()}
                 print(
-                    f"  median CPU s (user + system, all processes): 1 worker {cpu_med['1']:.1f}, "
-                    f"auto {cpu_med['auto']:.1f}, 2 workers {cpu_med['2']:.1f}"
+                    f"  median CPU s of the command's own process (user + system; worker "
+                    f"processes not counted): 1 worker {cpu_med['1']:.1f}, auto "
+                    f"{cpu_med['auto']:.1f}, 2 workers {cpu_med['2']:.1f}"
                 )
                 for note in chose:
                     print(f"  {note}")
