@@ -37,18 +37,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Literal
 
 import numpy as np
 
 from deformctl.errors import UsageError
 from deformctl.series import FloatArray
 
-Model = Literal["kv", "hc", "sls"]
-#: The laws, simplest first (``auto`` prefers the earlier one on a tie).
-MODELS: tuple[Model, ...] = ("kv", "hc", "sls")
-#: ``characterize --model`` choices.
-MODEL_CHOICES: tuple[str, ...] = (*MODELS, "auto")
 #: Hunt–Crossley exponent bounds (1: linear spring; 3: the stiffest law a soft object shows).
 HC_EXPONENT_BOUNDS = (1.0, 3.0)
 
@@ -64,17 +58,6 @@ DAMPING_PARAMETERS: dict[str, tuple[str, ...]] = {
     "hc": ("damping_ns_per_m_pow_n_plus_1",),
     "sls": ("arm_stiffness_n_per_m", "relaxation_time_s"),
 }
-
-
-def check_model(model: object) -> str:
-    """``model`` when it names a law or ``auto``.
-
-    Raises:
-        UsageError: anything else (exit 2).
-    """
-    if model not in MODEL_CHOICES:
-        raise UsageError(f"--model must be one of {', '.join(MODEL_CHOICES)}, got {model!r}")
-    return str(model)
 
 
 def cumulative_mean_parts(x: FloatArray, dt_s: float) -> FloatArray:
