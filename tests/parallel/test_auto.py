@@ -280,20 +280,17 @@ class _Called(Exception):
 
 
 @pytest.mark.parametrize(
-    ("target", "library", "argv"),
+    ("library", "argv"),
     [
-        ("deformctl.cli._measure_sim.simulate_catalog_file",
-         "deformctl.measure.stage.simulate_catalog_file", ["measure", "--sim", "-o", "s.mcap"]),
-        ("deformctl.cli.lift.lift_catalog_files",
-         "deformctl.lift.stage.lift_catalog_files", ["lift", "--sim", "-o", "l.parquet"]),
-        ("deformctl.cli._measure_csv.measure_csv_files",
-         "deformctl.measure.csv_batch.measure_csv_files",
+        ("deformctl.measure.stage.simulate_catalog_file", ["measure", "--sim", "-o", "s.mcap"]),
+        ("deformctl.lift.stage.lift_catalog_files", ["lift", "--sim", "-o", "l.parquet"]),
+        ("deformctl.measure.csv_batch.measure_csv_files",
          ["measure", "--csv", "--columns", "time=t,force=f,compression=c", "--weight-n", "1",
           "-o", "s.mcap"]),
     ],
 )  # fmt: skip
 def test_the_commands_default_is_the_librarys(
-    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, target: str, library: str, argv: list[str]
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, library: str, argv: list[str]
 ) -> None:
     import importlib
     import inspect
@@ -310,7 +307,7 @@ def test_the_commands_default_is_the_librarys(
         seen.update(kwargs)
         raise _Called
 
-    monkeypatch.setattr(target, recorder)
+    monkeypatch.setattr(library, recorder)
     monkeypatch.chdir(tmp_path)
     for name in ("a.csv", "b.csv"):  # two recordings: a single one is read in the client
         (tmp_path / name).write_text("t,f,c\n0,0,0\n")
