@@ -29,12 +29,16 @@ SqueezeProgress = Callable[[str, int, int], None]
 
 
 def default_peak_force_n(spec: ObjectSpec, strain: float = DEFAULT_SQUEEZE_STRAIN) -> float:
-    """The default peak squeeze force: ``D · strain · size_x``, N (the static force for ``strain``).
+    """The default peak squeeze force: ``D · strain · size_x``, N (the static force for ``strain``;
+    for a Hunt–Crossley object ``k (strain · size_x)ⁿ``, :meth:`~deformctl.sim.ObjectSpec.
+    elastic_force_n`).
 
     Args:
         spec: the object (catalog D in N/cm, size in cm).
         strain: compression as a fraction of the object's width between the palms.
     """
+    if spec.hunt_crossley:
+        return spec.elastic_force_n(strain * spec.size_m[0])
     return spec.stiffness_n_per_m * strain * spec.size_m[0]
 
 
