@@ -115,7 +115,7 @@ MAIN_BYTES = {
 }
 
 
-def _digest(*arrays: np.ndarray) -> str:
+def _digest(*arrays: object) -> str:
     h = hashlib.sha256()
     for a in arrays:
         h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
@@ -139,6 +139,7 @@ def test_n_1_is_main_bit_for_bit(preset: str) -> None:
     got = _digest(sq.time_s, sq.force_n, sq.compression_m, sq.palm_left_x_m, sq.palm_right_x_m)
     assert got == MAIN_BYTES[f"squeeze_{preset}"]
     s = p.lift_attempt(spec, 2.5).series
+    assert s is not None
     got = _digest(
         s.time_s, s.palm_z_m, s.object_com_z_m, s.slip_m, s.normal_force_n, s.friction_force_n
     )
