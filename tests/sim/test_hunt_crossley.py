@@ -125,7 +125,7 @@ def _digest(*arrays: object) -> str:
 @pytest.mark.parametrize("preset", ["paper", "table"])
 def test_n_1_is_main_bit_for_bit(preset: str) -> None:
     spec = ObjectSpec("seeded", (6.0, 5.0, 4.0), 1.5, 0.6, 4.0, 1.2, stiffness_exponent=1.0)
-    p = sim_preset(preset)  # type: ignore[arg-type]
+    p = sim_preset(preset)
     sq = squeeze(
         spec,
         peak_force_n=2.0,
