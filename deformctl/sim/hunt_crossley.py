@@ -20,24 +20,33 @@ The element law, and why the squeeze follows ``k dⁿ``
     ``κ`` is by :func:`deformctl.sim.statics.unit_squeeze_stiffness_n_per_m`; then
     ``κ = k / C_n``. The dampers, moving with the static mode ``S_e = s_e / d``, add
     ``τ κ G_n dⁿ ḋ`` with ``G_n = Σ w_e L_e^(1−n) |S_e|ⁿ⁺² / L_e`` (virtual work), so
-    ``τ = λ_hc / (κ G_n)`` gives the squeeze damping ``λ_hc dⁿ ḋ``. The exact spring geometry
+    ``τ = r λ_hc / (κ G_n)`` gives the squeeze damping ``r λ_hc dⁿ ḋ`` and the width damper the
+    rest (``r``: ``SimSettings.shear_damping_ratio``; the dampers' own mode differs a little from
+    the springs', and the round trip through ``characterize`` finds λ within 1.5 %). The exact
+    spring geometry
     (``nonlinear_springs=True``), gravity and the table break the homogeneity slightly:
     tests/sim/test_hunt_crossley.py measures the squeeze against ``k dⁿ``.
 
 The implicit step
-    The step's matrix ``A = M + h C + h² K`` is built once per model (:mod:`.engine`), so it
-    holds the elements' tangent ``K_e = n κ w_e ε_refⁿ⁻¹`` and damping ``C_e = τ κ w_e ε_refⁿ``
-    at one reference strain, ``ε_ref = d_op / size_x`` (the mean strain at the operating
-    compression), the stiffness pattern of the linear lattice scaled. The exact element forces
-    go to the right-hand side, so the step is backward Euler whose Jacobian is exact at
-    ``ε_ref``; like any frozen-Jacobian step it stays stable while the true tangent and damping
-    are below about twice the frozen ones (plus the masses' share). The stiffness has room (the
-    masses and the implicit damping carry the rest); the dampers, whose coefficient grows as
-    ``|s|ⁿ``, do not: they stop growing at :data:`DAMPING_CAP` times their reference value
-    (strain ``DAMPING_CAP^(1/n) ε_ref``), that is at about ``DAMPING_CAP · F_op`` of squeeze
-    force. The width damper of the ``paper`` preset (``(1 − r) λ`` across the palms) becomes
+    The step's matrix ``A = M + h C + h² K`` is built once per model (:mod:`.engine`). It holds
+    the elements' tangent at the operating compression, ``K_e = n κ w_e ε_refⁿ⁻¹`` with
+    ``ε_ref = d_op / size_x`` (the mean strain there), and their dampers at
+    :data:`DAMPING_REFERENCE` times the operating force, ``C_e = 2 τ κ w_e ε_refⁿ`` (both the
+    linear lattice's pattern, scaled). The exact element forces go to the right-hand side, so the
+    step is backward Euler with a Jacobian that is exact at one state; like any frozen-Jacobian
+    step it stays stable while the true tangent and damping are below about twice the frozen
+    ones (plus the masses' share). Where the frozen tangent is larger than the true one (below
+    F_op) the difference acts as a damping of about ``h`` times it (a lag of the order of the
+    step: the squeeze tests measure it); where the frozen damping is larger it only slows the
+    velocity's change within a step. The stiffness has room above F_op (the masses and the
+    implicit damping carry it: squeezes to 5 F_op stay stable); the dampers, whose coefficient
+    grows as ``|s|ⁿ``, do not: they stop growing at :data:`DAMPING_CAP` times their value in
+    ``A``, at about ``DAMPING_CAP · DAMPING_REFERENCE · F_op`` (3.8 F_op) of squeeze force. The
+    width damper of the ``paper`` preset (``(1 − r) λ`` across the palms) becomes
     ``(1 − r) λ_hc min(d, d_cap)ⁿ`` the same way; the dampers' floor
-    (``min_shear_retardation_s``) stays a linear damper on the frozen tangent.
+    (``min_shear_retardation_s``) stays a linear damper on the frozen tangent, and the rest
+    shape on the table is the power-law lattice's own static equilibrium
+    (:func:`resting_positions_hc_m`).
 """
 
 from __future__ import annotations
