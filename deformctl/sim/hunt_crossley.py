@@ -51,9 +51,10 @@ The implicit step
 
 from __future__ import annotations
 
+from collections.abc import Hashable
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 import scipy.sparse
@@ -62,11 +63,25 @@ from numpy.typing import NDArray
 
 from deformctl.errors import SimulationError
 from deformctl.sim.lattice import Lattice, build_lattice, palm_dof_map
+from deformctl.sim.objects import ObjectSpec
 from deformctl.sim.step.bundles import HuntCrossley
 
-if TYPE_CHECKING:  # pragma: no cover - typing only (the engine imports this module)
-    from deformctl.sim.engine import SimSettings
-    from deformctl.sim.objects import ObjectSpec
+
+class Settings(Hashable, Protocol):
+    """What this module reads of :class:`deformctl.sim.engine.SimSettings` (the engine imports
+    this module, so it is not imported here)."""
+
+    @property
+    def palm_layer(self) -> str: ...
+
+    @property
+    def shear_damping_ratio(self) -> float: ...
+
+    @property
+    def min_shear_retardation_s(self) -> float: ...
+
+    def alpha_m(self, spec: ObjectSpec) -> float: ...
+
 
 FloatArray = NDArray[np.float64]
 
@@ -305,7 +320,7 @@ LINEAR_LAW = HuntCrossley(1.0, np.zeros(1), 0.0, 0.0, 1.0, 1.0)
 
 
 @lru_cache(maxsize=16)
-def spec_elements(spec: ObjectSpec, settings: SimSettings) -> HuntCrossleyElements:
+def spec_elements(spec: ObjectSpec, settings: Settings) -> HuntCrossleyElements:
     """:func:`hc_elements` of a Hunt–Crossley object under ``settings``."""
     return hc_elements(
         spec.size_m,
@@ -320,7 +335,7 @@ def spec_elements(spec: ObjectSpec, settings: SimSettings) -> HuntCrossleyElemen
     )
 
 
-def hc_law(spec: ObjectSpec, settings: SimSettings) -> HuntCrossley:
+def hc_law(spec: ObjectSpec, settings: Settings) -> HuntCrossley:
     """The kernels' :class:`~deformctl.sim.step.bundles.HuntCrossley` of ``spec`` (the linear
     :data:`LINEAR_LAW` for a Kelvin object)."""
     if not spec.hunt_crossley:
