@@ -35,10 +35,10 @@ them. ``docs/development.md`` says what each package owns.
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING, Any
 
 from deformctl.errors import DeformctlError
+from deformctl.lazy import lazy_exports
 
 if TYPE_CHECKING:  # pragma: no cover - read on first use (module __getattr__)
     __version__: str
@@ -83,6 +83,9 @@ _API: dict[str, str] = {
 __all__ = ["DeformctlError", "__version__", *sorted(_API)]
 
 
+_api_getattr, _api_dir = lazy_exports(globals(), _API)
+
+
 def __getattr__(name: str) -> Any:
     """The library call ``name``, imported on first use (``__version__`` too: reading the
     installed distribution's metadata costs a good part of a one-object ``predict``'s start)."""
@@ -91,13 +94,8 @@ def __getattr__(name: str) -> Any:
 
         globals()[name] = value = version_string()
         return value
-    module = _API.get(name)
-    if module is None:
-        raise AttributeError(f"module 'deformctl' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
+    return _api_getattr(name)
 
 
 def __dir__() -> list[str]:
-    return sorted({*globals(), *_API, "__version__"})
+    return sorted({*_api_dir(), "__version__"})

@@ -97,10 +97,13 @@ def rig_rows(index: Any, predictor: Predictor, path: str) -> Any:
 
     Raises:
         InputDataError: fewer than :data:`MIN_ROWS` rig rows, rows without the model's features
-            (``friction_mu`` for the grip model), rows whose search did not converge, or a model
-            that is not a grip model (the messages name the rows; exit 65).
+            (``friction_mu`` for the grip model), rows whose search did not converge, rows that
+            are physically impossible (the refusal list ``table``, ``train`` and ``--lookup``
+            apply, :func:`deformctl.table.impossible_rows`: L_f ≤ 0, below F_w beyond the
+            search's tolerance, above 10 × F_w or not finite; D ≤ 0, λ < 0), or a model that is
+            not a grip model (the messages name the rows; exit 65).
     """
-    from deformctl.table import format_ids
+    from deformctl.table import format_ids, refuse_impossible_rows
 
     if predictor.form != "grip":
         raise InputDataError(
@@ -135,6 +138,7 @@ def rig_rows(index: Any, predictor: Predictor, path: str) -> Any:
                 "L_f is only a bound); lift them again or leave them out",
                 path=path,
             )
+    refuse_impossible_rows(rows, "the rig rows", path=path)
     if len(rows) < MIN_ROWS:
         named = format_ids(ids) if len(ids) else "none"
         raise InputDataError(
@@ -180,16 +184,20 @@ def adapt_model(model: str, index: Any, *, index_path: str = "index") -> AdaptRe
     W, D, lam, mu = (rows[c].to_numpy(dtype=np.float64) for c in base.features)
     y_true = rows["lift_force_n"].to_numpy(dtype=np.float64)
     before = base.predict_many(W, D, lam, mu).lift_force_n
+    _refuse_non_positive(rows, before, "the base model's prediction", str(base.path))
     X = np.column_stack([np.ones(len(rows)), _scaled_inputs(base, rows)])
     residual = np.log(y_true / before)
     coef, alpha, loo = ridge_loo(X, residual)
-    after = before * np.exp(X @ coef)
+    with np.errstate(over="ignore", invalid="ignore"):
+        after = before * np.exp(X @ coef)
+    _refuse_non_positive(rows, after, "the adapted prediction", index_path)
     scores = np.exp(loo) - 1.0  # L_f / L̂_f,(−i) − 1
     meta = dict(base.metadata)
     export = dict(meta["numpy_model"])
     export["correction"] = [float(c) for c in coef]
     meta["numpy_model"] = export
     meta["conformal_scores"] = [float(s) for s in scores]
+    meta["target_range"] = _widened_targets(meta, y_true / (W / (2.0 * mu)))
     meta["conformal"] = {}
     meta["n_calibration"] = len(rows)
     check = dict(meta.get("check_points") or {})
@@ -227,6 +235,36 @@ def adapt_model(model: str, index: Any, *, index_path: str = "index") -> AdaptRe
         loo_median_rel_error=float(np.median(np.abs(scores))),
         base_median_rel_error=float(np.median(np.abs(y_true / before - 1.0))),
     )
+
+
+def _widened_targets(meta: dict[str, Any], rig_ratio: np.ndarray) -> dict[str, list[float]]:
+    """The base model's training targets' L_f / F_w range widened to the rig rows' (a
+    prediction far outside both is flagged, :mod:`deformctl.grip.sanity`)."""
+    from deformctl.grip.sanity import target_ratio_range
+
+    base = target_ratio_range(meta)
+    low, high = float(rig_ratio.min()), float(rig_ratio.max())
+    if base is not None:
+        low, high = min(low, base[0]), max(high, base[1])
+    return {"lift_ratio_f_w": [low, high]}
+
+
+def _refuse_non_positive(rows: Any, forces: np.ndarray, what: str, path: str) -> None:
+    """Refuse (65) when a force about to be fitted, stored or printed is not finite and > 0.
+
+    Raises:
+        InputDataError: ``rows A, B: <what> is not a finite force > 0 (inf N)``.
+    """
+    from deformctl.table import format_ids
+
+    bad = ~(np.isfinite(forces) & (forces > 0))
+    if bad.any():
+        ids = rows["object_id"].astype(str).to_numpy()
+        raise InputDataError(
+            f"rows {format_ids(ids[bad])}: {what} is not a finite force > 0 "
+            f"({forces[bad][0]:.6g} N); nothing written",
+            path=path,
+        )
 
 
 def model_file_bytes(base: str, metadata: dict[str, Any]) -> bytes:

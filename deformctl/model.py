@@ -97,6 +97,29 @@ class ScaledTargetRegressor(RegressorMixin, BaseEstimator):
         return np.asarray(inner, dtype=np.float64).reshape(-1) * scale
 
 
+def scaled_mlp(
+    *,
+    hidden: tuple[int, ...],
+    activation: str,
+    solver: str,
+    alpha: float,
+    max_iter: int,
+    tol: float,
+    random_state: int,
+) -> Pipeline:
+    """``Pipeline(StandardScaler, MLPRegressor)``: the network inside every deformctl model."""
+    mlp = MLPRegressor(
+        hidden_layer_sizes=tuple(hidden),
+        activation=activation,
+        solver=solver,
+        alpha=alpha,
+        max_iter=max_iter,
+        tol=tol,
+        random_state=random_state,
+    )
+    return Pipeline([("scale", StandardScaler()), ("mlp", mlp)])
+
+
 def make_model(
     *,
     hidden: tuple[int, ...] = DEFAULT_HIDDEN,
@@ -112,8 +135,8 @@ def make_model(
 
     ``target="ratio"`` learns ``L_f / W`` (W is feature 0); ``"direct"`` learns L_f itself.
     """
-    mlp = MLPRegressor(
-        hidden_layer_sizes=tuple(hidden),
+    core = scaled_mlp(
+        hidden=hidden,
         activation=activation,
         solver=solver,
         alpha=alpha,
@@ -121,5 +144,4 @@ def make_model(
         tol=tol,
         random_state=random_state,
     )
-    core = Pipeline([("scale", StandardScaler()), ("mlp", mlp)])
     return ScaledTargetRegressor(core, scale_index=0 if target == "ratio" else None)

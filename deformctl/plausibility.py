@@ -17,47 +17,61 @@ force axis                       another component of the wrench spans more than
 compression sign                 negative over the loaded samples (force ≥ :data:`SIGN_FORCE_FRAC`
                                  of its peak)
 ================================ =============================================================
+
+A value that a unit slip may explain but that can be right is flagged instead (:func:`unit_doubts`,
+:func:`damping_ratio_doubt`): ``force_unit_doubtful``, ``compression_unit_doubtful``,
+``time_unit_doubtful`` and ``damping_ratio_implausible``, each with a warning line naming the unit
+that would make it plausible; ``characterize`` adds them to the object's ``quality``, so the
+coefficients are never ``ok``. A doubtful value that no recognised unit makes plausible is refused.
+The numbers live with their quantities in :mod:`deformctl.quantities` (``RECORDED_*``,
+``IMPLIED_DAMPING_RATIO``, ``MAX_LIFT_RATIO``).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from os import PathLike
+from typing import Any
 
 import numpy as np
 
 from deformctl.errors import InputDataError
+from deformctl.quantities import (
+    IMPLIED_DAMPING_RATIO,
+    RECORDED_PEAK_COMPRESSION_M,
+    RECORDED_PEAK_FORCE_N,
+    RECORDED_RATE_HZ,
+    RECORDED_SECANT_N_PER_CM,
+)
 from deformctl.series import FloatArray
+from deformctl.units import UNITS
 
-#: Sample rates outside this range (Hz) mean a wrong time unit: 1 Hz–100 kHz spans every force
-#: sensor and pose topic we know of; a 1 kHz log read in the wrong unit lands at 1 Hz or 1 MHz.
-MIN_RATE_HZ = 1.0
-MAX_RATE_HZ = 100_000.0
-#: A peak force above this (N) means a wrong force unit (grippers and testing machines for soft
-#: objects stay far below 10 kN).
-MAX_PEAK_FORCE_N = 10_000.0
-#: A peak compression above this (m) means a wrong length unit, whatever the object.
-MAX_COMPRESSION_M = 0.5
+# The numbers live with their quantities (:mod:`deformctl.quantities`, "a recording's
+# plausibility"); these names are the limits as this module's checks and messages use them.
+MIN_RATE_HZ = RECORDED_RATE_HZ.low
+MAX_RATE_HZ = RECORDED_RATE_HZ.high
+MAX_PEAK_FORCE_N = RECORDED_PEAK_FORCE_N.high
+MAX_COMPRESSION_M = RECORDED_PEAK_COMPRESSION_M.high
 #: The force is "mostly on another axis" when another component's range (1st to 99th
 #: percentile) is more than this multiple of the chosen axis's range.
 AXIS_DOMINANCE = 2.0
 #: The compression sign is judged on the samples whose force is at least this fraction of the
 #: peak: where the object is squeezed, d must be positive.
 SIGN_FORCE_FRAC = 0.5
-#: The largest plausible L_f / F_w. The lifting force of a deformable object is
-#: L_f = F_w + F_d; L_f / F_w is about 2 for an undamped object and falls with damping
-#: (docs/explanation/model.md), and the paper's objects lie below 2. Five times that is a unit or
-#: catalog mistake (a weight in grams, a μ of 0.005), not an object: ``lift``'s default force
-#: ceiling (:mod:`deformctl.lift.ceiling`), the index table's refusal of absurd rows
-#: (:func:`deformctl.table.impossible_rows`) and a prediction's plausibility all use it.
-MAX_LIFT_RATIO = 10.0
 #: Suggested units aim at these magnitudes: a 1 kHz sensor, a 10 N squeeze, a compression of a
 #: tenth of the object (or 1 cm when its size is unknown).
-_TARGET_RATE_HZ = 1000.0
-_TARGET_FORCE_N = 10.0
+_TARGET_RATE_HZ = RECORDED_RATE_HZ.target
+_TARGET_FORCE_N = RECORDED_PEAK_FORCE_N.target
 _TARGET_STRAIN = 0.1
-_TARGET_COMPRESSION_M = 0.01
+_TARGET_COMPRESSION_M = RECORDED_PEAK_COMPRESSION_M.target
+#: The units a hint may suggest: the slips of a factor 10³ (an imperial unit is not a slip).
+SUGGESTED_UNITS: dict[str, dict[str, float]] = {
+    "time": {"s": 1.0, "ms": 1e-3, "µs": 1e-6},
+    "force": {"N": 1.0, "kN": 1e3, "mN": 1e-3},
+    "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "µm": 1e-6},
+}
 
 PathArg = str | PathLike[str]
 
@@ -207,76 +221,225 @@ def compression_has_wrong_sign(compression_m: FloatArray, force_n: FloatArray) -
 
 # -- the "too small" side (issue 34 point 1): flags, since a small reading can be right ---------
 
-#: A peak force below this (N) is doubtful: a gripper squeeze or a testing machine on a soft
-#: object loads it with at least 50 mN; a kN column read as N (or N values under an ``mN`` label)
-#: lands 1000 times lower.
-MIN_PEAK_FORCE_N = 0.05
-#: A peak force above this (N, and up to :data:`MAX_PEAK_FORCE_N`, refused beyond) is doubtful:
-#: N values under a ``kN`` label land 1000 times higher. The shared silicone phantoms, squeezed
-#: 20 mm on a testing machine, peak at up to 1151 N (EF50_0T_A2.csv): 3 kN leaves them a margin
-#: of 2.6; N values under ``kN`` with a peak below 3 N are not caught (no reading tells them).
-DOUBTFUL_PEAK_FORCE_N = 3000.0
-#: A peak compression below this (m) is doubtful: metres under an ``mm`` label land here.
-MIN_PEAK_COMPRESSION_M = 2e-5
-#: With no time unit stated, a sample rate below this (Hz) is doubtful: a kHz logger's ms
-#: stamps read as seconds land at a few Hz.
-MIN_UNSTATED_RATE_HZ = 10.0
+MIN_PEAK_FORCE_N = RECORDED_PEAK_FORCE_N.doubt_low
+DOUBTFUL_PEAK_FORCE_N = RECORDED_PEAK_FORCE_N.doubt_high
+MIN_PEAK_COMPRESSION_M = RECORDED_PEAK_COMPRESSION_M.doubt_low
+MIN_UNSTATED_RATE_HZ = RECORDED_RATE_HZ.doubt_low
+MAX_SECANT_N_PER_CM = RECORDED_SECANT_N_PER_CM.doubt_high
+MAX_DAMPING_RATIO = IMPLIED_DAMPING_RATIO.doubt_high
+#: The recording's doubt flags (``measure``); the implied damping ratio's flag
+#: (``damping_ratio_implausible``) is ``characterize``'s, which fits λ.
 DOUBT_FLAGS = ("force_unit_doubtful", "compression_unit_doubtful", "time_unit_doubtful")
+
+
+@dataclass(frozen=True)
+class Reading:
+    """How one stream's numbers were read.
+
+    Attributes:
+        what: the stream, for messages (``column 'Load (N)'``, ``topic '/wrench'``).
+        unit: the unit applied (``N``, ``mm``, ``s``).
+        si: its factor to SI.
+        stated: the unit was given (a header, a units row, ``--units``, a message type whose
+            unit is fixed) rather than assumed.
+    """
+
+    what: str
+    unit: str
+    si: float
+    stated: bool = True
+
+
+def _units_of(dimension: str) -> dict[str, float]:
+    """Every recognised unit of ``dimension`` (:data:`deformctl.units.UNITS`), name → SI factor."""
+    return {name: unit.si for name, unit in UNITS[dimension].items()}
+
+
+def _reading_clause(unit: str | None) -> str:
+    return f"; plausible in {unit}: is the unit right?" if unit else "; is the unit right?"
 
 
 def unit_doubts(
     *,
     rate_hz: float,
-    time_unit_stated: bool,
     peak_force_n: float,
     peak_compression_m: float,
-    suggest: Callable[[str, float], str | None],
+    readings: Mapping[str, Reading],
+    path: PathArg | None = None,
 ) -> list[tuple[str, str, dict[str, float]]]:
     """The "too small" (and "rather large") side of the plausibility checks, as flags.
 
+    The bands are :mod:`deformctl.quantities`' (``RECORDED_*``): a sample rate below 10 Hz with
+    no time unit stated, a peak force below 50 mN or above 3 kN, a peak compression below 20 µm,
+    and (when neither peak is doubtful) a secant stiffness peak force / peak compression above
+    5000 N/cm. Each line names the stream and the unit (a 10³ slip: s/ms/µs, N/kN/mN,
+    m/cm/mm/µm) under which the value would be plausible.
+
     Args:
         rate_hz: the force's sample rate.
-        time_unit_stated: the time column's unit was given (header, units row, ``--units``).
         peak_force_n, peak_compression_m: the recording's peaks, SI.
-        suggest: ``suggest(kind, value)`` -> the unit under which ``value`` (kind ``time``
-            (a sample interval, s), ``force`` or ``length``) would be plausible, or None.
+        readings: ``time``, ``force`` and ``length``: how each stream was read.
+        path: the recording, for the refusal.
 
     Returns:
-        ``(flag, line, numbers)`` per doubt; each line names the unit that would make the value
-        plausible. Empty for a plausible recording.
+        ``(flag, line, numbers)`` per doubt; empty for a plausible recording.
+
+    Raises:
+        InputDataError: a doubtful value that no recognised unit of its dimension (``lbf``,
+            ``in``, ``h`` and the rest of :data:`deformctl.units.UNITS`) makes plausible: no
+            reading of it is a squeeze (exit 65, naming the stream and the units tried).
     """
     out: list[tuple[str, str, dict[str, float]]] = []
 
-    def unit_clause(kind: str, value: float) -> str:
-        unit = suggest(kind, value)
-        return f"; plausible in {unit}: is the unit right?" if unit else "; is the unit right?"
+    def suggest(kind: str, value_si: float, judge: Any, to_value: Any = None) -> str | None:
+        reading = readings[kind]
+        unit = suggest_unit(
+            value_si / reading.si, SUGGESTED_UNITS[kind], to_value=to_value or (lambda v: v),
+            ok=judge.plausible, target=judge.target,
+        )  # fmt: skip
+        return None if unit == reading.unit else unit
 
-    if not time_unit_stated and math.isfinite(rate_hz) and rate_hz < MIN_UNSTATED_RATE_HZ:
+    def no_reading(kind: str, value_si: float, judge: Any, text: str, to_value: Any = None) -> None:
+        reading, every = readings[kind], _units_of(kind)
+        if suggest_unit(value_si / reading.si, every, to_value=to_value or (lambda v: v),
+                        ok=judge.plausible, target=judge.target) is None:  # fmt: skip
+            raise InputDataError(
+                f"{reading.what}: {text} is implausible under every {kind} unit "
+                f"({', '.join(every)}): no reading of it is a squeeze",
+                path=path,
+            )
+
+    time, force, length = readings["time"], readings["force"], readings["length"]
+    if not time.stated and math.isfinite(rate_hz) and 0 < rate_hz < MIN_UNSTATED_RATE_HZ:
+        rate = RECORDED_RATE_HZ
+        no_reading("time", 1.0 / rate_hz, rate, f"sample rate {rate_hz:.3g} Hz", lambda dt: 1 / dt)
         out.append((
-            "time_unit_doubtful",
-            f"time unit not stated and the sample rate is {rate_hz:.3g} Hz (below "
-            f"{MIN_UNSTATED_RATE_HZ:g} Hz){unit_clause('time', 1.0 / rate_hz)}",
+            rate.flag,
+            f"{time.what}: time unit not stated and the sample rate is {rate_hz:.3g} Hz (below "
+            f"{MIN_UNSTATED_RATE_HZ:g} Hz)"
+            f"{_reading_clause(suggest('time', 1.0 / rate_hz, rate, lambda dt: 1 / dt))}",
             {"rate_hz": rate_hz},
         ))  # fmt: skip
-    if math.isfinite(peak_force_n) and 0 < peak_force_n < MIN_PEAK_FORCE_N:
+    force_odd = compression_odd = False
+    peak, judge = peak_force_n, RECORDED_PEAK_FORCE_N
+    if math.isfinite(peak) and 0 < peak < judge.doubt_low:
+        no_reading("force", peak, judge, f"peak force {peak:.3g} N")
+        force_odd = True
         out.append((
-            "force_unit_doubtful",
-            f"peak force {peak_force_n:.3g} N is below {MIN_PEAK_FORCE_N * 1e3:g} mN"
-            f"{unit_clause('force', peak_force_n)}",
-            {"peak_force_n": peak_force_n},
+            judge.flag,
+            f"{force.what}: peak force {peak:.3g} N is below {judge.doubt_low * 1e3:g} mN"
+            f"{_reading_clause(suggest('force', peak, judge))}",
+            {"peak_force_n": peak},
         ))  # fmt: skip
-    elif DOUBTFUL_PEAK_FORCE_N < peak_force_n <= MAX_PEAK_FORCE_N:
+    elif judge.doubt_high < peak <= judge.high:
+        force_odd = True
         out.append((
-            "force_unit_doubtful",
-            f"peak force {peak_force_n:.3g} N is above {DOUBTFUL_PEAK_FORCE_N / 1e3:g} kN for a "
-            f"soft object{unit_clause('force', peak_force_n)}",
-            {"peak_force_n": peak_force_n},
+            judge.flag,
+            f"{force.what}: peak force {peak:.3g} N is above {judge.doubt_high / 1e3:g} kN for a "
+            f"soft object{_reading_clause(suggest('force', peak, judge))}",
+            {"peak_force_n": peak},
         ))  # fmt: skip
-    if math.isfinite(peak_compression_m) and 0 < peak_compression_m < MIN_PEAK_COMPRESSION_M:
+    peak, judge = peak_compression_m, RECORDED_PEAK_COMPRESSION_M
+    if math.isfinite(peak) and 0 < peak < judge.doubt_low:
+        no_reading("length", peak, judge, f"peak compression {peak * 1e6:.3g} µm")
+        compression_odd = True
         out.append((
-            "compression_unit_doubtful",
-            f"peak compression {peak_compression_m * 1e6:.3g} µm is below "
-            f"{MIN_PEAK_COMPRESSION_M * 1e6:g} µm{unit_clause('length', peak_compression_m)}",
-            {"peak_compression_m": peak_compression_m},
+            judge.flag,
+            f"{length.what}: peak compression {peak * 1e6:.3g} µm is below "
+            f"{judge.doubt_low * 1e6:g} µm{_reading_clause(suggest('length', peak, judge))}",
+            {"peak_compression_m": peak},
         ))  # fmt: skip
+    if not (force_odd or compression_odd):
+        secant = _secant_doubt(peak_force_n, peak_compression_m, readings)
+        if secant is not None:
+            out.append(secant)
     return out
+
+
+def _secant_doubt(
+    force_n: float, compression_m: float, readings: Mapping[str, Reading]
+) -> tuple[str, str, dict[str, float]] | None:
+    """The secant-stiffness doubt (:data:`~deformctl.quantities.RECORDED_SECANT_N_PER_CM`)."""
+    if not (math.isfinite(force_n) and math.isfinite(compression_m) and compression_m > 0):
+        return None
+    judge = RECORDED_SECANT_N_PER_CM
+    secant = force_n / compression_m / 100.0  # N/cm
+    if not judge.doubtful(secant):
+        return None
+    force, length = readings["force"], readings["length"]
+    forces, lengths = RECORDED_PEAK_FORCE_N, RECORDED_PEAK_COMPRESSION_M
+
+    def fix(reading: Reading, kind: str, ok: Any) -> str | None:
+        unit = suggest_unit(
+            1.0 / reading.si, SUGGESTED_UNITS[kind], to_value=lambda k: k, ok=ok, target=1.0
+        )
+        return None if unit == reading.unit else unit
+
+    def force_ok(k: float) -> bool:
+        return judge.plausible(force_n * k / compression_m / 100) and forces.plausible(force_n * k)
+
+    def length_ok(k: float) -> bool:
+        return judge.plausible(force_n / (compression_m * k) / 100) and lengths.plausible(
+            compression_m * k
+        )
+
+    force_fix = fix(force, "force", force_ok)
+    length_fix = fix(length, "length", length_ok)
+    fixes = [f"the force in {force_fix}"] if force_fix else []
+    fixes += [f"the compression in {length_fix}"] if length_fix else []
+    clause = f"; plausible with {' or '.join(fixes)}: is a unit right?" if fixes else ""
+    flag = "compression_unit_doubtful" if length_fix and not force_fix else judge.flag
+    return (
+        flag,
+        f"{force.what} / {length.what}: secant stiffness {secant:.3g} N/cm (peak force "
+        f"{force_n:.3g} N at {compression_m * 1e3:.3g} mm) is above {judge.doubt_high:g} N/cm "
+        f"for a soft object{clause or '; is a unit right?'}",
+        {"secant_n_per_cm": secant},
+    )
+
+
+def implied_damping_ratio(
+    deformability_n_per_cm: object, damping_ns_per_cm: object, weight_n: object
+) -> float:
+    """ζ = λ / (2 √(D m)), m = W / g, SI inside (NaN when an input is missing or D, W ≤ 0)."""
+    from deformctl.units import GRAVITY_M_S2, N_PER_CM, NS_PER_CM
+
+    try:
+        d, lam, w = (
+            float(v)  # type: ignore[arg-type]
+            for v in (deformability_n_per_cm, damping_ns_per_cm, weight_n)
+        )
+    except (TypeError, ValueError):
+        return math.nan
+    if not (math.isfinite(d) and math.isfinite(lam) and math.isfinite(w) and d > 0 and w > 0):
+        return math.nan
+    return lam * NS_PER_CM / (2.0 * math.sqrt(d * N_PER_CM * w / GRAVITY_M_S2))
+
+
+def damping_ratio_doubt(zeta: float, *, time_unit_stated: bool) -> tuple[str, str] | None:
+    """The flag and the text of an implausible implied damping ratio, or None.
+
+    ζ above :data:`MAX_DAMPING_RATIO` (:data:`~deformctl.quantities.IMPLIED_DAMPING_RATIO`):
+    ``time_unit_doubtful`` when the recording's time unit was not stated, else
+    ``damping_ratio_implausible``; the text names the factor (10³, 10⁶) by which shorter time
+    stamps would make ζ plausible, and the slip it is when the stamps were read as seconds (ms,
+    µs): λ scales with the time unit, D does not. (The coefficients row does not keep the
+    recording's time unit, so the slip is named from seconds.)
+    """
+    judge = IMPLIED_DAMPING_RATIO
+    if not (math.isfinite(zeta) and judge.doubtful(zeta)):
+        return None
+    unit = suggest_unit(
+        zeta, SUGGESTED_UNITS["time"], to_value=lambda z: z, ok=judge.plausible, target=judge.target
+    )
+    if unit and unit != "s":
+        times = round(1.0 / SUGGESTED_UNITS["time"][unit])
+        hint = f"plausible with time stamps {times:,} times shorter ({unit} read as s?)"
+    else:
+        hint = "no time unit fixes it"
+    flag = judge.flag if time_unit_stated else "time_unit_doubtful"
+    stated = "" if time_unit_stated else "time unit not stated and "
+    return flag, (
+        f"{stated}implied damping ratio ζ = λ / (2 √(D m)) = {zeta:.3g} is above "
+        f"{judge.doubt_high:g}; {hint}: is the time unit right?"
+    )

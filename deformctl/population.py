@@ -39,6 +39,10 @@ import pandas as pd
 
 from deformctl.catalog import CATALOG_COLUMNS, MATERIAL_COLUMNS, SIZE_COLUMNS
 from deformctl.errors import UsageError
+from deformctl.population_options import (
+    DEFAULT_FRICTION_MU,
+    PAPER_POPULATION_SIZE,
+)
 from deformctl.quantities import (
     DAMPING_NS_PER_CM,
     FRICTION_MU,
@@ -71,13 +75,6 @@ def check_population_size(n: object, what: str = "population size") -> int:
         )
     return int(n)
 
-
-#: The paper's population size and split (section V.A).
-PAPER_POPULATION_SIZE = 73
-PAPER_TRAIN_SIZE = 40
-
-#: Default friction coefficient of a population (constant: the network has no friction input).
-DEFAULT_FRICTION_MU = 0.5
 
 Range = tuple[float, float]
 

@@ -15,6 +15,10 @@ value gets the same rule and the same words whichever command, or library call, 
   :class:`~deformctl.errors.InputDataError` (exit 65) naming where it was read, ``object 'A':
   friction_mu = 0 is outside its physical bounds (0, 3]``.
 
+A quantity a recording gives (a sample rate, a peak force, a peak compression, a secant
+stiffness, an implied damping ratio) has its plausible band here too (:class:`Plausible`, the
+section at the end): :mod:`deformctl.plausibility` judges every recording against it.
+
 The catalog's bounds (``schemas/catalog.columns.json`` states the same numbers, checked by
 ``tests/test_catalog.py``) are what a gripper can hold and the simulator can integrate: outside
 them numpy sees underflow and overflow (a size of 1e-308 cm gives a non-finite lattice, a weight of
@@ -39,10 +43,13 @@ __all__ = [
     "FRICTION_MU",
     "GROWTH",
     "HOLD_S",
+    "IMPLIED_DAMPING_RATIO",
     "LAG_S",
     "MARKER_ID",
     "MARKER_SIZE_CM",
     "MAX_ATTEMPTS",
+    "MAX_FORCE_N",
+    "MAX_LIFT_RATIO",
     "MEMORY_BUDGET_GIB",
     "MIN_GAP_S",
     "MIN_SQUEEZE_S",
@@ -50,6 +57,10 @@ __all__ = [
     "NOISE_POSITION_M",
     "PEAK_FORCE_N",
     "RAMP_S",
+    "RECORDED_PEAK_COMPRESSION_M",
+    "RECORDED_PEAK_FORCE_N",
+    "RECORDED_RATE_HZ",
+    "RECORDED_SECANT_N_PER_CM",
     "RIG_TIMEOUT_S",
     "SIZE_CM",
     "SLIP_TOLERANCE_M",
@@ -63,6 +74,7 @@ __all__ = [
     "TOLERANCE_REL",
     "WEIGHT_N",
     "WINDOW_S",
+    "Plausible",
     "Quantity",
 ]
 
@@ -262,8 +274,102 @@ START_MARGIN = Quantity("start_margin", "--start-margin", "", 1.0)
 START_INTERPOLATE = Quantity("start_interpolate", "--start-interpolate", "", 1, integer=True)
 RIG_TIMEOUT_S = Quantity("rig_timeout_s", "--rig-timeout", " s", 0.0, low_open=True)
 SLIP_TOLERANCE_M = Quantity("slip_tolerance_m", "--slip-tolerance-m", " m", 0.0, low_open=True)
+#: The force ceiling of a lift (``lift --max-force-n``, the catalog's ``max_force_n`` column, the
+#: search's ``max_force_n``; :mod:`deformctl.lift.ceiling`): no attempt requests more.
+MAX_FORCE_N = Quantity("max_force_n", "--max-force-n", " N", 0.0, low_open=True)
 
 # ---------------------------------------------------------------------------- predicting
 #: The probability an upper bound must hold with (``predict --coverage``, the split-conformal
 #: bound of :mod:`deformctl.grip.conformal`).
 COVERAGE = Quantity("coverage", "--coverage", "", 0.0, 1.0, low_open=True, high_open=True)
+
+# ---------------------------------------------------------------------- a recording's plausibility
+#: What a gripper squeeze or a testing machine on a soft object can record (issue 34 point 1).
+#: :mod:`deformctl.plausibility` judges every recording against these (``measure --csv`` and
+#: ``--bag``; the implied damping ratio in ``characterize``): a value outside ``low``–``high`` is
+#: refused (exit 65), one outside ``doubt_low``–``doubt_high`` flagged, and either line names the
+#: unit under which the value would be plausible. The limits catch factors of 10³ (a unit slip),
+#: not unusual objects.
+
+
+@dataclass(frozen=True)
+class Plausible:
+    """The plausible band of a quantity a recording gives.
+
+    Attributes:
+        name: what is judged, for messages (``peak force``).
+        unit: its SI unit, as messages print it after a number.
+        low, high: outside them no reading is a squeeze: refused (exit 65).
+        doubt_low, doubt_high: outside them (and inside ``low``–``high``) the value is doubtful:
+            flagged ``flag`` with a warning line.
+        flag: the quality flag of a doubtful value.
+        target: the most typical value; a suggested unit aims at it (nearest in log).
+    """
+
+    name: str
+    unit: str
+    low: float
+    high: float
+    doubt_low: float
+    doubt_high: float
+    flag: str
+    target: float
+
+    def refused(self, value: float) -> bool:
+        """Whether no recording of a squeeze gives ``value`` (outside ``low``–``high``)."""
+        return not (self.low <= value <= self.high)
+
+    def doubtful(self, value: float) -> bool:
+        """Whether ``value`` is inside ``low``–``high`` but outside the doubt band."""
+        return not self.refused(value) and not (self.doubt_low <= value <= self.doubt_high)
+
+    def plausible(self, value: float) -> bool:
+        """Whether ``value`` is neither refused nor doubtful (a finite number in the doubt band)."""
+        return math.isfinite(value) and self.doubt_low <= value <= self.doubt_high
+
+
+#: Sample rate, Hz: 1 Hz–100 kHz spans every force sensor and pose topic we know of (a 1 kHz log
+#: read in the wrong time unit lands at 1 Hz or 1 MHz: refused). With no time unit stated, a
+#: rate below 10 Hz is doubtful: a kHz logger's ms stamps read as seconds land at a few Hz.
+RECORDED_RATE_HZ = Plausible(
+    "sample rate", " Hz", 1.0, 100_000.0, 10.0, 100_000.0, "time_unit_doubtful", 1000.0
+)
+#: Peak force, N. Above 10 kN: refused (grippers and testing machines for soft objects stay far
+#: below). Below 50 mN: doubtful (a squeeze loads a soft object with more; a kN column read as N,
+#: or N values under an ``mN`` label, land 1000 times lower). Above 3 kN: doubtful (N values
+#: under a ``kN`` label land 1000 times higher); the shared silicone phantoms, squeezed 20 mm on a
+#: testing machine, peak at up to 1151 N (EF50_0T_A2.csv): a margin of 2.6.
+RECORDED_PEAK_FORCE_N = Plausible(
+    "peak force", " N", 0.0, 10_000.0, 0.05, 3000.0, "force_unit_doubtful", 10.0
+)
+#: Peak compression, m. Above 0.5 m (or the object's size along the squeeze): refused. Below
+#: 20 µm: doubtful (metres under an ``mm`` label land here).
+RECORDED_PEAK_COMPRESSION_M = Plausible(
+    "peak compression", " m", 0.0, 0.5, 2e-5, 0.5, "compression_unit_doubtful", 0.01
+)
+#: The secant stiffness peak force / peak compression, N/cm, above which a squeeze of a soft
+#: object is doubtful: N values under a ``kN`` label (or mm values under an ``m`` label) make it
+#: 1000 times stiffer. The stiffest shared phantom is 575 N/cm (1151 N at 20 mm); a 5 cm block of
+#: a 10 MPa rubber is about 6700 N/cm. Flagged as the force's or the compression's unit, whichever
+#: a 10³ slip would explain. Caught this way: N values under ``kN`` whose secant then exceeds it
+#: (5 N at 3 mm reads 16,700 N/cm); not caught: a slip that stays below it (1 N at 3 mm reads
+#: 3,300 N/cm) — no reading tells those from a stiff object.
+RECORDED_SECANT_N_PER_CM = Plausible(
+    "secant stiffness", " N/cm", 0.0, math.inf, 0.0, 5000.0, "force_unit_doubtful", 20.0
+)
+#: The damping ratio a fit implies, ζ = λ / (2 √(D m)) with m = W / g (``characterize``). Above
+#: 1000 it is doubtful: λ of a recording whose time stamps are 1000 times too long (ms read as s)
+#: is 1000 times too high, and ζ with it (the paper's sponge, ζ = 17, reads 17,000). The bundled
+#: grip model's training objects reach ζ = 64; a 10 g foam block of D = 5 N/cm and λ = 15 N·s/cm
+#: reaches about 330. A time-unit slip on an object with ζ below 1 is not caught (it reads below
+#: 1000). There is no low side: ζ = 0 is an undamped object.
+IMPLIED_DAMPING_RATIO = Plausible(
+    "implied damping ratio", "", 0.0, math.inf, 0.0, 1000.0, "damping_ratio_implausible", 1.0
+)
+#: The largest plausible L_f / F_w. The lifting force of a deformable object is L_f = F_w + F_d;
+#: L_f / F_w is about 2 for an undamped object and falls with damping
+#: (docs/explanation/model.md), and the paper's objects lie below 2. Five times that is a unit or
+#: catalog mistake (a weight in grams, a μ of 0.005), not an object: ``lift``'s default force
+#: ceiling (:mod:`deformctl.lift.ceiling`), the index table's refusal of absurd rows
+#: (:func:`deformctl.table.impossible_rows`) and a prediction's plausibility all use it.
+MAX_LIFT_RATIO = 10.0

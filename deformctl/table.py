@@ -37,7 +37,7 @@ import pandas as pd
 from deformctl.catalog import rigid_grip_force_n
 from deformctl.errors import InputDataError, SchemaError, UsageError
 from deformctl.grip.groups import NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM
-from deformctl.plausibility import MAX_LIFT_RATIO
+from deformctl.quantities import MAX_LIFT_RATIO
 
 #: The columns of an index table, in order.
 INDEX_COLUMNS: tuple[str, ...] = (
@@ -97,7 +97,7 @@ def impossible_rows(table: pd.DataFrame, *, coefficients: bool = True) -> list[s
     :data:`~deformctl.grip.groups.NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM`) or not finite. Weights
     and μ ≤ 0 or not finite. Lifting forces: L_f not finite or ≤ 0, L_f below F_w by more than
     :data:`F_W_TOLERANCE_REL` (a search never reports less than F_w), or above
-    :data:`~deformctl.plausibility.MAX_LIFT_RATIO` × F_w (a unit or catalog mistake). F_w is
+    :data:`~deformctl.quantities.MAX_LIFT_RATIO` × F_w (a unit or catalog mistake). F_w is
     the ``f_w_n`` column, else W / (2 μ); without either the F_w checks are skipped.
 
     Returns:
@@ -150,16 +150,22 @@ def impossible_rows(table: pd.DataFrame, *, coefficients: bool = True) -> list[s
 
 
 def refuse_impossible_rows(
-    table: pd.DataFrame, what: str, *, coefficients: bool = True, hint: str = ""
+    table: pd.DataFrame,
+    what: str,
+    *,
+    coefficients: bool = True,
+    hint: str = "",
+    path: str | None = None,
 ) -> None:
     """Raise when :func:`impossible_rows` finds anything.
 
     Raises:
-        InputDataError: one line, ``"impossible rows in {what}: ...; ..."`` (exit 65).
+        InputDataError: one line, ``"impossible rows in {what}: ...; ..."`` (exit 65; prefixed
+            with ``path`` when given).
     """
     problems = impossible_rows(table, coefficients=coefficients)
     if problems:
-        raise InputDataError(f"impossible rows in {what}: {'; '.join(problems)}{hint}")
+        raise InputDataError(f"impossible rows in {what}: {'; '.join(problems)}{hint}", path=path)
 
 
 def _pick(
@@ -584,3 +590,15 @@ def lookup_mapping(index_table: pd.DataFrame, query: Mapping[str, float]) -> Loo
 def _plain(value: object) -> object:
     """numpy scalars -> Python scalars, so a row dict is JSON friendly."""
     return value.item() if isinstance(value, np.generic) else value
+
+
+def flagged_rows(index_table: pd.DataFrame) -> int:
+    """Rows of an index table that a model learns from or is scored on although flagged: a
+    :data:`QUALITY_COLUMN` other than ``ok`` (kept by ``table --allow-flagged``) or an
+    unconverged search (kept by ``table --allow-unconverged``)."""
+    flagged = pd.Series(False, index=index_table.index)
+    if "converged" in index_table:
+        flagged |= index_table["converged"].eq(False)
+    if QUALITY_COLUMN in index_table:
+        flagged |= index_table[QUALITY_COLUMN].fillna("ok").ne("ok")
+    return int(flagged.sum())

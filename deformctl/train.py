@@ -241,6 +241,15 @@ def _f_w(table: pd.DataFrame) -> np.ndarray:
     return np.full(len(table), np.nan)
 
 
+def _target_range(lift_force_n: np.ndarray, f_w_n: np.ndarray) -> dict[str, list[float]]:
+    """The training targets' L_f / F_w range, ``{"lift_ratio_f_w": [low, high]}`` (empty
+    without F_w): a prediction far outside it is flagged (:mod:`deformctl.grip.sanity`)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.asarray(lift_force_n, dtype=np.float64) / np.asarray(f_w_n, dtype=np.float64)
+    ratio = ratio[np.isfinite(ratio) & (ratio > 0)]
+    return {"lift_ratio_f_w": [float(ratio.min()), float(ratio.max())]} if ratio.size else {}
+
+
 def constant_ratio(lift_force_n: np.ndarray, f_w_n: np.ndarray) -> float:
     """The median of ``L_f / F_w`` over the rows where both are finite (NaN when there are none)."""
     ratio = np.asarray(lift_force_n, dtype=np.float64) / np.asarray(f_w_n, dtype=np.float64)
@@ -509,6 +518,7 @@ def train_model(
         "converged": bool(best_converged),
         "training_range": {k: list(v) for k, v in training_range.items()},
         "training_friction_mu": single_mu,
+        "target_range": _target_range(y_train, fw_train),
         "negative_damping_read_as_zero": int(np.sum(lam_all < 0)) if chosen == "grip" else 0,
         "model": both(pred_train, pred_test),
         "baseline_nearest": both(nn_train, nn_test),

@@ -76,7 +76,7 @@ def test_every_command_has_its_library_call() -> None:
 def test_population_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     # the library's defaults before the recorder replaces the function (names load lazily)
     api = _defaults(deformctl.make_population)
-    seen = _record(monkeypatch, "deformctl.cli.population.make_population")
+    seen = _record(monkeypatch, "deformctl.population.make_population")
     _run(["population", "-o", str(tmp_path / "c.csv")])
     assert seen["args"] == (api["n"],)
     for name in ("seed", "weight_n", "deformability_n_per_cm", "damping_ns_per_cm", "friction_mu"):
@@ -86,7 +86,7 @@ def test_population_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) ->
 def test_measure_sim_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     # the library's defaults before the recorder replaces the function (names load lazily)
     api = _defaults(deformctl.simulate_squeezes)
-    seen = _record(monkeypatch, "deformctl.cli._measure_sim.simulate_catalog_file")
+    seen = _record(monkeypatch, "deformctl.measure.stage.simulate_catalog_file")
     _run(["measure", str(tmp_path / "cat.csv"), "--sim", "-o", str(tmp_path / "s.mcap")])
     task = seen["args"][1]
     assert task.protocol == api["protocol"]
@@ -97,7 +97,7 @@ def test_measure_sim_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -
 
 
 def test_measure_bag_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
-    seen = _record(monkeypatch, "deformctl.cli._measure_rig.measure_recording")
+    seen = _record(monkeypatch, "deformctl.measure.stage.measure_recording")
     _run(["measure", "--bag", str(tmp_path / "r.mcap"), "--wrench-topic", "/w",
           "--position-topic", "/p", "--object-id", "a", "--weight-n", "1",
           "-o", str(tmp_path / "s.mcap")])  # fmt: skip
@@ -107,7 +107,7 @@ def test_measure_bag_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -
 
 
 def test_measure_csv_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
-    seen = _record(monkeypatch, "deformctl.cli._measure_csv.measure_csv_files")
+    seen = _record(monkeypatch, "deformctl.measure.csv_batch.measure_csv_files")
     columns = "time=t,force=f,compression=c"
     _run(["measure", "--csv", str(tmp_path / "r.csv"), "--columns", columns,
           "--object-id", "a", "--weight-n", "1", "-o", str(tmp_path / "s.mcap")])  # fmt: skip
@@ -133,7 +133,7 @@ def test_predict_defaults(monkeypatch: pytest.MonkeyPatch) -> None:
 def test_characterize_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     # the library's defaults before the recorder replaces the function (names load lazily)
     api = _defaults(deformctl.read_and_characterize)
-    seen = _record(monkeypatch, "deformctl.cli.characterize.characterize_file")
+    seen = _record(monkeypatch, "deformctl.characterize.stage.characterize_file")
     _run(["characterize", str(tmp_path / "s.mcap"), "-o", str(tmp_path / "c.parquet")])
     _, fit, policy = seen["args"]
     assert fit == api["options"] == deformctl.FitOptions()
@@ -142,7 +142,7 @@ def test_characterize_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) 
 
 
 def test_lift_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
-    seen = _record(monkeypatch, "deformctl.cli.lift.lift_catalog_files")
+    seen = _record(monkeypatch, "deformctl.lift.stage.lift_catalog_files")
     _run(["lift", str(tmp_path / "cat.csv"), "--sim", "-o", str(tmp_path / "l.parquet")])
     assert seen["search"] == _defaults(deformctl.lift_catalog)["search"]
     assert seen["search"] == deformctl.SearchOptions()
@@ -158,7 +158,7 @@ def test_lift_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
 def test_table_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     # the library's defaults before the recorder replaces the function (names load lazily)
     api = _defaults(deformctl.build_index_table)
-    seen = _record(monkeypatch, "deformctl.cli.table.build_index_table")
+    seen = _record(monkeypatch, "deformctl.table.build_index_table")
     inputs = [str(DATA / "coefficients.parquet"), str(DATA / "lift_results.parquet")]
     _run(["table", *inputs, "-o", str(tmp_path / "i.parquet")])
     for name, value in api.items():

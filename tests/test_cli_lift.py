@@ -168,7 +168,8 @@ def test_progress_bar_draws_on_a_terminal(
 ) -> None:
     import deformctl.cli.lift as lift_cli
 
-    monkeypatch.setattr(lift_cli, "Console", partial(Console, force_terminal=True))
+    terminal = partial(Console, stderr=True, force_terminal=True)
+    monkeypatch.setattr(lift_cli, "stderr_console", terminal)
     result = run(catalog, "--rig", rig("threshold_rig.py", 1.0), "-o", tmp_path / "o.parquet")
     assert result.exit_code == 0, result.stderr
     assert "3/3" in result.stderr  # the bar reached the last object, on stderr

@@ -64,7 +64,9 @@ def test_writes_model_and_metrics_only(trained: dict[str, object]) -> None:
     assert isinstance(d, Path)
     assert sorted(os.listdir(d)) == ["index.parquet", "m.json", "model.skops"]
     result = trained["result"]
-    assert result.stderr.endswith(f"wrote {d / 'model.skops'} and {d / 'm.json'}\n")  # type: ignore[attr-defined]
+    last = result.stderr.splitlines()[-1]  # type: ignore[attr-defined]
+    assert last.startswith("train: 30 object(s) done, 0 flagged, 0 failed in "), last
+    assert last.endswith(f" s -> {d / 'model.skops'}, {d / 'm.json'}"), last
 
 
 def test_seed_split_and_metrics_recorded(trained: dict[str, object]) -> None:

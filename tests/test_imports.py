@@ -27,6 +27,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # the stages, each one module or package (they may import each other, never in a cycle)
     (
         "population",
+        "population_options",
         "measure",
         "characterize",
         "lift",
@@ -54,6 +55,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "quantities",
         "reprs",
         "blas",
+        "summary",
+        "lazy",
     ),
 )
 

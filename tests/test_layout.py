@@ -31,6 +31,7 @@ def _sources() -> list[Path]:
 
 
 def test_restated_heavy_defaults_are_the_librarys() -> None:
+    from deformctl.measure.sim import simulate_squeezes
     from deformctl.sim import LiftProfile, SimSettings, SlipCriterion
     from deformctl.vision import detect_slip, measure_object_size
 
@@ -41,7 +42,8 @@ def test_restated_heavy_defaults_are_the_librarys() -> None:
         if owner in objects:
             assert dataclasses.asdict(objects[owner])[field] == value, name  # type: ignore[call-overload]
         else:
-            function = {"detect_slip": detect_slip, "measure_object_size": measure_object_size}
+            function = {"detect_slip": detect_slip, "measure_object_size": measure_object_size,
+                        "simulate_squeezes": simulate_squeezes}  # fmt: skip
             assert inspect.signature(function[owner]).parameters[field].default == value, name
 
 

@@ -459,7 +459,8 @@ def test_stage_task_modules_do_not_load_the_simulator() -> None:
     # A local sweep's fork server preloads the task's module: it must not load the simulator
     # (numba, OpenBLAS threads) before the workers are forked and limit their BLAS threads.
     code = (
-        "import sys, deformctl.lift.runners.sim, deformctl.measure, deformctl.characterize; "
+        "import sys, deformctl.lift.runners.sim, deformctl.measure.stage, "
+        "deformctl.characterize.stage; "
         "print(sorted(m for m in ('deformctl.sim', 'numba', 'scipy', 'sklearn', 'cv2') "
         "if m in sys.modules))"
     )

@@ -238,7 +238,8 @@ def test_explicit_peak_force_and_progress_bar(
 ) -> None:
     import deformctl.cli.measure as measure_cli
 
-    monkeypatch.setattr(measure_cli, "Console", partial(Console, force_terminal=True))
+    terminal = partial(Console, stderr=True, force_terminal=True)
+    monkeypatch.setattr(measure_cli, "stderr_console", terminal)
     log = tmp_path / "sq.mcap"
     res = run("measure", PAPER_CATALOG, "--sim", "-o", log, "--objects", "C", "--squeezes", "3",
               "--peak-force-n", "4", "--ramp-s", "0.1", "--hold-s", "0.1")  # fmt: skip

@@ -83,21 +83,49 @@ def fresh_venv(wheel_file: Path) -> Path:
     return venv
 
 
-def test_a_fresh_venv_runs_the_first_commands(fresh_venv: Path, tmp_path: Path) -> None:
-    """``pip install`` of the wheel, then ``population``, ``measure --sim`` and ``lift --sim``."""
+#: Runs beyond the first commands that must compile nothing after the warm-up: squeezes and
+#: lift attempts of both presets and a fine cube (``particles_per_side=9``).
+RUNS = """
+from deformctl.presets import sim_preset
+from deformctl.sim import ObjectSpec, SimSettings, lift_attempt, squeeze
+bag = ObjectSpec("bag", (15.0, 12.0, 9.0), 10.0, 0.5, 20.0, 2.0)
+for name in ("paper", "table"):
+    preset = sim_preset(name)
+    squeeze(bag, peak_force_n=5.0, ramp_s=0.01, hold_s=0.01, settings=preset.settings)
+    preset.lift_attempt(bag, 12.0)
+squeeze(bag, peak_force_n=5.0, ramp_s=0.01, hold_s=0.01, settings=SimSettings(particles_per_side=9))
+"""
+
+
+def test_a_fresh_venv_warms_up_and_runs_the_first_commands(
+    fresh_venv: Path, tmp_path: Path
+) -> None:
+    """``pip install`` of the wheel; ``python -m deformctl.sim.warmup`` (``make install`` runs
+    it) compiles every kernel a run uses into a fresh numba cache, so ``population``,
+    ``measure --sim``, ``lift --sim`` and squeezes and lifts of both presets and a fine cube
+    add nothing to the cache afterwards. (One test, so the kernels compile once.)"""
     deformctl = str(fresh_venv / "bin" / "deformctl")
+    python = str(fresh_venv / "bin" / "python")
+    cache = tmp_path / "numba"
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    env["NUMBA_CACHE_DIR"] = str(cache)
 
     def run(*args: str) -> subprocess.CompletedProcess[str]:
         proc = subprocess.run(args, cwd=tmp_path, env=env, capture_output=True, text=True,
-                              check=False)  # fmt: skip
+                              check=False, timeout=900)  # fmt: skip
         assert proc.returncode == 0, proc.stderr
         return proc
 
-    where = run(
-        str(fresh_venv / "bin" / "python"), "-c", "import deformctl; print(deformctl.__file__)"
-    )
+    where = run(python, "-c", "import deformctl; print(deformctl.__file__)")
     assert Path(where.stdout.strip()).is_relative_to(fresh_venv)
+    done = run(python, "-m", "deformctl.sim.warmup")
+    assert done.stdout == ""
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1
+    assert lines[0].startswith("deformctl: simulator kernels compiled or loaded in ")
+    compiled = sorted(p.relative_to(cache) for p in cache.rglob("*.nbi"))
+    assert len(compiled) >= 10, compiled
+
     run(deformctl, "population", "--paper", "-o", "p.csv")
     paper = (REPO / "datasets/paper/objects.csv").read_text().splitlines()
     written = (tmp_path / "p.csv").read_text().splitlines()
@@ -109,11 +137,14 @@ def test_a_fresh_venv_runs_the_first_commands(fresh_venv: Path, tmp_path: Path) 
     squeezes = {f"/squeeze/{o}" for o in "ABCD"}
     assert {c["topic"] for c in info["channels"]} == squeezes | {"/scene", "/palms"}  # Foxglove
     # the paper preset's calibration file comes with the wheel: a lift with it (the golden
-    # population's first object) runs on the kernels measure compiled above
+    # population's first object)
     run(deformctl, "population", "--golden", "-o", "g.csv")
     first = (tmp_path / "g.csv").read_text().splitlines()[1].split(",")[0]
     run(deformctl, "lift", "g.csv", "--sim", "--objects", first, "-o", "lift.parquet")
     assert (tmp_path / "lift.parquet").is_file()
+    run(python, "-c", RUNS)
+    after = sorted(p.relative_to(cache) for p in cache.rglob("*.nbi"))
+    assert after == compiled, sorted(set(after) - set(compiled))
 
 
 def _run(wheel_dir: Path, cwd: Path, *args: str) -> str:

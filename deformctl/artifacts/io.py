@@ -26,7 +26,6 @@ from __future__ import annotations
 import contextlib
 import os
 import re
-import secrets
 import shutil
 import stat
 import sys
@@ -376,7 +375,7 @@ def atomic_output(
         return
     parent = dest.parent if str(dest.parent) else Path(".")
     remove_stale_temporaries(dest)
-    tmp = parent / f".{dest.name}.deformctl-{os.getpid()}-{secrets.token_hex(4)}.tmp"
+    tmp = parent / f".{dest.name}.deformctl-{os.getpid()}-{os.urandom(4).hex()}.tmp"
     try:
         fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     except OSError as err:

@@ -40,8 +40,6 @@ from deformctl.artifacts.tables import (
 from deformctl.errors import InputDataError, SchemaError, UsageError
 from deformctl.series import LiftAttempt
 
-#: Rows shown when the count is not given.
-DEFAULT_ROWS = 20
 #: The kind of the rows :func:`lift_attempt_frame` returns.
 KIND_ATTEMPTS = "lift_attempts"
 #: Units of the attempt rows' columns (None: no unit).
@@ -71,41 +69,6 @@ class Rows:
     frame: pd.DataFrame
     units: dict[str, str | None]
     total: int
-
-
-def parse_row_count(text: str | None) -> int | None:
-    """``--rows``: a whole number >= 0, or ``all`` (None); not given: :data:`DEFAULT_ROWS`.
-
-    Raises:
-        UsageError: a negative or non-numeric count (exit 2).
-    """
-    if text is None:
-        return DEFAULT_ROWS
-    value = text.strip().lower()
-    if value == "all":
-        return None
-    if not value.isdigit():
-        raise UsageError(f"--rows must be a whole number >= 0 or 'all', got {text!r}")
-    return int(value)
-
-
-def parse_column_list(text: str | None) -> list[str] | None:
-    """``--columns a,b,c`` → ``["a", "b", "c"]`` (None when not given).
-
-    Raises:
-        UsageError: an empty name or a name given twice (exit 2).
-    """
-    if text is None:
-        return None
-    names = [c.strip() for c in text.split(",")]
-    if any(not c for c in names):
-        raise UsageError(f"--columns: expected name[,name...], got {text!r}")
-    seen: set[str] = set()
-    for name in names:
-        if name in seen:
-            raise UsageError(f"--columns: {name!r} given twice")
-        seen.add(name)
-    return names
 
 
 def table_frame(data: bytes, path: PathArg) -> pd.DataFrame | None:

@@ -33,75 +33,149 @@ The public names of the estimators, models and stage are re-exported here.
 
 from __future__ import annotations
 
-from deformctl.characterize.coefficients import (
-    COEFFICIENT_COLUMNS,
-    CoefficientFit,
-)
-from deformctl.characterize.fit import (
-    COLLINEAR_COND,
-    DEFAULT_MIN_COMPRESSION_FRAC,
-    DEFAULT_MIN_RATE_FRAC,
-    DEFAULT_POLYORDER,
-    DEFAULT_WINDOW_RATE_HZ,
-    DEFAULT_WINDOW_S,
-    UNIFORM_DT_RTOL,
-    characterize,
-    damping_excitation,
-    default_window_s,
-    fit_lsq,
-    fit_paper,
-)
-from deformctl.characterize.laws import MODEL_CHOICES, MODELS
-from deformctl.characterize.material_options import (
-    DEFAULT_MATERIALS,
-    MaterialOptions,
-    check_at_force_n,
-    default_lag,
-)
-from deformctl.characterize.models import (
-    Profile,
-    kelvin_voigt_piecewise_linear,
-    kelvin_voigt_response,
-    synthetic_kelvin_voigt_squeeze,
-)
-from deformctl.characterize.objectfit import ObjectFit, fit_object
-from deformctl.characterize.options import (
-    DEFAULT_FIT,
-    DEFAULT_POLICY,
-    METHODS,
-    PRELOADS,
-    FitOptions,
-    Method,
-    Preload,
-    QualityPolicy,
-    check_method,
-    check_paper_options,
-    check_preload,
-)
-from deformctl.characterize.prepare import (
-    MIN_SAMPLES,
-    NO_COMPRESSION_M,
-    NO_COMPRESSION_NOISE_MULT,
-    validate_squeeze,
-)
-from deformctl.characterize.stage import (
-    RIG_SOURCES,
-    CharacterizeTask,
-    LogCoefficients,
-    characterize_dir,
-    characterize_file,
-    characterize_items,
-    characterize_sweep,
-    default_preload,
-    read_and_characterize,
-    squeeze_log_parts,
-    sweep_warnings,
-)
-from deformctl.characterize.synthetic import (
-    synthetic_law_squeeze,
-    synthetic_relaxation_hold,
-    synthetic_rupture_backoff,
-)
+from typing import TYPE_CHECKING
+
+from deformctl.lazy import lazy_exports
+
+if TYPE_CHECKING:  # the names below, for type checkers; at run time they load on first use
+    from deformctl.characterize.coefficients import (
+        COEFFICIENT_COLUMNS,
+        CoefficientFit,
+    )
+    from deformctl.characterize.fit import (
+        COLLINEAR_COND,
+        DEFAULT_MIN_COMPRESSION_FRAC,
+        DEFAULT_MIN_RATE_FRAC,
+        DEFAULT_POLYORDER,
+        DEFAULT_WINDOW_RATE_HZ,
+        DEFAULT_WINDOW_S,
+        UNIFORM_DT_RTOL,
+        characterize,
+        damping_excitation,
+        default_window_s,
+        fit_lsq,
+        fit_paper,
+    )
+    from deformctl.characterize.material_options import (
+        DEFAULT_MATERIALS,
+        MODEL_CHOICES,
+        MODELS,
+        MaterialOptions,
+        check_at_force_n,
+        default_lag,
+    )
+    from deformctl.characterize.models import (
+        Profile,
+        kelvin_voigt_piecewise_linear,
+        kelvin_voigt_response,
+        synthetic_kelvin_voigt_squeeze,
+    )
+    from deformctl.characterize.objectfit import (
+        ObjectFit,
+        fit_object,
+    )
+    from deformctl.characterize.options import (
+        DEFAULT_FIT,
+        DEFAULT_POLICY,
+        METHODS,
+        PRELOADS,
+        FitOptions,
+        Method,
+        Preload,
+        QualityPolicy,
+        check_method,
+        check_paper_options,
+        check_preload,
+    )
+    from deformctl.characterize.prepare import (
+        MIN_SAMPLES,
+        NO_COMPRESSION_M,
+        NO_COMPRESSION_NOISE_MULT,
+        validate_squeeze,
+    )
+    from deformctl.characterize.stage import (
+        RIG_SOURCES,
+        CharacterizeTask,
+        LogCoefficients,
+        characterize_dir,
+        characterize_file,
+        characterize_items,
+        characterize_sweep,
+        default_preload,
+        read_and_characterize,
+        squeeze_log_parts,
+        sweep_warnings,
+    )
+    from deformctl.characterize.synthetic import (
+        synthetic_law_squeeze,
+        synthetic_relaxation_hold,
+        synthetic_rupture_backoff,
+    )
+
+#: Public name -> the submodule that defines it. Importing this package imports none of them, so
+#: a module that needs one of them (the command line's options) does not pay for the others
+#: (pandas, pyarrow, numba, the MCAP readers).
+_EXPORTS: dict[str, str] = {
+    "COEFFICIENT_COLUMNS": "deformctl.characterize.coefficients",
+    "CoefficientFit": "deformctl.characterize.coefficients",
+    "COLLINEAR_COND": "deformctl.characterize.fit",
+    "DEFAULT_MIN_COMPRESSION_FRAC": "deformctl.characterize.fit",
+    "DEFAULT_MIN_RATE_FRAC": "deformctl.characterize.fit",
+    "DEFAULT_POLYORDER": "deformctl.characterize.fit",
+    "DEFAULT_WINDOW_RATE_HZ": "deformctl.characterize.fit",
+    "DEFAULT_WINDOW_S": "deformctl.characterize.fit",
+    "UNIFORM_DT_RTOL": "deformctl.characterize.fit",
+    "characterize": "deformctl.characterize.fit",
+    "damping_excitation": "deformctl.characterize.fit",
+    "default_window_s": "deformctl.characterize.fit",
+    "fit_lsq": "deformctl.characterize.fit",
+    "fit_paper": "deformctl.characterize.fit",
+    "MODEL_CHOICES": "deformctl.characterize.material_options",
+    "MODELS": "deformctl.characterize.material_options",
+    "DEFAULT_MATERIALS": "deformctl.characterize.material_options",
+    "MaterialOptions": "deformctl.characterize.material_options",
+    "check_at_force_n": "deformctl.characterize.material_options",
+    "default_lag": "deformctl.characterize.material_options",
+    "Profile": "deformctl.characterize.models",
+    "kelvin_voigt_piecewise_linear": "deformctl.characterize.models",
+    "kelvin_voigt_response": "deformctl.characterize.models",
+    "synthetic_kelvin_voigt_squeeze": "deformctl.characterize.models",
+    "ObjectFit": "deformctl.characterize.objectfit",
+    "fit_object": "deformctl.characterize.objectfit",
+    "DEFAULT_FIT": "deformctl.characterize.options",
+    "DEFAULT_POLICY": "deformctl.characterize.options",
+    "METHODS": "deformctl.characterize.options",
+    "PRELOADS": "deformctl.characterize.options",
+    "FitOptions": "deformctl.characterize.options",
+    "Method": "deformctl.characterize.options",
+    "Preload": "deformctl.characterize.options",
+    "QualityPolicy": "deformctl.characterize.options",
+    "check_method": "deformctl.characterize.options",
+    "check_paper_options": "deformctl.characterize.options",
+    "check_preload": "deformctl.characterize.options",
+    "MIN_SAMPLES": "deformctl.characterize.prepare",
+    "NO_COMPRESSION_M": "deformctl.characterize.prepare",
+    "NO_COMPRESSION_NOISE_MULT": "deformctl.characterize.prepare",
+    "validate_squeeze": "deformctl.characterize.prepare",
+    "RIG_SOURCES": "deformctl.characterize.stage",
+    "CharacterizeTask": "deformctl.characterize.stage",
+    "LogCoefficients": "deformctl.characterize.stage",
+    "characterize_dir": "deformctl.characterize.stage",
+    "characterize_file": "deformctl.characterize.stage",
+    "characterize_items": "deformctl.characterize.stage",
+    "characterize_sweep": "deformctl.characterize.stage",
+    "default_preload": "deformctl.characterize.stage",
+    "read_and_characterize": "deformctl.characterize.stage",
+    "squeeze_log_parts": "deformctl.characterize.stage",
+    "sweep_warnings": "deformctl.characterize.stage",
+    "synthetic_law_squeeze": "deformctl.characterize.synthetic",
+    "synthetic_relaxation_hold": "deformctl.characterize.synthetic",
+    "synthetic_rupture_backoff": "deformctl.characterize.synthetic",
+}
+
+
+__getattr__, __dir__ = lazy_exports(globals(), _EXPORTS)
+
 
 __all__ = [
     "COEFFICIENT_COLUMNS",

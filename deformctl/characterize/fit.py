@@ -59,9 +59,11 @@ import numpy as np
 import pandas as pd
 
 from deformctl.characterize.coefficients import CoefficientFit, _coefficient_frame
-from deformctl.characterize.laws import check_model
+from deformctl.characterize.material_options import check_model
 from deformctl.characterize.objectfit import ObjectFit, fit_object
 from deformctl.characterize.options import (
+    DEFAULT_WINDOW_RATE_HZ,
+    DEFAULT_WINDOW_S,
     Method,
     Preload,
     check_method,
@@ -78,12 +80,6 @@ from deformctl.series import FloatArray, SqueezeSeries
 from deformctl.signals import sg_smooth, sg_window_length, uniform_grid
 from deformctl.units import N_PER_CM, NS_PER_CM
 
-#: Default Savitzky–Golay window, s. Long enough that the derivative of 0.05 mm position noise is
-#: small against squeeze rates of a few mm/s (noise in ``d'`` biases λ low, see ``fit_lsq``), short
-#: enough that a cubic follows a squeeze of a few seconds (cubic smoothing bias < 0.1 % in tests).
-DEFAULT_WINDOW_S = 0.2
-#: Sample rate the default window was chosen for, Hz (see :func:`default_window_s`).
-DEFAULT_WINDOW_RATE_HZ = 1000.0
 #: Default Savitzky–Golay polynomial order (cubic: exact for d through a smooth corner).
 DEFAULT_POLYORDER = 3
 #: Samples with compression below this fraction of the squeeze's peak compression are not used.

@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Literal
 
 import numpy as np
 
@@ -45,11 +44,6 @@ from deformctl.errors import UsageError
 from deformctl.quantities import STIFFNESS_EXPONENT
 from deformctl.series import FloatArray
 
-Model = Literal["kv", "hc", "sls"]
-#: The laws, simplest first (``auto`` prefers the earlier one on a tie).
-MODELS: tuple[Model, ...] = ("kv", "hc", "sls")
-#: ``characterize --model`` choices.
-MODEL_CHOICES: tuple[str, ...] = (*MODELS, "auto")
 #: Hunt–Crossley exponent bounds (1: linear spring; 3: the stiffest law a soft object shows).
 #: The simulator's catalog column ``material_stiffness_exponent`` has the same rule.
 HC_EXPONENT_BOUNDS = (STIFFNESS_EXPONENT.low, STIFFNESS_EXPONENT.high)
@@ -66,17 +60,6 @@ DAMPING_PARAMETERS: dict[str, tuple[str, ...]] = {
     "hc": ("damping_ns_per_m_pow_n_plus_1",),
     "sls": ("arm_stiffness_n_per_m", "relaxation_time_s"),
 }
-
-
-def check_model(model: object) -> str:
-    """``model`` when it names a law or ``auto``.
-
-    Raises:
-        UsageError: anything else (exit 2).
-    """
-    if model not in MODEL_CHOICES:
-        raise UsageError(f"--model must be one of {', '.join(MODEL_CHOICES)}, got {model!r}")
-    return str(model)
 
 
 def cumulative_mean_parts(x: FloatArray, dt_s: float) -> FloatArray:

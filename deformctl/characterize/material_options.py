@@ -10,10 +10,29 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
-from deformctl.characterize.laws import MODEL_CHOICES, check_model
+from deformctl.errors import UsageError
 from deformctl.quantities import AT_FORCE_N
+
+Model = Literal["kv", "hc", "sls"]
+#: The laws (:mod:`deformctl.characterize.laws`), simplest first (``auto`` prefers the earlier
+#: one on a tie).
+MODELS: tuple[Model, ...] = ("kv", "hc", "sls")
+#: ``characterize --model`` choices.
+MODEL_CHOICES: tuple[str, ...] = (*MODELS, "auto")
+
+
+def check_model(model: object) -> str:
+    """``model`` when it names a law or ``auto``.
+
+    Raises:
+        UsageError: anything else (exit 2).
+    """
+    if model not in MODEL_CHOICES:
+        raise UsageError(f"--model must be one of {', '.join(MODEL_CHOICES)}, got {model!r}")
+    return str(model)
+
 
 #: The ``source`` a squeeze log's object row carries when ``measure`` read a rig recording.
 RIG_SOURCES = ("ros2_bag", "csv")

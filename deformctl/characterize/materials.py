@@ -39,13 +39,13 @@ import numpy as np
 from deformctl.characterize.laws import (
     DAMPING_PARAMETERS,
     HC_EXPONENT_BOUNDS,
-    MODELS,
     PARAMETERS,
     cumulative_mean_parts,
     to_physical,
     window_design,
     window_mean,
 )
+from deformctl.characterize.material_options import MODELS
 from deformctl.errors import InputDataError
 from deformctl.series import FloatArray
 

@@ -26,7 +26,6 @@ import numpy as np
 
 from deformctl.characterize.laws import (
     DAMPING_PARAMETERS,
-    MODELS,
     PARAMETERS,
     compression_at_force,
     elastic_force,
@@ -34,6 +33,7 @@ from deformctl.characterize.laws import (
     rate_force,
     secant_stiffness,
 )
+from deformctl.characterize.material_options import MODELS
 from deformctl.characterize.materials import (
     MIN_COMPRESSION_FRAC,
     FitData,

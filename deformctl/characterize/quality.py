@@ -34,6 +34,11 @@ wrong sign, wrong units; numbers in each constant's docstring) and stated here o
                                  relaxation, not rupture; ``rupture.find_relaxation``)
 ``secant_misfit``                where D is stated the law misses the recording by more than
                                  :data:`SECANT_MISFIT_FRAC` of the operating force
+``damping_ratio_implausible``    the implied damping ratio ζ = λ / (2 √(D m)) is above 1000
+                                 (:data:`deformctl.quantities.IMPLIED_DAMPING_RATIO`) though the
+                                 recording's time unit was stated: the line names the time unit
+                                 that would make it plausible (with no time unit stated the flag
+                                 is ``time_unit_doubtful``)
 ``logging_gap``, ``coarse_force``, the recording's defects, found by ``measure`` and stored in
 ``force_lag``                    the squeeze log (:mod:`deformctl.measure.defects`)
 ================================ ==============================================================
@@ -47,11 +52,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any
-
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from deformctl.errors import InputDataError, UsageError
+from deformctl.plausibility import damping_ratio_doubt, implied_damping_ratio
+
+if TYPE_CHECKING:  # pragma: no cover - a table is handed in; this module does not need pandas
+    import pandas as pd
 
 NEGATIVE_STIFFNESS = "negative_stiffness"
 NEGATIVE_DAMPING = "negative_damping"
@@ -64,6 +71,7 @@ AT_BOUND = "at_bound"
 NONLINEAR_STIFFNESS = "nonlinear_stiffness"
 RELAXATION = "relaxation"
 SECANT_MISFIT = "secant_misfit"
+DAMPING_RATIO_IMPLAUSIBLE = "damping_ratio_implausible"
 #: The recording's defects (:data:`deformctl.measure.defects.RECORDING_FLAGS`, restated here:
 #: imports only go down; a test checks that they agree) and what each means.
 RECORDING_FLAGS: dict[str, str] = {
@@ -71,10 +79,11 @@ RECORDING_FLAGS: dict[str, str] = {
     "coarse_force": "the force's resolution is coarser than 2 % of its peak",
     "force_lag": "the force lags the position; λ is low by D × the lag (measure --lag-s auto)",
     "force_unit_doubtful": "the peak force is implausible for a soft object (below 50 mN or "
-    "above 3 kN): a unit slip such as kN read as N",
-    "compression_unit_doubtful": "the peak compression is below 20 µm: a unit slip such as m "
-    "read as mm",
-    "time_unit_doubtful": "no time unit stated and a sample rate below 10 Hz: ms stamps read as s",
+    "above 3 kN, or a secant stiffness above 5000 N/cm): a unit slip such as kN read as N",
+    "compression_unit_doubtful": "the peak compression is below 20 µm (or a secant stiffness "
+    "above 5000 N/cm): a unit slip such as m read as mm",
+    "time_unit_doubtful": "no time unit stated and a sample rate below 10 Hz or an implied "
+    "damping ratio above 1000: ms stamps read as s",
 }
 #: Every flag, in the order ``quality`` lists them.
 FLAGS: tuple[str, ...] = (
@@ -89,6 +98,7 @@ FLAGS: tuple[str, ...] = (
     NONLINEAR_STIFFNESS,
     RELAXATION,
     SECANT_MISFIT,
+    DAMPING_RATIO_IMPLAUSIBLE,
     *RECORDING_FLAGS,
 )
 OK = "ok"
@@ -193,6 +203,33 @@ def assess(
     return tuple(flags)
 
 
+def with_damping_ratio_flag(quality: str, row: Mapping[str, Any], obj: Mapping[str, Any]) -> str:
+    """``quality`` with ``damping_ratio_implausible`` (or ``time_unit_doubtful`` when the
+    recording's time unit was not stated) when the implied damping ratio of ``row``'s D and λ
+    and the object's weight is above 1000 (:func:`deformctl.plausibility.damping_ratio_doubt`)."""
+    zeta = implied_damping_ratio(
+        row.get("deformability_n_per_cm"), row.get("damping_ns_per_cm"), obj.get("weight_n")
+    )
+    doubt = damping_ratio_doubt(zeta, time_unit_stated=time_unit_stated(obj))
+    if doubt is None:
+        return quality
+    flags = list(parse_quality(quality))
+    return quality_text(flags if doubt[0] in flags else [*flags, doubt[0]])
+
+
+def time_unit_stated(obj: Mapping[str, Any]) -> bool:
+    """Whether the recording's time unit was known: False for a CSV export whose time column's
+    unit was assumed (no header unit, units row or ``--units``), True otherwise (bags and logs
+    have stamps in ns; the simulator its own clock)."""
+    if obj.get("source") != "csv":
+        return True
+    csv = obj.get("csv")
+    try:
+        return str(csv["columns"]["time"]["unit_from"]) != "default"  # type: ignore[index]
+    except (KeyError, TypeError):
+        return False  # a CSV recording that does not say: not known
+
+
 def with_recording_flags(quality: str, recording_flags: object) -> str:
     """``quality`` with the recording's flags (a squeeze log object's ``recording_flags``)."""
     extra = (
@@ -260,6 +297,13 @@ def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
             f"{flag} ({row.get('n_samples')} samples < {FEW_SAMPLES_WINDOWS:g} windows of "
             f"{row.get('window_samples')})"
         )
+    if flag == DAMPING_RATIO_IMPLAUSIBLE or flag == "time_unit_doubtful":
+        zeta = implied_damping_ratio(
+            row.get("deformability_n_per_cm"), row.get("damping_ns_per_cm"), row.get("weight_n")
+        )
+        doubt = damping_ratio_doubt(zeta, time_unit_stated=flag == DAMPING_RATIO_IMPLAUSIBLE)
+        if doubt is not None:
+            return f"{flag} ({doubt[1]})"
     if flag in RECORDING_FLAGS:
         return f"{flag} ({RECORDING_FLAGS[flag]}; found by measure, details in the squeeze log)"
     if flag == RUPTURE:
@@ -377,8 +421,9 @@ def thresholds_help() -> str:
         "law at its bound), nonlinear_stiffness (the loading tangent stiffness varies by more "
         "than 2x), relaxation (the force decayed at constant compression), secant_misfit "
         f"(where D is stated the law misses the recorded force by > "
-        f"{100 * SECANT_MISFIT_FRAC:g} % of the operating force); the recording's defects "
-        "found by measure: logging_gap, coarse_force, force_lag, and the unit doubts "
-        "force_unit_doubtful (peak < 50 mN or > 3 kN), compression_unit_doubtful (< 20 µm), "
-        "time_unit_doubtful (no time unit, < 10 Hz)."
+        f"{100 * SECANT_MISFIT_FRAC:g} % of the operating force), damping_ratio_implausible "
+        "(ζ = λ / (2 √(D m)) > 1000 with a stated time unit); the recording's defects found by "
+        "measure: logging_gap, coarse_force, force_lag, and the unit doubts force_unit_doubtful "
+        "(peak < 50 mN or > 3 kN, or secant > 5000 N/cm), compression_unit_doubtful (< 20 µm), "
+        "time_unit_doubtful (no time unit, < 10 Hz or ζ > 1000)."
     )

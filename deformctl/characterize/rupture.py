@@ -50,17 +50,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 
-from deformctl.errors import UsageError
+from deformctl.characterize.options import PHASES, Phase, check_phase
 from deformctl.series import FloatArray, Rupture, SqueezeSeries, ruptures_from_object
 from deformctl.signals import noise_std, sg_smooth, sg_window_length, uniform_grid
 from deformctl.units import NS_PER_S
-
-Phase = Literal["loading", "unloading", "all"]
-PHASES: tuple[str, ...] = ("loading", "unloading", "all")
 
 __all__ = [
     "HOLD_TOL_FRAC",
@@ -377,17 +373,6 @@ def slice_squeeze(s: SqueezeSeries, sl: slice) -> SqueezeSeries:
         start_time_ns=start_ns,
         **opt,
     )
-
-
-def check_phase(phase: object) -> Phase:
-    """``phase`` when it is one of :data:`PHASES` (the one rule for ``--phase``).
-
-    Raises:
-        UsageError: an unknown phase (exit 2).
-    """
-    if phase not in PHASES:
-        raise UsageError(f"--phase must be one of {', '.join(PHASES)}, got {phase!r}")
-    return phase  # type: ignore[return-value]
 
 
 def phase_slice(time_s: FloatArray, force_n: FloatArray, phase: str, *, window_s: float) -> slice:

@@ -41,7 +41,11 @@ from deformctl.characterize.options import (
     QualityPolicy,
 )
 from deformctl.characterize.plot import check_plot_dir, plot_fits
-from deformctl.characterize.quality import enforce, with_recording_flags
+from deformctl.characterize.quality import (
+    enforce,
+    with_damping_ratio_flag,
+    with_recording_flags,
+)
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, run_sweep
 from deformctl.reprs import short_repr
@@ -128,6 +132,7 @@ def _fit_object(
     )
     row = rows[0]
     row["quality"] = with_recording_flags(str(row["quality"]), (obj or {}).get("recording_flags"))
+    row["quality"] = with_damping_ratio_flag(str(row["quality"]), row, dict(obj or {}))
     row.update(object_fields(obj))
     return row, mode
 

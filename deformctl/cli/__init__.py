@@ -9,21 +9,29 @@ its traceback. The options several commands share are declared once in
 
 A command module is imported only when it runs: ``deformctl predict ...`` builds the app with
 the ``predict`` command alone (:func:`main`), so it does not import what ``measure``, ``lift``
-or ``inspect`` need (pandas, pyarrow, numba, OpenCV). ``deformctl``, ``deformctl --help`` and
-anything that is not a command name build the whole app, as do :data:`app` and
-:data:`COMMANDS` (attributes made on first use).
+or ``inspect`` need (pandas, pyarrow, numba, OpenCV). ``deformctl``, ``deformctl --help``,
+``--version`` and anything that is not a command name need only the commands' names and
+docstrings: :func:`main` reads those from the command modules' source (:func:`listed_command`)
+and imports none of them. :data:`app` and :data:`COMMANDS` (attributes made on first use) are
+the whole app and every command function. A command module imports the heavy libraries its
+command runs on (pandas, pyarrow, scikit-learn, numba, OpenCV, Dask, the MCAP readers) inside
+the command, so that ``deformctl <command> --help`` does not pay for them either
+(``tests/cli/test_startup.py``; ``make bench`` times them).
 """
 
 from __future__ import annotations
 
+import ast
 import importlib
+import importlib.util
 import sys
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import typer
 
-from deformctl.cli._common import OneLineErrorGroup
+from deformctl.cli._group import OneLineErrorGroup
 
 if TYPE_CHECKING:  # pragma: no cover - built on first use (module __getattr__)
     app: typer.Typer
@@ -73,8 +81,31 @@ def command(name: str) -> Callable[..., Any]:
     return function
 
 
-def build_app(names: Sequence[str] = COMMAND_NAMES) -> typer.Typer:
-    """The ``deformctl`` app with the subcommands ``names`` (all by default), in that order."""
+def listed_command(name: str) -> Callable[..., Any]:
+    """A stand-in for subcommand ``name`` that only lists it: its docstring is the command
+    function's, read from ``deformctl/cli/<name>.py`` without importing it (``deformctl
+    --help`` prints the same first lines; running the stand-in is a bug)."""
+    spec = importlib.util.find_spec(f"deformctl.cli.{name}")
+    assert spec is not None, name
+    assert spec.origin is not None, name
+    tree = ast.parse(Path(spec.origin).read_text(encoding="utf-8"))
+    found = (n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == name)
+    doc = ast.get_docstring(next(found))
+
+    def listed() -> None:
+        raise AssertionError(f"{name}: a listed command stand-in was run")  # pragma: no cover
+
+    listed.__name__ = listed.__qualname__ = name
+    listed.__doc__ = doc
+    return listed
+
+
+def build_app(
+    names: Sequence[str] = COMMAND_NAMES,
+    make: Callable[[str], Callable[..., Any]] = command,
+) -> typer.Typer:
+    """The ``deformctl`` app with the subcommands ``names`` (all by default), in that order,
+    each ``make(name)`` (the command function; :func:`listed_command` to list it only)."""
     built = typer.Typer(
         name="deformctl",
         cls=OneLineErrorGroup,
@@ -86,7 +117,7 @@ def build_app(names: Sequence[str] = COMMAND_NAMES) -> typer.Typer:
     )
     built.callback()(_root)
     for name in names:
-        built.command()(command(name))
+        built.command()(make(name))
     return built
 
 
@@ -103,7 +134,10 @@ def __getattr__(name: str) -> Any:
 
 
 def main() -> None:
-    """Console-script entry point: only the invoked command's module is imported."""
+    """Console-script entry point: only the invoked command's module is imported (none for
+    ``deformctl --help``, which lists the commands)."""
     args = sys.argv[1:]
-    names = [args[0]] if args and args[0] in COMMAND_NAMES else COMMAND_NAMES
-    build_app(names)(prog_name="deformctl")
+    if args and args[0] in COMMAND_NAMES:
+        build_app([args[0]])(prog_name="deformctl")
+    else:
+        build_app(COMMAND_NAMES, listed_command)(prog_name="deformctl")

@@ -10,12 +10,14 @@ from __future__ import annotations
 import functools
 import os
 import re
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from deformctl.cli._options import HEAVY_DEFAULTS
 from deformctl.errors import UsageError
-from deformctl.lift.runners.rig import SlipFromFrames
 from deformctl.quantities import MARKER_SIZE_CM, SLIP_TOLERANCE_M
+
+if TYPE_CHECKING:  # pragma: no cover - the rig runner (pandas, MCAP) loads when --rig runs
+    from deformctl.lift.runners.rig import SlipFromFrames
 
 #: Default ``--slip-tolerance-m`` (``detect_slip``'s): the object may fall behind the palms so
 #: far, m.

@@ -16,12 +16,12 @@ import typer
 from deformctl.cli._common import finish_sweep
 from deformctl.cli._options import HEAVY_DEFAULTS, default
 from deformctl.errors import UsageError
-from deformctl.lift.options import SearchOptions
-from deformctl.lift.runners.rig import DEFAULT_RIG_TIMEOUT_S, SlipFromFrames, rig_runner_factory
-from deformctl.lift.stage import RunnerFactory
-from deformctl.parallel import SweepOptions
+from deformctl.lift.options import DEFAULT_RIG_TIMEOUT_S, SearchOptions
 
-if TYPE_CHECKING:  # pragma: no cover - the simulator is imported when --sim is given
+if TYPE_CHECKING:  # pragma: no cover - the runners (numba; pandas, MCAP) load when they run
+    from deformctl.lift.runners.rig import SlipFromFrames
+    from deformctl.lift.stage import RunnerFactory
+    from deformctl.parallel import SweepOptions
     from deformctl.presets import SimPreset
 
 RigTimeout = Annotated[
@@ -196,8 +196,10 @@ def choose_runner(
     """
     chosen: list[RunnerFactory] = []
     if rig is not None:
+        from deformctl.lift.runners.rig import rig_runner_factory as rig_factory
+
         timeout_s = DEFAULT_RIG_TIMEOUT_S if rig_timeout_s is None else rig_timeout_s
-        chosen.append(rig_runner_factory(rig, timeout_s=timeout_s, slip_from_frames=judge))
+        chosen.append(rig_factory(rig, timeout_s=timeout_s, slip_from_frames=judge))
     elif rig_timeout_s is not None or judge is not None:
         raise UsageError(
             f"{'--rig-timeout' if judge is None else '--slip-from-frames'} needs --rig"
@@ -227,9 +229,10 @@ def lift_dataset(
     object_ids: Sequence[str] | None,
     force: bool,
     quiet: bool = False,
+    max_force_n: float | None = None,
 ) -> None:
-    """``lift --sim -o DIR/``: the search of every object through the sweep executor, then the
-    sweep's summary line (unless ``quiet``); each part's log records the scene at ``scene_hz``.
+    """``lift --sim -o DIR/``: every object's search (under its force ceiling) through the sweep
+    executor, then its summary (unless ``quiet``); each part's log has the scene at ``scene_hz``.
 
     Raises:
         UsageError: no ``--sim``, or ``--log`` (each part has its log).
@@ -237,13 +240,11 @@ def lift_dataset(
     if preset is None:
         raise UsageError("a dataset directory output (-o DIR/) needs --sim")
     if log is not None:
-        raise UsageError(
-            "--log is not used with a dataset directory output (see DIR/_logs/part-*.mcap)"
-        )
+        raise UsageError("--log is not used with a dataset directory output (DIR/_logs/ has them)")
     from deformctl.lift.runners.sim import LiftTask, lift_sweep
 
-    task = LiftTask(preset=preset, search=search, log_epoch_ns=log_epoch_ns, scene_hz=scene_hz)
-    summary = lift_sweep(
-        catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
-    )
+    task = LiftTask(preset=preset, search=search, log_epoch_ns=log_epoch_ns, scene_hz=scene_hz,
+                    max_force_n=max_force_n)  # fmt: skip
+    summary = lift_sweep(catalog, task, output=output, sweep=sweep, object_ids=object_ids,
+                         force=force)  # fmt: skip
     finish_sweep(summary, "lift", quiet=quiet)

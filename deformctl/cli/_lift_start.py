@@ -14,7 +14,7 @@ import typer
 
 from deformctl.artifacts.io import is_stdio
 from deformctl.errors import SearchError, UsageError
-from deformctl.lift.search import DEFAULT_START_MARGIN, validate_start_margin
+from deformctl.lift.options import DEFAULT_START_MARGIN
 
 if TYPE_CHECKING:  # pragma: no cover - the seed sources import scikit-learn when used
     from deformctl.cli._summary import RunClock
@@ -110,9 +110,11 @@ def start_seed(
         raise UsageError(f"{flag} bisects to --tolerance as refine does; drop --protocol paper")
     if dataset:
         raise UsageError(f"{flag} writes a table file, not a dataset directory output (-o DIR/)")
+    from deformctl.lift.search import validate_start_margin
+    from deformctl.lift.seeded import load_start_model, load_start_table
+
     chosen = DEFAULT_START_MARGIN if margin is None else margin
     validate_start_margin(chosen)
-    from deformctl.lift.seeded import load_start_model, load_start_table
 
     if model is not None:
         return load_start_model(model, margin=chosen, coefficients=coefficients)
@@ -163,17 +165,9 @@ MaxForceN = Annotated[
     typer.Option(
         "--max-force-n",
         metavar="N",
-        help="Force ceiling per palm, N, for every object: no attempt asks for more; a search "
-        "that needs more stops with 'no safe grip'. Default: the catalog's max_force_n, else "
-        "10 x F_w lowered to a known rupture or yield force (--coefficients).",
+        help="Force ceiling per palm, N, for every object (a file or a -o DIR/ output): no "
+        "attempt asks for more; a search that needs more stops with 'no safe grip'. Default: "
+        "the catalog's max_force_n, else 10 x F_w lowered to a known rupture or yield force "
+        "(--coefficients).",
     ),
 ]
-
-
-def check_max_force(max_force_n: float | None, *, dataset: bool) -> None:
-    """Refuse a bad ``--max-force-n`` (exit 2), and one with a dataset output (simulated)."""
-    from deformctl.lift.ceiling import validate_max_force
-
-    validate_max_force(max_force_n, "--max-force-n")  # None: the default ceiling
-    if dataset and max_force_n is not None:
-        raise UsageError("--max-force-n is for a single-file output (a dataset is simulated)")

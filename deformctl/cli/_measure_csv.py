@@ -13,24 +13,19 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from deformctl.cli._common import finish_sweep, parse_mapping
 from deformctl.cli._measure_csv_report import report_dataset, report_files
 from deformctl.cli._measure_rig import RigOptions, segmentation
-from deformctl.measure import DEFAULT_CSV_MEMORY_BUDGET_GIB as DEFAULT_BUDGET
-from deformctl.measure import (
-    CsvDialect,
-    CsvFileTask,
-    CsvOptions,
-    csv_objects,
-    measure_csv_files,
-    measure_csv_sweep,
-)
-from deformctl.measure.options import Segmentation
-from deformctl.parallel import SweepOptions, single_file_workers
+from deformctl.measure.csv_options import DEFAULT_CSV_MEMORY_BUDGET_GIB as DEFAULT_BUDGET
+from deformctl.measure.csv_options import CsvDialect, CsvOptions
+
+if TYPE_CHECKING:  # pragma: no cover - the readers (pandas, pyarrow, MCAP) load when --csv runs
+    from deformctl.measure.options import Segmentation
+    from deformctl.parallel import SweepOptions
 
 SkipRows = Annotated[
     int | None,
@@ -173,6 +168,14 @@ def run(
     sweep: SweepOptions,
 ) -> None:
     """Read every CSV file of ``paths`` and write their squeeze log or dataset directory."""
+    from deformctl.measure.csv_batch import (
+        CsvFileTask,
+        csv_objects,
+        measure_csv_files,
+        measure_csv_sweep,
+    )
+    from deformctl.parallel import single_file_workers
+
     options, cut = csv_options(flags, rig, memory_budget_gib)
     task = CsvFileTask(options, cut)
     files = csv_objects(

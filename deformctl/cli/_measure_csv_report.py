@@ -6,11 +6,14 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Sequence
 from os import PathLike
+from typing import TYPE_CHECKING
 
 import typer
 
 from deformctl.artifacts.io import display_name
-from deformctl.measure import CsvBatchResult
+
+if TYPE_CHECKING:  # pragma: no cover - the batch reader loads when --csv runs
+    from deformctl.measure.csv_batch import CsvBatchResult
 
 
 def _counted(lines: Sequence[str], of: int) -> list[str]:

@@ -8,13 +8,15 @@ module prints what it found.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import typer
 
 from deformctl.artifacts.io import is_stdio
-from deformctl.catalog import MeasuredObject
 from deformctl.cli._image_options import ImageOptions, check_image_options
-from deformctl.measure.images import measure_images as measure_images_to_catalog
+
+if TYPE_CHECKING:  # pragma: no cover - OpenCV and the catalog writer load when --images runs
+    from deformctl.catalog import MeasuredObject
 
 
 def measure_images(
@@ -26,6 +28,8 @@ def measure_images(
         UsageError, MissingInputError, OutputExistsError, InputDataError: see
             :func:`deformctl.measure.images.measure_images`.
     """
+    from deformctl.measure.images import measure_images as measure_images_to_catalog
+
     reference, mask = check_image_options(opts)
     result = measure_images_to_catalog(
         images,

@@ -11,15 +11,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from deformctl.artifacts.io import is_stdio
-from deformctl.catalog import MeasuredObject
 from deformctl.errors import UsageError
 from deformctl.measure.options import BagSource, Segmentation
-from deformctl.measure.stage import measure_recording
+
+if TYPE_CHECKING:  # pragma: no cover - the readers (pandas, MCAP) load when --bag/--csv runs
+    from deformctl.catalog import MeasuredObject
 
 Bag = Annotated[
     str | None,
@@ -203,6 +204,8 @@ def run(
     force: bool,
 ) -> None:
     """Read the ``--bag`` recording ``path`` and write its squeeze log."""
+    from deformctl.measure.stage import measure_recording
+
     if is_stdio(path):
         raise UsageError("--bag: cannot read from stdin; give a file")
     source = bag_source(opts)

@@ -11,10 +11,9 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from rich.console import Console
 
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli._common import finish_sweep, progress_bar
@@ -28,15 +27,13 @@ from deformctl.measure.options import (
     DEFAULT_SIM_RAMP_S,
     DEFAULT_SIM_SQUEEZES,
     DEFAULT_SQUEEZE_STRAIN,
-    SqueezeProtocol,
 )
-from deformctl.measure.stage import (
-    SimulateCatalogTask,
-    simulate_catalog_file,
-    simulate_catalog_sweep,
-)
-from deformctl.parallel import SweepOptions
-from deformctl.scene import scene_every_steps
+
+if TYPE_CHECKING:  # pragma: no cover - the stage (pandas, the simulator) loads when --sim runs
+    from rich.console import Console
+
+    from deformctl.measure.stage import SimulateCatalogTask
+    from deformctl.parallel import SweepOptions
 
 #: ``measure``'s budget: the simulator's lattice, or the rows of a CSV export and its log.
 MemoryBudgetGib = Annotated[
@@ -140,7 +137,10 @@ class SimFlags:
                 (:class:`~deformctl.measure.options.SqueezeProtocol`,
                 :class:`~deformctl.presets.SimOptions`).
         """
+        from deformctl.measure.options import SqueezeProtocol
+        from deformctl.measure.stage import SimulateCatalogTask
         from deformctl.presets import DEFAULT_PRESET, SimOptions
+        from deformctl.scene import scene_every_steps
 
         if self.peak_force_n is not None and self.strain is not None:
             raise UsageError("give --peak-force-n or --strain, not both")
@@ -193,6 +193,8 @@ def run(
     Raises:
         UsageError: no catalog, or a bad option (see :meth:`SimFlags.task`).
     """
+    from deformctl.measure.stage import simulate_catalog_file, simulate_catalog_sweep
+
     if not catalog:
         raise UsageError("--sim needs a CATALOG argument (the objects to squeeze)")
     task = opts.task()

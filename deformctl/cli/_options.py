@@ -26,8 +26,9 @@ from deformctl.parallel import DEFAULT_CONNECT_TIMEOUT_S, DEFAULT_PARTITION_SIZE
 
 R = TypeVar("R")
 
-#: Defaults of the simulator (``SimSettings``, ``LiftProfile``, ``SlipCriterion``) and of the
-#: vision functions (``detect_slip``, ``measure_object_size``), restated for the help texts only.
+#: Defaults of the simulator (``SimSettings``, ``LiftProfile``, ``SlipCriterion``, the scene rate
+#: of ``simulate_squeezes``: :data:`deformctl.scene.DEFAULT_SCENE_HZ`) and of the vision
+#: functions (``detect_slip``, ``measure_object_size``), restated for the help texts only.
 HEAVY_DEFAULTS: dict[str, object] = {
     "SimSettings.dt_s": 1e-3,
     "SimSettings.particles_per_side": 5,
@@ -40,6 +41,7 @@ HEAVY_DEFAULTS: dict[str, object] = {
     "detect_slip.tolerance_m": 0.005,
     "detect_slip.marker_dict": "DICT_4X4_50",
     "measure_object_size.marker_dict": "DICT_4X4_50",
+    "simulate_squeezes.scene_hz": 30.0,
 }
 
 

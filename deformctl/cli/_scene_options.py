@@ -6,7 +6,10 @@ from typing import Annotated
 
 import typer
 
-from deformctl.scene import DEFAULT_SCENE_HZ
+from deformctl.cli._options import HEAVY_DEFAULTS, default
+
+#: :data:`deformctl.scene.DEFAULT_SCENE_HZ`, restated (the scene module imports numpy).
+DEFAULT_SCENE_HZ = float(str(HEAVY_DEFAULTS["simulate_squeezes.scene_hz"]))
 
 SceneHz = Annotated[
     float | None,
@@ -15,7 +18,7 @@ SceneHz = Annotated[
         metavar="HZ",
         help="Sim: frames per simulated second of the log's 3-D scene for Foxglove (/scene: "
         "palms, surface particles, stuck / slipping contacts; /palms: each palm's forces and "
-        f"stick/slip); 0: none, at most 1/dt [default: {DEFAULT_SCENE_HZ:g}].",
+        f"stick/slip); 0: none, at most 1/dt {default('simulate_squeezes.scene_hz')}.",
     ),
 ]
 

@@ -3,25 +3,18 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
-import pandas as pd
 import typer
 
 from deformctl.artifacts.io import is_stdio
-from deformctl.characterize import (
+from deformctl.characterize.material_options import MODEL_CHOICES, MaterialOptions
+from deformctl.characterize.options import (
     DEFAULT_WINDOW_S,
-    MODEL_CHOICES,
-    CharacterizeTask,
     FitOptions,
-    LogCoefficients,
-    MaterialOptions,
     QualityPolicy,
-    characterize_file,
-    characterize_sweep,
     check_method,
     check_preload,
-    sweep_warnings,
 )
 from deformctl.characterize.quality import thresholds_help
 from deformctl.cli import _options as opt
@@ -29,6 +22,11 @@ from deformctl.cli._common import finish_sweep, translate_errors
 from deformctl.cli._summary import Quiet, RunClock
 from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
+
+if TYPE_CHECKING:  # pragma: no cover - the fits (pandas, scipy) load when the command runs
+    import pandas as pd
+
+    from deformctl.characterize.stage import LogCoefficients
 
 Preload = Annotated[
     str | None,
@@ -197,6 +195,13 @@ def characterize(
     Example: deformctl characterize squeeze.mcap -o coefficients.parquet --model auto
     """
     clock = RunClock("characterize")
+    from deformctl.characterize.stage import (
+        CharacterizeTask,
+        characterize_file,
+        characterize_sweep,
+        sweep_warnings,
+    )
+
     fit = FitOptions(
         method=check_method(method), window_s=window_s,
         preload=None if preload is None else check_preload(preload),

@@ -7,21 +7,10 @@ import os
 
 import typer
 
-from deformctl.artifacts.dataset import describe_dataset
-from deformctl.artifacts.describe import describe
 from deformctl.artifacts.io import display_name, read_input_bytes, stale_temporaries
-from deformctl.artifacts.rows import (
-    DEFAULT_ROWS,
-    artifact_rows,
-    parse_column_list,
-    parse_row_count,
-    rows_csv,
-    rows_records,
-    select_rows,
-)
+from deformctl.artifacts.row_options import DEFAULT_ROWS, parse_column_list, parse_row_count
 from deformctl.cli._common import translate_errors
 from deformctl.cli._inspect_text import render_dataset, render_text
-from deformctl.cli._rows import rows_footer, rows_text
 from deformctl.errors import UsageError
 
 
@@ -67,6 +56,11 @@ def inspect(
     """
     if as_json and as_csv:
         raise UsageError("give --json or --csv, not both")
+    from deformctl.artifacts.dataset import describe_dataset
+    from deformctl.artifacts.describe import describe
+    from deformctl.artifacts.rows import artifact_rows, rows_csv, rows_records, select_rows
+    from deformctl.cli._rows import rows_footer, rows_text
+
     limit = parse_row_count(rows)
     chosen = parse_column_list(columns)
     explicit = rows is not None or chosen is not None or as_csv or attempts

@@ -26,7 +26,6 @@ from __future__ import annotations
 from typing import Annotated, cast
 
 import typer
-from rich.console import Console
 
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli import _options as opt
@@ -58,13 +57,12 @@ from deformctl.cli._lift_start import (
     StartMargin,
     StartModel,
     StartTable,
-    check_max_force,
     report_run,
     run_summary,
     start_seed,
 )
 from deformctl.cli._scene_options import SceneHz, scene_rate
-from deformctl.cli._summary import Quiet, RunClock
+from deformctl.cli._summary import Quiet, RunClock, stderr_console
 from deformctl.errors import UsageError
 from deformctl.lift.options import (
     DEFAULT_GROWTH,
@@ -73,8 +71,8 @@ from deformctl.lift.options import (
     SearchOptions,
     SearchProtocol,
 )
-from deformctl.lift.stage import lift_catalog_files
 from deformctl.parallel import SweepOptions
+from deformctl.quantities import MAX_FORCE_N
 
 
 @translate_errors
@@ -216,16 +214,18 @@ def lift(
         protocol=cast(SearchProtocol, protocol), growth=growth, tolerance_rel=tolerance,
         max_attempts=max_attempts,
     )  # fmt: skip
-    check_max_force(max_force_n, dataset=dataset)
+    MAX_FORCE_N.check_optional(max_force_n)  # None: the catalog's or the default ceiling
     object_ids = opt.parse_object_ids(objects)
     seed = start_seed(start_model, start_table, start_interpolate, start_margin, coefficients,
                       protocol=protocol, dataset=dataset)  # fmt: skip
     epoch_ns = opt.parse_log_epoch(log_epoch)
     if dataset:
         lift_dataset(catalog, preset, log, search, epoch_ns, scene, output, sweep, object_ids,
-                     force, quiet)  # fmt: skip
+                     force, quiet, max_force_n=max_force_n)  # fmt: skip
         return
-    with progress_bar(Console(stderr=True), "lift") as progress:
+    from deformctl.lift.stage import lift_catalog_files
+
+    with progress_bar(stderr_console(), "lift") as progress:
         run = lift_catalog_files(
             catalog, factory, output=output, log=log, object_ids=object_ids, search=search,
             progress=progress, force=force, log_epoch_ns=epoch_ns, seed=seed, warn=warn,

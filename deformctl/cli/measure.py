@@ -10,12 +10,10 @@ object-catalog row instead of a squeeze log).
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
-from rich.console import Console
 
-from deformctl.catalog import MeasuredObject
 from deformctl.cli import _image_options as img
 from deformctl.cli import _measure_csv, _measure_images, _measure_rig, _measure_sim
 from deformctl.cli import _measure_csv as csvo
@@ -24,9 +22,19 @@ from deformctl.cli import _measure_sim as sq
 from deformctl.cli import _options as opt
 from deformctl.cli._common import translate_errors
 from deformctl.cli._scene_options import SceneHz
-from deformctl.cli._summary import Quiet
+from deformctl.cli._summary import Quiet, stderr_console
 from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
+
+if TYPE_CHECKING:  # pragma: no cover - rich and numpy load when a source runs
+    from deformctl.catalog import MeasuredObject
+
+
+def _object(object_id: str, weight_n: float, **kwargs: object) -> MeasuredObject:
+    from deformctl.catalog import MeasuredObject
+
+    return MeasuredObject(object_id, weight_n, **kwargs)  # type: ignore[arg-type]
+
 
 RIG, IMAGES = ("--bag", "--csv"), ("--images",)
 #: Every option that only some sources take → those sources (``--sim`` takes the sweep options).
@@ -213,7 +221,7 @@ def measure(
     flag, source = _source(bag, csv, images, sim, inputs)
     _refuse_foreign(flag, given)
     if flag == "--sim":
-        _measure_sim.run(source, sim_opts, output, force, sweep, Console(stderr=True), quiet)
+        _measure_sim.run(source, sim_opts, output, force, sweep, stderr_console(), quiet)
         return
     if flag == "--csv":
         named = csvo.ObjectFlags(
@@ -227,7 +235,7 @@ def measure(
         raise UsageError(f"{sweep.given()[0]} needs --sim or --csv")
     if object_id is None or weight_n is None:
         raise UsageError(f"{flag} needs --object-id and --weight-n")
-    obj = MeasuredObject(object_id, weight_n, size_cm=size_cm, friction_mu=friction_mu)
+    obj = _object(object_id, weight_n, size_cm=size_cm, friction_mu=friction_mu)
     if images is not None:
         _measure_images.measure_images(images, image_opts, obj, output=output, force=force)
         return

@@ -4,19 +4,10 @@ from __future__ import annotations
 
 import typer
 
-from deformctl.artifacts import Provenance, write_catalog
 from deformctl.cli._common import translate_errors
 from deformctl.cli._options import Force
 from deformctl.errors import UsageError
-from deformctl.population import (
-    DEFAULT_FRICTION_MU,
-    PAPER_POPULATION_SIZE,
-    check_population_size,
-    golden_population,
-    grip_population,
-    make_population,
-    paper_objects,
-)
+from deformctl.population_options import DEFAULT_FRICTION_MU, PAPER_POPULATION_SIZE
 
 #: The columns whose ranges are options (``--weight-n`` for ``weight_n``, ...).
 RANGE_COLUMNS = ("weight_n", "deformability_n_per_cm", "damping_ns_per_cm", "friction_mu")
@@ -86,6 +77,15 @@ def population(
 
     Example: deformctl population -n 73 --seed 0 -o population.csv
     """
+    from deformctl.artifacts import Provenance, write_catalog
+    from deformctl.population import (
+        check_population_size,
+        golden_population,
+        grip_population,
+        make_population,
+        paper_objects,
+    )
+
     check_population_size(n, "-n")  # before anything: exit 2 naming the flag
     chosen = [
         flag for flag, on in (("--golden", golden), ("--paper", paper), ("--grip", grip)) if on

@@ -21,26 +21,18 @@ from typing import Annotated, Any
 
 import typer
 
-from deformctl.artifacts import Provenance, check_output_path, read_table, write_table
-from deformctl.artifacts.dataset import read_table_any
 from deformctl.cli._common import translate_errors, warn
 from deformctl.errors import UsageError, error_context
-from deformctl.table import (
-    INDEX_COLUMNS,
-    LOOKUP_KEYS,
-    MIN_LOOKUP_ROWS,
-    QUALITY_COLUMN,
-    build_index_table,
-    format_ids,
-    interpolate,
-    keys_without_spread,
-    lookup_mapping,
-    parse_lookup,
-    validate_index_table,
-)
 
 BUILD_FORM = "deformctl table COEFFICIENTS LIFT -o INDEX"
-LOOKUP_FORM = "deformctl table INDEX --lookup " + ",".join(f"{k}=.." for k in LOOKUP_KEYS)
+
+
+def _lookup_form() -> str:
+    """``deformctl table INDEX --lookup weight_n=..,...`` (the lookup keys of
+    :mod:`deformctl.table`, which imports pandas: read when a usage error names the form)."""
+    from deformctl.table import LOOKUP_KEYS
+
+    return "deformctl table INDEX --lookup " + ",".join(f"{k}=.." for k in LOOKUP_KEYS)
 
 
 def _check_mode(
@@ -54,18 +46,18 @@ def _check_mode(
     """``"build"`` or ``"lookup"``; any other combination is a :class:`UsageError`."""
     if lookup_text is None:
         if interpolate_k is not None:
-            raise UsageError(f"--interpolate needs --lookup; use: {LOOKUP_FORM} --interpolate K")
+            raise UsageError(f"--interpolate needs --lookup; use: {_lookup_form()} --interpolate K")
         if len(inputs) != 2:
             raise UsageError(
                 f"got {len(inputs)} input(s); to build the index table use: {BUILD_FORM}; "
-                f"to look it up use: {LOOKUP_FORM}"
+                f"to look it up use: {_lookup_form()}"
             )
         if output is None:
             raise UsageError(f"building the index table needs -o/--output; use: {BUILD_FORM}")
         return "build"
     if len(inputs) != 1:
         raise UsageError(
-            f"--lookup takes exactly one index table, got {len(inputs)}: {LOOKUP_FORM}"
+            f"--lookup takes exactly one index table, got {len(inputs)}: {_lookup_form()}"
         )
     for flag, given in (
         ("-o/--output", output is not None),
@@ -86,6 +78,18 @@ def _fmt(value: object) -> str:
 
 
 def _lookup(path: str, text: str, interpolate_k: int | None, as_json: bool) -> None:
+    from deformctl.artifacts import read_table
+    from deformctl.table import (
+        INDEX_COLUMNS,
+        MIN_LOOKUP_ROWS,
+        QUALITY_COLUMN,
+        interpolate,
+        keys_without_spread,
+        lookup_mapping,
+        parse_lookup,
+        validate_index_table,
+    )
+
     query = parse_lookup(text)  # before reading: a bad --lookup is a usage error (exit 2)
     index = read_table(
         path,
@@ -200,6 +204,18 @@ def table(
         _lookup(inputs[0], lookup_text, interpolate_k, as_json)
         return
     assert output is not None
+    _build(inputs, output, allow_unconverged=allow_unconverged, allow_flagged=allow_flagged,
+           force=force)  # fmt: skip
+
+
+def _build(
+    inputs: list[str], output: str, *, allow_unconverged: bool, allow_flagged: bool, force: bool
+) -> None:
+    """Build mode: join, write ``output`` and say what was kept."""
+    from deformctl.artifacts import Provenance, check_output_path, write_table
+    from deformctl.artifacts.dataset import read_table_any
+    from deformctl.table import QUALITY_COLUMN, build_index_table, format_ids
+
     coefficients_path, lift_path = inputs
     if output in (coefficients_path, lift_path) and output != "-":
         raise UsageError(f"output {output} is also an input")

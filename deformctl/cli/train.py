@@ -5,18 +5,19 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
-from deformctl.artifacts import Provenance, atomic_output, check_output_path, read_table
 from deformctl.artifacts.io import committed_together, is_stdio
 from deformctl.cli._common import translate_errors
 from deformctl.cli._options import Force
+from deformctl.cli._summary import Quiet, RunClock
 from deformctl.errors import UsageError
-from deformctl.population import PAPER_TRAIN_SIZE as DEFAULT_TRAIN_SIZE
+from deformctl.population_options import PAPER_TRAIN_SIZE as DEFAULT_TRAIN_SIZE
+
+if TYPE_CHECKING:  # pragma: no cover - rich loads when the command runs
+    from rich.table import Table
 
 #: Row labels of the printed table, keyed by the metrics entries of :func:`train_model`.
 PREDICTORS = (
@@ -37,6 +38,8 @@ def _num(value: Any, fmt: str) -> str:
 
 def metrics_table(report: dict[str, Any]) -> Table:
     """The rich table of max / median relative error, MAE and R² per predictor and split."""
+    from rich.table import Table
+
     hp = report["hyperparameters"]
     form = report.get("form", "paper")
     calibration = report.get("n_calibration") or 0
@@ -146,6 +149,7 @@ def train(
         100_000, "--max-parameters", min=1, help="Refuse a network with more weights than this."
     ),
     force: Force = False,
+    quiet: Quiet = False,
 ) -> None:
     """Train Pipeline(StandardScaler, MLPRegressor) on an index table and save it with skops.
 
@@ -171,8 +175,11 @@ def train(
       deformctl train grip-index.parquet -o grip.skops --train-size 250 \\
           --calibration-size 150 --note sim_preset=paper
     """
+    clock = RunClock("train")
     # deferred: scikit-learn and skops take seconds to import and only training needs them
+    from deformctl.artifacts import Provenance, atomic_output, check_output_path, read_table
     from deformctl.artifacts.model import save_model
+    from deformctl.table import flagged_rows
     from deformctl.train import model_metadata, parse_hidden, train_model, train_report
 
     sizes = None if hidden is None else parse_hidden(hidden, max_parameters=max_parameters)
@@ -213,7 +220,17 @@ def train(
             with atomic_output(metrics, force=force, binary=False) as tmp:
                 tmp.write_text(json.dumps(report, indent=2, allow_nan=False) + "\n")
 
-    # With --metrics - the JSON owns stdout; the table goes to stderr.
+    print_report(report, metrics)
+    written = [output, *([metrics] if metrics and not is_stdio(metrics) else [])]
+    clock.finish(done=len(table), flagged=flagged_rows(table), failed=0, quiet=quiet,
+                 output=", ".join(written))  # fmt: skip
+
+
+def print_report(report: dict[str, Any], metrics: str | None) -> None:
+    """The metrics table, the coverage lines and the warning of a network that did not
+    converge; with ``--metrics -`` the JSON owns stdout and these go to stderr."""
+    from rich.console import Console
+
     console = Console(
         file=sys.stderr if metrics is not None and is_stdio(metrics) else sys.stdout,
         highlight=False,
@@ -227,7 +244,3 @@ def train(
             "the metrics above are what it reached",
             err=True,
         )
-    typer.echo(
-        f"wrote {output}" + (f" and {metrics}" if metrics and not is_stdio(metrics) else ""),
-        err=True,
-    )

@@ -57,7 +57,12 @@ from deformctl.grip.inputs import (  # their home; re-exported for predict and t
     input_problems,
     input_rule,
 )
-from deformctl.grip.sanity import implausible, implausible_line, output_problem
+from deformctl.grip.sanity import (
+    implausible,
+    implausible_line,
+    output_problem,
+    target_ratio_range,
+)
 from deformctl.quantities import (
     COVERAGE,
     FRICTION_MU,
@@ -352,6 +357,10 @@ class Predictor:
             and not (isinstance(scale_index, int) and 0 <= scale_index < len(features))
         ):
             raise InputDataError("the numpy export's scale_index is out of range", path=path)
+        try:
+            target_ratio_range(meta)  # read on every prediction (grip.sanity)
+        except (TypeError, ValueError):
+            raise InputDataError("the model's target range is malformed", path=path) from None
         if mu is not None:  # μ's one rule, as a value read from a file
             FRICTION_MU.check_data(mu, where="the model's training objects", path=path)
         corr = exp.get("correction")
@@ -591,8 +600,9 @@ class Predictor:
         window_ok, line = _window(name, lift, upper, safe)
         if line:
             warnings.append(line)
-        odd = bool(implausible(np.array([lift]), np.array([f_w]))[0])
-        warnings += [implausible_line(name, lift, f_w)] if odd else []
+        targets = target_ratio_range(self.metadata)
+        odd = bool(implausible(np.array([lift]), np.array([f_w]), targets)[0])
+        warnings += [implausible_line(name, lift, f_w, targets)] if odd else []
         return Estimate(
             lift_force_n=lift,
             f_w_n=f_w,
@@ -705,8 +715,11 @@ class Predictor:
             window_ok[i], line = _window(str(labels[i]), lift[i], upper[i], safe[i])
             if line:
                 warnings.append(line)
-        odd = implausible(lift, f_w)
-        warnings += [implausible_line(str(labels[i]), lift[i], f_w[i]) for i in np.flatnonzero(odd)]
+        targets = target_ratio_range(self.metadata)
+        odd = implausible(lift, f_w, targets)
+        warnings += [
+            implausible_line(str(labels[i]), lift[i], f_w[i], targets) for i in np.flatnonzero(odd)
+        ]
         return Estimates(
             names=labels,
             lift_force_n=lift,

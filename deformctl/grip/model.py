@@ -50,6 +50,7 @@ from deformctl.model import (
     DEFAULT_MAX_ITER,
     DEFAULT_SOLVER,
     DEFAULT_TOL,
+    scaled_mlp,
 )
 from deformctl.physics import rigid_grip_force_n
 
@@ -139,8 +140,8 @@ def make_grip_model(
     random_state: int = 0,
 ) -> GripForceRegressor:
     """An unfitted grip model: ``GripForceRegressor(Pipeline(StandardScaler, MLP))``."""
-    mlp = MLPRegressor(
-        hidden_layer_sizes=tuple(hidden),
+    core = scaled_mlp(
+        hidden=hidden,
         activation=activation,
         solver=solver,
         alpha=alpha,
@@ -148,4 +149,4 @@ def make_grip_model(
         tol=tol,
         random_state=random_state,
     )
-    return GripForceRegressor(Pipeline([("scale", StandardScaler()), ("mlp", mlp)]))
+    return GripForceRegressor(core)

@@ -11,8 +11,9 @@
   :mod:`deformctl.lift.runners.sim`: the built-in simulator (``sim_runner_factory``), its sweep
   task and ``lift_sweep``.
 
-Only the search is imported with the package: the stage and the runners import the artifact
-layer, which sits below every stage.
+The search's names load on first use (PEP 562), so importing the package or one of its light
+modules (``deformctl.lift.options``, which the command line's help reads) imports neither the
+search's numpy nor the stage and the runners (the artifact layer, below every stage).
 
 Example:
     >>> from deformctl.series import TrialOutcome
@@ -24,5 +25,51 @@ Example:
 
 from __future__ import annotations
 
-from deformctl.lift.search import *  # noqa: F403 - the package's face is the search
-from deformctl.lift.search import __all__ as __all__
+from typing import TYPE_CHECKING
+
+from deformctl.lazy import lazy_exports
+
+if TYPE_CHECKING:  # the names below, for type checkers; at run time they load on first use
+    from deformctl.lift.search import (
+        DEFAULT_GROWTH,
+        DEFAULT_MAX_ATTEMPTS,
+        DEFAULT_START_MARGIN,
+        DEFAULT_TOLERANCE_REL,
+        PROTOCOLS,
+        AttemptError,
+        LiftAttempt,
+        LiftSearchResult,
+        RigSearchAbortedError,
+        SearchAbortedError,
+        SearchOptions,
+        SearchProtocol,
+        TrialRunner,
+        find_min_lift_force,
+        find_min_lift_force_seeded,
+        rigid_grip_force_n,
+        validate_start_margin,
+    )
+
+#: The search's public names (:mod:`deformctl.lift.search`), the package's face.
+__all__ = [
+    "DEFAULT_GROWTH",
+    "DEFAULT_MAX_ATTEMPTS",
+    "DEFAULT_START_MARGIN",
+    "DEFAULT_TOLERANCE_REL",
+    "PROTOCOLS",
+    "AttemptError",
+    "LiftAttempt",
+    "LiftSearchResult",
+    "RigSearchAbortedError",
+    "SearchAbortedError",
+    "SearchOptions",
+    "SearchProtocol",
+    "TrialRunner",
+    "find_min_lift_force",
+    "find_min_lift_force_seeded",
+    "rigid_grip_force_n",
+    "validate_start_margin",
+]
+
+
+__getattr__, __dir__ = lazy_exports(globals(), dict.fromkeys(__all__, "deformctl.lift.search"))

@@ -23,10 +23,10 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, overload
+from typing import Any, cast, overload
 
-from deformctl.errors import InputDataError, UsageError
-from deformctl.plausibility import MAX_LIFT_RATIO
+from deformctl.errors import InputDataError
+from deformctl.quantities import MAX_FORCE_N, MAX_LIFT_RATIO
 
 __all__ = [
     "CEILING_COLUMN",
@@ -69,22 +69,17 @@ class ForceCeiling:
 
 
 @overload
-def validate_max_force(value: None, what: str) -> None: ...
+def validate_max_force(value: None, what: str = ...) -> None: ...
 @overload
-def validate_max_force(value: float, what: str) -> float: ...
-def validate_max_force(value: Any, what: str) -> float | None:
-    """``value`` as a ceiling, N: a finite number > 0 (None passes: no ceiling given).
+def validate_max_force(value: float, what: str = ...) -> float: ...
+def validate_max_force(value: Any, what: str = MAX_FORCE_N.flag) -> float | None:
+    """``value`` as a ceiling, N, under the one rule of :data:`~deformctl.quantities.MAX_FORCE_N`
+    (a finite number > 0; None passes: no ceiling given).
 
     Raises:
         UsageError: it is not (``what`` names the flag; exit 2).
     """
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise UsageError(f"{what} must be a finite number > 0 N, got {value!r}")
-    if not (math.isfinite(value) and value > 0):
-        raise UsageError(f"{what} must be a finite number > 0 N, got {value!r}")
-    return float(value)
+    return cast(float | None, MAX_FORCE_N.check_optional(value, label=what))
 
 
 def _number(value: Any) -> float | None:
@@ -117,27 +112,20 @@ def force_ceiling(
         path: the catalog's name, for messages.
 
     Raises:
-        InputDataError: the catalog's ``max_force_n`` for the object is not a finite number > 0
-            (exit 65, naming the object).
+        InputDataError: the catalog's ``max_force_n`` for the object breaks the rule of
+            :data:`~deformctl.quantities.MAX_FORCE_N` (exit 65, naming the object).
     """
     row = row or {}
     if CEILING_COLUMN in row:
         raw = row[CEILING_COLUMN]
-        value = _number(raw)
-        if value is not None:
-            if not (math.isfinite(value) and value > 0):
-                raise InputDataError(
-                    f"object {object_id!r}: {CEILING_COLUMN} must be a finite number > 0 N, "
-                    f"got {raw!r}",
-                    path=path,
-                )
-            return ForceCeiling(value, "catalog")
         if raw is not None and not (isinstance(raw, float) and math.isnan(raw)):
-            raise InputDataError(
-                f"object {object_id!r}: {CEILING_COLUMN} must be a finite number > 0 N, "
-                f"got {raw!r}",
-                path=path,
-            )
+            value = _number(raw)
+            where = f"object {object_id!r}"
+            if value is None:  # not a number at all: the rule's words, with the text given
+                raise InputDataError(
+                    f"{where}: {CEILING_COLUMN} {MAX_FORCE_N.problem(raw)}", path=path
+                )
+            return ForceCeiling(MAX_FORCE_N.check_data(value, where=where, path=path), "catalog")
     if max_force_n is not None:
         return ForceCeiling(validate_max_force(max_force_n, "--max-force-n"), "--max-force-n")
     ceiling = ForceCeiling(DEFAULT_CEILING_RATIO * f_w_n, "default")

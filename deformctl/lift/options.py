@@ -26,6 +26,7 @@ DEFAULT_TOLERANCE_REL = 0.005  #: refine stops when (high - low) / high <= 0.5 %
 DEFAULT_MAX_ATTEMPTS = 50  #: covers F_w * 1.2**40 (about 1500 x F_w) plus the bisection
 #: seeded: the first attempt is at the predicted L_f times this (chosen by measurement:
 #: ``bench/bench_seeded.py``, docs/guide "Starting from the model's prediction").
+DEFAULT_RIG_TIMEOUT_S = 60.0  #: the longest one rig attempt may take, s (``lift --rig-timeout``)
 DEFAULT_START_MARGIN = 1.005
 
 

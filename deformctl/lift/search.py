@@ -93,7 +93,7 @@ from deformctl.lift.options import (
     SearchOptions,
     SearchProtocol,
 )
-from deformctl.quantities import FRICTION_MU, START_MARGIN, WEIGHT_N
+from deformctl.quantities import FRICTION_MU, MAX_FORCE_N, START_MARGIN, WEIGHT_N
 from deformctl.reprs import short_repr
 from deformctl.series import LiftAttempt, TrialOutcome
 
@@ -327,12 +327,8 @@ def _validate(
     *, weight_n: float, friction_mu: float, object_id: str, max_force_n: float = math.inf
 ) -> None:
     """The object's W and μ under their rules (:mod:`deformctl.quantities`), and its ceiling."""
-    if isinstance(max_force_n, bool) or not (
-        isinstance(max_force_n, int | float) and max_force_n > 0
-    ):
-        raise UsageError(
-            f"object {object_id!r}: force ceiling must be a number > 0 N, got {max_force_n!r}"
-        )
+    if not (isinstance(max_force_n, float) and max_force_n == math.inf):  # inf: no ceiling
+        MAX_FORCE_N.check(max_force_n, label=f"object {object_id!r}: max_force_n")
     WEIGHT_N.check(weight_n, label=f"object {object_id!r}: weight_n")
     FRICTION_MU.check(friction_mu, label=f"object {object_id!r}: friction_mu")
 

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from deformctl.characterize.rupture import Phase
+from deformctl.characterize.options import Phase
 from deformctl.errors import DeformctlError, InputDataError, UsageError
 from deformctl.measure.csv_columns import ColumnRole, column_roles, describe_roles
 from deformctl.measure.csv_options import CsvOptions
@@ -59,13 +59,9 @@ from deformctl.measure.recording import (
 )
 from deformctl.measure.segment import _detection_window_s, _to_squeezes
 from deformctl.plausibility import (
-    DOUBTFUL_PEAK_FORCE_N,
-    MAX_COMPRESSION_M,
     MAX_PEAK_FORCE_N,
-    MAX_RATE_HZ,
-    MIN_PEAK_COMPRESSION_M,
-    MIN_PEAK_FORCE_N,
-    MIN_UNSTATED_RATE_HZ,
+    SUGGESTED_UNITS,
+    Reading,
     check_peak_compression,
     check_peak_force,
     check_sample_rate,
@@ -82,12 +78,6 @@ from deformctl.units import GIB, NS_PER_S, UNITS
 TIME_UNITS_S: dict[str, float] = {k.lower(): u.si for k, u in UNITS["time"].items()}
 FORCE_UNITS_N: dict[str, float] = {k.lower(): u.si for k, u in UNITS["force"].items()}
 LENGTH_UNITS_M: dict[str, float] = {k.lower(): u.si for k, u in UNITS["length"].items()}
-#: The units a hint may suggest: the slips of a factor 10³ (an imperial unit is not a slip).
-SUGGESTED_UNITS: dict[str, dict[str, float]] = {
-    "time": {"s": 1.0, "ms": 1e-3, "µs": 1e-6},
-    "force": {"N": 1.0, "kN": 1e3, "mN": 1e-3},
-    "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "µm": 1e-6},
-}
 #: A CSV time column whose first value (in s, after ``--units``) is at least this is Unix time
 #: (2000-01-01T00:00:00Z): the squeeze log keeps those times as its ``log_time``.
 ABSOLUTE_TIME_MIN_S = 946_684_800.0
@@ -322,7 +312,7 @@ def _read(
         if found is not None:
             defects.append(found)
     rate_hz = _rate_hz(time_s)
-    defects += _unit_doubts(rate_hz, force_n, compression_m, roles, pos_role)
+    defects += _unit_doubts(rate_hz, force_n, compression_m, roles, pos_role, name)
     warnings.extend(d.text for d in defects)
     absolute = float(time_s[0]) >= ABSOLUTE_TIME_MIN_S
     squeezes, ruptures = _to_squeezes(
@@ -445,38 +435,31 @@ def _unit_doubts(
     compression_m: FloatArray,
     roles: Mapping[str, ColumnRole],
     pos_role: str,
+    where: str,
 ) -> list[Defect]:
     """The two-sided plausibility flags (:func:`deformctl.plausibility.unit_doubts`), each
-    line naming the column and the unit that would make its values plausible."""
-    scale = {"time": roles["time"], "force": roles["force"], "length": roles[pos_role]}
-    targets = {"time": (lambda dt: 1.0 / dt, 1000.0), "force": (lambda f: f, 10.0),
-               "length": (lambda m: m, compression_target_m(None))}  # fmt: skip
-    oks = {
-        "time": lambda hz: MIN_UNSTATED_RATE_HZ <= hz <= MAX_RATE_HZ,
-        "force": lambda f: MIN_PEAK_FORCE_N <= f <= DOUBTFUL_PEAK_FORCE_N,
-        "length": lambda m: MIN_PEAK_COMPRESSION_M <= m <= MAX_COMPRESSION_M,
-    }
+    line naming the column and the unit that would make its values plausible.
 
-    def suggest(kind: str, value: float) -> str | None:
-        to_value, target = targets[kind]
-        unit = suggest_unit(
-            value / scale[kind].unit.si, SUGGESTED_UNITS[kind], to_value=to_value,
-            ok=oks[kind], target=target,
-        )  # fmt: skip
-        return None if unit == scale[kind].unit.name else unit
+    Raises:
+        InputDataError: a doubtful value no recognised unit makes plausible (exit 65).
+    """
+
+    def reading(role: ColumnRole) -> Reading:
+        stated = role.unit_from != "default"
+        return Reading(f"column {role.name!r}", role.unit.name, role.unit.si, stated)
 
     doubts = unit_doubts(
         rate_hz=rate_hz,
-        time_unit_stated=roles["time"].unit_from != "default",
         peak_force_n=float(np.max(np.abs(force_n))),
         peak_compression_m=float(np.max(compression_m)),
-        suggest=suggest,
+        readings={
+            "time": reading(roles["time"]),
+            "force": reading(roles["force"]),
+            "length": reading(roles[pos_role]),
+        },
+        path=where,
     )
-    column = {"time_unit_doubtful": "time", "force_unit_doubtful": "force"}
-    return [
-        Defect(flag, f"column {roles[column.get(flag, pos_role)].name!r}: {line}", numbers)
-        for flag, line, numbers in doubts
-    ]
+    return [Defect(flag, line, numbers) for flag, line, numbers in doubts]
 
 
 def _check_compression(

@@ -20,7 +20,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from deformctl.characterize.rupture import Phase, check_phase
+from deformctl.characterize.options import Phase, check_phase
 from deformctl.errors import UsageError
 from deformctl.quantities import (
     FORCE_THRESHOLD_FRAC,

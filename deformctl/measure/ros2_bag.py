@@ -15,7 +15,9 @@ dropped.
 **Checks.** Every channel's encoding, message definition and every decoded message are checked
 against the fields the reader needs; a recording whose sample rate, peak force, peak compression,
 force axis or compression sign a unit, axis or sign mistake explains is refused with the likely
-fix (:mod:`deformctl.plausibility`).
+fix (:mod:`deformctl.plausibility`); one that a unit slip may explain but that can be right (a
+peak force below 50 mN or above 3 kN, a peak compression below 20 µm, a secant stiffness above
+5000 N/cm) is flagged with a warning line naming the unit (``recording_flags``).
 """
 
 from __future__ import annotations
@@ -33,8 +35,9 @@ import zstandard
 
 from deformctl.artifacts.io import note_input
 from deformctl.artifacts.mcap.integrity import complete_prefix, locate_damage, tail_problem
-from deformctl.characterize.rupture import Phase
+from deformctl.characterize.options import Phase
 from deformctl.errors import InputDataError, MissingInputError, UsageError
+from deformctl.measure.defects import Defect
 from deformctl.measure.options import (
     DEFAULT_FORCE_THRESHOLD_FRAC,
     DEFAULT_MIN_GAP_S,
@@ -58,10 +61,12 @@ from deformctl.measure.segment import (
     _to_squeezes,
 )
 from deformctl.plausibility import (
+    Reading,
     check_force_axis,
     check_peak_compression,
     check_peak_force,
     check_sample_rate,
+    unit_doubts,
 )
 from deformctl.series import FloatArray, SqueezeSeries
 from deformctl.units import NS_PER_S
@@ -556,6 +561,20 @@ def read_bag(
         path=where,
         hint="is the position in metres? (ROS uses metres; convert a joint in mm or rad)",
     )
+    doubts = [
+        Defect(flag, line, numbers)
+        for flag, line, numbers in unit_doubts(
+            rate_hz=_rate_hz(time_s),
+            peak_force_n=float(np.max(force_n)),
+            peak_compression_m=float(np.max(compression_m)),
+            readings={  # ROS messages are SI; the stamps are ns (the time unit is known)
+                "time": Reading(f"topic {wrench_topics[0]!r}", "s", 1.0),
+                "force": Reading(f"topic {wrench_topics[0]!r}", "N", 1.0),
+                "length": Reading(f"topic {position_topic!r}", "m", 1.0),
+            },
+            path=where,
+        )
+    ]
     position_rate_hz = _rate_hz(pos_t)
     squeezes, ruptures = _to_squeezes(
         time_s,
@@ -575,7 +594,9 @@ def read_bag(
         source=source.kind,
         phase=phase,
         ruptures=tuple(ruptures),
-        warnings=tuple(notes),
+        flags=tuple(d.flag for d in doubts),
+        defects=tuple(d.as_dict() for d in doubts),
+        warnings=(*notes, *(d.text for d in doubts)),
     )
 
 

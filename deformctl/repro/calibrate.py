@@ -25,12 +25,16 @@ Method:
 Command line (``make calibrate``)::
 
     python -m deformctl.repro.calibrate [--write datasets/calibration/paper.json] [--jobs 2]
-        [--convergence]
+        [--convergence] [--quiet]
 
 prints each point's L_f ours vs paper, the worst error and the leave-one-out worst error, and with
 ``--write`` stores the fitted values (and everything printed) in the file the ``paper`` preset
 reads. ``--convergence`` also reruns the 13 points at half the time step and on a finer lattice
-(13 particles per side) and prints how far each L_f moves.
+(13 particles per side) and prints how far each L_f moves. It ends with the commands' summary
+line (:mod:`deformctl.summary`; ``--quiet`` drops it): the points done, the points flagged
+(:func:`flagged_points`: left out of the fit, the refit misses them by more than the worst
+in-sample error; a warning names them) and 0 failed (a search that does not converge stops the
+run with an error).
 """
 
 from __future__ import annotations
@@ -56,6 +60,7 @@ from deformctl.physics import damping_ratio, rigid_grip_force_n
 from deformctl.presets import CALIBRATED_PARAMETERS, PAPER_FIXED, SimPreset, paper_preset
 from deformctl.resources import dataset_path
 from deformctl.sim.objects import ObjectSpec
+from deformctl.summary import RunClock
 from deformctl.units import GRAVITY_M_S2
 from deformctl.version import __version__
 
@@ -409,13 +414,29 @@ def format_record(record: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def flagged_points(record: dict[str, Any]) -> list[str]:
+    """The points the fit leans on: left out, the refit misses them by more than the fit misses
+    any point (its leave-one-out error is above the in-sample worst error), each as
+    ``label (error)``."""
+    worst = record["worst_error"]
+    return [
+        f"{q['point']} ({q['error']:+.1%})"
+        for q in record["leave_one_out"]["points"]
+        if abs(q["error"]) > worst
+    ]
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m deformctl.repro.calibrate``: see the module docstring."""
+    clock = RunClock("calibrate")
     parser = argparse.ArgumentParser(prog="python -m deformctl.repro.calibrate")
     parser.add_argument("--write", metavar="FILE", help="write the calibration record here")
     parser.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
     parser.add_argument(
         "--convergence", action="store_true", help="also rerun at dt/2 and 13 particles per side"
+    )
+    parser.add_argument(
+        "--quiet", "-q", action="store_true", help="no summary line at the end (warnings stay)"
     )
     args = parser.parse_args(argv)
     try:
@@ -426,7 +447,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(format_record(record))
     if args.write:
         Path(args.write).write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
-        print(f"wrote {args.write}")
+    flagged = flagged_points(record)
+    if flagged:
+        print(f"warning: left out of the fit, {len(flagged)} point(s) miss by more than the "
+              f"worst in-sample error {record['worst_error']:.1%}: {', '.join(flagged)}",
+              file=sys.stderr)  # fmt: skip
+    clock.finish(done=len(record["points"]), flagged=len(flagged), failed=0,
+                 output=args.write or "stdout", quiet=args.quiet)  # fmt: skip
     return 0
 
 

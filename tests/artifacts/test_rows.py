@@ -12,15 +12,8 @@ import pandas as pd
 import pytest
 
 from deformctl.artifacts import read_catalog, read_table, write_lift_log
-from deformctl.artifacts.rows import (
-    DEFAULT_ROWS,
-    artifact_rows,
-    parse_column_list,
-    parse_row_count,
-    rows_csv,
-    rows_records,
-    select_rows,
-)
+from deformctl.artifacts.row_options import DEFAULT_ROWS, parse_column_list, parse_row_count
+from deformctl.artifacts.rows import artifact_rows, rows_csv, rows_records, select_rows
 from deformctl.artifacts.schema import load_table_spec
 from deformctl.errors import SchemaError, UsageError
 from deformctl.series import LiftAttempt, TrialOutcome

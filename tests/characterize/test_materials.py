@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from deformctl.characterize import fit_object, synthetic_law_squeeze
-from deformctl.characterize.laws import MODELS
+from deformctl.characterize.material_options import MODELS
 
 DRAWS = int(os.environ.get("DEFORMCTL_MATERIAL_DRAWS", "20"))
 SQUEEZES = 3

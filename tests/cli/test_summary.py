@@ -132,3 +132,34 @@ def test_characterize_counts_its_flagged_objects(tmp_path: Path) -> None:
         quiet = runner.invoke(app, ["characterize", str(log), "-o", str(out), "--force", "-q"])
         assert quiet.exit_code == 0
         assert quiet.stderr.strip().splitlines() == warnings  # warnings stay, the line goes
+
+
+def test_train_counts_the_flagged_rows_it_learns_from(tmp_path: Path) -> None:
+    # an index table kept with `table --allow-flagged` / `--allow-unconverged` carries rows whose
+    # coefficients or search are doubtful: train's line counts them; a clean table flags none
+    from deformctl.artifacts import Provenance, write_table
+    from deformctl.repro.synthetic import synthetic_index_table
+
+    clean = synthetic_index_table(n=12)
+    clean["quality"] = "ok"
+    doubtful = clean.copy()
+    doubtful.loc[3, "quality"] = "low_r2"
+    doubtful.loc[7, "converged"] = False
+    for table, flagged in ((clean, "0"), (doubtful, "2")):
+        index, model = tmp_path / f"index{flagged}.parquet", tmp_path / f"m{flagged}.skops"
+        write_table(table, index, "index_table", provenance=Provenance.from_invocation(argv=["t"]))
+        args = ["train", str(index), "-o", str(model), "--train-size", "8"]
+        result = runner.invoke(app, args)
+        assert result.exit_code == 0, result.stderr
+        m = LINE.match(result.stderr.strip().splitlines()[-1])
+        assert m is not None, result.stderr
+        assert (m["cmd"], m["done"], m["flagged"], m["failed"], m["out"]) == (
+            "train",
+            "12",
+            flagged,
+            "0",
+            str(model),
+        )
+    quiet = runner.invoke(app, [*args, "--force", "--quiet"])  # the doubtful table again
+    assert quiet.exit_code == 0, quiet.stderr
+    assert "object(s) done" not in quiet.stderr

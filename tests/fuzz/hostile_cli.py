@@ -10,7 +10,14 @@ and runs the command that reads it, in process (typer's runner). A case is **cle
 * a failure prints exactly one ``error:`` line (warnings may precede it), no traceback, and
   leaves no output file behind (``lift`` keeps its attempts: exit 1 only);
 * a success prints no force that is not a force: an interpolated or predicted L_f is finite and
-  > 0, and one outside [F_w, 10 F_w] carries ``prediction_implausible``.
+  > 0, and one outside [F_w, 10 F_w] carries ``prediction_implausible``;
+* a recording with a unit slip of 10³ (a column scaled, or its label changed) that ``measure``
+  accepts carries a warning naming the unit that would make it plausible (issue 34 point 1).
+
+The later kinds (issue 34 points 1-3 and 7): a CSV export with a unit slip (``measure --csv``),
+an index whose rig rows ``adapt`` must refuse or use, a hostile ``--max-force-n`` on every
+``lift`` output (single file and ``-o DIR/``), and a model whose stored training ranges or
+target range are damaged (``predict``).
 
 Usage: ``python -m tests.fuzz.hostile_cli --cases 600 --seed 0`` (``make fuzz``); it prints the
 clean fraction and every unclean case, and exits 1 when one is unclean.
@@ -33,7 +40,10 @@ import numpy as np
 import pandas as pd
 
 REPO = Path(__file__).resolve().parents[2]
-KINDS = ("catalog", "squeeze_log", "bag", "tables", "index", "model")
+KINDS = (
+    "catalog", "squeeze_log", "bag", "tables", "index", "model",
+    "recording", "rig_rows", "max_force", "model_meta",
+)  # fmt: skip
 VALUES = ("1e308", "-20", "0", "nan", "inf", "-1e-300", "abc", "")
 
 
@@ -43,6 +53,7 @@ class Case:
     argv: list[str]
     output: Path | None
     check: Callable[[str], str | None] | None = None  # stdout -> problem, for exit 0
+    needs_warning: bool = False  # exit 0 must carry a "plausible ..." warning (a unit slip)
 
 
 def _write_base(root: Path) -> dict[str, Path]:
@@ -85,6 +96,16 @@ def _write_base(root: Path) -> dict[str, Path]:
     from deformctl.grip.fast import resolve_model_path
 
     shutil.copy(resolve_model_path("grip"), base["model"])
+    base["recording"] = root / "export.csv"
+    tr = np.arange(0.0, 2.0, 1.0 / 500.0)
+    dr = 0.003 * np.sin(np.pi * tr / 2.0) ** 2  # 3 mm, a 10 N Kelvin-Voigt squeeze
+    fr = (
+        2000.0 * dr
+        + 30.0 * np.gradient(dr, tr)
+        + 0.01 * np.random.default_rng(0).normal(size=tr.size)
+    )
+    rows = [f"{a:.4f},{b:.6f},{c * 1e3:.6f}" for a, b, c in zip(tr, fr, dr, strict=True)]
+    base["recording"].write_text("Time (s),Load (N),Compression (mm)\n" + "\n".join(rows) + "\n")
     return base
 
 
@@ -161,9 +182,104 @@ def _prediction_ok(stdout: str) -> str | None:
     return None
 
 
+#: A recording's unit slips: (what, column, scale of the values, header text replaced, or None,
+#: whether ``measure`` must warn or refuse). ``lbf`` relabels N values as lbf: 44 N, plausible.
+SLIPS: tuple[tuple[str, int, float, tuple[str, str] | None, bool], ...] = (
+    ("force in kN read as N", 1, 1e-3, None, True),
+    ("force in mN read as N", 1, 1e3, None, True),
+    ("compression in m under (mm)", 2, 1e-3, None, True),
+    ("compression in um under (mm)", 2, 1e3, None, True),
+    ("N values under [kN]", 1, 1.0, ("Load (N)", "Load [kN]"), True),
+    ("N values under (mN)", 1, 1.0, ("Load (N)", "Load (mN)"), True),
+    ("mm values under (m)", 2, 1.0, ("Compression (mm)", "Compression (m)"), True),
+    ("s values under (ms)", 0, 1.0, ("Time (s)", "Time (ms)"), True),
+    ("s values under (us)", 0, 1.0, ("Time (s)", "Time (us)"), True),
+    ("N values under [lbf]", 1, 1.0, ("Load (N)", "Load [lbf]"), False),
+    ("force x 1e-6", 1, 1e-6, None, True),
+    ("force x 1e-9", 1, 1e-9, None, True),
+)
+
+
+def _recording_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Generator) -> Case:
+    what, column, scale, relabel, warns = SLIPS[int(rng.integers(len(SLIPS)))]
+    lines = base["recording"].read_text().splitlines()
+    if relabel is not None:
+        lines[0] = lines[0].replace(*relabel)
+    if scale != 1.0:
+        body = []
+        for line in lines[1:]:
+            cells = line.split(",")
+            cells[column] = f"{float(cells[column]) * scale:.12g}"
+            body.append(",".join(cells))
+        lines = [lines[0], *body]
+    path = work / f"export{i}.csv"
+    path.write_text("\n".join(lines) + "\n")
+    out = work / f"out{i}.mcap"
+    argv = ["measure", "--csv", str(path), "--weight-n", "1", "--object-id", "A", "-o", str(out)]
+    return Case(f"recording {what}: measure", argv, out, needs_warning=warns)
+
+
+def _rig_rows_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Generator) -> Case:
+    from deformctl.artifacts import write_table
+    from deformctl.grip.fast import Predictor
+
+    frame = pd.read_parquet(base["index"]).copy()
+    grip = Predictor.load(str(base["model"]))
+    cols = [frame[c].to_numpy(float) for c in grip.features]
+    frame["lift_force_n"] = 1.2 * grip.predict_many(*cols).lift_force_n
+    frame["source"], frame["converged"] = "rig", True
+    what, frame = _frame_damage(frame, rng)
+    path = work / f"rig{i}.parquet"
+    try:
+        write_table(frame, path, "index_table", provenance=None)
+    except Exception:  # the writer refuses it: a foreign writer does not
+        frame.to_parquet(path)
+    out = work / f"adapted{i}.skops"
+    argv = ["adapt", str(base["model"]), str(path), "-o", str(out)]
+    return Case(f"rig rows {what}: adapt", argv, out)
+
+
+def _max_force_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Generator) -> Case:
+    value = str(rng.choice([v for v in VALUES if v != "1e308"] + ["-inf", "1e-400", "5 N"]))
+    dataset = rng.random() < 0.5
+    out = f"{work / f'sweep{i}'}/" if dataset else str(work / f"lift{i}.parquet")
+    runner = ["--sim"] if dataset else ["--rig", "true"]
+    argv = ["lift", str(base["catalog"]), *runner, "--max-force-n", value, "-o", out]
+    return Case(f"--max-force-n {value!r} ({'DIR/' if dataset else 'file'}): lift", argv,
+                Path(out.rstrip("/")))  # fmt: skip
+
+
+def _model_meta_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Generator) -> Case:
+    from deformctl.adapt import model_file_bytes
+    from deformctl.grip.fast import read_model_metadata
+
+    meta = dict(read_model_metadata(base["model"]))
+    value = float(rng.choice([1e308, -20.0, 0.0, math.nan, math.inf, 1e-300, 1.5, 3.0]))
+    if rng.random() < 0.5:
+        low, high = meta["target_range"]["lift_ratio_f_w"]
+        pair = [value, high] if rng.random() < 0.5 else [low, value]
+        meta["target_range"] = {"lift_ratio_f_w": pair}
+        what = f"target range {pair}"
+    else:
+        ranges = dict(meta["training_range"])
+        key = sorted(ranges)[int(rng.integers(len(ranges)))]
+        ranges[key] = [ranges[key][0], value]
+        meta["training_range"] = ranges
+        what = f"training range {key} = {ranges[key]}"
+    path = work / f"model{i}.skops"
+    path.write_bytes(model_file_bytes(str(base["model"]), meta))
+    argv = ["predict", str(path), "--weight-n", "2.9", "--deformability-n-per-cm", "30",
+            "--damping-ns-per-cm", "0.47", "--friction-mu", "0.5"]  # fmt: skip
+    return Case(f"model {what}: predict", argv, None, _prediction_ok)
+
+
 def make_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Generator) -> Case:
     kind = KINDS[i % len(KINDS)]
     out = work / f"out{i}"
+    later = {"recording": _recording_case, "rig_rows": _rig_rows_case,
+             "max_force": _max_force_case, "model_meta": _model_meta_case}  # fmt: skip
+    if kind in later:
+        return later[kind](i, base, work, rng)
     if kind == "catalog":
         what, text = _csv_damage(base["catalog"].read_text(encoding="utf-8"), rng)
         path = work / f"cat{i}.csv"
@@ -229,6 +345,10 @@ def judge(case: Case, result: object) -> str | None:
         if case.output is not None and case.output.exists() and code != 1:
             return "output written on failure"
         return None
+    if case.needs_warning and not any(
+        ln.startswith("warning: ") and "plausible" in ln for ln in err.splitlines()
+    ):
+        return "a unit slip passed without a warning naming the unit"
     if case.check is not None:
         return case.check(result.stdout)  # type: ignore[attr-defined]
     return None

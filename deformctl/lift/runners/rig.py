@@ -67,6 +67,7 @@ from typing import Any, TypeGuard
 from deformctl import jsonsafe
 from deformctl.catalog import CatalogObject
 from deformctl.errors import DeformctlError, RigError, UsageError
+from deformctl.lift.options import DEFAULT_RIG_TIMEOUT_S
 from deformctl.lift.search import AttemptError, TrialRunner
 from deformctl.lift.stage import RunnerFactory
 from deformctl.quantities import FRICTION_MU, RIG_TIMEOUT_S, SIZE_CM, WEIGHT_N
@@ -92,7 +93,6 @@ __all__ = [
     "rig_runner_factory",
 ]
 
-DEFAULT_RIG_TIMEOUT_S = 60.0  #: the longest one rig attempt may take, s (``lift --rig-timeout``)
 
 #: After killing a timed-out rig's process group: how long to wait for its pipes to close, s
 #: (a descendant that started its own session keeps them open; they are then closed unread).

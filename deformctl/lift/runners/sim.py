@@ -50,6 +50,7 @@ from deformctl.lift.options import DEFAULT_SEARCH, SearchOptions
 from deformctl.lift.search import TrialRunner
 from deformctl.lift.stage import RunnerFactory, lift_catalog
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
+from deformctl.quantities import MAX_FORCE_N
 from deformctl.scene import DEFAULT_SCENE_HZ, scene_every_steps
 
 if TYPE_CHECKING:  # pragma: no cover - the simulator is imported where it runs (see below)
@@ -202,12 +203,22 @@ class LiftTask:
         log_epoch_ns: where each part's lift log begins, ns since the Unix epoch (None: the
             log writer's fixed epoch, 2000-01-01).
         scene_hz: scene frames per simulated second in the part logs (0: none).
+        max_force_n: the force ceiling of every object, N (``--max-force-n``, under the rule of
+            :data:`~deformctl.quantities.MAX_FORCE_N`); None: the catalog's ``max_force_n``, else
+            the default of :mod:`deformctl.lift.ceiling`, as for a single-file output.
+
+    Raises:
+        UsageError: ``max_force_n`` breaks its rule (exit 2).
     """
 
     preset: SimPreset
     search: SearchOptions = DEFAULT_SEARCH
     log_epoch_ns: int | None = None
     scene_hz: float = DEFAULT_SCENE_HZ
+    max_force_n: float | None = None
+
+    def __post_init__(self) -> None:
+        MAX_FORCE_N.check_optional(self.max_force_n)
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """One object's search: its lift_results row, its attempts as the payload.
@@ -216,7 +227,12 @@ class LiftTask:
             InputDataError: the object cannot be lifted or simulated (recorded as failed).
         """
         factory = sim_runner_factory(preset=self.preset, scene_hz=self.scene_hz)
-        run = lift_catalog([CatalogObject.from_row(item)], factory, search=self.search)
+        run = lift_catalog(
+            [CatalogObject.from_row(item)],
+            factory,
+            search=self.search,
+            max_force_n=self.max_force_n,
+        )
         error = run.error_message()
         return TaskOutput(
             rows=spec_rows(run.table, "lift_results"),
@@ -275,6 +291,8 @@ def lift_sweep(
     run_settings = {"runner": factory.name, **factory.settings, **task.search.as_dict()}
     if task.log_epoch_ns is not None:
         run_settings["log_epoch_ns"] = task.log_epoch_ns
+    if task.max_force_n is not None:  # a resumed run must use the same ceiling
+        run_settings["max_force_n"] = task.max_force_n
     provenance = Provenance.from_invocation([catalog_path], settings=run_settings)
     fingerprint = dataset_fingerprint(
         "lift", "lift_results", run_settings, {"catalog": input_digest(catalog_path)}
