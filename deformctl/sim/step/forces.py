@@ -2,8 +2,8 @@
 gravity and the palms' drive, as the implicit step's right-hand side, and the BDF2 predictor.
 
 The linear Kelvin loop (:func:`_element_rhs`) is the same code with or without Hunt–Crossley
-elements: a model whose ``body.law.exponent`` is not 1 branches once per call, before the loop,
-to :func:`_element_rhs_hc`.
+elements: :func:`_step_impulse` branches once per step, on ``body.law.exponent``, to it or to
+:func:`_element_rhs_hc`.
 """
 
 from __future__ import annotations
@@ -95,9 +95,6 @@ def _element_rhs(body: Body, x: FloatArray, vel: FloatArray, h: float, out: Floa
     the loop reads one constant per element and forms ``c`` and ``h k`` from it (the same
     products as the arrays would hold, so the same bits; 56 instead of 72 bytes streamed per
     element)."""
-    if body.law.exponent != 1.0:
-        _element_rhs_hc(body, x, vel, h, out)
-        return
     edges, rest, n0, k = body.edges, body.rest, body.n0, body.k
     retardation, nonlinear = body.retardation, body.nonlinear
     for e in range(edges.shape[0]):
@@ -238,7 +235,10 @@ def _step_impulse(
             x[p, a] = base_x[p, a] + q[d]
             vel[p, a] = v[d]
             fp[p, a] = 0.0
-    _element_rhs(body, x, vel, dt, fp)
+    if body.law.exponent != 1.0:
+        _element_rhs_hc(body, x, vel, dt, fp)
+    else:
+        _element_rhs(body, x, vel, dt, fp)
     fq[:] = 0.0
     for p in range(n):
         fp[p, 2] -= particle_mass[p] * gravity
