@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install test lint bench golden-spread reproduce _report calibrate examples clean model \
+.PHONY: install test lint bench golden-spread reproduce _report calibrate examples clean model hc-check \
   _grip_train _grip_eval grip-study materials scene-figure fuzz
 
 install: $(STAMP)
@@ -100,6 +100,11 @@ _report: $(R)/lift.parquet $(R)/coefficients.parquet $(R)/predictions.parquet \
   $(R)/table3_lift.parquet $(R)/paper_lift.parquet $(R)/paper_coefficients.parquet
 	$(BIN)/python -m deformctl.repro.report $(RUN) --require-max-test-error 0.05 \
 	  --require-beat-constant-ratio --require-ratio-span 1.2 1.7
+
+# The simulator's Hunt–Crossley material at the paper preset's lattice: the squeeze against the law
+# and the round trip through characterize --model hc (about a minute; the fast tests run 5^3).
+hc-check: install
+	$(BIN)/python -m bench.check_hunt_crossley
 
 # Fit the paper preset's two parameters to the paper's 13 simulated lifting forces and write them
 # to the file the preset reads (about 2 minutes on 2 cores; prints ours vs paper, the worst and

@@ -10,9 +10,12 @@ takes a :class:`CatalogObject` and its typed attributes. Three rules live here a
   quantity, :mod:`deformctl.quantities`): :meth:`CatalogObject.from_row`;
 * lifting needs F_w = W / (2 μ): :meth:`CatalogObject.f_w_n`, computed by
   :func:`rigid_grip_force_n` only;
-* simulating needs the *material values* (the simulator's ground truth for D and λ):
-  :meth:`CatalogObject.to_sim_spec`, which turns the row into the simulator's
-  :class:`~deformctl.sim.ObjectSpec` (the simulator never sees catalog column names).
+* simulating needs the *material values* (the simulator's ground truth for D and λ, and the
+  optional stiffness exponent n, 1 when absent): :meth:`CatalogObject.to_sim_spec`, which turns
+  the row into the simulator's :class:`~deformctl.sim.ObjectSpec` (the simulator never sees
+  catalog column names). With n > 1, D is the secant stiffness and λ the equivalent damping at
+  the operating force F_w (what ``characterize`` writes), and the simulator uses Hunt–Crossley
+  springs (:mod:`deformctl.sim.hunt_crossley`).
 
 The module imports nothing heavy (the simulator is imported when a spec is built), because the
 population generator, the lift search and the command line all use it.
@@ -39,6 +42,7 @@ from deformctl.quantities import (
     DAMPING_NS_PER_CM,
     FRICTION_MU,
     SIZE_CM,
+    STIFFNESS_EXPONENT,
     STIFFNESS_N_PER_CM,
     WEIGHT_N,
     Quantity,
@@ -49,6 +53,8 @@ if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported w
 
     from deformctl.sim import ObjectSpec
 
+#: The stiffness exponent n (optional, after the catalog columns; absent: 1, a linear material).
+EXPONENT_COLUMN = "material_stiffness_exponent"
 #: The catalog columns, in order; the two material columns are the simulator's ground truth.
 CATALOG_COLUMNS: tuple[str, ...] = (
     "object_id",
@@ -72,6 +78,7 @@ COLUMN_QUANTITIES: dict[str, Quantity] = {
     "friction_mu": FRICTION_MU,
     "material_stiffness_n_per_cm": STIFFNESS_N_PER_CM,
     "material_damping_ns_per_cm": DAMPING_NS_PER_CM,
+    EXPONENT_COLUMN: STIFFNESS_EXPONENT,
 }
 #: Physical bounds of each numeric column, ``(lowest, highest)``, in the column's unit (inclusive
 #: but for μ, whose 0 is excluded: :data:`deformctl.quantities.FRICTION_MU`, 0 < μ <= 3):
@@ -87,6 +94,7 @@ __all__ = [
     "BOUNDS",
     "CATALOG_COLUMNS",
     "COLUMN_QUANTITIES",
+    "EXPONENT_COLUMN",
     "MATERIAL_COLUMNS",
     "SIZE_COLUMNS",
     "CatalogObject",
@@ -147,6 +155,8 @@ class CatalogObject(Mapping[str, Any]):
         material_stiffness_n_per_cm: the simulator's ground-truth D, N/cm, or None (a real
             object).
         material_damping_ns_per_cm: the simulator's ground-truth λ, N·s/cm, or None.
+        material_stiffness_exponent: the material's stiffness exponent n in [1, 3] (1 when the
+            column is absent: linear).
     """
 
     object_id: str
@@ -155,6 +165,7 @@ class CatalogObject(Mapping[str, Any]):
     friction_mu: float
     material_stiffness_n_per_cm: float | None = None
     material_damping_ns_per_cm: float | None = None
+    material_stiffness_exponent: float = 1.0
     row: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
     @classmethod
@@ -168,8 +179,10 @@ class CatalogObject(Mapping[str, Any]):
 
         Raises:
             InputDataError: no ``object_id``, or a size, weight or friction column that is
-                missing, not a number, not finite or outside :data:`BOUNDS`; one line naming
-                the object and the column (exit 65).
+                missing, not a number, not finite or outside :data:`BOUNDS`, or a
+                ``material_stiffness_exponent`` column whose cell is not a number in [1, 3]
+                (empty and NaN included: leave the column out for a linear material); one line
+                naming the object and the column (exit 65).
         """
         raw = {str(k): v for k, v in row.items()}
         oid = _plain(raw.get("object_id"))
@@ -180,6 +193,7 @@ class CatalogObject(Mapping[str, Any]):
             size = tuple(_number(raw, c, object_id) for c in SIZE_COLUMNS)
             weight = _number(raw, "weight_n", object_id)
             mu = _number(raw, "friction_mu", object_id)
+            exponent = _number(raw, EXPONENT_COLUMN, object_id) if EXPONENT_COLUMN in raw else 1.0
         except InputDataError as err:
             raise InputDataError(err.message, path=path) from None
         material = [_plain(raw.get(c)) for c in MATERIAL_COLUMNS]
@@ -196,6 +210,7 @@ class CatalogObject(Mapping[str, Any]):
             friction_mu=mu,
             material_stiffness_n_per_cm=stiffness,
             material_damping_ns_per_cm=damping,
+            material_stiffness_exponent=exponent,
             row=raw,
         )
 
@@ -266,6 +281,7 @@ class CatalogObject(Mapping[str, Any]):
                 friction_mu=self.friction_mu,
                 stiffness_n_per_cm=stiffness,
                 damping_ns_per_cm=damping,
+                stiffness_exponent=self.material_stiffness_exponent,
             )
         except InputDataError as err:
             message = err.message if missing == [] else f"{err.message}; {needs}"

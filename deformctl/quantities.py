@@ -68,6 +68,7 @@ __all__ = [
     "SQUEEZES",
     "START_INTERPOLATE",
     "START_MARGIN",
+    "STIFFNESS_EXPONENT",
     "STIFFNESS_N_PER_CM",
     "STRAIN",
     "TOLERANCE_REL",
@@ -228,6 +229,10 @@ STIFFNESS_N_PER_CM = Quantity(
     "deformability_n_per_cm", "--deformability-n-per-cm", " N/cm", 0.01, 1e5
 )
 DAMPING_NS_PER_CM = Quantity("damping_ns_per_cm", "--damping-ns-per-cm", " N·s/cm", 0.0, 1e4)
+#: n, the material's stiffness exponent (force ∝ compressionⁿ; 1: linear, Kelvin–Voigt): the
+#: bounds of ``characterize``'s Hunt–Crossley fit (:data:`deformctl.characterize.laws.
+#: HC_EXPONENT_BOUNDS`), and what the simulator's Hunt–Crossley lattice is calibrated for.
+STIFFNESS_EXPONENT = Quantity("material_stiffness_exponent", "--stiffness-exponent", "", 1.0, 3.0)
 
 # ---------------------------------------------------------------------------- measuring
 SQUEEZES = Quantity("squeezes", "--squeezes", "", 1, integer=True)

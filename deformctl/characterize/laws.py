@@ -41,10 +41,12 @@ from collections.abc import Mapping
 import numpy as np
 
 from deformctl.errors import UsageError
+from deformctl.quantities import STIFFNESS_EXPONENT
 from deformctl.series import FloatArray
 
 #: Hunt–Crossley exponent bounds (1: linear spring; 3: the stiffest law a soft object shows).
-HC_EXPONENT_BOUNDS = (1.0, 3.0)
+#: The simulator's catalog column ``material_stiffness_exponent`` has the same rule.
+HC_EXPONENT_BOUNDS = (STIFFNESS_EXPONENT.low, STIFFNESS_EXPONENT.high)
 
 #: Each law's parameters (SI), in the order :func:`to_physical` returns them, after ``preload_n``.
 PARAMETERS: dict[str, tuple[str, ...]] = {

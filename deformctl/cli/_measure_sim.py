@@ -61,7 +61,8 @@ PeakForceN = Annotated[
         "--peak-force-n",
         metavar="F",
         help="Sim: peak force of the largest squeeze, N, for every object [default: the "
-        "strain rule, D x strain x size_x].",
+        "strain rule, D x strain x size_x; a Hunt–Crossley object: k (strain x size_x)^n, at "
+        "least 1.5 F_w].",
     ),
 ]
 Strain = Annotated[

@@ -172,12 +172,13 @@ def parse_object_ids(text: str | None) -> list[str] | None:
 # ---------------------------------------------------------------------------- sweeps
 
 Workers = Annotated[
-    int | None,
+    str,
     typer.Option(
         "--workers",
-        metavar="N",
-        help="Local worker processes: a dataset output [default: every core], or a "
-        "single-file output of measure --sim / lift --sim [default: every core from 8 objects].",
+        metavar="auto|N",
+        help="Local worker processes for a dataset output, or a single-file output of "
+        "measure --sim / lift --sim: N, or auto (a single file: the count of least measured wall "
+        "time, one process when more would not save 15 %; a dataset: every core).",
     ),
 ]
 Scheduler = Annotated[
@@ -216,7 +217,7 @@ Resume = Annotated[
 
 #: The sweep options' parameters: (parameter name, ``SweepOptions`` field, alias, default).
 _SWEEP_PARAMETERS: tuple[tuple[str, str, Any, Any], ...] = (
-    ("workers", "workers", Workers, None),
+    ("workers", "workers", Workers, "auto"),
     ("scheduler", "scheduler", Scheduler, None),
     ("connect_timeout", "connect_timeout_s", ConnectTimeout, None),
     ("partition_size", "partition_size", PartitionSize, None),

@@ -174,8 +174,8 @@ def lift(
     (--workers N local processes, or --scheduler tcp://HOST:PORT of a Dask cluster) into
     DIR/part-*.parquet with each part's attempts in DIR/_logs/; --resume completes an
     interrupted run. An object that fails is recorded in DIR/_failures/ and the rest go on.
-    A single-file output with --sim also runs on --workers N local processes (default: every
-    core from 8 objects on); the rows and attempts are the same whatever N.
+    A single-file output with --sim also runs on --workers N local processes (default auto:
+    workers only where they save time, measured); the rows and attempts are the same whatever N.
 
     With --start-model MODEL (or --start-table INDEX) each search starts at the predicted L_f ×
     --start-margin instead of at F_w, goes down (or up by --growth) until the outcome flips and
@@ -187,7 +187,7 @@ def lift(
     """
     clock = RunClock("lift")
     dataset = sweep.check(output, file_workers=True)
-    if not dataset and sweep.workers is not None and not sim:
+    if not dataset and sweep.workers_given and not sim:
         raise UsageError(
             "--workers with a single-file output needs --sim (a rig lifts one object at a time)"
         )

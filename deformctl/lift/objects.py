@@ -7,6 +7,10 @@ measured D and λ become the object's material (``material_stiffness_n_per_cm``,
 the object that was measured: what a user checks a prediction against before the rig. They are
 kept as ``deformability_n_per_cm`` and ``damping_ns_per_cm`` too, what ``--start-model``
 predicts from (:func:`deformctl.lift.seeded.object_features`), on the rig as in the simulator.
+An object whose chosen law is Hunt–Crossley (``model`` ``hc``) becomes a Hunt–Crossley material
+(``material_stiffness_exponent`` = ``hc_exponent``) with its D and λ restated at F_w = W/(2μ),
+where the catalog states them (:mod:`deformctl.sim.hunt_crossley`), whatever force
+``characterize`` stated them at.
 
 Example:
     >>> import pandas as pd
@@ -26,8 +30,9 @@ import numpy as np
 import pandas as pd
 
 from deformctl.artifacts.io import display_name, read_input_bytes
-from deformctl.catalog import MATERIAL_COLUMNS, SIZE_COLUMNS
+from deformctl.catalog import EXPONENT_COLUMN, MATERIAL_COLUMNS, SIZE_COLUMNS
 from deformctl.errors import InputDataError, SchemaError
+from deformctl.physics import rigid_grip_force_n
 
 __all__ = ["OBJECT_FLAGS", "catalog_from_coefficients", "read_lift_objects"]
 
@@ -73,7 +78,39 @@ def catalog_from_coefficients(table: pd.DataFrame, path: str | None = None) -> p
         values = pd.to_numeric(table[measured], errors="coerce").to_numpy(dtype=np.float64)
         out[material] = values
         out[measured] = values  # what a start model predicts from, with a rig too
+    _hunt_crossley_material(table, out)
     return out
+
+
+def _hunt_crossley_material(table: pd.DataFrame, out: pd.DataFrame) -> None:
+    """The Hunt–Crossley objects' material in ``out``: ``material_stiffness_exponent`` = n, and
+    D and λ at F_w from the fitted ``k`` (N/cmⁿ) and ``λ_hc`` (N·s/cmⁿ⁺¹):
+    ``d_w = (F_w / k)^(1/n)``, ``D = F_w / d_w``, ``λ = λ_hc d_wⁿ`` (nothing when no object's law
+    is ``hc``)."""
+    needed = {"model", "hc_exponent", "hc_stiffness_n_per_cm_pow_n"}
+    if not needed <= set(table.columns):
+        return
+    hc = (table["model"].astype(str) == "hc").to_numpy()
+    if not hc.any():
+        return
+
+    def column(name: str) -> np.ndarray:
+        if name not in table.columns:
+            return np.full(len(table), math.nan)
+        return pd.to_numeric(table[name], errors="coerce").to_numpy(dtype=np.float64)
+
+    n, k = column("hc_exponent"), column("hc_stiffness_n_per_cm_pow_n")
+    lam = column("hc_damping_ns_per_cm_pow_n_plus_1")
+    f_w = np.asarray(
+        rigid_grip_force_n(
+            out["weight_n"].to_numpy(np.float64), out["friction_mu"].to_numpy(np.float64)
+        )
+    )
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d_w = (f_w / k) ** (1.0 / n)
+        out[MATERIAL_COLUMNS[0]] = np.where(hc, f_w / d_w, out[MATERIAL_COLUMNS[0]])
+        out[MATERIAL_COLUMNS[1]] = np.where(hc, lam * d_w**n, out[MATERIAL_COLUMNS[1]])
+    out[EXPONENT_COLUMN] = np.where(hc, n, 1.0)
 
 
 def read_lift_objects(path: str) -> pd.DataFrame:

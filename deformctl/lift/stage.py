@@ -57,6 +57,7 @@ from deformctl.lift.search import (
     find_min_lift_force_seeded,
 )
 from deformctl.parallel import map_in_order, single_file_workers
+from deformctl.parallel.auto import AUTO, Auto
 from deformctl.reprs import short_repr
 from deformctl.series import TrialOutcome
 
@@ -197,7 +198,7 @@ def lift_catalog(
     path: str | None = None,
     seed: StartSeed | None = None,
     warn: Warn | None = None,
-    workers: int = 1,
+    workers: int | Auto = 1,
     journal: LiftJournal | None = None,
     max_force_n: float | None = None,
 ) -> CatalogLiftResult:
@@ -229,8 +230,9 @@ def lift_catalog(
             for it before any attempt. The rows' ``predicted_lift_force_n``, ``start_force_n``,
             ``start_in_training_range`` and ``start_source`` are filled (null without a seed).
         warn: receives warning lines (None: they are dropped).
-        workers: local processes to run the objects on (:func:`deformctl.parallel.map_in_order`;
-            results in catalog order, the same as one process); a runner that stops on failure
+        workers: local processes to run the objects on, or ``"auto"``
+            (:func:`deformctl.parallel.map_in_order`; results in catalog order, the same as one
+            process); a runner that stops on failure
             (the rig) always runs in this process, one object after another.
         journal: record every attempt and every finished row in it as they happen
             (:mod:`deformctl.lift.journal`); the objects then run in this process.
@@ -316,7 +318,7 @@ def lift_catalog(
         if progress is not None:
             progress(objects[i].object_id, i + 1, len(objects))
 
-    if workers > 1 and not factory.stop_on_failure and journal is None:
+    if workers != 1 and not factory.stop_on_failure and journal is None:
         outcomes = map_in_order(search_one, jobs, workers=workers, on_result=lambda i, _: done(i))
         for obj, outcome in zip(objects, outcomes, strict=True):
             record(obj, outcome)
@@ -366,7 +368,7 @@ def lift_catalog_files(
     log_epoch_ns: int | None = None,
     seed: StartSeed | None = None,
     warn: Warn | None = None,
-    workers: int | None = None,
+    workers: int | Auto | None = AUTO,
     max_force_n: float | None = None,
 ) -> CatalogLiftResult:
     """:func:`lift_catalog` from a catalog file: the lift_results table and the lift log written.
@@ -391,9 +393,9 @@ def lift_catalog_files(
         force: overwrite existing outputs.
         log_epoch_ns: where the log's attempts without a wall clock (simulated ones) begin, ns
             since the Unix epoch (None: the log writer's fixed epoch, 2000-01-01).
-        workers: local processes for the objects (see :func:`lift_catalog`); None: every core
-            from :data:`~deformctl.parallel.MIN_PARALLEL_OBJECTS` objects on
-            (:func:`~deformctl.parallel.single_file_workers`). The outputs do not depend on it.
+        workers: local processes for the objects (see :func:`lift_catalog`); ``"auto"`` (or
+            None): the count of least measured wall time (:mod:`deformctl.parallel.auto`). The
+            outputs do not depend on it.
 
     Raises:
         UsageError: ``output`` and ``log`` are the same file, or both stdout (exit 2).
@@ -583,6 +585,11 @@ class _ObjectSearch:
     factory: RunnerFactory
     margin: float | None
     search: SearchOptions
+
+    @property
+    def worker_preload(self) -> tuple[str, ...]:
+        """The modules the runner's local workers load first (the simulator's kernels)."""
+        return tuple(getattr(self.factory.make, "worker_preload", ()))
 
     def __call__(
         self, job: tuple[CatalogObject, StartEstimate | None]

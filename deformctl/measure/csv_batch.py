@@ -43,6 +43,7 @@ from deformctl.measure.options import DEFAULT_SEGMENTATION, Segmentation
 from deformctl.measure.recording import Recording
 from deformctl.measure.stage import LOG_SAMPLE_BYTES, MEASURE_SCHEMA
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, map_in_order, run_sweep
+from deformctl.parallel.auto import AUTO, Auto
 from deformctl.reprs import short_repr
 from deformctl.series import SqueezeSeries
 from deformctl.units import GIB
@@ -331,14 +332,15 @@ def measure_csv_files(
     *,
     output: str,
     force: bool = False,
-    workers: int = 1,
+    workers: int | Auto = AUTO,
 ) -> CsvBatchResult:
     """``measure --csv FILES… -o LOG``: every file's object in one squeeze log.
 
     One file's errors are raised as they are (exit 65, 66 or 2, nothing written). With several,
     a file that fails is recorded (its one-line error in the log's provenance,
     ``settings["_failures"]``) and the others are written; when every file fails nothing is
-    written. The files are read on ``workers`` local processes, in order.
+    written. The files are read on ``workers`` local processes (``"auto"``: the count of least
+    measured wall time, :mod:`deformctl.parallel.auto`), in order.
 
     Raises:
         OutputExistsError: ``output`` exists and not ``force`` (exit 1).

@@ -24,6 +24,9 @@ if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported w
     from deformctl.sim import ObjectSpec, SimSettings
 
 
+#: a Hunt–Crossley object's default squeezes reach at least this multiple of F_w
+HC_MIN_PEAK_OVER_F_W = 1.5
+
 SqueezeProgress = Callable[[str, int, int], None]
 """``progress(object_id, squeezes_done, squeezes_total)``, called after each simulated squeeze."""
 
@@ -31,10 +34,19 @@ SqueezeProgress = Callable[[str, int, int], None]
 def default_peak_force_n(spec: ObjectSpec, strain: float = DEFAULT_SQUEEZE_STRAIN) -> float:
     """The default peak squeeze force: ``D · strain · size_x``, N (the static force for ``strain``).
 
+    A Hunt–Crossley object (:attr:`~deformctl.sim.ObjectSpec.hunt_crossley`) is squeezed to the
+    static force for ``strain`` on its own law, ``k (strain · size_x)ⁿ``, and to at least
+    :data:`HC_MIN_PEAK_OVER_F_W` times F_w, the force its D and λ are stated at: the 1 % strain
+    of the rule is a small fraction of F_w for a stiffening material, where a fit would state D
+    far outside the squeezes.
+
     Args:
         spec: the object (catalog D in N/cm, size in cm).
         strain: compression as a fraction of the object's width between the palms.
     """
+    if spec.hunt_crossley:
+        at_strain = spec.elastic_force_n(strain * spec.size_m[0])
+        return max(at_strain, HC_MIN_PEAK_OVER_F_W * spec.operating_force_n)
     return spec.stiffness_n_per_m * strain * spec.size_m[0]
 
 

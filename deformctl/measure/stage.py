@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import pandas as pd
 import pyarrow as pa
@@ -45,6 +45,7 @@ from deformctl.parallel import (
     run_sweep,
     single_file_workers,
 )
+from deformctl.parallel.auto import AUTO, Auto
 from deformctl.scene import DEFAULT_SCENE_HZ
 from deformctl.series import SqueezeSeries
 
@@ -82,6 +83,9 @@ class SimulateCatalogTask:
         scene_hz: scene frames per simulated second in the log (:mod:`deformctl.scene`; 0:
             none).
     """
+
+    #: loaded by the fork server of local workers (:mod:`deformctl.sim._warm_worker`)
+    worker_preload: ClassVar[tuple[str, ...]] = ("deformctl.sim._warm_worker",)
 
     protocol: SqueezeProtocol
     settings: SimSettings
@@ -185,7 +189,7 @@ def simulate_catalog_file(
     object_ids: Sequence[str] | None = None,
     progress: SqueezeProgress | None = None,
     force: bool = False,
-    workers: int | None = None,
+    workers: int | Auto | None = AUTO,
 ) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
     """``measure CATALOG --sim -o LOG``: squeeze every (selected) object into one squeeze log.
 
@@ -193,9 +197,8 @@ def simulate_catalog_file(
     refused, naming the object). With ``workers`` > 1 the objects are squeezed on that many
     local processes (:func:`deformctl.parallel.map_in_order`, one :class:`SimulateCatalogTask`
     per object); each object's noise stream depends only on the seed and its position, so the
-    log is byte for byte the one-process log. ``workers=None``: every core from
-    :data:`~deformctl.parallel.MIN_PARALLEL_OBJECTS` objects on
-    (:func:`~deformctl.parallel.single_file_workers`).
+    log is byte for byte the one-process log. ``workers="auto"`` (or None): the count of least
+    measured wall time (:mod:`deformctl.parallel.auto`; the first objects are squeezed here).
 
     Returns:
         The objects' rows and the squeezes written (see :func:`simulate_squeezes`).
@@ -210,7 +213,7 @@ def simulate_catalog_file(
     _check_budgets(catalog, task, catalog_path, single_log=True)  # bad rows first
     provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
     n_workers = single_file_workers(workers, len(catalog))
-    if n_workers > 1:
+    if n_workers != 1:
         objects, series = _squeeze_in_workers(catalog, task, n_workers, progress)
     else:
         objects, series = simulate_squeezes(
@@ -236,7 +239,7 @@ def _positioned_items(catalog: pd.DataFrame) -> list[dict[str, Any]]:
 def _squeeze_in_workers(
     catalog: pd.DataFrame,
     task: SimulateCatalogTask,
-    workers: int,
+    workers: int | Auto,
     progress: SqueezeProgress | None,
 ) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
     """:func:`simulate_squeezes` of ``catalog`` with one task per object on local processes."""

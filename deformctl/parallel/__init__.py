@@ -22,6 +22,7 @@ exposes its own task (:class:`deformctl.measure.SimulateCatalogTask`,
 :class:`deformctl.characterize.CharacterizeTask`, :class:`deformctl.lift.runners.sim.LiftTask`).
 
 Modules: :mod:`~deformctl.parallel.options` (:class:`SweepOptions`, the flags),
+:mod:`~deformctl.parallel.auto` (``--workers auto``: :func:`choose_workers`, :class:`WorkerChoice`),
 :mod:`~deformctl.parallel.backends` (the worker side, local processes, Dask) and
 :mod:`~deformctl.parallel.sweep` (:func:`run_sweep`, :func:`map_in_order`); their public names are
 re-exported here.
@@ -34,6 +35,7 @@ from typing import TYPE_CHECKING
 from deformctl.lazy import lazy_exports
 
 if TYPE_CHECKING:  # the names below, for type checkers; at run time they load on first use
+    from deformctl.parallel.auto import WorkerChoice, choose_workers
     from deformctl.parallel.backends import TaskOutput, connect_dask
     from deformctl.parallel.options import (
         DEFAULT_CONNECT_TIMEOUT_S,
@@ -52,6 +54,8 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
 #: so a command that needs one module (the CLI's sweep options) does not pay
 #: for pyarrow and the dataset writer the executor brings.
 _EXPORTS: dict[str, str] = {
+    "WorkerChoice": "deformctl.parallel.auto",
+    "choose_workers": "deformctl.parallel.auto",
     "TaskOutput": "deformctl.parallel.backends",
     "connect_dask": "deformctl.parallel.backends",
     "DEFAULT_CONNECT_TIMEOUT_S": "deformctl.parallel.options",
@@ -75,6 +79,8 @@ __all__ = [
     "SweepOptions",
     "SweepSummary",
     "TaskOutput",
+    "WorkerChoice",
+    "choose_workers",
     "connect_dask",
     "map_in_order",
     "run_sweep",

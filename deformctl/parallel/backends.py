@@ -191,17 +191,20 @@ def _abandon_pool(pool: ProcessPoolExecutor) -> None:
 def _worker_context(task: Callable[..., Any], preload: Sequence[str] = ()) -> Any:
     """The start context of local workers: forkserver (spawn where unavailable).
 
-    Workers fork from a server that has imported this module, ``preload`` and the task's module
-    once (a no-op when this process started its fork server already). Python 3.11's fork server
-    ignores the parent's sys.path: a task module must be importable from PYTHONPATH or the cwd.
+    Workers fork from a server that has imported this module, ``preload``, the task's module
+    and the modules the task names in a ``worker_preload`` attribute (e.g. one that loads the
+    simulator's compiled kernels) once, so each worker starts in a few milliseconds (a no-op
+    when this process started its fork server already). Python 3.11's fork server ignores the
+    parent's sys.path: a task module must be importable from PYTHONPATH or the cwd.
     """
     methods = multiprocessing.get_all_start_methods()
     ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
     if ctx.get_start_method() == "forkserver":
-        modules = ["deformctl.parallel", *preload]
+        modules = ["deformctl.parallel.backends", *preload]
         module = getattr(task, "__module__", None)  # a function's, or an instance's class's
         if module and module != "__main__" and module in sys.modules:
             modules.append(module)
+        modules.extend(getattr(task, "worker_preload", ()))
         ctx.set_forkserver_preload(modules)
     return ctx
 

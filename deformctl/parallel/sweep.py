@@ -6,11 +6,13 @@
 
 from __future__ import annotations
 
+import logging
+import math
 import os
 import sys
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,6 +22,17 @@ import pyarrow as pa
 
 from deformctl.artifacts.dataset import DatasetWriter, ObjectResult, PartPayloads
 from deformctl.errors import EXIT_FAILURE, EXIT_OK, DeformctlError, InputDataError, UsageError
+from deformctl.parallel.auto import (
+    AUTO,
+    DEFAULT_START_S,
+    PROBE_OBJECTS,
+    Auto,
+    choose_workers,
+    machine_load,
+    measured_start_s,
+    record_start_s,
+    task_kind,
+)
 from deformctl.parallel.backends import (
     _abandon_pool,
     _Backend,
@@ -29,7 +42,13 @@ from deformctl.parallel.backends import (
     _LocalBackend,
     _worker_context,
 )
-from deformctl.parallel.options import DEFAULT_CONNECT_TIMEOUT_S, DEFAULT_PARTITION_SIZE
+from deformctl.parallel.options import (
+    DEFAULT_CONNECT_TIMEOUT_S,
+    DEFAULT_PARTITION_SIZE,
+    parse_workers,
+)
+
+_log = logging.getLogger("deformctl.parallel")
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -127,7 +146,7 @@ def run_sweep(
     schema: pa.Schema,
     fingerprint: Mapping[str, Any],
     id_column: str = "object_id",
-    workers: int | None = None,
+    workers: int | Auto | None = AUTO,
     scheduler: str | None = None,
     connect_timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S,
     partition_size: int = DEFAULT_PARTITION_SIZE,
@@ -150,7 +169,8 @@ def run_sweep(
         fingerprint: JSON-serialisable description of what produced the data (command, settings,
             seed, tool version); a resume must present the same one.
         id_column: the item/row column identifying an object.
-        workers: local worker processes; ``None`` uses every available core.
+        workers: local worker processes; ``"auto"`` (or ``None``) uses every available core, at
+            most one per object left.
         scheduler: ``tcp://HOST:PORT`` of a running Dask scheduler instead of local processes.
         connect_timeout_s: time allowed to reach the scheduler, s.
         partition_size: objects per part.
@@ -172,10 +192,9 @@ def run_sweep(
         DeformctlError: the scheduler cannot be reached, or the executor lost its workers.
     """
     start = time.monotonic()
-    if workers is not None and scheduler is not None:
+    given = None if workers is None or workers == AUTO else parse_workers(workers)
+    if given is not None and scheduler is not None:
         raise UsageError("give either --workers (local processes) or --scheduler, not both")
-    if workers is not None and workers <= 0:
-        raise UsageError(f"--workers must be >= 1, got {workers}")
     if partition_size <= 0:
         raise UsageError(f"partition size must be >= 1, got {partition_size}")
     if max_in_flight is not None and max_in_flight <= 0:
@@ -226,7 +245,7 @@ def run_sweep(
         if scheduler is not None:
             backend = _DaskBackend(scheduler, connect_timeout_s, task, schema, id_column)
         else:
-            n_workers = workers if workers is not None else _available_cores()
+            n_workers = given if isinstance(given, int) else _available_cores()
             backend = _LocalBackend(min(n_workers, len(todo)), task, schema, id_column)
 
     buffers: dict[int, dict[int, ObjectResult]] = {}
@@ -302,29 +321,27 @@ def run_sweep(
     )
 
 
-#: A single-file output runs its objects on local processes only from this many objects on: a
-#: worker costs about a second to start (imports and the compiled kernels), more than a short
-#: catalog's whole run.
+#: Objects from which the old rule (before ``auto``) ran a single-file output on every core; kept
+#: for callers that import it. ``auto`` (:mod:`deformctl.parallel.auto`) measures instead.
 MIN_PARALLEL_OBJECTS = 8
 
 
-def single_file_workers(workers: int | None, n_items: int) -> int:
+def single_file_workers(workers: int | Auto | None, n_items: int) -> int | Auto:
     """How many local processes a single-file output uses for ``n_items`` objects.
 
-    ``workers`` as given (``--workers N``), else every available core once the catalog has
-    :data:`MIN_PARALLEL_OBJECTS` objects (in this process below that); never more than the
-    objects.
+    ``workers`` as given (``--workers N``), never more than the objects; ``None`` or ``"auto"``:
+    ``"auto"`` (:func:`map_in_order` measures and chooses), or 1 for a single object.
     """
-    if workers is None:
-        workers = _available_cores() if n_items >= MIN_PARALLEL_OBJECTS else 1
-    return max(1, min(workers, n_items))
+    if workers is None or workers == AUTO:
+        return AUTO if n_items > 1 else 1
+    return max(1, min(int(workers), n_items))
 
 
 def map_in_order(
     task: Callable[[Any], Any],
     items: Sequence[Any],
     *,
-    workers: int,
+    workers: int | Auto,
     on_result: Callable[[int, Any], None] | None = None,
 ) -> list[Any]:
     """``[task(item) for item in items]``, on ``workers`` local processes, results in item order.
@@ -332,12 +349,15 @@ def map_in_order(
     The processes are set up as a sweep's (:class:`_LocalBackend`: fork server, one BLAS thread,
     a watchdog that ends them with their client). For a single-file output that holds every
     result anyway, so a result does not depend on the number of workers. ``workers <= 1`` (or
-    one item) runs in this process.
+    one item) runs in this process. ``workers="auto"`` runs the first
+    :data:`~deformctl.parallel.auto.PROBE_OBJECTS` items here, timing them, then the rest on
+    the number of processes :func:`~deformctl.parallel.auto.choose_workers` picks (logged on
+    the ``deformctl.parallel`` logger as a :class:`~deformctl.parallel.auto.WorkerChoice`).
 
     Args:
         task: a picklable callable; its module must be importable by the workers.
         items: picklable items.
-        workers: local processes.
+        workers: local processes, or ``"auto"``.
         on_result: called as ``on_result(index, result)`` in item order, as results arrive
             (e.g. progress).
 
@@ -345,31 +365,93 @@ def map_in_order(
         whatever ``task`` raised for the first item (in order) that failed; the items after it
         are cancelled. DeformctlError: a worker process died.
     """
+    if workers == AUTO:
+        return _map_auto(task, items, on_result)
+    assert isinstance(workers, int)
     if workers <= 1 or len(items) <= 1:
-        out = []
-        for i, item in enumerate(items):
-            out.append(task(item))
-            if on_result is not None:
-                on_result(i, out[-1])
-        return out
+        return _map_here(task, items, on_result)
+    return _map_pool(task, items, workers, on_result)[0]
+
+
+def _map_here(
+    task: Callable[[Any], Any],
+    items: Sequence[Any],
+    on_result: Callable[[int, Any], None] | None,
+    offset: int = 0,
+    times: list[float] | None = None,
+) -> list[Any]:
+    out = []
+    for i, item in enumerate(items):
+        t0 = time.perf_counter()
+        out.append(task(item))
+        if times is not None:
+            times.append(time.perf_counter() - t0)
+        if on_result is not None:
+            on_result(offset + i, out[-1])
+    return out
+
+
+def _map_pool(
+    task: Callable[[Any], Any],
+    items: Sequence[Any],
+    workers: int,
+    on_result: Callable[[int, Any], None] | None,
+    offset: int = 0,
+) -> tuple[list[Any], float]:
+    """The items on ``workers`` processes; (results, seconds from the start to the first one)."""
     ctx = _worker_context(task)
     results: list[Any] = [None] * len(items)
+    start = time.perf_counter()
+    first_s = math.nan
     with ProcessPoolExecutor(
         max_workers=workers, mp_context=ctx, initializer=_init_worker, initargs=(os.getpid(),)
     ) as pool:
         futures = [pool.submit(task, item) for item in items]
         try:
+            wait(futures, return_when=FIRST_COMPLETED)
+            first_s = time.perf_counter() - start
             for i, fut in enumerate(futures):
                 results[i] = fut.result()
                 if on_result is not None:
-                    on_result(i, results[i])
+                    on_result(offset + i, results[i])
         except BrokenProcessPool as err:
             _abandon_pool(pool)
             raise DeformctlError("a local worker process died") from err
         finally:
             for fut in futures:
                 fut.cancel()
-    return results
+    return results, first_s
+
+
+def _map_auto(
+    task: Callable[[Any], Any],
+    items: Sequence[Any],
+    on_result: Callable[[int, Any], None] | None,
+) -> list[Any]:
+    """:func:`map_in_order` with ``workers="auto"``: probe here, choose, run the rest."""
+    probe = min(len(items), PROBE_OBJECTS)
+    times: list[float] = []
+    out = _map_here(task, items[:probe], on_result, times=times)
+    rest = items[probe:]
+    if not rest:
+        return out
+    kind = task_kind(task)
+    measured = measured_start_s(kind)
+    choice = choose_workers(
+        len(rest),
+        cores=_available_cores(),
+        start_s=DEFAULT_START_S if measured is None else measured,
+        per_object_s=times[-1],
+        busy=machine_load(),
+        start_measured=measured is not None,
+    )
+    _log.info(choice.line(), extra={"worker_choice": choice})
+    if choice.workers <= 1:
+        return out + _map_here(task, rest, on_result, offset=probe)
+    results, first_s = _map_pool(task, rest, choice.workers, on_result, offset=probe)
+    # the first result came after the start cost and one object's work
+    record_start_s(kind, first_s - choice.per_object_s, choice.workers)
+    return out + results
 
 
 def _available_cores() -> int:

@@ -144,6 +144,7 @@ from numpy.typing import NDArray
 
 from deformctl.errors import UsageError
 from deformctl.quantities import MEMORY_BUDGET_GIB
+from deformctl.sim.hunt_crossley import hc_law, spec_elements
 from deformctl.sim.lattice import (
     Lattice,
     build_lattice,
@@ -163,6 +164,7 @@ from deformctl.sim.step import (
     Contacts,
     DirectSolver,
     Drive,
+    HuntCrossley,
     IterativeSolver,
     Palms,
     integrate,
@@ -352,6 +354,7 @@ class Model:
             (see :mod:`deformctl.sim.step`);
         bottom_particles, bottom_row: table contact map (every particle).
         gravity_m_s2: gravity along -z (0 when off).
+        law: the Hunt–Crossley elements (:func:`deformctl.sim.hunt_crossley.hc_law`).
     """
 
     spec: ObjectSpec
@@ -384,6 +387,7 @@ class Model:
     bottom_particles: IntArray
     bottom_row: IntArray
     gravity_m_s2: float
+    law: HuntCrossley
 
 
 @lru_cache(maxsize=16)
@@ -486,6 +490,9 @@ def element_constants(
 ) -> tuple[Lattice, FloatArray, FloatArray]:
     """Lattice and calibrated element stiffness (N/m) and damping (N·s/m), each ``[m]``."""
     check_lattice_size(spec, settings)
+    if spec.hunt_crossley:  # the tangent and damping at the reference strain
+        el = spec_elements(spec, settings)
+        return el.lattice, el.tangent_n_per_m, el.damping_ns_per_m
     alpha_m = settings.alpha_m(spec)
     lattice, unit_d = _lattice_and_scale(spec.size_m, alpha_m, settings.palm_layer == "surface")
     stiffness = lattice.unit_stiffness * (spec.stiffness_n_per_m / unit_d)
@@ -495,7 +502,10 @@ def element_constants(
 
 def element_retardation_s(spec: ObjectSpec, settings: SimSettings) -> float:
     """The lattice elements' damping over stiffness, s: every element's damper is this times its
-    spring (:func:`element_constants`; the step kernels form the dampers from it)."""
+    spring (:func:`element_constants`; the step kernels form the dampers from it). A Hunt–Crossley
+    object's linear dampers are the floor alone (:mod:`deformctl.sim.hunt_crossley`)."""
+    if spec.hunt_crossley:
+        return settings.min_shear_retardation_s
     retardation = spec.damping_ns_per_m / spec.stiffness_n_per_m
     if settings.shear_damping_ratio != 1.0 or settings.min_shear_retardation_s > 0.0:
         retardation = settings.shear_damping_ratio * retardation + settings.min_shear_retardation_s
@@ -504,7 +514,10 @@ def element_retardation_s(spec: ObjectSpec, settings: SimSettings) -> float:
 
 def width_damping_ns_per_m(spec: ObjectSpec, settings: SimSettings) -> float:
     """The damper across the gripped width, N·s/m: the squeeze damping the lattice does not carry,
-    ``max(0, lambda - D (r lambda / D + min_shear_retardation_s))``."""
+    ``max(0, lambda - D (r lambda / D + min_shear_retardation_s))``; for a Hunt–Crossley object
+    ``(1 - r) lambda`` at the operating compression, scaled by the step with the compression."""
+    if spec.hunt_crossley:
+        return spec_elements(spec, settings).width_damping_ns_per_m
     lattice_part = (
         settings.shear_damping_ratio * spec.damping_ns_per_m
         + settings.min_shear_retardation_s * spec.stiffness_n_per_m
@@ -533,14 +546,14 @@ def build_model(
         lift_m: start height of the bottom layer above the table, m.
     """
     lattice, stiffness, damping = element_constants(spec, settings)
-    n = lattice.n_particles
+    n, law = lattice.n_particles, hc_law(spec, settings)
     masses = np.ones(n)
     if settings.palm_layer == "surface" and lattice.shape[0] >= 3:
         masses[lattice.face_mask(0) | lattice.face_mask(1)] = 0.0
     masses *= spec.mass_kg / masses.sum()
     g = GRAVITY_M_S2 if gravity else 0.0
     if resting and gravity:
-        base_x = resting_positions_m(lattice, stiffness, masses * g)
+        base_x = resting_positions_m(lattice, stiffness, masses * g, law)
     else:
         base_x = lattice.positions_m.copy()
     base_x[:, 2] += lift_m
@@ -687,6 +700,7 @@ def build_model(
         bottom_particles=bottom.astype(np.int64),
         bottom_row=bottom_row,
         gravity_m_s2=g,
+        law=law,
     )
 
 
@@ -734,6 +748,7 @@ def run_model(
     body = Body(
         model.base_x, model.dof_of, model.particle_masses_kg, lat.edges, lat.rest_length_m,
         lat.direction, model.stiffness_n_per_m, model.retardation_s, s.nonlinear_springs,
+        model.law,
     )  # fmt: skip
     palms = Palms(
         model.palm_x_dof, model.palm_z_dof, model.palm_x0, model.palm_stop_m, s.palm_mass_kg,

@@ -1,4 +1,12 @@
-"""The simulated object: a box with a weight, a friction coefficient and Kelvin material constants.
+"""The simulated object: a box with a weight, a friction coefficient and its material law.
+
+The material is Kelvin–Voigt (``f = D d + λ ḋ`` between the palms) or, with a stiffness exponent
+``n > 1``, Hunt–Crossley (``f = k dⁿ + λ_hc dⁿ ḋ``). A Hunt–Crossley object is given as a catalog
+gives it: D is the *secant* stiffness at the operating force ``F_op = F_w = W / (2 μ)`` (what
+``characterize`` writes as ``deformability_n_per_cm`` by default) and λ the equivalent damping
+``λ_hc d_opⁿ`` at the operating compression ``d_op = F_op / D``; so ``k = F_op / d_opⁿ`` and
+``λ_hc = λ / d_opⁿ`` (:attr:`ObjectSpec.hc_stiffness_n_per_m_pow_n`,
+:attr:`ObjectSpec.hc_damping_ns_per_m_pow_n_plus_1`). With ``n = 1`` both readings agree.
 
 Sizes are in cm, stiffness in N/cm and damping in N·s/cm (the paper's units at the edge); the
 spec keeps those units in its field names and offers SI properties for the physics. A catalog row
@@ -16,6 +24,7 @@ from deformctl.quantities import (
     DAMPING_NS_PER_CM,
     FRICTION_MU,
     SIZE_CM,
+    STIFFNESS_EXPONENT,
     STIFFNESS_N_PER_CM,
     WEIGHT_N,
 )
@@ -34,6 +43,9 @@ class ObjectSpec:
             kinetic).
         stiffness_n_per_cm: the object's squeeze stiffness D between the palms, N/cm.
         damping_ns_per_cm: the object's squeeze damping lambda between the palms, N·s/cm.
+        stiffness_exponent: n in [1, 3]: 1 (default) a Kelvin–Voigt object; above 1 a
+            Hunt–Crossley object whose D and lambda are stated at the operating force (see the
+            module docs).
     """
 
     object_id: str
@@ -42,6 +54,7 @@ class ObjectSpec:
     friction_mu: float
     stiffness_n_per_cm: float
     damping_ns_per_cm: float
+    stiffness_exponent: float = 1.0
 
     def __post_init__(self) -> None:
         where = f"object {self.object_id!r}"
@@ -56,6 +69,7 @@ class ObjectSpec:
         FRICTION_MU.check_data(float(self.friction_mu), where=where)
         STIFFNESS_N_PER_CM.check_data(float(self.stiffness_n_per_cm), where=where)
         DAMPING_NS_PER_CM.check_data(float(self.damping_ns_per_cm), where=where)
+        STIFFNESS_EXPONENT.check_data(float(self.stiffness_exponent), where=where)
 
     @property
     def size_m(self) -> tuple[float, float, float]:
@@ -76,6 +90,38 @@ class ObjectSpec:
     def damping_ns_per_m(self) -> float:
         """Squeeze damping lambda, N·s/m."""
         return self.damping_ns_per_cm * NS_PER_CM
+
+    @property
+    def hunt_crossley(self) -> bool:
+        """Whether the material stiffens (``n > 1``: Hunt–Crossley springs in the lattice)."""
+        return self.stiffness_exponent != 1.0
+
+    @property
+    def operating_force_n(self) -> float:
+        """F_op, the force D and lambda are stated at: F_w = W / (2 mu), N."""
+        return f_w_n(self)
+
+    @property
+    def operating_compression_m(self) -> float:
+        """d_op = F_op / D, the compression at the operating force, m."""
+        return self.operating_force_n / self.stiffness_n_per_m
+
+    @property
+    def hc_stiffness_n_per_m_pow_n(self) -> float:
+        """Hunt–Crossley k = F_op / d_opⁿ, N/mⁿ (D itself when n = 1)."""
+        return self.operating_force_n / self.operating_compression_m**self.stiffness_exponent
+
+    @property
+    def hc_damping_ns_per_m_pow_n_plus_1(self) -> float:
+        """Hunt–Crossley lambda_hc = lambda / d_opⁿ, N·s/m^(n+1) (lambda when n = 1)."""
+        return self.damping_ns_per_m / self.operating_compression_m**self.stiffness_exponent
+
+    def elastic_force_n(self, compression_m: float) -> float:
+        """The rate-free squeeze force at a compression, N: ``D d`` or ``k dⁿ``."""
+        d = max(float(compression_m), 0.0)
+        if not self.hunt_crossley:
+            return self.stiffness_n_per_m * d
+        return self.hc_stiffness_n_per_m_pow_n * d**self.stiffness_exponent
 
     @property
     def retardation_time_s(self) -> float:

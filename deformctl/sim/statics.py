@@ -13,6 +13,7 @@ import numpy as np
 import scipy.sparse
 from numpy.typing import NDArray
 
+from deformctl.sim.hunt_crossley import resting_positions_hc_m
 from deformctl.sim.lattice import (
     Lattice,
     lattice_factor,
@@ -22,6 +23,7 @@ from deformctl.sim.lattice import (
 )
 from deformctl.sim.multigrid import build_hierarchy, solve
 from deformctl.sim.stencil import build_stencil
+from deformctl.sim.step.bundles import HuntCrossley
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -87,13 +89,21 @@ def unit_squeeze_stiffness_n_per_m(lattice: Lattice) -> float:
 
 
 def resting_positions_m(
-    lattice: Lattice, stiffness: FloatArray, particle_weight_n: FloatArray | float
+    lattice: Lattice,
+    stiffness: FloatArray,
+    particle_weight_n: FloatArray | float,
+    law: HuntCrossley | None = None,
 ) -> FloatArray:
     """Linear static equilibrium of the object on a frictionless table under gravity, m, ``[n, 3]``.
 
-    The bottom layer is held at z = 0; the rest of the lattice sags under its weight.
+    The bottom layer is held at z = 0; the rest of the lattice sags under its weight. With a
+    Hunt–Crossley ``law`` (exponent above 1) the equilibrium of its power-law springs instead
+    (:func:`deformctl.sim.hunt_crossley.resting_positions_hc_m`).
     """
     n = lattice.n_particles
+    if law is not None and law.exponent != 1.0:
+        weight = np.broadcast_to(particle_weight_n, (n,)).astype(np.float64)
+        return resting_positions_hc_m(lattice, law, weight)
     dof_of, n_dof, _, _ = palm_dof_map(lattice, gripped=False)
     fixed = dof_of[3 * np.flatnonzero(lattice.bottom_mask()) + 2]
     load = np.zeros(n_dof)

@@ -119,6 +119,7 @@ ROW = {
     "friction_mu": 0.5,
     "material_stiffness_n_per_cm": 10.0,
     "material_damping_ns_per_cm": 1.0,
+    "material_stiffness_exponent": 1.0,
 }
 
 
@@ -151,9 +152,10 @@ def test_catalog_tables(column: str, value: Any) -> None:
     inside = number and math.isfinite(float(value)) and rule.low <= float(value) <= high
     inside = inside and not (rule.low_open and float(value) == low)
     inside = inside and not (rule.high_open and float(value) == high)
-    # an optional column (the material values) may be empty: NaN is "not known"
-    optional = not next(c.required for c in load_table_spec("catalog").columns if c.name == column)
-    missing = optional and number and math.isnan(float(value))
+    # a nullable column (D and λ) may be empty: NaN is "not known" (the stiffness exponent may be
+    # left out, but a cell it has must hold a number)
+    nullable = next(c.nullable for c in load_table_spec("catalog").columns if c.name == column)
+    missing = nullable and number and math.isnan(float(value))
     refused: DeformctlError | None = None
     try:
         validate_frame(frame, "catalog", path="cat.csv")

@@ -32,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import pandas as pd
 
@@ -162,6 +162,9 @@ class _SimAttempt:
 
 @dataclass(frozen=True)
 class _SimRunnerMaker:
+    #: loaded by the fork server of local workers (:mod:`deformctl.sim._warm_worker`)
+    worker_preload: ClassVar[tuple[str, ...]] = ("deformctl.sim._warm_worker",)
+
     preset: SimPreset
     scene_hz: float = 0.0
 
@@ -210,6 +213,9 @@ class LiftTask:
     Raises:
         UsageError: ``max_force_n`` breaks its rule (exit 2).
     """
+
+    #: loaded by the fork server of local workers (:mod:`deformctl.sim._warm_worker`)
+    worker_preload: ClassVar[tuple[str, ...]] = ("deformctl.sim._warm_worker",)
 
     preset: SimPreset
     search: SearchOptions = DEFAULT_SEARCH

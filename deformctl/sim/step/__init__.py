@@ -49,6 +49,7 @@ from deformctl.sim.step.bundles import (
     Contacts,
     DirectSolver,
     Drive,
+    HuntCrossley,
     IterativeSolver,
     Palms,
 )
@@ -99,6 +100,7 @@ __all__ = [
     "Contacts",
     "DirectSolver",
     "Drive",
+    "HuntCrossley",
     "IterativeSolver",
     "Palms",
     "integrate",

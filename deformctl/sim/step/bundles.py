@@ -22,6 +22,30 @@ IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 
 
+class HuntCrossley(NamedTuple):
+    """The Hunt–Crossley law of a stiffening lattice (``exponent == 1``: none, the elements are
+    the linear Kelvin elements of :class:`Body`; see :mod:`deformctl.sim.hunt_crossley`).
+
+    Attributes:
+        exponent: n; an element's spring force is ``power |s|ⁿ sign(s)`` for a stretch ``s``.
+        power: each element's ``p_e``, N/mⁿ, ``[m]`` (``[0]`` when linear).
+        retardation: s; each element's Hunt–Crossley damper is ``retardation p_e |s|ⁿ / L0``
+            N·s/m, with ``|s|`` capped at ``cap_strain L0``.
+        cap_strain: the strain above which the dampers stop growing (the implicit step's
+            damping matrix is built at the reference strain; above twice it the step would be
+            unstable).
+        width_reference_m, width_cap_m: the width damper of :class:`Palms` is scaled by
+            ``(min(d, width_cap_m) / width_reference_m)ⁿ`` for a palm compression ``d``.
+    """
+
+    exponent: float
+    power: FloatArray
+    retardation: float
+    cap_strain: float
+    width_reference_m: float
+    width_cap_m: float
+
+
 class Body(NamedTuple):
     """The lattice and its Kelvin elements.
 
@@ -33,6 +57,9 @@ class Body(NamedTuple):
             stiffness N/m, ``[m]``.
         retardation: s; each element's damping is ``retardation k`` N·s/m.
         nonlinear: exact spring geometry (else linear small-strain forces).
+        law: the Hunt–Crossley springs and dampers (``law.exponent == 1``: the Kelvin elements
+            above); with them ``k`` is the tangent the implicit step was built with and
+            ``retardation k`` a linear damper added to each element.
     """
 
     base_x: FloatArray
@@ -44,6 +71,7 @@ class Body(NamedTuple):
     k: FloatArray
     retardation: float
     nonlinear: bool
+    law: HuntCrossley
 
 
 class Palms(NamedTuple):

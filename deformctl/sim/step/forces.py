@@ -1,5 +1,9 @@
-"""The step's forces: the Kelvin elements, gravity and the palms' drive, as the implicit step's
-right-hand side, and the BDF2 predictor.
+"""The step's forces: the Kelvin elements (or the Hunt–Crossley ones of a stiffening material),
+gravity and the palms' drive, as the implicit step's right-hand side, and the BDF2 predictor.
+
+The linear Kelvin loop (:func:`_element_rhs`) is the same code with or without Hunt–Crossley
+elements: :func:`_step_impulse` branches once per step, on ``body.law.exponent``, to it or to
+:func:`_element_rhs_hc`.
 """
 
 from __future__ import annotations
@@ -132,6 +136,75 @@ def _element_rhs(body: Body, x: FloatArray, vel: FloatArray, h: float, out: Floa
 
 
 @njit(cache=True)
+def _element_rhs_hc(body: Body, x: FloatArray, vel: FloatArray, h: float, out: FloatArray) -> None:
+    """:func:`_element_rhs` for Hunt–Crossley elements (:mod:`deformctl.sim.hunt_crossley`).
+
+    For a stretch ``s`` (compression negative) and stretch rate ``ṡ`` an element pulls its ends
+    together with ``p |s|ⁿ sign(s) + (c_hc + retardation k) ṡ``, where
+    ``c_hc = law.retardation p min(|s|, cap_strain L0)ⁿ / L0``; minus ``h k v`` along the rest
+    direction, ``k`` the tangent the implicit matrix holds.
+    """
+    edges, rest, n0, k = body.edges, body.rest, body.n0, body.k
+    retardation, nonlinear = body.retardation, body.nonlinear
+    law = body.law
+    n_exp, power, hc_ret, cap = law.exponent, law.power, law.retardation, law.cap_strain
+    for e in range(edges.shape[0]):
+        i = edges[e, 0]
+        j = edges[e, 1]
+        dx = x[j, 0] - x[i, 0]
+        dy = x[j, 1] - x[i, 1]
+        dz = x[j, 2] - x[i, 2]
+        dvx = vel[j, 0] - vel[i, 0]
+        dvy = vel[j, 1] - vel[i, 1]
+        dvz = vel[j, 2] - vel[i, 2]
+        ax = n0[e, 0]
+        ay = n0[e, 1]
+        az = n0[e, 2]
+        if nonlinear:
+            length = np.sqrt(dx * dx + dy * dy + dz * dz)
+            inv = 1.0 / length
+            nx = dx * inv
+            ny = dy * inv
+            nz = dz * inv
+            stretch = length - rest[e]
+        else:
+            nx = ax
+            ny = ay
+            nz = az
+            stretch = dx * ax + dy * ay + dz * az - rest[e]
+        size = abs(stretch)
+        spring = power[e] * size**n_exp
+        if stretch < 0.0:
+            spring = -spring
+        held = min(size, cap * rest[e])
+        damper = hc_ret * power[e] * held**n_exp / rest[e] + k[e] * retardation
+        f = spring + damper * (dvx * nx + dvy * ny + dvz * nz)
+        g = (k[e] * h) * (dvx * ax + dvy * ay + dvz * az)
+        fx = f * nx + g * ax
+        fy = f * ny + g * ay
+        fz = f * nz + g * az
+        out[i, 0] += fx
+        out[i, 1] += fy
+        out[i, 2] += fz
+        out[j, 0] -= fx
+        out[j, 1] -= fy
+        out[j, 2] -= fz
+
+
+@njit(cache=True)
+def _width_scale(body: Body, palm_x_dof: IntArray, q: FloatArray) -> float:
+    """The factor on the width damper at the palm compression ``d`` of ``q``: 1 for a Kelvin
+    body, ``(min(d, cap) / d_ref)ⁿ`` for a Hunt–Crossley one (0 while the palms are apart)."""
+    law = body.law
+    if law.exponent == 1.0:
+        return 1.0
+    d = q[palm_x_dof[0]] - q[palm_x_dof[1]]
+    if d <= 0.0:
+        return 0.0
+    return float((min(d, law.width_cap_m) / law.width_reference_m) ** law.exponent)
+
+
+@njit(cache=True)
 def _step_impulse(
     body: Body,
     palms: Palms,
@@ -162,7 +235,10 @@ def _step_impulse(
             x[p, a] = base_x[p, a] + q[d]
             vel[p, a] = v[d]
             fp[p, a] = 0.0
-    _element_rhs(body, x, vel, dt, fp)
+    if body.law.exponent != 1.0:
+        _element_rhs_hc(body, x, vel, dt, fp)
+    else:
+        _element_rhs(body, x, vel, dt, fp)
     fq[:] = 0.0
     for p in range(n):
         fp[p, 2] -= particle_mass[p] * gravity
@@ -170,6 +246,8 @@ def _step_impulse(
             fq[dof_of[3 * p + a]] += fp[p, a]
     if palm_x_dof[0] >= 0:
         fw = width_damping * (v[palm_x_dof[1]] - v[palm_x_dof[0]])
+        if body.law.exponent != 1.0:
+            fw *= _width_scale(body, palm_x_dof, q)
         fq[palm_x_dof[0]] += f_now + fw
         fq[palm_x_dof[1]] -= f_now + fw
     for i in range(fq.shape[0]):

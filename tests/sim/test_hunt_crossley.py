@@ -1,0 +1,195 @@
+"""Issue 33 point 7: the simulator carries a stiffening material (deformctl.sim.hunt_crossley).
+
+Known truth: the linear lattice's own calibration (n = 1), the homogeneity of the power-law
+squeeze (any closing gives the same C_n), the object's law ``k dⁿ + λ_hc dⁿ ḋ`` for a slow
+floating squeeze (within 5 % over the loading range), and main's bytes for n = 1.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from deformctl.catalog import CatalogObject
+from deformctl.cli import app
+from deformctl.errors import InputDataError
+from deformctl.presets import sim_preset
+from deformctl.series import SqueezeSeries
+from deformctl.sim import ObjectSpec, squeeze
+from deformctl.sim import hunt_crossley as hc
+from deformctl.sim.lattice import build_lattice
+from deformctl.sim.statics import unit_squeeze_stiffness_n_per_m
+
+runner = CliRunner()
+#: the paper preset on a small lattice (5 particles per side: the tests stay fast)
+SMALL = dataclasses.replace(sim_preset("paper").settings, particles_per_side=5)
+
+
+def _spec(n: float, damping_ns_per_cm: float = 0.0) -> ObjectSpec:
+    # W = 5 N, mu = 0.5: F_op = F_w = 5 N; D = 5 N/cm at F_op: d_op = 1 cm (10 % strain)
+    return ObjectSpec("hc", (10.0, 10.0, 10.0), 5.0, 0.5, 5.0, damping_ns_per_cm, n)
+
+
+def test_the_catalog_values_map_to_k_and_lambda_at_the_operating_force() -> None:
+    spec = _spec(2.5, 2.0)
+    f_op = 5.0 / (2 * 0.5)
+    d_op = f_op / 500.0  # m
+    assert spec.operating_compression_m == pytest.approx(d_op, rel=1e-15)
+    assert spec.hc_stiffness_n_per_m_pow_n == pytest.approx(f_op / d_op**2.5, rel=1e-12)
+    # D is the secant at F_op, lambda the equivalent damping there
+    assert spec.elastic_force_n(d_op) / d_op == pytest.approx(500.0, rel=1e-12)
+    assert spec.hc_damping_ns_per_m_pow_n_plus_1 * d_op**2.5 == pytest.approx(200.0, rel=1e-12)
+
+
+def test_the_calibration_at_n_1_is_the_linear_calibration() -> None:
+    for surface in (False, True):
+        lattice = build_lattice((0.1, 0.08, 0.06), 0.025, palm_surface=surface)
+        c_1, _ = hc.unit_squeeze_power(lattice, 1.0)
+        assert c_1 == pytest.approx(unit_squeeze_stiffness_n_per_m(lattice), rel=1e-8)
+
+
+@pytest.mark.parametrize("n", [1.5, 3.0])
+def test_the_power_law_squeeze_is_homogeneous(n: float, monkeypatch: pytest.MonkeyPatch) -> None:
+    lattice = build_lattice((0.1, 0.08, 0.06), 0.025, palm_surface=True)
+    c_small, g_small = hc.unit_squeeze_power(lattice, n)
+    monkeypatch.setattr(hc, "CALIBRATION_STRAIN", 0.2)
+    c_big, g_big = hc.unit_squeeze_power(lattice, n)
+    assert c_big == pytest.approx(c_small, rel=1e-8)
+    assert g_big == pytest.approx(g_small, rel=1e-7)
+    # and it is a stiffening law: the linear lattice's constant is not C_n
+    assert abs(c_small / unit_squeeze_stiffness_n_per_m(lattice) - 1.0) > 0.5
+
+
+def _law_error(sq: SqueezeSeries, spec: ObjectSpec, ramp_s: float) -> tuple[float, float]:
+    """(largest relative miss of ``k dⁿ + λ_hc dⁿ ḋ`` over the loading samples from 10 % of the
+    peak force, relative miss of ``k dⁿ`` at the end of the hold)."""
+    n = spec.stiffness_exponent
+    d = np.maximum(sq.compression_m, 0.0)
+    rate = np.gradient(sq.compression_m, sq.time_s)
+    law = spec.hc_stiffness_n_per_m_pow_n * d**n
+    law = law + spec.hc_damping_ns_per_m_pow_n_plus_1 * d**n * rate
+    f = sq.force_n
+    loading = (sq.time_s <= ramp_s) & (f >= 0.1 * f.max())
+    miss = float(np.max(np.abs(f[loading] - law[loading]) / law[loading]))
+    end = abs(f[-1] - spec.hc_stiffness_n_per_m_pow_n * d[-1] ** n) / f[-1]
+    return miss, float(end)
+
+
+@pytest.mark.parametrize(("n", "damping"), [(1.5, 0.0), (2.0, 2.0), (3.0, 0.0), (3.0, 1.0)])
+def test_the_simulated_squeeze_follows_the_fitted_law(n: float, damping: float) -> None:
+    spec = _spec(n, damping)
+    ramp = 2.0
+    hold = 3.0 if damping else 0.2  # the damped object creeps to its static compression
+    sq = squeeze(spec, peak_force_n=7.5, ramp_s=ramp, hold_s=hold, settings=SMALL, gravity=False)
+    miss, end = _law_error(sq, spec, ramp)
+    assert miss <= 0.05, miss
+    assert end <= 0.01, end
+    # not a test that cannot fail: a linear spring of the same D misses by far more
+    linear = spec.stiffness_n_per_m * sq.compression_m[-1]
+    assert abs(linear / sq.force_n[-1] - 1.0) > 0.05
+
+
+def test_a_hard_squeeze_of_a_damped_object_stays_stable() -> None:
+    # 5 F_op: the dampers are capped above DAMPING_CAP * DAMPING_REFERENCE F_op
+    spec = _spec(3.0, 3.0)
+    sq = squeeze(spec, peak_force_n=25.0, ramp_s=0.25, hold_s=1.0, settings=SMALL, gravity=True)
+    assert np.all(np.isfinite(sq.compression_m))
+    d_static = (25.0 / spec.hc_stiffness_n_per_m_pow_n) ** (1.0 / 3.0)
+    assert float(sq.compression_m.max()) < 1.5 * d_static
+
+
+#: sha256 of a seeded squeeze's and lift attempt's series computed by main 728c7b3 (before the
+#: Hunt–Crossley elements): n = 1 runs the linear kernels, bit for bit
+MAIN_BYTES = {
+    "squeeze_paper": "5a5f0409ad575cb7f1ddab5950347cf53f3d6c3f37846c864e93cd398c0d6d71",
+    "lift_paper": "3874d1cbaee66d236aed6d1bfe8547dd628be12d7c2e39d605d4b43f11797d06",
+    "squeeze_table": "bebc28b8aafa5b8af702be47d0b425786c5c711293de61c80ba9e37efe4a2903",
+    "lift_table": "1b2d998fb3a614f2bc79ab0d69cf2413792a1393d3ec0099a814de892a678652",
+}
+
+
+def _digest(*arrays: object) -> str:
+    h = hashlib.sha256()
+    for a in arrays:
+        h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+    return h.hexdigest()
+
+
+@pytest.mark.parametrize("preset", ["paper", "table"])
+def test_n_1_is_main_bit_for_bit(preset: str) -> None:
+    spec = ObjectSpec("seeded", (6.0, 5.0, 4.0), 1.5, 0.6, 4.0, 1.2, stiffness_exponent=1.0)
+    p = sim_preset(preset)
+    sq = squeeze(
+        spec,
+        peak_force_n=2.0,
+        ramp_s=0.1,
+        hold_s=0.1,
+        settings=p.settings,
+        noise_force_n=0.01,
+        noise_position_m=1e-5,
+        seed=7,
+    )
+    got = _digest(sq.time_s, sq.force_n, sq.compression_m, sq.palm_left_x_m, sq.palm_right_x_m)
+    assert got == MAIN_BYTES[f"squeeze_{preset}"]
+    s = p.lift_attempt(spec, 2.5).series
+    assert s is not None
+    got = _digest(
+        s.time_s, s.palm_z_m, s.object_com_z_m, s.slip_m, s.normal_force_n, s.friction_force_n
+    )
+    assert got == MAIN_BYTES[f"lift_{preset}"]
+
+
+# ---------------------------------------------------------------------------- the catalog column
+
+
+@pytest.mark.parametrize(
+    ("value", "words"),
+    [
+        ("0.5", "must be >= 1, got 0.5"),
+        ("3.5", "must be <= 3, got 3.5"),
+        ("stiff", "material_stiffness_exponent"),
+        ("nan", "material_stiffness_exponent"),
+        ("", "material_stiffness_exponent"),
+    ],
+)
+@pytest.mark.parametrize("command", ["measure", "lift"])
+def test_a_bad_exponent_is_one_data_error_naming_the_column(
+    value: str,
+    words: str,
+    command: str,
+    tmp_path: Path,
+    catalog_row: dict[str, Any],
+    write_catalog: Any,
+) -> None:
+    row = {**catalog_row, "material_stiffness_exponent": value}
+    cat = write_catalog(tmp_path / "cat.csv", [row])
+    out = tmp_path / ("sq.mcap" if command == "measure" else "lift.csv")
+    result = runner.invoke(app, [command, str(cat), "--sim", "-o", str(out)])
+    assert result.exit_code == 65, result.output
+    assert result.stderr.startswith("error: ")
+    assert result.stderr.count("\n") == 1, result.stderr
+    assert "material_stiffness_exponent" in result.stderr
+    assert words in result.stderr
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("value", [0.99, 3.01, math.nan, "two", None])
+def test_the_row_parser_refuses_a_bad_exponent(value: object, catalog_row: dict[str, Any]) -> None:
+    with pytest.raises(InputDataError, match="material_stiffness_exponent"):
+        CatalogObject.from_row({**catalog_row, "material_stiffness_exponent": value})
+
+
+def test_an_absent_exponent_is_linear_and_a_given_one_reaches_the_simulator(
+    catalog_row: dict[str, Any],
+) -> None:
+    assert CatalogObject.from_row(catalog_row).to_sim_spec().stiffness_exponent == 1.0
+    spec = CatalogObject.from_row({**catalog_row, "material_stiffness_exponent": 2.5}).to_sim_spec()
+    assert spec.stiffness_exponent == 2.5
+    assert spec.hunt_crossley
