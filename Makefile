@@ -39,11 +39,11 @@ SEED ?= 0
 fuzz: install
 	$(BIN)/python -m tests.fuzz.hostile_cli --cases $(CASES) --seed $(SEED)
 
-# The golden numbers (tests/test_golden.py) recomputed under every OpenBLAS kernel the installed
+# The golden numbers (tests/repro/test_golden.py) recomputed under every OpenBLAS kernel the installed
 # numpy accepts x 1 and 2 BLAS threads, each number's spread beside its tolerance, then
-# tests/test_golden.py under each kernel (docs/reference/reproducibility.md). JOBS subprocesses
-# side by side. TESTS="tests/test_train.py ..." runs other test files under each kernel instead.
-TESTS ?= tests/test_golden.py
+# tests/repro/test_golden.py under each kernel (docs/reference/reproducibility.md). JOBS subprocesses
+# side by side. TESTS="tests/train/test_train.py ..." runs other test files under each kernel instead.
+TESTS ?= tests/repro/test_golden.py
 golden-spread: install
 	$(BIN)/python -m deformctl.repro.golden_spread --jobs $(JOBS) --tests $(TESTS)
 

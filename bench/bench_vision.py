@@ -13,9 +13,9 @@ import time
 
 from deformctl import vision
 from deformctl.vision import synth
-from tests.test_vision import CASES, MARKER_CM, _k, _scenes
+from tests._helpers.vision_render import render
 from tests.vision.test_camera import BOX_CM, ORANGE, camera_matrix
-from tests.vision_render import render
+from tests.vision.test_size import CASES, MARKER_CM, _k, _scenes
 
 SEEDS = (0, 1, 2)
 

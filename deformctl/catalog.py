@@ -85,7 +85,7 @@ COLUMN_QUANTITIES: dict[str, Quantity] = {
 #: what a gripper can hold and the simulator can integrate (:mod:`deformctl.quantities` says why).
 #: The catalog spec (``schemas/catalog.columns.json``) states the same numbers as
 #: ``minimum``/``maximum``, so every reader refuses an out-of-bounds row before any numerics
-#: (tests/test_hostile_bounds.py checks the two agree).
+#: (tests/fuzz/test_hostile_bounds.py checks the two agree).
 BOUNDS: dict[str, tuple[float, float]] = {
     column: (q.low, q.high) for column, q in COLUMN_QUANTITIES.items()
 }

@@ -1,4 +1,4 @@
-"""Moved to :mod:`deformctl.repro.golden`; this name is kept for ``tests/test_golden.py``.
+"""Moved to :mod:`deformctl.repro.golden`; this name is kept for ``tests/repro/test_golden.py``.
 
 ``python -m deformctl.golden [--update]`` still works and runs :func:`deformctl.repro.golden.main`.
 """

@@ -20,10 +20,10 @@ stiffness, an implied damping ratio) has its plausible band here too (:class:`Pl
 section at the end): :mod:`deformctl.plausibility` judges every recording against it.
 
 The catalog's bounds (``schemas/catalog.columns.json`` states the same numbers, checked by
-``tests/test_catalog.py``) are what a gripper can hold and the simulator can integrate: outside
-them numpy sees underflow and overflow (a size of 1e-308 cm gives a non-finite lattice, a weight of
-1e-300 N or a damping of 1e308 N·s/cm an indefinite factor) or the run never ends (an object of
-1e6 cm).
+``tests/catalog/test_catalog.py``) are what a gripper can hold and the simulator can integrate:
+outside them numpy sees underflow and overflow (a size of 1e-308 cm gives a non-finite lattice,
+a weight of 1e-300 N or a damping of 1e308 N·s/cm an indefinite factor) or the run never ends (an
+object of 1e6 cm).
 """
 
 from __future__ import annotations

@@ -9,6 +9,8 @@
   testing machine's CSV export (time s, force N, compression mm, names with their units).
 * :func:`small_lattice`: the simulator's lattice of a 10 x 7 x 5 cm box at 2.5 cm spacing
   (5 x 4 x 3 particles), built once per session; treat it as read-only.
+* :func:`dask_cluster`: a Dask scheduler and two workers, each its own process, on 127.0.0.1
+  (``tests/_helpers/dask_cluster.py``), stopped after the test.
 
 Hypothesis draws its examples from a fixed seed (``derandomize``) and keeps no example database,
 so every run of ``make test`` tries the same cases on every machine: a fuzz test that finds a bug
@@ -25,6 +27,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pytest
 from hypothesis import settings
+
+from tests._helpers.dask_cluster import dask_cluster  # noqa: F401 - a shared fixture
 
 settings.register_profile("deterministic", derandomize=True, database=None)
 settings.register_profile("explore", derandomize=False)

@@ -7,6 +7,7 @@ import dataclasses
 import inspect
 import subprocess
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 import pytest
@@ -16,6 +17,18 @@ from deformctl.cli import COMMANDS
 from deformctl.cli._options import HEAVY_DEFAULTS
 
 PACKAGE = Path(deformctl.__file__).resolve().parent
+TESTS = Path(__file__).resolve().parent
+#: The test modules that stay at the top of tests/: each tests the project as a whole.
+PROJECT_WIDE = {
+    "test_api.py": "the public API (deformctl/__init__.py) against every command's defaults",
+    "test_assertions.py": "every test module of the suite asserts something",
+    "test_docs.py": "every shell block of README.md and docs/ runs; the CLI reference is current",
+    "test_imports.py": "the import graph and the module sizes of the whole package",
+    "test_layout.py": "where things live, in deformctl/ and in tests/",
+    "test_wheel.py": "the built wheel, installed and run without the checkout",
+}
+#: Test folders that mirror no module: hostile inputs sent through every command and reader.
+CROSS_CUTTING = {"fuzz": "hostile and property-based inputs across commands and readers"}
 #: Catalog columns no other table has: only deformctl/catalog.py names them.
 CATALOG_ONLY = {
     "size_x_cm",
@@ -116,3 +129,104 @@ def test_make_examples_runs_every_example() -> None:
     recipe = makefile.split("\nexamples: install\n", 1)[1].split("\n\n", 1)[0]
     for example in sorted((PACKAGE.parent / "examples").glob("[!_]*.py")):
         assert f"examples/{example.name}" in recipe, example.name
+
+
+def layout_problems(files: Mapping[str, str], source: set[str]) -> list[str]:
+    """What breaks the tests' layout (issue 31, point 8), one line each.
+
+    ``files`` maps each Python file under ``tests/`` (its path there, ``cli/test_lift.py``) to its
+    text, ``source`` holds the paths of the package's files under ``deformctl/``. The rules:
+
+    * a test module at the top of ``tests/`` is one of :data:`PROJECT_WIDE`;
+    * any other sits in ``tests/<package>/...``, mirroring a package or module of ``deformctl/``
+      (``tests/lift/`` for ``deformctl/lift/``, ``tests/table/`` for ``deformctl/table.py``,
+      ``tests/lift/runners/`` for ``deformctl/lift/runners/``), or in a :data:`CROSS_CUTTING`
+      folder;
+    * every folder from ``tests/`` down to a test module has an ``__init__.py``, so two test
+      modules of the same name in two folders are two modules;
+    * no file imports a test module (shared code lives in ``tests/_helpers/``, fixtures in
+      ``tests/conftest.py``);
+    * every package of ``deformctl/`` has a test folder.
+    """
+    problems = []
+    tested: set[str] = set()
+    for name, text in sorted(files.items()):
+        path = Path(name)
+        folders = path.parent.parts
+        if path.name.startswith("test_"):
+            if not folders and path.name not in PROJECT_WIDE:
+                problems.append(f"{name}: a top-level test module outside PROJECT_WIDE")
+            elif folders and folders[0] not in CROSS_CUTTING:
+                mirrored = "/".join(folders)
+                if f"{mirrored}/__init__.py" not in source and f"{mirrored}.py" not in source:
+                    problems.append(f"{name}: deformctl/ has no {mirrored}/ nor {mirrored}.py")
+            tested.add(folders[0] if folders else "")
+            for k in range(len(folders) + 1):
+                init = "/".join([*folders[:k], "__init__.py"])
+                if init not in files:
+                    problems.append(f"{name}: no {init}")
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, ast.Import):
+                modules = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                modules = [node.module or ""] + [alias.name for alias in node.names]
+            else:
+                continue
+            if any(part.startswith("test_") for m in modules for part in m.split(".")):
+                problems.append(f"{name}:{node.lineno}: imports a test module")
+    packages = {Path(p).parts[0] for p in source if len(Path(p).parts) == 2}
+    problems += [f"deformctl/{p}/ has no tests/{p}/" for p in sorted(packages - tested)]
+    return sorted(set(problems))
+
+
+def _tree(root: Path) -> dict[str, str]:
+    return {
+        p.relative_to(root).as_posix(): p.read_text(encoding="utf-8")
+        for p in sorted(root.rglob("*.py"))
+        if "__pycache__" not in p.parts
+    }
+
+
+def test_tests_mirror_the_source() -> None:
+    files = _tree(TESTS)
+    assert not layout_problems(files, set(_tree(PACKAGE)))
+    assert sum(Path(name).name.startswith("test_") for name in files) > 100  # the walk found them
+
+
+def test_the_layout_check_finds_each_misplaced_test() -> None:
+    source = {"__init__.py", "table.py", "lift/__init__.py", "lift/runners/__init__.py"}
+    good = {
+        "__init__.py": "",
+        "test_docs.py": "",
+        "_helpers/__init__.py": "",
+        "_helpers/bags.py": "def write_bag():\n    pass\n",
+        "table/__init__.py": "",
+        "table/test_table.py": "from tests._helpers.bags import write_bag\n",
+        "lift/__init__.py": "",
+        "lift/test_search.py": "from ._threshold import ThresholdRunner\n",
+        "lift/runners/__init__.py": "",
+        "lift/runners/test_rig.py": "",
+        "fuzz/__init__.py": "",
+        "fuzz/test_hostile.py": "",
+    }
+    assert layout_problems(good, source) == []
+    bad = {
+        **good,
+        "test_table.py": "",
+        "tabel/__init__.py": "",
+        "tabel/test_lookup.py": "",
+        "lift/runners/test_sim.py": "from tests.lift.test_search import helper\n",
+        "table/test_guards.py": "import test_table\nfrom . import test_table as t\n",
+    }
+    del bad["lift/runners/__init__.py"]
+    assert layout_problems(bad, source) == [
+        "lift/runners/test_rig.py: no lift/runners/__init__.py",
+        "lift/runners/test_sim.py: no lift/runners/__init__.py",
+        "lift/runners/test_sim.py:1: imports a test module",
+        "tabel/test_lookup.py: deformctl/ has no tabel/ nor tabel.py",
+        "table/test_guards.py:1: imports a test module",
+        "table/test_guards.py:2: imports a test module",
+        "test_table.py: a top-level test module outside PROJECT_WIDE",
+    ]
+    del bad["lift/test_search.py"], bad["lift/runners/test_rig.py"], bad["lift/runners/test_sim.py"]
+    assert "deformctl/lift/ has no tests/lift/" in layout_problems(bad, source)

@@ -27,9 +27,10 @@ running force peak ``p`` where
    before the peak. Conditions 1 and 2 alone also hold for a heavily damped object after its
    force peak: with ``λ/D`` long against the squeeze, the compression lags the force and still
    grows while the force falls by half (measured on the synthetic squeezes of
-   ``tests/test_characterize.py``, λ/D ≥ 0.5 s: 25 of 240 squeezes). With condition 3 none of
+   ``tests/characterize/test_fit.py``, λ/D ≥ 0.5 s: 25 of 240 squeezes). With condition 3 none of
    them, and none of the simulator's squeezes, is a rupture; a force collapse to 30–69 % of the
-   peak with the gripper still closing is found within 6–155 ms (``tests/test_phases.py``).
+   peak with the gripper still closing is found within 6–155 ms
+   (``tests/characterize/test_rupture_phases.py``).
 
 A force that falls while the compression recedes (a load–unload cycle, a release) is not a
 rupture.

@@ -4,7 +4,7 @@ Help texts state defaults taken from the library, not typed in: the search
 (:mod:`deformctl.lift.search`), the sweep executor (:mod:`deformctl.parallel`), the squeeze
 protocol (:mod:`deformctl.measure`) and the rig runner. The simulator's and OpenCV's defaults are
 restated in :data:`HEAVY_DEFAULTS`, because importing numba or OpenCV costs the command line half
-a second at start-up; ``tests/test_cli_options.py`` checks each of them against the library
+a second at start-up; ``tests/test_layout.py`` checks each of them against the library
 object it restates, so they cannot drift.
 
 An option whose value is ``None`` was not given; the library default then applies. The five

@@ -14,7 +14,7 @@ bits. This script measures what that does to the numbers the tests compare:
    number's spread (max - min over the runs) beside its tolerance
    (:data:`deformctl.repro.golden.TOLERANCES`) and the worst move from
    ``datasets/golden/expected.json`` as a fraction of what the tolerance allows.
-3. It runs test files (default ``tests/test_golden.py``) under each kernel with pytest, in a
+3. It runs test files (default ``tests/repro/test_golden.py``) under each kernel with pytest, in a
    subprocess that first prints the kernel threadpoolctl reports.
 
 Only this script sets OpenBLAS variables, in its own subprocesses; the tests and CI never do.
@@ -28,7 +28,7 @@ Usage::
     python -m deformctl.repro.golden_spread [--kernels default,Haswell,...] [--threads 1,2]
         [--jobs N] [--tests FILE ...] [--no-spread] [--json OUT.json] [--verbose]
 
-``--no-spread --tests tests/test_train.py ...`` is the audit mode: the given test files under
+``--no-spread --tests tests/train/test_train.py ...`` is the audit mode: the given test files under
 each kernel (x each ``--threads`` value with ``--test-threads``), no golden run.
 """
 
@@ -56,7 +56,7 @@ CORETYPES = (
     "Sandybridge", "Bobcat", "Bulldozer", "Piledriver", "Haswell", "Steamroller", "Excavator",
     "Zen", "SkylakeX", "Cooperlake", "SapphireRapids",
 )  # fmt: skip
-DEFAULT_TESTS = ("tests/test_golden.py",)
+DEFAULT_TESTS = ("tests/repro/test_golden.py",)
 _BLAS_VARS = ("OPENBLAS_CORETYPE", "OPENBLAS_L2_SIZE", "OPENBLAS_NUM_THREADS")
 
 

@@ -24,7 +24,6 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from builders import PAPER_OBJECTS, make_attempts, make_provenance, make_squeezes, make_tables
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
@@ -44,6 +43,13 @@ from deformctl.cli import app
 from deformctl.errors import EXIT_DATAERR, DeformctlError
 from deformctl.population import make_population
 from deformctl.train import train_model
+from tests._helpers.builders import (
+    PAPER_OBJECTS,
+    make_attempts,
+    make_provenance,
+    make_squeezes,
+    make_tables,
+)
 
 runner = CliRunner()
 OBJECTS = [{"object_id": "A", "weight_n": 0.7, "friction_mu": 0.5}]

@@ -10,7 +10,6 @@ from typing import Any
 import jsonschema
 import numpy as np
 import pytest
-from builders import PAPER_OBJECTS
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -25,6 +24,7 @@ from deformctl.artifacts import (
 )
 from deformctl.artifacts.schema import MESSAGE_SCHEMAS, TABLE_KINDS, fast_check, json_validator
 from deformctl.errors import EXIT_NOINPUT, MissingInputError, OutputExistsError, SchemaError
+from tests._helpers.builders import PAPER_OBJECTS
 
 
 def test_atomic_output_success_and_failure(tmp_path: Path) -> None:

@@ -21,7 +21,6 @@ from typing import Any
 
 import numpy as np
 import pytest
-from builders import make_provenance, make_squeezes
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mcap.writer import CompressionType, Writer
@@ -38,6 +37,7 @@ from deformctl.artifacts.mcap import (
 from deformctl.artifacts.schema import json_schema_bytes, message_columns, validate_message
 from deformctl.errors import DeformctlError, SchemaError
 from deformctl.series import SqueezeSeries
+from tests._helpers.builders import make_provenance, make_squeezes
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 FIELDS = ("time_s", "force_n", "compression_m", "commanded_force_n", "palm_left_x_m",

@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from builders import make_attempts, make_provenance, make_squeezes
 from mcap.reader import make_reader
 from mcap.writer import Writer
 
@@ -25,6 +24,7 @@ from deformctl.artifacts.schema import json_schema_bytes
 from deformctl.errors import EXIT_DATAERR, InputDataError, OutputExistsError, SchemaError
 from deformctl.lift.search import LiftAttempt
 from deformctl.series import SqueezeSeries, TrialOutcome
+from tests._helpers.builders import make_attempts, make_provenance, make_squeezes
 
 OBJECTS = [
     {"object_id": "A", "weight_n": 0.7, "friction_mu": 0.5, "material_damping_ns_per_cm": math.nan},

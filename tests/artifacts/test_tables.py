@@ -12,7 +12,6 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-from builders import PAPER_OBJECTS, make_provenance, make_tables
 
 from deformctl.artifacts import (
     TABLE_KINDS,
@@ -31,6 +30,7 @@ from deformctl.errors import (
     OutputExistsError,
     SchemaError,
 )
+from tests._helpers.builders import PAPER_OBJECTS, make_provenance, make_tables
 
 CATALOG_HEADER = "object_id,size_x_cm,size_y_cm,size_z_cm,weight_n,friction_mu\n"
 

@@ -22,22 +22,13 @@ import pytest
 from deformctl.characterize import fit_object, synthetic_law_squeeze
 from deformctl.characterize.material_options import MODELS
 
+from ._truth import TRUTH
+
 DRAWS = int(os.environ.get("DEFORMCTL_MATERIAL_DRAWS", "20"))
 SQUEEZES = 3
 LAG_S = 0.0173
 REL_TOL = 0.02
 MIN_SHARE = 0.95
-
-#: Each law's true parameters (SI).
-TRUTH: dict[str, dict[str, float]] = {
-    "kv": {"stiffness_n_per_m": 1000.0, "damping_ns_per_m": 100.0},
-    "hc": {
-        "stiffness_n_per_m_pow_n": 1000.0 / 0.01**0.8,  # 1000 N/m secant at 10 mm
-        "exponent": 1.8,
-        "damping_ns_per_m_pow_n_plus_1": 100.0 / 0.01**1.8,
-    },
-    "sls": {"stiffness_n_per_m": 800.0, "arm_stiffness_n_per_m": 1200.0, "relaxation_time_s": 0.5},
-}
 
 
 def _draw(law: str, seed: int) -> tuple[float, str]:

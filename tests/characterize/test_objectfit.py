@@ -26,7 +26,7 @@ from deformctl.cli import app
 from deformctl.errors import UsageError
 from deformctl.series import SqueezeSeries
 
-from .test_materials import TRUTH
+from ._truth import TRUTH
 
 runner = CliRunner()
 KV = TRUTH["kv"]

@@ -20,7 +20,7 @@ from deformctl.characterize import synthetic_law_squeeze
 from deformctl.characterize.plot import COLOURS, PIXELS
 from deformctl.cli import app
 
-from .test_materials import TRUTH
+from ._truth import TRUTH
 
 runner = CliRunner()
 

@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from doubtful_logs import csv_text
 from typer.testing import CliRunner
 
 from deformctl.artifacts import read_squeeze_log, read_table, write_squeeze_log
@@ -31,8 +30,9 @@ from deformctl.characterize import (
 from deformctl.characterize.rupture import cut_rupture, find_relaxation
 from deformctl.cli import app
 from deformctl.series import SqueezeSeries
+from tests._helpers.doubtful_logs import csv_text
 
-from .test_materials import TRUTH
+from ._truth import TRUTH
 
 RUPTURE_N = 12.0
 WINDOW_S = 0.34  # the default window at 200 Hz

@@ -19,9 +19,7 @@ from pathlib import Path
 from typing import Any
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "artifacts"))
-
-from builders import make_attempts, make_squeezes, make_tables  # noqa: E402
+sys.path.insert(0, str(HERE.parents[1]))  # the checkout, for tests._helpers
 
 from deformctl.artifacts import (  # noqa: E402
     Provenance,
@@ -32,6 +30,7 @@ from deformctl.artifacts import (  # noqa: E402
     write_squeeze_log,
     write_table,
 )
+from tests._helpers.builders import make_attempts, make_squeezes, make_tables  # noqa: E402
 
 OBJECTS = [
     {"object_id": "A", "weight_n": 0.7, "size_x_cm": 17.8, "friction_mu": 0.5},

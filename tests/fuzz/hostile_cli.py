@@ -58,13 +58,12 @@ class Case:
 
 def _write_base(root: Path) -> dict[str, Path]:
     """The good artifacts every case starts from."""
-    sys.path.insert(0, str(REPO / "tests"))
-    from test_measure_ingest import write_bag
-
+    sys.path.insert(0, str(REPO))  # the checkout, for tests._helpers
     from deformctl.artifacts import write_table
     from deformctl.artifacts.mcap import write_squeeze_log
     from deformctl.measure.recording import SqueezeSeries
     from deformctl.table import build_index_table
+    from tests._helpers.ros2_bags import write_bag
 
     base = {"catalog": root / "objects.csv"}
     shutil.copy(REPO / "datasets/paper/objects.csv", base["catalog"])

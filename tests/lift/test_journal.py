@@ -35,7 +35,7 @@ from deformctl.lift.stage import lift_catalog_files
 REPO = Path(__file__).resolve().parents[2]
 RIGS = REPO / "tests" / "rigs"
 THRESHOLD_N = 17.0
-# F_w = W / (2 mu): sponge 10 N, brick 16 N, anvil 40 N (as tests/test_cli_lift.py)
+# F_w = W / (2 mu): sponge 10 N, brick 16 N, anvil 40 N (as tests/cli/test_lift.py)
 CATALOG = (
     "object_id,size_x_cm,size_y_cm,size_z_cm,weight_n,friction_mu\n"
     "sponge,8,5,4,10,0.5\nbrick,6,6,6,16,0.5\nanvil,5,5,5,40,0.5\n"

@@ -16,16 +16,16 @@ from pathlib import Path
 import mcap_ros2.writer
 import numpy as np
 import pytest
-import test_measure_ingest
 from mcap.reader import make_reader
 from mcap.stream_reader import CRCValidationError
-from test_measure_ingest import LEFT, POSE, RIGHT, write_bag
 from typer.testing import CliRunner
 
 from deformctl.artifacts.mcap import write_squeeze_log
 from deformctl.artifacts.mcap.integrity import locate_damage
 from deformctl.cli import app
 from deformctl.measure.recording import SqueezeSeries
+from tests._helpers import ros2_bags
+from tests._helpers.ros2_bags import LEFT, POSE, RIGHT, write_bag
 
 runner = CliRunner()
 #: Chunk record: opcode (1), length (8), start/end time (16), uncompressed size (8) and CRC (4),
@@ -40,7 +40,7 @@ def bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("bag") / "squeeze.mcap"
     small_chunks = functools.partial(mcap_ros2.writer.Writer, chunk_size=20_000)
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(test_measure_ingest, "Writer", small_chunks)
+        mp.setattr(ros2_bags, "Writer", small_chunks)
         write_bag(path, 30.02, 6.47, seed=1, force_rate_hz=250.0, n_squeezes=2)
     return path
 

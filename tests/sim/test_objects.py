@@ -1,4 +1,7 @@
-"""The closed-form helpers of the simulator's object (catalog parsing: tests/test_catalog.py)."""
+"""The closed-form helpers of the simulator's object.
+
+Catalog parsing is tested in tests/catalog/test_catalog.py.
+"""
 
 from __future__ import annotations
 
