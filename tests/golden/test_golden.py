@@ -12,4 +12,3 @@ def test_the_shim_re_exports_the_same_objects() -> None:
     for name in golden.__all__:
         assert getattr(golden, name) is getattr(repro_golden, name), name
     assert {"compare", "compute_golden", "main", "TOLERANCES"} <= set(golden.__all__)
-

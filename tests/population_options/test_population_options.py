@@ -22,7 +22,8 @@ def test_the_defaults_pass_the_quantity_rules() -> None:
     assert FRICTION_MU.check(DEFAULT_FRICTION_MU) == 0.5
     with pytest.raises(UsageError, match="--friction-mu"):
         FRICTION_MU.check(0.0)  # the rule bites: F_w = W / 2μ needs μ > 0
-    assert isinstance(PAPER_POPULATION_SIZE, int) and isinstance(PAPER_TRAIN_SIZE, int)
+    assert isinstance(PAPER_POPULATION_SIZE, int)
+    assert isinstance(PAPER_TRAIN_SIZE, int)
     assert 0 < PAPER_TRAIN_SIZE < PAPER_POPULATION_SIZE  # objects remain to test on
 
 
@@ -37,6 +38,9 @@ def test_the_library_defaults_are_these() -> None:
 
 
 def test_importing_it_imports_neither_numpy_nor_pandas() -> None:
-    code = "import sys, deformctl.population_options; print(sorted({'numpy', 'pandas'} & set(sys.modules)))"
+    code = (
+        "import sys, deformctl.population_options; "
+        "print(sorted({'numpy', 'pandas'} & set(sys.modules)))"
+    )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "[]"

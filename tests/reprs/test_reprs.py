@@ -37,7 +37,9 @@ class _Result:
 
 def test_each_kind_of_value_is_short() -> None:
     assert short(1 / 3) == "0.333333"
-    assert short(True) == "True" and short(None) == "None" and short(12) == "12"
+    assert short(True) == "True"
+    assert short(None) == "None"
+    assert short(12) == "12"
     assert short(np.zeros((3753, 2))) == "array[3753 x 2]"
     assert short(np.float64(2.5)) == "2.5"
     assert short(pd.DataFrame(np.zeros((73, 22)))) == "DataFrame[73 x 22]"
@@ -46,11 +48,13 @@ def test_each_kind_of_value_is_short() -> None:
     assert short({"a": 1.0}) == "{'a': 1}"
     assert short({k: k for k in "abcd"}) == "{4 keys}"
     cut = short("z" * 500)
-    assert len(cut) == MAX_TEXT + 2 and cut.endswith("...'")  # quotes around MAX_TEXT characters
+    assert len(cut) == MAX_TEXT + 2
+    assert cut.endswith("...'")
     assert short(object()).startswith("<object object at 0x")  # a short repr stays
     assert short(_Shown("x" * (MAX_TEXT + 1))) == "_Shown(...)"  # a long one does not
     assert short(_Shown("a\nb")) == "_Shown(...)"  # nor a multi-line one
-    assert len(list(range(MAX_ITEMS))) == MAX_ITEMS and short(list(range(MAX_ITEMS))) == "[0, 1, 2]"
+    assert short(list(range(MAX_ITEMS))) == "[0, 1, 2]"  # up to MAX_ITEMS: item by item
+    assert short(list(range(MAX_ITEMS + 1))) == "[4 items]"
 
 
 def test_a_result_with_big_fields_prints_on_one_short_line() -> None:
@@ -64,5 +68,6 @@ def test_a_result_with_big_fields_prints_on_one_short_line() -> None:
     )
     in_a_list = _Result(None, [inner], inner)  # a result inside a sequence: by its class only
     assert repr(in_a_list) == (
-        "_Result(table=None, attempts=[_Inner(...)], inner=_Inner(samples=array[1000000], label='A'))"
+        "_Result(table=None, attempts=[_Inner(...)], "
+        "inner=_Inner(samples=array[1000000], label='A'))"
     )

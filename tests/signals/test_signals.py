@@ -50,7 +50,8 @@ def test_uniform_grid_keeps_a_uniform_clock_and_resamples_a_jittered_one() -> No
     y = 2.0 * t + 1.0
     dt_s, grid, (same,) = uniform_grid(t, y)
     assert dt_s == pytest.approx(0.01)
-    assert grid is t and same is y  # as they are
+    assert grid is t
+    assert same is y
     jittered = t + np.random.default_rng(1).uniform(-2e-3, 2e-3, t.size)
     jittered[0], jittered[-1] = 0.0, 0.99
     dt_s, grid, (line,) = uniform_grid(jittered, 2.0 * jittered + 1.0)

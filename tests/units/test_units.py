@@ -30,14 +30,14 @@ POUND_KG = 0.45359237  #: the international avoirdupois pound (1959), exact
 
 def test_constants_against_their_definitions() -> None:
     assert GRAVITY_M_S2 == 9.80665  # standard gravity (CGPM 1901), exact
-    assert LBF_N == pytest.approx(POUND_KG * GRAVITY_M_S2, rel=1e-15)
-    assert OZF_N * 16 == pytest.approx(LBF_N, rel=1e-15)
-    assert (KGF_N, GF_N * 1000) == (GRAVITY_M_S2, pytest.approx(GRAVITY_M_S2, rel=1e-15))
-    assert INCH_M == pytest.approx(2.54 * CM, rel=1e-15)
+    assert pytest.approx(POUND_KG * GRAVITY_M_S2, rel=1e-15) == LBF_N
+    assert pytest.approx(LBF_N, rel=1e-15) == OZF_N * 16
+    assert (GRAVITY_M_S2, pytest.approx(GRAVITY_M_S2, rel=1e-15)) == (KGF_N, GF_N * 1000)
+    assert pytest.approx(2.54 * CM, rel=1e-15) == INCH_M
     assert (CM, MM, GIB) == (0.01, 0.001, 1_073_741_824)
     # 2 N/cm is 2 N per 0.01 m = 200 N/m; 0.5 N·s/cm is 50 N·s/m
-    assert 2.0 * N_PER_CM == pytest.approx(2.0 / CM)
-    assert 0.5 * NS_PER_CM == pytest.approx(0.5 / CM)
+    assert pytest.approx(2.0 / CM) == 2.0 * N_PER_CM
+    assert pytest.approx(0.5 / CM) == 0.5 * NS_PER_CM
 
 
 def test_seconds_to_integer_nanoseconds() -> None:
@@ -61,9 +61,12 @@ def test_spellings_and_slips() -> None:
     for text, name in [("sec", "s"), ("秒", "s"), ("kp", "kgf"), ("Millimetres", "mm"),
                        ("microns", "µm"), ("NEWTON", "N")]:  # fmt: skip
         unit = parse_unit(text)
-        assert unit is not None and unit.name == name, text
-    assert parse_unit("Mm") is None and parse_unit("Ms") is None  # mega, not milli
-    assert parse_unit("") is None and parse_unit("[ ]") is None
+        assert unit is not None, text
+        assert unit.name == name, text
+    assert parse_unit("Mm") is None
+    assert parse_unit("Ms") is None
+    assert parse_unit("") is None
+    assert parse_unit("[ ]") is None
     assert parse_unit("s", "force") is None
 
 
