@@ -21,7 +21,7 @@ from pathlib import Path
 TESTS = Path(__file__).resolve().parent
 #: (file, test) -> where its assertions are.
 ASSERTED_ELSEWHERE: dict[tuple[str, str], str] = {
-    ("train/test_train.py", "test_sklearn_estimator_contract"): "scikit-learn's checks assert",
+    ("model/test_model.py", "test_sklearn_estimator_contract"): "scikit-learn's checks assert",
 }
 _PYTEST_ASSERTING = {"raises", "warns", "fail", "deprecated_call"}
 

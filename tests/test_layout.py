@@ -146,7 +146,8 @@ def layout_problems(files: Mapping[str, str], source: set[str]) -> list[str]:
       modules of the same name in two folders are two modules;
     * no file imports a test module (shared code lives in ``tests/_helpers/``, fixtures in
       ``tests/conftest.py``);
-    * every package of ``deformctl/`` has a test folder.
+    * every package of ``deformctl/`` has a test folder, and so has every top-level module
+      (``tests/units/`` for ``deformctl/units.py``; not ``__init__.py`` nor ``__main__.py``).
     """
     problems = []
     tested: set[str] = set()
@@ -176,6 +177,12 @@ def layout_problems(files: Mapping[str, str], source: set[str]) -> list[str]:
                 problems.append(f"{name}:{node.lineno}: imports a test module")
     packages = {Path(p).parts[0] for p in source if len(Path(p).parts) == 2}
     problems += [f"deformctl/{p}/ has no tests/{p}/" for p in sorted(packages - tested)]
+    modules = {
+        Path(p).stem
+        for p in source
+        if len(Path(p).parts) == 1 and p.endswith(".py") and p not in ("__init__.py", "__main__.py")
+    }
+    problems += [f"deformctl/{m}.py has no tests/{m}/" for m in sorted(modules - tested)]
     return sorted(set(problems))
 
 
@@ -194,7 +201,8 @@ def test_tests_mirror_the_source() -> None:
 
 
 def test_the_layout_check_finds_each_misplaced_test() -> None:
-    source = {"__init__.py", "table.py", "lift/__init__.py", "lift/runners/__init__.py"}
+    source = {"__init__.py", "__main__.py", "table.py", "lift/__init__.py",
+              "lift/runners/__init__.py"}  # fmt: skip
     good = {
         "__init__.py": "",
         "test_docs.py": "",
@@ -230,3 +238,10 @@ def test_the_layout_check_finds_each_misplaced_test() -> None:
     ]
     del bad["lift/test_search.py"], bad["lift/runners/test_rig.py"], bad["lift/runners/test_sim.py"]
     assert "deformctl/lift/ has no tests/lift/" in layout_problems(bad, source)
+    untested = {k: v for k, v in good.items() if not k.startswith("table/")}
+    assert layout_problems(untested, source) == ["deformctl/table.py has no tests/table/"]
+    only_init = {**untested, "table/__init__.py": ""}  # a folder without a test module
+    assert layout_problems(only_init, source) == ["deformctl/table.py has no tests/table/"]
+    assert layout_problems(good, source | {"units.py"}) == [
+        "deformctl/units.py has no tests/units/"
+    ]

@@ -17,7 +17,6 @@ import pytest
 
 from deformctl.errors import EXIT_DATAERR, EXIT_USAGE, InputDataError, UsageError
 from deformctl.measure import CsvDialect, CsvOptions, read_csv_export
-from deformctl.units import parse_unit, split_header
 
 from ._exports import Squeeze, kv_squeeze, write_export
 
@@ -41,42 +40,6 @@ def _same(rec_squeeze: object, s: Squeeze, *, atol_f: float = 2e-6, atol_d: floa
     np.testing.assert_allclose(t, s.t - s.t[0], atol=1e-9)
     np.testing.assert_allclose(f, s.f, atol=atol_f)
     np.testing.assert_allclose(d, s.d - s.d[0], atol=atol_d)
-
-
-def test_unit_names_from_headers() -> None:
-    cases = {
-        "Load (N)": ("Load", "N"),
-        "Force [kN]": ("Force", "kN"),
-        "Displacement/mm": ("Displacement", "mm"),
-        "Time (s)": ("Time", "s"),
-        "Zeit [s]": ("Zeit", "s"),
-        "Time in ms": ("Time", "ms"),
-        "位移 (mm)": ("位移", "mm"),
-        "Force/Weight": ("Force/Weight", None),
-        "Pos": ("Pos", None),
-    }
-    for header, want in cases.items():
-        assert split_header(header) == want, header
-    for text, name, si in [
-        ("um", "µm", 1e-6),
-        ("μm", "µm", 1e-6),
-        ("[kN]", "kN", 1e3),
-        ("lbf", "lbf", 4.4482216152605),
-        ("ozf", "ozf", 4.4482216152605 / 16),
-        ("gf", "gf", 9.80665e-3),
-        ("kgf", "kgf", 9.80665),
-        ("mN", "mN", 1e-3),
-        ("(ms)", "ms", 1e-3),
-        ("µs", "µs", 1e-6),
-        ("in", "in", 0.0254),
-        ("cm", "cm", 0.01),
-    ]:
-        unit = parse_unit(text)
-        assert unit is not None, text
-        assert (unit.name, unit.si) == (name, pytest.approx(si)), text
-    assert parse_unit("MN") is None  # a meganewton is not a millinewton
-    assert parse_unit("kN", "length") is None
-    assert parse_unit("furlong") is None
 
 
 def test_phantom_layout_preamble_header_units(tmp_path: Path, squeeze: Squeeze) -> None:

@@ -19,14 +19,12 @@ from sklearn.metrics import mean_absolute_error, r2_score
 from sklearn.neural_network import MLPRegressor
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
-from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from deformctl.errors import InputDataError, SchemaError, UsageError
 from deformctl.repro.synthetic import synthetic_index_table
 from deformctl.table import lookup
 from deformctl.train import (
     FEATURES,
-    ScaledTargetRegressor,
     TrainResult,
     predict,
     regression_metrics,
@@ -228,23 +226,3 @@ def test_regression_metrics_small_example() -> None:
     assert m["mae_n"] == pytest.approx(5.0 / 3.0)
     # SS_res = 1 + 0 + 16, SS_tot = sum((y - 70/3)**2) = 1400/3
     assert m["r2"] == pytest.approx(1 - 17.0 / (1400.0 / 3.0))
-
-
-# --- the estimator contract ---------------------------------------------------------------
-
-
-def test_scaled_target_regressor_learns_the_ratio_exactly() -> None:
-    rng = np.random.default_rng(0)
-    X = pd.DataFrame({"w": rng.uniform(1, 5, 30), "z": rng.uniform(0, 1, 30)})
-    y = X["w"] * (2.0 + 3.0 * X["z"])  # y / w is linear in z: a linear model recovers it
-    m = ScaledTargetRegressor(LinearRegression(), scale_index=0).fit(X, y)
-    np.testing.assert_allclose(m.predict(X), y, rtol=1e-12)
-    np.testing.assert_allclose(m.regressor_.coef_, [0.0, 3.0], atol=1e-12)
-    np.testing.assert_array_equal(m.feature_min_, X.min().to_numpy())
-    with pytest.raises(ValueError, match="must be > 0"):
-        m.predict(X.assign(w=-1.0))
-
-
-@parametrize_with_checks([ScaledTargetRegressor(LinearRegression(), scale_index=None)])
-def test_sklearn_estimator_contract(estimator: object, check: object) -> None:
-    check(estimator)  # type: ignore[operator]
