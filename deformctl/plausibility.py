@@ -427,7 +427,7 @@ def damping_ratio_doubt(zeta: float, *, time_unit_stated: bool) -> tuple[str, st
     recording's time unit, so the slip is named from seconds.)
     """
     judge = IMPLIED_DAMPING_RATIO
-    if not (math.isfinite(zeta) and judge.doubtful(zeta)):
+    if math.isnan(zeta) or not judge.doubtful(zeta):  # an infinite ζ is doubtful too
         return None
     unit = suggest_unit(
         zeta, SUGGESTED_UNITS["time"], to_value=lambda z: z, ok=judge.plausible, target=judge.target

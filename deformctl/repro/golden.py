@@ -55,6 +55,7 @@ and rerun ``make golden-spread`` when the change touches a fit or the network.
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import sys
@@ -351,9 +352,14 @@ def compare(expected: dict[str, Any], actual: dict[str, Any]) -> list[str]:
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m deformctl.repro.golden [--update]``: compare with (or rewrite) the expected
     file."""
-    args = list(sys.argv[1:] if argv is None else argv)
+    parser = argparse.ArgumentParser(
+        prog="python -m deformctl.repro.golden",
+        description="Run the golden pipeline and compare it with datasets/golden/expected.json.",
+    )
+    parser.add_argument("--update", action="store_true", help="rewrite the expected file")
+    update = parser.parse_args(argv).update  # --help and unknown arguments exit here (0, 2)
     actual = compute_golden()
-    if args == ["--update"]:
+    if update:
         EXPECTED_PATH.parent.mkdir(parents=True, exist_ok=True)
         EXPECTED_PATH.write_text(json.dumps(actual, indent=2, sort_keys=True) + "\n")
         print(f"wrote {EXPECTED_PATH}")

@@ -88,3 +88,10 @@ def test_the_doubt_fires_above_1000_and_not_at_or_below() -> None:
     assert above is not None
     assert above[0] == "damping_ratio_implausible"
     assert "ms read as s?" in above[1]
+
+
+def test_an_infinite_damping_ratio_is_doubtful_and_nan_is_not_judged() -> None:
+    flag, text = damping_ratio_doubt(math.inf, time_unit_stated=True) or ("", "")
+    assert flag == "damping_ratio_implausible"
+    assert "= inf is above 1000" in text
+    assert damping_ratio_doubt(math.nan, time_unit_stated=True) is None
