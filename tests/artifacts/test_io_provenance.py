@@ -125,6 +125,7 @@ def test_fixed_catalog_spelling() -> None:
     assert [c.name for c in spec.columns if not c.required] == [
         "material_stiffness_n_per_cm",
         "material_damping_ns_per_cm",
+        "material_stiffness_exponent",
     ]
 
 
