@@ -30,6 +30,14 @@ from hypothesis import settings
 
 from tests._helpers.dask_cluster import dask_cluster  # noqa: F401 - a shared fixture
 
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Tests marked ``slow`` run first (stable order otherwise): ``make test``'s two xdist workers
+    then share the long ones from the start instead of one worker finishing a 100 s test alone
+    at the end. Every worker sorts the same collection the same way, as xdist requires."""
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+
+
 settings.register_profile("deterministic", derandomize=True, database=None)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile("deterministic")

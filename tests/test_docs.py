@@ -48,6 +48,7 @@ def _id(path: Path) -> str:
 RUNNABLE = [p for p in doc_files() if shell_blocks(p)]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", RUNNABLE, ids=_id)
 def test_every_shell_block_runs(path: Path, tmp_path: Path) -> None:
     for name in ("datasets", "examples", "tests"):

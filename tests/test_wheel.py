@@ -97,6 +97,7 @@ squeeze(bag, peak_force_n=5.0, ramp_s=0.01, hold_s=0.01, settings=SimSettings(pa
 """
 
 
+@pytest.mark.slow
 def test_a_fresh_venv_warms_up_and_runs_the_first_commands(
     fresh_venv: Path, tmp_path: Path
 ) -> None:
