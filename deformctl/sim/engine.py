@@ -156,7 +156,7 @@ from deformctl.sim.lattice import (
 from deformctl.sim.multigrid import Hierarchy, build_hierarchy
 from deformctl.sim.objects import ObjectSpec
 from deformctl.sim.solver import LDLFactor, estimate_factor_entries, ldl_columns
-from deformctl.sim.statics import resting_positions_m, unit_squeeze_stiffness_n_per_m
+from deformctl.sim.statics import resting_state, unit_squeeze_stiffness_n_per_m
 from deformctl.sim.stencil import build_stencil
 from deformctl.sim.step import (
     N_REC,
@@ -553,7 +553,7 @@ def build_model(
     masses *= spec.mass_kg / masses.sum()
     g = GRAVITY_M_S2 if gravity else 0.0
     if resting and gravity:
-        base_x = resting_positions_m(lattice, stiffness, masses * g, law)
+        base_x, law = resting_state(lattice, stiffness, masses * g, law)
     else:
         base_x = lattice.positions_m.copy()
     base_x[:, 2] += lift_m

@@ -124,11 +124,15 @@ def _unit_power(
     return lattice, c_n, g_n
 
 
-def unit_squeeze_power(lattice: Lattice, exponent: float) -> tuple[float, float]:
+def unit_squeeze_power(
+    lattice: Lattice, exponent: float, *, on_table: bool = True
+) -> tuple[float, float]:
     """``(C_n, G_n)`` of the lattice with ``κ = 1`` (see the module docs): the squeeze force at
     unit closing (N/mⁿ) and the dampers' squeeze coefficient per unit ``τ``; measured by a static
     solve under the squeeze's boundary conditions (each face bonded to its palm in x and z, the
-    palms fixed in z, free in y; small-strain kinematics).
+    palms fixed in z, free in y; small-strain kinematics) and, ``on_table`` (the squeeze of
+    ``measure --sim``), the bottom layer held in z by the frictionless table; else floating (the
+    linear lattice's calibration, :func:`deformctl.sim.statics.unit_squeeze_stiffness_n_per_m`).
 
     Raises:
         SimulationError: Newton's method did not converge (not seen; a message, not a hang).
@@ -141,6 +145,8 @@ def unit_squeeze_power(lattice: Lattice, exponent: float) -> tuple[float, float]
     u = np.zeros(n_dof)
     u[px[0]], u[px[1]] = 0.5 * closing, -0.5 * closing
     fixed = np.array([px[0], px[1], pz[0], pz[1]])
+    if on_table:
+        fixed = np.union1d(fixed, dof_of[3 * np.flatnonzero(lattice.bottom_mask()) + 2])
     u, b = power_static(lattice, p, n, dof_of, u, fixed, np.zeros(n_dof))
     s = b @ u
     force = float((b[:, [px[0]]].T @ (p * np.abs(s) ** n * np.sign(s)))[0])
@@ -212,18 +218,21 @@ def power_static(
     )
 
 
-def resting_positions_hc_m(
-    lattice: Lattice, law: HuntCrossley, particle_weight_n: FloatArray
-) -> FloatArray:
-    """:func:`deformctl.sim.statics.resting_positions_m` of a Hunt–Crossley lattice: the static
-    equilibrium of its power-law springs on a frictionless table under gravity, m, ``[n, 3]``."""
+def weight_prestress_n(lattice: Lattice, particle_weight_n: FloatArray) -> FloatArray:
+    """The tensions, N, ``[m]``, with which the lattice in its start shape carries its weight on a
+    frictionless table (the bottom layer held in z): the linear lattice's distribution
+    (weights :attr:`Lattice.unit_stiffness`), which balances gravity exactly, at any scale.
+
+    A Hunt–Crossley object starts in its unloaded shape carrying these as a pre-stress, and its
+    power law acts on the stretch from there (module docs, "The resting object")."""
     n_p = lattice.n_particles
     dof_of, n_dof, _, _ = palm_dof_map(lattice, gripped=False)
     fixed = dof_of[3 * np.flatnonzero(lattice.bottom_mask()) + 2]
     load = np.zeros(n_dof)
     load[dof_of[3 * np.arange(n_p) + 2]] = -particle_weight_n
-    u, _ = power_static(lattice, law.power, law.exponent, dof_of, np.zeros(n_dof), fixed, load)
-    return np.asarray(lattice.positions_m + u[dof_of].reshape(n_p, 3))
+    w = lattice.unit_stiffness
+    u, b = power_static(lattice, w, 1.0, dof_of, np.zeros(n_dof), fixed, load)
+    return np.asarray(w * (b @ u))
 
 
 def _moved(u: FloatArray, free: NDArray[np.int64], step: FloatArray, t: float) -> FloatArray:
@@ -316,7 +325,7 @@ def hc_elements(
 
 
 #: the law of a Kelvin body (its elements are the linear ones; nothing here is read)
-LINEAR_LAW = HuntCrossley(1.0, np.zeros(1), 0.0, 0.0, 1.0, 1.0)
+LINEAR_LAW = HuntCrossley(1.0, np.zeros(1), 0.0, 0.0, 1.0, 1.0, np.zeros(1))
 
 
 @lru_cache(maxsize=16)
@@ -348,4 +357,5 @@ def hc_law(spec: ObjectSpec, settings: Settings) -> HuntCrossley:
         el.cap_strain,
         DAMPING_REFERENCE ** (1.0 / spec.stiffness_exponent) * el.reference_m,
         el.cap_strain / el.reference_strain * el.reference_m,
+        np.zeros(el.power.shape[0]),
     )

@@ -13,7 +13,7 @@ import numpy as np
 import scipy.sparse
 from numpy.typing import NDArray
 
-from deformctl.sim.hunt_crossley import resting_positions_hc_m
+from deformctl.sim.hunt_crossley import weight_prestress_n
 from deformctl.sim.lattice import (
     Lattice,
     lattice_factor,
@@ -89,24 +89,32 @@ def unit_squeeze_stiffness_n_per_m(lattice: Lattice) -> float:
 
 
 def resting_positions_m(
-    lattice: Lattice,
-    stiffness: FloatArray,
-    particle_weight_n: FloatArray | float,
-    law: HuntCrossley | None = None,
+    lattice: Lattice, stiffness: FloatArray, particle_weight_n: FloatArray | float
 ) -> FloatArray:
     """Linear static equilibrium of the object on a frictionless table under gravity, m, ``[n, 3]``.
 
-    The bottom layer is held at z = 0; the rest of the lattice sags under its weight. With a
-    Hunt–Crossley ``law`` (exponent above 1) the equilibrium of its power-law springs instead
-    (:func:`deformctl.sim.hunt_crossley.resting_positions_hc_m`).
+    The bottom layer is held at z = 0; the rest of the lattice sags under its weight.
     """
     n = lattice.n_particles
-    if law is not None and law.exponent != 1.0:
-        weight = np.broadcast_to(particle_weight_n, (n,)).astype(np.float64)
-        return resting_positions_hc_m(lattice, law, weight)
     dof_of, n_dof, _, _ = palm_dof_map(lattice, gripped=False)
     fixed = dof_of[3 * np.flatnonzero(lattice.bottom_mask()) + 2]
     load = np.zeros(n_dof)
     load[dof_of[3 * np.arange(n) + 2]] = -np.broadcast_to(particle_weight_n, (n,))
     u = _regularised_solve(lattice, stiffness, load, dof_of, n_dof, fixed, gripped=False)
     return np.asarray(lattice.positions_m + u[dof_of].reshape(n, 3))
+
+
+def resting_state(
+    lattice: Lattice, stiffness: FloatArray, particle_weight_n: FloatArray, law: HuntCrossley
+) -> tuple[FloatArray, HuntCrossley]:
+    """The start of an object resting on the table under gravity: its positions, m, ``[n, 3]``,
+    and its law. A Kelvin object sags to :func:`resting_positions_m`; a Hunt–Crossley one keeps
+    its unloaded shape and carries its weight as the elements' pre-stress
+    (:func:`deformctl.sim.hunt_crossley.weight_prestress_n`), so that its power law acts on the
+    compression from the resting state, as a squeeze test measures it.
+    """
+    if law.exponent == 1.0:
+        return resting_positions_m(lattice, stiffness, particle_weight_n), law
+    weight = np.broadcast_to(particle_weight_n, (lattice.n_particles,)).astype(np.float64)
+    prestress = weight_prestress_n(lattice, weight)
+    return lattice.positions_m.copy(), law._replace(rest_force=prestress)

@@ -27,7 +27,7 @@ def test_squeeze_then_characterize_recovers_k_and_n(n: float, damping: float) ->
         ramp_s=0.25,
         hold_s=1.0,
         settings=SMALL,
-        gravity=False,  # a material test: no weight pre-stressing the power law
+        gravity=True,  # on the table, as measure --sim squeezes
         noise_force_n=0.005,
         noise_position_m=5e-6,
         seed=3,

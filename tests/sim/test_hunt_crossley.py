@@ -2,7 +2,8 @@
 
 Known truth: the linear lattice's own calibration (n = 1), the homogeneity of the power-law
 squeeze (any closing gives the same C_n), the object's law ``k dⁿ + λ_hc dⁿ ḋ`` for a slow
-floating squeeze (within 5 % over the loading range), and main's bytes for n = 1.
+squeeze on the table (within 5 % over the loading range; a floating squeeze is softer by the
+calibration's own table factor), a resting object that stays put, and main's bytes for n = 1.
 """
 
 from __future__ import annotations
@@ -51,8 +52,11 @@ def test_the_catalog_values_map_to_k_and_lambda_at_the_operating_force() -> None
 def test_the_calibration_at_n_1_is_the_linear_calibration() -> None:
     for surface in (False, True):
         lattice = build_lattice((0.1, 0.08, 0.06), 0.025, palm_surface=surface)
-        c_1, _ = hc.unit_squeeze_power(lattice, 1.0)
+        c_1, _ = hc.unit_squeeze_power(lattice, 1.0, on_table=False)
         assert c_1 == pytest.approx(unit_squeeze_stiffness_n_per_m(lattice), rel=1e-8)
+        # the table holds the bottom layer in z: a stiffer squeeze, by a few per cent
+        on_table, _ = hc.unit_squeeze_power(lattice, 1.0)
+        assert 1.0 < on_table / c_1 < 1.10
 
 
 @pytest.mark.parametrize("n", [1.5, 3.0])
@@ -87,13 +91,45 @@ def test_the_simulated_squeeze_follows_the_fitted_law(n: float, damping: float) 
     spec = _spec(n, damping)
     ramp = 2.0
     hold = 3.0 if damping else 0.2  # the damped object creeps to its static compression
-    sq = squeeze(spec, peak_force_n=7.5, ramp_s=ramp, hold_s=hold, settings=SMALL, gravity=False)
+    # on the table under gravity, as measure --sim squeezes: the weight is the resting state's
+    # pre-stress, and the law holds from there
+    sq = squeeze(spec, peak_force_n=7.5, ramp_s=ramp, hold_s=hold, settings=SMALL, gravity=True)
     miss, end = _law_error(sq, spec, ramp)
     assert miss <= 0.05, miss
     assert end <= 0.01, end
     # not a test that cannot fail: a linear spring of the same D misses by far more
     linear = spec.stiffness_n_per_m * sq.compression_m[-1]
     assert abs(linear / sq.force_n[-1] - 1.0) > 0.05
+
+
+@pytest.mark.parametrize("n", [1.5, 3.0])
+def test_a_floating_squeeze_is_softer_by_the_table_factor(n: float) -> None:
+    # known truth: the calibration's two static solves (with and without the table); the
+    # floating squeeze (no gravity, no table) reads k C_float / C_table
+    spec = _spec(n)
+    sq = squeeze(spec, peak_force_n=7.5, ramp_s=2.0, hold_s=0.2, settings=SMALL, gravity=False)
+    el = hc.spec_elements(spec, SMALL)
+    floating, _ = hc.unit_squeeze_power(el.lattice, n, on_table=False)
+    d = sq.compression_m[-1]
+    expected = spec.hc_stiffness_n_per_m_pow_n * floating / el.unit_force * d**n
+    assert sq.force_n[-1] == pytest.approx(expected, rel=0.01)
+    assert abs(el.unit_force / floating - 1.0) > 0.015  # the factor is not nothing
+
+
+@pytest.mark.parametrize("n", [1.5, 3.0])
+def test_a_resting_object_carries_its_weight_and_stays_put(n: float) -> None:
+    from deformctl.sim.engine import build_model, run_model
+    from deformctl.sim.step import record as K
+
+    spec = _spec(n, 1.0)
+    model = build_model(spec, SMALL, gripped=False, gravity=True, table=True)
+    # it starts in its unloaded shape, the weight held by the elements' pre-stress
+    assert np.array_equal(model.base_x, model.lattice.positions_m)
+    assert np.abs(model.law.rest_force).max() > 0.0
+    zeros = np.zeros(round(0.5 / SMALL.dt_s) + 1)
+    q, _, rec = run_model(model, zeros, zeros)
+    assert np.abs(q).max() < 1e-7  # m: no sag, no creep
+    assert rec[-1, K.REC_TABLE_N] == pytest.approx(spec.weight_n, rel=1e-3)
 
 
 def test_a_hard_squeeze_of_a_damped_object_stays_stable() -> None:

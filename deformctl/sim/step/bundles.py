@@ -27,8 +27,11 @@ class HuntCrossley(NamedTuple):
     the linear Kelvin elements of :class:`Body`; see :mod:`deformctl.sim.hunt_crossley`).
 
     Attributes:
-        exponent: n; an element's spring force is ``power |s|ⁿ sign(s)`` for a stretch ``s``.
+        exponent: n; an element's spring force is ``rest_force + power |s|ⁿ sign(s)`` for a
+            stretch ``s`` from the start shape.
         power: each element's ``p_e``, N/mⁿ, ``[m]`` (``[0]`` when linear).
+        rest_force: each element's tension in the start shape, N, ``[m]``: the weight's
+            pre-stress of an object resting on the table, zeros otherwise (``[0]`` when linear).
         retardation: s; each element's Hunt–Crossley damper is ``retardation p_e |s|ⁿ / L0``
             N·s/m, with ``|s|`` capped at ``cap_strain L0``.
         cap_strain: the strain above which the dampers stop growing (the implicit step's
@@ -44,6 +47,7 @@ class HuntCrossley(NamedTuple):
     cap_strain: float
     width_reference_m: float
     width_cap_m: float
+    rest_force: FloatArray
 
 
 class Body(NamedTuple):

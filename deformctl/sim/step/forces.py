@@ -139,8 +139,9 @@ def _element_rhs(body: Body, x: FloatArray, vel: FloatArray, h: float, out: Floa
 def _element_rhs_hc(body: Body, x: FloatArray, vel: FloatArray, h: float, out: FloatArray) -> None:
     """:func:`_element_rhs` for Hunt–Crossley elements (:mod:`deformctl.sim.hunt_crossley`).
 
-    For a stretch ``s`` (compression negative) and stretch rate ``ṡ`` an element pulls its ends
-    together with ``p |s|ⁿ sign(s) + (c_hc + retardation k) ṡ``, where
+    For a stretch ``s`` (compression negative) from the start shape and stretch rate ``ṡ`` an
+    element pulls its ends together with ``f0 + p |s|ⁿ sign(s) + (c_hc + retardation k) ṡ``
+    (``f0``: ``law.rest_force``, the weight's pre-stress of a resting object), where
     ``c_hc = law.retardation p min(|s|, cap_strain L0)ⁿ / L0``; minus ``h k v`` along the rest
     direction, ``k`` the tangent the implicit matrix holds.
     """
@@ -148,6 +149,7 @@ def _element_rhs_hc(body: Body, x: FloatArray, vel: FloatArray, h: float, out: F
     retardation, nonlinear = body.retardation, body.nonlinear
     law = body.law
     n_exp, power, hc_ret, cap = law.exponent, law.power, law.retardation, law.cap_strain
+    rest_force = law.rest_force
     for e in range(edges.shape[0]):
         i = edges[e, 0]
         j = edges[e, 1]
@@ -176,6 +178,7 @@ def _element_rhs_hc(body: Body, x: FloatArray, vel: FloatArray, h: float, out: F
         spring = power[e] * size**n_exp
         if stretch < 0.0:
             spring = -spring
+        spring += rest_force[e]
         held = min(size, cap * rest[e])
         damper = hc_ret * power[e] * held**n_exp / rest[e] + k[e] * retardation
         f = spring + damper * (dvx * nx + dvy * ny + dvz * nz)
