@@ -22,10 +22,21 @@ The element law, and why the squeeze follows ``k dⁿ``
     ``τ κ G_n dⁿ ḋ`` with ``G_n = Σ w_e L_e^(1−n) |S_e|ⁿ⁺² / L_e`` (virtual work), so
     ``τ = r λ_hc / (κ G_n)`` gives the squeeze damping ``r λ_hc dⁿ ḋ`` and the width damper the
     rest (``r``: ``SimSettings.shear_damping_ratio``; the dampers' own mode differs a little from
-    the springs', and the round trip through ``characterize`` finds λ within 1.5 %). The exact
-    spring geometry
-    (``nonlinear_springs=True``), gravity and the table break the homogeneity slightly:
-    tests/sim/test_hunt_crossley.py measures the squeeze against ``k dⁿ``.
+    the springs', and the round trip through ``characterize`` finds λ within 1.5 %). The static
+    solve holds the bottom layer in z, as the frictionless table does in the squeeze of
+    ``measure --sim`` (2–4 % stiffer than floating; a floating squeeze reads k lower by that
+    factor). The exact spring geometry (``nonlinear_springs=True``) breaks the homogeneity:
+    tests/sim/test_hunt_crossley.py and ``make hc-check`` measure the squeeze against ``k dⁿ``.
+
+The resting object
+    A squeeze test measures d from the object as it rests, and ``k dⁿ`` is fitted to that. A
+    power-law element has no stiffness at zero stretch: an object left to sag under its weight
+    would be pre-compressed, and its squeeze stiffer than its law (n came back 6–13 % low).
+    So a Hunt–Crossley object on the table starts in its unloaded shape, each element carrying
+    its share of the weight as a constant tension ``f0_e`` (:func:`weight_prestress_n`, the
+    linear lattice's distribution, which balances gravity and the table exactly), and its power
+    law acts on the stretch from there: ``f_e = f0_e + p_e |s|ⁿ sign(s) + …``. For n = 1 this
+    is the sagged linear lattice again; n = 1 keeps that code path, bit for bit.
 
 The implicit step
     The step's matrix ``A = M + h C + h² K`` is built once per model (:mod:`.engine`). It holds
@@ -44,9 +55,7 @@ The implicit step
     ``A``, at about ``DAMPING_CAP · DAMPING_REFERENCE · F_op`` (3.8 F_op) of squeeze force. The
     width damper of the ``paper`` preset (``(1 − r) λ`` across the palms) becomes
     ``(1 − r) λ_hc min(d, d_cap)ⁿ`` the same way; the dampers' floor
-    (``min_shear_retardation_s``) stays a linear damper on the frozen tangent, and the rest
-    shape on the table is the power-law lattice's own static equilibrium
-    (:func:`resting_positions_hc_m`).
+    (``min_shear_retardation_s``) stays a linear damper on the frozen tangent.
 """
 
 from __future__ import annotations
