@@ -58,7 +58,12 @@ OBJECTS = [{"object_id": "A", "weight_n": 0.7, "friction_mu": 0.5}]
 @functools.cache
 def _artifacts() -> dict[str, tuple[bytes, str, Callable[[Path], Any]]]:
     """name → (valid bytes, format, library reader)."""
-    d = Path(tempfile.mkdtemp(prefix="deformctl-corrupt-"))
+    with tempfile.TemporaryDirectory(prefix="deformctl-corrupt-") as tmp:
+        return _write_artifacts(Path(tmp))
+
+
+def _write_artifacts(d: Path) -> dict[str, tuple[bytes, str, Callable[[Path], Any]]]:
+    """Write each valid artifact into ``d``; their bytes (``d`` may go once this returns)."""
     prov = make_provenance()
     write_squeeze_log(d / "s.mcap", OBJECTS, make_squeezes(3), provenance=prov)
     write_lift_log(d / "l.mcap", OBJECTS, make_attempts(3), provenance=prov)
