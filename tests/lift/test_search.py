@@ -291,3 +291,15 @@ def test_ramp_overflow_stops_without_trying_an_infinite_force() -> None:
     assert all(math.isfinite(f) for f, _ in runner.calls)
     assert r.attempts == 4  # 10 * 1e100**k is finite for k <= 3 (max float ~1.8e308)
     assert "overflowed" in r.message
+
+
+def test_the_package_face_is_the_search_s_public_names() -> None:
+    # deformctl/lift/__init__.py restates the search's __all__ (its lazy face must name them
+    # without importing the search): the two lists stay the same, and each name resolves to
+    # the search's own object
+    import deformctl.lift as face
+    import deformctl.lift.search as search
+
+    assert sorted(face.__all__) == sorted(search.__all__)
+    for name in search.__all__:
+        assert getattr(face, name) is getattr(search, name)
