@@ -9,6 +9,7 @@ smoothed the same way wherever it is judged. Arrays are 1-D float64 ``[n]``.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 
@@ -54,15 +55,57 @@ def sg_window_length(window_s: float, dt_s: float, polyorder: int) -> int:
     return n if n % 2 == 1 else n + 1
 
 
+@lru_cache(maxsize=64)
+def _sg_coefficients(window: int, polyorder: int, deriv: int, delta: float) -> FloatArray:
+    """The convolution weights of the Savitzky–Golay filter: the least-squares polynomial of
+    ``polyorder`` over ``window`` samples, its ``deriv``-th derivative at the centre (per
+    ``delta``), reversed for :func:`numpy.convolve`."""
+    half = window // 2
+    x = np.arange(half, -half - 1, -1, dtype=np.float64)  # reversed: convolution weights
+    vander = x[None, :] ** np.arange(polyorder + 1)[:, None]
+    target = np.zeros(polyorder + 1)
+    target[deriv] = math.factorial(deriv) / delta**deriv
+    coef, *_ = np.linalg.lstsq(vander, target, rcond=None)
+    coef.setflags(write=False)
+    return coef
+
+
+def savgol(
+    values: FloatArray, window: int, polyorder: int, *, deriv: int = 0, delta: float = 1.0
+) -> FloatArray:
+    """Savitzky–Golay filter of ``values`` ``[n]``: what ``scipy.signal.savgol_filter`` returns
+    with ``mode="interp"`` (its default), without importing ``scipy.signal`` (0.7 s of a
+    command's start; tests/signals/test_signals.py compares the two to 1e-12).
+
+    Each sample at least ``window // 2`` from the ends is the centre of a least-squares
+    polynomial of ``polyorder`` over ``window`` samples (its ``deriv``-th derivative per
+    ``delta``); the first and last ``window // 2`` come from the polynomial fitted to the first
+    and last ``window`` samples, evaluated where they lie (one-sided at the ends).
+
+    Requires an odd ``window`` with ``polyorder < window <= n``.
+    """
+    v = np.asarray(values, dtype=np.float64)
+    n, half = v.shape[0], window // 2
+    if window % 2 != 1 or not polyorder < window <= n:
+        raise ValueError(f"need an odd window in ({polyorder}, {n}], got {window}")
+    out = np.convolve(v, _sg_coefficients(window, polyorder, deriv, float(delta)), mode="same")
+    at = np.arange(window, dtype=np.float64)
+    for lo, where in ((0, slice(0, half)), (n - window, slice(window - half, window))):
+        poly = np.polyfit(at, v[lo : lo + window], polyorder)
+        if deriv:
+            poly = np.polyder(poly, deriv)
+        out[lo + where.start : lo + where.stop] = np.polyval(poly, at[where]) / delta**deriv
+    return out
+
+
 def sg_smooth(
     values: FloatArray, window_samples: int, polyorder: int, dt_s: float
 ) -> tuple[FloatArray, FloatArray]:
-    """SG-smoothed ``values`` and their time derivative (per second), both ``[n]``.
+    """SG-smoothed ``values`` and their time derivative (per second), both ``[n]``
+    (:func:`savgol`).
 
     Requires ``n >= window_samples``.
     """
-    from scipy.signal import savgol_filter  # deferred: ~1 s to import, only fits need it
-
-    smooth = savgol_filter(values, window_samples, polyorder, deriv=0)
-    rate = savgol_filter(values, window_samples, polyorder, deriv=1, delta=dt_s)
-    return np.asarray(smooth, dtype=np.float64), np.asarray(rate, dtype=np.float64)
+    smooth = savgol(values, window_samples, polyorder)
+    rate = savgol(values, window_samples, polyorder, deriv=1, delta=dt_s)
+    return smooth, rate

@@ -48,6 +48,7 @@ from deformctl.characterize.laws import (
 from deformctl.characterize.material_options import MODELS
 from deformctl.errors import InputDataError
 from deformctl.series import FloatArray
+from deformctl.signals import savgol
 
 #: Windows whose compression stays below this fraction of the squeeze's peak are not fitted.
 MIN_COMPRESSION_FRAC = 0.02
@@ -149,14 +150,12 @@ def windows(n: int, window_samples: int) -> tuple[np.ndarray, np.ndarray]:
 def end_smoothed(compression_m: FloatArray, window: int) -> FloatArray:
     """The compression for the damping terms' end points: a cubic Savitzky–Golay fit over a
     quarter window (at least 5 samples), one-sided at the ends (``mode="interp"``)."""
-    from scipy.signal import savgol_filter
-
     n = compression_m.shape[0]
     length = max(5, window // 4)
     length = length if length % 2 == 1 else length + 1
     if n < length:
         return compression_m
-    return np.asarray(savgol_filter(compression_m, length, 3, mode="interp"), dtype=np.float64)
+    return savgol(compression_m, length, 3)
 
 
 def fit_squeeze(

@@ -62,7 +62,7 @@ from deformctl.characterize.stiffness import (
 )
 from deformctl.errors import InputDataError, UsageError
 from deformctl.series import FloatArray, SqueezeSeries
-from deformctl.signals import sg_smooth, sg_window_length, uniform_grid
+from deformctl.signals import savgol, sg_window_length, uniform_grid
 
 #: The windows compared with the law where D is stated: mean compression within this fraction
 #: of the law's compression at the operating force (``secant_residual_frac``).
@@ -208,13 +208,11 @@ def _unexplained(v: FloatArray, x: FloatArray) -> float:
 def _short_rate(d: FloatArray, window_samples: int, dt_s: float) -> FloatArray:
     """The compression's rate from a cubic Savitzky–Golay fit over a quarter window (at least 5
     samples; one-sided at the ends), m/s: short, so the corners of a squeeze are not smeared."""
-    from scipy.signal import savgol_filter
-
     length = max(5, window_samples // 4)
     length = length if length % 2 == 1 else length + 1
     if d.shape[0] < length:
         return np.gradient(d, dt_s)
-    return np.asarray(savgol_filter(d, length, 3, deriv=1, delta=dt_s), dtype=np.float64)
+    return savgol(d, length, 3, deriv=1, delta=dt_s)
 
 
 def _secant_residual(chosen: MaterialFit, data: FitData, force_n: float) -> float:
@@ -284,24 +282,37 @@ def _loading(
     )
 
 
-def _sample_r2(fit: MaterialFit, data: FitData, grids: Sequence[Grid]) -> float:
+def _sample_rates(data: FitData, grids: Sequence[Grid]) -> list[FloatArray] | None:
+    """Each grid's compression rate from a cubic Savitzky–Golay derivative over the window, m/s
+    (None when the laws carry no damping): computed once, for every law's :func:`_sample_r2`."""
+    if not data.damping:
+        return None
+    rates = []
+    for g in grids:
+        n = g.compression_m.shape[0]
+        wl = min(data.window_samples, n - (1 - n % 2))
+        rates.append(savgol(g.compression_m, wl, POLYORDER, deriv=1, delta=g.dt_s))
+    return rates
+
+
+def _sample_r2(
+    fit: MaterialFit, grids: Sequence[Grid], rates: Sequence[FloatArray] | None
+) -> float:
     """R² of a law on the samples in contact (not the window means, which average the sensor's
     noise away): ``1 − Σ(f − f̂)²/Σ(f − f̄)²`` with the force moved back by the lag and the rate
-    from a cubic Savitzky–Golay derivative over the window."""
+    from :func:`_sample_rates` (None: no damping term)."""
     lag = fit.params.get("lag_s", 0.0)
     lag = lag if math.isfinite(lag) else 0.0
     ys: list[FloatArray] = []
     preds: list[FloatArray] = []
-    for g in grids:
+    for i, g in enumerate(grids):
         n = g.force_n.shape[0]
         t = np.asarray(g.dt_s * np.arange(n), dtype=np.float64)
         f = np.interp(t + lag, t, g.force_n) if lag > 0 else g.force_n
         d = g.compression_m
         pred = fit.params["preload_n"] + elastic_force(fit.model, fit.params, d)
-        if data.damping:
-            wl = min(data.window_samples, n - (1 - n % 2))
-            _, rate = sg_smooth(d, wl, POLYORDER, g.dt_s)
-            pred = pred + rate_force(fit.model, fit.params, d, rate, g.dt_s)
+        if rates is not None:
+            pred = pred + rate_force(fit.model, fit.params, d, rates[i], g.dt_s)
         contact = np.maximum.accumulate(d) >= MIN_COMPRESSION_FRAC * float(np.max(d))
         ys.append(f[contact])
         preds.append(pred[contact])
@@ -408,6 +419,7 @@ def fit_object(
     d_se = math.nan if PARAMETERS[chosen.model][0] in held else chosen.derived_se(secant)
     d_all = np.concatenate([s.compression_m for s in data.squeezes])
     f_all = np.concatenate([g.force_n for g in grids])
+    rates = _sample_rates(data, grids)
     return ObjectFit(
         fits=fits,
         chosen=chosen,
@@ -434,7 +446,7 @@ def fit_object(
         compression_range_m=(float(np.min(d_all)), float(np.max(d_all))),
         force_range_n=(float(np.min(f_all)), float(np.max(f_all))),
         per_speed=_per_speed(speeds, chosen.residual_rms_n),
-        sample_r2={f.model: _sample_r2(f, data, grids) for f in fits},
+        sample_r2={f.model: _sample_r2(f, grids, rates) for f in fits},
         fit_preload=fit_preload,
         secant_residual_frac=_secant_residual(chosen, data, above(chosen.params)),
     )

@@ -1,12 +1,16 @@
-"""deformctl.signals against known truth: SG smoothing of a polynomial, the noise of a known
-white noise, the resampling of a jittered clock."""
+"""deformctl.signals against known truth: SG smoothing of a polynomial and scipy's own filter,
+the noise of a known white noise, the resampling of a jittered clock."""
 
 from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from deformctl.signals import noise_std, sg_smooth, sg_window_length, uniform_grid
+from deformctl.signals import noise_std, savgol, sg_smooth, sg_window_length, uniform_grid
 
 
 @pytest.mark.parametrize("polyorder", [2, 3])
@@ -58,3 +62,53 @@ def test_uniform_grid_keeps_a_uniform_clock_and_resamples_a_jittered_one() -> No
     np.testing.assert_allclose(np.diff(grid), dt_s, rtol=1e-9)
     assert grid[0] == 0.0
     np.testing.assert_allclose(line, 2.0 * grid + 1.0, rtol=1e-12)  # linear: interpolation exact
+
+
+@pytest.mark.parametrize("n", [7, 60, 1251])
+def test_savgol_is_scipys_filter_without_its_import(n: int) -> None:
+    # known truth: scipy.signal.savgol_filter (mode "interp", its default), the filter the
+    # estimators used before; every window, order and derivative they use, ends included
+    from scipy.signal import savgol_filter
+
+    rng = np.random.default_rng(n)
+    x = np.cumsum(rng.normal(size=n)) + 0.1 * rng.normal(size=n)
+    for window in (5, 7, 21, 51, 201):
+        for polyorder in (1, 2, 3):
+            for deriv in range(polyorder + 1):
+                if window > n:
+                    continue
+                want = savgol_filter(x, window, polyorder, deriv=deriv, delta=0.003)
+                got = savgol(x, window, polyorder, deriv=deriv, delta=0.003)
+                assert np.max(np.abs(got - want)) <= 1e-12 * np.max(np.abs(want))
+
+
+@pytest.mark.parametrize(("window", "polyorder"), [(4, 2), (9, 9), (9, 2)])
+def test_savgol_refuses_a_window_it_cannot_fit(window: int, polyorder: int) -> None:
+    # an even window, an order as high as the window, a window longer than the 8 samples
+    with pytest.raises(ValueError, match="odd window"):
+        savgol(np.arange(8.0), window, polyorder)
+
+
+def test_fitting_a_squeeze_never_imports_scipy_signal(tmp_path: Path) -> None:
+    # scipy.signal costs a command 0.7 s of import: characterize (every law, the rupture and
+    # relaxation checks) runs without it
+    code = (
+        "import sys\n"
+        "import numpy as np\n"
+        "from deformctl.characterize import characterize\n"
+        "from deformctl.characterize.models import kelvin_voigt_response\n"
+        "from deformctl.series import SqueezeSeries\n"
+        "t = np.arange(0.0, 2.0, 1e-3)\n"
+        "sq = []\n"
+        "for i, peak in enumerate((3.0, 4.0, 5.0)):\n"
+        "    f, d = kelvin_voigt_response(t, 20.0, 1.0, peak_force_n=peak,\n"
+        "                                 profile='sine', duration_s=2.0)\n"
+        "    sq.append(SqueezeSeries('a', i, t, f, d))\n"
+        "row = characterize({'a': sq}, model='auto').iloc[0]\n"
+        "assert abs(row['deformability_n_per_cm'] / 20.0 - 1) < 0.05, row\n"
+        "print('scipy.signal' in sys.modules)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path
+    )
+    assert out.stdout.strip() == "False", out.stderr
