@@ -19,7 +19,7 @@ nonsense: weights scaled by 10^300 predict 10^301 N. Two checks, on the physics 
   [r_lo / :data:`TARGET_FACTOR`, r_hi × :data:`TARGET_FACTOR`] is more than the network ever
   learned, not an interpolation: flagged, and the warning names the range. The bundled grip
   model's targets span 1.11–2.06, so it flags a prediction above 3.09 × F_w; over 20,000 random
-  objects inside its training range (17,793 of them) it predicts 1.112–2.022 × F_w
+  objects inside its training range (17,793 of them) it predicts 1.108–2.023 × F_w
   (tests/grip/test_targets.py).
   A model without a stored range (trained before it was stored) gets the [1, 10] × F_w check only.
 

@@ -86,8 +86,8 @@ def test_the_bundled_model_is_silent_over_its_training_range() -> None:
     assert est.prediction_implausible is not None
     assert not est.prediction_implausible[inside].any()
     assert not [w for w in est.warnings if "far from the training targets" in w]
-    assert low / 1.01 <= ratio.min()  # measured 1.112
-    assert ratio.max() <= high * 1.01  # measured 2.022
+    assert low / 1.01 <= ratio.min()  # measured 1.108
+    assert ratio.max() <= high * 1.01  # measured 2.023
 
 
 def test_the_flag_fires_outside_the_band_and_not_inside() -> None:
