@@ -320,3 +320,49 @@ def test_the_commands_default_is_the_librarys(
     assert isinstance(result.exception, _Called), result.stderr
     assert default == "auto"
     assert seen["workers"] == default
+
+
+def _cheap_probes_then_dear(seconds: float) -> float:
+    """A task whose first objects are cheap and the rest dear (the probe underestimates)."""
+    time.sleep(seconds)
+    return seconds
+
+
+def test_a_cheap_probe_does_not_keep_a_dear_catalog_in_one_process(
+    monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+) -> None:
+    # known truth, worked by hand: start 0.5 s (as if measured), 2 idle cores; after the two
+    # probes of 0.01 s, 20 objects left: one process 0.2 s, two 0.6 s: one process. After the
+    # first dear object (0.25 s) the mean of the timed objects is 0.13 s: 19 left, one process
+    # 2.47 s, two 0.5 + 10 x 0.13 = 1.8 s, more than 15 % less: the pool, with 19 objects left.
+    kind = task_kind(_cheap_probes_then_dear)
+    record_start_s(kind, 0.5, 2)
+    monkeypatch.setattr(auto_mod, "machine_load", lambda: 0.0)
+    monkeypatch.setattr("deformctl.parallel.sweep.machine_load", lambda: 0.0)
+    monkeypatch.setattr("deformctl.parallel.sweep._available_cores", lambda: 2)
+    items = [0.01, 0.01] + [0.25] * 20
+    first = choose_workers(20, cores=2, start_s=0.5, per_object_s=0.01)
+    assert first.workers == 1  # the rule on the probes alone
+    seen: list[int] = []
+    with caplog.at_level(logging.INFO, logger="deformctl.parallel"):
+        out = map_in_order(
+            _cheap_probes_then_dear, items, workers="auto", on_result=lambda i, _: seen.append(i)
+        )
+    assert out == items
+    assert seen == list(range(len(items)))  # every object once, in order
+    (record,) = [r for r in caplog.records if hasattr(r, "worker_choice")]
+    choice: WorkerChoice = record.worker_choice  # type: ignore[attr-defined]
+    assert choice.workers == 2
+    assert choice.objects == 19
+
+
+def test_the_load_is_the_runnable_count_now_less_the_reader(tmp_path: Path) -> None:
+    # known truth: the kernel's fourth field counts the reader itself; a lagging average is
+    # not read where the count exists
+    fake = tmp_path / "loadavg"
+    fake.write_text("7.50 6.00 5.00 3/120 4242\n")
+    assert auto_mod.machine_load(str(fake)) == 2.0
+    fake.write_text("7.50 6.00 5.00 1/120 4242\n")
+    assert auto_mod.machine_load(str(fake)) == 0.0  # alone: no other load
+    # no such file (not Linux): the 1-minute load average, a number >= 0
+    assert auto_mod.machine_load(str(tmp_path / "absent")) >= 0.0
