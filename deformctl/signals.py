@@ -65,7 +65,8 @@ def _sg_coefficients(window: int, polyorder: int, deriv: int, delta: float) -> F
     vander = x[None, :] ** np.arange(polyorder + 1)[:, None]
     target = np.zeros(polyorder + 1)
     target[deriv] = math.factorial(deriv) / delta**deriv
-    coef, *_ = np.linalg.lstsq(vander, target, rcond=None)
+    solution, *_ = np.linalg.lstsq(vander, target, rcond=None)
+    coef = np.asarray(solution, dtype=np.float64)
     coef.setflags(write=False)
     return coef
 
@@ -91,9 +92,9 @@ def savgol(
     out = np.convolve(v, _sg_coefficients(window, polyorder, deriv, float(delta)), mode="same")
     at = np.arange(window, dtype=np.float64)
     for lo, where in ((0, slice(0, half)), (n - window, slice(window - half, window))):
-        poly = np.polyfit(at, v[lo : lo + window], polyorder)
+        poly = np.asarray(np.polyfit(at, v[lo : lo + window], polyorder), dtype=np.float64)
         if deriv:
-            poly = np.polyder(poly, deriv)
+            poly = np.asarray(np.polyder(poly, deriv), dtype=np.float64)
         out[lo + where.start : lo + where.stop] = np.polyval(poly, at[where]) / delta**deriv
     return out
 
