@@ -28,15 +28,15 @@ def short(value: Any, depth: int = 0) -> str:
         return repr(value)
     if isinstance(value, str):
         return repr(value if len(value) <= MAX_TEXT else value[: MAX_TEXT - 3] + "...")
+    if shape is not None and kind in ("DataFrame", "Series", "Table"):  # before the numpy
+        dims = " x ".join(str(n) for n in shape) if isinstance(shape, tuple) else str(shape)
+        return f"{kind}[{dims}]"  # branch: a Series has a dtype too
     if shape is not None and hasattr(value, "dtype"):  # numpy arrays and scalars
         if shape == ():
             return repr(value.item())
         return f"array[{' x '.join(str(n) for n in shape)}]"
-    if shape is not None and kind in ("DataFrame", "Series", "Table"):
-        dims = " x ".join(str(n) for n in shape) if isinstance(shape, tuple) else str(shape)
-        return f"{kind}[{dims}]"
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return short_repr(value) if depth < 1 else f"{kind}(...)"
+        return _fields(value, depth + 1) if depth < 1 else f"{kind}(...)"
     if isinstance(value, Mapping):
         if len(value) > MAX_ITEMS:
             return f"{{{len(value)} keys}}"
@@ -53,6 +53,12 @@ def short(value: Any, depth: int = 0) -> str:
 
 def short_repr(self: Any) -> str:
     """``Class(field=value, ...)`` with each value :func:`short` (use as ``__repr__``)."""
-    fields = (f for f in dataclasses.fields(self) if f.repr)
-    body = ", ".join(f"{f.name}={short(getattr(self, f.name))}" for f in fields)
-    return f"{type(self).__name__}({body})"
+    return _fields(self, 0)
+
+
+def _fields(obj: Any, depth: int) -> str:
+    """``Class(field=value, ...)`` of a dataclass whose fields sit ``depth`` levels down: a
+    dataclass in a field shows its own fields, one in those shows as ``Class(...)``."""
+    fields = (f for f in dataclasses.fields(obj) if f.repr)
+    body = ", ".join(f"{f.name}={short(getattr(obj, f.name), depth)}" for f in fields)
+    return f"{type(obj).__name__}({body})"

@@ -71,3 +71,15 @@ def test_a_result_with_big_fields_prints_on_one_short_line() -> None:
         "_Result(table=None, attempts=[_Inner(...)], "
         "inner=_Inner(samples=array[1000000], label='A'))"
     )
+
+
+def test_a_series_is_a_series_and_nesting_stops_one_level_down() -> None:
+    # a pandas Series has a dtype, as an array does: it still shows as a Series
+    assert short(pd.Series(np.zeros(5))) == "Series[5]"
+    # a dataclass in a field shows its fields; one in those shows by its class only, however
+    # deep the chain (a dataclass directly in a dataclass used to restart the count)
+    deep = _Result(None, [], _Inner(_Inner(_Inner(1.0))))
+    assert (
+        repr(deep)
+        == "_Result(table=None, attempts=[], inner=_Inner(samples=_Inner(...), label='x'))"
+    )
