@@ -88,14 +88,14 @@ def _exact_springs(n: float, strain: float) -> float:
     """The ``table`` preset (geometrically exact springs), squeezed slowly on the table to
     ``strain`` of its width on its law: the static force's relative miss of ``k dⁿ``."""
     spec = ObjectSpec("hc", (10.0, 10.0, 10.0), 5.0, 0.5, 5.0, 0.0, n)
-    d = strain * 0.1
-    target = spec.hc_stiffness_n_per_m_pow_n * d**n if n != 1.0 else spec.stiffness_n_per_m * d
     sq = squeeze(
-        spec, peak_force_n=target, ramp_s=2.0, hold_s=1.0, settings=sim_preset("table").settings
+        spec,
+        peak_force_n=spec.elastic_force_n(strain * 0.1),
+        ramp_s=2.0,
+        hold_s=1.0,
+        settings=sim_preset("table").settings,
     )
-    d_end = sq.compression_m[-1]
-    law = spec.hc_stiffness_n_per_m_pow_n * d_end**n if n != 1.0 else spec.stiffness_n_per_m * d_end
-    return float(sq.force_n[-1] / law - 1.0)
+    return float(sq.force_n[-1] / spec.elastic_force_n(sq.compression_m[-1]) - 1.0)
 
 
 def main() -> None:

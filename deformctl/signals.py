@@ -55,6 +55,13 @@ def sg_window_length(window_s: float, dt_s: float, polyorder: int) -> int:
     return n if n % 2 == 1 else n + 1
 
 
+def quarter_window_length(window_samples: int) -> int:
+    """The short cubic Savitzky–Golay window of the estimators: a quarter of ``window_samples``,
+    at least 5 samples, odd (the damping terms' end points, the corners' rate)."""
+    length = max(5, window_samples // 4)
+    return length if length % 2 == 1 else length + 1
+
+
 @lru_cache(maxsize=64)
 def _sg_coefficients(window: int, polyorder: int, deriv: int, delta: float) -> FloatArray:
     """The convolution weights of the Savitzky–Golay filter: the least-squares polynomial of

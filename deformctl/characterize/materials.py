@@ -48,7 +48,7 @@ from deformctl.characterize.laws import (
 from deformctl.characterize.material_options import MODELS
 from deformctl.errors import InputDataError
 from deformctl.series import FloatArray
-from deformctl.signals import savgol
+from deformctl.signals import quarter_window_length, savgol
 
 #: Windows whose compression stays below this fraction of the squeeze's peak are not fitted.
 MIN_COMPRESSION_FRAC = 0.02
@@ -151,8 +151,7 @@ def end_smoothed(compression_m: FloatArray, window: int) -> FloatArray:
     """The compression for the damping terms' end points: a cubic Savitzky–Golay fit over a
     quarter window (at least 5 samples), one-sided at the ends (``mode="interp"``)."""
     n = compression_m.shape[0]
-    length = max(5, window // 4)
-    length = length if length % 2 == 1 else length + 1
+    length = quarter_window_length(window)
     if n < length:
         return compression_m
     return savgol(compression_m, length, 3)

@@ -62,7 +62,7 @@ from deformctl.characterize.stiffness import (
 )
 from deformctl.errors import InputDataError, UsageError
 from deformctl.series import FloatArray, SqueezeSeries
-from deformctl.signals import savgol, sg_window_length, uniform_grid
+from deformctl.signals import quarter_window_length, savgol, sg_window_length, uniform_grid
 
 #: The windows compared with the law where D is stated: mean compression within this fraction
 #: of the law's compression at the operating force (``secant_residual_frac``).
@@ -208,8 +208,7 @@ def _unexplained(v: FloatArray, x: FloatArray) -> float:
 def _short_rate(d: FloatArray, window_samples: int, dt_s: float) -> FloatArray:
     """The compression's rate from a cubic Savitzky–Golay fit over a quarter window (at least 5
     samples; one-sided at the ends), m/s: short, so the corners of a squeeze are not smeared."""
-    length = max(5, window_samples // 4)
-    length = length if length % 2 == 1 else length + 1
+    length = quarter_window_length(window_samples)
     if d.shape[0] < length:
         return np.gradient(d, dt_s)
     return savgol(d, length, 3, deriv=1, delta=dt_s)

@@ -445,11 +445,12 @@ def _map_auto(
     kind = task_kind(task)
     measured = measured_start_s(kind)
     done, shown = probe, None
-    busy = machine_load() if done < len(items) else 0.0  # 5 reads, ~9 ms: only when choosing
+    if done < len(items):  # read once, and only when there is a choice (5 reads, ~9 ms)
+        busy, cores = machine_load(), _available_cores()
     while done < len(items):
         choice = choose_workers(
             len(items) - done,
-            cores=_available_cores(),
+            cores=cores,
             start_s=DEFAULT_START_S if measured is None else measured,
             per_object_s=statistics.fmean(times[1:] or times),
             busy=busy,

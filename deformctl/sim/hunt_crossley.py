@@ -71,7 +71,13 @@ import scipy.sparse.linalg
 from numpy.typing import NDArray
 
 from deformctl.errors import SimulationError
-from deformctl.sim.lattice import Lattice, build_lattice, palm_dof_map
+from deformctl.sim.lattice import (
+    Lattice,
+    bottom_z_dofs,
+    build_lattice,
+    palm_dof_map,
+    table_weight_problem,
+)
 from deformctl.sim.objects import ObjectSpec
 from deformctl.sim.step.bundles import HuntCrossley
 
@@ -155,7 +161,7 @@ def unit_squeeze_power(
     u[px[0]], u[px[1]] = 0.5 * closing, -0.5 * closing
     fixed = np.array([px[0], px[1], pz[0], pz[1]])
     if on_table:
-        fixed = np.union1d(fixed, dof_of[3 * np.flatnonzero(lattice.bottom_mask()) + 2])
+        fixed = np.union1d(fixed, bottom_z_dofs(lattice, dof_of))
     u, b = power_static(lattice, p, n, dof_of, u, fixed, np.zeros(n_dof))
     s = b @ u
     force = float((b[:, [px[0]]].T @ (p * np.abs(s) ** n * np.sign(s)))[0])
@@ -234,11 +240,7 @@ def weight_prestress_n(lattice: Lattice, particle_weight_n: FloatArray) -> Float
 
     A Hunt–Crossley object starts in its unloaded shape carrying these as a pre-stress, and its
     power law acts on the stretch from there (module docs, "The resting object")."""
-    n_p = lattice.n_particles
-    dof_of, n_dof, _, _ = palm_dof_map(lattice, gripped=False)
-    fixed = dof_of[3 * np.flatnonzero(lattice.bottom_mask()) + 2]
-    load = np.zeros(n_dof)
-    load[dof_of[3 * np.arange(n_p) + 2]] = -particle_weight_n
+    dof_of, n_dof, fixed, load = table_weight_problem(lattice, particle_weight_n)
     w = lattice.unit_stiffness
     u, b = power_static(lattice, w, 1.0, dof_of, np.zeros(n_dof), fixed, load)
     return np.asarray(w * (b @ u))

@@ -199,6 +199,25 @@ def palm_dof_map(lattice: Lattice, gripped: bool) -> tuple[IntArray, int, IntArr
     return shape_dof_map(lattice.shape, gripped)
 
 
+def bottom_z_dofs(lattice: Lattice, dof_of: IntArray) -> IntArray:
+    """The z DOFs of the bottom layer (the particles the table holds), ``[k]``."""
+    return np.asarray(dof_of[3 * np.flatnonzero(lattice.bottom_mask()) + 2])
+
+
+def table_weight_problem(
+    lattice: Lattice, particle_weight_n: FloatArray | float
+) -> tuple[IntArray, int, IntArray, FloatArray]:
+    """The free object resting on a frictionless table under gravity, as a static problem:
+    ``(dof_of, n_dof, fixed, load)`` with the bottom layer's z DOFs ``fixed`` and each
+    particle's weight, N, as the load on its z DOF (:func:`deformctl.sim.statics.
+    resting_positions_m`, :func:`deformctl.sim.hunt_crossley.weight_prestress_n`)."""
+    n = lattice.n_particles
+    dof_of, n_dof, _, _ = palm_dof_map(lattice, gripped=False)
+    load = np.zeros(n_dof)
+    load[dof_of[3 * np.arange(n) + 2]] = -np.broadcast_to(particle_weight_n, (n,))
+    return dof_of, n_dof, bottom_z_dofs(lattice, dof_of), load
+
+
 def shape_dof_map(
     shape: tuple[int, int, int], gripped: bool
 ) -> tuple[IntArray, int, IntArray, IntArray]:

@@ -20,6 +20,7 @@ from deformctl.sim.lattice import (
     palm_dof_map,
     reduced_stiffness,
     shape_dof_map,
+    table_weight_problem,
 )
 from deformctl.sim.multigrid import build_hierarchy, solve
 from deformctl.sim.stencil import build_stencil
@@ -96,10 +97,7 @@ def resting_positions_m(
     The bottom layer is held at z = 0; the rest of the lattice sags under its weight.
     """
     n = lattice.n_particles
-    dof_of, n_dof, _, _ = palm_dof_map(lattice, gripped=False)
-    fixed = dof_of[3 * np.flatnonzero(lattice.bottom_mask()) + 2]
-    load = np.zeros(n_dof)
-    load[dof_of[3 * np.arange(n) + 2]] = -np.broadcast_to(particle_weight_n, (n,))
+    dof_of, n_dof, fixed, load = table_weight_problem(lattice, particle_weight_n)
     u = _regularised_solve(lattice, stiffness, load, dof_of, n_dof, fixed, gripped=False)
     return np.asarray(lattice.positions_m + u[dof_of].reshape(n, 3))
 
