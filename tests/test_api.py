@@ -87,7 +87,7 @@ def test_measure_sim_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -
     # the library's defaults before the recorder replaces the function (names load lazily)
     api = _defaults(deformctl.simulate_squeezes)
     seen = _record(monkeypatch, "deformctl.measure.stage.simulate_catalog_file")
-    _run(["measure", str(tmp_path / "cat.csv"), "--sim", "-o", str(tmp_path / "s.mcap")])
+    _run(["measure", "sim", str(tmp_path / "cat.csv"), "-o", str(tmp_path / "s.mcap")])
     task = seen["args"][1]
     assert task.protocol == api["protocol"]
     assert api["settings"] is None  # the default preset's, as the command's:
@@ -98,7 +98,7 @@ def test_measure_sim_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -
 
 def test_measure_bag_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     seen = _record(monkeypatch, "deformctl.measure.stage.measure_recording")
-    _run(["measure", "--bag", str(tmp_path / "r.mcap"), "--wrench-topic", "/w",
+    _run(["measure", "bag", str(tmp_path / "r.mcap"), "--wrench-topic", "/w",
           "--position-topic", "/p", "--object-id", "a", "--weight-n", "1",
           "-o", str(tmp_path / "s.mcap")])  # fmt: skip
     assert seen["args"][1] == deformctl.BagSource(wrench_topics=("/w",), position_topic="/p")
@@ -109,7 +109,7 @@ def test_measure_bag_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -
 def test_measure_csv_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     seen = _record(monkeypatch, "deformctl.measure.csv_batch.measure_csv_files")
     columns = "time=t,force=f,compression=c"
-    _run(["measure", "--csv", str(tmp_path / "r.csv"), "--columns", columns,
+    _run(["measure", "csv", str(tmp_path / "r.csv"), "--columns", columns,
           "--object-id", "a", "--weight-n", "1", "-o", str(tmp_path / "s.mcap")])  # fmt: skip
     task = seen["args"][1]
     assert task.options == deformctl.CsvOptions(
@@ -143,7 +143,7 @@ def test_characterize_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) 
 
 def test_lift_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     seen = _record(monkeypatch, "deformctl.lift.stage.lift_catalog_files")
-    _run(["lift", str(tmp_path / "cat.csv"), "--sim", "-o", str(tmp_path / "l.parquet")])
+    _run(["lift", "sim", str(tmp_path / "cat.csv"), "-o", str(tmp_path / "l.parquet")])
     assert seen["search"] == _defaults(deformctl.lift_catalog)["search"]
     assert seen["search"] == deformctl.SearchOptions()
     factory = seen["args"][1]
@@ -151,7 +151,7 @@ def test_lift_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     assert factory.settings == deformctl.sim_runner_factory(scene_hz=0.0).settings
     assert factory.settings["sim_preset"] == "paper"
     log = ["--log", str(tmp_path / "l.mcap")]
-    _run(["lift", str(tmp_path / "cat.csv"), "--sim", "-o", str(tmp_path / "l.parquet"), *log])
+    _run(["lift", "sim", str(tmp_path / "cat.csv"), "-o", str(tmp_path / "l.parquet"), *log])
     assert seen["args"][1].settings == deformctl.sim_runner_factory().settings
 
 
@@ -233,7 +233,7 @@ def test_the_library_reads_an_export_as_the_command_does(kv_csv: Path, tmp_path:
     from deformctl.artifacts import read_squeeze_log, read_table
 
     log, table = tmp_path / "kv.mcap", tmp_path / "kv.parquet"
-    argv = ["measure", "--csv", str(kv_csv), "--object-id", "kv", "--weight-n", "1", "-o", str(log)]
+    argv = ["measure", "csv", str(kv_csv), "--object-id", "kv", "--weight-n", "1", "-o", str(log)]
     assert runner.invoke(app, argv).exit_code == 0
     assert runner.invoke(app, ["characterize", str(log), "-o", str(table)]).exit_code == 0
     rec = deformctl.read_recording(str(kv_csv), deformctl.CsvOptions(), object_id="kv")

@@ -131,7 +131,7 @@ def test_a_fresh_venv_warms_up_and_runs_the_first_commands(
     paper = (REPO / "datasets/paper/objects.csv").read_text().splitlines()
     written = (tmp_path / "p.csv").read_text().splitlines()
     assert [line.split(",")[0] for line in written] == [line.split(",")[0] for line in paper]
-    run(deformctl, "measure", "p.csv", "--sim", "-o", "s.mcap")
+    run(deformctl, "measure", "sim", "p.csv", "-o", "s.mcap")
     info = json.loads(run(deformctl, "inspect", "s.mcap", "--json").stdout)
     assert info["kind"] == "squeeze_log"
     assert info["squeezes"] == 12  # 4 objects x 3 squeezes
@@ -141,7 +141,7 @@ def test_a_fresh_venv_warms_up_and_runs_the_first_commands(
     # population's first object)
     run(deformctl, "population", "--golden", "-o", "g.csv")
     first = (tmp_path / "g.csv").read_text().splitlines()[1].split(",")[0]
-    run(deformctl, "lift", "g.csv", "--sim", "--objects", first, "-o", "lift.parquet")
+    run(deformctl, "lift", "sim", "g.csv", "--objects", first, "-o", "lift.parquet")
     assert (tmp_path / "lift.parquet").is_file()
     run(python, "-c", RUNS)
     after = sorted(p.relative_to(cache) for p in cache.rglob("*.nbi"))

@@ -108,7 +108,7 @@ def build_app(
     each ``make(name)`` (the command function; :func:`listed_command` to list it only)."""
     built = typer.Typer(
         name="deformctl",
-        cls=OneLineErrorGroup,
+        cls=type("DeformctlGroup", (OneLineErrorGroup,), {"ORDER": tuple(names)}),
         no_args_is_help=True,
         add_completion=False,
         pretty_exceptions_enable=False,
@@ -117,16 +117,30 @@ def build_app(
     )
     built.callback()(_root)
     for name in names:
-        built.command()(make(name))
+        function = make(name)
+        group = getattr(function, "group", None)  # a command with subcommands: its typer app
+        if isinstance(group, typer.Typer):
+            built.add_typer(group, name=name)
+        else:
+            built.command()(function)
     return built
 
 
+def leaf_commands(function: Callable[..., Any]) -> tuple[Callable[..., Any], ...]:
+    """The functions that run: ``function`` itself, or each of its subcommands."""
+    group = getattr(function, "group", None)
+    if not isinstance(group, typer.Typer):
+        return (function,)
+    return tuple(c.callback for c in group.registered_commands if c.callback is not None)
+
+
 def __getattr__(name: str) -> Any:
-    """``app`` (the whole app) and ``COMMANDS`` (every command function), made on first use."""
+    """``app`` (the whole app) and ``COMMANDS`` (every function that runs a command or a
+    subcommand, in order), made on first use."""
     if name == "app":
         value: Any = build_app()
     elif name == "COMMANDS":
-        value = tuple(command(n) for n in COMMAND_NAMES)
+        value = tuple(leaf for n in COMMAND_NAMES for leaf in leaf_commands(command(n)))
     else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     globals()[name] = value

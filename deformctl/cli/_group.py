@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import typer
 from typer._click import exceptions as click_exc  # typer vendors click: its exceptions
-from typer.core import TyperGroup
+from typer.core import TyperCommand, TyperGroup
 
 from deformctl.cli._common import _one_line
 from deformctl.errors import EXIT_FAILURE, EXIT_USAGE
@@ -19,24 +19,41 @@ if TYPE_CHECKING:  # pragma: no cover - annotations only
     from typer.core import TyperOption
 
 
-class OneLineErrorGroup(TyperGroup):
-    """The root command group: every click usage error becomes one ``error: ...`` line, exit 2.
-
-    Click prints a usage error (an unknown command or option, ``--seed abc``, a missing argument)
-    as a three-line box; shell pipelines and CI want the project's one-line form, so the group
-    runs click in non-standalone mode and formats what it raises itself. ``--help`` and the
-    help printed for a bare ``deformctl`` are unchanged.
-    """
+class _HelpFlagDefault:
+    """A command whose ``-h/--help`` flag, not given, is False (:meth:`get_help_option`)."""
 
     def get_help_option(self, ctx: Context) -> TyperOption | None:
         """The ``-h/--help`` flag, not given = False. Typer leaves an unset flag at None and
         coerces None through a pydantic adapter, which imports pydantic: about a third of what
         ``deformctl <command> --help`` costs (bench/bench_startup.py). False skips it (a bool
         needs no coercion); the help printed is the same."""
-        option = super().get_help_option(ctx)
+        option: TyperOption | None = super().get_help_option(ctx)  # type: ignore[misc]
         if option is not None and option.default is None:
             option.default = False
         return option
+
+
+class HelpCommand(_HelpFlagDefault, TyperCommand):
+    """A subcommand whose ``--help`` does not import pydantic."""
+
+
+class OneLineErrorGroup(_HelpFlagDefault, TyperGroup):
+    """The root command group: every click usage error becomes one ``error: ...`` line, exit 2.
+
+    Click prints a usage error (an unknown command or option, ``--seed abc``, a missing argument)
+    as a three-line box; shell pipelines and CI want the project's one-line form, so the group
+    runs click in non-standalone mode and formats what it raises itself. ``--help`` and the
+    help printed for a bare ``deformctl`` are unchanged; the commands are listed in pipeline
+    order.
+    """
+
+    #: The commands in the order they are listed (typer adds those with subcommands last).
+    ORDER: ClassVar[tuple[str, ...]] = ()
+
+    def list_commands(self, ctx: Context) -> list[str]:
+        """The commands in :data:`ORDER`, then any other."""
+        rank = {name: i for i, name in enumerate(self.ORDER)}
+        return sorted(super().list_commands(ctx), key=lambda name: rank.get(name, len(rank)))
 
     def main(  # type: ignore[override]
         self,

@@ -1,4 +1,4 @@
-"""``deformctl measure --images``: its options, and their checks.
+"""``deformctl measure images``: its options, and their checks.
 
 The options are :class:`ImageOptions`; :func:`check_image_options` turns them into the library's
 :class:`~deformctl.measure.options.ScaleReference` and
@@ -7,7 +7,6 @@ The options are :class:`ImageOptions`; :func:`check_image_options` turns them in
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import re
 from dataclasses import dataclass
@@ -15,21 +14,12 @@ from typing import Annotated
 
 import typer
 
-from deformctl.cli._options import HEAVY_DEFAULTS
+from deformctl.cli._options import HEAVY_DEFAULTS, OptionGroup
 from deformctl.errors import UsageError
 from deformctl.measure.options import ObjectMask, ScaleReference, parse_hsv_pair
 
 DEFAULT_MARKER_DICT = str(HEAVY_DEFAULTS["measure_object_size.marker_dict"])
 
-Images = Annotated[
-    tuple[str, str] | None,
-    typer.Option(
-        "--images",
-        metavar="TOP SIDE",
-        help="Source: a top and a side image with a scale reference; writes a catalog row "
-        "(object size from the images) instead of a squeeze log.",
-    ),
-]
 MarkerSizeCm = Annotated[
     float | None,
     typer.Option(
@@ -109,7 +99,7 @@ Append = Annotated[
 
 @dataclass(frozen=True)
 class ImageOptions:
-    """The ``--images`` options as given on the command line (None / False: not given)."""
+    """The image options as given on the command line (None / False: not given)."""
 
     marker_size_cm: float | None = None
     marker_dict: str | None = None
@@ -122,21 +112,24 @@ class ImageOptions:
     append: bool = False
     camera_matrix: str | None = None
 
-    def given(self) -> list[str]:
-        """The flags of the options given (for refusing them with another source)."""
-        return [
-            _flag(f.name)
-            for f in dataclasses.fields(self)
-            if getattr(self, f.name) not in (None, False)
-        ]
 
-
-def _flag(name: str) -> str:
-    return "--" + name.replace("_", "-")
-
-
-#: The flags of :class:`ImageOptions` (only ``--images`` takes them).
-FLAGS = tuple(_flag(f.name) for f in dataclasses.fields(ImageOptions))
+#: The image options as one :class:`ImageOptions`.
+IMAGE = OptionGroup(
+    "opts",
+    (
+        ("marker_size_cm", MarkerSizeCm, None),
+        ("marker_dict", MarkerDict, None),
+        ("marker_id", MarkerId, None),
+        ("checkerboard", Checkerboard, None),
+        ("square_size_cm", SquareSizeCm, None),
+        ("color_range", ColorRange, None),
+        ("background", Background, None),
+        ("debug_dir", DebugDir, None),
+        ("append", Append, False),
+        ("camera_matrix", CameraMatrix, None),
+    ),
+    ImageOptions,
+)
 
 
 def parse_checkerboard(text: str) -> tuple[int, int]:

@@ -10,9 +10,11 @@ from __future__ import annotations
 import functools
 import os
 import re
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-from deformctl.cli._options import HEAVY_DEFAULTS
+import typer
+
+from deformctl.cli._options import HEAVY_DEFAULTS, OptionGroup, default
 from deformctl.errors import UsageError
 from deformctl.quantities import MARKER_SIZE_CM, SLIP_TOLERANCE_M
 
@@ -111,4 +113,92 @@ def frames_judge(
     return functools.partial(slip_from_frames, **options)
 
 
-__all__ = ["DEFAULT_SLIP_TOLERANCE_M", "frames_judge", "parse_palm_marker_ids"]
+PalmMarkerIds = Annotated[
+    str | None,
+    typer.Option(
+        "--palm-marker-ids", metavar="L,R", help="Frames: ids of ArUco markers on the palms."
+    ),
+]
+PalmRegions = Annotated[
+    str | None,
+    typer.Option(
+        "--palm-regions",
+        metavar="x,y,w,h;x,y,w,h",
+        help="Frames: palm rectangles in the before frame, px (each with a distinct palm part).",
+    ),
+]
+FrameMarkerSizeCm = Annotated[
+    float | None,
+    typer.Option(
+        "--frame-marker-size-cm",
+        metavar="S",
+        help="Frames: side of the markers in view, cm (the image scale).",
+    ),
+]
+FrameMarkerDict = Annotated[
+    str | None,
+    typer.Option(
+        "--frame-marker-dict",
+        help=f"Frames: ArUco dictionary {default('detect_slip.marker_dict')}.",
+    ),
+]
+FrameSlipToleranceM = Annotated[
+    float | None,
+    typer.Option(
+        "--slip-tolerance-m",
+        metavar="T",
+        help="Frames: how far the object may fall behind the palms, m "
+        f"{default('detect_slip.tolerance_m')}.",
+    ),
+]
+SlipFromFramesOption = Annotated[
+    bool,
+    typer.Option(
+        "--slip-from-frames",
+        help="The rig answers with before/after frames: judge lifted/slipped from them.",
+    ),
+]
+DebugDir = Annotated[
+    str | None,
+    typer.Option("--debug-dir", help="Frames: write the last attempt's annotated frames here."),
+]
+
+
+def _judge(
+    *,
+    slip_from_frames: bool,
+    palm_marker_ids: str | None,
+    palm_regions: str | None,
+    frame_marker_size_cm: float | None,
+    frame_marker_dict: str | None,
+    slip_tolerance_m: float | None,
+    debug_dir: str | None,
+) -> SlipFromFrames | None:
+    return frames_judge(
+        enabled=slip_from_frames,
+        palm_marker_ids=palm_marker_ids,
+        palm_regions=palm_regions,
+        frame_marker_size_cm=frame_marker_size_cm,
+        slip_tolerance_m=slip_tolerance_m,
+        marker_dict=frame_marker_dict,
+        debug_dir=debug_dir,
+    )
+
+
+#: ``--slip-from-frames`` and its options as one judge of the rig's frames (or None).
+FRAMES = OptionGroup(
+    "judge",
+    (
+        ("slip_from_frames", SlipFromFramesOption, False),
+        ("palm_marker_ids", PalmMarkerIds, None),
+        ("palm_regions", PalmRegions, None),
+        ("frame_marker_size_cm", FrameMarkerSizeCm, None),
+        ("frame_marker_dict", FrameMarkerDict, None),
+        ("slip_tolerance_m", FrameSlipToleranceM, None),
+        ("debug_dir", DebugDir, None),
+    ),
+    _judge,
+)
+
+
+__all__ = ["DEFAULT_SLIP_TOLERANCE_M", "FRAMES", "frames_judge", "parse_palm_marker_ids"]

@@ -8,15 +8,19 @@ library's :class:`~deformctl.lift.seeded.StartSeed`.
 
 from __future__ import annotations
 
+import functools
 from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from deformctl.artifacts.io import is_stdio
+from deformctl.cli._options import OptionGroup
 from deformctl.errors import SearchError, UsageError
 from deformctl.lift.options import DEFAULT_START_MARGIN
 
 if TYPE_CHECKING:  # pragma: no cover - the seed sources import scikit-learn when used
+    from collections.abc import Callable
+
     from deformctl.cli._summary import RunClock
     from deformctl.lift.seeded import StartSeed
     from deformctl.lift.stage import CatalogLiftResult
@@ -25,6 +29,7 @@ if TYPE_CHECKING:  # pragma: no cover - the seed sources import scikit-learn whe
 CatalogArg = Annotated[
     str,
     typer.Argument(
+        metavar="CATALOG",
         help="Object catalog, CSV or Parquet; - for stdin. Or a coefficients table from "
         "characterize: its objects' size, weight and μ, with the measured D and λ as the "
         "material (--sim lifts the measured object).",
@@ -77,6 +82,34 @@ Coefficients = Annotated[
         "--sim, its material values].",
     ),
 ]
+
+
+def _start(
+    *,
+    start_model: str | None,
+    start_table: str | None,
+    start_interpolate: int | None,
+    start_margin: float | None,
+    coefficients: str | None,
+) -> Callable[..., StartSeed | None]:
+    return functools.partial(
+        start_seed, start_model, start_table, start_interpolate, start_margin, coefficients
+    )
+
+
+#: ``--start-model`` ... ``--coefficients`` as one ``start(protocol=..., dataset=...)``, which
+#: returns the :class:`~deformctl.lift.seeded.StartSeed` (or None) once the output is known.
+START = OptionGroup(
+    "start",
+    (
+        ("start_model", StartModel, None),
+        ("start_table", StartTable, None),
+        ("start_interpolate", StartInterpolate, None),
+        ("start_margin", StartMargin, None),
+        ("coefficients", Coefficients, None),
+    ),
+    _start,
+)
 
 
 def start_seed(

@@ -1,4 +1,4 @@
-"""``deformctl measure --csv FILE…``: one object per CSV export, into one log or a dataset.
+"""``deformctl measure csv FILE…``: one object per CSV export, into one log or a dataset.
 
 The flags become a :class:`deformctl.measure.CsvOptions` (how to read the files) and a
 :class:`deformctl.measure.CsvFileTask`; :func:`deformctl.measure.csv_objects` says which object
@@ -10,21 +10,26 @@ printed here, once per distinct line.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from deformctl.cli._common import finish_sweep, parse_mapping
 from deformctl.cli._measure_csv_report import report_dataset, report_files
-from deformctl.cli._measure_rig import RigOptions, segmentation
+from deformctl.cli._measure_rig import (
+    Columns,
+    ObjectFlags,
+    PositionIncreasesWhen,
+    PositionIs,
+    Units,
+)
+from deformctl.cli._options import OptionGroup
 from deformctl.measure.csv_options import DEFAULT_CSV_MEMORY_BUDGET_GIB as DEFAULT_BUDGET
 from deformctl.measure.csv_options import CsvDialect, CsvOptions
 
-if TYPE_CHECKING:  # pragma: no cover - the readers (pandas, pyarrow, MCAP) load when --csv runs
-    from deformctl.measure.options import Segmentation
+if TYPE_CHECKING:  # pragma: no cover - the readers (pandas, pyarrow, MCAP) load when it runs
+    from deformctl.measure.csv_batch import CsvFileTask
     from deformctl.parallel import SweepOptions
 
 SkipRows = Annotated[
@@ -91,95 +96,93 @@ ObjectsFrom = Annotated[
 ]
 
 
-@dataclass(frozen=True)
-class CsvFlags:
-    """The ``--csv``-only flags as given (None: not given)."""
-
-    skip_rows: int | None = None
-    delimiter: str | None = None
-    decimal: str | None = None
-    thousands: str | None = None
-    encoding: str | None = None
-    force_sign: str | None = None
-    lag_s: str | None = None
-    objects_from: str | None = None
-
-    def given(self) -> list[str]:
-        """The flags given (for refusing them with another source)."""
-        return [
-            _flag(f.name) for f in dataclasses.fields(self) if getattr(self, f.name) is not None
-        ]
-
-
-def _flag(name: str) -> str:
-    return "--" + name.replace("_", "-")
-
-
-#: The ``--csv``-only flags.
-FLAGS = tuple(_flag(f.name) for f in dataclasses.fields(CsvFlags))
-
-
-@dataclass(frozen=True)
-class ObjectFlags:
-    """What the command line says of the objects (each file's ``--objects-from`` row wins).
-
-    The values are checked per file, when the file's object is built
-    (:func:`deformctl.measure.csv_objects`, :class:`deformctl.catalog.MeasuredObject`).
-    """
-
-    object_id: str | None = None
-    weight_n: float | None = None
-    size_cm: tuple[float, float, float] | None = None
-    friction_mu: float | None = None
+#: ``measure csv``'s budget: the rows of a CSV export and its log.
+MemoryBudgetGib = Annotated[
+    float | None,
+    typer.Option(
+        "--memory-budget-gib",
+        metavar="GIB",
+        help="Refuse a file (or one log of all files) whose estimated memory exceeds this, GiB "
+        f"[default: {DEFAULT_BUDGET:g}].",
+    ),
+]
 
 
 def csv_options(
-    flags: CsvFlags, rig: RigOptions, memory_budget_gib: float | None
-) -> tuple[CsvOptions, Segmentation]:
-    """The options every file is read with, and how each is cut into squeezes."""
+    *,
+    columns: str | None,
+    units: str | None,
+    position_is: str,
+    position_increases_when: str | None,
+    skip_rows: int | None,
+    delimiter: str | None,
+    decimal: str | None,
+    thousands: str | None,
+    encoding: str | None,
+    force_sign: str | None,
+    lag_s: str | None,
+    memory_budget_gib: float | None,
+) -> CsvOptions:
+    """The options every file is read with (checked by :class:`CsvOptions` when built).
+
+    Raises:
+        UsageError: a malformed ``--columns``/``--units``, or a value outside its rule.
+    """
     dialect = CsvDialect(
-        delimiter=flags.delimiter,
-        decimal=flags.decimal,
-        thousands=flags.thousands,
-        encoding=flags.encoding or "utf-8",
-        skip_rows=flags.skip_rows,
+        delimiter=delimiter,
+        decimal=decimal,
+        thousands=thousands,
+        encoding=encoding or "utf-8",
+        skip_rows=skip_rows,
     )
-    options = CsvOptions(
+    return CsvOptions(
         dialect=dialect,
-        columns=parse_mapping(rig.columns, "--columns") if rig.columns else {},
-        units=parse_mapping(rig.units, "--units") if rig.units else {},
-        force_sign=flags.force_sign or "auto",  # type: ignore[arg-type]
-        lag_s=flags.lag_s,  # type: ignore[arg-type]  # checked by CsvOptions
-        position_is=rig.position_is,  # type: ignore[arg-type]
-        position_increases_when=rig.position_increases_when,  # type: ignore[arg-type]
+        columns=parse_mapping(columns, "--columns") if columns else {},
+        units=parse_mapping(units, "--units") if units else {},
+        force_sign=force_sign or "auto",  # type: ignore[arg-type]
+        lag_s=lag_s,  # type: ignore[arg-type]  # checked by CsvOptions
+        position_is=position_is,  # type: ignore[arg-type]
+        position_increases_when=position_increases_when,  # type: ignore[arg-type]
         memory_budget_gib=DEFAULT_BUDGET if memory_budget_gib is None else memory_budget_gib,
     )
-    return options, segmentation(rig)
+
+
+#: How ``measure csv`` reads its files, as one :class:`CsvOptions`.
+READ = OptionGroup(
+    "options",
+    (
+        ("columns", Columns, None),
+        ("units", Units, None),
+        ("position_is", PositionIs, "palm"),
+        ("position_increases_when", PositionIncreasesWhen, None),
+        ("skip_rows", SkipRows, None),
+        ("delimiter", Delimiter, None),
+        ("decimal", Decimal, None),
+        ("thousands", Thousands, None),
+        ("encoding", Encoding, None),
+        ("force_sign", ForceSign, None),
+        ("lag_s", LagS, None),
+        ("memory_budget_gib", MemoryBudgetGib, None),
+    ),
+    csv_options,
+)
 
 
 def run(
     paths: Sequence[str],
-    flags: CsvFlags,
-    rig: RigOptions,
+    task: CsvFileTask,
+    objects_from: str | None,
     named: ObjectFlags,
-    memory_budget_gib: float | None,
     output: str,
     force: bool,
     sweep: SweepOptions,
 ) -> None:
     """Read every CSV file of ``paths`` and write their squeeze log or dataset directory."""
-    from deformctl.measure.csv_batch import (
-        CsvFileTask,
-        csv_objects,
-        measure_csv_files,
-        measure_csv_sweep,
-    )
+    from deformctl.measure.csv_batch import csv_objects, measure_csv_files, measure_csv_sweep
     from deformctl.parallel import single_file_workers
 
-    options, cut = csv_options(flags, rig, memory_budget_gib)
-    task = CsvFileTask(options, cut)
     files = csv_objects(
-        paths, objects_from=flags.objects_from, object_id=named.object_id,
+        paths, objects_from=objects_from, object_id=named.object_id,
         weight_n=named.weight_n, size_cm=named.size_cm, friction_mu=named.friction_mu,
     )  # fmt: skip
     if sweep.check(output, file_workers=True):

@@ -1,9 +1,10 @@
-"""``deformctl measure --bag``: one object's squeeze log from a rig recording, and the options
-``--bag`` and ``--csv`` share (``--csv`` runs in :mod:`deformctl.cli._measure_csv`).
+"""``deformctl measure bag``: one object's squeeze log from a ROS 2 bag, and the options
+``bag``, ``csv`` and ``images`` share (``csv`` runs in :mod:`deformctl.cli._measure_csv`).
 
-The flags become the library's options (:class:`~deformctl.catalog.MeasuredObject`, a
+The options become the library's (:class:`~deformctl.catalog.MeasuredObject`, a
 :class:`~deformctl.measure.options.BagSource` and a
-:class:`~deformctl.measure.options.Segmentation`, each checked when built) and
+:class:`~deformctl.measure.options.Segmentation`, each checked when built, each from its
+:class:`~deformctl.cli._options.OptionGroup`) and
 :func:`deformctl.measure.stage.measure_recording` reads the recording and writes its log.
 """
 
@@ -16,119 +17,83 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from deformctl.artifacts.io import is_stdio
+from deformctl.cli._options import OptionGroup
 from deformctl.errors import UsageError
 from deformctl.measure.options import BagSource, Segmentation
 
-if TYPE_CHECKING:  # pragma: no cover - the readers (pandas, MCAP) load when --bag/--csv runs
+if TYPE_CHECKING:  # pragma: no cover - the readers (pandas, MCAP) load when a recording is read
     from deformctl.catalog import MeasuredObject
 
-Bag = Annotated[
-    str | None,
-    typer.Option(
-        "--bag", metavar="BAG.mcap", help="Source: a ROS 2 bag, one MCAP file (ros2msg/cdr)."
-    ),
-]
-Csv = Annotated[
-    str | None,
-    typer.Option(
-        "--csv",
-        metavar="FILE",
-        help="Source: CSV exports, one object each (more files follow as arguments; - for "
-        "stdin): a preamble, the header, units in the names or a units row are found.",
-    ),
-]
 WrenchTopics = Annotated[
     list[str],
-    typer.Option(
-        "--wrench-topic",
-        metavar="TOPIC",
-        help="Bag: geometry_msgs/msg/WrenchStamped topic; repeat for the second palm.",
-    ),
+    typer.Option("--wrench-topic", metavar="TOPIC", help="WrenchStamped topic; twice: two palms."),
 ]
 PositionTopic = Annotated[
     str | None,
-    typer.Option(
-        "--position-topic",
-        metavar="TOPIC",
-        help="Bag: geometry_msgs/msg/PoseStamped or sensor_msgs/msg/JointState topic.",
-    ),
+    typer.Option("--position-topic", metavar="TOPIC", help="PoseStamped or JointState topic."),
 ]
 Joint = Annotated[
-    str | None,
-    typer.Option("--joint", metavar="NAME", help="Bag: the JointState joint that is the position."),
+    str | None, typer.Option("--joint", metavar="NAME", help="The JointState joint to read.")
 ]
-Axis = Annotated[str, typer.Option("--axis", metavar="x|y|z", help="Bag: the squeeze axis.")]
+Axis = Annotated[str, typer.Option("--axis", metavar="x|y|z", help="The squeeze axis.")]
 PositionIs = Annotated[
     str,
     typer.Option(
         "--position-is",
         metavar="palm|gap",
-        help="palm: one palm's travel, its partner mirrors it (d = 2 x travel); "
-        "gap: the distance between the palms (d = gap(t0) - gap).",
+        help="d = 2 x one palm's travel, or gap(t0) - gap.",
     ),
 ]
 Columns = Annotated[
     str | None,
     typer.Option(
         "--columns",
-        metavar="time=COL,force=COL,compression=COL",
-        help="CSV: the columns of these roles (the others are found by name: time, force, "
-        "compression, position or gap); position may be gap=COL or compression=COL.",
+        metavar="ROLE=COL,...",
+        help="Columns of the roles time, force, compression, position, gap [default: by name].",
     ),
 ]
 Units = Annotated[
     str | None,
     typer.Option(
         "--units",
-        metavar="time=s,force=N,compression=mm",
-        help="CSV: units of the columns whose unit the file does not state (default s, N, m, "
-        "with a warning); one that contradicts the file is an error.",
+        metavar="ROLE=UNIT,...",
+        help="Units the file does not state [default: s, N, m, with a warning].",
     ),
 ]
 Segment = Annotated[
     bool | None,
     typer.Option(
         "--segment/--no-segment",
-        help="Split the recording into squeezes by force (default: yes for bags, no for CSV).",
+        help="Cut the recording into squeezes by force [default: bag yes, CSV no].",
     ),
 ]
 Phase = Annotated[
     str | None,
     typer.Option(
         "--phase",
-        metavar="loading|unloading|all",
-        help="Keep each squeeze up to its peak force, from it, or whole [default: all]. A "
-        "squeeze that ruptures is always cut at the rupture (recorded in the log).",
+        metavar="PHASE",
+        help="loading, unloading or all of each squeeze [default: all]; a rupture is cut off.",
     ),
 ]
 PositionIncreasesWhen = Annotated[
     str | None,
     typer.Option(
         "--position-increases-when",
-        metavar="closing|opening",
-        help="The position grows as the gripper closes or opens [default: a gap grows when "
-        "opening, a compression when closing; one palm's sign is found].",
+        metavar="WHEN",
+        help="closing or opening [default: a gap when opening, a compression when closing].",
     ),
 ]
-ObjectId = Annotated[
-    str | None,
-    typer.Option("--object-id", metavar="ID", help="Id of the squeezed object (required)."),
-]
+ObjectId = Annotated[str | None, typer.Option("--object-id", metavar="ID", help="The object's id.")]
 WeightN = Annotated[
-    float | None,
-    typer.Option("--weight-n", metavar="W", help="Weight of the object, N (required)."),
+    float | None, typer.Option("--weight-n", metavar="W", help="The object's weight, N.")
 ]
 SizeCm = Annotated[
     tuple[float, float, float] | None,
-    typer.Option("--size-cm", metavar="X Y Z", help="Size of the object, cm (x = squeeze axis)."),
+    typer.Option("--size-cm", metavar="X Y Z", help="The object's size, cm (x: squeeze axis)."),
 ]
 NoCrcCheck = Annotated[
     bool,
-    typer.Option(
-        "--no-crc-check",
-        help="Bag: read a damaged bag anyway: chunks whatever their CRC, a cut file up to its "
-        "last complete record (a warning says so).",
-    ),
+    typer.Option("--no-crc-check", help="Read a damaged or cut bag anyway, with a warning."),
 ]
 FrictionMu = Annotated[
     float | None,
@@ -137,81 +102,117 @@ FrictionMu = Annotated[
 
 
 @dataclass(frozen=True)
-class RigOptions:
-    """The recording options as given on the command line (None / empty: not given)."""
+class ObjectFlags:
+    """What the command line says of the object (for ``measure csv``, each file's
+    ``--objects-from`` row wins); checked when the object is built
+    (:class:`deformctl.catalog.MeasuredObject`, :func:`deformctl.measure.csv_objects`)."""
 
-    object_id: str | None
-    wrench_topics: list[str]
-    position_topic: str | None
-    joint: str | None
-    axis: str
-    position_is: str
-    columns: str | None
-    units: str | None
-    segment: bool | None
-    phase: str | None = None
-    position_increases_when: str | None = None
-    crc_check: bool = True
+    object_id: str | None = None
+    weight_n: float | None = None
+    size_cm: tuple[float, float, float] | None = None
+    friction_mu: float | None = None
 
-    def given(self) -> list[str]:
-        """The flags of the source-specific options given (to refuse them elsewhere)."""
-        values = [
-            ("--wrench-topic", self.wrench_topics),
-            ("--position-topic", self.position_topic),
-            ("--joint", self.joint),
-            ("--columns", self.columns),
-            ("--units", self.units),
-            ("--segment/--no-segment", self.segment),
-            ("--phase", self.phase),
-            ("--position-increases-when", self.position_increases_when),
-            ("--object-id", self.object_id),
-            ("--no-crc-check", not self.crc_check),
-        ]
-        return [flag for flag, value in values if value not in (None, [], False)]
+    def measured(self, command: str) -> MeasuredObject:
+        """The one object ``command`` (``measure bag``, ``measure images``) measures.
+
+        Raises:
+            UsageError: no ``--object-id`` or no ``--weight-n`` (exit 2).
+        """
+        from deformctl.catalog import MeasuredObject
+
+        if self.object_id is None or self.weight_n is None:
+            raise UsageError(f"{command} needs --object-id and --weight-n")
+        return MeasuredObject(
+            self.object_id, self.weight_n, size_cm=self.size_cm, friction_mu=self.friction_mu
+        )
 
 
-def bag_source(opts: RigOptions) -> BagSource:
-    """The ``--bag`` source options.
+#: ``--object-id``, ``--weight-n``, ``--size-cm``, ``--friction-mu`` as one ``ObjectFlags``.
+OBJECT = OptionGroup(
+    "named",
+    (
+        ("object_id", ObjectId, None),
+        ("weight_n", WeightN, None),
+        ("size_cm", SizeCm, None),
+        ("friction_mu", FrictionMu, None),
+    ),
+    ObjectFlags,
+)
+#: The same without ``--size-cm`` (``measure images`` measures the size).
+IMAGE_OBJECT = OptionGroup(
+    "named", tuple(o for o in OBJECT.options if o[0] != "size_cm"), ObjectFlags
+)
+
+
+def segmentation(*, segment: bool | None, phase: str | None) -> Segmentation:
+    """How ``measure bag`` and ``measure csv`` cut their recording (``--segment``, ``--phase``)."""
+    return Segmentation(segment=segment, phase=phase or "all")  # type: ignore[arg-type]
+
+
+#: ``--segment/--no-segment`` and ``--phase`` as one :class:`Segmentation`.
+CUT = OptionGroup("cut", (("segment", Segment, None), ("phase", Phase, None)), segmentation)
+
+
+def bag_source(
+    *,
+    wrench_topics: list[str],
+    position_topic: str | None,
+    joint: str | None,
+    axis: str,
+    position_is: str,
+    position_increases_when: str | None,
+    no_crc_check: bool,
+) -> BagSource:
+    """The bag's topics and how to read them.
 
     Raises:
         UsageError: a topic missing, or an option out of its rule (exit 2).
     """
-    if not opts.wrench_topics:
-        raise UsageError("--bag needs --wrench-topic (one, or two for two palms)")
-    if opts.position_topic is None:
-        raise UsageError("--bag needs --position-topic (PoseStamped or JointState)")
+    if not wrench_topics:
+        raise UsageError("measure bag needs --wrench-topic (one, or two for two palms)")
+    if position_topic is None:
+        raise UsageError("measure bag needs --position-topic (PoseStamped or JointState)")
     return BagSource(
-        wrench_topics=tuple(opts.wrench_topics),
-        position_topic=opts.position_topic,
-        joint=opts.joint,
-        axis=opts.axis,  # type: ignore[arg-type]
-        position_is=opts.position_is,  # type: ignore[arg-type]
-        position_increases_when=opts.position_increases_when,  # type: ignore[arg-type]
-        crc_check=opts.crc_check,
+        wrench_topics=tuple(wrench_topics),
+        position_topic=position_topic,
+        joint=joint,
+        axis=axis,  # type: ignore[arg-type]
+        position_is=position_is,  # type: ignore[arg-type]
+        position_increases_when=position_increases_when,  # type: ignore[arg-type]
+        crc_check=not no_crc_check,
     )
 
 
-def segmentation(opts: RigOptions) -> Segmentation:
-    """How ``--bag`` and ``--csv`` cut their recording (``--segment``, ``--phase``)."""
-    return Segmentation(segment=opts.segment, phase=opts.phase or "all")  # type: ignore[arg-type]
+#: The bag's topics and reading options as one :class:`BagSource`.
+BAG = OptionGroup(
+    "source",
+    (
+        ("wrench_topics", WrenchTopics, []),
+        ("position_topic", PositionTopic, None),
+        ("joint", Joint, None),
+        ("axis", Axis, "x"),
+        ("position_is", PositionIs, "palm"),
+        ("position_increases_when", PositionIncreasesWhen, None),
+        ("no_crc_check", NoCrcCheck, False),
+    ),
+    bag_source,
+)
 
 
 def run(
     path: str,
-    opts: RigOptions,
+    source: BagSource,
+    cut: Segmentation,
     obj: MeasuredObject,
     output: str,
     force: bool,
 ) -> None:
-    """Read the ``--bag`` recording ``path`` and write its squeeze log."""
+    """Read the bag ``path`` and write its squeeze log."""
     from deformctl.measure.stage import measure_recording
 
     if is_stdio(path):
-        raise UsageError("--bag: cannot read from stdin; give a file")
-    source = bag_source(opts)
-    rec = measure_recording(
-        path, source, obj, output=output, segmentation=segmentation(opts), force=force
-    )
+        raise UsageError("measure bag: cannot read from stdin; give a file")
+    rec = measure_recording(path, source, obj, output=output, segmentation=cut, force=force)
     for line in rec.warnings:  # e.g. a bag read without CRC checks (each names the file)
         typer.echo(f"warning: {line}", err=True)
     for r in rec.ruptures:  # each squeeze is kept up to its rupture, recorded in the log

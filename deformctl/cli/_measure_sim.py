@@ -1,4 +1,4 @@
-"""``deformctl measure CATALOG --sim``: simulated squeezes of every (selected) catalog object.
+"""``deformctl measure sim CATALOG``: simulated squeezes of every (selected) catalog object.
 
 The options become a :class:`deformctl.measure.SimulateCatalogTask` (a
 :class:`~deformctl.measure.options.SqueezeProtocol` and the preset of a
@@ -9,19 +9,23 @@ output, :func:`deformctl.measure.simulate_catalog_sweep`.
 
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli._common import finish_sweep, progress_bar
-from deformctl.cli._options import default, parse_log_epoch, parse_object_ids
-from deformctl.cli._scene_options import scene_rate
+from deformctl.cli._options import (
+    SIMULATOR,
+    LogEpoch,
+    OptionGroup,
+    SceneHz,
+    parse_log_epoch,
+    parse_object_ids,
+    scene_rate,
+)
 from deformctl.cli._summary import RunClock
 from deformctl.errors import UsageError
-from deformctl.measure.csv_options import DEFAULT_CSV_MEMORY_BUDGET_GIB
 from deformctl.measure.options import (
     DEFAULT_SIM_HOLD_S,
     DEFAULT_SIM_RAMP_S,
@@ -29,30 +33,18 @@ from deformctl.measure.options import (
     DEFAULT_SQUEEZE_STRAIN,
 )
 
-if TYPE_CHECKING:  # pragma: no cover - the stage (pandas, the simulator) loads when --sim runs
+if TYPE_CHECKING:  # pragma: no cover - the stage (pandas, the simulator) loads when it runs
     from rich.console import Console
 
     from deformctl.measure.stage import SimulateCatalogTask
     from deformctl.parallel import SweepOptions
 
-#: ``measure``'s budget: the simulator's lattice, or the rows of a CSV export and its log.
-MemoryBudgetGib = Annotated[
-    float | None,
-    typer.Option(
-        "--memory-budget-gib",
-        metavar="GIB",
-        help="Sim: refuse a lattice whose estimated memory exceeds this, GiB "
-        f"{default('SimSettings.memory_budget_gib')}. CSV: refuse a file (or one log of all "
-        f"files) whose estimated memory exceeds this [default: {DEFAULT_CSV_MEMORY_BUDGET_GIB:g}].",
-    ),
-]
 Squeezes = Annotated[
     int | None,
     typer.Option(
         "--squeezes",
         metavar="X",
-        help="Sim: squeezes per object, at 0.5..1 x the peak force [default: "
-        f"{DEFAULT_SIM_SQUEEZES}, the paper's].",
+        help=f"Squeezes per object, at 0.5..1 x the peak force [default: {DEFAULT_SIM_SQUEEZES}].",
     ),
 ]
 PeakForceN = Annotated[
@@ -60,9 +52,8 @@ PeakForceN = Annotated[
     typer.Option(
         "--peak-force-n",
         metavar="F",
-        help="Sim: peak force of the largest squeeze, N, for every object [default: the "
-        "strain rule, D x strain x size_x; a Hunt–Crossley object: k (strain x size_x)^n, at "
-        "least 1.5 F_w].",
+        help="Peak force of the largest squeeze, N [default: D x strain x size_x; Hunt-Crossley: "
+        "k (strain x size_x)^n; at least 1.5 F_w].",
     ),
 ]
 Strain = Annotated[
@@ -70,117 +61,119 @@ Strain = Annotated[
     typer.Option(
         "--strain",
         metavar="E",
-        help=f"Sim: the default rule's static strain [default: {DEFAULT_SQUEEZE_STRAIN:g}].",
+        help=f"The default peak force's static strain [default: {DEFAULT_SQUEEZE_STRAIN:g}].",
     ),
 ]
 RampS = Annotated[
     float | None,
-    typer.Option("--ramp-s", help=f"Sim: force ramp, s [default: {DEFAULT_SIM_RAMP_S:g}]."),
+    typer.Option("--ramp-s", help=f"Force ramp, s [default: {DEFAULT_SIM_RAMP_S:g}]."),
 ]
 HoldS = Annotated[
     float | None,
-    typer.Option(
-        "--hold-s", help=f"Sim: hold at the peak force, s [default: {DEFAULT_SIM_HOLD_S:g}]."
-    ),
+    typer.Option("--hold-s", help=f"Hold at the peak force, s [default: {DEFAULT_SIM_HOLD_S:g}]."),
 ]
 Floating = Annotated[
     bool | None,
-    typer.Option(
-        "--floating",
-        help="Sim: squeeze without gravity and table (a material test) [default: on the table].",
-    ),
+    typer.Option("--floating", help="No gravity and no table (a material test)."),
 ]
-Seed = Annotated[int | None, typer.Option("--seed", help="Sim: noise seed [default: 0].", min=0)]
+Seed = Annotated[int | None, typer.Option("--seed", help="Noise seed [default: 0].", min=0)]
 NoiseForceN = Annotated[
-    float | None, typer.Option("--noise-force-n", help="Sim: force noise std, N [default: 0].")
+    float | None, typer.Option("--noise-force-n", help="Force noise std, N [default: 0].")
 ]
 NoisePositionM = Annotated[
     float | None,
-    typer.Option(
-        "--noise-position-m", help="Sim: noise std of each palm position, m [default: 0]."
-    ),
+    typer.Option("--noise-position-m", help="Palm position noise std, m [default: 0]."),
 ]
 
 
-@dataclass(frozen=True)
-class SimFlags:
-    """The ``--sim`` options as given (None: not given, the documented default applies)."""
+def simulate_task(
+    *,
+    squeezes: int | None,
+    peak_force_n: float | None,
+    strain: float | None,
+    ramp_s: float | None,
+    hold_s: float | None,
+    floating: bool | None,
+    seed: int | None,
+    noise_force_n: float | None,
+    noise_position_m: float | None,
+    sim_preset: str | None,
+    alpha_cm: float | None,
+    dt_s: float | None,
+    memory_budget_gib: float | None,
+    log_epoch: str | None,
+    scene_hz: float | None,
+) -> SimulateCatalogTask:
+    """The squeezes, simulator settings and seed the options ask for (None: not given, the
+    library default applies).
 
-    squeezes: int | None
-    sim_preset: str | None
-    objects: str | None
-    peak_force_n: float | None
-    strain: float | None
-    ramp_s: float | None
-    hold_s: float | None
-    floating: bool | None
-    alpha_cm: float | None
-    dt_s: float | None
-    memory_budget_gib: float | None
-    seed: int | None
-    noise_force_n: float | None
-    noise_position_m: float | None
-    log_epoch: str | None = None
-    scene_hz: float | None = None
+    Raises:
+        UsageError: both ``--peak-force-n`` and ``--strain``, or a value outside its rule
+            (:class:`~deformctl.measure.options.SqueezeProtocol`,
+            :class:`~deformctl.presets.SimOptions`).
+    """
+    from deformctl.measure.options import SqueezeProtocol
+    from deformctl.measure.stage import SimulateCatalogTask
+    from deformctl.presets import DEFAULT_PRESET, SimOptions
+    from deformctl.scene import scene_every_steps
 
-    def given(self) -> list[str]:
-        """The flags of the options given on the command line."""
-        return [
-            "--" + name.replace("_", "-") for name, value in vars(self).items() if value is not None
-        ]
-
-    def task(self) -> SimulateCatalogTask:
-        """The squeezes, simulator settings and seed these options ask for.
-
-        Raises:
-            UsageError: both ``--peak-force-n`` and ``--strain``, or a value outside its rule
-                (:class:`~deformctl.measure.options.SqueezeProtocol`,
-                :class:`~deformctl.presets.SimOptions`).
-        """
-        from deformctl.measure.options import SqueezeProtocol
-        from deformctl.measure.stage import SimulateCatalogTask
-        from deformctl.presets import DEFAULT_PRESET, SimOptions
-        from deformctl.scene import scene_every_steps
-
-        if self.peak_force_n is not None and self.strain is not None:
-            raise UsageError("give --peak-force-n or --strain, not both")
-        given: dict[str, Any] = {
-            "squeezes": self.squeezes,
-            "peak_force_n": self.peak_force_n,
-            "strain": self.strain,
-            "ramp_s": self.ramp_s,
-            "hold_s": self.hold_s,
-            "gravity": None if self.floating is None else not self.floating,
-            "noise_force_n": self.noise_force_n,
-            "noise_position_m": self.noise_position_m,
-        }
-        protocol = SqueezeProtocol(**{k: v for k, v in given.items() if v is not None})
-        preset = SimOptions(
-            preset_name=self.sim_preset or DEFAULT_PRESET,
-            alpha_cm=self.alpha_cm,
-            dt_s=self.dt_s,
-            memory_budget_gib=self.memory_budget_gib,
-        ).preset()
-        scene_hz = scene_rate(self.scene_hz)
-        scene_every_steps(scene_hz, preset.settings.dt_s)
-        epoch_ns = parse_log_epoch(self.log_epoch)
-        return SimulateCatalogTask(
-            protocol=protocol,
-            settings=preset.settings,
-            seed=0 if self.seed is None else self.seed,
-            sim_preset=preset.name,
-            scene_hz=scene_hz,
-            **({} if epoch_ns is None else {"log_epoch_ns": epoch_ns}),
-        )
+    if peak_force_n is not None and strain is not None:
+        raise UsageError("give --peak-force-n or --strain, not both")
+    given: dict[str, Any] = {
+        "squeezes": squeezes,
+        "peak_force_n": peak_force_n,
+        "strain": strain,
+        "ramp_s": ramp_s,
+        "hold_s": hold_s,
+        "gravity": None if floating is None else not floating,
+        "noise_force_n": noise_force_n,
+        "noise_position_m": noise_position_m,
+    }
+    protocol = SqueezeProtocol(**{k: v for k, v in given.items() if v is not None})
+    preset = SimOptions(
+        preset_name=sim_preset or DEFAULT_PRESET,
+        alpha_cm=alpha_cm,
+        dt_s=dt_s,
+        memory_budget_gib=memory_budget_gib,
+    ).preset()
+    scene_hz = scene_rate(scene_hz)
+    scene_every_steps(scene_hz, preset.settings.dt_s)
+    epoch_ns = parse_log_epoch(log_epoch)
+    return SimulateCatalogTask(
+        protocol=protocol,
+        settings=preset.settings,
+        seed=0 if seed is None else seed,
+        sim_preset=preset.name,
+        scene_hz=scene_hz,
+        **({} if epoch_ns is None else {"log_epoch_ns": epoch_ns}),
+    )
 
 
-#: The flags of :class:`SimFlags` (only ``--sim`` takes them).
-FLAGS = tuple("--" + f.name.replace("_", "-") for f in dataclasses.fields(SimFlags))
+#: The squeeze and simulator options of ``measure sim``, as one ``SimulateCatalogTask``.
+TASK = OptionGroup(
+    "task",
+    (
+        ("squeezes", Squeezes, None),
+        ("peak_force_n", PeakForceN, None),
+        ("strain", Strain, None),
+        ("ramp_s", RampS, None),
+        ("hold_s", HoldS, None),
+        ("floating", Floating, None),
+        ("seed", Seed, None),
+        ("noise_force_n", NoiseForceN, None),
+        ("noise_position_m", NoisePositionM, None),
+        *SIMULATOR,
+        ("log_epoch", LogEpoch, None),
+        ("scene_hz", SceneHz, None),
+    ),
+    simulate_task,
+)
 
 
 def run(
     catalog: str,
-    opts: SimFlags,
+    task: SimulateCatalogTask,
+    objects: str | None,
     output: str,
     force: bool,
     sweep: SweepOptions,
@@ -188,17 +181,10 @@ def run(
     quiet: bool = False,
 ) -> None:
     """Squeeze the objects of ``catalog`` into ``output`` (a squeeze log or a dataset directory)
-    and end with the summary line (unless ``quiet``).
-
-    Raises:
-        UsageError: no catalog, or a bad option (see :meth:`SimFlags.task`).
-    """
+    and end with the summary line (unless ``quiet``)."""
     from deformctl.measure.stage import simulate_catalog_file, simulate_catalog_sweep
 
-    if not catalog:
-        raise UsageError("--sim needs a CATALOG argument (the objects to squeeze)")
-    task = opts.task()
-    object_ids = parse_object_ids(opts.objects)
+    object_ids = parse_object_ids(objects)
     clock = RunClock("measure")
     if sweep.check(output, file_workers=True):
         summary = simulate_catalog_sweep(

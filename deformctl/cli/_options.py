@@ -7,24 +7,26 @@ restated in :data:`HEAVY_DEFAULTS`, because importing numba or OpenCV costs the 
 a second at start-up; ``tests/test_layout.py`` checks each of them against the library
 object it restates, so they cannot drift.
 
-An option whose value is ``None`` was not given; the library default then applies. The five
-sweep options are added to a command by :func:`with_sweep_options`, which hands them to it as
-one :class:`~deformctl.parallel.SweepOptions`.
+An option whose value is ``None`` was not given; the library default then applies. Options that
+travel together are handed to a command as the one value they build
+(:mod:`deformctl.cli._option_groups`, re-exported here: the five sweep options as one
+:class:`~deformctl.parallel.SweepOptions`, :data:`SIMULATOR` the simulator's).
 """
 
 from __future__ import annotations
 
-import functools
-import inspect
-from collections.abc import Callable
-from typing import Annotated, Any, TypeVar
+from typing import Annotated, Any
 
 import typer
 
+from deformctl.cli._option_groups import (
+    NO_SWEEP,
+    SWEEP,
+    OptionGroup,
+    with_options,
+    with_sweep_options,
+)
 from deformctl.errors import UsageError
-from deformctl.parallel import DEFAULT_CONNECT_TIMEOUT_S, DEFAULT_PARTITION_SIZE, SweepOptions
-
-R = TypeVar("R")
 
 #: Defaults of the simulator (``SimSettings``, ``LiftProfile``, ``SlipCriterion``, the scene rate
 #: of ``simulate_squeezes``: :data:`deformctl.scene.DEFAULT_SCENE_HZ`) and of the vision
@@ -169,81 +171,34 @@ def parse_object_ids(text: str | None) -> list[str] | None:
     return ids
 
 
-# ---------------------------------------------------------------------------- sweeps
+#: :data:`deformctl.scene.DEFAULT_SCENE_HZ`, restated (the scene module imports numpy).
+DEFAULT_SCENE_HZ = float(str(HEAVY_DEFAULTS["simulate_squeezes.scene_hz"]))
 
-Workers = Annotated[
-    str,
-    typer.Option(
-        "--workers",
-        metavar="auto|N",
-        help="Local worker processes for a dataset output, or a single-file output of "
-        "measure --sim / lift --sim: N, or auto (a single file: the count of least measured wall "
-        "time, one process when more would not save 15 %; a dataset: every core).",
-    ),
-]
-Scheduler = Annotated[
-    str | None,
-    typer.Option(
-        "--scheduler",
-        metavar="tcp://HOST:PORT",
-        help="Dataset output: run on this running Dask scheduler, tcp://HOST:PORT.",
-    ),
-]
-ConnectTimeout = Annotated[
+SceneHz = Annotated[
     float | None,
     typer.Option(
-        "--connect-timeout",
-        metavar="S",
-        help="With --scheduler: seconds allowed to reach the scheduler "
-        f"[default: {DEFAULT_CONNECT_TIMEOUT_S:g}].",
-    ),
-]
-PartitionSize = Annotated[
-    int | None,
-    typer.Option(
-        "--partition-size",
-        metavar="N",
-        help=f"Dataset output: objects per part file [default: {DEFAULT_PARTITION_SIZE}].",
-    ),
-]
-Resume = Annotated[
-    bool,
-    typer.Option(
-        "--resume",
-        help="Dataset output: keep the complete parts of an earlier run, compute the rest.",
+        "--scene-hz",
+        metavar="HZ",
+        help="Sim: frames per simulated second of the log's 3-D scene for Foxglove (/scene: "
+        "palms, surface particles, stuck / slipping contacts; /palms: each palm's forces and "
+        f"stick/slip); 0: none, at most 1/dt {default('simulate_squeezes.scene_hz')}.",
     ),
 ]
 
 
-#: The sweep options' parameters: (parameter name, ``SweepOptions`` field, alias, default).
-_SWEEP_PARAMETERS: tuple[tuple[str, str, Any, Any], ...] = (
-    ("workers", "workers", Workers, "auto"),
-    ("scheduler", "scheduler", Scheduler, None),
-    ("connect_timeout", "connect_timeout_s", ConnectTimeout, None),
-    ("partition_size", "partition_size", PartitionSize, None),
-    ("resume", "resume", Resume, False),
+def scene_rate(value: float | None) -> float:
+    """The rate ``--scene-hz`` asks for (its default when not given); checked where it is used
+    (:func:`deformctl.scene.scene_every_steps`)."""
+    return DEFAULT_SCENE_HZ if value is None else float(value)
+
+
+#: The simulator options ``measure sim`` and ``lift sim`` share: (parameter, alias, default).
+SIMULATOR: tuple[tuple[str, Any, Any], ...] = (
+    ("sim_preset", SimPresetName, None),
+    ("alpha_cm", AlphaCm, None),
+    ("dt_s", DtS, None),
+    ("memory_budget_gib", MemoryBudgetGib, None),
 )
-#: What a command wrapped by :func:`with_sweep_options` receives when called directly.
-NO_SWEEP = SweepOptions()
 
 
-def with_sweep_options(command: Callable[..., R]) -> Callable[..., R]:
-    """Give ``command`` the options ``--workers`` ... ``--resume`` as one ``sweep`` argument.
-
-    ``command`` takes ``sweep: SweepOptions``; the command line sees the five options instead
-    (declared once, above), and the wrapper builds the :class:`SweepOptions` from them.
-    """
-    signature = inspect.signature(command, eval_str=True)
-    kept = [p for p in signature.parameters.values() if p.name != "sweep"]
-    added = [
-        inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=value, annotation=alias)
-        for name, _, alias, value in _SWEEP_PARAMETERS
-    ]
-
-    @functools.wraps(command)
-    def wrapper(*args: Any, **kwargs: Any) -> R:
-        given = {field: kwargs.pop(name, value) for name, field, _, value in _SWEEP_PARAMETERS}
-        return command(*args, sweep=SweepOptions(**given), **kwargs)
-
-    wrapper.__signature__ = signature.replace(parameters=[*kept, *added])  # type: ignore[attr-defined]
-    return wrapper
+__all__ = ["NO_SWEEP", "SWEEP", "OptionGroup", "with_options", "with_sweep_options"]

@@ -1,10 +1,11 @@
 """The CLI reference (``docs/reference/cli.md``), generated from the typer app itself.
 
 ``python -m deformctl.cli.reference`` prints the reference: the root command's help and, in
-pipeline order, every subcommand's ``--help`` text, laid out at a fixed width so the output does
-not depend on the terminal. ``--write PATH`` writes it there; ``--check PATH`` exits 1 when the
-file differs from what the app prints now (``tests/test_docs.py`` runs the check, so an option
-added without regenerating the reference fails the suite). After changing a command::
+pipeline order, every subcommand's ``--help`` text (and its own subcommands'), laid out at a
+fixed width so the output does not depend on the terminal. ``--write PATH`` writes it there;
+``--check PATH`` exits 1 when the file differs from what the app prints now
+(``tests/test_docs.py`` runs the check, so an option added without regenerating the reference
+fails the suite). After changing a command::
 
     python -m deformctl.cli.reference --write docs/reference/cli.md
 """
@@ -34,7 +35,7 @@ def render() -> str:
     """The reference as Markdown: the root help, then each subcommand's help, in order."""
     import typer.main
 
-    from deformctl.cli import COMMANDS, app
+    from deformctl.cli import COMMAND_NAMES, app
 
     root = typer.main.get_command(app)
     parts = [HEADER]
@@ -49,11 +50,14 @@ def render() -> str:
 
     root_ctx = root.make_context("deformctl", [], resilient_parsing=True)
     parts.append("## deformctl\n\n```text\n" + help_text(root, "deformctl", None) + "\n```\n")
-    for function in COMMANDS:
-        name = function.__name__
+    for name in COMMAND_NAMES:
         sub = root.commands[name]  # type: ignore[attr-defined]
         text = help_text(sub, name, root_ctx)
         parts.append(f"## deformctl {name}\n\n```text\n{text}\n```\n")
+        sub_ctx = sub.make_context(name, [], parent=root_ctx, resilient_parsing=True)
+        for leaf, command in getattr(sub, "commands", {}).items():  # its subcommands, in order
+            text = help_text(command, leaf, sub_ctx)
+            parts.append(f"### deformctl {name} {leaf}\n\n```text\n{text}\n```\n")
     return "\n".join(parts)
 
 

@@ -27,7 +27,7 @@ D_CSV, LAM_CSV = 20.0, 3.0  # N/cm, N·s/cm
 def bag_args(bag: Path, out: Path, *extra: str) -> list[str]:
     return [
         "measure",
-        "--bag",
+        "bag",
         str(bag),
         "--wrench-topic",
         LEFT,
@@ -62,7 +62,7 @@ def _kv_csv_rows(noise: bool, rate_hz: float = 1000.0) -> tuple[np.ndarray, np.n
 def csv_args(path: Path, out: Path, columns: str, *extra: str) -> list[str]:
     return [
         "measure",
-        "--csv",
+        "csv",
         str(path),
         "--columns",
         columns,

@@ -117,7 +117,7 @@ def test_a_simulated_sweep_log_is_read_in_bulk(tmp_path: Path) -> None:
     out = tmp_path / "sq"
     result = CliRunner().invoke(
         app,
-        ["measure", str(DATA.parents[1] / "datasets" / "paper" / "objects.csv"), "--sim",
+        ["measure", "sim", str(DATA.parents[1] / "datasets" / "paper" / "objects.csv"),
          "--seed", "0", "-o", f"{out}/", "--workers", "1", "--partition-size", "2"],
     )  # fmt: skip
     assert result.exit_code == 0, result.stderr

@@ -53,7 +53,7 @@ def bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def _measure_bag(bag: Path, out: Path, *extra: str) -> None:
-    args = ["measure", "--bag", str(bag), "--wrench-topic", LEFT, "--wrench-topic", RIGHT,
+    args = ["measure", "bag", str(bag), "--wrench-topic", LEFT, "--wrench-topic", RIGHT,
             "--position-topic", POSE, "--object-id", "sand", "--weight-n", "2.9",
             "-o", str(out)]  # fmt: skip
     res = runner.invoke(app, [*args, *extra])
@@ -101,7 +101,7 @@ def _csv(path: Path, t0_s: float) -> None:
 
 
 def _measure_csv(csv: Path, out: Path, *extra: str) -> int:
-    res = runner.invoke(app, ["measure", "--csv", str(csv), "--columns",
+    res = runner.invoke(app, ["measure", "csv", str(csv), "--columns",
                               "time=t,force=load,compression=pos", "--units", "compression=mm",
                               "--object-id", "foam", "--weight-n", "0.7", "-o", str(out),
                               *extra])  # fmt: skip
@@ -137,7 +137,7 @@ CATALOG = (
 def _measure_sim(tmp_path: Path, out: str, *extra: str) -> list[tuple[str, int]]:
     catalog = tmp_path / "objects.csv"
     catalog.write_text(CATALOG)
-    res = runner.invoke(app, ["measure", str(catalog), "--sim", "--squeezes", "2",
+    res = runner.invoke(app, ["measure", "sim", str(catalog), "--squeezes", "2",
                               "--alpha-cm", "2", "--hold-s", "0.1", "-o", str(tmp_path / out),
                               *extra])  # fmt: skip
     assert res.exit_code == 0, res.stderr
@@ -175,7 +175,7 @@ def test_simulated_logs_start_at_a_fixed_epoch_one_channel_per_object(tmp_path: 
 def test_bad_log_epoch_is_a_usage_error(tmp_path: Path, value: str, message: str) -> None:
     catalog = tmp_path / "objects.csv"
     catalog.write_text(CATALOG)
-    res = runner.invoke(app, ["measure", str(catalog), "--sim", "--log-epoch", value, "-o",
+    res = runner.invoke(app, ["measure", "sim", str(catalog), "--log-epoch", value, "-o",
                               str(tmp_path / "s.mcap")])  # fmt: skip
     assert res.exit_code == EXIT_USAGE
     assert res.stderr.startswith("error: " + message)
@@ -184,7 +184,7 @@ def test_bad_log_epoch_is_a_usage_error(tmp_path: Path, value: str, message: str
 
 
 def test_log_epoch_is_only_for_simulated_logs(bag: Path, tmp_path: Path) -> None:
-    res = runner.invoke(app, ["measure", "--bag", str(bag), "--wrench-topic", LEFT,
+    res = runner.invoke(app, ["measure", "bag", str(bag), "--wrench-topic", LEFT,
                               "--position-topic", POSE, "--object-id", "s", "--weight-n", "1",
                               "--log-epoch", "0", "-o", str(tmp_path / "s.mcap")])  # fmt: skip
     assert res.exit_code == EXIT_USAGE

@@ -48,7 +48,7 @@ def test_small_strain_slope_and_stiffening_ratio(tmp_path: Path, name: str) -> N
     log, out = tmp_path / "log.mcap", tmp_path / "c.parquet"
     res = runner.invoke(
         app,
-        ["measure", "--csv", str(export), "--object-id", name, "--weight-n", "1", "-o", str(log)],
+        ["measure", "csv", str(export), "--object-id", name, "--weight-n", "1", "-o", str(log)],
     )
     assert res.exit_code == 0, res.stderr
     res = runner.invoke(app, ["characterize", str(log), "-o", str(out)])
@@ -73,7 +73,7 @@ def test_small_strain_slope_and_stiffening_ratio(tmp_path: Path, name: str) -> N
 
 def test_d_far_below_the_operating_force_is_a_secant_misfit(tmp_path: Path) -> None:
     log = tmp_path / "log.mcap"
-    args = ["measure", "--csv", str(DATA / "EF10_0T_A1.csv"), "--object-id", "ef10"]
+    args = ["measure", "csv", str(DATA / "EF10_0T_A1.csv"), "--object-id", "ef10"]
     assert runner.invoke(app, [*args, "--weight-n", "1", "-o", str(log)]).exit_code == 0
     table = {}
     for name, extra in (("median", []), ("tenth", ["--at-force-n", "4.83"])):

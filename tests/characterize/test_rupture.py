@@ -112,7 +112,7 @@ def test_phase_loading_stops_at_the_yield(tmp_path: Path) -> None:
     res = runner.invoke(
         app,
         [
-            "measure", "--csv", str(export), "--columns", "time=t,force=load,compression=pos",
+            "measure", "csv", str(export), "--columns", "time=t,force=load,compression=pos",
             "--units", "compression=mm", "--phase", "loading", "--object-id", "kiwi",
             "--weight-n", "1", "-o", str(log),
         ],

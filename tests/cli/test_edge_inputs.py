@@ -34,7 +34,7 @@ def test_tiny_alpha_is_refused_before_building_the_lattice(
 ) -> None:
     out = tmp_path / ("x.mcap" if command == "measure" else "x.parquet")
     result = runner.invoke(
-        app, [command, str(catalog), "--sim", "--alpha-cm", "1e-3", "-o", str(out)]
+        app, [command, "sim", str(catalog), "--alpha-cm", "1e-3", "-o", str(out)]
     )
     assert result.exit_code == 2
     _one_line_error(result.stderr)
@@ -47,7 +47,7 @@ def test_tiny_alpha_is_refused_before_building_the_lattice(
     "args",
     [
         ["population", "--seed", "-1", "-o", "{tmp}/p.csv"],
-        ["measure", "{catalog}", "--sim", "--seed", "-1", "-o", "{tmp}/x.mcap"],
+        ["measure", "sim", "{catalog}", "--seed", "-1", "-o", "{tmp}/x.mcap"],
         ["train", "{tmp}/index.parquet", "--seed", "-1", "-o", "{tmp}/m.skops"],
     ],
 )
@@ -64,7 +64,7 @@ def test_csv_that_is_not_utf8_is_bad_input(tmp_path: Path) -> None:
     src = tmp_path / "latin1.csv"
     src.write_bytes("time,force,pos\n0,1,caf\xe9\n".encode("latin-1"))
     out = tmp_path / "x.mcap"
-    argv = ["measure", "--csv", str(src), "--columns", "time=time,force=force,position=pos"]
+    argv = ["measure", "csv", str(src), "--columns", "time=time,force=force,position=pos"]
     result = runner.invoke(app, [*argv, "--object-id", "A", "--weight-n", "1", "-o", str(out)])
     assert result.exit_code == 65
     _one_line_error(result.stderr)

@@ -111,7 +111,7 @@ def test_a_dataset_directory_shows_its_rows(tmp_path: Path) -> None:
     catalog = tmp_path / "cat.csv"
     make_population(2, seed=1).to_csv(catalog, index=False)
     fast = ["--alpha-cm", "10", "--dt-s", "0.002", "--hold-s", "0.05", "--lift-height-m", "0.01"]
-    args = ["lift", str(catalog), "--sim", "--protocol", "paper", "--workers", "1", *fast]
+    args = ["lift", "sim", str(catalog), "--protocol", "paper", "--workers", "1", *fast]
     done = runner.invoke(app, [*args, "-o", f"{tmp_path / 'lift'}/"])
     assert done.exit_code == 0, done.stderr
     out = _ok(_run(tmp_path / "lift", "--columns", "object_id,lift_force_n"))

@@ -55,8 +55,8 @@ def catalog(tmp_path: Path) -> Path:
 
 def test_refine_rows_and_log_match_the_threshold(catalog: Path, tmp_path: Path) -> None:
     out, log, requests = tmp_path / "lift.parquet", tmp_path / "lift.mcap", tmp_path / "req.jsonl"
-    result = run(catalog, "--rig", rig("threshold_rig.py", THRESHOLD_N, requests), "-o", out,
-                 "--log", log)  # fmt: skip
+    result = run("rig", catalog, "--command", rig("threshold_rig.py", THRESHOLD_N, requests),
+                 "-o", out, "--log", log)  # fmt: skip
     assert result.exit_code == 0, result.stderr
     # no progress bar when stderr is not a terminal: only the summary line
     assert result.stderr.startswith("lift: 3 object(s) done, 0 flagged, 0 failed in ")
@@ -127,8 +127,8 @@ def test_refine_rows_and_log_match_the_threshold(catalog: Path, tmp_path: Path) 
 
 def test_paper_protocol_through_the_cli(catalog: Path, tmp_path: Path) -> None:
     out, log = tmp_path / "lift.parquet", tmp_path / "lift.mcap"
-    result = run(catalog, "--rig", rig("threshold_rig.py", THRESHOLD_N), "--protocol", "paper",
-                 "-o", out, "--log", log, "--objects", "anvil,sponge")  # fmt: skip
+    result = run("rig", catalog, "--command", rig("threshold_rig.py", THRESHOLD_N), "--protocol",
+                 "paper", "-o", out, "--log", log, "--objects", "anvil,sponge")  # fmt: skip
     assert result.exit_code == 0, result.stderr
     table = read_table(out, "lift_results").set_index("object_id")
     assert list(table.index) == ["anvil", "sponge"]  # the --objects order
@@ -148,7 +148,9 @@ def test_progress_bar_draws_on_a_terminal(
 
     terminal = partial(Console, stderr=True, force_terminal=True)
     monkeypatch.setattr(lift_cli, "stderr_console", terminal)
-    result = run(catalog, "--rig", rig("threshold_rig.py", 1.0), "-o", tmp_path / "o.parquet")
+    result = run(
+        "rig", catalog, "--command", rig("threshold_rig.py", 1.0), "-o", tmp_path / "o.parquet"
+    )
     assert result.exit_code == 0, result.stderr
     assert "3/3" in result.stderr  # the bar reached the last object, on stderr
     assert "3/3" not in result.stdout
@@ -156,7 +158,16 @@ def test_progress_bar_draws_on_a_terminal(
 
 def test_force_overwrites(catalog: Path, tmp_path: Path) -> None:
     out = tmp_path / "lift.parquet"
-    args = [catalog, "--rig", rig("threshold_rig.py", 1.0), "-o", out, "--objects", "anvil"]
+    args = [
+        "rig",
+        catalog,
+        "--command",
+        rig("threshold_rig.py", 1.0),
+        "-o",
+        out,
+        "--objects",
+        "anvil",
+    ]
     assert run(*args).exit_code == 0
     assert run(*args, "--force").exit_code == 0
     assert len(read_table(out, "lift_results")) == 1
@@ -167,7 +178,9 @@ def test_force_overwrites(catalog: Path, tmp_path: Path) -> None:
 
 def test_rig_crash_keeps_attempts_and_stops_the_run(catalog: Path, tmp_path: Path) -> None:
     out, log = tmp_path / "lift.parquet", tmp_path / "lift.mcap"
-    result = run(catalog, "--rig", rig("crash_rig.py", THRESHOLD_N), "-o", out, "--log", log)
+    result = run(
+        "rig", catalog, "--command", rig("crash_rig.py", THRESHOLD_N), "-o", out, "--log", log
+    )
     assert result.exit_code == 1
     assert one_line_error(result) == (
         "error: search aborted, 2 attempts kept: rig: object 'sponge' attempt_index 2 at "
@@ -200,7 +213,7 @@ def test_garbage_mid_search_keeps_attempts(catalog: Path, tmp_path: Path) -> Non
         encoding="utf-8",
     )
     out, log = tmp_path / "lift.parquet", tmp_path / "lift.mcap"
-    result = run(catalog, "--rig", shlex.join([sys.executable, str(script)]), "-o", out,
+    result = run("rig", catalog, "--command", shlex.join([sys.executable, str(script)]), "-o", out,
                  "--log", log, "--objects", "sponge")  # fmt: skip
     assert result.exit_code == 1
     line = one_line_error(result)
@@ -215,7 +228,9 @@ def test_garbage_mid_search_keeps_attempts(catalog: Path, tmp_path: Path) -> Non
 
 def test_garbage_rig(catalog: Path, tmp_path: Path) -> None:
     out = tmp_path / "lift.parquet"
-    result = run(catalog, "--rig", rig("garbage_rig.py"), "-o", out, "--objects", "sponge")
+    result = run(
+        "rig", catalog, "--command", rig("garbage_rig.py"), "-o", out, "--objects", "sponge"
+    )
     assert result.exit_code == 1
     assert "attempt_index 0 at 10 N: answer is not valid JSON" in one_line_error(result)
     table = read_table(out, "lift_results")
@@ -226,8 +241,8 @@ def test_garbage_rig(catalog: Path, tmp_path: Path) -> None:
 def test_rig_timeout(catalog: Path, tmp_path: Path) -> None:
     out, log = tmp_path / "lift.parquet", tmp_path / "lift.mcap"
     start = time.monotonic()
-    result = run(catalog, "--rig", rig("sleepy_rig.py", 30), "--rig-timeout", "0.5", "-o", out,
-                 "--log", log, "--objects", "sponge")  # fmt: skip
+    result = run("rig", catalog, "--command", rig("sleepy_rig.py", 30), "--rig-timeout", "0.5",
+                 "-o", out, "--log", log, "--objects", "sponge")  # fmt: skip
     assert time.monotonic() - start < 15
     assert result.exit_code == 1
     assert one_line_error(result).endswith(
@@ -239,8 +254,8 @@ def test_rig_timeout(catalog: Path, tmp_path: Path) -> None:
 
 def test_never_lifts_within_max_attempts(catalog: Path, tmp_path: Path) -> None:
     out, log = tmp_path / "lift.parquet", tmp_path / "lift.mcap"
-    result = run(catalog, "--rig", rig("threshold_rig.py", 1000), "--max-attempts", 3, "-o", out,
-                 "--log", log, "--objects", "sponge,brick")  # fmt: skip
+    result = run("rig", catalog, "--command", rig("threshold_rig.py", 1000), "--max-attempts", 3,
+                 "-o", out, "--log", log, "--objects", "sponge,brick")  # fmt: skip
     assert result.exit_code == 1
     # The first object that failed is named with its last force; the second still ran.
     assert one_line_error(result) == (
@@ -282,7 +297,7 @@ def test_bad_options_are_usage_errors(
 ) -> None:
     requests = tmp_path / "req.jsonl"
     before = listing(tmp_path)
-    result = run(catalog, "--rig", rig("threshold_rig.py", 17, requests), "-o",
+    result = run("rig", catalog, "--command", rig("threshold_rig.py", 17, requests), "-o",
                  tmp_path / "lift.parquet", "--log", tmp_path / "lift.mcap", *options)  # fmt: skip
     assert result.exit_code == exit_code
     assert one_line_error(result).startswith(message)
@@ -292,14 +307,20 @@ def test_bad_options_are_usage_errors(
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        ([], "error: choose exactly one trial runner: --rig CMD"),
-        (["--rig-timeout", "5"], "error: --rig-timeout needs --rig"),
-        (["--rig", ""], "error: rig command is empty"),
-        (["--rig", "python3 'unclosed"], "error: rig command cannot be parsed (No closing"),
+        ([], "error: deformctl lift: 'CATALOG' is not a source: give one of sim, rig"),
+        (["rig", "CATALOG"], "error: deformctl lift rig: missing option '--command'"),
+        (["sim", "CATALOG", "--rig-timeout", "5"], "error: deformctl lift sim: no such option"),
+        (["rig", "CATALOG", "--command", ""], "error: rig command is empty"),
+        (
+            ["rig", "CATALOG", "--command", "python3 'unclosed"],
+            "error: rig command cannot be parsed (No closing",
+        ),
     ],
 )
 def test_runner_choice(catalog: Path, tmp_path: Path, args: list[str], message: str) -> None:
-    result = run(catalog, *args, "-o", tmp_path / "lift.parquet")
+    args = [catalog if a == "CATALOG" else a for a in args] if args else [catalog]
+    result = run(*args, "-o", tmp_path / "lift.parquet")
+    message = message.replace("'CATALOG'", repr(str(catalog)))
     assert result.exit_code == 2
     assert one_line_error(result).startswith(message)
     assert not (tmp_path / "lift.parquet").exists()
@@ -318,7 +339,7 @@ def test_friction_not_positive_is_bad_input_data(tmp_path: Path, mu: str, messag
     cat = tmp_path / "objects.csv"
     cat.write_text(HEADER + f"sponge,8,5,4,10,0.5\nflat,8,5,4,10,{mu}\n", encoding="utf-8")
     requests = tmp_path / "req.jsonl"
-    result = run(cat, "--rig", rig("threshold_rig.py", 17, requests), "-o",
+    result = run("rig", cat, "--command", rig("threshold_rig.py", 17, requests), "-o",
                  tmp_path / "lift.parquet", "--log", tmp_path / "lift.mcap")  # fmt: skip
     assert result.exit_code == 65
     assert one_line_error(result) == f"error: {cat}: {message}"
@@ -331,13 +352,15 @@ def test_zero_friction_object_not_selected_is_still_refused(tmp_path: Path) -> N
     cat = tmp_path / "objects.csv"
     cat.write_text(HEADER + "sponge,8,5,4,10,0.5\nflat,8,5,4,10,0\n", encoding="utf-8")
     out = tmp_path / "lift.parquet"
-    result = run(cat, "--rig", rig("threshold_rig.py", 1), "-o", out, "--objects", "sponge")
+    result = run(
+        "rig", cat, "--command", rig("threshold_rig.py", 1), "-o", out, "--objects", "sponge"
+    )
     assert result.exit_code == 65, result.stderr
     assert "friction_mu" in one_line_error(result)
 
 
 def test_missing_catalog(tmp_path: Path) -> None:
-    result = run(tmp_path / "nope.csv", "--rig", rig("threshold_rig.py", 1), "-o",
+    result = run("rig", tmp_path / "nope.csv", "--command", rig("threshold_rig.py", 1), "-o",
                  tmp_path / "lift.parquet")  # fmt: skip
     assert result.exit_code == 66
     assert one_line_error(result) == f"error: {tmp_path / 'nope.csv'}: no such file"
@@ -348,7 +371,7 @@ def test_missing_catalog(tmp_path: Path) -> None:
 def test_existing_output_without_force(catalog: Path, tmp_path: Path, existing: str) -> None:
     (tmp_path / existing).write_bytes(b"keep me")
     requests = tmp_path / "req.jsonl"
-    result = run(catalog, "--rig", rig("threshold_rig.py", 17, requests), "-o",
+    result = run("rig", catalog, "--command", rig("threshold_rig.py", 17, requests), "-o",
                  tmp_path / "lift.parquet", "--log", tmp_path / "lift.mcap")  # fmt: skip
     assert result.exit_code == 1
     assert one_line_error(result) == (
@@ -360,7 +383,7 @@ def test_existing_output_without_force(catalog: Path, tmp_path: Path, existing: 
 
 def test_output_and_log_must_differ(catalog: Path, tmp_path: Path) -> None:
     same = tmp_path / "x.out"
-    result = run(catalog, "--rig", rig("threshold_rig.py", 1), "-o", same, "--log", same)
+    result = run("rig", catalog, "--command", rig("threshold_rig.py", 1), "-o", same, "--log", same)
     assert result.exit_code == 2
     assert "-o and --log are the same file" in one_line_error(result)
 
@@ -484,7 +507,9 @@ def test_lift_help_ends_with_an_example() -> None:
 
 
 def test_table_to_stdout(catalog: Path, tmp_path: Path) -> None:
-    result = run(catalog, "--rig", rig("threshold_rig.py", 1.0), "-o", "-", "--objects", "anvil")
+    result = run(
+        "rig", catalog, "--command", rig("threshold_rig.py", 1.0), "-o", "-", "--objects", "anvil"
+    )
     assert result.exit_code == 0, result.stderr
     (tmp_path / "out.parquet").write_bytes(result.stdout_bytes)  # only the Parquet bytes
     table = read_table(tmp_path / "out.parquet", "lift_results")

@@ -33,7 +33,7 @@ def _ok(result: Result) -> Result:
 
 def test_lift_from_coefficients_reproduces_the_catalog_lift(tmp_path: Path) -> None:
     log, coef = tmp_path / "squeeze.mcap", tmp_path / "coefficients.parquet"
-    _ok(runner.invoke(app, ["measure", str(PAPER), "--sim", "--objects", "C", "-o", str(log)]))
+    _ok(runner.invoke(app, ["measure", "sim", str(PAPER), "--objects", "C", "-o", str(log)]))
     _ok(runner.invoke(app, ["characterize", str(log), "-o", str(coef)]))
     measured = read_table(coef, "coefficients").iloc[0]
     assert measured["deformability_n_per_cm"] != 30.02  # measured, not the catalog's material
@@ -43,7 +43,7 @@ def test_lift_from_coefficients_reproduces_the_catalog_lift(tmp_path: Path) -> N
         _ok(
             runner.invoke(
                 app,
-                ["lift", str(source), "--sim", "--objects", "C", *FAST_LIFT, "-o", str(out[name])],
+                ["lift", "sim", str(source), "--objects", "C", *FAST_LIFT, "-o", str(out[name])],
             )
         )
     by_catalog = read_table(out["catalog"], "lift_results").iloc[0]
@@ -67,13 +67,13 @@ def test_a_missing_size_or_weight_names_the_column_and_the_flag(
     path = tmp_path / "coefficients.parquet"
     write_table(table, path, "coefficients", provenance=None)
     out = tmp_path / "lift.parquet"
-    line = _error(runner.invoke(app, ["lift", str(path), "--sim", "-o", str(out)]), 65)
+    line = _error(runner.invoke(app, ["lift", "sim", str(path), "-o", str(out)]), 65)
     assert line == (
         f"error: {path}: {drop} is missing for B: a coefficients table lifts only objects whose "
         f"squeeze log recorded it (measure {flag}, or a catalog with it to measure --sim)"
     )
     assert not out.exists()
     write_table(table.drop(columns=[drop]), path, "coefficients", provenance=None, force=True)
-    line = _error(runner.invoke(app, ["lift", str(path), "--sim", "-o", str(out)]), 65)
+    line = _error(runner.invoke(app, ["lift", "sim", str(path), "-o", str(out)]), 65)
     assert f"{drop} is missing for A, B" in line
     assert flag in line

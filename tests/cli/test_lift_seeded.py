@@ -96,7 +96,7 @@ def _refine(weight_n: float) -> float:
 
 def test_start_model_on_a_rig(catalog: Path, tmp_path: Path, files: dict[str, Path]) -> None:
     out, log, requests = tmp_path / "lift.parquet", tmp_path / "lift.mcap", tmp_path / "req.jsonl"
-    result = run(catalog, "--rig", rig("threshold_rig.py", THRESHOLD_N, requests),
+    result = run("rig", catalog, "--command", rig("threshold_rig.py", THRESHOLD_N, requests),
                  "--start-model", files["model"], "--coefficients", files["coefficients"],
                  "-o", out, "--log", log)  # fmt: skip
     assert result.exit_code == 0, result.stderr
@@ -163,7 +163,7 @@ def test_start_table_from_catalog_columns(tmp_path: Path, files: dict[str, Path]
         encoding="utf-8",
     )
     out = tmp_path / "lift.parquet"
-    result = run(cat, "--rig", rig("threshold_rig.py", THRESHOLD_N), "--start-table",
+    result = run("rig", cat, "--command", rig("threshold_rig.py", THRESHOLD_N), "--start-table",
                  files["index"], "--start-interpolate", 3, "--start-margin", 1.01,
                  "-o", out)  # fmt: skip
     assert result.exit_code == 0, result.stderr
@@ -183,7 +183,7 @@ def test_a_model_for_another_feature_set_is_refused(
     catalog: Path, tmp_path: Path, files: dict[str, Path]
 ) -> None:
     out = tmp_path / "lift.parquet"
-    result = run(catalog, "--rig", rig("threshold_rig.py", THRESHOLD_N), "--start-model",
+    result = run("rig", catalog, "--command", rig("threshold_rig.py", THRESHOLD_N), "--start-model",
                  files["other"], "--coefficients", files["coefficients"], "-o", out)  # fmt: skip
     assert result.exit_code == 65
     # the model file's structure check (deformctl.train, issue 17) refuses it on loading
@@ -226,7 +226,7 @@ def test_bad_start_options(
     subst = {"MODEL": files["model"], "INDEX": files["index"]}
     args = [subst.get(o, o) for o in options]
     requests = tmp_path / "req.jsonl"
-    result = run(catalog, "--rig", rig("threshold_rig.py", THRESHOLD_N, requests), "-o",
+    result = run("rig", catalog, "--command", rig("threshold_rig.py", THRESHOLD_N, requests), "-o",
                  tmp_path / "lift.parquet", *args)  # fmt: skip
     assert result.exit_code == code, result.stderr
     assert one_line_error(result).startswith(message.format(catalog=catalog, index=files["index"]))
@@ -237,7 +237,7 @@ def test_seeded_sim_run_agrees_with_refine_in_fewer_attempts(tmp_path: Path) -> 
     # Object A of Table I in the simulator: refine, an index table of that one answer, seeded.
     cat = PAPER / "objects.csv"
     refine, seeded = tmp_path / "refine.parquet", tmp_path / "seeded.parquet"
-    result = run(cat, "--objects", "A", "--sim", "-o", refine)
+    result = run("sim", cat, "--objects", "A", "-o", refine)
     assert result.exit_code == 0, result.stderr
     ref = read_table(refine, "lift_results").iloc[0]
     obj = pd.read_csv(cat).set_index("object_id").loc["A"]
@@ -251,7 +251,7 @@ def test_seeded_sim_run_agrees_with_refine_in_fewer_attempts(tmp_path: Path) -> 
     write_table(coefficients, tmp_path / "c.parquet", "coefficients",
                 provenance=Provenance.from_invocation([]))  # fmt: skip
     assert run_table(tmp_path / "c.parquet", refine, tmp_path / "index.parquet") == 0
-    result = run(cat, "--objects", "A", "--sim", "--start-table", tmp_path / "index.parquet",
+    result = run("sim", cat, "--objects", "A", "--start-table", tmp_path / "index.parquet",
                  "-o", seeded)  # fmt: skip
     assert result.exit_code == 0, result.stderr
     row = read_table(seeded, "lift_results").iloc[0]

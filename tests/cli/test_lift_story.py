@@ -43,7 +43,11 @@ def seeded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     write_table(table, d / "coef.parquet", "coefficients", provenance=None)
     for name, extra in (("seeded", ["--start-model", "grip"]), ("plain", [])):
         out = ["-o", str(d / f"{name}.parquet"), "--log", str(d / f"{name}.mcap")]
-        _ok(runner.invoke(app, ["lift", str(d / "coef.parquet"), "--rig", RIG, *extra, *out]))
+        _ok(
+            runner.invoke(
+                app, ["lift", "rig", str(d / "coef.parquet"), "--command", RIG, *extra, *out]
+            )
+        )
     return {"dir": d, "coef": d / "coef.parquet"}
 
 

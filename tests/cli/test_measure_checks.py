@@ -190,9 +190,9 @@ def test_position_increases_when_is_checked(tmp_path: Path) -> None:
 
 def test_rig_options_are_refused_with_sim(tmp_path: Path) -> None:
     out = tmp_path / "o.mcap"
-    res = runner.invoke(app, ["measure", "x.csv", "--sim", "--phase", "loading", "-o", str(out)])
+    res = runner.invoke(app, ["measure", "sim", "x.csv", "--phase", "loading", "-o", str(out)])
     assert res.exit_code == EXIT_USAGE
-    assert "--phase cannot be used with --sim" in res.stderr
+    assert "measure sim: no such option: --phase" in res.stderr
 
 
 def test_phases_of_a_load_unload_cycle(tmp_path: Path) -> None:

@@ -120,7 +120,7 @@ def images(image_dir: Path, name: str) -> tuple[Path, Path]:
 
 def measure_args(top: Path, side: Path, out: Path, object_id: str = "box") -> list[object]:
     return [
-        "measure", "--images", top, side, "--marker-size-cm", MARKER_CM,
+        "measure", "images", top, side, "--marker-size-cm", MARKER_CM,
         "--object-id", object_id, "--weight-n", 2.5, "--friction-mu", 0.6, "-o", out,
     ]  # fmt: skip
 
@@ -278,8 +278,8 @@ def test_missing_image_and_existing_output(image_dir: Path, tmp_path: Path) -> N
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (["--bag", "x.mcap"], "several sources (--bag, --images)"),
-        (["--size-cm", 1, 2, 3], "--size-cm cannot be used with --images"),
+        (["--bag", "x.mcap"], "measure images: no such option: --bag"),
+        (["--size-cm", 1, 2, 3], "measure images: no such option: --size-cm"),
         (["--checkerboard", "7by5", "--square-size-cm", 2], None),
         (["--color-range", "100,50,50"], "--color-range: expected H,S,V:H,S,V"),
         (["--force", "--append"], "--append and --force cannot be used together"),
@@ -301,11 +301,11 @@ def test_usage_errors(extra: list[object], message: str | None, tmp_path: Path) 
 
 
 def test_image_options_refused_with_other_sources(tmp_path: Path) -> None:
-    result = run("measure", "--csv", tmp_path / "x.csv", "--marker-size-cm", 5,
+    result = run("measure", "csv", tmp_path / "x.csv", "--marker-size-cm", 5,
                  "--object-id", "a", "--weight-n", 1, "-o", tmp_path / "o.mcap")  # fmt: skip
     assert result.exit_code == 2
-    assert "--marker-size-cm cannot be used with --csv" in one_line_error(result)
-    result = run("measure", "--images", "a.png", "b.png", "--marker-size-cm", 5,
+    assert "measure csv: no such option: --marker-size-cm" in one_line_error(result)
+    result = run("measure", "images", "a.png", "b.png", "--marker-size-cm", 5,
                  "--object-id", "a", "--weight-n", 1, "-o", tmp_path / "o.csv")  # fmt: skip
     assert result.exit_code == 2
     assert "--images needs --friction-mu" in one_line_error(result)
@@ -361,7 +361,7 @@ def test_lift_with_slip_from_frames(
         search = ["--protocol", "paper"]  # the ramp only: 2, 2.4, 2.88, 3.456 N
         rig = rig_command("--regions")
     result = run(
-        "lift", catalog, "--rig", rig, "--slip-from-frames", *palm_args,
+        "lift", "rig", catalog, "--command", rig, "--slip-from-frames", *palm_args,
         "--frame-marker-size-cm", 2.4, "--slip-tolerance-m", 0.005, *search,
         "-o", "lift.parquet", "--log", "lift.mcap",
     )  # fmt: skip
@@ -390,8 +390,9 @@ def test_frames_of_different_sizes_fail_the_rig_attempt(
     monkeypatch.chdir(tmp_path)
     catalog = _lift_catalog(tmp_path)
     result = run(
-        "lift", catalog, "--rig", rig_command("--after-size", "640x480"), "--slip-from-frames",
-        "--palm-marker-ids", "1,2", "--frame-marker-size-cm", 2.4, "-o", "lift.parquet",
+        "lift", "rig", catalog, "--command", rig_command("--after-size", "640x480"),
+        "--slip-from-frames", "--palm-marker-ids", "1,2", "--frame-marker-size-cm", 2.4, "-o",
+        "lift.parquet",
     )  # fmt: skip
     assert result.exit_code == 1
     line = one_line_error(result)
@@ -415,7 +416,7 @@ def test_frames_of_different_sizes_fail_the_rig_attempt(
     ],
 )  # fmt: skip
 def test_frame_option_errors(args: list[object], message: str, tmp_path: Path) -> None:
-    result = run("lift", _lift_catalog(tmp_path), "--rig", rig_command(), *args,
+    result = run("lift", "rig", _lift_catalog(tmp_path), "--command", rig_command(), *args,
                  "-o", tmp_path / "lift.parquet")  # fmt: skip
     assert result.exit_code == 2
     assert message in one_line_error(result)

@@ -37,7 +37,7 @@ def _ok(result: Result) -> Result:
 
 def _coefficients(csv: Path, *extra: str, object_id: str = "foam") -> bytes:
     """The bytes of ``measure --csv CSV … -o - | characterize - -o -``."""
-    log = _ok(runner.invoke(app, ["measure", "--csv", str(csv), "--object-id", object_id,
+    log = _ok(runner.invoke(app, ["measure", "csv", str(csv), "--object-id", object_id,
                                   *extra, "-o", "-"])).stdout_bytes  # fmt: skip
     assert log[:5] == b"\x89MCAP"
     table = _ok(runner.invoke(app, ["characterize", "-", "-o", "-"], input=log)).stdout_bytes
@@ -150,7 +150,7 @@ FAST_SQUEEZE = ["--squeezes", "2", "--ramp-s", "0.05", "--hold-s", "0.1", "--dt-
 
 def test_a_simulated_squeeze_travels_with_its_catalog_values() -> None:
     paper = ROOT / "datasets" / "paper" / "objects.csv"
-    log = _ok(runner.invoke(app, ["measure", str(paper), "--sim", "--objects", "C", *FAST_SQUEEZE,
+    log = _ok(runner.invoke(app, ["measure", "sim", str(paper), "--objects", "C", *FAST_SQUEEZE,
                                   "-o", "-"])).stdout_bytes  # fmt: skip
     short = ["--window-s", "0.03"]  # the fast squeezes are short
     table = _ok(runner.invoke(app, ["characterize", "-", "-o", "-", *short], input=log))

@@ -26,7 +26,7 @@ def _topics(path: Path) -> dict[str, int]:
 def test_lift_log_has_the_scene_by_default_and_none_at_zero(tmp_path: Path) -> None:
     out = tmp_path / "lift.parquet"
     for hz, log in ((None, "on.mcap"), ("0", "off.mcap")):
-        args = ["lift", PAPER, "--sim", *FAST_LIFT, "-o", str(out), "--force"]
+        args = ["lift", "sim", PAPER, *FAST_LIFT, "-o", str(out), "--force"]
         args += ["--log", str(tmp_path / log)] + ([] if hz is None else ["--scene-hz", hz])
         result = runner.invoke(app, args)
         assert result.exit_code == 0, result.stderr
@@ -43,7 +43,7 @@ def test_lift_log_has_the_scene_by_default_and_none_at_zero(tmp_path: Path) -> N
 
 def test_measure_log_scene_rate(tmp_path: Path) -> None:
     log = tmp_path / "squeeze.mcap"
-    args = ["measure", PAPER, "--sim", *FAST_SQUEEZE, "--scene-hz", "100", "-o", str(log)]
+    args = ["measure", "sim", PAPER, *FAST_SQUEEZE, "--scene-hz", "100", "-o", str(log)]
     result = runner.invoke(app, args)
     assert result.exit_code == 0, result.stderr
     counts = _topics(log)
@@ -68,7 +68,7 @@ def test_bad_rates_exit_2_and_write_nothing(
 ) -> None:
     out = tmp_path / ("lift.parquet" if command == "lift" else "squeeze.mcap")
     fast = FAST_LIFT if command == "lift" else FAST_SQUEEZE
-    args = [command, PAPER, "--sim", *fast, "--scene-hz", value, "-o", str(out)]
+    args = [command, "sim", PAPER, *fast, "--scene-hz", value, "-o", str(out)]
     if command == "lift":
         args += ["--log", str(tmp_path / "lift.mcap")]
     result = runner.invoke(app, args)
@@ -82,15 +82,25 @@ def test_bad_rates_exit_2_and_write_nothing(
 
 def test_scene_hz_needs_the_simulator(tmp_path: Path) -> None:
     rig = f"python3 {REPO / 'examples' / 'threshold_rig.py'}"
-    args = ["lift", PAPER, "--rig", rig, "--scene-hz", "10", "-o", str(tmp_path / "x.parquet")]
+    args = [
+        "lift",
+        "rig",
+        PAPER,
+        "--command",
+        rig,
+        "--scene-hz",
+        "10",
+        "-o",
+        str(tmp_path / "x.parquet"),
+    ]
     result = runner.invoke(app, args)
     assert result.exit_code == 2
-    assert "--scene-hz needs --sim" in result.stderr
+    assert "lift rig: no such option: --scene-hz" in result.stderr
 
 
 def test_scene_hz_needs_a_log(tmp_path: Path) -> None:
     out = tmp_path / "x.parquet"
-    args = ["lift", PAPER, "--sim", *FAST_LIFT, "--scene-hz", "10", "-o", str(out)]
+    args = ["lift", "sim", PAPER, *FAST_LIFT, "--scene-hz", "10", "-o", str(out)]
     result = runner.invoke(app, args)
     assert result.exit_code == 2
     assert "--scene-hz needs --log" in result.stderr

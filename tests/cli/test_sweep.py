@@ -94,7 +94,7 @@ def serial_lift(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, pd.Data
     """The 20-object catalog and its lift_results from the serial single-file command."""
     tmp = tmp_path_factory.mktemp("serial")
     cat = _catalog(tmp)
-    _ok(_cli("lift", cat, "--sim", "-o", tmp / "lift.parquet", *FAST_LIFT))
+    _ok(_cli("lift", "sim", cat, "-o", tmp / "lift.parquet", *FAST_LIFT))
     return cat, read_table(tmp / "lift.parquet", "lift_results")
 
 
@@ -105,12 +105,12 @@ def test_dask_cluster_gives_the_local_and_serial_rows(
 ) -> None:
     cat, expected = serial_lift
     on_dask = tmp_path / "dask"
-    result = _cli("lift", cat, "--sim", "-o", f"{on_dask}/", *FAST_LIFT, "--partition-size", 6,
+    result = _cli("lift", "sim", cat, "-o", f"{on_dask}/", *FAST_LIFT, "--partition-size", 6,
                   "--scheduler", dask_cluster.address, "--connect-timeout", 10)  # fmt: skip
     _ok(result)
     assert "20 done, 0 failed" in result.stderr
     local = tmp_path / "local"
-    _ok(_cli("lift", cat, "--sim", "-o", f"{local}/", *FAST_LIFT, "--partition-size", 6,
+    _ok(_cli("lift", "sim", cat, "-o", f"{local}/", *FAST_LIFT, "--partition-size", 6,
              "--workers", 2))  # fmt: skip
     got_dask, got_local = (
         read_table_any(str(on_dask), "lift_results"),
@@ -156,7 +156,7 @@ def _descendants(pid: int) -> dict[int, int]:
 
 
 def _start_sweep(cat: Path, out: Path) -> subprocess.Popen[bytes]:
-    cmd = [sys.executable, "-m", "deformctl", "lift", str(cat), "--sim", "-o", f"{out}/",
+    cmd = [sys.executable, "-m", "deformctl", "lift", "sim", str(cat), "-o", f"{out}/",
            *FAST_LIFT, "--partition-size", "2", "--workers", "2"]  # fmt: skip
     return subprocess.Popen(
         cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True
@@ -204,7 +204,7 @@ def test_killed_sweep_resumes_with_nothing_lost_or_duplicated(
         _kill_group(proc)
     kept = len(list(out.glob("part-*.parquet")))
     assert 2 <= kept < 10  # killed part-way
-    result = _cli("lift", cat, "--sim", "-o", f"{out}/", *FAST_LIFT, "--partition-size", 2,
+    result = _cli("lift", "sim", cat, "-o", f"{out}/", *FAST_LIFT, "--partition-size", 2,
                   "--workers", 2, "--resume")  # fmt: skip
     _ok(result)
     assert f"{2 * kept} kept from an earlier run" in result.stderr
@@ -222,7 +222,7 @@ def test_failed_objects_are_recorded_and_the_sweep_goes_on(tmp_path: Path) -> No
     catalog.to_csv(cat, index=False)
     out = tmp_path / "out"
     args = [a if a != "20" else "1" for a in FAST_LIFT]  # one attempt: F_w itself must lift
-    result = _cli("lift", cat, "--sim", "-o", f"{out}/", *args, "--workers", 1)
+    result = _cli("lift", "sim", cat, "-o", f"{out}/", *args, "--workers", 1)
     assert result.exit_code == 1, result.stderr
     rows = read_table_any(str(out), "lift_results")
     failures = read_failures(out)
@@ -242,9 +242,9 @@ def test_failed_objects_are_recorded_and_the_sweep_goes_on(tmp_path: Path) -> No
 
 def test_measure_and_characterize_sweeps_equal_the_serial_files(tmp_path: Path) -> None:
     cat = _catalog(tmp_path, 6)
-    _ok(_cli("measure", cat, "--sim", "-o", tmp_path / "sq.mcap", *FAST_SQUEEZE, "--seed", 5))
+    _ok(_cli("measure", "sim", cat, "-o", tmp_path / "sq.mcap", *FAST_SQUEEZE, "--seed", 5))
     sq = tmp_path / "sq"
-    _ok(_cli("measure", cat, "--sim", "-o", f"{sq}/", *FAST_SQUEEZE, "--seed", 5,
+    _ok(_cli("measure", "sim", cat, "-o", f"{sq}/", *FAST_SQUEEZE, "--seed", 5,
              "--partition-size", 4, "--workers", 2))  # fmt: skip
     objs, serial = read_squeeze_log(tmp_path / "sq.mcap")
     swept = [s for k in range(2) for s in read_squeeze_log(sq / "_logs" / f"part-{k:05d}.mcap")[1]]
@@ -270,7 +270,7 @@ def test_measure_and_characterize_sweeps_equal_the_serial_files(tmp_path: Path) 
 def test_dataset_folders_of_the_first_layout_are_read_and_resumed(tmp_path: Path) -> None:
     cat = _catalog(tmp_path, 3)
     sq = tmp_path / "sq"
-    args = ["measure", cat, "--sim", "-o", f"{sq}/", *FAST_SQUEEZE, "--partition-size", 2]
+    args = ["measure", "sim", cat, "-o", f"{sq}/", *FAST_SQUEEZE, "--partition-size", 2]
     _ok(_cli(*args, "--workers", 1))
     _ok(_cli("characterize", sq, "-o", tmp_path / "c.parquet", "--window-s", 0.03))
     logs = sorted((sq / "_logs").iterdir())
@@ -294,7 +294,7 @@ def _snapshot(path: Path) -> dict[str, bytes]:
 
 def test_bad_sweep_inputs(serial_lift: tuple[Path, pd.DataFrame], tmp_path: Path) -> None:
     cat, _ = serial_lift
-    base = ["lift", cat, "--sim", *FAST_LIFT]
+    base = ["lift", "sim", cat, *FAST_LIFT]
     # --workers 0, or a sweep flag with a single-file output: usage errors, nothing written
     _one_line_error(_cli(*base, "-o", f"{tmp_path / 'a'}/", "--workers", 0), 2,
                     "--workers must be >= 1, got 0")  # fmt: skip
@@ -326,7 +326,7 @@ def test_bad_sweep_inputs(serial_lift: tuple[Path, pd.DataFrame], tmp_path: Path
 
     # resume into a directory another command wrote, or one with another schema: exit 65
     sq = tmp_path / "sq"
-    _ok(_cli("measure", cat, "--sim", "-o", f"{sq}/", *FAST_SQUEEZE, "--objects", "P00,P01",
+    _ok(_cli("measure", "sim", cat, "-o", f"{sq}/", *FAST_SQUEEZE, "--objects", "P00,P01",
              "--workers", 1))  # fmt: skip
     before = _snapshot(sq)
     _one_line_error(_cli(*base, "-o", f"{sq}/", "--resume", "--objects", "P00,P01"), 65,

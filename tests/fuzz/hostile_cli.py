@@ -214,7 +214,7 @@ def _recording_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Ge
     path = work / f"export{i}.csv"
     path.write_text("\n".join(lines) + "\n")
     out = work / f"out{i}.mcap"
-    argv = ["measure", "--csv", str(path), "--weight-n", "1", "--object-id", "A", "-o", str(out)]
+    argv = ["measure", "csv", str(path), "--weight-n", "1", "--object-id", "A", "-o", str(out)]
     return Case(f"recording {what}: measure", argv, out, needs_warning=warns)
 
 
@@ -242,8 +242,8 @@ def _max_force_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Ge
     value = str(rng.choice([v for v in VALUES if v != "1e308"] + ["-inf", "1e-400", "5 N"]))
     dataset = rng.random() < 0.5
     out = f"{work / f'sweep{i}'}/" if dataset else str(work / f"lift{i}.parquet")
-    runner = ["--sim"] if dataset else ["--rig", "true"]
-    argv = ["lift", str(base["catalog"]), *runner, "--max-force-n", value, "-o", out]
+    runner = ["sim"] if dataset else ["rig", "--command", "true"]
+    argv = ["lift", runner[0], str(base["catalog"]), *runner[1:], "--max-force-n", value, "-o", out]
     return Case(f"--max-force-n {value!r} ({'DIR/' if dataset else 'file'}): lift", argv,
                 Path(out.rstrip("/")))  # fmt: skip
 
@@ -295,7 +295,7 @@ def make_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Generato
             argv = ["characterize", str(path), "-o", f"{out}.parquet"]
             return Case(f"squeeze log {what}: characterize", argv, Path(f"{out}.parquet"))
         if kind == "bag":
-            argv = ["measure", "--bag", str(path), "--wrench-topic", "/left/wrench",
+            argv = ["measure", "bag", str(path), "--wrench-topic", "/left/wrench",
                     "--position-topic", "/left/palm_pose", "--object-id", "A",
                     "--weight-n", "1", "-o", f"{out}.mcap"]  # fmt: skip
             return Case(f"bag {what}: measure", argv, Path(f"{out}.mcap"))

@@ -67,7 +67,7 @@ def test_sim_settings_refuse_a_tiny_time_step(
     with pytest.raises(UsageError, match="dt_s"):
         SimSettings(dt_s=1e-12)
     cat = write_catalog(tmp_path / "cat.csv", [catalog_row])
-    result = runner.invoke(app, ["measure", str(cat), "--sim", "--dt-s", "1e-12", "-o", "x.mcap"])
+    result = runner.invoke(app, ["measure", "sim", str(cat), "--dt-s", "1e-12", "-o", "x.mcap"])
     assert result.exit_code == 2
     assert "dt_s" in _one_line(result.stderr)
 
@@ -78,7 +78,7 @@ def test_a_squeeze_needs_a_force_ramp(
 ) -> None:
     cat = write_catalog(tmp_path / "cat.csv", [catalog_row])
     out = tmp_path / "x.mcap"
-    result = runner.invoke(app, ["measure", str(cat), "--sim", "--ramp-s", ramp, "-o", str(out)])
+    result = runner.invoke(app, ["measure", "sim", str(cat), "--ramp-s", ramp, "-o", str(out)])
     assert result.exit_code == 2
     assert "--ramp-s" in _one_line(result.stderr)
     assert not out.exists()
@@ -98,7 +98,7 @@ def test_a_huge_single_log_is_refused_before_simulating(
     rows = [{**catalog_row, "object_id": f"o{i}"} for i in range(100_000)]
     cat = write_catalog(tmp_path / "big.csv", rows)
     out = tmp_path / "x.mcap"
-    result = runner.invoke(app, ["measure", str(cat), "--sim", "-o", str(out)])
+    result = runner.invoke(app, ["measure", "sim", str(cat), "-o", str(out)])
     assert result.exit_code == 2
     line = _one_line(result.stderr)
     assert "dataset directory" in line
@@ -135,7 +135,7 @@ def test_lift_steps_are_budgeted_before_any_attempt(
 ) -> None:
     cat = write_catalog(tmp_path / "cat.csv", [catalog_row])
     out = tmp_path / output
-    result = runner.invoke(app, ["lift", str(cat), "--sim", *args, "-o", str(out)])
+    result = runner.invoke(app, ["lift", "sim", str(cat), *args, "-o", str(out)])
     assert result.exit_code == 2, result.stderr
     line = _one_line(result.stderr)
     assert "lift attempt" in line
@@ -149,7 +149,7 @@ def test_squeeze_steps_are_budgeted_before_simulating(
 ) -> None:
     cat = write_catalog(tmp_path / "cat.csv", [catalog_row])
     out = tmp_path / output
-    argv = ["measure", str(cat), "--sim", "--ramp-s", "1e308", "--hold-s", "1e308"]
+    argv = ["measure", "sim", str(cat), "--ramp-s", "1e308", "--hold-s", "1e308"]
     result = runner.invoke(app, [*argv, "-o", str(out)])
     assert result.exit_code == 2, result.stderr
     assert "squeeze" in _one_line(result.stderr)
@@ -167,7 +167,7 @@ def test_out_of_memory_is_one_line(
     monkeypatch.setattr(stage, "simulate_squeezes", boom)
     cat = write_catalog(tmp_path / "cat.csv", [catalog_row])
     out = tmp_path / "x.mcap"
-    argv = ["measure", str(cat), "--sim", "--memory-budget-gib", "1e9", "-o", str(out)]
+    argv = ["measure", "sim", str(cat), "--memory-budget-gib", "1e9", "-o", str(out)]
     result = runner.invoke(app, argv)
     assert result.exit_code == 1
     assert "out of memory" in _one_line(result.stderr)

@@ -35,10 +35,10 @@ def _one_error_line(stderr: str) -> str:
         (["no-such-command"], "no such command 'no-such-command'"),
         (["lift", "--bogus"], "no such option: --bogus"),
         (["population", "--seed", "abc", "-o", "p.csv"], "--seed"),
-        (["lift"], "missing argument"),
+        (["lift", "sim"], "missing argument"),
         (["inspect"], "missing argument"),
         (["table", "a", "--interpolate", "x"], "--interpolate"),
-        (["measure", "x", "--sim", "--squeezes", "many", "-o", "y"], "--squeezes"),
+        (["measure", "sim", "x", "--squeezes", "many", "-o", "y"], "--squeezes"),
     ],
 )
 def test_usage_errors_are_one_line_exit_2(argv: list[str], needle: str) -> None:

@@ -43,7 +43,9 @@ def test_a_column_named_twice_is_refused(
     cat = tmp_path / "cat.csv"
     cat.write_text(f"{HEADER}{SIM}{extra_header}\n{ROW},10,1{extra_value}\n")
     out = tmp_path / ("x.mcap" if command == "measure" else "l.parquet")
-    argv = [command, str(cat)] + ([] if command == "inspect" else ["--sim", "-o", str(out)])
+    argv = (
+        [command, str(cat)] if command == "inspect" else [command, "sim", str(cat), "-o", str(out)]
+    )
     result = runner.invoke(app, argv)
     assert result.exit_code == 65, result.output
     line = _one_line(result.stderr)

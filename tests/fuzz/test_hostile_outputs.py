@@ -134,7 +134,17 @@ def test_lift_log_without_its_table_is_never_left(
     cat.write_text("object_id,size_x_cm,size_y_cm,size_z_cm,weight_n,friction_mu\nA,5,5,5,1,0.5\n")
     log, out = tmp_path / "lift.mcap", tmp_path / "lift.parquet"
     rig = Path(__file__).parents[1] / "rigs" / "threshold_rig.py"
-    argv = ["lift", str(cat), "--rig", f"{sys.executable} {rig}", "-o", str(out), "--log", str(log)]
+    argv = [
+        "lift",
+        "rig",
+        str(cat),
+        "--command",
+        f"{sys.executable} {rig}",
+        "-o",
+        str(out),
+        "--log",
+        str(log),
+    ]
     result = runner.invoke(app, argv)
     assert result.exit_code == 1, result.output
     assert not log.exists()
@@ -149,7 +159,7 @@ def test_lift_log_without_its_table_is_never_left(
         ["train", "IN", "-o", "IN", "--force"],
         ["table", "IN", str(LIFT), "-o", "IN", "--force"],
         ["predict", "MODEL", "IN", "-o", "IN", "--force"],
-        ["lift", "IN", "--sim", "-o", "IN", "--force"],
+        ["lift", "sim", "IN", "-o", "IN", "--force"],
     ],
     ids=["characterize", "train", "table", "predict", "lift"],
 )

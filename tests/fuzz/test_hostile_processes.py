@@ -78,7 +78,7 @@ def test_a_killed_sweep_client_leaves_no_process_behind(tmp_path: Path, output: 
     cat.write_text(header + ",material_stiffness_n_per_cm,material_damping_ns_per_cm\n")
     with cat.open("a") as fh:
         fh.write("\n".join(rows) + "\n")
-    argv = [sys.executable, "-m", "deformctl", "lift", str(cat), "--sim", "--workers", "2"]
+    argv = [sys.executable, "-m", "deformctl", "lift", "sim", str(cat), "--workers", "2"]
     client = subprocess.Popen(
         [*argv, "-o", str(tmp_path / output)],
         stdout=subprocess.DEVNULL,

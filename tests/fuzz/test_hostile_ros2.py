@@ -78,7 +78,7 @@ MISMATCHES = {
 
 
 def _measure(bag: Path, out: Path, *, joint: bool = False) -> tuple[int, str]:
-    argv = ["measure", "--bag", str(bag), "--wrench-topic", LEFT]
+    argv = ["measure", "bag", str(bag), "--wrench-topic", LEFT]
     argv += ["--position-topic", JOINTS if joint else POSE, "--object-id", "x"]
     argv += ["--joint", "g"] if joint else []
     result = runner.invoke(app, [*argv, "--weight-n", "1", "-o", str(out)])

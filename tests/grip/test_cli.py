@@ -247,7 +247,7 @@ def test_lift_starts_from_the_grip_model_with_the_catalogs_mu(
     out = tmp_path / "lift.parquet"
     result = runner.invoke(
         app,
-        ["lift", str(tmp_path / "objects.csv"), "--rig", rig, "--start-model",
+        ["lift", "rig", str(tmp_path / "objects.csv"), "--command", rig, "--start-model",
          str(setup["model"]), "-o", str(out)],
     )  # fmt: skip
     assert result.exit_code == 0, result.stderr

@@ -166,7 +166,18 @@ def test_cli_no_request_exceeds_the_ceiling(tmp_path: Path) -> None:
     catalog.write_text(f"{HEADER}\nsponge,8,5,4,10,0.5\nbrick,6,6,6,16,0.5\n", encoding="utf-8")
     out, requests = tmp_path / "lift.parquet", tmp_path / "req.jsonl"
     res = cli.invoke(
-        app, ["lift", str(catalog), "--rig", _rig(requests), "--max-force-n", "15", "-o", str(out)]
+        app,
+        [
+            "lift",
+            "rig",
+            str(catalog),
+            "--command",
+            _rig(requests),
+            "--max-force-n",
+            "15",
+            "-o",
+            str(out),
+        ],
     )
     assert res.exit_code == 1
     assert res.stderr.splitlines()[0] == (
@@ -188,7 +199,9 @@ def test_cli_silent_when_the_ceiling_is_not_reached(tmp_path: Path) -> None:
     catalog = tmp_path / "objects.csv"
     catalog.write_text(f"{HEADER}\nsponge,8,5,4,10,0.5\n", encoding="utf-8")
     out, requests = tmp_path / "lift.parquet", tmp_path / "req.jsonl"
-    res = cli.invoke(app, ["lift", str(catalog), "--rig", _rig(requests), "-o", str(out)])
+    res = cli.invoke(
+        app, ["lift", "rig", str(catalog), "--command", _rig(requests), "-o", str(out)]
+    )
     assert res.exit_code == 0, res.stderr
     assert "ceiling" not in res.stderr
     assert "warning" not in res.stderr
@@ -201,7 +214,8 @@ def test_cli_a_bad_max_force_is_a_usage_error_naming_the_flag(tmp_path: Path, va
     catalog.write_text(f"{HEADER}\nsponge,8,5,4,10,0.5\n", encoding="utf-8")
     out = tmp_path / "lift.parquet"
     res = cli.invoke(
-        app, ["lift", str(catalog), "--rig", "true", "--max-force-n", value, "-o", str(out)]
+        app,
+        ["lift", "rig", str(catalog), "--command", "true", "--max-force-n", value, "-o", str(out)],
     )
     assert res.exit_code == 2
     assert res.stderr.startswith("error: --max-force-n must be a finite number > 0 N, got ")

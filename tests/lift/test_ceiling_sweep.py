@@ -112,11 +112,12 @@ def test_every_lift_output_refuses_a_bad_flag_with_one_line(
     tmp_path: Path, value: str, output: str
 ) -> None:
     catalog = _catalog(tmp_path, *ROWS)
-    runner = ["--sim", *FAST_LIFT] if output.endswith("/") else ["--rig", "true"]
+    runner = ["sim", *FAST_LIFT] if output.endswith("/") else ["rig", "--command", "true"]
     res = cli.invoke(
         app,
-        ["lift", str(catalog), *runner, "--max-force-n", value, "-o", str(tmp_path / output)],
-    )
+        ["lift", runner[0], str(catalog), *runner[1:], "--max-force-n", value, "-o",
+         str(tmp_path / output)],
+    )  # fmt: skip
     assert res.exit_code == EXIT_USAGE, res.stderr
     lines = res.stderr.strip().splitlines()
     assert lines == [f"error: --max-force-n {RULE}{float(value):g}"], res.stderr
@@ -133,7 +134,7 @@ def test_the_sweep_path_applies_the_ceiling(tmp_path: Path) -> None:
     out = tmp_path / "out"
     res = cli.invoke(
         app,
-        ["lift", str(catalog), "--sim", *FAST_LIFT, "--max-force-n", "1.5", "-o", f"{out}/",
+        ["lift", "sim", str(catalog), *FAST_LIFT, "--max-force-n", "1.5", "-o", f"{out}/",
          "--workers", "1"],
     )  # fmt: skip
     assert res.exit_code == 1, res.stderr  # b does not converge
@@ -159,7 +160,7 @@ def test_the_catalog_column_or_the_default_sets_the_ceiling_on_the_sweep_path(
     (10 x F_w, lifted), as for a single-file output."""
     catalog = _catalog(tmp_path, ROWS[1] + ",1.5", ROWS[0] + ",", header=HEADER + ",max_force_n")
     out = tmp_path / "out"
-    res = cli.invoke(app, ["lift", str(catalog), "--sim", *FAST_LIFT, "-o", f"{out}/"])
+    res = cli.invoke(app, ["lift", "sim", str(catalog), *FAST_LIFT, "-o", f"{out}/"])
     assert res.exit_code == 1, res.stderr
     rows = read_table_any(str(out), "lift_results").set_index("object_id")
     assert rows.loc["b", "max_force_n"] == 1.5  # the catalog's

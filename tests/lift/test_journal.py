@@ -65,7 +65,7 @@ def test_kill_mid_search_keeps_every_attempt(tmp_path: Path) -> None:
     stall = Path(f"{requests}.stalled")
     rig = shlex.join([sys.executable, str(RIGS / "stall_rig.py"), str(THRESHOLD_N),
                       str(requests), "brick", "3"])  # fmt: skip
-    cmd = [sys.executable, "-m", "deformctl", "lift", str(catalog), "--rig", rig,
+    cmd = [sys.executable, "-m", "deformctl", "lift", "rig", str(catalog), "--command", rig,
            "-o", str(out), "--log", str(log)]  # fmt: skip
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     try:

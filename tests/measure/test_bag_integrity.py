@@ -54,7 +54,7 @@ def _chunks(path: Path) -> list[tuple[int, int]]:
 
 
 def _measure(bag: Path, out: Path, *extra: str) -> tuple[int, str]:
-    args = ["measure", "--bag", str(bag), "--wrench-topic", LEFT, "--wrench-topic", RIGHT]
+    args = ["measure", "bag", str(bag), "--wrench-topic", LEFT, "--wrench-topic", RIGHT]
     args += ["--position-topic", POSE, "--object-id", "A", "--weight-n", "1", "-o", str(out)]
     res = runner.invoke(app, [*args, *extra])
     return res.exit_code, res.stderr

@@ -36,7 +36,7 @@ def _measure(*args: str, stdin: str | None = None) -> tuple[int, str]:
 
 def _refused(path: Path, out: Path, code: int, line: str, *extra: str) -> None:
     """``measure --csv path``: exactly ``error: <path>: <line>``, exit ``code``, no output."""
-    got, err = _measure("--csv", str(path), "--weight-n", "1", "-o", str(out), *extra)
+    got, err = _measure("csv", str(path), "--weight-n", "1", "-o", str(out), *extra)
     assert (got, err) == (code, f"error: {path}: {line}\n")
     assert not out.exists()
 
@@ -156,7 +156,7 @@ def test_contradicting_units_and_wrong_encoding(tmp_path: Path) -> None:
         "--skip-rows",
         "3",
     )
-    assert _measure("--csv", str(tmp_path / "no.csv"), "--weight-n", "1", "-o", "x.mcap") == (
+    assert _measure("csv", str(tmp_path / "no.csv"), "--weight-n", "1", "-o", "x.mcap") == (
         EXIT_NOINPUT,
         f"error: {tmp_path / 'no.csv'}: no such file\n",
     )
@@ -185,7 +185,7 @@ def test_mapping_and_file_facts_are_printed_and_recorded(tmp_path: Path) -> None
     s = kv_squeeze()
     path = write_export(tmp_path / "foam.csv", s, preamble=("Machine: UTM 5900", "Operator: A"))
     log = tmp_path / "foam.mcap"
-    code, err = _measure("--csv", str(path), "--weight-n", "0.7", "-o", str(log))
+    code, err = _measure("csv", str(path), "--weight-n", "0.7", "-o", str(log))
     assert code == 0
     lines = err.splitlines()
     assert lines[0] == (
@@ -210,21 +210,21 @@ def test_stdin_and_options_that_need_one_file(tmp_path: Path) -> None:
     )
     log = tmp_path / "s.mcap"
     code, err = _measure(
-        "--csv", "-", "--object-id", "s", "--weight-n", "1", "-o", str(log), stdin=text
+        "csv", "-", "--object-id", "s", "--weight-n", "1", "-o", str(log), stdin=text
     )
     assert code == 0, err
     assert err.splitlines()[0].startswith("<stdin>: columns: time='Time (s)'")
-    code, err = _measure("--csv", "-", "--weight-n", "1", "-o", str(log), "--force", stdin=text)
+    code, err = _measure("csv", "-", "--weight-n", "1", "-o", str(log), "--force", stdin=text)
     assert (code, err) == (EXIT_USAGE, "error: --csv - (stdin) needs --object-id\n")
     a, b = tmp_path / "a.csv", tmp_path / "b.csv"
     a.write_text(text)
     b.write_text(text)
     code, err = _measure(
-        "--csv", str(a), str(b), "--object-id", "x", "--weight-n", "1", "-o", "o.mcap"
+        "csv", str(a), str(b), "--object-id", "x", "--weight-n", "1", "-o", "o.mcap"
     )
     assert code == EXIT_USAGE
     assert err.startswith("error: --object-id names one object, but 2 files are given")
-    code, err = _measure("--csv", str(a), str(b), "-o", "o.mcap")
+    code, err = _measure("csv", str(a), str(b), "-o", "o.mcap")
     assert (code, err) == (
         EXIT_USAGE,
         f"error: {a}: no weight for object 'a': give --weight-n or a weight_n column in "
@@ -233,7 +233,7 @@ def test_stdin_and_options_that_need_one_file(tmp_path: Path) -> None:
     (tmp_path / "sub").mkdir()
     c = tmp_path / "sub" / "a.csv"
     c.write_text(text)
-    code, err = _measure("--csv", str(a), str(c), "--weight-n", "1", "-o", "o.mcap")
+    code, err = _measure("csv", str(a), str(c), "--weight-n", "1", "-o", "o.mcap")
     assert code == EXIT_USAGE
     assert f"files {a} and {c} are both object 'a'" in err
 
@@ -256,7 +256,7 @@ def test_many_files_one_log_with_a_failure(tmp_path: Path) -> None:
     log = tmp_path / "all.mcap"
     files = [str(p) for p in (*good, bad)]
     code, err = _measure(
-        "--csv", *files, "--weight-n", "0.7", "--objects-from", str(mapping), "-o", str(log)
+        "csv", *files, "--weight-n", "0.7", "--objects-from", str(mapping), "-o", str(log)
     )
     assert code == EXIT_FAILURE
     lines = err.splitlines()
@@ -294,7 +294,7 @@ def test_many_files_dataset_directory_with_a_failure(tmp_path: Path) -> None:
     bad.write_text(MIXED)
     out = tmp_path / "squeeze"
     code, err = _measure(
-        "--csv", *files, str(bad), "--weight-n", "0.7", "--workers", "1", "-o", f"{out}/"
+        "csv", *files, str(bad), "--weight-n", "0.7", "--workers", "1", "-o", f"{out}/"
     )
     assert code == EXIT_FAILURE
     lines = err.splitlines()

@@ -35,7 +35,7 @@ runner = CliRunner()
 def _characterize(csv: Path, *extra: str) -> tuple[pd.Series, str]:
     log, table = csv.with_suffix(".mcap"), csv.with_suffix(".parquet")
     res = runner.invoke(
-        app, ["measure", "--csv", str(csv), "--weight-n", "1", "-o", str(log), *extra]
+        app, ["measure", "csv", str(csv), "--weight-n", "1", "-o", str(log), *extra]
     )
     assert res.exit_code == 0, res.stderr
     res2 = runner.invoke(

@@ -37,7 +37,7 @@ def _line_slope_n_per_cm(csv: Path, d_min_cm: float, d_max_cm: float) -> float:
 
 def _check_folder(files: list[Path], tmp_path: Path) -> pd.DataFrame:
     out = tmp_path / "squeeze"
-    args = ["measure", "--csv", *map(str, files), "--weight-n", "1", "--workers", "1"]
+    args = ["measure", "csv", *map(str, files), "--weight-n", "1", "--workers", "1"]
     res = runner.invoke(app, [*args, "-o", f"{out}/"])
     assert res.exit_code == 0, res.stderr
     assert res.stderr.splitlines()[0] == (

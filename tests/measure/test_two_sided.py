@@ -44,7 +44,7 @@ def _characterize(tmp_path: Path, csv: Path, weight_n: str = "1") -> tuple[str, 
     """measure + characterize through the CLI: (the quality, characterize's stderr)."""
     log, table = tmp_path / "log.mcap", tmp_path / "coef.parquet"
     res = runner.invoke(
-        app, ["measure", "--csv", str(csv), "--weight-n", weight_n, "-o", str(log),
+        app, ["measure", "csv", str(csv), "--weight-n", weight_n, "-o", str(log),
               "--object-id", "A"],
     )  # fmt: skip
     assert res.exit_code == 0, res.stderr
@@ -102,7 +102,7 @@ def test_where_no_reading_can_be_right_the_recording_is_refused(
     squeeze = type(s)(s.t, s.f * scale[0], s.d * scale[1])
     csv = write_export(tmp_path / "none.csv", squeeze, digits=12)
     out = tmp_path / "none.mcap"
-    res = runner.invoke(app, ["measure", "--csv", str(csv), "--weight-n", "1", "-o", str(out)])
+    res = runner.invoke(app, ["measure", "csv", str(csv), "--weight-n", "1", "-o", str(out)])
     assert res.exit_code == 65, res.stderr
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1, res.stderr
@@ -239,7 +239,7 @@ def test_a_bag_whose_compression_no_unit_explains_is_refused(tmp_path: Path) -> 
     )
     assert str(info.value).endswith("no reading of it is a squeeze")
     out = tmp_path / "tiny-log.mcap"
-    res = runner.invoke(app, ["measure", "--bag", str(bag), *BAG_TOPICS, "--object-id", "s",
+    res = runner.invoke(app, ["measure", "bag", str(bag), *BAG_TOPICS, "--object-id", "s",
                               "--weight-n", "0.6", "-o", str(out)])  # fmt: skip
     assert res.exit_code == 65, res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
@@ -249,7 +249,7 @@ def test_a_bag_whose_compression_no_unit_explains_is_refused(tmp_path: Path) -> 
 def test_a_bag_flag_reaches_the_log_and_the_quality(tmp_path: Path, kn_bag: Path) -> None:
     bag = kn_bag
     log, table = tmp_path / "log.mcap", tmp_path / "coef.parquet"
-    res = runner.invoke(app, ["measure", "--bag", str(bag), *BAG_TOPICS, "--object-id", "s",
+    res = runner.invoke(app, ["measure", "bag", str(bag), *BAG_TOPICS, "--object-id", "s",
                               "--weight-n", "0.6", "-o", str(log)])  # fmt: skip
     assert res.exit_code == 0, res.stderr
     assert "warning: " in res.stderr

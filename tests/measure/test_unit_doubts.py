@@ -72,7 +72,7 @@ def test_the_flag_reaches_characterize_quality(tmp_path: Path) -> None:
     csv = write_export(tmp_path / "kn.csv", kv_squeeze(), units=("s", "kN", "mm"), digits=9)
     log, table = tmp_path / "kn.mcap", tmp_path / "kn.parquet"
     res = runner.invoke(
-        app, ["measure", "--csv", str(csv), "--weight-n", "1", "-o", str(log), "--object-id", "A"]
+        app, ["measure", "csv", str(csv), "--weight-n", "1", "-o", str(log), "--object-id", "A"]
     )
     assert res.exit_code == 0, res.stderr
     assert "warning:" in res.stderr

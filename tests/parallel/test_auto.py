@@ -249,7 +249,7 @@ def test_measure_sim_takes_workers_auto_and_says_what_it_chose(tmp_path: Path) -
     cat = _catalog(tmp_path, 3)
     out = tmp_path / "s.mcap"
     result = runner.invoke(
-        app, ["measure", str(cat), "--sim", "-o", str(out), "--workers", "auto", *_FAST]
+        app, ["measure", "sim", str(cat), "-o", str(out), "--workers", "auto", *_FAST]
     )
     assert result.exit_code == 0, result.stderr
     line = result.stderr.strip().splitlines()[-1]
@@ -263,8 +263,8 @@ def test_measure_sim_takes_workers_auto_and_says_what_it_chose(tmp_path: Path) -
 def test_a_bad_workers_value_is_one_line_and_exit_2(tmp_path: Path, value: str) -> None:
     cat = _catalog(tmp_path, 2)
     for argv in (
-        ["measure", str(cat), "--sim", "-o", str(tmp_path / "s.mcap"), *_FAST],
-        ["lift", str(cat), "--sim", "-o", str(tmp_path / "l.parquet")],
+        ["measure", "sim", str(cat), "-o", str(tmp_path / "s.mcap"), *_FAST],
+        ["lift", "sim", str(cat), "-o", str(tmp_path / "l.parquet")],
         ["characterize", str(cat), "-o", str(tmp_path / "c/")],
     ):
         result = runner.invoke(app, [*argv, "--workers", value])
@@ -282,10 +282,10 @@ class _Called(Exception):
 @pytest.mark.parametrize(
     ("library", "argv"),
     [
-        ("deformctl.measure.stage.simulate_catalog_file", ["measure", "--sim", "-o", "s.mcap"]),
-        ("deformctl.lift.stage.lift_catalog_files", ["lift", "--sim", "-o", "l.parquet"]),
+        ("deformctl.measure.stage.simulate_catalog_file", ["measure", "sim", "-o", "s.mcap"]),
+        ("deformctl.lift.stage.lift_catalog_files", ["lift", "sim", "-o", "l.parquet"]),
         ("deformctl.measure.csv_batch.measure_csv_files",
-         ["measure", "--csv", "--columns", "time=t,force=f,compression=c", "--weight-n", "1",
+         ["measure", "csv", "--columns", "time=t,force=f,compression=c", "--weight-n", "1",
           "-o", "s.mcap"]),
     ],
 )  # fmt: skip
@@ -311,12 +311,9 @@ def test_the_commands_default_is_the_librarys(
     monkeypatch.chdir(tmp_path)
     for name in ("a.csv", "b.csv"):  # two recordings: a single one is read in the client
         (tmp_path / name).write_text("t,f,c\n0,0,0\n")
-    command, *rest = argv
-    inputs = [str(_catalog(tmp_path, 2))]
-    if "--csv" in rest:
-        rest.remove("--csv")
-        inputs = ["--csv", "a.csv", "b.csv"]
-    result = runner.invoke(app, [command, *inputs, *rest])
+    command, source, *rest = argv
+    inputs = ["a.csv", "b.csv"] if source == "csv" else [str(_catalog(tmp_path, 2))]
+    result = runner.invoke(app, [command, source, *inputs, *rest])
     assert isinstance(result.exception, _Called), result.stderr
     assert default == "auto"
     assert seen["workers"] == default

@@ -143,19 +143,19 @@ def _error_line(args: list[str], code: int) -> str:
 
 def test_workers_flag_on_a_single_file(tmp_path: Path) -> None:
     cat = _catalog(tmp_path, 2)
-    rig = ["lift", str(cat), "--rig", "true", "-o", str(tmp_path / "r.parquet")]
+    rig = ["lift", "rig", str(cat), "--command", "true", "-o", str(tmp_path / "r.parquet")]
     err = _error_line([*rig, "--workers", "2"], 2)
-    assert "--workers with a single-file output needs --sim" in err
+    assert "lift rig: no such option: --workers" in err
     err = _error_line(["characterize", str(cat), "-o", str(tmp_path / "c.parquet"),
                        "--workers", "2"], 2)  # fmt: skip
     assert "--workers needs a dataset directory output" in err
-    err = _error_line(["measure", str(cat), "--sim", "-o", str(tmp_path / "s.mcap"),
+    err = _error_line(["measure", "sim", str(cat), "-o", str(tmp_path / "s.mcap"),
                        "--workers", "0"], 2)  # fmt: skip
     assert "--workers must be >= 1, got 0" in err
     assert not any(tmp_path.glob("*.mcap"))
     assert not any(tmp_path.glob("*.parquet"))
     result = runner.invoke(
-        app, ["measure", str(cat), "--sim", "-o", str(tmp_path / "s.mcap"), "--workers", "2",
+        app, ["measure", "sim", str(cat), "-o", str(tmp_path / "s.mcap"), "--workers", "2",
               "--alpha-cm", "5", "--dt-s", "0.002", "--squeezes", "1", "--ramp-s", "0.05",
               "--hold-s", "0.05"],
     )  # fmt: skip
@@ -174,7 +174,7 @@ def test_cli_logs_with_one_and_two_workers_hold_the_same_squeezes(tmp_path: Path
     for workers in ("1", "2"):
         out = tmp_path / f"s{workers}.mcap"
         result = runner.invoke(
-            app, ["measure", str(cat), "--sim", "-o", str(out), "--workers", workers, *fast]
+            app, ["measure", "sim", str(cat), "-o", str(out), "--workers", workers, *fast]
         )
         assert result.exit_code == 0, result.stderr
         logs.append(read_squeeze_log(out))

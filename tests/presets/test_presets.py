@@ -68,18 +68,18 @@ def test_override_renames_the_preset() -> None:
     assert table.replace(profile={"accel_m_s2": 1.0}).name == "table+overrides"
 
 
-def _lift(tmp_path: Path, *args: str) -> tuple[int, str, Path]:
+def _lift(tmp_path: Path, runner_name: str, *args: str) -> tuple[int, str, Path]:
     out = tmp_path / "lift.parquet"
     res = runner.invoke(
         app,
-        ["lift", str(PAPER / "objects.csv"), "--objects", "A", "-o", str(out), *args],
+        ["lift", runner_name, str(PAPER / "objects.csv"), "--objects", "A", "-o", str(out), *args],
     )
     return res.exit_code, res.stderr, out
 
 
 def test_lift_records_the_default_preset_in_row_and_log(tmp_path: Path) -> None:
     log = tmp_path / "lift.mcap"
-    code, err, out = _lift(tmp_path, "--sim", "--log", str(log))
+    code, err, out = _lift(tmp_path, "sim", "--log", str(log))
     assert code == 0, err
     row = pd.read_parquet(out).iloc[0]
     assert row["sim_preset"] == "paper"
@@ -95,7 +95,7 @@ def test_lift_records_the_default_preset_in_row_and_log(tmp_path: Path) -> None:
 
 
 def test_lift_single_option_overrides_and_names_it(tmp_path: Path) -> None:
-    code, err, out = _lift(tmp_path, "--sim", "--sim-preset", "table", "--lift-accel-m-s2", "1")
+    code, err, out = _lift(tmp_path, "sim", "--sim-preset", "table", "--lift-accel-m-s2", "1")
     assert code == 0, err
     row = pd.read_parquet(out).iloc[0]
     assert row["sim_preset"] == "table+overrides"
@@ -105,8 +105,11 @@ def test_lift_single_option_overrides_and_names_it(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--sim", "--sim-preset", "mujoco"], "unknown sim preset 'mujoco'"),
-        (["--rig", "python3 x.py", "--sim-preset", "table"], "--sim-preset needs --sim"),
+        (["sim", "--sim-preset", "mujoco"], "unknown sim preset 'mujoco'"),
+        (
+            ["rig", "--command", "python3 x.py", "--sim-preset", "table"],
+            "lift rig: no such option: --sim-preset",
+        ),
     ],
 )
 def test_bad_preset_options_exit_2_with_nothing_written(
@@ -124,7 +127,7 @@ def test_measure_records_the_preset(tmp_path: Path) -> None:
     out = tmp_path / "sq.mcap"
     res = runner.invoke(
         app,
-        ["measure", str(PAPER / "objects.csv"), "--objects", "A", "--sim", "--squeezes", "1",
+        ["measure", "sim", str(PAPER / "objects.csv"), "--objects", "A", "--squeezes", "1",
          "--sim-preset", "table", "-o", str(out)],
     )  # fmt: skip
     assert res.exit_code == 0, res.stderr

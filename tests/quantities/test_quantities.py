@@ -106,17 +106,17 @@ def _error(argv: list[str]) -> str:
 
 def _csv(tmp: Path, *flags: str) -> list[str]:
     recording = ["--columns", "time=t,force=f,compression=c", "--object-id", "a"]
-    return ["measure", "--csv", str(tmp / "r.csv"), *recording, *flags, "-o", str(tmp / "o.mcap")]
+    return ["measure", "csv", str(tmp / "r.csv"), *recording, *flags, "-o", str(tmp / "o.mcap")]
 
 
 def _bag(tmp: Path, *flags: str) -> list[str]:
     topics = ["--wrench-topic", "/w", "--position-topic", "/p", "--object-id", "a"]
-    return ["measure", "--bag", str(tmp / "b.mcap"), *topics, *flags, "-o", str(tmp / "o.mcap")]
+    return ["measure", "bag", str(tmp / "b.mcap"), *topics, *flags, "-o", str(tmp / "o.mcap")]
 
 
 def _images(tmp: Path, *flags: str) -> list[str]:
     photos = [str(tmp / "top.png"), str(tmp / "side.png"), "--marker-size-cm", "5"]
-    return ["measure", "--images", *photos, "--object-id", "a", *flags, "-o", str(tmp / "c.csv")]
+    return ["measure", "images", *photos, "--object-id", "a", *flags, "-o", str(tmp / "c.csv")]
 
 
 def _population(tmp: Path, *flags: str) -> list[str]:
@@ -256,7 +256,7 @@ def test_the_ramp_is_refused_by_the_library_too(tmp_path: Path) -> None:
         "damping), got 0"
     )
     catalog = str(tmp_path / "cat.csv")
-    assert _error(["measure", catalog, "--sim", "--ramp-s", "0", "-o", str(tmp_path / "s")]) == want
+    assert _error(["measure", "sim", catalog, "--ramp-s", "0", "-o", str(tmp_path / "s")]) == want
     assert _lib(lambda: SqueezeProtocol(ramp_s=0.0)) == want
 
 
@@ -267,7 +267,17 @@ def test_the_search_options_have_one_text(tmp_path: Path) -> None:
         ("--tolerance", "0", {"tolerance_rel": 0.0}),
         ("--max-attempts", "0", {"max_attempts": 0}),
     ):
-        argv = ["lift", catalog, "--rig", "true", flag, value, "-o", str(tmp_path / "l.parquet")]
+        argv = [
+            "lift",
+            "rig",
+            catalog,
+            "--command",
+            "true",
+            flag,
+            value,
+            "-o",
+            str(tmp_path / "l.parquet"),
+        ]
         line = _error(argv)
         assert line.startswith(f"error: {flag} must be "), line
         assert _lib(lambda kw=kwargs: SearchOptions(**kw)) == line  # type: ignore[misc]
@@ -282,8 +292,8 @@ def test_the_search_options_have_one_text(tmp_path: Path) -> None:
 @pytest.mark.parametrize("flag", ["--alpha-cm", "--dt-s", "--memory-budget-gib"])
 def test_the_simulator_settings_have_one_text(tmp_path: Path, flag: str) -> None:
     catalog = str(tmp_path / "cat.csv")
-    measure = ["measure", catalog, "--sim", flag, "-1", "-o", str(tmp_path / "s.mcap")]
-    lift = ["lift", catalog, "--sim", flag, "-1", "-o", str(tmp_path / "l.parquet")]
+    measure = ["measure", "sim", catalog, flag, "-1", "-o", str(tmp_path / "s.mcap")]
+    lift = ["lift", "sim", catalog, flag, "-1", "-o", str(tmp_path / "l.parquet")]
     assert _error(measure) == _error(lift)
     if flag == "--memory-budget-gib":  # the CSV reader's budget is the same quantity
         want = "error: --memory-budget-gib must be a finite number > 0 GiB, got -1"

@@ -37,9 +37,9 @@ def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     run = tmp_path_factory.mktemp("reproduce")
     catalog = str(EXPECTED_PATH.parent / "catalog.csv")
     r = str(run)
-    _run("measure", catalog, "--sim", "-o", f"{r}/squeeze.mcap")
+    _run("measure", "sim", catalog, "-o", f"{r}/squeeze.mcap")
     _run("characterize", f"{r}/squeeze.mcap", "-o", f"{r}/coefficients.parquet")
-    _run("lift", catalog, "--sim", "-o", f"{r}/lift.parquet")
+    _run("lift", "sim", catalog, "-o", f"{r}/lift.parquet")
     _run("table", f"{r}/coefficients.parquet", f"{r}/lift.parquet", "-o", f"{r}/index.parquet")
     _run(
         "train", f"{r}/index.parquet", "-o", f"{r}/model.skops", "--train-size", "6",
@@ -47,13 +47,13 @@ def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     )  # fmt: skip
     _run("predict", f"{r}/model.skops", f"{r}/index.parquet", "-o", f"{r}/predictions.parquet")
     paper = str(PAPER / "objects.csv")
-    _run("measure", paper, "--sim", "-o", f"{r}/paper_squeeze.mcap")
+    _run("measure", "sim", paper, "-o", f"{r}/paper_squeeze.mcap")
     _run("characterize", f"{r}/paper_squeeze.mcap", "-o", f"{r}/paper_coefficients.parquet")
-    _run("lift", paper, "--sim", "-o", f"{r}/paper_lift.parquet")
+    _run("lift", "sim", paper, "-o", f"{r}/paper_lift.parquet")
     # two of Table III's nine cubes keep the test short; the report shows the others as n/a
     cubes = pd.read_csv(PAPER / "table3_cubes.csv").iloc[[0, 1]]
     cubes.to_csv(run / "table3_cubes.csv", index=False)
-    _run("lift", f"{r}/table3_cubes.csv", "--sim", "-o", f"{r}/table3_lift.parquet")
+    _run("lift", "sim", f"{r}/table3_cubes.csv", "-o", f"{r}/table3_lift.parquet")
     return run
 
 

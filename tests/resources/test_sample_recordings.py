@@ -68,7 +68,7 @@ def test_the_bag_holds_two_palms_a_pose_and_joint_states_on_one_clock() -> None:
 def test_the_bag_measures_back_to_its_sponge(tmp_path: Path, position: list[str]) -> None:
     bag = dataset_path("examples", "gripper.mcap")
     log, coef = tmp_path / "sponge.mcap", tmp_path / "sponge.parquet"
-    res = runner.invoke(app, ["measure", "--bag", str(bag), *BAG_TOPICS, *position,
+    res = runner.invoke(app, ["measure", "bag", str(bag), *BAG_TOPICS, *position,
                               "--object-id", "sponge", "--weight-n", "0.6",
                               "-o", str(log)])  # fmt: skip
     assert res.exit_code == 0, res.stderr
@@ -85,7 +85,7 @@ def test_the_whole_bag_keeps_its_stamp_range(tmp_path: Path) -> None:
     bag = dataset_path("examples", "gripper.mcap")
     stamps = [m[2] for m in _decoded(bag) if m[0] == "/left/wrench"]
     log = tmp_path / "whole.mcap"
-    res = runner.invoke(app, ["measure", "--bag", str(bag), *BAG_TOPICS, "--position-topic",
+    res = runner.invoke(app, ["measure", "bag", str(bag), *BAG_TOPICS, "--position-topic",
                               "/left/palm_pose", "--no-segment", "--object-id", "sponge",
                               "--weight-n", "0.6", "-o", str(log)])  # fmt: skip
     assert res.exit_code == 0, res.stderr
@@ -98,7 +98,7 @@ def test_the_csv_export_measures_back_to_its_foam(tmp_path: Path) -> None:
     csv = dataset_path("examples", "utm_export.csv")
     assert csv.read_text().splitlines()[:2] == ["Time,Force,Crosshead", "(s),[kN],(mm)"]
     log, coef = tmp_path / "foam.mcap", tmp_path / "foam.parquet"
-    res = runner.invoke(app, ["measure", "--csv", str(csv), *CSV_COLUMNS, "--object-id", "foam",
+    res = runner.invoke(app, ["measure", "csv", str(csv), *CSV_COLUMNS, "--object-id", "foam",
                               "--weight-n", "0.7", "-o", str(log)])  # fmt: skip
     assert res.exit_code == 0, res.stderr
     res = runner.invoke(app, ["characterize", str(log), "-o", str(coef)])

@@ -207,7 +207,7 @@ def test_a_bad_exponent_is_one_data_error_naming_the_column(
     row = {**catalog_row, "material_stiffness_exponent": value}
     cat = write_catalog(tmp_path / "cat.csv", [row])
     out = tmp_path / ("sq.mcap" if command == "measure" else "lift.csv")
-    result = runner.invoke(app, [command, str(cat), "--sim", "-o", str(out)])
+    result = runner.invoke(app, [command, "sim", str(cat), "-o", str(out)])
     assert result.exit_code == 65, result.output
     assert result.stderr.startswith("error: ")
     assert result.stderr.count("\n") == 1, result.stderr

@@ -66,7 +66,7 @@ def test_cli_memory_budget_option_refuses_with_one_line(command: str, tmp_path: 
     catalog = tmp_path / "cat.csv"
     catalog.write_text(CATALOG)
     out = tmp_path / ("x.mcap" if command == "measure" else "x.parquet")
-    argv = [command, str(catalog), "--sim", "--alpha-cm", "0.5", "--memory-budget-gib", "0.05"]
+    argv = [command, "sim", str(catalog), "--alpha-cm", "0.5", "--memory-budget-gib", "0.05"]
     result = CliRunner().invoke(app, [*argv, "-o", str(out)])
     assert result.exit_code == 2
     assert result.stderr.startswith("error: ")
@@ -79,7 +79,8 @@ def test_cli_memory_budget_option_refuses_with_one_line(command: str, tmp_path: 
 def test_cli_memory_budget_needs_sim(tmp_path: Path) -> None:
     catalog = tmp_path / "cat.csv"
     catalog.write_text(CATALOG)
-    argv = ["lift", str(catalog), "--memory-budget-gib", "1", "-o", str(tmp_path / "x.parquet")]
+    argv = ["lift", "rig", str(catalog), "--command", "true", "--memory-budget-gib", "1", "-o",
+            str(tmp_path / "x.parquet")]  # fmt: skip
     result = CliRunner().invoke(app, argv)
     assert result.exit_code == 2
-    assert "--memory-budget-gib needs --sim" in result.stderr
+    assert "lift rig: no such option: --memory-budget-gib" in result.stderr

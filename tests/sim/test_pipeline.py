@@ -86,7 +86,7 @@ def listing(directory: Path) -> list[str]:
 def measure_and_characterize(catalog: Path, out_dir: Path, *options: str) -> pd.DataFrame:
     log = out_dir / f"{catalog.stem}.mcap"
     coefficients = out_dir / f"{catalog.stem}.parquet"
-    res = run("measure", catalog, "--sim", "-o", log, *options)
+    res = run("measure", "sim", catalog, "-o", log, *options)
     assert res.exit_code == 0, res.stderr
     res = run("characterize", log, "-o", coefficients)
     assert res.exit_code == 0, res.stderr
@@ -182,7 +182,7 @@ def test_heavy_soft_object_on_the_table_and_floating(tmp_path: Path) -> None:
 
 def test_sim_log_holds_objects_provenance_and_seeded_noise(tmp_path: Path) -> None:
     log = tmp_path / "sq.mcap"
-    args = ["measure", PAPER_CATALOG, "--sim", "-o", log, "--objects", "D,B", "--squeezes", "2",
+    args = ["measure", "sim", PAPER_CATALOG, "-o", log, "--objects", "D,B", "--squeezes", "2",
             "--ramp-s", "0.1", "--hold-s", "0.2", "--dt-s", "0.002", "--seed", "7",
             "--noise-force-n", "0.01", "--noise-position-m", "5e-5"]  # fmt: skip
     res = run(*args)
@@ -241,7 +241,7 @@ def test_explicit_peak_force_and_progress_bar(
     terminal = partial(Console, stderr=True, force_terminal=True)
     monkeypatch.setattr(measure_cli, "stderr_console", terminal)
     log = tmp_path / "sq.mcap"
-    res = run("measure", PAPER_CATALOG, "--sim", "-o", log, "--objects", "C", "--squeezes", "3",
+    res = run("measure", "sim", PAPER_CATALOG, "-o", log, "--objects", "C", "--squeezes", "3",
               "--peak-force-n", "4", "--ramp-s", "0.1", "--hold-s", "0.1")  # fmt: skip
     assert res.exit_code == 0, res.stderr
     assert "3/3" in res.stderr  # the bar reached the last squeeze, on stderr
@@ -265,7 +265,7 @@ def lift_runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     out = {"catalog": catalog, "dir": tmp}
     for protocol in ("refine", "paper"):
         table, log = tmp / f"{protocol}.parquet", tmp / f"{protocol}.mcap"
-        res = run("lift", catalog, "--sim", "--sim-preset", "table", "--protocol", protocol,
+        res = run("lift", "sim", catalog, "--sim-preset", "table", "--protocol", protocol,
                   "-o", table, "--log", log)  # fmt: skip
         assert res.exit_code == 0, res.stderr
         out[protocol] = read_table(table, "lift_results").set_index("object_id")
@@ -289,7 +289,7 @@ def test_rigid_limit_follows_the_lift_acceleration_option(tmp_path: Path) -> Non
     catalog = tmp_path / "stiff.csv"
     catalog.write_text(HEADER + STIFF_ROW, encoding="utf-8")
     out = tmp_path / "lift.parquet"
-    res = run("lift", catalog, "--sim", "--sim-preset", "table", "-o", out, "--lift-accel-m-s2",
+    res = run("lift", "sim", catalog, "--sim-preset", "table", "-o", out, "--lift-accel-m-s2",
               "5", "--lift-speed-m-s", "0.4", "--hold-s", "0.3")  # fmt: skip
     assert res.exit_code == 0, res.stderr
     row = read_table(out, "lift_results").iloc[0]
@@ -394,7 +394,7 @@ def test_row_without_material_values_is_bad_input(tmp_path: Path, command: str) 
     catalog = tmp_path / "objects.csv"
     catalog.write_text(NO_MATERIAL, encoding="utf-8")
     extra = ["--log", tmp_path / "lift.mcap"] if command == "lift" else []
-    res = run(command, catalog, "--sim", "-o", tmp_path / "out.file", *extra)
+    res = run(command, "sim", catalog, "-o", tmp_path / "out.file", *extra)
     assert res.exit_code == EXIT_DATAERR
     assert one_line_error(res) == (
         f"error: {catalog}: object 'real_bag' has no material values "
@@ -408,7 +408,7 @@ def test_catalog_without_material_columns_is_bad_input(tmp_path: Path) -> None:
     catalog = tmp_path / "objects.csv"
     catalog.write_text("object_id,size_x_cm,size_y_cm,size_z_cm,weight_n,friction_mu\n"
                        "bag,10,10,8,2,0.5\n")  # fmt: skip
-    res = run("measure", catalog, "--sim", "-o", tmp_path / "sq.mcap")
+    res = run("measure", "sim", catalog, "-o", tmp_path / "sq.mcap")
     assert res.exit_code == EXIT_DATAERR
     assert "object 'bag' has no material values" in one_line_error(res)
     assert listing(tmp_path) == ["objects.csv"]
@@ -418,7 +418,7 @@ def test_catalog_without_material_columns_is_bad_input(tmp_path: Path) -> None:
 def test_friction_not_positive_under_sim(tmp_path: Path, command: str) -> None:
     catalog = tmp_path / "objects.csv"
     catalog.write_text(HEADER + "ok,10,10,8,2,0.5,20,1\nslick,10,10,8,2,0,20,1\n", "utf-8")
-    res = run(command, catalog, "--sim", "-o", tmp_path / "out.file")
+    res = run(command, "sim", catalog, "-o", tmp_path / "out.file")
     assert res.exit_code == EXIT_DATAERR
     line = one_line_error(res)
     assert line.startswith(f"error: {catalog}: field 'friction_mu': object 'slick': must be > 0")
@@ -428,21 +428,22 @@ def test_friction_not_positive_under_sim(tmp_path: Path, command: str) -> None:
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["lift", "{cat}", "--sim", "--rig", "true"], "exactly one trial runner (--rig or"),
-        (["lift", "{cat}", "--rig", "true", "--lift-accel-m-s2", "1"], "-m-s2 needs --sim"),
-        (["lift", "{cat}", "--sim", "--slip-criterion", "vibes"], "slip measure must be"),
-        (["lift", "{cat}", "--sim", "--lift-accel-m-s2", "0"], "accel_m_s2 must be > 0"),
-        (["lift", "{cat}", "--sim", "--dt-s", "0"], "dt_s must be in [1e-05, 0.05] s"),
-        (["measure", "{cat}", "--sim", "--object-id", "x"], "--object-id cannot be used"),
-        (["measure", "--csv", "{cat}", "--squeezes", "2"], "--squeezes cannot be used with --csv"),
-        (["measure", "{cat}"], "needs --sim (a catalog) or --csv (files)"),
-        (["measure", "--sim"], "--sim needs a CATALOG argument"),
+        (["lift", "{cat}", "--sim", "--rig", "true"], "several sources (--rig, --sim)"),
+        (["lift", "rig", "{cat}", "--command", "true", "--lift-accel-m-s2", "1"],
+         "lift rig: no such option: --lift-accel-m-s2"),
+        (["lift", "sim", "{cat}", "--slip-criterion", "vibes"], "slip measure must be"),
+        (["lift", "sim", "{cat}", "--lift-accel-m-s2", "0"], "accel_m_s2 must be > 0"),
+        (["lift", "sim", "{cat}", "--dt-s", "0"], "dt_s must be in [1e-05, 0.05] s"),
+        (["measure", "sim", "{cat}", "--object-id", "x"], "no such option: --object-id"),
+        (["measure", "csv", "{cat}", "--squeezes", "2"], "no such option: --squeezes"),
+        (["measure", "{cat}"], "is not a source: give one of sim, csv, bag, images"),
+        (["measure", "sim"], "measure sim: missing argument 'CATALOG'"),
         (["measure", "{cat}", "--sim", "--csv", "x.csv"], "several sources (--csv, --sim)"),
-        (["measure", "{cat}", "--sim", "--strain", "0.6"], "strain must be in (0, 0.5)"),
-        (["measure", "{cat}", "--sim", "--peak-force-n", "-1"], "--peak-force-n must be a finite"),
-        (["measure", "{cat}", "--sim", "--peak-force-n", "1", "--strain", "0.01"], "not both"),
-        (["measure", "{cat}", "--sim", "--squeezes", "0"], "--squeezes must be an integer >= 1"),
-        (["measure", "{cat}", "--sim", "--objects", "A,Z"], "unknown object id 'Z'"),
+        (["measure", "sim", "{cat}", "--strain", "0.6"], "strain must be in (0, 0.5)"),
+        (["measure", "sim", "{cat}", "--peak-force-n", "-1"], "--peak-force-n must be a finite"),
+        (["measure", "sim", "{cat}", "--peak-force-n", "1", "--strain", "0.01"], "not both"),
+        (["measure", "sim", "{cat}", "--squeezes", "0"], "--squeezes must be an integer >= 1"),
+        (["measure", "sim", "{cat}", "--objects", "A,Z"], "unknown object id 'Z'"),
     ],
 )  # fmt: skip
 def test_usage_errors(tmp_path: Path, args: list[str], message: str) -> None:
@@ -459,7 +460,7 @@ def test_slip_options_reach_the_rows_and_the_attempts(tmp_path: Path) -> None:
     catalog = tmp_path / "stiff.csv"
     catalog.write_text(HEADER + STIFF_ROW, encoding="utf-8")
     out, log = tmp_path / "lift.parquet", tmp_path / "lift.mcap"
-    res = run("lift", catalog, "--sim", "-o", out, "--log", log, "--protocol", "paper",
+    res = run("lift", "sim", catalog, "-o", out, "--log", log, "--protocol", "paper",
               "--slip-criterion", "shortfall", "--slip-tolerance-m", "0.002",
               "--lift-height-m", "0.01", "--hold-s", "0.1")  # fmt: skip
     assert res.exit_code == 0, res.stderr
@@ -477,7 +478,7 @@ def test_slip_options_reach_the_rows_and_the_attempts(tmp_path: Path) -> None:
 
 
 def test_slip_tolerance_without_a_runner_that_uses_it(tmp_path: Path) -> None:
-    res = run("lift", PAPER_CATALOG, "--rig", "true", "--slip-tolerance-m", "0.002",
+    res = run("lift", "rig", PAPER_CATALOG, "--command", "true", "--slip-tolerance-m", "0.002",
               "-o", tmp_path / "lift.parquet")  # fmt: skip
     assert res.exit_code == EXIT_USAGE
     assert "--slip-tolerance-m needs --slip-from-frames" in one_line_error(res)

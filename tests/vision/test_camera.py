@@ -81,7 +81,7 @@ def write_ros(path: Path, k: np.ndarray, dist: np.ndarray, size: tuple[int, int]
 
 
 def _measure(top: Path, side: Path, out: Path, *extra: str) -> tuple[int, str]:
-    res = runner.invoke(app, ["measure", "--images", str(top), str(side), "--marker-size-cm",
+    res = runner.invoke(app, ["measure", "images", str(top), str(side), "--marker-size-cm",
                               "5", "--object-id", "box", "--weight-n", "3", "--friction-mu", "0.5",
                               "-o", str(out), *extra])  # fmt: skip
     return res.exit_code, res.stderr
@@ -244,7 +244,7 @@ def test_missing_calibration_and_other_sources(scene: dict, tmp_path: Path) -> N
     code, err = _measure(scene["top"], scene["side"], out, "--camera-matrix", "nope.yaml")
     assert code == EXIT_NOINPUT
     assert err.startswith("error: nope.yaml: ")
-    res = runner.invoke(app, ["measure", "--csv", "x.csv", "--columns", "time=t,force=f,gap=g",
+    res = runner.invoke(app, ["measure", "csv", "x.csv", "--columns", "time=t,force=f,gap=g",
                               "--object-id", "a", "--weight-n", "1", "--camera-matrix",
                               "k.yaml", "-o", str(out)])  # fmt: skip
     assert res.exit_code == EXIT_USAGE
