@@ -1,4 +1,4 @@
-"""``lift --rig CMD --slip-from-frames``: judge rig answers that carry camera frames.
+"""``lift rig --slip-from-frames``: judge rig answers that carry camera frames.
 
 A rig that only takes pictures answers ``{"before_frame": ..., "after_frame": ...}``; deformctl
 then decides ``lifted`` and ``slip_m`` with :func:`deformctl.vision.slip_from_frames`, bound
@@ -18,7 +18,7 @@ from deformctl.cli._options import HEAVY_DEFAULTS, OptionGroup, default
 from deformctl.errors import UsageError
 from deformctl.quantities import MARKER_SIZE_CM, SLIP_TOLERANCE_M
 
-if TYPE_CHECKING:  # pragma: no cover - the rig runner (pandas, MCAP) loads when --rig runs
+if TYPE_CHECKING:  # pragma: no cover - the rig runner (pandas, MCAP) loads when it runs
     from deformctl.lift.runners.rig import SlipFromFrames
 
 #: Default ``--slip-tolerance-m`` (``detect_slip``'s): the object may fall behind the palms so
@@ -115,30 +115,27 @@ def frames_judge(
 
 PalmMarkerIds = Annotated[
     str | None,
-    typer.Option(
-        "--palm-marker-ids", metavar="L,R", help="Frames: ids of ArUco markers on the palms."
-    ),
+    typer.Option("--palm-marker-ids", metavar="L,R", help="Frames: the palms' ArUco marker ids."),
 ]
 PalmRegions = Annotated[
     str | None,
     typer.Option(
         "--palm-regions",
-        metavar="x,y,w,h;x,y,w,h",
-        help="Frames: palm rectangles in the before frame, px (each with a distinct palm part).",
+        metavar="x,y,w,h;...",
+        help="Frames: the palms' rectangles in the before frame, px.",
     ),
 ]
 FrameMarkerSizeCm = Annotated[
     float | None,
     typer.Option(
-        "--frame-marker-size-cm",
-        metavar="S",
-        help="Frames: side of the markers in view, cm (the image scale).",
+        "--frame-marker-size-cm", metavar="S", help="Frames: side of the markers in view, cm."
     ),
 ]
 FrameMarkerDict = Annotated[
     str | None,
     typer.Option(
         "--frame-marker-dict",
+        metavar="DICT",
         help=f"Frames: ArUco dictionary {default('detect_slip.marker_dict')}.",
     ),
 ]
@@ -147,20 +144,16 @@ FrameSlipToleranceM = Annotated[
     typer.Option(
         "--slip-tolerance-m",
         metavar="T",
-        help="Frames: how far the object may fall behind the palms, m "
-        f"{default('detect_slip.tolerance_m')}.",
+        help=f"Frames: slip that fails an attempt, m {default('detect_slip.tolerance_m')}.",
     ),
 ]
 SlipFromFramesOption = Annotated[
     bool,
-    typer.Option(
-        "--slip-from-frames",
-        help="The rig answers with before/after frames: judge lifted/slipped from them.",
-    ),
+    typer.Option("--slip-from-frames", help="Judge slip from the rig's before/after frames."),
 ]
 DebugDir = Annotated[
     str | None,
-    typer.Option("--debug-dir", help="Frames: write the last attempt's annotated frames here."),
+    typer.Option("--debug-dir", metavar="DIR", help="Frames: write annotated frames here."),
 ]
 
 

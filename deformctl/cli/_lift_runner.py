@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from deformctl.cli._common import finish_sweep
-from deformctl.cli._options import HEAVY_DEFAULTS, SIMULATOR, OptionGroup, default
+from deformctl.cli._options import SIMULATOR, OptionGroup, default
 from deformctl.errors import UsageError
 from deformctl.lift.options import (
     DEFAULT_GROWTH,
@@ -32,34 +32,34 @@ RigTimeout = Annotated[
     float | None,
     typer.Option(
         "--rig-timeout",
-        help="Seconds one rig attempt may take before it is killed "
-        f"[default: {DEFAULT_RIG_TIMEOUT_S:g}].",
+        metavar="S",
+        help=f"Seconds one attempt may take [default: {DEFAULT_RIG_TIMEOUT_S:g}].",
     ),
 ]
 LiftAccel = Annotated[
     float | None,
     typer.Option(
         "--lift-accel-m-s2",
-        help="Sim: peak lift acceleration a_max, m/s² [default: the preset's; paper: calibrated "
-        f"(datasets/calibration/paper.json), table: {HEAVY_DEFAULTS['LiftProfile.accel_m_s2']:g}].",
+        metavar="A",
+        help="Lift acceleration, m/s² [default: preset's].",
     ),
 ]
 LiftSpeed = Annotated[
     float | None,
     typer.Option(
-        "--lift-speed-m-s", help=f"Sim: lift cruise speed, m/s {default('LiftProfile.speed_m_s')}."
+        "--lift-speed-m-s",
+        metavar="V",
+        help=f"Cruise speed, m/s {default('LiftProfile.speed_m_s')}.",
     ),
 ]
 LiftHeight = Annotated[
     float | None,
-    typer.Option("--lift-height-m", help="Sim: rise, m [default: half the object's height]."),
+    typer.Option("--lift-height-m", metavar="H", help="Rise, m [default: half the height]."),
 ]
 LiftHoldS = Annotated[
     float | None,
     typer.Option(
-        "--lift-hold-s",
-        help="Sim: hold after the rise, s [default: the preset's; paper 0.3, table "
-        f"{HEAVY_DEFAULTS['LiftProfile.hold_s']:g}].",
+        "--lift-hold-s", metavar="S", help="Hold after the rise, s [default: the preset's]."
     ),
 ]
 #: The old spelling of ``--lift-hold-s`` (``measure``'s ``--hold-s`` is the squeeze hold).
@@ -71,17 +71,16 @@ SlipToleranceM = Annotated[
     typer.Option(
         "--slip-tolerance-m",
         metavar="T",
-        help="Slip beyond which an attempt fails, m [default: the preset's, paper 1e-06, table "
-        f"{HEAVY_DEFAULTS['SlipCriterion.tolerance_m']:g}].",
+        help="Slip failing an attempt, m [default: preset's].",
     ),
 ]
 SlipCriterionOption = Annotated[
     str | None,
     typer.Option(
         "--slip-criterion",
-        metavar="contact|shortfall",
-        help="Sim: contact = sliding at the palms since the rise began; shortfall = palm rise "
-        f"minus object rise at the end {default('SlipCriterion.measure')}.",
+        metavar="CRITERION",
+        help="contact (palms slid) or shortfall (palm minus object rise) "
+        f"{default('SlipCriterion.measure')}.",
     ),
 ]
 
@@ -147,17 +146,31 @@ Protocol = Annotated[
     typer.Option(
         "--protocol",
         metavar="refine|paper",
-        help="refine: the paper's ramp, then bisection to --tolerance; paper: the ramp only.",
+        show_default=False,
+        help="paper: ramp by --growth; refine: then bisect [default: refine].",
     ),
 ]
 Growth = Annotated[
-    float, typer.Option("--growth", help="Ramp factor between attempts (> 1; the paper's 1.2).")
+    float,
+    typer.Option(
+        "--growth",
+        metavar="G",
+        show_default=False,
+        help=f"Ramp factor, > 1 [default: {DEFAULT_GROWTH:g}].",
+    ),
 ]
 Tolerance = Annotated[
     float,
-    typer.Option("--tolerance", help="refine: stop at (high - low) / high <= this, in (0, 1)."),
+    typer.Option(
+        "--tolerance",
+        metavar="T",
+        show_default=False,
+        help=f"refine: relative bracket [default: {DEFAULT_TOLERANCE_REL:g}].",
+    ),
 ]
-MaxAttempts = Annotated[int, typer.Option("--max-attempts", help="Most attempts per object.")]
+MaxAttempts = Annotated[
+    int, typer.Option("--max-attempts", metavar="N", help="Most attempts per object.")
+]
 
 
 def _search(*, protocol: str, growth: float, tolerance: float, max_attempts: int) -> SearchOptions:

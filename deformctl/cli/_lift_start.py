@@ -30,19 +30,15 @@ CatalogArg = Annotated[
     str,
     typer.Argument(
         metavar="CATALOG",
-        help="Object catalog, CSV or Parquet; - for stdin. Or a coefficients table from "
-        "characterize: its objects' size, weight and μ, with the measured D and λ as the "
-        "material (--sim lifts the measured object).",
+        help="Catalog, CSV or Parquet (- for stdin), or a coefficients table.",
     ),
 ]
 StartModel = Annotated[
     str | None,
     typer.Option(
         "--start-model",
-        metavar="MODEL.skops",
-        help="Start each search at this model's predicted L_f (× --start-margin), then go down "
-        "or up and bisect to --tolerance; outside its training range: from F_w, with a warning. "
-        "`grip` is the bundled model (μ from the catalog).",
+        metavar="MODEL",
+        help="Start at this model's L_f (grip: bundled).",
     ),
 ]
 StartTable = Annotated[
@@ -50,8 +46,7 @@ StartTable = Annotated[
     typer.Option(
         "--start-table",
         metavar="INDEX.parquet",
-        help="Start each search at the nearest index-table entry's L_f/F_w × this object's F_w "
-        "(or --start-interpolate K entries'); outside the table's range: from F_w.",
+        help="Start at the nearest index entry's L_f/F_w.",
     ),
 ]
 StartInterpolate = Annotated[
@@ -59,8 +54,7 @@ StartInterpolate = Annotated[
     typer.Option(
         "--start-interpolate",
         metavar="K",
-        help="With --start-table: inverse-distance weighted mean of the K nearest entries "
-        "[default: the nearest entry].",
+        help="With --start-table: K nearest [default: 1].",
     ),
 ]
 StartMargin = Annotated[
@@ -68,18 +62,15 @@ StartMargin = Annotated[
     typer.Option(
         "--start-margin",
         metavar="M",
-        help="With --start-model/--start-table: the first attempt is at the prediction × M "
-        f"(>= 1) [default: {DEFAULT_START_MARGIN:g}, measured by bench/bench_seeded.py].",
+        help=f"Start at the prediction x M [default: {DEFAULT_START_MARGIN:g}].",
     ),
 ]
 Coefficients = Annotated[
     str | None,
     typer.Option(
         "--coefficients",
-        metavar="COEFFICIENTS.parquet",
-        help="With --start-model/--start-table: the objects' D and λ (from characterize) "
-        "[default: the catalog's deformability_n_per_cm / damping_ns_per_cm columns; with "
-        "--sim, its material values].",
+        metavar="COEF.parquet",
+        help="Their D and λ [default: the catalog's].",
     ),
 ]
 
@@ -198,9 +189,7 @@ MaxForceN = Annotated[
     typer.Option(
         "--max-force-n",
         metavar="N",
-        help="Force ceiling per palm, N, for every object (a file or a -o DIR/ output): no "
-        "attempt asks for more; a search that needs more stops with 'no safe grip'. Default: "
-        "the catalog's max_force_n, else 10 x F_w lowered to a known rupture or yield force "
-        "(--coefficients).",
+        help="Force ceiling per palm, N [default: the catalog's max_force_n, else 10 x F_w "
+        "or a known rupture force].",
     ),
 ]

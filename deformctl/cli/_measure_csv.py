@@ -34,27 +34,22 @@ if TYPE_CHECKING:  # pragma: no cover - the readers (pandas, pyarrow, MCAP) load
 
 SkipRows = Annotated[
     int | None,
-    typer.Option(
-        "--skip-rows",
-        metavar="N",
-        help="CSV: the header is the line after N lines (a preamble) [default: the first row of "
-        "names above the numbers].",
-    ),
+    typer.Option("--skip-rows", metavar="N", help="Lines before the header [default: found]."),
 ]
 Delimiter = Annotated[
     str | None,
-    typer.Option("--delimiter", metavar=",|;|tab", help="CSV: the delimiter [default: sniffed]."),
+    typer.Option("--delimiter", metavar=",|;|tab", help="The delimiter [default: sniffed]."),
 ]
 Decimal = Annotated[
     str | None,
-    typer.Option("--decimal", metavar=".|,", help="CSV: the decimal mark [default: sniffed]."),
+    typer.Option("--decimal", metavar=".|,", help="The decimal mark [default: sniffed]."),
 ]
 Thousands = Annotated[
     str | None,
     typer.Option(
         "--thousands",
         metavar=",|.|space|'",
-        help="CSV: the thousands separator [default: sniffed from digit groups, e.g. 1,234.5].",
+        help="The thousands separator [default: sniffed].",
     ),
 ]
 Encoding = Annotated[
@@ -62,16 +57,15 @@ Encoding = Annotated[
     typer.Option(
         "--encoding",
         metavar="NAME",
-        help="CSV: the text encoding, e.g. gbk, cp1252 [default: utf-8; a byte-order mark wins].",
+        help="Text encoding, e.g. cp1252 [default: utf-8].",
     ),
 ]
 ForceSign = Annotated[
     str | None,
     typer.Option(
         "--force-sign",
-        metavar="auto|positive|negative",
-        help="CSV: the sign of a compressive force in the file [default: auto, the sign that "
-        "grows with the compression; a flip is reported and recorded].",
+        metavar="SIGN",
+        help="Sign of a compressive force: positive, negative or auto (reported) [default: auto].",
     ),
 ]
 LagS = Annotated[
@@ -79,9 +73,8 @@ LagS = Annotated[
     typer.Option(
         "--lag-s",
         metavar="auto|S",
-        help="CSV: shift the force S seconds earlier before the fit (it lags the position); "
-        "auto: by the lag estimated on the loading ramp [default: estimated, reported, "
-        "flagged force_lag, not shifted].",
+        help="Shift the force S s earlier (auto: by the estimated lag) [default: flag a lag, "
+        "no shift].",
     ),
 ]
 ObjectsFrom = Annotated[
@@ -89,9 +82,7 @@ ObjectsFrom = Annotated[
     typer.Option(
         "--objects-from",
         metavar="MAP.csv",
-        help="CSV: a table of file, object_id, weight_n, size_x_cm, size_y_cm, size_z_cm, "
-        "friction_mu (any but file may be left out; empty cells take the flags' values) "
-        "[default: id = the file's stem].",
+        help="Each file's object_id, weight_n, size_*_cm, friction_mu [default: id = stem].",
     ),
 ]
 
@@ -102,8 +93,7 @@ MemoryBudgetGib = Annotated[
     typer.Option(
         "--memory-budget-gib",
         metavar="GIB",
-        help="Refuse a file (or one log of all files) whose estimated memory exceeds this, GiB "
-        f"[default: {DEFAULT_BUDGET:g}].",
+        help=f"Largest estimated memory of a file or log, GiB [default: {DEFAULT_BUDGET:g}].",
     ),
 ]
 

@@ -1,4 +1,4 @@
-"""What ``measure --csv`` prints of a run: the columns and units found (once per distinct line),
+"""What ``measure csv`` prints of a run: the columns and units found (once per distinct line),
 each file's notes and warnings, the ruptures cut off, the failures and the summary line."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import typer
 
 from deformctl.artifacts.io import display_name
 
-if TYPE_CHECKING:  # pragma: no cover - the batch reader loads when --csv runs
+if TYPE_CHECKING:  # pragma: no cover - the batch reader loads when it runs
     from deformctl.measure.csv_batch import CsvBatchResult
 
 
@@ -73,7 +73,7 @@ def report_files(result: CsvBatchResult, output: str) -> None:
 
 
 def report_dataset(out_dir: str | PathLike[str]) -> None:
-    """The columns, warnings and failures of a ``measure --csv -o DIR/`` run, from its parts."""
+    """The columns, warnings and failures of a ``measure csv -o DIR/`` run, from its parts."""
     from deformctl.artifacts.dataset import read_dataset, read_failures
     from deformctl.errors import DeformctlError
 

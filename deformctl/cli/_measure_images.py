@@ -1,4 +1,4 @@
-"""``deformctl measure --images TOP SIDE``: an object's catalog row from a top and a side image.
+"""``deformctl measure images TOP SIDE``: an object's catalog row from a top and a side image.
 
 The options are checked (:func:`deformctl.cli._image_options.check_image_options`) and
 :func:`deformctl.measure.images.measure_images` measures the images and writes the row; this
@@ -15,7 +15,7 @@ import typer
 from deformctl.artifacts.io import is_stdio
 from deformctl.cli._image_options import ImageOptions, check_image_options
 
-if TYPE_CHECKING:  # pragma: no cover - OpenCV and the catalog writer load when --images runs
+if TYPE_CHECKING:  # pragma: no cover - OpenCV and the catalog writer load when it runs
     from deformctl.catalog import MeasuredObject
 
 

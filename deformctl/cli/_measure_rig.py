@@ -41,7 +41,7 @@ PositionIs = Annotated[
     typer.Option(
         "--position-is",
         metavar="palm|gap",
-        help="d = 2 x one palm's travel, or gap(t0) - gap.",
+        help="d = 2 x palm travel, or gap(t0) - gap.",
     ),
 ]
 Columns = Annotated[
@@ -49,7 +49,7 @@ Columns = Annotated[
     typer.Option(
         "--columns",
         metavar="ROLE=COL,...",
-        help="Columns of the roles time, force, compression, position, gap [default: by name].",
+        help="Columns of time, force, compression|position|gap [default: by name].",
     ),
 ]
 Units = Annotated[
@@ -57,14 +57,14 @@ Units = Annotated[
     typer.Option(
         "--units",
         metavar="ROLE=UNIT,...",
-        help="Units the file does not state [default: s, N, m, with a warning].",
+        help="Units the file does not state [default: s, N, m].",
     ),
 ]
 Segment = Annotated[
     bool | None,
     typer.Option(
         "--segment/--no-segment",
-        help="Cut the recording into squeezes by force [default: bag yes, CSV no].",
+        help="Cut into squeezes by force [default: bag yes, CSV no].",
     ),
 ]
 Phase = Annotated[
@@ -72,7 +72,7 @@ Phase = Annotated[
     typer.Option(
         "--phase",
         metavar="PHASE",
-        help="loading, unloading or all of each squeeze [default: all]; a rupture is cut off.",
+        help="loading, unloading or all [default: all]; ruptures are cut.",
     ),
 ]
 PositionIncreasesWhen = Annotated[
@@ -80,7 +80,7 @@ PositionIncreasesWhen = Annotated[
     typer.Option(
         "--position-increases-when",
         metavar="WHEN",
-        help="closing or opening [default: a gap when opening, a compression when closing].",
+        help="closing or opening [default: found].",
     ),
 ]
 ObjectId = Annotated[str | None, typer.Option("--object-id", metavar="ID", help="The object's id.")]

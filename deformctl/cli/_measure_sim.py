@@ -193,7 +193,7 @@ def run(
         finish_sweep(summary, "measure", quiet=quiet)
         return
     with progress_bar(console, "squeeze") as progress:
-        objects, series = simulate_catalog_file(
+        rows, series = simulate_catalog_file(
             catalog,
             task,
             output=output,
@@ -204,11 +204,11 @@ def run(
         )
     duration_s = sum(float(s.time_s[-1]) for s in series)
     clock.finish(
-        done=len(objects),
+        done=len(rows),
         flagged=0,  # a simulated squeeze carries no flag; a failure stops the run (exit 65)
         failed=0,
         output="stdout" if is_stdio(output) else output,
-        detail=f"{len(series)} simulated squeeze(s) of {len(objects)} object(s), "
+        detail=f"{len(series)} simulated squeeze(s) of {len(rows)} object(s), "
         f"{task.protocol.squeezes} each, {duration_s:.1f} s simulated, "
         f"dt {task.settings.dt_s:g} s",
         quiet=quiet,

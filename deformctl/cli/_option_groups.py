@@ -26,17 +26,14 @@ Workers = Annotated[
     typer.Option(
         "--workers",
         metavar="auto|N",
-        help="Local worker processes for a dataset output, or a single-file output of "
-        "measure --sim / lift --sim: N, or auto (a single file: the count of least measured wall "
-        "time, one process when more would not save 15 %; a dataset: every core).",
+        show_default=False,
+        help="N local processes, or auto [default: auto].",
     ),
 ]
 Scheduler = Annotated[
     str | None,
     typer.Option(
-        "--scheduler",
-        metavar="tcp://HOST:PORT",
-        help="Dataset output: run on this running Dask scheduler, tcp://HOST:PORT.",
+        "--scheduler", metavar="tcp://HOST:PORT", help="Dataset output: run on this Dask scheduler."
     ),
 ]
 ConnectTimeout = Annotated[
@@ -44,8 +41,7 @@ ConnectTimeout = Annotated[
     typer.Option(
         "--connect-timeout",
         metavar="S",
-        help="With --scheduler: seconds allowed to reach the scheduler "
-        f"[default: {DEFAULT_CONNECT_TIMEOUT_S:g}].",
+        help=f"Seconds to reach the scheduler [default: {DEFAULT_CONNECT_TIMEOUT_S:g}].",
     ),
 ]
 PartitionSize = Annotated[
@@ -53,15 +49,11 @@ PartitionSize = Annotated[
     typer.Option(
         "--partition-size",
         metavar="N",
-        help=f"Dataset output: objects per part file [default: {DEFAULT_PARTITION_SIZE}].",
+        help=f"Objects per part of -o DIR/ [default: {DEFAULT_PARTITION_SIZE}].",
     ),
 ]
 Resume = Annotated[
-    bool,
-    typer.Option(
-        "--resume",
-        help="Dataset output: keep the complete parts of an earlier run, compute the rest.",
-    ),
+    bool, typer.Option("--resume", help="Keep -o DIR/'s complete parts; do the rest.")
 ]
 
 

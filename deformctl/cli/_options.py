@@ -65,10 +65,7 @@ LogEpoch = Annotated[
     typer.Option(
         "--log-epoch",
         metavar="TIME",
-        help="Where the log's simulated squeezes or attempts begin, laid end to end from there: "
-        "ISO 8601 (2024-05-01T12:00:00Z; no zone: UTC) or seconds since 1970 "
-        "[default: 2000-01-01T00:00:00Z]. Recordings keep their own clock (a bag's header "
-        "stamps, a CSV's Unix times) and rig attempts the wall clock.",
+        help="Start of the log's clock, ISO 8601 or Unix s [default: 2000-01-01T00:00:00Z].",
     ),
 ]
 #: 2500-01-01T00:00:00Z: the latest epoch accepted (MCAP log times are unsigned 64-bit ns, which
@@ -117,10 +114,7 @@ SimPresetName = Annotated[
     typer.Option(
         "--sim-preset",
         metavar="paper|table",
-        help="Sim: the simulator preset, the object model and lift protocol every simulated "
-        "force depends on [default: paper, calibrated to the seed paper's simulation; table: the "
-        "lift from the table, kept for comparison]. Single --sim options override its values; "
-        "every row and log records the preset.",
+        help="Object model and lift: paper (calibrated) or table [default: paper].",
     ),
 ]
 
@@ -129,29 +123,25 @@ AlphaCm = Annotated[
     typer.Option(
         "--alpha-cm",
         metavar="CM",
-        help="Sim: lattice spacing, cm [default: the preset's, the longest side / "
-        f"{_PAPER_PARTICLES - 1} ({_PAPER_PARTICLES} particles) for paper, / {_PARTICLES - 1} for "
-        "table].",
+        help=f"Lattice spacing, cm [default: the longest side / {_PAPER_PARTICLES - 1} (paper), "
+        f"/ {_PARTICLES - 1} (table)].",
     ),
 ]
 DtS = Annotated[
     float | None,
-    typer.Option("--dt-s", metavar="S", help=f"Sim: time step, s {default('SimSettings.dt_s')}."),
+    typer.Option("--dt-s", metavar="S", help=f"Time step, s {default('SimSettings.dt_s')}."),
 ]
 MemoryBudgetGib = Annotated[
     float | None,
     typer.Option(
         "--memory-budget-gib",
         metavar="GIB",
-        help="Sim: refuse a lattice whose estimated memory exceeds this, GiB "
-        f"{default('SimSettings.memory_budget_gib')}.",
+        help=f"Largest lattice memory, GiB {default('SimSettings.memory_budget_gib')}.",
     ),
 ]
 Objects = Annotated[
     str | None,
-    typer.Option(
-        "--objects", metavar="ID,...", help="These catalog objects, in this order [default: all]."
-    ),
+    typer.Option("--objects", metavar="ID,...", help="Only these catalog objects, in order."),
 ]
 
 
@@ -179,9 +169,8 @@ SceneHz = Annotated[
     typer.Option(
         "--scene-hz",
         metavar="HZ",
-        help="Sim: frames per simulated second of the log's 3-D scene for Foxglove (/scene: "
-        "palms, surface particles, stuck / slipping contacts; /palms: each palm's forces and "
-        f"stick/slip); 0: none, at most 1/dt {default('simulate_squeezes.scene_hz')}.",
+        help="Frames per simulated s of the log's 3-D scene; 0: none "
+        f"{default('simulate_squeezes.scene_hz')}.",
     ),
 ]
 

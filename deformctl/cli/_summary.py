@@ -18,8 +18,7 @@ Quiet = Annotated[
     typer.Option(
         "--quiet",
         "-q",
-        help="No summary line at the end (objects done, flagged, failed, wall time, output); "
-        "warnings and errors still print.",
+        help="No summary line; warnings and errors print.",
     ),
 ]
 

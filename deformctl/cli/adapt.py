@@ -32,7 +32,7 @@ def adapt(
     leave-one-out scores: at coverage P it needs n >= P / (1 - P) rows (9 at P = 0.9); with
     fewer it is their largest score, flagged bound_guaranteed = false. The metadata records the
     base model, the rows, the correction and the rules (`inspect adapted.skops`). Use it like any
-    model: `predict adapted.skops ...`, `lift --start-model adapted.skops --rig ...`.
+    model: `predict adapted.skops ...`, `lift rig --start-model adapted.skops ...`.
 
     Example: deformctl adapt grip rig_index.parquet -o adapted.skops
     """

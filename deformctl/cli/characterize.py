@@ -34,15 +34,13 @@ Preload = Annotated[
         "--preload",
         metavar="fit|zero",
         help="lsq: fit a contact preload (f = F0 + D d + λ d') or assume none [default: fit for "
-        "rig recordings (measure --bag/--csv), zero for simulated squeezes].",
+        "rig recordings (measure bag/csv), zero for simulated squeezes].",
     ),
 ]
+#: Deprecated, hidden: the lsq fits always bound λ >= 0, so the flag changes no number. It is
+#: still accepted (one deprecation line) and recorded in the provenance, as before.
 ConstrainDamping = Annotated[
-    bool,
-    typer.Option(
-        "--constrain-damping",
-        help="lsq: fit with λ >= 0 (bounded least squares); the row says when the bound held.",
-    ),
+    bool, typer.Option("--constrain-damping", hidden=True, help="Deprecated: has no effect.")
 ]
 Strict = Annotated[
     bool,
@@ -187,7 +185,7 @@ def characterize(
     --strict and the README's "When the numbers are doubtful"); each flagged object gives one
     warning line on stderr.
 
-    SQUEEZE.mcap may also be a directory written by measure --sim -o DIR/ (its _logs/part-*.mcap
+    SQUEEZE.mcap may also be a directory written by measure sim -o DIR/ (its _logs/part-*.mcap
     logs, in order). With a dataset directory output (-o DIR/) the objects are fitted in
     parallel (--workers, --scheduler; --resume) into DIR/part-*.parquet; an object that cannot
     be fitted is recorded in DIR/_failures/ and the others go on.
@@ -209,6 +207,12 @@ def characterize(
         materials=MaterialOptions(model=model, at_force_n=at_force_n),
     )  # fmt: skip
     policy = QualityPolicy(strict=strict, allow_flagged=allow_flagged)
+    if constrain_damping:
+        typer.echo(
+            "deformctl: 'characterize --constrain-damping' is deprecated and has no effect: "
+            "the lsq fits always bound λ >= 0",
+            err=True,
+        )
     if sweep.check(output):
         if len(logs) != 1 or plot is not None:
             raise UsageError("a dataset directory output (-o DIR/) takes one log directory "

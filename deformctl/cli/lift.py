@@ -52,6 +52,7 @@ if TYPE_CHECKING:  # pragma: no cover - the runners (numba; pandas, MCAP) load w
     from deformctl.lift.runners.rig import SlipFromFrames
     from deformctl.lift.seeded import StartSeed
     from deformctl.lift.stage import RunnerFactory
+    from deformctl.parallel.auto import Auto
     from deformctl.presets import SimPreset
 
 Output = Annotated[
@@ -97,14 +98,10 @@ def sim(
 ) -> None:
     """Find each object's L_f with attempts in the simulator (the catalog's material values).
 
-    Each attempt grips, rises (--lift-accel-m-s2, --lift-speed-m-s, --lift-height-m, then holds
-    --lift-hold-s) and judges slip by --slip-criterion against --slip-tolerance-m, under
-    --sim-preset. Writes one row per object (L_f, F_w, attempts, bracket, converged) and, with
-    --log, every attempt. A dataset output (-o DIR/) runs the objects in parallel; --workers
-    also runs a single file (the rows are the same whatever N). Exit 1 when an object does
-    not converge; the outputs are written first.
+    Each attempt grips, rises and holds, then judges slip. One row per object (L_f, F_w,
+    attempts, converged); exit 1 when one does not converge, after writing the outputs.
 
-    Example: deformctl lift sim datasets/paper/objects.csv -o lift.parquet --log lift.mcap
+    Example: deformctl lift sim objects.csv -o lift.parquet --log lift.mcap
     """
     clock = RunClock("lift")
     dataset = sweep.check(output, file_workers=True)
@@ -136,8 +133,7 @@ def rig(
         typer.Option(
             "--command",
             metavar="CMD",
-            help="The rig command, run once per attempt: JSON request on stdin, JSON answer "
-            "on stdout (docs/rig-protocol.md).",
+            help="Rig command: a JSON request in, a JSON answer out (docs/rig-protocol.md).",
         ),
     ],
     output: Output,
@@ -151,14 +147,12 @@ def rig(
     search: SearchOptions = None,  # type: ignore[assignment]
     start: Start = None,  # type: ignore[assignment]
 ) -> None:
-    """Find each object's L_f with attempts on a rig (an external command per attempt).
+    """Find each object's L_f with attempts on a rig (a command run per attempt).
 
-    Writes one row per object (L_f, F_w, attempts, bracket, converged) and, with --log, every
-    attempt; both are kept on disk as the run goes. A rig that fails stops the run (the objects
-    after it are not run); exit 1 when an object does not converge or the rig fails.
+    One row per object (L_f, F_w, attempts, converged), kept on disk as the run goes; a rig that
+    fails stops the run. Exit 1 when an object does not converge or the rig fails.
 
-    Example: deformctl lift rig datasets/paper/objects.csv --command "python3
-    examples/threshold_rig.py" -o lift.parquet --log lift.mcap
+    Example: deformctl lift rig objects.csv --command "python3 rig.py" -o lift.parquet
     """
     clock = RunClock("lift")
     if opt.NO_SWEEP.check(output):
@@ -183,7 +177,7 @@ def _lift_file(
     search: SearchOptions,
     seed: StartSeed | None,
     epoch_ns: int | None,
-    workers: object,
+    workers: int | Auto | None,
     max_force_n: float | None,
     force: bool,
     clock: RunClock | None,

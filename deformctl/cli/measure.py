@@ -66,11 +66,10 @@ def sim(
 ) -> None:
     """Squeeze every catalog object --squeezes times in the simulator (force ramp, then hold).
 
-    The log stores each object's catalog row, the simulator settings and the seed. A dataset
-    directory output (-o DIR/) runs the objects in parallel (--workers, --scheduler; --resume)
-    into DIR/_logs/part-*.mcap and a per-object DIR/part-*.parquet; characterize reads DIR/.
+    The log stores each object's catalog row, the settings and the seed. A dataset output
+    (-o DIR/) runs the objects in parallel into DIR/_logs/ and DIR/part-*.parquet.
 
-    Example: deformctl measure sim datasets/paper/objects.csv -o squeeze.mcap
+    Example: deformctl measure sim objects.csv -o squeeze.mcap
     """
     _measure_sim.run(catalog, task, objects, output, force, sweep, stderr_console(), quiet)
 

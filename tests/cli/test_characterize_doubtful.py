@@ -137,12 +137,24 @@ def test_unidentifiable_damping_is_nan_in_the_table(tmp_path: Path) -> None:
     assert row["damping_excitation"] < 0.05
 
 
-def test_constrain_damping(tmp_path: Path) -> None:
+def test_constrain_damping_is_deprecated_and_changes_nothing(tmp_path: Path) -> None:
     # kept for old scripts: the lsq fits are always bounded, with or without it
     log = _log(tmp_path / "log.mcap", _negative_damping())
-    out = tmp_path / "c.parquet"
+    out, plain = tmp_path / "c.parquet", tmp_path / "plain.parquet"
     res = runner.invoke(app, ["characterize", str(log), "-o", str(out), "--constrain-damping"])
     assert res.exit_code == 0, res.stderr
+    notices = [line for line in res.stderr.splitlines() if "deprecated" in line]
+    assert notices == [
+        "deformctl: 'characterize --constrain-damping' is deprecated and has no effect: the lsq "
+        "fits always bound λ >= 0"
+    ]
+    assert runner.invoke(app, ["characterize", str(log), "-o", str(plain)]).exit_code == 0
+    columns = ["deformability_n_per_cm", "damping_ns_per_cm", "damping_bound_active", "quality"]
+    same = read_table(plain, "coefficients")[columns]
+    assert read_table(out, "coefficients")[columns].equals(same)
+    help_text = runner.invoke(app, ["characterize", "--help"]).stdout
+    options = [line.split()[0] for line in help_text.splitlines() if line.startswith("  -")]
+    assert "--constrain-damping" not in options  # the help promises nothing it does not do
     df = read_table(out, "coefficients").set_index("object_id")
     assert df.loc["bad", "damping_ns_per_cm"] == 0.0
     assert bool(df.loc["bad", "damping_bound_active"])

@@ -142,6 +142,15 @@ def test_the_old_form_takes_an_equals_sign_and_keeps_the_file_order(tmp_path: Pa
     assert rewrite("measure", ["--help"], flags, names) is None
 
 
+@pytest.mark.parametrize(("command", "source"), SUBCOMMANDS)
+def test_each_subcommand_help_is_short(command: str, source: str) -> None:
+    res = runner.invoke(app, [command, source, "--help"])
+    assert res.exit_code == 0, res.stderr
+    assert f"Usage: deformctl {command} {source}" in res.stdout
+    assert "Example: deformctl " in res.stdout
+    assert len(res.stdout.splitlines()) <= HELP_LINES, res.stdout
+
+
 @pytest.mark.parametrize("command", ["measure", "lift"])
 def test_the_command_help_lists_its_subcommands(command: str) -> None:
     res = runner.invoke(app, [command, "--help"])
