@@ -289,7 +289,8 @@ def _read(
     defects: list[Defect] = [d for d in (logging_gaps(time_s), coarse_force(force_n)) if d]
     kind = options.position_is if pos_role == "position" else pos_role
     reading = position_reading(roles[pos_role], kind)
-    notes.append(f"position: {reading['text']}")
+    if pos_role != "compression":  # a compression column has one reading
+        notes.append(f"position: {reading['text']}")
     threshold_frac = segmentation.force_threshold_frac
     what = f"column {roles[pos_role].name!r}"
 

@@ -81,6 +81,18 @@ class Recording:
     notes: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
 
+    @property
+    def notices(self) -> tuple[str, ...]:
+        """What a user must read of this recording besides its columns, one line each: the
+        notes after the first (the force's sign flipped, the position's reading, a lag shifted
+        out), each rupture cut off, then each warning (a unit assumed, a defect) prefixed
+        ``warning:``. The single-file and the many-files forms of ``measure`` print the same
+        lines, each after the file's name."""
+        lines = list(self.notes[1:])
+        lines += [f"warning: rupture in {r.describe()}: cut off" for r in self.ruptures]
+        lines += [f"warning: {w}" for w in self.warnings]
+        return tuple(lines)
+
     def log_fields(self) -> dict[str, Any]:
         """What a squeeze log stores with the object besides its catalog values.
 
