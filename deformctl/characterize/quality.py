@@ -441,7 +441,7 @@ def enforce(
         oid, text = str(row["object_id"]), describe_row(row)
         flagged.append((oid, text))
         if NEGATIVE_STIFFNESS in flags:
-            negative.append((oid, text))
+            negative.append((oid, text + _why_not_positive(row)))
         lines.append(f"{path}: object {oid!r}: {text}" if path else f"object {oid!r}: {text}")
     if strict and flagged:
         oid, text = flagged[0]
@@ -451,11 +451,22 @@ def enforce(
         oid, text = negative[0]
         more = f"; {len(negative) - 1} more" if len(negative) > 1 else ""
         raise InputDataError(
-            f"object {oid!r}: {text}: the force or the compression has the wrong sign "
-            f"(pass --allow-flagged to write it anyway){more}",
+            f"object {oid!r}: {text} (pass --allow-flagged to write it anyway){more}",
             path=path,
         )
     return lines
+
+
+def _why_not_positive(row: Mapping[str, Any]) -> str:
+    """Why D ≤ 0: a stiffness held at its bound 0 is a law that does not fit the loading (a
+    relaxation, a collapse), not a sign; a fitted negative D is a sign."""
+    at_bound = str(row.get("params_at_bound") or "")
+    if "stiffness" in at_bound and float(row.get("deformability_n_per_cm") or 0.0) == 0.0:
+        return (
+            f": the {row.get('model', '?')} law's stiffness sits at its bound 0, so no stiffness "
+            "was found in the loading (a relaxation or a collapse rather than a squeeze?)"
+        )
+    return ": the force or the compression has the wrong sign"
 
 
 def thresholds_help() -> str:

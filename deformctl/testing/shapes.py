@@ -214,7 +214,7 @@ def shape_logging_gap(rng: np.random.Generator) -> tuple[Samples, Truth]:
     p = _kv_params(rng)
     gap = _u(rng, 1.0, 6.0)
     s = _law_squeeze(rng, "kv", p, hold_s=gap + 2.0)
-    load_s = float(s.t[int(np.argmax(s.d))])
+    load_s = float(s.t[int(np.argmax(s.d >= 0.98 * float(np.max(s.d))))])  # the hold starts
     keep = ~((s.t > load_s + 0.5) & (s.t < load_s + 0.5 + gap))
     return Samples(s.t[keep], s.f[keep], s.d[keep]), Truth(
         "logging_gap", "kv", p, lambda_identified=True

@@ -160,3 +160,14 @@ def test_a_file_with_no_numbers_is_still_one_error(tmp_path: Path) -> None:
     path.write_text("a,b,c\r\nx,y,z\r\nu,v,w\r\n")
     with pytest.raises(InputDataError, match="no rows of numbers"):
         read_csv_export(path, object_id="w")
+
+
+def test_the_unit_hint_keeps_the_position_role_and_its_reading(
+    tmp_path: Path, squeeze: Squeeze
+) -> None:
+    path = write_export(tmp_path / "pos.csv", squeeze, names=("Time (s)", "Load (N)", "Pos"))
+    with pytest.raises(InputDataError, match=r"did you mean --units position=mm\?"):
+        read_csv_export(path, object_id="p")  # mm values read as m: 5 m of compression
+    rec = read_csv_export(path, object_id="p", units={"position": "mm"})
+    _same(rec.squeezes[0].compression_m, squeeze.d)  # the hint's reading is the compression
+    assert rec.details["position_reading"]["reading"] == "travel"
