@@ -1,7 +1,7 @@
 """The text of a synthetic export: a recording written as an instrument writes it.
 
 :func:`draw_layout` picks, from a seeded generator, how the file is written; :func:`export_bytes`
-writes a :class:`~deformctl.testing.shapes.Samples` recording in that layout and returns the bytes
+writes a :class:`Samples` recording in that layout and returns the bytes
 and the options a user would pass with it (the encoding the tool's error line names, the unit
 a header leaves out). Styles (:data:`STYLES`):
 
@@ -23,18 +23,27 @@ decimal comma; the compressive force written negative.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-if TYPE_CHECKING:  # pragma: no cover - typing only
-    from deformctl.testing.shapes import Samples
+from deformctl.series import FloatArray
 
 STYLES: tuple[str, ...] = ("names", "bluehill", "gbk", "gripper")
 LINE_ENDS: tuple[str, ...] = ("\n", "\r\n", "\r")
 #: A giant cell is this long (above the csv module's 128 KiB field limit).
 GIANT_CELL_CHARS = 140_000
 _STEPS = ("approach", "load", "hold", "release", "rest")
+
+
+@dataclass(frozen=True)
+class Samples:
+    """A recording in SI: time s, force N (compressive positive), compression m."""
+
+    t: FloatArray
+    f: FloatArray
+    d: FloatArray
 
 
 def draw_layout(rng: np.random.Generator) -> dict[str, Any]:

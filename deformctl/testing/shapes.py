@@ -57,6 +57,7 @@ from typing import Any
 import numpy as np
 
 from deformctl.series import FloatArray
+from deformctl.testing.exports import Samples, draw_layout, export_bytes
 
 #: A row with quality ``ok`` whose D is off by more than this (relative) is confidently wrong.
 D_TOL = 0.05
@@ -99,15 +100,6 @@ class Truth:
         if self.model != "kv" or not self.lambda_identified:
             return math.nan
         return float(self.params["damping_ns_per_m"]) / N_PER_CM
-
-
-@dataclass(frozen=True)
-class Samples:
-    """A recording in SI: time s, force N (compressive positive), compression m."""
-
-    t: FloatArray
-    f: FloatArray
-    d: FloatArray
 
 
 @dataclass(frozen=True)
@@ -335,8 +327,6 @@ SHAPES: dict[str, Callable[[np.random.Generator], tuple[Samples, Truth]]] = {
 def draw(seed: int, index: int, shape: str | None = None) -> Case:
     """Draw ``index`` of ``seed``: a shape (uniform over :data:`SHAPES` unless given) and a
     layout (:func:`deformctl.testing.exports.draw_layout`), each from its own seeded stream."""
-    from deformctl.testing.exports import draw_layout, export_bytes
-
     rng = np.random.default_rng([seed, index])
     name = shape if shape is not None else str(rng.choice(list(SHAPES)))
     samples, truth = SHAPES[name](rng)
