@@ -7,7 +7,7 @@ catalog position::
       _sweep.json                    manifest, written first: fingerprint, schema, ids per part
       part-00000.parquet             rows of the objects of part 0 that have rows, in order
       _logs/part-00000.mcap          the part's log (a squeeze or lift log), when the stage has one
-      _failures/part-00000.parquet   one row per failed object: id, error_type, error_message
+      _failures/part-00000.parquet   one row per failed object: id, cause, error_message
 
 Only the rows are Parquet files at the top level and everything else has a ``_`` name, which
 Parquet readers skip (pyarrow, pandas, Spark, Polars), so ``pandas.read_parquet(out_dir)``,
@@ -148,12 +148,64 @@ def dataset_fingerprint(
     }
 
 
+#: The causes a failures row names (docs/reference/exit-codes.md lists them): the kind of the
+#: error that stopped the object, never the class of an exception.
+FAILURE_CAUSES: dict[str, str] = {
+    "bad_input": "the object's input is not valid data (exit 65 alone)",
+    "missing_input": "an input file the object needs does not exist (exit 66 alone)",
+    "bad_option": "an option cannot work for this object (exit 2 alone)",
+    "output_exists": "an output exists already (exit 1 alone)",
+    "not_converged": "a lifting-force search that failed or did not converge",
+    "simulation_failed": "the simulator could not produce a valid result",
+    "rig_failed": "an external rig crashed, timed out or answered garbage",
+    "object_failed": "the object's run ended without a result",
+    "out_of_memory": "the object ran out of memory",
+    "internal_error": "a defect of deformctl (please report it with the message)",
+}
+#: Error types (class names, or the names a task gives) → cause; subclasses of
+#: :class:`~deformctl.errors.DeformctlError` by their nearest listed base.
+_CAUSE_OF_TYPE: dict[str, str] = {
+    "InputDataError": "bad_input",
+    "MissingInputError": "missing_input",
+    "UsageError": "bad_option",
+    "OutputExistsError": "output_exists",
+    "SearchError": "not_converged",
+    "NotConverged": "not_converged",
+    "SimulationError": "simulation_failed",
+    "RigError": "rig_failed",
+    "ObjectFailed": "object_failed",
+    "DeformctlError": "object_failed",
+    "MemoryError": "out_of_memory",
+}
+
+
+def failure_cause(error_type: str) -> str:
+    """The cause (:data:`FAILURE_CAUSES`) of an error type: a cause as it is, a class of
+    :mod:`deformctl.errors` (or a subclass) by its kind, anything else ``internal_error``."""
+    if error_type in FAILURE_CAUSES:
+        return error_type
+    if error_type in _CAUSE_OF_TYPE:
+        return _CAUSE_OF_TYPE[error_type]
+    from deformctl.errors import DeformctlError
+
+    todo: list[type] = [DeformctlError]
+    while todo:
+        cls = todo.pop()
+        if cls.__name__ == error_type:
+            for base in cls.__mro__:
+                if base.__name__ in _CAUSE_OF_TYPE:
+                    return _CAUSE_OF_TYPE[base.__name__]
+        todo.extend(cls.__subclasses__())
+    return "internal_error"
+
+
 def failure_schema(schema: pa.Schema, id_column: str) -> pa.Schema:
-    """The schema of the failures part: the id column (same type), error type and message."""
+    """The schema of the failures part: the id column (same type), the cause
+    (:data:`FAILURE_CAUSES`) and the one-line message."""
     return pa.schema(
         [
             schema.field(id_column),
-            pa.field("error_type", pa.string(), nullable=False),
+            pa.field("cause", pa.string(), nullable=False),
             pa.field("error_message", pa.string(), nullable=False),
         ]
     )
@@ -402,7 +454,7 @@ class DatasetWriter:
         rows = [
             {
                 self.id_column: r.item_id,
-                "error_type": r.error_type,
+                "cause": failure_cause(str(r.error_type)),
                 "error_message": r.error_message,
             }
             for r in failed
@@ -640,11 +692,19 @@ def read_dataset(path: str | os.PathLike[str]) -> pd.DataFrame:
 
 
 def read_failures(path: str | os.PathLike[str]) -> pd.DataFrame:
-    """The failed objects of a sweep directory: id column, ``error_type``, ``error_message``."""
+    """The failed objects of a sweep directory: id column, ``cause`` (:data:`FAILURE_CAUSES`),
+    ``error_message`` (the parts of older versions' ``error_type`` read as their cause)."""
     p = Path(path)
     if not p.is_dir():
         raise MissingInputError("no such sweep directory", path=p)
-    tables = [_read_parquet(f) for f in dataset_part_paths(p, sub=FAILURES_DIR)]
+    tables = []
+    for f in dataset_part_paths(p, sub=FAILURES_DIR):
+        t = _read_parquet(f)
+        if "error_type" in t.column_names:
+            causes = [failure_cause(str(v)) for v in t.column("error_type").to_pylist()]
+            i = t.column_names.index("error_type")
+            t = t.set_column(i, pa.field("cause", pa.string(), nullable=False), pa.array(causes))
+        tables.append(t.replace_schema_metadata(None))
     return pa.concat_tables(tables).to_pandas()
 
 

@@ -28,8 +28,10 @@ wrong sign, wrong units; numbers in each constant's docstring) and stated here o
                                  (stiffness or damping 0, HC's n at 1 or 3, SLS's τ at one
                                  window or ten recordings; ``params_at_bound`` names them)
 ``nonlinear_stiffness``          the loading curve's tangent stiffness varies by more than
-                                 :data:`deformctl.characterize.stiffness.NONLINEAR_RATIO` ×: D is
-                                 the secant at ``operating_force_n`` only
+                                 :data:`deformctl.characterize.stiffness.NONLINEAR_RATIO` ×, or
+                                 falls over a stretch (a slip, a yield, a buckling dip:
+                                 ``tangent_stiffness_spread`` is then null): D is the secant at
+                                 ``operating_force_n`` only
 ``relaxation``                   the force decayed smoothly at constant compression (stress
                                  relaxation, not rupture; ``rupture.find_relaxation``)
 ``secant_misfit``                where D is stated the law misses the recording by more than
@@ -39,6 +41,8 @@ wrong sign, wrong units; numbers in each constant's docstring) and stated here o
                                  recording's time unit was stated: the line names the time unit
                                  that would make it plausible (with no time unit stated the flag
                                  is ``time_unit_doubtful``)
+``not_finite``                   a computed column came out infinite (a defect of an
+                                 estimator): it is written as null (:func:`finite_row`)
 ``logging_gap``, ``coarse_force``, the recording's defects, found by ``measure`` and stored in
 ``force_lag``                    the squeeze log (:mod:`deformctl.measure.defects`)
 ================================ ==============================================================
@@ -71,6 +75,7 @@ NONLINEAR_STIFFNESS = "nonlinear_stiffness"
 RELAXATION = "relaxation"
 SECANT_MISFIT = "secant_misfit"
 DAMPING_RATIO_IMPLAUSIBLE = "damping_ratio_implausible"
+NOT_FINITE = "not_finite"
 #: The recording's defects (:data:`deformctl.measure.defects.RECORDING_FLAGS`, restated here:
 #: imports only go down; a test checks that they agree) and what each means.
 RECORDING_FLAGS: dict[str, str] = {
@@ -98,6 +103,7 @@ FLAGS: tuple[str, ...] = (
     RELAXATION,
     SECANT_MISFIT,
     DAMPING_RATIO_IMPLAUSIBLE,
+    NOT_FINITE,
     *RECORDING_FLAGS,
 )
 OK = "ok"
@@ -233,6 +239,27 @@ def time_unit_stated(obj: Mapping[str, Any]) -> bool:
         return False  # a CSV recording that does not say: not known
 
 
+def finite_row(row: dict[str, Any]) -> dict[str, Any]:
+    """``row`` with every infinite number written as null (NaN) and, when there was one, the
+    ``not_finite`` flag in its quality: a computed
+    column is finite or null with a flag, never a value the table's writer refuses."""
+    bad = [
+        k
+        for k, v in row.items()
+        if isinstance(v, float | int) and not isinstance(v, bool) and math.isinf(float(v))
+    ]
+    if not bad:
+        return row
+    out = {**row, **dict.fromkeys(bad, math.nan)}
+    flags = list(parse_quality(out.get("quality")))
+    if NOT_FINITE not in flags:
+        flags.append(NOT_FINITE)
+    out["quality"] = quality_text(
+        [f for f in FLAGS if f in flags] + [f for f in flags if f not in FLAGS]
+    )
+    return out
+
+
 def with_recording_flags(quality: str, recording_flags: object) -> str:
     """``quality`` with the recording's flags (a squeeze log object's ``recording_flags``)."""
     extra = (
@@ -262,6 +289,13 @@ def _num(value: Any, fmt: str) -> str:
     except (TypeError, ValueError):
         return "?"
     return format(v, fmt) if math.isfinite(v) else "NaN"
+
+
+def _finite(value: Any) -> bool:
+    try:
+        return math.isfinite(float(value))
+    except (TypeError, ValueError):
+        return False
 
 
 def _pm(value: Any, se: Any) -> str:
@@ -320,6 +354,18 @@ def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
     if flag == AT_BOUND:
         which = row.get("params_at_bound") or "a parameter"
         return f"{flag} ({which} of the {row.get('model', '?')} law at its bound)"
+    if flag == NONLINEAR_STIFFNESS and not _finite(row.get("tangent_stiffness_spread")):
+        return (
+            f"{flag} (the loading curve falls or is flat over a stretch: a slip, a yield or a "
+            f"buckling dip before the peak; tangent_stiffness_spread is null; small-strain "
+            f"{_num(row.get('deformability_small_strain_n_per_cm'), '.3g')} N/cm; D is the "
+            f"secant at {_num(row.get('operating_force_n'), '.3g')} N)"
+        )
+    if flag == NOT_FINITE:
+        return (
+            f"{flag} (a computed column came out infinite: written as null; a defect of an "
+            "estimator, please report it)"
+        )
     if flag == NONLINEAR_STIFFNESS:
         return (
             f"{flag} (tangent stiffness varies {_num(row.get('tangent_stiffness_spread'), '.3g')}× "
@@ -395,7 +441,7 @@ def enforce(
         oid, text = str(row["object_id"]), describe_row(row)
         flagged.append((oid, text))
         if NEGATIVE_STIFFNESS in flags:
-            negative.append((oid, text))
+            negative.append((oid, text + _why_not_positive(row)))
         lines.append(f"{path}: object {oid!r}: {text}" if path else f"object {oid!r}: {text}")
     if strict and flagged:
         oid, text = flagged[0]
@@ -405,11 +451,22 @@ def enforce(
         oid, text = negative[0]
         more = f"; {len(negative) - 1} more" if len(negative) > 1 else ""
         raise InputDataError(
-            f"object {oid!r}: {text}: the force or the compression has the wrong sign "
-            f"(pass --allow-flagged to write it anyway){more}",
+            f"object {oid!r}: {text} (pass --allow-flagged to write it anyway){more}",
             path=path,
         )
     return lines
+
+
+def _why_not_positive(row: Mapping[str, Any]) -> str:
+    """Why D ≤ 0: a stiffness held at its bound 0 is a law that does not fit the loading (a
+    relaxation, a collapse), not a sign; a fitted negative D is a sign."""
+    at_bound = str(row.get("params_at_bound") or "")
+    if "stiffness" in at_bound and float(row.get("deformability_n_per_cm") or 0.0) == 0.0:
+        return (
+            f": the {row.get('model', '?')} law's stiffness sits at its bound 0, so no stiffness "
+            "was found in the loading (a relaxation or a collapse rather than a squeeze?)"
+        )
+    return ": the force or the compression has the wrong sign"
 
 
 def thresholds_help() -> str:
@@ -424,10 +481,12 @@ def thresholds_help() -> str:
         f"(R² < {LOW_R2:g}), few_samples (< {FEW_SAMPLES_WINDOWS:g} windows of samples), "
         "rupture (a squeeze ruptured; fitted up to it), at_bound (a parameter of the chosen "
         "law at its bound), nonlinear_stiffness (the loading tangent stiffness varies by more "
-        "than 2x), relaxation (the force decayed at constant compression), secant_misfit "
+        "than 2x, or falls over a stretch), relaxation (the force decayed at constant "
+        "compression), secant_misfit "
         f"(where D is stated the law misses the recorded force by > "
         f"{100 * SECANT_MISFIT_FRAC:g} % of the operating force), damping_ratio_implausible "
-        "(ζ = λ / (2 √(D m)) > 1000 with a stated time unit); the recording's defects found by "
+        "(ζ = λ / (2 √(D m)) > 1000 with a stated time unit), not_finite (a computed column "
+        "came out infinite: written as null); the recording's defects found by "
         "measure: logging_gap, coarse_force, force_lag, and the unit doubts force_unit_doubtful "
         "(peak < 50 mN or > 3 kN, or secant > 5000 N/cm), compression_unit_doubtful (< 20 µm), "
         "time_unit_doubtful (no time unit, < 10 Hz or ζ > 1000)."

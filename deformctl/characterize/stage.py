@@ -43,6 +43,7 @@ from deformctl.characterize.options import (
 from deformctl.characterize.plot import check_plot_dir, plot_fits
 from deformctl.characterize.quality import (
     enforce,
+    finite_row,
     with_damping_ratio_flag,
     with_recording_flags,
 )
@@ -134,7 +135,7 @@ def _fit_object(
     row["quality"] = with_recording_flags(str(row["quality"]), (obj or {}).get("recording_flags"))
     row["quality"] = with_damping_ratio_flag(str(row["quality"]), row, dict(obj or {}))
     row.update(object_fields(obj))
-    return row, mode
+    return finite_row(row), mode
 
 
 def _read_logs(

@@ -104,29 +104,41 @@ class LoadingStiffness:
         a, b = self.small_strain_n_per_m, self.large_strain_n_per_m
         return b / a if a > 0 and b > 0 else math.nan
 
-    @property
-    def tangent_spread(self) -> float:
-        """Largest over smallest slope of the slices whose slope is known to
-        :data:`SLOPE_REL_SE` (inf when one of them is not positive; NaN: fewer than two)."""
+    def _known_slopes(self) -> FloatArray:
+        """The slopes known to :data:`SLOPE_REL_SE`."""
         se = self.slope_se_n_per_m or tuple(0.0 for _ in self.slopes_n_per_m)
-        s = np.asarray(
+        return np.asarray(
             [
                 x
                 for x, e in zip(self.slopes_n_per_m, se, strict=True)
                 if math.isfinite(x) and math.isfinite(e) and e <= SLOPE_REL_SE * abs(x)
-            ]
+            ],
+            dtype=np.float64,
         )
-        if s.size < 2:
+
+    @property
+    def falling(self) -> bool:
+        """A slice whose slope is known falls or is flat: the loading curve has a falling
+        stretch (a squeeze that slips or yields before its peak, a buckling plateau-then-dip)."""
+        s = self._known_slopes()
+        return bool(s.size >= 2 and np.any(s <= 0))
+
+    @property
+    def tangent_spread(self) -> float:
+        """Largest over smallest slope of the slices whose slope is known to
+        :data:`SLOPE_REL_SE` (NaN: fewer than two, or one of them not positive: see
+        :attr:`falling`; a ratio of slopes of both signs is no spread)."""
+        s = self._known_slopes()
+        if s.size < 2 or np.any(s <= 0):
             return math.nan
-        if np.any(s <= 0):
-            return math.inf
         return float(np.max(s) / np.min(s))
 
     @property
     def nonlinear(self) -> bool:
-        """The tangent stiffness varies by more than :data:`NONLINEAR_RATIO` over the loading."""
+        """The tangent stiffness varies by more than :data:`NONLINEAR_RATIO` over the loading,
+        or falls over a stretch of it (:attr:`falling`)."""
         spread = self.tangent_spread
-        return not math.isnan(spread) and spread > NONLINEAR_RATIO
+        return self.falling or (not math.isnan(spread) and spread > NONLINEAR_RATIO)
 
 
 def loading_stiffness(

@@ -85,6 +85,10 @@ ABSOLUTE_TIME_MIN_S = 946_684_800.0
 #: 204 and 210 B per row (peak RSS above a 10,000-row run's; 1 and 3 million rows of three
 #: columns into one squeeze log), rounded up. The budget refuses a file before it is read.
 CSV_ROW_BYTES = 250
+#: ``force_sign="auto"``: a force this share of whose summed sizes has one sign is compressive
+#: in that sign (a relaxation recording's force falls as the compression grows, yet stays
+#: positive); below it, the sign that grows with the compression.
+ONE_SIGN_SHARE = 0.9
 #: Fewest data rows a recording must have.
 MIN_ROWS = 2
 
@@ -124,7 +128,7 @@ def read_csv_export(
     options: CsvOptions | None = None,
     columns: Mapping[str, str] | None = None,
     units: Mapping[str, str] | None = None,
-    position_is: PositionIs = "palm",
+    position_is: PositionIs = "travel",
     compression_zero: CompressionZero = "first",
     segment: bool = False,
     force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
@@ -143,11 +147,12 @@ def read_csv_export(
             None, built from ``columns``, ``units``, ``position_is``, ``compression_zero``
             and ``position_increases_when`` (the other fields found in the file).
         columns: role → column name for the roles not to find by name: ``time``, ``force``
-            and one of ``position`` (one palm's travel, see ``position_is``), ``gap`` (between
+            and one of ``position`` (a travel, see ``position_is``), ``gap`` (between
             the palms) or ``compression`` (e.g. a testing machine's crosshead travel).
         units: role → unit for the roles whose unit the file does not state (time
             s/ms/µs/ns/min, force N/kN/mN/daN/lbf/ozf/kgf/gf, lengths m/cm/mm/µm/in).
-        position_is: meaning of a ``position`` column: ``"palm"`` or ``"gap"``.
+        position_is: how a ``position`` column is read: ``"travel"`` (the compression, the
+            default), ``"palm"`` (one palm's travel: d = 2 × travel) or ``"gap"``.
         compression_zero: ``"first"`` (the first row) or ``"lead_in"``.
         segment: split the file into squeezes (default: one squeeze per file).
         force_threshold_frac, min_gap_s, min_squeeze_s: segmentation
@@ -283,6 +288,9 @@ def _read(
         )
     defects: list[Defect] = [d for d in (logging_gaps(time_s), coarse_force(force_n)) if d]
     kind = options.position_is if pos_role == "position" else pos_role
+    reading = position_reading(roles[pos_role], kind)
+    if pos_role != "compression":  # a compression column has one reading
+        notes.append(f"position: {reading['text']}")
     threshold_frac = segmentation.force_threshold_frac
     what = f"column {roles[pos_role].name!r}"
 
@@ -332,6 +340,7 @@ def _read(
         "preamble": dict(layout.preamble),
         "preamble_lines": list(layout.preamble_lines),
         "force_sign": sign,
+        "position_reading": {k: v for k, v in reading.items() if k != "text"},
         "merged_timestamps": merged,
         "lag": {**lag.as_dict(), "shifted_s": shift_s},
     }
@@ -348,6 +357,38 @@ def _read(
         notes=tuple(notes),
         warnings=tuple(warnings),
     )
+
+
+#: How each reading makes the compression of a position column (``d`` from the column ``p``).
+POSITION_RULES: dict[str, str] = {
+    "compression": "d = p - p(first row)",
+    "travel": "d = |p - p(first row)|, signed positive at the peak force",
+    "palm": "d = 2 x |p - p(first row)|, one palm's travel, its partner mirroring it",
+    "gap": "d = p(first row) - p, the distance between the palms",
+}
+#: Why a reading was taken, and the option for another.
+_READING_WHY: dict[str, str] = {
+    "travel": "a crosshead's or a gripper jaw's travel is the compression; --position-is palm "
+    "reads it as one palm's travel (x2), --position-is gap as the distance between the palms",
+    "palm": "--position-is palm",
+    "gap": "--position-is gap",
+    "compression": "the column is the compression",
+}
+
+
+def position_reading(role: ColumnRole, kind: str) -> dict[str, Any]:
+    """How the position column was read: its role, the reading, the factor on its travel, the
+    rule, and the line ``measure`` prints (``text``) and the squeeze log records (without it)."""
+    factor = 2.0 if kind == "palm" else 1.0
+    rule = POSITION_RULES[kind]
+    return {
+        "column": role.name,
+        "role": role.role,
+        "reading": kind,
+        "factor": factor,
+        "rule": rule,
+        "text": f"column {role.name!r} ({role.role}) read as {kind}: {rule} ({_READING_WHY[kind]})",
+    }
 
 
 def _line_of_row(source: CsvSource, layout: CsvLayout, row: int) -> int:
@@ -370,9 +411,11 @@ def _force_sign(
 ) -> tuple[FloatArray, dict[str, Any]]:
     """The force with compression positive, and what was decided.
 
-    The compressive sign is the one that grows with the compression: the sign of the
-    covariance of the force with the position's distance from its start (whichever way the
-    position runs).
+    The compressive sign is the force's own when nearly all of it has one sign (at least
+    :data:`ONE_SIGN_SHARE` of the sum of its sizes: a relaxation recording, whose force falls
+    while the compression holds or grows, keeps its positive force); otherwise the one that
+    grows with the compression: the sign of the covariance of the force with the position's
+    distance from its start (whichever way the position runs).
 
     Raises:
         InputDataError: an explicit ``force_sign`` under which the force falls as the
@@ -381,8 +424,14 @@ def _force_sign(
     travel = np.abs(position - position[0])
     cov = float(np.mean((force_n - force_n.mean()) * (travel - travel.mean())))
     grows = cov >= 0
+    positive = float(np.sum(np.clip(force_n, 0.0, None)))
+    negative = float(np.sum(np.clip(-force_n, 0.0, None)))
+    total = positive + negative
+    by = "covariance"
+    if total > 0 and max(positive, negative) >= ONE_SIGN_SHARE * total:
+        by = "one_sign"
     if options.force_sign == "auto":
-        flipped = not grows
+        flipped = negative > positive if by == "one_sign" else not grows
     else:
         flipped = options.force_sign == "negative"
         if grows == flipped and cov != 0:
@@ -396,6 +445,7 @@ def _force_sign(
         "option": options.force_sign,
         "compressive": "negative" if flipped else "positive",
         "flipped": bool(flipped),
+        "by": by if options.force_sign == "auto" else "option",
     }
     return (-force_n if flipped else force_n), decided
 

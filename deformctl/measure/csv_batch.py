@@ -27,7 +27,7 @@ from typing import Any
 import pyarrow as pa
 
 from deformctl.artifacts import check_output_path, write_squeeze_log
-from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
+from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint, failure_cause
 from deformctl.artifacts.io import display_name
 from deformctl.artifacts.provenance import Provenance, input_digest
 from deformctl.catalog import (
@@ -49,7 +49,9 @@ from deformctl.series import SqueezeSeries
 from deformctl.units import GIB
 
 #: Rows of a ``measure --csv -o DIR/`` dataset: :data:`MEASURE_SCHEMA` and, per object, its
-#: file, the columns and units read, and the recording's flags and warnings.
+#: file, the columns and units read, the recording's flags and warnings, and its notices
+#: (:attr:`Recording.notices`: sign flips, the position's reading, ruptures and warnings, one
+#: per line), which the many-files form prints as the single-file form does.
 CSV_MEASURE_SCHEMA = pa.schema(
     [
         *MEASURE_SCHEMA,
@@ -57,6 +59,7 @@ CSV_MEASURE_SCHEMA = pa.schema(
         pa.field("columns", pa.string(), nullable=False),
         pa.field("recording_flags", pa.string(), nullable=False),
         pa.field("warnings", pa.string(), nullable=False),
+        pa.field("notices", pa.string(), nullable=False),
     ]
 )
 #: Columns of an ``--objects-from`` mapping besides ``file``.
@@ -272,6 +275,7 @@ def summary_row(file: CsvFile, rec: Recording) -> dict[str, Any]:
         "columns": ", ".join(f"{r}={c['column']!r} [{c['unit']}]" for r, c in columns.items()),
         "recording_flags": ",".join(rec.flags) or "ok",
         "warnings": "\n".join(rec.warnings),
+        "notices": "\n".join(rec.notices),
     }
 
 
@@ -285,6 +289,7 @@ class FileOutcome:
     recording: Recording | None = None
     error: str = ""
     exit_code: int = 0
+    cause: str = ""
 
 
 @dataclass(frozen=True)
@@ -297,7 +302,45 @@ class _Catching:
         try:
             return FileOutcome(file, self.task.read(file))
         except DeformctlError as err:
-            return FileOutcome(file, error=str(err), exit_code=err.exit_code)
+            cause = failure_cause(type(err).__name__)
+            return FileOutcome(file, error=str(err), exit_code=err.exit_code, cause=cause)
+        except Exception as err:  # a defect: recorded as one, the other files go on
+            message = f"{display_name(file.path)}: internal error: {' '.join(str(err).split())}"
+            return FileOutcome(file, error=message, exit_code=EXIT_FAILURE, cause="internal_error")
+
+
+def file_notices(outcome: FileOutcome) -> list[str]:
+    """One file's lines for stderr, each naming the file: its notices
+    (:attr:`Recording.notices`), or its error line."""
+    name = display_name(outcome.file.path)
+    if outcome.recording is None:
+        return [f"error: {outcome.error}"]
+    lines = []
+    for line in outcome.recording.notices:
+        if line.startswith("warning: "):
+            text = line.removeprefix("warning: ")
+            lines.append(f"warning: {name}: object {outcome.file.object_id!r}: {text}")
+        else:
+            lines.append(f"{name}: {line}")
+    return lines
+
+
+def dataset_notices(rows: Any) -> list[str]:
+    """The lines of :func:`file_notices` from a ``measure --csv -o DIR/`` dataset's rows (a
+    DataFrame of :data:`CSV_MEASURE_SCHEMA`; rows written before the ``notices`` column give
+    their warnings)."""
+    lines = []
+    for rec in rows.to_dict("records"):
+        name, oid = rec["source_file"], rec["object_id"]
+        text = rec.get("notices")
+        if not isinstance(text, str):
+            text = "\n".join(f"warning: {w}" for w in str(rec.get("warnings") or "").split("\n"))
+        for line in filter(None, text.split("\n")):
+            if line.startswith("warning: "):
+                lines.append(f"warning: {name}: object {oid!r}: {line.removeprefix('warning: ')}")
+            else:
+                lines.append(f"{name}: {line}")
+    return lines
 
 
 @dataclass(frozen=True)
@@ -378,7 +421,12 @@ def measure_csv_files(
         settings.update(force_rate_hz=rec.force_rate_hz, position_rate_hz=rec.position_rate_hz)
     if result.failed:
         settings["_failures"] = [
-            {"file": o.file.path, "object_id": o.file.object_id, "error": o.error}
+            {
+                "file": o.file.path,
+                "object_id": o.file.object_id,
+                "cause": o.cause,
+                "error": o.error,
+            }
             for o in result.failed
         ]
     provenance = Provenance.from_invocation([o.file.path for o in result.read], settings=settings)

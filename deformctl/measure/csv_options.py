@@ -153,7 +153,7 @@ class CsvOptions:
         columns: role → column, for the roles to take from a given column (a header name,
             with or without its unit, e.g. ``Load (N)`` or ``Load``); the roles not given are
             found by name (:mod:`deformctl.measure.csv_columns`). Roles: ``time``, ``force``
-            and at most one of ``position`` (one palm's travel, see ``position_is``), ``gap``
+            and at most one of ``position`` (a travel, read as ``position_is`` says), ``gap``
             (between the palms) or ``compression`` (a testing machine's crosshead travel).
         units: role → unit, for the roles whose unit the file does not state; a unit the file
             states must agree (else exit 2 naming both). Time s/ms/µs/ns/min, force
@@ -163,7 +163,10 @@ class CsvOptions:
         lag_s: shift the force this much earlier before anything else (it lags the position
             by ``lag_s``), ``auto`` (the lag estimated on the loading ramp, when it can be
             estimated) or None (estimated and reported, not shifted).
-        position_is: what a ``position`` column is: ``palm`` or ``gap``.
+        position_is: how a ``position`` column is read: ``travel`` (the compression: a
+            testing machine's crosshead travel, a gripper's jaw travel; the default), ``palm``
+            (one palm's travel, its partner mirroring it: d = 2 × travel) or ``gap`` (the
+            distance between the palms: d = gap(t0) − gap).
         compression_zero: ``first`` (the first row) or ``lead_in``.
         position_increases_when: ``closing`` or ``opening``; None: a compression grows when
             closing, a gap when opening, one palm's sign is found.
@@ -179,7 +182,7 @@ class CsvOptions:
     units: Mapping[str, str] = field(default_factory=dict)
     force_sign: ForceSign = "auto"
     lag_s: float | Literal["auto"] | None = None
-    position_is: Literal["palm", "gap"] = "palm"
+    position_is: Literal["travel", "palm", "gap"] = "travel"
     compression_zero: Literal["first", "lead_in"] = "first"
     position_increases_when: Literal["closing", "opening"] | None = None
     memory_budget_gib: float = DEFAULT_CSV_MEMORY_BUDGET_GIB

@@ -245,7 +245,10 @@ def _head_text(source: CsvSource, encoding: str) -> tuple[str, int, str, bool]:
 
 def _split(line: str, delimiter: str) -> list[str]:
     """The cells of one line (quotes removed, blanks stripped, trailing empty cells dropped)."""
-    cells = next(csv.reader([line], delimiter=delimiter, skipinitialspace=True), [])
+    try:
+        cells = next(csv.reader([line], delimiter=delimiter, skipinitialspace=True), [])
+    except csv.Error:  # a cell over the csv module's field limit (128 KiB), or a stray quote
+        cells = line.split(delimiter)
     cells = [c.strip() for c in cells]
     while cells and not cells[-1]:
         cells.pop()
@@ -322,12 +325,20 @@ def _detect_thousands(cells: Sequence[str], decimal: str, delimiter: str) -> str
     return None
 
 
-def _score(rows: Sequence[Sequence[str]], decimal: str, thousands: str | None) -> tuple[int, int]:
-    """(rows that are all numbers, of the commonest width; that width)."""
+def _score(
+    rows: Sequence[Sequence[str]], decimal: str, thousands: str | None, lenient: bool = False
+) -> tuple[int, int]:
+    """(rows that are all numbers, of the commonest width; that width). ``lenient``: rows of
+    mostly numbers count too (an export with a text column: a step name, a comment)."""
     widths = Counter(
         len(r)
         for r in rows
-        if len(r) >= 2 and all(is_number(c, decimal, thousands) for c in r if c)
+        if len(r) >= 2
+        and (
+            _numeric_row(r, decimal, thousands)
+            if lenient
+            else all(is_number(c, decimal, thousands) for c in r if c)
+        )
     )
     if not widths:
         return 0, 0
@@ -346,6 +357,17 @@ class _Dialect:
 def _sniff_dialect(lines: Sequence[str], dialect: CsvDialect, name: str) -> _Dialect:
     """The delimiter, decimal mark and thousands separator under which the rows are numbers."""
     delimiters = (dialect.delimiter,) if dialect.delimiter else DELIMITERS
+    candidates = _candidates(lines, dialect, delimiters, lenient=False)
+    if not candidates:  # no row of numbers only: an export with a text column?
+        candidates = _candidates(lines, dialect, delimiters, lenient=True)
+    return _finish_sniff(lines, dialect, delimiters, candidates, name)
+
+
+def _candidates(
+    lines: Sequence[str], dialect: CsvDialect, delimiters: Sequence[str], *, lenient: bool
+) -> list[tuple[int, int, int, _Dialect]]:
+    """(numeric rows, width, -rank of the delimiter, the dialect) of each dialect that finds
+    numeric rows (:func:`_score`)."""
     candidates: list[tuple[int, int, int, _Dialect]] = []
     for rank, delim in enumerate(delimiters):
         rows = [_split(line, delim) for line in lines]
@@ -361,9 +383,19 @@ def _sniff_dialect(lines: Sequence[str], dialect: CsvDialect, name: str) -> _Dia
                 thousands = _detect_thousands(cells, decimal, delim)
             if thousands == decimal:
                 continue
-            count, width = _score(rows, decimal, thousands)
+            count, width = _score(rows, decimal, thousands, lenient)
             if count:
                 candidates.append((count, width, -rank, _Dialect(delim, decimal, thousands, width)))
+    return candidates
+
+
+def _finish_sniff(
+    lines: Sequence[str],
+    dialect: CsvDialect,
+    delimiters: Sequence[str],
+    candidates: list[tuple[int, int, int, _Dialect]],
+    name: str,
+) -> _Dialect:
     if not candidates:
         tried = ", ".join(DELIMITER_NAMES[d] for d in delimiters)
         raise InputDataError(
@@ -433,11 +465,29 @@ def _preamble(lines: Sequence[str], delimiter: str) -> tuple[dict[str, str], tup
     return found, tuple(other)
 
 
-def _line_offsets(lines: Sequence[str], codec: str, bom: int) -> list[int]:
-    """The byte offset of every line's start (``lines`` split on newlines, kept without them)."""
+_LINE_END = re.compile(r"\r\n|\r|\n")
+
+
+def split_lines(text: str) -> tuple[list[str], list[str]]:
+    """The lines of ``text`` without their ends, and each line's end (``\\r\\n``, ``\\r``,
+    ``\\n``; ``""`` after the last line): Windows, old-Mac and Unix files alike."""
+    lines: list[str] = []
+    ends: list[str] = []
+    at = 0
+    for m in _LINE_END.finditer(text):
+        lines.append(text[at : m.start()])
+        ends.append(m.group())
+        at = m.end()
+    lines.append(text[at:])
+    ends.append("")
+    return lines, ends
+
+
+def _line_offsets(lines: Sequence[str], ends: Sequence[str], codec: str, bom: int) -> list[int]:
+    """The byte offset of every line's start (``lines`` kept without their ``ends``)."""
     offsets = [bom]
-    for line in lines:
-        offsets.append(offsets[-1] + len((line + "\n").encode(codec)))
+    for line, end in zip(lines, ends, strict=True):
+        offsets.append(offsets[-1] + len((line + end).encode(codec)))
     return offsets
 
 
@@ -454,10 +504,12 @@ def read_layout(source: CsvSource, dialect: CsvDialect) -> CsvLayout:
     if source.size == 0:
         raise InputDataError("empty file (0 bytes)", path=name)
     text, bom, codec, whole = _head_text(source, dialect.encoding)
-    lines = text.split("\n")
+    if not whole and text.endswith("\r"):
+        text = text[:-1]  # its "\n" may lie beyond the head
+    lines, ends = split_lines(text)
     if not whole and len(lines) > 1:
-        lines = lines[:-1]  # the last line of the head may be cut
-    lines = [line.rstrip("\r") for line in lines[:HEAD_LINES]]
+        lines, ends = lines[:-1], ends[:-1]  # the last line of the head may be cut
+    lines, ends = lines[:HEAD_LINES], ends[:HEAD_LINES]
     if not any(line.strip() for line in lines):
         raise InputDataError("no text: the file holds only blank lines", path=name)
     skip = dialect.skip_rows
@@ -560,7 +612,7 @@ def read_layout(source: CsvSource, dialect: CsvDialect) -> CsvLayout:
     units_cells = rows[units_i] if units_i is not None else []
     units_row = tuple(units_cells[i] if i < len(units_cells) else "" for i in range(width))
     preamble, other = _preamble(lines[:header_i], sniff.delimiter)
-    offsets = _line_offsets(lines, codec, bom)
+    offsets = _line_offsets(lines, ends, codec, bom)
     data_bytes = offsets[-1] - offsets[start]
     data_rows = sum(1 for line in lines[start:] if line.strip())
     estimate = data_rows if whole else _rows_estimate(source, offsets[start], data_bytes, data_rows)
@@ -587,8 +639,9 @@ def _rows_estimate(source: CsvSource, start: int, head_bytes: int, head_rows: in
     """The data rows of a file larger than its head: its size over the mean row length of the
     head's rows and of the last :data:`HEAD_BYTES` (numbers grow longer down a file)."""
     tail = source.tail(HEAD_BYTES)
-    tail = tail[tail.find(b"\n") + 1 :]  # the tail's first line may be cut
-    per_tail_row = len(tail) / max(tail.count(b"\n"), 1)
+    newline = b"\n" if b"\n" in tail else b"\r"  # an old-Mac file ends its lines with CR
+    tail = tail[tail.find(newline) + 1 :]  # the tail's first line may be cut
+    per_tail_row = len(tail) / max(tail.count(newline), 1)
     per_row = 0.5 * (head_bytes / max(head_rows, 1) + per_tail_row)
     return int((source.size - start) / max(per_row, 1.0))
 

@@ -39,10 +39,15 @@ from deformctl.quantities import (
 )
 
 Axis = Literal["x", "y", "z"]
-PositionIs = Literal["gap", "palm"]
+PositionIs = Literal["travel", "gap", "palm"]
 CompressionZero = Literal["first", "lead_in"]
 IncreasesWhen = Literal["closing", "opening"]
 INCREASES_WHEN: tuple[str, ...] = ("closing", "opening")
+#: The readings of a position column: ``travel`` (the compression itself: a testing machine's
+#: crosshead travel, a gripper's jaw travel; the CSV default), ``palm`` (one palm's travel, its
+#: partner mirroring it: twice the compression's share) and ``gap`` (the distance between the
+#: palms).
+POSITION_READINGS: tuple[str, ...] = ("travel", "palm", "gap")
 #: Segmentation defaults (see :mod:`deformctl.measure.segment`).
 DEFAULT_FORCE_THRESHOLD_FRAC = 0.1
 DEFAULT_MIN_GAP_S = 0.1
@@ -79,7 +84,7 @@ def check_position_options(
     Raises:
         UsageError: an unknown position kind, compression zero or direction (exit 2).
     """
-    _choice(position_is, ("gap", "palm"), "--position-is")
+    _choice(position_is, POSITION_READINGS, "--position-is")
     _choice(compression_zero, ("first", "lead_in"), "compression_zero")
     _increases_when(position_increases_when)
 
@@ -133,8 +138,8 @@ class BagSource:
             ``sensor_msgs/msg/JointState`` topic (with ``joint``).
         joint: the JointState joint whose position is the position signal, m.
         axis: the squeeze axis in the wrench and pose frames.
-        position_is: ``"palm"`` (one palm's travel, its partner mirrors it: d = 2·travel) or
-            ``"gap"`` (the distance between the palms).
+        position_is: ``"palm"`` (one palm's travel, its partner mirrors it: d = 2·travel),
+            ``"gap"`` (the distance between the palms) or ``"travel"`` (d = travel).
         compression_zero: ``"lead_in"`` (the median over the unloaded lead-in) or ``"first"``.
         position_increases_when: ``"closing"`` or ``"opening"``; None: a gap grows when
             opening, one palm's sign is found.

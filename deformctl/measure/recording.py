@@ -15,6 +15,9 @@ differentiation window for slow position topics.
   (mirror-image arms, as in the paper's rig): ``d = 2 · s · (p(t) − p(t0))``, with the sign
   ``s = ±1`` chosen so that ``d`` is positive at the sample of peak force (so it does not matter
   whether the logged palm is the left or the right one).
+* ``travel``: a position whose travel is the compression (a testing machine's crosshead
+  travel, a gripper's jaw travel; the CSV default for a ``position`` column):
+  ``d = s · (p(t) − p(t0))``, the sign found as for ``palm``.
 * ``compression`` (CSV only): the compression itself, e.g. a testing machine's crosshead travel
   against a fixed anvil: ``d = c(t) − c(t0)``.
 
@@ -77,6 +80,18 @@ class Recording:
     details: Mapping[str, Any] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
+
+    @property
+    def notices(self) -> tuple[str, ...]:
+        """What a user must read of this recording besides its columns, one line each: the
+        notes after the first (the force's sign flipped, the position's reading, a lag shifted
+        out), each rupture cut off, then each warning (a unit assumed, a defect) prefixed
+        ``warning:``. The single-file and the many-files forms of ``measure`` print the same
+        lines, each after the file's name."""
+        lines = list(self.notes[1:])
+        lines += [f"warning: rupture in {r.describe()}: cut off" for r in self.ruptures]
+        lines += [f"warning: {w}" for w in self.warnings]
+        return tuple(lines)
 
     def log_fields(self) -> dict[str, Any]:
         """What a squeeze log stores with the object besides its catalog values.
@@ -143,7 +158,8 @@ def _unloaded_reference(position: FloatArray, force_n: FloatArray, threshold_fra
 
 
 def _convention(kind: str, increases_when: str | None) -> str | None:
-    """When the position grows for a position kind: ``closing``, ``opening`` or None (auto)."""
+    """When the position grows for a position kind: ``closing``, ``opening`` or None (auto:
+    one palm's or a travel's sign is the one positive at the peak force)."""
     if increases_when is not None:
         return increases_when
     return {"gap": "opening", "compression": "closing"}.get(kind)
@@ -159,7 +175,8 @@ def _compression(
     increases_when: str | None = None,
     what: str = "the position",
 ) -> FloatArray:
-    """Compression ``[n]`` (m) from a gap, a symmetric palm's travel, or a direct compression.
+    """Compression ``[n]`` (m) from a gap, a symmetric palm's travel, a travel, or a direct
+    compression.
 
     ``increases_when`` says whether the position grows as the gripper closes or opens; None
     means the kind's convention (a gap grows when opening, a compression when closing) or, for
@@ -179,7 +196,7 @@ def _compression(
         sign = 1.0 if rel[peak] >= 0 else -1.0
     else:
         sign = 1.0 if convention == "closing" else -1.0
-    d = (2.0 if kind == "palm" else 1.0) * sign * rel
+    d = (2.0 if kind == "palm" else 1.0) * sign * rel  # travel, gap, compression: 1
     if float(np.max(np.abs(d))) <= 0.0:
         raise InputDataError(
             "no compression: the position signal never moves (zero displacement)", path=path

@@ -232,9 +232,9 @@ def test_failed_objects_are_recorded_and_the_sweep_goes_on(tmp_path: Path) -> No
     assert len(unconverged) >= 1  # F_w itself rarely lifts
     assert sorted(failures["object_id"]) == sorted([refused, *unconverged])
     by_id = failures.set_index("object_id")
-    assert by_id.loc[refused, "error_type"] == "InputDataError"
+    assert by_id.loc[refused, "cause"] == "bad_input"
     assert "material" in by_id.loc[refused, "error_message"]
-    assert set(by_id.drop(refused)["error_type"]) == {"NotConverged"}
+    assert set(by_id.drop(refused)["cause"]) == {"not_converged"}
     n_failed = len(failures)
     summary = result.stderr.strip().splitlines()[-1]
     assert f"{6 - n_failed} done, {n_failed} failed" in summary

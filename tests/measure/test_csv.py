@@ -130,6 +130,7 @@ def test_negative_compressive_force_is_flipped_and_recorded(
         "option": "auto",
         "compressive": "negative",
         "flipped": True,
+        "by": "one_sign",
     }
     assert rec.notes[1] == (
         "the force is negative under compression in column 'Load (N)': sign flipped "
@@ -280,7 +281,7 @@ def test_options_record_what_was_given(tmp_path: Path) -> None:
         "units": {"force": "kN"},
         "force_sign": "auto",
         "lag_s": 0.1,
-        "position_is": "palm",
+        "position_is": "travel",
         "compression_zero": "first",
         "position_increases_when": None,
         "memory_budget_gib": 2.0,

@@ -280,6 +280,7 @@ def test_many_files_one_log_with_a_failure(tmp_path: Path) -> None:
         {
             "file": str(bad),
             "object_id": "bad",
+            "cause": "bad_input",
             "error": f"{bad}: only 1 data row (line 2): a squeeze needs at least 2",
         }
     ]
@@ -312,6 +313,7 @@ def test_many_files_dataset_directory_with_a_failure(tmp_path: Path) -> None:
     assert set(rows["recording_flags"]) == {"ok"}
     failures = read_failures(out)
     assert list(failures["object_id"]) == ["mixed"]
+    assert list(failures["cause"]) == ["bad_input"]  # a documented cause, not a class
     coef = tmp_path / "coef.parquet"
     res = runner.invoke(app, ["characterize", f"{out}/", "-o", str(coef), "--model", "kv"])
     assert res.exit_code == 0, res.stderr

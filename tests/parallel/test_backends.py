@@ -31,7 +31,7 @@ def test_dask_sweep_gives_the_local_rows(dask_cluster: Cluster, tmp_path: Path) 
     assert (s.done, s.failed, s.parts) == (19, 1, 7)
     pd.testing.assert_frame_equal(read_dataset(tmp_path / "dask"), expected_rows(items))
     assert snapshot(tmp_path / "dask") == snapshot(tmp_path / "local")
-    assert read_failures(tmp_path / "dask")["error_type"].tolist() == ["SearchError"]
+    assert read_failures(tmp_path / "dask")["cause"].tolist() == ["not_converged"]
 
 
 def test_killing_a_dask_worker_mid_sweep_loses_nothing(

@@ -71,13 +71,13 @@ def test_one_and_two_workers_give_the_direct_rows(tmp_path: Path) -> None:
     assert snapshot(tmp_path / "w1") == snapshot(tmp_path / "w2")  # byte-identical datasets
 
 
-def test_failed_object_is_recorded_with_type_and_one_line_message(tmp_path: Path) -> None:
+def test_failed_object_is_recorded_with_cause_and_one_line_message(tmp_path: Path) -> None:
     sweep(make_items(), tmp_path / "o", workers=2)
     fails = read_failures(tmp_path / "o")
     assert fails.to_dict("records") == [
         {
             "object_id": FAILING_ID,
-            "error_type": "SearchError",
+            "cause": "not_converged",
             "error_message": f"lift search for {FAILING_ID} did not converge after 9 steps",
         }
     ]
@@ -109,7 +109,7 @@ def test_rows_outside_the_schema_fail_that_object_only(tmp_path: Path) -> None:
     s = sweep(make_items(), tmp_path / "o", workers=1, task=bad_rows_task)
     assert (s.done, s.failed) == (18, 2)
     fails = read_failures(tmp_path / "o").set_index("object_id")
-    assert fails.loc["obj-03", "error_type"] == "ValueError"
+    assert fails.loc["obj-03", "cause"] == "internal_error"
     assert "extra ['speed_m_per_s']" in fails.loc["obj-03", "error_message"]
 
 
