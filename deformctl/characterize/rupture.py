@@ -489,7 +489,8 @@ def phase_slice(time_s: FloatArray, force_n: FloatArray, phase: str, *, window_s
     dt_s, grid, (f,) = uniform_grid(time_s, force_n)
     wl = min(sg_window_length(window_s, dt_s, _POLYORDER), f.shape[0] - (1 - f.shape[0] % 2))
     smooth = sg_smooth(f, wl, _POLYORDER, dt_s)[0] if wl > _POLYORDER + 1 else f
-    top = np.flatnonzero(smooth >= (1.0 - PHASE_PEAK_TOL) * float(np.max(smooth)))
+    peak = float(np.max(smooth))  # (a force that never turns positive has a negative peak)
+    top = np.flatnonzero(smooth >= peak - PHASE_PEAK_TOL * abs(peak))
     if phase == "loading":
         end_t = grid[int(top[0])]
         return slice(0, int(np.searchsorted(time_s, end_t, side="right")))

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from deformctl.series import FloatArray, SqueezeSeries
+from deformctl.series import FloatArray, Rupture, SqueezeSeries
 
 __all__ = [
     "RUPTURE_SHAPES",
@@ -49,6 +49,7 @@ __all__ = [
     "fruit_squeeze",
     "fruit_squeezes",
     "main",
+    "write_csv",
 ]
 
 #: The shapes a draw can take; the first two rupture.
@@ -350,6 +351,7 @@ class CheckResult:
     small_found: int = 0
     collapses_called_relaxation: int = 0
     safe_above_onset: int = 0  #: found ruptures whose safe force exceeds the onset force
+    sign_flipped: int = 0  #: through_csv: draws whose force sign the reader flipped (wrongly)
     not_rupture: dict[str, int] = field(default_factory=dict)
     false_rupture: dict[str, int] = field(default_factory=dict)
     force_errors: list[float] = field(default_factory=list)
@@ -371,6 +373,8 @@ class CheckResult:
             f"safe force (max_safe_force_n) above the onset force: {self.safe_above_onset}",
             f"collapses flagged relaxation: {self.collapses_called_relaxation}",
         ]
+        if self.sign_flipped:
+            out.append(f"force sign flipped (wrongly) by the CSV reader: {self.sign_flipped}")
         for shape, n in self.not_rupture.items():
             bad = self.false_rupture.get(shape, 0)
             out.append(f"false ruptures on {shape}: {bad}/{n} ({_pct(bad, n)})")
@@ -381,17 +385,47 @@ def _pct(a: int, b: int) -> str:
     return f"{100.0 * a / b:.1f} %" if b else "n/a"
 
 
-def check(draws: int, seed: int = 0, *, keep_misses: int = 20) -> CheckResult:
-    """Run the rupture detector (and the relaxation finder on what it keeps) over the draws."""
+def _through_csv(
+    fs: FruitSqueeze, folder: str
+) -> tuple[SqueezeSeries, Rupture | None, float, bool]:
+    """The draw written as a CSV export and read back by ``measure --csv``'s reader (no
+    options): its first squeeze (cut at a rupture), the rupture, its position rate, and whether
+    the reader flipped the force's sign (every draw's compressive force is positive)."""
+    import os
+
+    from deformctl.measure.csv import read_csv_export
+
+    path = os.path.join(folder, f"{fs.series.object_id}.csv")
+    write_csv(fs, path)
+    rec = read_csv_export(path, object_id=fs.series.object_id)
+    os.remove(path)
+    rate = rec.position_rate_hz or fs.rate_hz
+    flipped = bool(rec.details.get("force_sign", {}).get("flipped", False))
+    return rec.squeezes[0], (rec.ruptures[0] if rec.ruptures else None), float(rate), flipped
+
+
+def check(
+    draws: int, seed: int = 0, *, keep_misses: int = 20, through_csv: bool = False
+) -> CheckResult:
+    """Run the rupture detector (and the relaxation finder on what it keeps) over the draws:
+    on the series themselves, or (``through_csv``) on what ``measure --csv`` makes of each
+    written as a CSV export (its force sign, lag and cut included)."""
+    import tempfile
+
     from deformctl.characterize.fit import default_window_s
     from deformctl.characterize.rupture import cut_rupture, find_relaxation, safe_force_n
 
     res = CheckResult()
+    folder = tempfile.TemporaryDirectory(prefix="fruit-") if through_csv else None
     for i in range(draws):
         fs = fruit_squeeze(seed, i)
-        s = fs.series
-        window = default_window_s(fs.rate_hz)
-        cut, rupture = cut_rupture(s, window_s=window)
+        if folder is not None:
+            cut, rupture, rate, flipped = _through_csv(fs, folder.name)
+            window = default_window_s(rate)
+            res.sign_flipped += flipped
+        else:
+            window = default_window_s(fs.rate_hz)
+            cut, rupture = cut_rupture(fs.series, window_s=window)
         res.draws += 1
         if not fs.ruptures:
             res.not_rupture[fs.shape] = res.not_rupture.get(fs.shape, 0) + 1
@@ -420,21 +454,50 @@ def check(draws: int, seed: int = 0, *, keep_misses: int = 20) -> CheckResult:
             res.big_force_ok += abs(rel) <= 0.1
         else:
             res.small_found += 1
+    if folder is not None:
+        folder.cleanup()
     return res
 
 
+def write_csv(fs: FruitSqueeze, path: str) -> None:
+    """The draw as a CSV export a gripper's logger might write: ``Time (s)``, ``Load (N)``,
+    ``Compression (mm)`` (the jaws' travel since contact)."""
+    s = fs.series
+    rows = np.column_stack([s.time_s, s.force_n, 1e3 * s.compression_m])
+    np.savetxt(
+        path, rows, fmt="%.6f", delimiter=",", header="Time (s),Load (N),Compression (mm)",
+        comments="",
+    )  # fmt: skip
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m deformctl.testing.fruit check [--draws N] [--seed S]``, or ``show DRAW``."""
+    """``python -m deformctl.testing.fruit check [--draws N] [--seed S]``, ``show DRAW`` or
+    ``csv DRAW -o FILE [--shape SHAPE]``."""
     parser = argparse.ArgumentParser(prog="python -m deformctl.testing.fruit")
     sub = parser.add_subparsers(dest="command", required=True)
     c = sub.add_parser("check", help="run the rupture detector over seeded draws")
     c.add_argument("--draws", type=int, default=500)
     c.add_argument("--seed", type=int, default=0)
     c.add_argument("--misses", action="store_true", help="list the draws it got wrong")
+    c.add_argument(
+        "--through-csv",
+        action="store_true",
+        help="write each draw as a CSV export and read it as measure --csv does",
+    )
     s = sub.add_parser("show", help="one draw's truth")
     s.add_argument("draw", type=int)
     s.add_argument("--seed", type=int, default=0)
+    w = sub.add_parser("csv", help="write one draw as a CSV export (Time, Load, Compression)")
+    w.add_argument("draw", type=int)
+    w.add_argument("-o", "--output", required=True)
+    w.add_argument("--seed", type=int, default=0)
+    w.add_argument("--shape", choices=SHAPES, default=None)
     args = parser.parse_args(argv)
+    if args.command == "csv":
+        fs = fruit_squeeze(args.seed, args.draw, shape=args.shape)
+        write_csv(fs, args.output)
+        print(f"{args.output}: {fs.shape}, onset force {fs.onset_force_n:.4g} N")
+        return 0
     if args.command == "show":
         fs = fruit_squeeze(args.seed, args.draw)
         print(f"shape {fs.shape}, onset {fs.onset_force_n:.4g} N at {fs.onset_time_s:.3f} s, "
@@ -444,7 +507,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     if args.draws < 1:
         parser.error("--draws must be at least 1")
-    res = check(args.draws, args.seed)
+    res = check(args.draws, args.seed, through_csv=args.through_csv)
     for line in res.lines():
         print(line)
     if args.misses:

@@ -11,6 +11,7 @@ force, no collapse flagged ``relaxation`` and no rupture in relaxation holds or 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,7 +19,8 @@ import pytest
 from deformctl.characterize import characterize
 from deformctl.characterize.fit import default_window_s
 from deformctl.characterize.rupture import SAFE_FORCE_MARGIN, cut_rupture, safe_force_n
-from deformctl.testing.fruit import SHAPES, check, fruit_squeeze, main
+from deformctl.measure.csv import read_csv_export
+from deformctl.testing.fruit import SHAPES, check, fruit_squeeze, main, write_csv
 
 DRAWS = 160
 
@@ -93,7 +95,21 @@ def test_safe_force_margin() -> None:
     assert math.isnan(safe_force_n(math.nan))
 
 
-def test_check_command_prints_the_numbers(capsys: pytest.CaptureFixture[str]) -> None:
+def test_through_the_csv_reader_the_same_rupture(tmp_path: Path) -> None:
+    # draw 9 of seed 0 as a CSV export, read as measure --csv reads it: the same onset
+    fs = fruit_squeeze(0, 9)
+    write_csv(fs, str(tmp_path / "kiwi.csv"))
+    rec = read_csv_export(tmp_path / "kiwi.csv", object_id="kiwi")
+    assert len(rec.ruptures) == 1
+    assert rec.ruptures[0].force_n == pytest.approx(fs.onset_force_n, rel=0.1)
+    res = check(6, seed=0, through_csv=True)
+    assert res.draws == 6
+    assert sum(res.not_rupture.values()) + res.big + res.small == 6
+
+
+def test_check_command_prints_the_numbers(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
     assert main(["check", "--draws", "8", "--seed", "4"]) == 0
     out = capsys.readouterr().out
     assert "draws: 8" in out
@@ -101,3 +117,6 @@ def test_check_command_prints_the_numbers(capsys: pytest.CaptureFixture[str]) ->
     assert "false ruptures on" in out
     assert main(["show", "3"]) == 0
     assert "onset" in capsys.readouterr().out
+    out_csv = tmp_path / "f.csv"
+    assert main(["csv", "3", "-o", str(out_csv), "--shape", "backoff"]) == 0
+    assert out_csv.read_text().startswith("Time (s),Load (N),Compression (mm)\n")
