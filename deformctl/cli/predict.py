@@ -165,7 +165,8 @@ def predict(
         check_output_path(output, force)  # fail before any work
     predictor = load_predictor(model_path)
     inputs: dict[str, Any] = {k: None if v is None else [v] for k, v in flags.items()}
-    ids, failed = None, []
+    ids: list[str] | None = None
+    failed: list[str] = []
     if features is not None:
         joined: list[str] = []
         frame = read_prediction_inputs(features, catalog, joined)
