@@ -8,7 +8,10 @@ closing; then the controller backs off. The force sensor lags the jaw position (
 noise) and its truth. Shapes (:data:`SHAPES`):
 
 * ``collapse``: a force ramp (with 0-2 slips before the break: the force dips by 5-20 % while the
-  jaws jump), the collapse, then the back-off (the jaws hold or recede a little).
+  jaws jump) to a peak; in half of the draws the fruit then yields (the force falls slowly from
+  the peak, 1.2-3.5x the break force, while the jaws close on); then the collapse by 35-92 %
+  within 0.1-0.4 s, with the jaws closing on (or, in a fifth of the draws, stopped), and the
+  back-off 0-0.4 s after the controller sees it (the jaws hold or recede a little).
 * ``collapse_reload``: the same, but after the collapse the jaws crush on and the force rises
   again, to 1-3.5x the break force, before the back-off: the later, higher peak is not the
   rupture force.
@@ -24,6 +27,8 @@ the sensor's lag). :func:`check` runs the rupture detector of ``characterize`` a
 recording's rate) over many draws and counts what it finds; the command line prints it::
 
     python -m deformctl.testing.fruit check --draws 500 --seed 0
+    python -m deformctl.testing.fruit check --draws 500 --through-csv   # as measure --csv reads
+    python -m deformctl.testing.fruit csv 9 -o kiwi.csv                  # one draw as a CSV export
 
 Every random choice comes from ``numpy.random.default_rng([seed, draw])``.
 """
@@ -285,7 +290,7 @@ def _backoff(rng: np.random.Generator, h: float, lag: float) -> dict[str, object
     f = np.where(t > t_bo0, f_max * (1.0 - (1.0 - f_end_frac) * _ease(xb)), f)
     d_top = float(np.interp(t_bo0, t, d_el))
     d_rec = _elastic_compression(f, f_max, d_max, n_law) + offset
-    d = np.where(t > t_bo0, d_top - (d_top - d_rec - creep * 0) * (1.0 - keep), d_el)
+    d = np.where(t > t_bo0, d_top - (d_top - d_rec) * (1.0 - keep), d_el)
     return {
         "t": t, "f": f, "d": d, "scale_n": f_max, "onset_force_n": math.nan,
         "onset_time_s": math.nan, "collapse_frac": math.nan,
