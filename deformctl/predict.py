@@ -495,12 +495,11 @@ def prediction_inputs(
     out = frame[keep].reset_index(drop=True)
     safe_cols = [c for c in SAFE_FORCE_COLUMNS if c in frame.columns]
     if safe_cols:
-        from deformctl.characterize.rupture import SAFE_FORCE_MARGIN
+        from deformctl.characterize.rupture import safe_force_n
 
         safe = frame[safe_cols].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=np.float64)
         safe = np.where(np.isfinite(safe) & (safe > 0), safe, np.inf).min(axis=1)
-        safe = (1.0 - SAFE_FORCE_MARGIN) * safe  # characterize.rupture.safe_force_n
-        out["max_safe_force_n"] = np.where(np.isfinite(safe), safe, np.nan)
+        out["max_safe_force_n"] = safe_force_n(np.where(np.isfinite(safe), safe, np.nan))
     if "quality" in frame.columns:
         out["quality"] = [None if pd.isna(q) else str(q) for q in frame["quality"]]
     return out

@@ -69,6 +69,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import overload
 
 import numpy as np
 
@@ -150,10 +151,14 @@ _MAX_PEAKS = 20
 PHASE_PEAK_TOL = 0.01
 
 
-def safe_force_n(rupture_force_n: float) -> float:
-    """The largest grip force deemed safe for an object that ruptured at ``rupture_force_n``:
-    ``(1 − SAFE_FORCE_MARGIN) · rupture_force_n`` (NaN stays NaN)."""
-    return (1.0 - SAFE_FORCE_MARGIN) * float(rupture_force_n)
+@overload
+def safe_force_n(rupture_force_n: float) -> float: ...
+@overload
+def safe_force_n(rupture_force_n: FloatArray) -> FloatArray: ...
+def safe_force_n(rupture_force_n: float | FloatArray) -> float | FloatArray:
+    """The largest grip force deemed safe for an object that ruptured at ``rupture_force_n``
+    (a float or an array): ``(1 − SAFE_FORCE_MARGIN) · rupture_force_n`` (NaN stays NaN)."""
+    return (1.0 - SAFE_FORCE_MARGIN) * rupture_force_n
 
 
 def _running_peak_index(force_n: FloatArray) -> np.ndarray:
