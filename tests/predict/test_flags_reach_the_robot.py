@@ -13,10 +13,13 @@ from __future__ import annotations
 
 import io
 import math
+import shutil
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
 import pytest
 from typer.testing import CliRunner
 
@@ -148,3 +151,39 @@ def test_strict_problems_names_the_causes() -> None:
     assert strict_problems(columns, ["d"])[0] == "d (not characterized)"
     no_window = {"predicted_lift_force_n": np.ones(1), "bound_guaranteed": np.array([True])}
     assert strict_problems(no_window) == ["row 0 (no safe force known)"]
+
+
+def test_a_failed_object_of_the_dataset_is_named(
+    dataset: tuple[Path, float], tmp_path: Path
+) -> None:
+    coef = tmp_path / "coef"
+    shutil.copytree(dataset[0], coef)
+    failures = next((coef / "_failures").glob("part-*.parquet"))
+    schema = pq.read_schema(failures)
+    row = {
+        "object_id": ["ghost"],
+        "error_type": ["InputDataError"],
+        "error_message": ["no squeeze"],
+    }
+    pq.write_table(pa.table(row, schema=schema), failures)
+    result = runner.invoke(app, ["predict", "grip", str(coef), "--coverage", "0.9", "--strict"])
+    assert result.exit_code == 1
+    assert "warning: " in result.stderr
+    assert "ghost: no prediction: coefficients failed on it (no squeeze)" in result.stderr
+    assert "ghost (not characterized)" in result.stderr.splitlines()[-1]
+
+
+def test_another_dataset_or_directory_is_one_line(
+    dataset: tuple[Path, float], tmp_path: Path
+) -> None:
+    logs = dataset[0].parent / "logs"
+    result = runner.invoke(app, ["predict", "grip", f"{logs}/"])
+    assert result.exit_code == 65
+    assert result.stderr.strip().endswith(
+        "is a squeeze_log dataset; predict reads coefficients, index_table, predictions tables"
+    )
+    (tmp_path / "empty").mkdir()
+    result = runner.invoke(app, ["predict", "grip", str(tmp_path / "empty")])
+    assert result.exit_code == 65
+    assert result.stderr.count("\n") == 1
+    assert "not a deformctl dataset directory" in result.stderr
