@@ -3,10 +3,12 @@
 Every model is evaluated by :class:`deformctl.grip.fast.Predictor` (numpy only):
 :func:`load_predictor` opens a model file (or a bundled name such as ``grip``) through its numpy
 export, or an older file without one through skops' allow-list. :func:`read_prediction_inputs`
-reads the objects from a coefficients, index or predictions table (weights and μ joined from a
-catalog; the safe force from a rupture or yield force), :func:`predict_objects` predicts them
-(with the bound at a coverage, the flags and the warnings) and :func:`output_columns` /
-:func:`csv_text` lay out the predictions table.
+reads the objects from a coefficients, index or predictions table or dataset directory (weights
+and μ joined from a catalog; the safe force from a rupture or yield force, less the margin of
+:func:`deformctl.characterize.rupture.safe_force_n`; ``characterize``'s quality),
+:func:`predict_objects` predicts them (with the bound at a coverage, the flags and the warnings),
+:func:`output_columns` / :func:`csv_text` lay out the predictions table, and
+:func:`quality_warnings` / :func:`strict_problems` say which rows a robot should not act on.
 
 Importing this module imports numpy and the predictor only: pandas, pyarrow and scikit-learn are
 imported by the functions that need them (a table, an older model file), so one object given by
