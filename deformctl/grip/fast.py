@@ -48,6 +48,7 @@ from deformctl.grip.conformal import (
     conformal_margin,
     conformal_min_scores,
     conformal_rank,
+    min_coverage,
 )
 from deformctl.grip.groups import GRIP_FEATURES, ZETA_SHIFT
 from deformctl.grip.inputs import (  # their home; re-exported for predict and the tests
@@ -58,9 +59,12 @@ from deformctl.grip.inputs import (  # their home; re-exported for predict and t
     input_rule,
 )
 from deformctl.grip.sanity import (
+    SCORE_HIGH,
+    bound_problem,
     implausible,
     implausible_line,
     output_problem,
+    scores_problem,
     target_ratio_range,
 )
 from deformctl.quantities import (
@@ -368,7 +372,15 @@ class Predictor:
         raw_scores = meta.get("conformal_scores")
         scores = None
         if raw_scores is not None:
-            scores = np.sort(_float_array(raw_scores, None, "calibration scores", path).ravel())
+            try:
+                stored = np.asarray(raw_scores, dtype=np.float64).ravel()
+            except (TypeError, ValueError):
+                what = "the model's calibration scores are not numbers"
+                raise InputDataError(what, path=path) from None
+            problem = scores_problem(stored, meta)  # the one check of a bound's scores
+            if problem is not None:
+                raise InputDataError(f"not a usable lifting-force model: {problem}", path=path)
+            scores = np.sort(stored)
         predictor = cls(
             path=path,
             metadata=meta,
@@ -490,17 +502,45 @@ class Predictor:
         if self.scores is None:
             raise InputDataError(NO_SCORES_MESSAGE, path=self.path)
         n = self.scores.size
+        if p < min_coverage(n):
+            raise UsageError(
+                f"--coverage must be at least 1/(n + 1) = {min_coverage(n):.3g} with the model's "
+                f"n = {n} calibration scores, got {p:g} (below it every P gives the same bound)"
+            )
         if self._thin(p) is not None:  # an adapted model on few rig rows: their largest score
-            return float(self.scores[-1])
+            return max(float(self.scores[-1]), 0.0)
         if conformal_rank(n, p) > n:
             need = conformal_min_scores(p)
             raise InputDataError(
                 f"--coverage {p:g} needs at least {need} calibration scores; the model has {n}",
                 path=self.path,
             )
-        q = conformal_margin(self.scores, p)
+        # a negative margin (a low P) would put the bound below the prediction: never
+        q = max(conformal_margin(self.scores, p), 0.0)
         self._cache[("margin", coverage)] = q
         return q
+
+    def _upper(self, lift: Any, f_w: Any, q: float) -> Any:
+        """The bound ``max(L_f (1 + q), F_w)`` (grip.sanity), checked: a bound that breaks
+        F_w <= L_f <= bound <= (1 + SCORE_HIGH) L_f refuses the file (its scores cannot be
+        right).
+
+        Raises:
+            InputDataError: such a bound (exit 65).
+        """
+        with np.errstate(over="ignore", invalid="ignore"):
+            upper = np.fmax(np.asarray(lift, dtype=np.float64) * (1.0 + q), f_w)
+        row = bound_problem(np.atleast_1d(lift), np.atleast_1d(upper), np.atleast_1d(f_w))
+        if row is not None:
+            value = float(np.atleast_1d(upper)[row])
+            raise InputDataError(
+                f"not a usable lifting-force model: its calibration scores give an upper bound of "
+                f"{value:.6g} N for a prediction of {float(np.atleast_1d(lift)[row]):.6g} N "
+                f"(F_w = {float(np.atleast_1d(f_w)[row]):.6g} N), outside [max(L_f, F_w), "
+                f"{1 + SCORE_HIGH:.4g} x L_f]",
+                path=self.path,
+            )
+        return upper
 
     def _thin(self, p: float | None) -> str | None:
         """The warning of an adapted model asked for a P its n rig rows cannot guarantee."""
@@ -595,7 +635,7 @@ class Predictor:
         if parts:
             outside = True
             warnings.append(f"{name}: outside the training range: {'; '.join(parts)}")
-        upper = math.nan if q is None else lift * (1.0 + q)
+        upper = math.nan if q is None else float(self._upper(lift, f_w, q))
         safe = math.nan if max_safe_force_n is None else float(max_safe_force_n)
         window_ok, line = _window(name, lift, upper, safe)
         if line:
@@ -704,7 +744,7 @@ class Predictor:
             if row_parts:
                 outside[k] = True
                 warnings.append(f"{labels[k]}: outside the training range: {'; '.join(row_parts)}")
-        upper = np.full(n, np.nan) if q is None else lift * (1.0 + q)
+        upper = np.full(n, np.nan) if q is None else self._upper(lift, f_w, q)
         safe = (
             np.full(n, np.nan)
             if max_safe_force_n is None
