@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import math
 import operator
-import zipfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib.resources import files
@@ -41,8 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from deformctl import jsonsafe
-from deformctl.errors import InputDataError, MissingInputError, UsageError
+from deformctl.errors import InputDataError, UsageError
 from deformctl.grip.activations import _activation, _activation_scalar
 from deformctl.grip.conformal import (
     conformal_margin,
@@ -57,6 +55,10 @@ from deformctl.grip.inputs import (  # their home; re-exported for predict and t
     input_problem,
     input_problems,
     input_rule,
+)
+from deformctl.grip.modelfile import (  # read_model_metadata: re-exported, its old home
+    file_problem,
+    read_model_metadata,
 )
 from deformctl.grip.sanity import (
     SCORE_HIGH,
@@ -94,10 +96,6 @@ __all__ = [
 
 #: Model names ``predict`` (and :meth:`Predictor.load`) resolve to a file shipped with deformctl.
 BUNDLED_MODELS: tuple[str, ...] = ("grip",)
-#: The model-file format tag (the same as :data:`deformctl.artifacts.model.MODEL_FORMAT`).
-MODEL_FORMATS = ("deformctl-lift-force-model/1", "deformctl-lift-force-model/2")
-#: The most bytes of ``schema.json`` read from a model file (the bundled model's is ~60 kB).
-MAX_SCHEMA_BYTES = 64 * 1024 * 1024
 
 #: Two friction coefficients this close (relative) are the same μ.
 _SAME_MU_RTOL = 1e-6
@@ -133,54 +131,6 @@ def resolve_model_path(model: str | Path) -> Path:
     if text in BUNDLED_MODELS:
         return Path(str(files("deformctl.datasets").joinpath("models", f"{text}.skops")))
     return Path(text)
-
-
-def read_model_metadata(path: str | Path) -> dict[str, Any]:
-    """A model file's metadata dict, read as JSON from the archive's ``schema.json``.
-
-    Raises:
-        MissingInputError: no such file (66).
-        InputDataError: not a deformctl model file (65).
-    """
-    p = Path(path)
-    if not p.is_file():
-        raise MissingInputError("model file not found", path=p)
-    try:
-        with zipfile.ZipFile(p) as archive:
-            info = archive.getinfo("schema.json")
-            if info.file_size > MAX_SCHEMA_BYTES:
-                raise InputDataError(
-                    f"schema.json is {info.file_size} bytes, more than a model file holds", path=p
-                )
-            schema = jsonsafe.loads(archive.read(info))
-        node = schema["content"]["metadata_json"]
-        fmt = jsonsafe.loads(schema["content"]["format"]["content"])
-        if node.get("__loader__") != "JsonNode" or node.get("__class__") != "str":
-            raise TypeError("metadata_json is not a string")
-        text = jsonsafe.loads(node["content"])
-        if not isinstance(text, str):
-            raise TypeError("metadata_json is not a string")
-    except InputDataError:
-        raise
-    except zipfile.BadZipFile:
-        raise InputDataError(
-            "not a skops model file (truncated or not a zip archive)", path=p
-        ) from None
-    except (KeyError, TypeError, ValueError, AttributeError, OSError, EOFError) as err:
-        raise InputDataError(f"not a deformctl model file ({type(err).__name__})", path=p) from None
-    if fmt not in MODEL_FORMATS:
-        raise InputDataError(
-            f"not a deformctl model file (expected format {MODEL_FORMATS[-1]})", path=p
-        )
-    try:
-        metadata = jsonsafe.loads(text, allow_nan=True)
-    except ValueError as err:
-        raise InputDataError(
-            f"the model file's metadata is not usable JSON ({err})", path=p
-        ) from None
-    if not isinstance(metadata, dict):
-        raise InputDataError("the model file's metadata is not a JSON object", path=p)
-    return metadata
 
 
 def _float_array(value: Any, shape: tuple[int, ...] | None, what: str, path: Path) -> np.ndarray:
@@ -293,7 +243,11 @@ class Predictor:
         exp = meta.get("numpy_model")
         if not isinstance(exp, dict):
             raise NoNumpyExportError("the model file has no numpy export", path=path)
-        return cls.from_export(exp, meta, path)
+        predictor = cls.from_export(exp, meta, path)
+        problem = file_problem(path, exp)  # the estimator agrees with the export (one loader)
+        if problem is not None:
+            raise InputDataError(f"not a usable lifting-force model: {problem}", path=path)
+        return predictor
 
     @classmethod
     def from_export(
@@ -329,6 +283,11 @@ class Predictor:
             shift = float(exp.get("zeta_shift", ZETA_SHIFT))
         except (KeyError, TypeError, ValueError, IndexError):
             raise InputDataError("the model's numpy export is malformed", path=path) from None
+        bad = [
+            k for k, (lo, hi) in ranges.items() if not (math.isfinite(lo) and lo <= hi < math.inf)
+        ]
+        if bad:
+            raise InputDataError(f"the model's training range of {bad[0]} is not finite", path=path)
         if form not in ("grip", "paper") or activation not in _ACTIVATIONS:
             raise InputDataError(f"the numpy export's form {form!r} is unknown", path=path)
         if form == "grip" and features != GRIP_FEATURES:
