@@ -154,7 +154,12 @@ def _dtype_name(series: pd.Series) -> str:
 def _table_summary(df: pd.DataFrame, kind: str) -> dict[str, Any]:
     spec = load_table_spec(kind)
     columns = []
-    units = df.attrs.get("units", {})
+    attrs = df.attrs
+    # pandas deep-copies ``attrs`` (a unit per column) into every column and row it hands out:
+    # read them once and iterate a frame without them (10,000 columns: 8 s -> linear)
+    df = df.copy(deep=False)
+    df.attrs = {}
+    units = attrs.get("units", {})
     for c in df.columns:
         col = spec.column(str(c))
         columns.append(
@@ -166,10 +171,10 @@ def _table_summary(df: pd.DataFrame, kind: str) -> dict[str, Any]:
                 "description": col.description if col else "",
             }
         )
-    prov = df.attrs.get("provenance")
+    prov = attrs.get("provenance")
     out: dict[str, Any] = {
         "kind": kind,
-        "schema": {"name": spec.name, "version": df.attrs.get("schema_version", spec.version)},
+        "schema": {"name": spec.name, "version": attrs.get("schema_version", spec.version)},
         "rows": len(df),
         "columns": columns,
         "provenance": None if prov is None else prov.to_dict(),
