@@ -133,3 +133,27 @@ def test_the_catalog_carries_the_arm(catalog_row: dict[str, object]) -> None:
         CatalogObject.from_row({**row, "material_stiffness_exponent": 2.0}).to_sim_spec()
     with pytest.raises(InputDataError, match="material_relaxation_time_s"):
         CatalogObject.from_row({**row, "material_relaxation_time_s": 0.0})
+
+
+def test_a_standard_linear_solid_fit_is_lifted_as_that_solid() -> None:
+    import pandas as pd
+
+    from deformctl.lift.objects import catalog_from_coefficients
+
+    common = {"size_x_cm": 6.0, "size_y_cm": 6.0, "size_z_cm": 4.0, "friction_mu": 0.5,
+              "weight_n": 2.0, "deformability_n_per_cm": 9.0, "damping_ns_per_cm": 2.0,
+              "sls_stiffness_n_per_cm": 9.0, "sls_arm_stiffness_n_per_cm": 4.0,
+              "sls_relaxation_time_s": 0.5}  # fmt: skip
+    table = pd.DataFrame([{"object_id": "dough", "model": "sls", **common},
+                          {"object_id": "foam", "model": "kv", **common}])  # fmt: skip
+    catalog = catalog_from_coefficients(table)
+    dough, foam = (CatalogObject.from_row(catalog.iloc[i].to_dict()) for i in range(2))
+    spec = dough.to_sim_spec()
+    assert (spec.stiffness_n_per_cm, spec.damping_ns_per_cm) == (9.0, 0.0)
+    assert (spec.arm_stiffness_n_per_cm, spec.relaxation_time_s) == (4.0, 0.5)
+    # the Kelvin–Voigt object keeps its D and λ, and has no arm
+    kv = foam.to_sim_spec()
+    assert (kv.stiffness_n_per_cm, kv.damping_ns_per_cm) == (9.0, 2.0)
+    assert not kv.standard_linear_solid
+    # a table without a standard linear solid gains no columns
+    assert "material_arm_stiffness_n_per_cm" not in catalog_from_coefficients(table.iloc[[1]])
