@@ -5,6 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
 .PHONY: install test lint bench golden-spread reproduce _report calibrate examples clean model hc-check \
+  sls-check \
   _grip_train _grip_eval grip-study materials scene-figure fuzz
 
 install: $(STAMP)
@@ -105,6 +106,11 @@ _report: $(R)/lift.parquet $(R)/coefficients.parquet $(R)/predictions.parquet \
 # and the round trip through characterize --model hc (about a minute; the fast tests run 5^3).
 hc-check: install
 	$(BIN)/python -m bench.check_hunt_crossley
+
+# The standard linear solid at the paper preset's lattice: its squeeze against the law and the
+# round trip through characterize --model sls over population --grip's k2/D and τ ranges (~30 s)
+sls-check: install
+	$(BIN)/python -m bench.check_standard_linear_solid
 
 # Fit the paper preset's two parameters to the paper's 13 simulated lifting forces and write them
 # to the file the preset reads (about 2 minutes on 2 cores; prints ours vs paper, the worst and
