@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
 .PHONY: install test lint bench golden-spread reproduce _report calibrate examples clean model hc-check \
-  sls-check \
+  sls-check grip-study-laws \
   _grip_train _grip_eval grip-study materials scene-figure fuzz
 
 install: $(STAMP)
@@ -179,6 +179,11 @@ $(M)/%/index.parquet: $(M)/%/coefficients.parquet $(M)/%/lift.parquet
 # evidence behind the grip model's form (docs/explanation/model.md), 2-4 minutes on 2 cores.
 grip-study: install
 	$(BIN)/python -m deformctl.repro.grip_study --jobs $(JOBS)
+
+# The same study per law: Hunt–Crossley (pairs, μ, the exponent) and the standard linear solid
+# (pairs, k2/D and τ), ~8 minutes on one core (docs/explanation/model.md quotes it)
+grip-study-laws: install
+	$(BIN)/python -m deformctl.repro.grip_study_laws --jobs $(JOBS)
 
 # Every file in examples/, run as its docstring says, in a scratch folder ($(EX)/).
 EX ?= .examples
