@@ -5,6 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
 .PHONY: install test lint bench golden-spread reproduce _report calibrate examples clean model hc-check \
+  sls-check grip-study-laws \
   _grip_train _grip_eval grip-study materials scene-figure fuzz
 
 install: $(STAMP)
@@ -106,6 +107,11 @@ _report: $(R)/lift.parquet $(R)/coefficients.parquet $(R)/predictions.parquet \
 hc-check: install
 	$(BIN)/python -m bench.check_hunt_crossley
 
+# The standard linear solid at the paper preset's lattice: its squeeze against the law and the
+# round trip through characterize --model sls over population --grip's k2/D and τ ranges (~30 s)
+sls-check: install
+	$(BIN)/python -m bench.check_standard_linear_solid
+
 # Fit the paper preset's two parameters to the paper's 13 simulated lifting forces and write them
 # to the file the preset reads (about 2 minutes on 2 cores; prints ours vs paper, the worst and
 # the leave-one-out worst error, the density check and the dt / lattice convergence).
@@ -173,6 +179,11 @@ $(M)/%/index.parquet: $(M)/%/coefficients.parquet $(M)/%/lift.parquet
 # evidence behind the grip model's form (docs/explanation/model.md), 2-4 minutes on 2 cores.
 grip-study: install
 	$(BIN)/python -m deformctl.repro.grip_study --jobs $(JOBS)
+
+# The same study per law: Hunt–Crossley (pairs, μ, the exponent) and the standard linear solid
+# (pairs, k2/D and τ), ~8 minutes on one core (docs/explanation/model.md quotes it)
+grip-study-laws: install
+	$(BIN)/python -m deformctl.repro.grip_study_laws --jobs $(JOBS)
 
 # Every file in examples/, run as its docstring says, in a scratch folder ($(EX)/).
 EX ?= .examples

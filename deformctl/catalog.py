@@ -15,7 +15,10 @@ takes a :class:`CatalogObject` and its typed attributes. Three rules live here a
   the row into the simulator's :class:`~deformctl.sim.ObjectSpec` (the simulator never sees
   catalog column names). With n > 1, D is the secant stiffness and λ the equivalent damping at
   the operating force F_w (what ``characterize`` writes), and the simulator uses Hunt–Crossley
-  springs (:mod:`deformctl.sim.hunt_crossley`).
+  springs (:mod:`deformctl.sim.hunt_crossley`). With the optional Maxwell arm
+  (``material_arm_stiffness_n_per_cm`` k2 > 0 and ``material_relaxation_time_s`` τ) the material is
+  a standard linear solid: D its relaxed spring, λ a dashpot beside the arm (0 for the Zener solid
+  ``characterize --model sls`` fits; :mod:`deformctl.sim.sls`).
 
 The module imports nothing heavy (the simulator is imported when a spec is built), because the
 population generator, the lift search and the command line all use it.
@@ -39,8 +42,10 @@ import numpy as np
 from deformctl.errors import InputDataError, UsageError
 from deformctl.physics import rigid_grip_force_n
 from deformctl.quantities import (
+    ARM_STIFFNESS_N_PER_CM,
     DAMPING_NS_PER_CM,
     FRICTION_MU,
+    RELAXATION_TIME_S,
     SIZE_CM,
     STIFFNESS_EXPONENT,
     STIFFNESS_N_PER_CM,
@@ -55,6 +60,10 @@ if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported w
 
 #: The stiffness exponent n (optional, after the catalog columns; absent: 1, a linear material).
 EXPONENT_COLUMN = "material_stiffness_exponent"
+#: A standard linear solid's Maxwell arm (optional): its spring k2 (absent: 0, no arm) and its
+#: relaxation time τ (needed when k2 > 0; an empty cell is allowed when k2 is 0).
+ARM_COLUMN = "material_arm_stiffness_n_per_cm"
+RELAXATION_COLUMN = "material_relaxation_time_s"
 #: The catalog columns, in order; the two material columns are the simulator's ground truth.
 CATALOG_COLUMNS: tuple[str, ...] = (
     "object_id",
@@ -79,6 +88,8 @@ COLUMN_QUANTITIES: dict[str, Quantity] = {
     "material_stiffness_n_per_cm": STIFFNESS_N_PER_CM,
     "material_damping_ns_per_cm": DAMPING_NS_PER_CM,
     EXPONENT_COLUMN: STIFFNESS_EXPONENT,
+    ARM_COLUMN: ARM_STIFFNESS_N_PER_CM,
+    RELAXATION_COLUMN: RELAXATION_TIME_S,
 }
 #: Physical bounds of each numeric column, ``(lowest, highest)``, in the column's unit
 #: (inclusive; μ: :data:`deformctl.quantities.FRICTION_MU`, 0.01 <= μ <= 3):
@@ -91,11 +102,13 @@ BOUNDS: dict[str, tuple[float, float]] = {
 }
 
 __all__ = [
+    "ARM_COLUMN",
     "BOUNDS",
     "CATALOG_COLUMNS",
     "COLUMN_QUANTITIES",
     "EXPONENT_COLUMN",
     "MATERIAL_COLUMNS",
+    "RELAXATION_COLUMN",
     "SIZE_COLUMNS",
     "CatalogObject",
     "MeasuredObject",
@@ -157,6 +170,9 @@ class CatalogObject(Mapping[str, Any]):
         material_damping_ns_per_cm: the simulator's ground-truth λ, N·s/cm, or None.
         material_stiffness_exponent: the material's stiffness exponent n in [1, 3] (1 when the
             column is absent: linear).
+        material_arm_stiffness_n_per_cm: a standard linear solid's arm spring k2, N/cm (0 when
+            the column is absent: no arm).
+        material_relaxation_time_s: the arm's relaxation time τ, s (None without an arm).
     """
 
     object_id: str
@@ -166,6 +182,8 @@ class CatalogObject(Mapping[str, Any]):
     material_stiffness_n_per_cm: float | None = None
     material_damping_ns_per_cm: float | None = None
     material_stiffness_exponent: float = 1.0
+    material_arm_stiffness_n_per_cm: float = 0.0
+    material_relaxation_time_s: float | None = None
     row: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
     @classmethod
@@ -182,7 +200,9 @@ class CatalogObject(Mapping[str, Any]):
                 missing, not a number, not finite or outside :data:`BOUNDS`, or a
                 ``material_stiffness_exponent`` column whose cell is not a number in [1, 3]
                 (empty and NaN included: leave the column out for a linear material); one line
-                naming the object and the column (exit 65).
+                naming the object and the column (exit 65); likewise a
+                ``material_arm_stiffness_n_per_cm`` cell, and a ``material_relaxation_time_s``
+                cell that is missing with ``k2 > 0`` or not a number in (0, 10⁴] s.
         """
         raw = {str(k): v for k, v in row.items()}
         oid = _plain(raw.get("object_id"))
@@ -194,6 +214,12 @@ class CatalogObject(Mapping[str, Any]):
             weight = _number(raw, "weight_n", object_id)
             mu = _number(raw, "friction_mu", object_id)
             exponent = _number(raw, EXPONENT_COLUMN, object_id) if EXPONENT_COLUMN in raw else 1.0
+            arm = _number(raw, ARM_COLUMN, object_id) if ARM_COLUMN in raw else 0.0
+            tau = (
+                _number(raw, RELAXATION_COLUMN, object_id)
+                if arm > 0.0 or not _absent(raw, RELAXATION_COLUMN)
+                else None
+            )
         except InputDataError as err:
             raise InputDataError(err.message, path=path) from None
         material = [_plain(raw.get(c)) for c in MATERIAL_COLUMNS]
@@ -211,6 +237,8 @@ class CatalogObject(Mapping[str, Any]):
             material_stiffness_n_per_cm=stiffness,
             material_damping_ns_per_cm=damping,
             material_stiffness_exponent=exponent,
+            material_arm_stiffness_n_per_cm=arm,
+            material_relaxation_time_s=tau,
             row=raw,
         )
 
@@ -282,6 +310,12 @@ class CatalogObject(Mapping[str, Any]):
                 stiffness_n_per_cm=stiffness,
                 damping_ns_per_cm=damping,
                 stiffness_exponent=self.material_stiffness_exponent,
+                arm_stiffness_n_per_cm=self.material_arm_stiffness_n_per_cm,
+                relaxation_time_s=(
+                    math.inf
+                    if self.material_relaxation_time_s is None
+                    else self.material_relaxation_time_s
+                ),
             )
         except InputDataError as err:
             message = err.message if missing == [] else f"{err.message}; {needs}"

@@ -33,20 +33,31 @@ Example:
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pandas as pd
 
-from deformctl.catalog import CATALOG_COLUMNS, MATERIAL_COLUMNS, SIZE_COLUMNS
+from deformctl.catalog import (
+    ARM_COLUMN,
+    CATALOG_COLUMNS,
+    EXPONENT_COLUMN,
+    MATERIAL_COLUMNS,
+    RELAXATION_COLUMN,
+    SIZE_COLUMNS,
+)
 from deformctl.errors import UsageError
 from deformctl.population_options import (
     DEFAULT_FRICTION_MU,
+    DEFAULT_GRIP_LAW_MIX,
+    GRIP_LAWS,
     PAPER_POPULATION_SIZE,
 )
 from deformctl.quantities import (
     DAMPING_NS_PER_CM,
     FRICTION_MU,
     SIZE_CM,
+    STIFFNESS_EXPONENT,
     STIFFNESS_N_PER_CM,
     WEIGHT_N,
 )
@@ -229,11 +240,121 @@ def grip_strain_at_f_w(catalog: pd.DataFrame) -> np.ndarray:
     return np.asarray(f_w / (d * catalog[SIZE_COLUMNS[0]].to_numpy(dtype=np.float64)))
 
 
-def grip_population(n: int, *, seed: int, id_prefix: str = "P") -> pd.DataFrame:
+#: The Hunt–Crossley objects' stiffness exponent n, uniform: from linear to the stiffest law a
+#: soft object shows (:data:`deformctl.quantities.STIFFNESS_EXPONENT`, ``characterize``'s bounds).
+#: Their D and λ are the grip ranges' at F_w (the secant stiffness and equivalent damping there).
+GRIP_HC_EXPONENT: Range = (STIFFNESS_EXPONENT.low, STIFFNESS_EXPONENT.high)
+#: The standard linear solids' arm spring over their relaxed spring, k2 / D, log-uniform: from a
+#: quarter to three times (the solid stiffens 1.25-4 times at rates fast against 1/τ).
+GRIP_SLS_ARM_RATIO: Range = (0.25, 3.0)
+#: The standard linear solids' relaxation time τ, s, log-uniform: what ``measure --sim``'s
+#: default squeezes (0.25 s ramp, 1 s hold) let ``characterize --model sls`` recover within 3 %
+#: (below about 0.2 s its fit window cannot resolve τ; above about 1.5 s the 1 s hold cannot tell
+#: k2 from D; ``make sls-check``). Their D is the grip range's (the relaxed spring) and λ is 0
+#: (the Zener solid itself, what ``--model sls`` fits).
+GRIP_SLS_RELAXATION_TIME_S: Range = (0.25, 1.0)
+
+
+def parse_law_mix(text: str, *, label: str = "--laws") -> dict[str, float]:
+    """A law mix ``kv=1,hc=1,sls=1`` (weights, any scale; a law alone means weight 1) as shares
+    that sum to 1, in :data:`GRIP_LAWS` order, laws of weight 0 left out.
+
+    Raises:
+        UsageError: an unknown law, a weight that is not a finite number >= 0, a law given twice,
+            or no weight above 0; naming ``label`` and the known laws (exit 2).
+    """
+    weights: dict[str, float] = {}
+    known = ", ".join(GRIP_LAWS)
+    for part in str(text).split(","):
+        name, _, value = part.strip().partition("=")
+        name = name.strip()
+        if name not in GRIP_LAWS:
+            raise UsageError(f"{label}: unknown law {name!r} in {text!r} (known: {known})")
+        if name in weights:
+            raise UsageError(f"{label}: law {name!r} given twice in {text!r}")
+        try:
+            weight = float(value) if value.strip() else 1.0
+        except ValueError:
+            weight = math.nan
+        if not (math.isfinite(weight) and weight >= 0):
+            raise UsageError(f"{label}: the weight of {name} must be a number >= 0, got {value!r}")
+        weights[name] = weight
+    total = sum(weights.values())
+    if not total > 0:
+        raise UsageError(f"{label}: no law has a weight above 0 in {text!r} (known: {known})")
+    return {law: weights[law] / total for law in GRIP_LAWS if weights.get(law, 0.0) > 0}
+
+
+def grip_law_spec(laws: str | dict[str, float] = DEFAULT_GRIP_LAW_MIX) -> dict[str, object]:
+    """The grip population's law mix and every range, JSON-safe (plain floats, lists), for a
+    model's metadata or ``train --note``: ``{"mix": {law: share}, "common": {column: [low,
+    high, draw]}, "laws": {law: {column: [low, high, draw]}}}`` (draw: ``log-uniform``,
+    ``uniform``, ``log-uniform-shifted`` for λ, ``fixed``), only the laws of the mix.
+    """
+    mix = parse_law_mix(laws) if isinstance(laws, str) else parse_law_mix(_mix_text(laws))
+
+    def span(bounds: Range, draw: str) -> list[object]:
+        return [float(bounds[0]), float(bounds[1]), draw]
+
+    d = span(GRIP_DEFORMABILITY_N_PER_CM, "log-uniform")
+    lam = span(GRIP_DAMPING_NS_PER_CM, f"log-uniform-shifted {GRIP_DAMPING_SHIFT_NS_PER_CM:g}")
+    per_law: dict[str, dict[str, list[object]]] = {
+        "kv": {MATERIAL_COLUMNS[0]: d, MATERIAL_COLUMNS[1]: lam},
+        "hc": {
+            MATERIAL_COLUMNS[0]: d,
+            MATERIAL_COLUMNS[1]: lam,
+            EXPONENT_COLUMN: span(GRIP_HC_EXPONENT, "uniform"),
+        },
+        "sls": {
+            MATERIAL_COLUMNS[0]: d,
+            MATERIAL_COLUMNS[1]: span((0.0, 0.0), "fixed"),
+            "arm_ratio_k2_over_d": span(GRIP_SLS_ARM_RATIO, "log-uniform"),
+            RELAXATION_COLUMN: span(GRIP_SLS_RELAXATION_TIME_S, "log-uniform"),
+        },
+    }
+    return {
+        "mix": {law: float(share) for law, share in mix.items()},
+        "common": {
+            "weight_n": span(GRIP_WEIGHT_N, "log-uniform"),
+            "friction_mu": span(GRIP_FRICTION_MU, "uniform"),
+            "size_x_cm": span((10.0, 20.0), "uniform"),
+            "size_y_cm": span((10.0, 20.0), "uniform"),
+            "size_z_cm": span((8.0, 20.0), "uniform"),
+            "max_strain_at_f_w": float(GRIP_MAX_STRAIN_AT_F_W),
+        },
+        "laws": {law: per_law[law] for law in mix},
+    }
+
+
+def _mix_text(mix: dict[str, float]) -> str:
+    return ",".join(f"{law}={weight!r}" for law, weight in mix.items())
+
+
+def catalog_laws(catalog: pd.DataFrame) -> np.ndarray:
+    """``[n]`` each object's material law, ``kv``, ``hc`` or ``sls``: Hunt–Crossley when its
+    ``material_stiffness_exponent`` is above 1, a standard linear solid when its
+    ``material_arm_stiffness_n_per_cm`` is above 0 (absent columns: Kelvin–Voigt)."""
+    n = len(catalog)
+
+    def column(name: str, absent: float) -> np.ndarray:
+        if name not in catalog.columns:
+            return np.full(n, absent)
+        return np.asarray(pd.to_numeric(catalog[name], errors="coerce").fillna(absent))
+
+    laws = np.full(n, "kv", dtype=object)
+    laws[column(EXPONENT_COLUMN, 1.0) > 1.0] = "hc"
+    laws[column(ARM_COLUMN, 0.0) > 0.0] = "sls"
+    return laws
+
+
+def grip_population(
+    n: int, *, seed: int, id_prefix: str = "P", laws: str = DEFAULT_GRIP_LAW_MIX
+) -> pd.DataFrame:
     """The bundled grip model's population: ``n`` grippable objects over the grip ranges.
 
     Drawn from ``numpy.random.default_rng(seed)`` in batches of ``n`` candidates (each batch
-    in a fixed order: W, D, λ, μ, sizes x, y, z), keeping those that can be gripped
+    in a fixed order: W, D, λ, μ, sizes x, y, z; then, unless the mix is Kelvin–Voigt alone,
+    the law, n, k2 / D and τ), keeping those that can be gripped
     (:data:`GRIP_MAX_STRAIN_AT_F_W`), until ``n`` are kept; ids are numbered in the order kept.
     The law:
 
@@ -242,12 +363,22 @@ def grip_population(n: int, *, seed: int, id_prefix: str = "P") -> pd.DataFrame:
       soft objects are not crowded out by the heavy ones;
     * λ with (λ + 0.01) log-uniform on [0.01, 15.01] N·s/cm (:data:`GRIP_DAMPING_NS_PER_CM`);
     * μ uniform on :data:`GRIP_FRICTION_MU` (0.2-1.0);
-    * sizes as :func:`make_population`'s defaults (x, y 10-20 cm, z 8-20 cm).
+    * sizes as :func:`make_population`'s defaults (x, y 10-20 cm, z 8-20 cm);
+    * the material law by ``laws`` (:func:`parse_law_mix`; default Kelvin–Voigt alone, the
+      catalog of before, bit for bit): Hunt–Crossley objects take n uniform on
+      :data:`GRIP_HC_EXPONENT` (their D and λ stated at F_w), standard linear solids k2 / D
+      log-uniform on :data:`GRIP_SLS_ARM_RATIO`, τ log-uniform on
+      :data:`GRIP_SLS_RELAXATION_TIME_S` and λ = 0. A mix with another law than Kelvin–Voigt
+      adds the columns ``material_stiffness_exponent`` (1 but for Hunt–Crossley),
+      ``material_arm_stiffness_n_per_cm`` (0 but for the standard linear solid) and
+      ``material_relaxation_time_s`` (empty but for it); :func:`grip_law_spec` states it all.
 
     Raises:
-        UsageError: ``n`` < 1.
+        UsageError: ``n`` < 1, or a bad ``laws``.
     """
     n = check_population_size(n)
+    mix = parse_law_mix(laws)
+    mixed = set(mix) != {"kv"}
     rng = np.random.default_rng(seed)
     shift = GRIP_DAMPING_SHIFT_NS_PER_CM
 
@@ -274,6 +405,8 @@ def grip_population(n: int, *, seed: int, id_prefix: str = "P") -> pd.DataFrame:
                 )
             )
         )
+        if mixed:
+            _draw_laws(batch, mix, rng, log_uniform)
         batch = batch[grip_strain_at_f_w(batch) <= GRIP_MAX_STRAIN_AT_F_W]
         kept.append(batch)
         count += len(batch)
@@ -281,3 +414,24 @@ def grip_population(n: int, *, seed: int, id_prefix: str = "P") -> pd.DataFrame:
     width = max(2, len(str(n - 1)))
     out["object_id"] = [f"{id_prefix}{i:0{width}d}" for i in range(n)]
     return out
+
+
+def _draw_laws(
+    batch: pd.DataFrame,
+    mix: dict[str, float],
+    rng: np.random.Generator,
+    log_uniform: Callable[[Range, int], np.ndarray],
+) -> None:
+    """Draw each candidate's law and its parameters into ``batch`` (see :func:`grip_population`)."""
+    n = len(batch)
+    names = list(mix)
+    law = np.asarray(names, dtype=object)[rng.choice(len(names), size=n, p=list(mix.values()))]
+    exponent = rng.uniform(*GRIP_HC_EXPONENT, size=n)
+    ratio = log_uniform(GRIP_SLS_ARM_RATIO, n)
+    tau = log_uniform(GRIP_SLS_RELAXATION_TIME_S, n)
+    hc, sls = law == "hc", law == "sls"
+    d = batch[MATERIAL_COLUMNS[0]].to_numpy(dtype=np.float64)
+    batch[MATERIAL_COLUMNS[1]] = np.where(sls, 0.0, batch[MATERIAL_COLUMNS[1]])
+    batch[EXPONENT_COLUMN] = np.where(hc, exponent, 1.0)
+    batch[ARM_COLUMN] = np.where(sls, ratio * d, 0.0)
+    batch[RELAXATION_COLUMN] = np.where(sls, tau, np.nan)

@@ -36,6 +36,7 @@ from typing import Any
 from deformctl.errors import InputDataError, UsageError
 
 __all__ = [
+    "ARM_STIFFNESS_N_PER_CM",
     "AT_FORCE_N",
     "COVERAGE",
     "DAMPING_NS_PER_CM",
@@ -61,6 +62,7 @@ __all__ = [
     "RECORDED_PEAK_FORCE_N",
     "RECORDED_RATE_HZ",
     "RECORDED_SECANT_N_PER_CM",
+    "RELAXATION_TIME_S",
     "RIG_TIMEOUT_S",
     "SIZE_CM",
     "SLIP_TOLERANCE_M",
@@ -237,6 +239,16 @@ DAMPING_NS_PER_CM = Quantity("damping_ns_per_cm", "--damping-ns-per-cm", " N·s/
 #: bounds of ``characterize``'s Hunt–Crossley fit (:data:`deformctl.characterize.laws.
 #: HC_EXPONENT_BOUNDS`), and what the simulator's Hunt–Crossley lattice is calibrated for.
 STIFFNESS_EXPONENT = Quantity("material_stiffness_exponent", "--stiffness-exponent", "", 1.0, 3.0)
+#: k2, a standard linear solid's Maxwell arm spring (``characterize --model sls``'s
+#: ``sls_arm_stiffness_n_per_cm``; 0: no arm, a Kelvin–Voigt material): D's bounds, 0 included.
+ARM_STIFFNESS_N_PER_CM = Quantity(
+    "material_arm_stiffness_n_per_cm", "--arm-stiffness-n-per-cm", " N/cm", 0.0, 1e5
+)
+#: τ, the Maxwell arm's relaxation time (``sls_relaxation_time_s``): above 0 (the simulator's
+#: arms are stable for any τ), at most 10⁴ s (beyond a squeeze's hours the arm is a spring).
+RELAXATION_TIME_S = Quantity(
+    "material_relaxation_time_s", "--relaxation-time-s", " s", 0.0, 1e4, low_open=True
+)
 
 # ---------------------------------------------------------------------------- measuring
 SQUEEZES = Quantity("squeezes", "--squeezes", "", 1, integer=True)

@@ -7,7 +7,12 @@ import typer
 from deformctl.cli._common import translate_errors
 from deformctl.cli._options import Force
 from deformctl.errors import UsageError
-from deformctl.population_options import DEFAULT_FRICTION_MU, PAPER_POPULATION_SIZE
+from deformctl.population_options import (
+    DEFAULT_FRICTION_MU,
+    DEFAULT_GRIP_LAW_MIX,
+    EQUAL_GRIP_LAW_MIX,
+    PAPER_POPULATION_SIZE,
+)
 
 #: The columns whose ranges are options (``--weight-n`` for ``weight_n``, ...).
 RANGE_COLUMNS = ("weight_n", "deformability_n_per_cm", "damping_ns_per_cm", "friction_mu")
@@ -61,6 +66,14 @@ def population(
         help="Write -n grippable objects of the bundled grip model's law (W 0.5-80 N and D "
         "5-60 N/cm log-uniform, λ 0-15 N·s/cm, μ 0.2-1.0; ignores the ranges).",
     ),
+    laws: str = typer.Option(
+        DEFAULT_GRIP_LAW_MIX,
+        "--laws",
+        metavar="LAW=WEIGHT,...",
+        help="With --grip: the material laws' mix, weights of kv (Kelvin–Voigt), hc "
+        "(Hunt–Crossley, n 1-3) and sls (standard linear solid: k2/D 0.25-3, τ 0.25-1 s, λ 0), "
+        f"e.g. {EQUAL_GRIP_LAW_MIX}. The default is Kelvin–Voigt alone.",
+    ),
     force: Force = False,
 ) -> None:
     """Write a seeded catalog of objects with W, D, λ drawn uniformly from stated ranges.
@@ -73,7 +86,11 @@ def population(
     --paper writes the paper's four Table I objects instead, --golden the CI population,
     --grip the population of the bundled grip model (`make model`): W and D log-uniform, λ with
     (λ + 0.01) log-uniform, μ uniform, and only objects whose compression at F_w = W / (2 μ) is
-    at most a quarter of their size along the squeeze axis (F_w / D <= 0.25 size_x).
+    at most a quarter of their size along the squeeze axis (F_w / D <= 0.25 size_x). With
+    --laws it also draws each object's material law (Hunt–Crossley: n uniform in [1, 3], D and
+    λ stated at F_w; standard linear solid: D its relaxed spring, k2/D log-uniform in
+    [0.25, 3], τ log-uniform in [0.25, 1] s, λ = 0); the catalog's provenance records the mix
+    and every range.
 
     Example: deformctl population -n 73 --seed 0 -o population.csv
     """
@@ -81,6 +98,7 @@ def population(
     from deformctl.population import (
         check_population_size,
         golden_population,
+        grip_law_spec,
         grip_population,
         make_population,
         paper_objects,
@@ -92,10 +110,13 @@ def population(
     ]
     if len(chosen) > 1:
         raise UsageError(f"give one of --golden, --paper and --grip, not {' and '.join(chosen)}")
+    if laws != DEFAULT_GRIP_LAW_MIX and not grip:
+        raise UsageError("--laws draws the material laws of --grip's population: give --grip")
+    law_spec = grip_law_spec(laws) if grip else None  # before anything: a bad mix is exit 2
     if grip:
         if n < 1:
             raise UsageError(f"-n must be >= 1, got {n}")
-        catalog = grip_population(n, seed=seed, id_prefix=id_prefix)
+        catalog = grip_population(n, seed=seed, id_prefix=id_prefix, laws=laws)
     elif golden:
         catalog = golden_population()
     elif paper:
@@ -121,7 +142,13 @@ def population(
             raise
     provenance = Provenance.from_invocation(
         seed=None if golden or paper else seed,
-        settings={"golden": golden, "paper": paper, "grip": grip, "n": len(catalog)},
+        settings={
+            "golden": golden,
+            "paper": paper,
+            "grip": grip,
+            "n": len(catalog),
+            **({"laws": law_spec} if law_spec is not None and laws != DEFAULT_GRIP_LAW_MIX else {}),
+        },
     )
     write_catalog(catalog, output, provenance=provenance, force=force)
     typer.echo(f"wrote {len(catalog)} objects to {output}", err=True)

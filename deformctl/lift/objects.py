@@ -10,7 +10,10 @@ predicts from (:func:`deformctl.lift.seeded.object_features`), on the rig as in 
 An object whose chosen law is Hunt–Crossley (``model`` ``hc``) becomes a Hunt–Crossley material
 (``material_stiffness_exponent`` = ``hc_exponent``) with its D and λ restated at F_w = W/(2μ),
 where the catalog states them (:mod:`deformctl.sim.hunt_crossley`), whatever force
-``characterize`` stated them at.
+``characterize`` stated them at. An object whose chosen law is the standard linear solid
+(``model`` ``sls``) becomes one: D its relaxed spring ``sls_stiffness_n_per_cm``, the Maxwell arm
+``sls_arm_stiffness_n_per_cm`` and ``sls_relaxation_time_s``, and no dashpot beside it (λ = 0:
+the fitted law has none; :mod:`deformctl.sim.sls`).
 
 Example:
     >>> import pandas as pd
@@ -30,7 +33,13 @@ import numpy as np
 import pandas as pd
 
 from deformctl.artifacts.io import display_name, read_input_bytes
-from deformctl.catalog import EXPONENT_COLUMN, MATERIAL_COLUMNS, SIZE_COLUMNS
+from deformctl.catalog import (
+    ARM_COLUMN,
+    EXPONENT_COLUMN,
+    MATERIAL_COLUMNS,
+    RELAXATION_COLUMN,
+    SIZE_COLUMNS,
+)
 from deformctl.errors import InputDataError, SchemaError
 from deformctl.physics import rigid_grip_force_n
 
@@ -79,6 +88,7 @@ def catalog_from_coefficients(table: pd.DataFrame, path: str | None = None) -> p
         out[material] = values
         out[measured] = values  # what a start model predicts from, with a rig too
     _hunt_crossley_material(table, out)
+    _standard_linear_solid_material(table, out)
     return out
 
 
@@ -111,6 +121,28 @@ def _hunt_crossley_material(table: pd.DataFrame, out: pd.DataFrame) -> None:
         out[MATERIAL_COLUMNS[0]] = np.where(hc, f_w / d_w, out[MATERIAL_COLUMNS[0]])
         out[MATERIAL_COLUMNS[1]] = np.where(hc, lam * d_w**n, out[MATERIAL_COLUMNS[1]])
     out[EXPONENT_COLUMN] = np.where(hc, n, 1.0)
+
+
+def _standard_linear_solid_material(table: pd.DataFrame, out: pd.DataFrame) -> None:
+    """The standard linear solids' material in ``out``: D = ``sls_stiffness_n_per_cm``, λ = 0,
+    ``material_arm_stiffness_n_per_cm`` and ``material_relaxation_time_s`` from the fit (0 and
+    empty for the other objects; nothing when no object's law is ``sls``)."""
+    needed = {"model", "sls_stiffness_n_per_cm", "sls_arm_stiffness_n_per_cm"}
+    if not needed <= set(table.columns) or "sls_relaxation_time_s" not in table.columns:
+        return
+    sls = (table["model"].astype(str) == "sls").to_numpy()
+    if not sls.any():
+        return
+
+    def column(name: str) -> np.ndarray:
+        return pd.to_numeric(table[name], errors="coerce").to_numpy(dtype=np.float64)
+
+    out[MATERIAL_COLUMNS[0]] = np.where(
+        sls, column("sls_stiffness_n_per_cm"), out[MATERIAL_COLUMNS[0]]
+    )
+    out[MATERIAL_COLUMNS[1]] = np.where(sls, 0.0, out[MATERIAL_COLUMNS[1]])
+    out[ARM_COLUMN] = np.where(sls, column("sls_arm_stiffness_n_per_cm"), 0.0)
+    out[RELAXATION_COLUMN] = np.where(sls, column("sls_relaxation_time_s"), np.nan)
 
 
 def read_lift_objects(path: str) -> pd.DataFrame:

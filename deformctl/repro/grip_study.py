@@ -35,13 +35,19 @@ BOX_CM = (12.0, 12.0, 10.0)
 
 @dataclass(frozen=True)
 class Case:
-    """One object to simulate: W (N), D (N/cm), λ (N·s/cm), μ, box size (cm)."""
+    """One object to simulate: W (N), D (N/cm), λ (N·s/cm), μ, box size (cm); and its law's
+    parameters (:class:`deformctl.sim.ObjectSpec`'s): the stiffness exponent n (Hunt–Crossley
+    above 1, D and λ then stated at F_w), the arm spring k2 (N/cm) and relaxation time τ (s) of a
+    standard linear solid (none: k2 = 0)."""
 
     weight_n: float
     deformability_n_per_cm: float
     damping_ns_per_cm: float
     friction_mu: float
     size_cm: tuple[float, float, float] = BOX_CM
+    stiffness_exponent: float = 1.0
+    arm_stiffness_n_per_cm: float = 0.0
+    relaxation_time_s: float = math.inf
 
 
 def lift_ratio(case: Case) -> float:
@@ -58,6 +64,9 @@ def lift_ratio(case: Case) -> float:
         case.friction_mu,
         case.deformability_n_per_cm,
         case.damping_ns_per_cm,
+        case.stiffness_exponent,
+        case.arm_stiffness_n_per_cm,
+        case.relaxation_time_s,
     )
     result = find_min_lift_force(
         lambda force_n, _i: preset.lift_attempt(spec, force_n),

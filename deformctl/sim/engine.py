@@ -155,6 +155,7 @@ from deformctl.sim.lattice import (
 )
 from deformctl.sim.multigrid import Hierarchy, build_hierarchy
 from deformctl.sim.objects import ObjectSpec
+from deformctl.sim.sls import implicit_damping, maxwell_arms, unloaded
 from deformctl.sim.solver import LDLFactor, estimate_factor_entries, ldl_columns
 from deformctl.sim.statics import resting_state, unit_squeeze_stiffness_n_per_m
 from deformctl.sim.stencil import build_stencil
@@ -166,6 +167,7 @@ from deformctl.sim.step import (
     Drive,
     HuntCrossley,
     IterativeSolver,
+    Maxwell,
     Palms,
     integrate,
     integrate_iterative,
@@ -354,7 +356,8 @@ class Model:
             (see :mod:`deformctl.sim.step`);
         bottom_particles, bottom_row: table contact map (every particle).
         gravity_m_s2: gravity along -z (0 when off).
-        law: the Hunt–Crossley elements (:func:`deformctl.sim.hunt_crossley.hc_law`).
+        law: the Hunt–Crossley elements (:func:`deformctl.sim.hunt_crossley.hc_law`); arm: the
+            Maxwell arms (:mod:`deformctl.sim.sls`; their implicit share is in the damping).
     """
 
     spec: ObjectSpec
@@ -388,6 +391,7 @@ class Model:
     bottom_row: IntArray
     gravity_m_s2: float
     law: HuntCrossley
+    arm: Maxwell
 
 
 @lru_cache(maxsize=16)
@@ -488,7 +492,7 @@ def check_run_steps(
 def element_constants(
     spec: ObjectSpec, settings: SimSettings
 ) -> tuple[Lattice, FloatArray, FloatArray]:
-    """Lattice and calibrated element stiffness (N/m) and damping (N·s/m), each ``[m]``."""
+    """Lattice and calibrated element stiffness (N/m) and damping (N·s/m; arms too), ``[m]``."""
     check_lattice_size(spec, settings)
     if spec.hunt_crossley:  # the tangent and damping at the reference strain
         el = spec_elements(spec, settings)
@@ -497,6 +501,8 @@ def element_constants(
     lattice, unit_d = _lattice_and_scale(spec.size_m, alpha_m, settings.palm_layer == "surface")
     stiffness = lattice.unit_stiffness * (spec.stiffness_n_per_m / unit_d)
     damping = stiffness * element_retardation_s(spec, settings)
+    if spec.standard_linear_solid:
+        damping = damping + implicit_damping(spec, stiffness, settings.implicit_step_s)
     return lattice, stiffness, damping
 
 
@@ -574,16 +580,9 @@ def build_model(
     width_c = width_damping_ns_per_m(spec, settings) if gripped else 0.0
     if width_c > 0.0:
         pl, pr = int(palm_x[0]), int(palm_x[1])
-        a = (
-            a
-            + scipy.sparse.coo_matrix(
-                (
-                    h * width_c * np.array([1.0, -1.0, -1.0, 1.0]),
-                    ([pl, pl, pr, pr], [pl, pr, pl, pr]),
-                ),
-                shape=(n_dof, n_dof),
-            ).tocsr()
-        ).tocsr()
+        width = h * width_c * np.array([1.0, -1.0, -1.0, 1.0])
+        ij = ([pl, pl, pr, pr], [pl, pr, pl, pr])
+        a = (a + scipy.sparse.coo_matrix((width, ij), shape=(n_dof, n_dof)).tocsr()).tocsr()
     palm_dofs = np.concatenate([palm_x, palm_z])
     iterative = uses_iterative_solver(settings, n_dof)
     factor = None if iterative else lattice_factor(lattice, a, dof_of, n_dof, last=palm_dofs)
@@ -701,6 +700,7 @@ def build_model(
         bottom_row=bottom_row,
         gravity_m_s2=g,
         law=law,
+        arm=maxwell_arms(spec, stiffness),
     )
 
 
@@ -716,6 +716,7 @@ def run_model(
     v: FloatArray | None = None,
     frame_every: int = 0,
     frames: FloatArray | None = None,
+    arm: Maxwell | None = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Integrate ``len(force_cmd_n) - 1`` steps.
 
@@ -735,6 +736,7 @@ def run_model(
         frame_every, frames: copy the particle positions into ``frames`` (m, ``[n_frames, n,
             3]``, see :func:`deformctl.sim.scene.frame_buffer`) after steps 0, ``frame_every``,
             2 ``frame_every``... (0: no copies; what is simulated does not depend on it).
+        arm: the Maxwell arms to run with, updated in place (default: the model's, unloaded).
 
     Returns:
         final q, final v and the record matrix ``[n_run, N_REC]`` (``n_run`` is
@@ -748,7 +750,7 @@ def run_model(
     body = Body(
         model.base_x, model.dof_of, model.particle_masses_kg, lat.edges, lat.rest_length_m,
         lat.direction, model.stiffness_n_per_m, model.retardation_s, s.nonlinear_springs,
-        model.law,
+        model.law, unloaded(model.arm) if arm is None else arm,
     )  # fmt: skip
     palms = Palms(
         model.palm_x_dof, model.palm_z_dof, model.palm_x0, model.palm_stop_m, s.palm_mass_kg,

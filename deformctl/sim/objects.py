@@ -8,6 +8,12 @@ gives it: D is the *secant* stiffness at the operating force ``F_op = F_w = W / 
 ``λ_hc = λ / d_opⁿ`` (:attr:`ObjectSpec.hc_stiffness_n_per_m_pow_n`,
 :attr:`ObjectSpec.hc_damping_ns_per_m_pow_n_plus_1`). With ``n = 1`` both readings agree.
 
+With an arm stiffness ``k2 > 0`` the material is a standard linear solid (Zener): D is its
+relaxed spring, and a Maxwell arm (``k2`` in series with a dashpot ``k2 τ``) acts beside it and
+beside the dashpot λ (0 for the Zener solid ``characterize --model sls`` fits):
+``f = D d + λ ḋ + σ``, ``σ̇ = k2 ḋ − σ/τ`` (:mod:`deformctl.sim.sls`). A material is
+Hunt–Crossley or a standard linear solid, not both.
+
 Sizes are in cm, stiffness in N/cm and damping in N·s/cm (the paper's units at the edge); the
 spec keeps those units in its field names and offers SI properties for the physics. A catalog row
 becomes a spec through :meth:`deformctl.catalog.CatalogObject.to_sim_spec`: the simulator does not
@@ -16,13 +22,16 @@ read catalogs.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from deformctl.errors import InputDataError
 from deformctl.physics import rigid_grip_force_n
 from deformctl.quantities import (
+    ARM_STIFFNESS_N_PER_CM,
     DAMPING_NS_PER_CM,
     FRICTION_MU,
+    RELAXATION_TIME_S,
     SIZE_CM,
     STIFFNESS_EXPONENT,
     STIFFNESS_N_PER_CM,
@@ -46,6 +55,10 @@ class ObjectSpec:
         stiffness_exponent: n in [1, 3]: 1 (default) a Kelvin–Voigt object; above 1 a
             Hunt–Crossley object whose D and lambda are stated at the operating force (see the
             module docs).
+        arm_stiffness_n_per_cm: k2, the Maxwell arm's spring, N/cm: 0 (default) no arm; above 0
+            a standard linear solid (see the module docs).
+        relaxation_time_s: τ, the arm's relaxation time, s (``inf``, the default: the arm, if
+            any, is a spring).
     """
 
     object_id: str
@@ -55,6 +68,8 @@ class ObjectSpec:
     stiffness_n_per_cm: float
     damping_ns_per_cm: float
     stiffness_exponent: float = 1.0
+    arm_stiffness_n_per_cm: float = 0.0
+    relaxation_time_s: float = math.inf
 
     def __post_init__(self) -> None:
         where = f"object {self.object_id!r}"
@@ -70,6 +85,17 @@ class ObjectSpec:
         STIFFNESS_N_PER_CM.check_data(float(self.stiffness_n_per_cm), where=where)
         DAMPING_NS_PER_CM.check_data(float(self.damping_ns_per_cm), where=where)
         STIFFNESS_EXPONENT.check_data(float(self.stiffness_exponent), where=where)
+        ARM_STIFFNESS_N_PER_CM.check_data(float(self.arm_stiffness_n_per_cm), where=where)
+        if not math.isinf(float(self.relaxation_time_s)):
+            RELAXATION_TIME_S.check_data(float(self.relaxation_time_s), where=where)
+        elif self.relaxation_time_s < 0:
+            raise InputDataError(f"{where}: a relaxation time must be > 0 s")
+        if self.hunt_crossley and self.standard_linear_solid:
+            raise InputDataError(
+                f"{where}: a material is Hunt–Crossley (stiffness exponent "
+                f"{self.stiffness_exponent:g}) or a standard linear solid (arm stiffness "
+                f"{self.arm_stiffness_n_per_cm:g} N/cm), not both"
+            )
 
     @property
     def size_m(self) -> tuple[float, float, float]:
@@ -95,6 +121,11 @@ class ObjectSpec:
     def hunt_crossley(self) -> bool:
         """Whether the material stiffens (``n > 1``: Hunt–Crossley springs in the lattice)."""
         return self.stiffness_exponent != 1.0
+
+    @property
+    def standard_linear_solid(self) -> bool:
+        """Whether the material relaxes (``k2 > 0``: Maxwell arms in the lattice)."""
+        return self.arm_stiffness_n_per_cm > 0.0
 
     @property
     def operating_force_n(self) -> float:

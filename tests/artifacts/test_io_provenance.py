@@ -126,6 +126,8 @@ def test_fixed_catalog_spelling() -> None:
         "material_stiffness_n_per_cm",
         "material_damping_ns_per_cm",
         "material_stiffness_exponent",
+        "material_arm_stiffness_n_per_cm",
+        "material_relaxation_time_s",
     ]
 
 

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -135,3 +138,92 @@ def test_grip_population_rule_leaves_out_what_cannot_be_gripped() -> None:
     )
     with pytest.raises(UsageError):
         grip_population(0, seed=1)
+
+
+def test_grip_population_draws_the_material_laws_of_its_mix() -> None:
+    from deformctl.population import (
+        GRIP_HC_EXPONENT,
+        GRIP_SLS_ARM_RATIO,
+        GRIP_SLS_RELAXATION_TIME_S,
+        catalog_laws,
+        grip_law_spec,
+        grip_population,
+    )
+
+    # the default mix is Kelvin–Voigt alone: the catalog of before, bit for bit (same draws)
+    pd.testing.assert_frame_equal(
+        grip_population(60, seed=5), grip_population(60, seed=5, laws="kv=2")
+    )
+    cat = grip_population(600, seed=5, laws="kv=1,hc=1,sls=2")
+    laws = catalog_laws(cat)
+    share = {law: float(np.mean(laws == law)) for law in ("kv", "hc", "sls")}
+    assert abs(share["kv"] - 0.25) < 0.06, share
+    assert abs(share["sls"] - 0.5) < 0.06, share
+    hc, sls = cat[laws == "hc"], cat[laws == "sls"]
+    n = hc["material_stiffness_exponent"]
+    assert n.between(*GRIP_HC_EXPONENT).all()
+    assert n.min() < 1.2
+    assert n.max() > 2.8
+    assert (cat.loc[laws != "hc", "material_stiffness_exponent"] == 1.0).all()
+    ratio = sls["material_arm_stiffness_n_per_cm"] / sls["material_stiffness_n_per_cm"]
+    assert ratio.between(*GRIP_SLS_ARM_RATIO).all()
+    assert ratio.max() / ratio.min() > 8
+    tau = sls["material_relaxation_time_s"]
+    assert tau.between(*GRIP_SLS_RELAXATION_TIME_S).all()
+    assert tau.max() / tau.min() > 3
+    assert (sls["material_damping_ns_per_cm"] == 0.0).all()  # the Zener solid itself
+    assert cat.loc[laws != "sls", "material_relaxation_time_s"].isna().all()
+    assert (cat.loc[laws != "sls", "material_arm_stiffness_n_per_cm"] == 0.0).all()
+    # every row is a simulator object of its law
+    from deformctl.catalog import catalog_objects
+
+    specs = [o.to_sim_spec() for o in catalog_objects(cat)]
+    assert [s.standard_linear_solid for s in specs] == list(laws == "sls")
+    assert [s.hunt_crossley for s in specs] == list(laws == "hc")
+    # the mix and every range, JSON-safe for a model's metadata
+    spec = grip_law_spec("kv=1,hc=1,sls=2")
+    assert json.loads(json.dumps(spec)) == spec
+    assert spec["mix"] == {"kv": 0.25, "hc": 0.25, "sls": 0.5}
+    assert spec["laws"]["hc"]["material_stiffness_exponent"][:2] == [1.0, 3.0]
+    assert spec["laws"]["sls"]["material_relaxation_time_s"][:2] == [0.25, 1.0]
+    assert set(grip_law_spec()["laws"]) == {"kv"}
+
+
+@pytest.mark.parametrize(
+    ("mix", "message"),
+    [("kv=1,foo=2", "unknown law 'foo'"), ("hc=-1", "weight of hc"), ("kv=0", "no law"),
+     ("kv,kv", "twice"), ("sls=nan", "weight of sls")],
+)  # fmt: skip
+def test_a_bad_law_mix_is_one_usage_line(mix: str, message: str, tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from deformctl.cli import app
+
+    out = tmp_path / "p.csv"
+    result = CliRunner().invoke(app, ["population", "--grip", "--laws", mix, "-o", str(out)])
+    assert result.exit_code == 2
+    assert result.stderr.startswith("error: --laws: ")
+    assert message in result.stderr
+    assert result.stderr.count("\n") == 1
+    assert not out.exists()
+    result = CliRunner().invoke(app, ["population", "--laws", "hc", "-o", str(out)])
+    assert result.exit_code == 2
+    assert "give --grip" in result.stderr
+
+
+def test_the_grip_catalog_records_its_law_mix(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from deformctl.artifacts import read_catalog
+    from deformctl.cli import app
+    from deformctl.population import catalog_laws
+
+    out = tmp_path / "p.parquet"
+    args = ["population", "--grip", "-n", "20", "--laws", "hc=1,sls=1", "-o", str(out)]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert set(catalog_laws(read_catalog(out))) == {"hc", "sls"}
+    import pyarrow.parquet as pq
+
+    meta = json.loads(pq.read_schema(out).metadata[b"deformctl"])
+    assert meta["provenance"]["settings"]["laws"]["mix"] == {"hc": 0.5, "sls": 0.5}

@@ -51,6 +51,7 @@ from deformctl.sim.step.bundles import (
     Drive,
     HuntCrossley,
     IterativeSolver,
+    Maxwell,
     Palms,
 )
 from deformctl.sim.step.direct import integrate
@@ -102,6 +103,7 @@ __all__ = [
     "Drive",
     "HuntCrossley",
     "IterativeSolver",
+    "Maxwell",
     "Palms",
     "integrate",
     "integrate_iterative",

@@ -50,6 +50,31 @@ class HuntCrossley(NamedTuple):
     rest_force: FloatArray
 
 
+class Maxwell(NamedTuple):
+    """The Maxwell arms of a standard linear solid (Zener): a spring in series with a dashpot
+    beside each element's spring and damper (``stiffness`` of length 0: none, the Kelvin or
+    Hunt–Crossley elements alone; see :mod:`deformctl.sim.sls`).
+
+    Each arm's force ``σ`` (a tension, N) follows ``σ̇ = k_a ṡ − σ/τ`` for the element's stretch
+    rate ``ṡ``; the step integrates it with the positions' own scheme
+    (:mod:`deformctl.sim.step.maxwell`).
+
+    Attributes:
+        stiffness: each arm's spring ``k_a``, N/m, ``[m]`` (``[0]``: no arms).
+        relaxation: τ, s, the arms' relaxation time (``inf``: the arm is a spring).
+        force: each arm's force at the start of the step, N, ``[m]`` (updated in place; zero:
+            the relaxed object a run starts from).
+        previous: the arms' force a step earlier, N, ``[m]`` (BDF2's history).
+        base: the arms' force at the step's base state, N, ``[m]`` (the BDF2 predictor).
+    """
+
+    stiffness: FloatArray
+    relaxation: float
+    force: FloatArray
+    previous: FloatArray
+    base: FloatArray
+
+
 class Body(NamedTuple):
     """The lattice and its Kelvin elements.
 
@@ -64,6 +89,7 @@ class Body(NamedTuple):
         law: the Hunt–Crossley springs and dampers (``law.exponent == 1``: the Kelvin elements
             above); with them ``k`` is the tangent the implicit step was built with and
             ``retardation k`` a linear damper added to each element.
+        arm: the Maxwell arms of a standard linear solid (none: ``arm.stiffness`` is empty).
     """
 
     base_x: FloatArray
@@ -76,6 +102,7 @@ class Body(NamedTuple):
     retardation: float
     nonlinear: bool
     law: HuntCrossley
+    arm: Maxwell
 
 
 class Palms(NamedTuple):

@@ -28,6 +28,7 @@ from deformctl.sim.step.delassus import (
     _warm_solve,
 )
 from deformctl.sim.step.forces import _predict, _step_impulse
+from deformctl.sim.step.maxwell import _arm_predict, _arm_update
 from deformctl.sim.step.record import N_REC, _record_step, _slipped_past
 
 FloatArray = NDArray[np.float64]
@@ -143,6 +144,7 @@ def integrate(
     for step in range(n_steps):
         f_now = force_cmd[step + 1]
         _predict(q, v, q_last, v_last, q_prev, v_prev, bdf2)
+        _arm_predict(body.arm, bdf2)
         _step_impulse(
             body, palms, q, v, gravity * gravity_scale[step + 1], f_now, h_step, x, vel, fp, fq
         )
@@ -322,6 +324,7 @@ def integrate(
                 f = friction_of[r]
                 if f >= 0 and state[r] == 1 and state[f] == 1:
                     state[r] = 3
+        _arm_update(body, x, vnew, h_step)  # before x moves to the new positions
         _record_step(step, tally, motion, body, palms, contacts, drive, all_rows, nr, f_now, h_step)
         if _slipped_past(rec, step, stop_slip, stop_from):
             return q, v, rec[: step + 1]

@@ -1,5 +1,6 @@
-"""The step's forces: the Kelvin elements (or the Hunt–Crossley ones of a stiffening material),
-gravity and the palms' drive, as the implicit step's right-hand side, and the BDF2 predictor.
+"""The step's forces: the Kelvin elements (or the Hunt–Crossley ones of a stiffening material;
+and a standard linear solid's Maxwell arms, :mod:`.maxwell`), gravity and the palms' drive, as
+the implicit step's right-hand side, and the BDF2 predictor.
 
 The linear Kelvin loop (:func:`_element_rhs`) is the same code with or without Hunt–Crossley
 elements: :func:`_step_impulse` branches once per step, on ``body.law.exponent``, to it or to
@@ -13,6 +14,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from deformctl.sim.step.bundles import Body, Palms
+from deformctl.sim.step.maxwell import _arm_rhs
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -242,6 +244,8 @@ def _step_impulse(
         _element_rhs_hc(body, x, vel, dt, fp)
     else:
         _element_rhs(body, x, vel, dt, fp)
+    if body.arm.stiffness.shape[0] > 0:  # a standard linear solid's Maxwell arms
+        _arm_rhs(body, x, vel, dt, fp)
     fq[:] = 0.0
     for p in range(n):
         fp[p, 2] -= particle_mass[p] * gravity

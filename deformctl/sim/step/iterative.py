@@ -22,6 +22,7 @@ from deformctl.sim.step.bundles import (
 from deformctl.sim.step.contact import _choose_rows, _moved_less, _row_targets
 from deformctl.sim.step.dense import _solve_dense
 from deformctl.sim.step.forces import _predict, _step_impulse
+from deformctl.sim.step.maxwell import _arm_predict, _arm_update
 from deformctl.sim.step.record import N_REC, _record_step, _slipped_past
 
 FloatArray = NDArray[np.float64]
@@ -320,6 +321,7 @@ def integrate_iterative(
     for step in range(n_steps):
         f_now = force_cmd[step + 1]
         _predict(q, v, q_last, v_last, q_prev, v_prev, bdf2)
+        _arm_predict(body.arm, bdf2)
         _step_impulse(
             body, palms, q, v, gravity * gravity_scale[step + 1], f_now, h_step, x, vel, fp, fq
         )
@@ -616,6 +618,7 @@ def integrate_iterative(
             dv_hist[slot, i] = dv[i]
             y_hist[slot, i] = adv[i]
         err_hist[slot] = adv_err
+        _arm_update(body, x, vnew, h_step)  # before x moves to the new positions
         _record_step(step, tally, motion, body, palms, contacts, drive, rows, n_rows, f_now, h_step)
         if _slipped_past(rec, step, stop_slip, stop_from):
             return q, v, rec[: step + 1]
