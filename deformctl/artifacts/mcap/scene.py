@@ -161,12 +161,13 @@ def scene_messages(
     head = {"object_id": object_id, "run": run, "index": int(index)}
     palm_head = json.dumps(head, separators=(",", ":"))[:-1]
     times = start_ns + np.rint((scene.time_s - t0_s) * NS_PER_S).astype(np.int64)
+    palm_of = np.maximum(side, 0)
+    colour = np.where(on_palm, 1 + 2 * palm_of + scene.slipping[:, palm_of].astype(np.int64), 0)
+    sphere_text = [spheres.frame(scene.positions_m[k], colour[k]) for k in range(len(times))]
     out: list[tuple[int, str, bytes]] = []
     for k, log_ns in enumerate(times.tolist()):
         stamp = '{"sec":%d,"nsec":%d}' % divmod(log_ns, NS_PER_S)  # noqa: UP031
         meta = '%s,{"key":"time_s","value":"%r"}]' % (meta_head, float(scene.time_s[k]))  # noqa: UP031
-        slipping = scene.slipping[k].astype(np.int64)
-        colour = np.where(on_palm, 1 + 2 * np.maximum(side, 0) + slipping[np.maximum(side, 0)], 0)
         centres = scene.palm_centres_m(k)
         cubes = ",".join(_box(centres[s], scene.palm_size_m, palm_colour) for s in (0, 1))
         before, after = _entity(stamp, "object", meta, spheres="\0").split("\0")
@@ -177,7 +178,7 @@ def scene_messages(
         update = b"".join(
             (
                 ('{"deletions":[],"entities":[%s' % ",".join(entities)).encode(),  # noqa: UP031
-                spheres.frame(scene.positions_m[k], colour),
+                sphere_text[k],
                 (tail + "]}").encode(),
             )
         )
