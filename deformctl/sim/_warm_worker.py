@@ -13,6 +13,8 @@ from __future__ import annotations
 import contextlib
 
 with contextlib.suppress(Exception):  # a fork server that failed here would break every pool
-    from deformctl.sim.warmup import compile_kernels
+    from deformctl.sim.first_use import ensure_compiled
+    from deformctl.sim.protocols import compile_kernels
 
-    compile_kernels()
+    if not ensure_compiled(compile_kernels):  # compiled here (on one stderr line), or loaded now
+        compile_kernels()

@@ -7,6 +7,7 @@ palm command schedule as arrays, and runs the whole attempt in one numba call.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -16,6 +17,7 @@ from numpy.typing import NDArray
 from deformctl.errors import SimulationError, UsageError
 from deformctl.scene import scene_every_steps
 from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
+from deformctl.sim import first_use
 from deformctl.sim.engine import SimSettings, build_model, check_run_steps, run_model
 from deformctl.sim.objects import ObjectSpec
 from deformctl.sim.scene import frame_buffer, scene_frames
@@ -199,6 +201,35 @@ class SupportRelease:
         return {"mode": self.mode, "release_time_s": self.release_time_s}
 
 
+def _kernels_ready() -> None:
+    """Before a process's first run: compile every kernel once, on one stderr line, if these
+    sources' kernels were never compiled (:mod:`deformctl.sim.first_use`)."""
+    first_use.ensure_compiled(compile_kernels)
+
+
+#: a small object: every kernel runs, none for long
+_WARM_SPEC = ObjectSpec("warmup", (4.0, 4.0, 4.0), 1.0, 0.5, 10.0, 0.5)
+
+
+def compile_kernels() -> float:
+    """Run every simulator kernel once (compiling or loading it), with the argument types of a
+    real run: a squeeze and a lift attempt with the direct solver and the iterative one
+    (multigrid CG), backward Euler and BDF2; returns the wall time, s."""
+    first_use.mark_compiled()  # the runs below must not ask again (and mark at the end)
+    t0 = time.perf_counter()
+    for solver in ("direct", "iterative"):
+        for integrator in ("euler", "bdf2"):
+            settings = SimSettings(
+                particles_per_side=4, solver=solver, integrator=integrator, grip_settle_s=0.01
+            )
+            squeeze(_WARM_SPEC, peak_force_n=1.0, ramp_s=0.005, hold_s=0.005, settings=settings)
+            for mode in ("table", "support"):
+                lift_attempt(_WARM_SPEC, 2.0, settings=settings, release=SupportRelease(mode=mode))
+    build_model.cache_clear()
+    first_use.mark_compiled()
+    return time.perf_counter() - t0
+
+
 def _check_finite(rec: FloatArray, what: str, spec: ObjectSpec) -> None:
     if not np.all(np.isfinite(rec)):
         raise SimulationError(f"object {spec.object_id!r}: non-finite state during {what}")
@@ -245,6 +276,7 @@ def squeeze(
     every = scene_every_steps(scene_hz, s.dt_s)
     n_steps = max(1, round((ramp_s + hold_s) / s.dt_s))
     check_run_steps(spec, s, n_steps, "squeeze", every)
+    _kernels_ready()
     model = build_model(spec, s, gripped=True, gravity=gravity, table=gravity)
     t = np.arange(n_steps + 1, dtype=np.float64) * s.dt_s
     force = peak_force_n * (np.clip(t / ramp_s, 0.0, 1.0) if ramp_s > 0 else np.ones_like(t))
@@ -352,6 +384,7 @@ def lift_attempt(
         raise UsageError(f"grip_force_n must be finite and >= 0, got {grip_force_n}")
     every = scene_every_steps(scene_hz, s.dt_s)
     on_table = r.mode == "table"
+    _kernels_ready()
     model = build_model(spec, s, gripped=True, resting=on_table, table=on_table)
     dt = s.dt_s
     rise = p.rise_m(spec)
@@ -456,6 +489,7 @@ def free_run(
 ) -> FreeRunSeries:
     """Release ``spec`` undeformed and at rest with its bottom ``drop_height_m`` above the table."""
     s = settings or SimSettings()
+    _kernels_ready()
     model = build_model(
         spec, s, gripped=False, gravity=True, table=table, resting=False, lift_m=drop_height_m
     )

@@ -16,34 +16,19 @@ Every kernel's cache is keyed by a hash of all the simulator's kernel sources
 (:mod:`deformctl.sim._kernel_cache`), not by its own file only as numba's is: after an edit of
 any kernel module (the multigrid, the stencil sweeps, the step loops...) every kernel compiles
 afresh, so a stale kernel is never loaded; run the warm-up again after such an edit.
+
+A process's first simulated run compiles the kernels when they were never compiled, on one stderr
+line (:mod:`deformctl.sim.first_use`); ``deformctl warmup`` (and ``make install``) does it ahead.
 """
 
 from __future__ import annotations
 
 import sys
-import time
 
-from deformctl.sim.engine import SimSettings, build_model
-from deformctl.sim.objects import ObjectSpec
-from deformctl.sim.protocols import SupportRelease, lift_attempt, squeeze
+from deformctl.sim.first_use import ensure_compiled
+from deformctl.sim.protocols import compile_kernels
 
-#: a small object: every kernel runs, none for long
-_SPEC = ObjectSpec("warmup", (4.0, 4.0, 4.0), 1.0, 0.5, 10.0, 0.5)
-
-
-def compile_kernels() -> float:
-    """Run every simulator kernel once (compiling or loading it); returns the wall time, s."""
-    t0 = time.perf_counter()
-    for solver in ("direct", "iterative"):
-        for integrator in ("euler", "bdf2"):
-            settings = SimSettings(
-                particles_per_side=4, solver=solver, integrator=integrator, grip_settle_s=0.01
-            )
-            squeeze(_SPEC, peak_force_n=1.0, ramp_s=0.005, hold_s=0.005, settings=settings)
-            for mode in ("table", "support"):
-                lift_attempt(_SPEC, 2.0, settings=settings, release=SupportRelease(mode=mode))
-    build_model.cache_clear()
-    return time.perf_counter() - t0
+__all__ = ["compile_kernels", "ensure_compiled", "main"]
 
 
 def main() -> None:

@@ -198,3 +198,34 @@ def test_the_layout_plots_fields_that_exist() -> None:
         assert field in fields, path
     named = json.dumps(layout["layout"])
     assert all(k in named for k in panels)  # every configured panel is placed
+
+
+def _python_spheres(xyz: np.ndarray, colour: np.ndarray, colours: list[str]) -> str:
+    template = (
+        '{"pose":{"position":{"x":%.7f,"y":%.7f,"z":%.7f},"orientation":{"w":1.0}},'
+        '"size":{"x":0.01},"color":%s}'
+    )
+    return ",".join(
+        template % (x, y, z, colours[c])
+        for (x, y, z), c in zip(xyz.tolist(), colour.tolist(), strict=True)
+    )
+
+
+def test_the_compiled_spheres_are_pythons_percent_text() -> None:
+    """The compiled writer gives ``%.7f``'s text on positions of every scale and sign (negative
+    zero, sub-rounding values, metres), and Python's own text for values it does not take."""
+    from deformctl.artifacts.mcap._scene_text import SpheresWriter
+
+    colours = ['{"r":0.1}', '{"r":0.25,"g":1.0}', "{}"]
+    writer = SpheresWriter('{"w":1.0}', '{"x":0.01}', colours)
+    rng = np.random.default_rng(7)
+    for scale in (1e-9, 1e-7, 1e-4, 0.05, 1.0, 30.0, 1e6):
+        xyz = rng.normal(0.0, scale, (257, 3))
+        xyz[0] = (-0.0, 0.0, -4e-8)
+        xyz[1] = (0.5e-7, -0.5e-7, 1.5e-7)
+        colour = rng.integers(0, len(colours), 257)
+        assert writer.frame(xyz, colour).decode() == _python_spheres(xyz, colour, colours)
+    odd = np.array([[np.nan, 1.0, 2.0], [1e300, -np.inf, 0.0]])
+    colour = np.zeros(2, np.int64)
+    assert writer.frame(odd, colour).decode() == _python_spheres(odd, colour, colours)
+    assert writer.frame(np.zeros((0, 3)), np.zeros(0, np.int64)) == b""

@@ -104,6 +104,17 @@ def _box(centre: np.ndarray, size: tuple[float, float, float], color: str) -> st
     )
 
 
+@functools.lru_cache(maxsize=16)
+def _spheres_writer(diameter_m: float) -> Any:
+    """The compiled writer of a frame's spheres of one diameter. Colour index of a sphere: 0 grey
+    (touching no palm), else 1 + 2 palm + (1 if that palm slipped)."""
+    from deformctl.artifacts.mcap._scene_text import SpheresWriter  # numba: only with a scene
+
+    d = diameter_m
+    colours = [_color(GREY), _color(STUCK), _color(SLIPPING), _color(STUCK), _color(SLIPPING)]
+    return SpheresWriter(_IDENTITY, _vector(d, d, d), colours)
+
+
 def scene_messages(
     scene: SceneFrames,
     *,
@@ -133,9 +144,9 @@ def scene_messages(
         ],
         separators=(",", ":"),
     )[:-1]
-    d = scene.particle_diameter_m
-    sphere = '{"pose":%s,"size":' + _vector(d, d, d) + ',"color":%s}'
-    colours = {"grey": _color(GREY), "stuck": _color(STUCK), "slipping": _color(SLIPPING)}
+    spheres = _spheres_writer(scene.particle_diameter_m)
+    side = scene.contact_side.astype(np.int64)
+    on_palm = side != NO_PALM
     palm_colour = _color(PALM)
     table = ""
     if scene.table:
@@ -150,27 +161,28 @@ def scene_messages(
     head = {"object_id": object_id, "run": run, "index": int(index)}
     palm_head = json.dumps(head, separators=(",", ":"))[:-1]
     times = start_ns + np.rint((scene.time_s - t0_s) * NS_PER_S).astype(np.int64)
+    palm_of = np.maximum(side, 0)
+    colour = np.where(on_palm, 1 + 2 * palm_of + scene.slipping[:, palm_of].astype(np.int64), 0)
+    sphere_text = [spheres.frame(scene.positions_m[k], colour[k]) for k in range(len(times))]
     out: list[tuple[int, str, bytes]] = []
     for k, log_ns in enumerate(times.tolist()):
         stamp = '{"sec":%d,"nsec":%d}' % divmod(log_ns, NS_PER_S)  # noqa: UP031
         meta = '%s,{"key":"time_s","value":"%r"}]' % (meta_head, float(scene.time_s[k]))  # noqa: UP031
-        state = ["slipping" if s else "stuck" for s in scene.slipping[k]]
-        spheres = ",".join(
-            sphere % (_pose(*p), colours["grey" if side == NO_PALM else state[side]])
-            for p, side in zip(
-                scene.positions_m[k].tolist(), scene.contact_side.tolist(), strict=True
-            )
-        )
         centres = scene.palm_centres_m(k)
         cubes = ",".join(_box(centres[s], scene.palm_size_m, palm_colour) for s in (0, 1))
-        entities = [
-            _entity(stamp, "palms", meta, cubes=cubes),
-            _entity(stamp, "object", meta, spheres=spheres),
-        ]
+        before, after = _entity(stamp, "object", meta, spheres="\0").split("\0")
+        entities = [_entity(stamp, "palms", meta, cubes=cubes), before]
+        tail = after
         if table:
-            entities.append(_entity(stamp, "table", meta, cubes=table))
-        update = '{"deletions":[],"entities":[%s]}' % ",".join(entities)  # noqa: UP031
-        out.append((log_ns, SCENE_TOPIC, update.encode()))
+            tail += "," + _entity(stamp, "table", meta, cubes=table)
+        update = b"".join(
+            (
+                ('{"deletions":[],"entities":[%s' % ",".join(entities)).encode(),  # noqa: UP031
+                sphere_text[k],
+                (tail + "]}").encode(),
+            )
+        )
+        out.append((log_ns, SCENE_TOPIC, update))
         palms = {
             "time_s": float(scene.time_s[k]),
             "palm_left_x_m": float(scene.palm_x_m[k, 0]),
