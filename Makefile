@@ -69,11 +69,11 @@ reproduce: install
 $(R)/population.csv:
 	$(DC) population -n 73 --seed 0 -o $@
 $(R)/squeeze.mcap: $(R)/population.csv
-	$(DC) measure $< --sim --seed 0 --workers $(WORKERS) -o $@
+	$(DC) measure sim $< --seed 0 --workers $(WORKERS) -o $@
 $(R)/coefficients.parquet: $(R)/squeeze.mcap
 	$(DC) characterize $< -o $@ > $(R)/coefficients.txt
 $(R)/lift.parquet: $(R)/population.csv
-	$(DC) lift $< --sim --workers $(WORKERS) -o $@ --log $(R)/lift.mcap > $(R)/lift.txt
+	$(DC) lift sim $< --workers $(WORKERS) -o $@ --log $(R)/lift.mcap > $(R)/lift.txt
 $(R)/index.parquet: $(R)/coefficients.parquet $(R)/lift.parquet
 	$(DC) table $^ -o $@
 $(R)/model.skops: $(R)/index.parquet
@@ -87,13 +87,13 @@ $(R)/predictions.parquet: $(R)/model.skops $(R)/index.parquet
 # has been waiting for one before it looks again, so a run that became ready earlier would take
 # the slot the tail's next step needs (measured: the table or the training started 3-4 s late).
 $(R)/paper_lift.parquet: | $(R)/coefficients.parquet
-	$(DC) lift datasets/paper/objects.csv --sim --workers $(WORKERS) -o $@ --log $(R)/paper_lift.mcap
+	$(DC) lift sim datasets/paper/objects.csv --workers $(WORKERS) -o $@ --log $(R)/paper_lift.mcap
 $(R)/paper_squeeze.mcap: | $(R)/paper_lift.parquet
-	$(DC) measure datasets/paper/objects.csv --sim --seed 0 --workers $(WORKERS) -o $@
+	$(DC) measure sim datasets/paper/objects.csv --seed 0 --workers $(WORKERS) -o $@
 $(R)/paper_coefficients.parquet: $(R)/paper_squeeze.mcap
 	$(DC) characterize $< -o $@
 $(R)/table3_lift.parquet: | $(R)/paper_coefficients.parquet
-	$(DC) lift datasets/paper/table3_cubes.csv --sim --workers $(WORKERS) -o $@
+	$(DC) lift sim datasets/paper/table3_cubes.csv --workers $(WORKERS) -o $@
 
 # in the order make starts them: the population's chain (lift, measure, characterize, table,
 # train, predict) first, Table I and III as slots free up
@@ -121,7 +121,7 @@ calibrate: install
 # The bundled grip model (datasets/models/grip.skops, `deformctl predict grip ...`): a seeded grip
 # population (population --grip: W 0.5-80 N, D 5-60 N/cm, λ 0-15 N·s/cm, μ 0.2-1.0, only objects
 # whose compression at F_w is at most a quarter of their width) through the pipeline with the
-# default lift --sim preset: lift --sim gives the truth L_f, measure --sim + characterize the
+# default lift sim preset: lift sim gives the truth L_f, measure sim + characterize the
 # features D and λ (what a robot user has), table, then train (grip form: L_f / F_w from ω_n and
 # ζ; MODEL_TRAIN rows train the network, MODEL_CAL calibrate the upper bound, the rest are
 # train's test rows). Then a fresh population (seed MODEL_EVAL_SEED), the friction pairs and
@@ -151,7 +151,7 @@ _grip_train: $(M)/train/index.parquet
 	$(DC) train $< -o $(MODEL_OUT) --force --train-size $(MODEL_TRAIN) \
 	  --calibration-size $(MODEL_CAL) --seed 0 --metrics $(M)/train/metrics.json \
 	  --note population=grip --note population_n=$(MODEL_N) --note population_seed=$(MODEL_SEED) \
-	  --note sim_preset=$(MODEL_PRESET) --note features_from="measure --sim + characterize"
+	  --note sim_preset=$(MODEL_PRESET) --note features_from="measure sim + characterize"
 
 _grip_eval: $(M)/test/index.parquet $(M)/mu/index.parquet $(M)/paper/index.parquet
 
@@ -164,9 +164,9 @@ $(M)/mu/population.csv: $(M)/test/population.csv
 $(M)/paper/population.csv:
 	cp datasets/paper/objects.csv $@
 $(M)/%/lift.parquet: $(M)/%/population.csv
-	$(DC) lift $< --sim --sim-preset $(MODEL_PRESET) --workers $(WORKERS) -o $@ > $(@D)/lift.txt
+	$(DC) lift sim $< --sim-preset $(MODEL_PRESET) --workers $(WORKERS) -o $@ > $(@D)/lift.txt
 $(M)/%/squeeze.mcap: $(M)/%/population.csv
-	$(DC) measure $< --sim --sim-preset $(MODEL_PRESET) --seed 0 --workers $(WORKERS) -o $@
+	$(DC) measure sim $< --sim-preset $(MODEL_PRESET) --seed 0 --workers $(WORKERS) -o $@
 $(M)/%/coefficients.parquet: $(M)/%/squeeze.mcap
 	$(DC) characterize $< -o $@ > $(@D)/coefficients.txt
 $(M)/%/index.parquet: $(M)/%/coefficients.parquet $(M)/%/lift.parquet
@@ -193,17 +193,18 @@ examples: install
 	cd $(EX) && ../$(BIN)/python ../examples/synthetic_index.py demo
 	cd $(EX) && ../$(BIN)/python ../examples/doubtful_exports.py doubtful
 	cd $(EX) && ../$(BIN)/python ../examples/make_sample_recordings.py recordings
-	cd $(EX) && ../$(DC) measure --bag recordings/gripper.mcap --wrench-topic /left/wrench \
+	cd $(EX) && ../$(DC) measure bag recordings/gripper.mcap --wrench-topic /left/wrench \
 	  --wrench-topic /right/wrench --position-topic /joint_states --joint gripper_width \
 	  --position-is gap --object-id sponge --weight-n 0.6 -o recordings/sponge.mcap
-	cd $(EX) && ../$(DC) measure --csv doubtful/utm.csv --columns time=t,force=load,compression=pos \
+	cd $(EX) && ../$(DC) measure csv doubtful/utm.csv --columns time=t,force=load,compression=pos \
 	  --units compression=mm --object-id foam --weight-n 0.7 -o doubtful/utm.mcap
 	cd $(EX) && ../$(DC) characterize doubtful/utm.mcap -o doubtful/utm.parquet
-	cd $(EX) && ../$(DC) measure --csv ../datasets/examples/phantom/*.csv --weight-n 0.62 -o phantoms/
+	cd $(EX) && ../$(DC) measure csv ../datasets/examples/phantom/*.csv --weight-n 0.62 -o phantoms/
 	cd $(EX) && ../$(DC) characterize phantoms/ -o phantoms.parquet --model kv
-	cd $(EX) && ../$(DC) lift ../datasets/paper/objects.csv \
-	  --rig "../$(BIN)/python ../examples/threshold_rig.py" -o lift-rig.parquet --log lift-rig.mcap
-	cd $(EX) && ../$(DC) lift ../datasets/paper/objects.csv --sim --objects D -o scene.parquet \
+	cd $(EX) && ../$(DC) lift rig ../datasets/paper/objects.csv \
+	  --command "../$(BIN)/python ../examples/threshold_rig.py" -o lift-rig.parquet \
+	  --log lift-rig.mcap
+	cd $(EX) && ../$(DC) lift sim ../datasets/paper/objects.csv --objects D -o scene.parquet \
 	  --log scene.mcap
 	cd $(EX) && ../$(BIN)/python ../examples/draw_scene_frame.py scene.mcap scene.png --object D
 	@echo "examples ran in $(EX)/"
@@ -211,7 +212,7 @@ examples: install
 # The figure of docs/guide/simulator.md: one frame of a lift log's /scene, drawn from the log.
 scene-figure: install
 	rm -rf .scene && mkdir -p .scene
-	$(DC) lift datasets/paper/objects.csv --sim -o .scene/lift.parquet --log .scene/lift.mcap
+	$(DC) lift sim datasets/paper/objects.csv -o .scene/lift.parquet --log .scene/lift.mcap
 	$(BIN)/python examples/draw_scene_frame.py .scene/lift.mcap docs/foxglove/scene-frame.png \
 	  --object D --index 0 --frame -1
 

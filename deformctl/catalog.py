@@ -292,7 +292,7 @@ class CatalogObject(Mapping[str, Any]):
         """
         from deformctl.sim import ObjectSpec  # deferred: numba and scipy
 
-        needs = "--sim needs material_stiffness_n_per_cm and material_damping_ns_per_cm"
+        needs = "the simulator needs material_stiffness_n_per_cm and material_damping_ns_per_cm"
         missing = [c for c in MATERIAL_COLUMNS if _absent(self.row, c)]
         if len(missing) == len(MATERIAL_COLUMNS):
             raise InputDataError(

@@ -15,7 +15,7 @@ writes (columns ``t`` in s, ``load`` in N, ``pos`` the compression in mm):
 
 Both have 1 % force noise and 10 µm (UTM) or 50 µm (gripper) position noise; then::
 
-    deformctl measure --csv OUTDIR/utm.csv --columns time=t,force=load,compression=pos \\
+    deformctl measure csv OUTDIR/utm.csv --columns time=t,force=load,compression=pos \\
         --units compression=mm --object-id foam --weight-n 0.7 -o OUTDIR/utm.mcap
     deformctl characterize OUTDIR/utm.mcap -o OUTDIR/utm.parquet
 """

@@ -3,7 +3,7 @@
 
 Usage: draw_scene_frame.py LOG PNG [--object ID] [--index K] [--frame N]
 
-Reads the ``foxglove.SceneUpdate`` messages of LOG (a ``lift --sim`` or ``measure --sim`` log),
+Reads the ``foxglove.SceneUpdate`` messages of LOG (a ``lift sim`` or ``measure sim`` log),
 checks the one it draws against the JSON Schema Foxglove publishes
 (``schemas/foxglove/SceneUpdate.json``), and draws the frame Foxglove's 3-D panel would show at
 that moment: the palms (cubes), the object's surface particles (spheres; those on a palm's face

@@ -22,10 +22,10 @@ writes two recordings of Kelvin–Voigt objects whose D and λ are known, so tha
 
 The same script gives the same files (seeded noise, fixed stamps); then::
 
-    deformctl measure --bag OUTDIR/gripper.mcap --wrench-topic /left/wrench \\
+    deformctl measure bag OUTDIR/gripper.mcap --wrench-topic /left/wrench \\
         --wrench-topic /right/wrench --position-topic /joint_states --joint gripper_width \\
         --position-is gap --object-id sponge --weight-n 0.6 -o sponge.mcap
-    deformctl measure --csv OUTDIR/utm_export.csv \\
+    deformctl measure csv OUTDIR/utm_export.csv \\
         --columns time=Time,force=Force,compression=Crosshead \\
         --object-id foam --weight-n 0.7 -o foam.mcap
 """

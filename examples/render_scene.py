@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Render camera images of a known box, to try ``deformctl measure --images`` without a camera.
+"""Render camera images of a known box, to try ``deformctl measure images`` without a camera.
 
 Usage: render_scene.py OUTDIR [--size-cm X Y Z] [--marker-size-cm S] [--tilt-deg T]
 [--hfov-deg F] [--seed N]
@@ -9,7 +9,7 @@ DICT_4X4_50, id 0, lying beside the box) and OUTDIR/side.png (camera in front, t
 standing upright in the plane of the box's front face), plus OUTDIR/top_bg.png and
 OUTDIR/side_bg.png (the same scenes without the box, for --background). The images have noise
 and a lighting gradient; the camera is a pinhole with an F-degree horizontal field of view (default
-60, what ``measure --images`` assumes without ``--camera-matrix``), whose calibration is written
+60, what ``measure images`` assumes without ``--camera-matrix``), whose calibration is written
 to OUTDIR/camera.yaml as ``cv2.FileStorage`` saves ``cv2.calibrateCamera``'s output. The true
 size is printed on stderr, so the measurement can be compared with it.
 """

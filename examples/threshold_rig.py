@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A stand-in rig for ``deformctl lift --rig``: lifts when the grip beats a threshold force.
+"""A stand-in rig for ``deformctl lift rig``: lifts when the grip beats a threshold force.
 
 It follows the rig protocol (docs/rig-protocol.md): one JSON request on stdin, one JSON answer
 on stdout, notes on stderr. Instead of a robot it pretends each object needs
@@ -10,10 +10,10 @@ With ``--lift-force-from TABLE`` (a lift results table, e.g. the demo's of
 ``examples/synthetic_index.py``) each object needs that table's ``lift_force_n`` instead.
 
 Usage (deformctl runs it once per attempt):
-    deformctl lift datasets/paper/objects.csv --rig "python3 examples/threshold_rig.py" \\
+    deformctl lift rig datasets/paper/objects.csv --command "python3 examples/threshold_rig.py" \\
         -o lift.parquet --log lift.mcap
-    deformctl lift demo/objects.csv --objects P01 \\
-        --rig "python3 examples/threshold_rig.py --lift-force-from demo/lift.parquet" \\
+    deformctl lift rig demo/objects.csv --objects P01 \\
+        --command "python3 examples/threshold_rig.py --lift-force-from demo/lift.parquet" \\
         --start-model demo/model.skops --coefficients demo/coefficients.parquet -o seeded.parquet
 
 Replace the body of ``grip_and_lift`` with your robot driver.

@@ -219,8 +219,14 @@ def lift_dataset(
         raise UsageError("--log is not used with a dataset directory output (DIR/_logs/ has them)")
     from deformctl.lift.runners.sim import LiftTask, lift_sweep
 
-    task = LiftTask(preset=preset, search=search, log_epoch_ns=log_epoch_ns, scene_hz=scene_hz,
-                    max_force_n=max_force_n)  # fmt: skip
-    summary = lift_sweep(catalog, task, output=output, sweep=sweep, object_ids=object_ids,
-                         force=force)  # fmt: skip
+    task = LiftTask(
+        preset=preset,
+        search=search,
+        log_epoch_ns=log_epoch_ns,
+        scene_hz=scene_hz,
+        max_force_n=max_force_n,
+    )
+    summary = lift_sweep(
+        catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
+    )
     finish_sweep(summary, "lift", quiet=quiet)

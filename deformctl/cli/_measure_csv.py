@@ -172,9 +172,13 @@ def run(
     from deformctl.parallel import single_file_workers
 
     files = csv_objects(
-        paths, objects_from=objects_from, object_id=named.object_id,
-        weight_n=named.weight_n, size_cm=named.size_cm, friction_mu=named.friction_mu,
-    )  # fmt: skip
+        paths,
+        objects_from=objects_from,
+        object_id=named.object_id,
+        weight_n=named.weight_n,
+        size_cm=named.size_cm,
+        friction_mu=named.friction_mu,
+    )
     if sweep.check(output, file_workers=True):
         summary = measure_csv_sweep(files, task, output=output, sweep=sweep, force=force)
         report_dataset(summary.out_dir)

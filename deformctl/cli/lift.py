@@ -117,11 +117,35 @@ def sim(
     seed = start(protocol=search.protocol, dataset=dataset)
     epoch_ns = opt.parse_log_epoch(log_epoch)
     if dataset:
-        lift_dataset(catalog, preset, log, search, epoch_ns, scene, output, sweep, object_ids,
-                     force, quiet, max_force_n=max_force_n)  # fmt: skip
+        lift_dataset(
+            catalog,
+            preset,
+            log,
+            search,
+            epoch_ns,
+            scene,
+            output,
+            sweep,
+            object_ids,
+            force,
+            quiet,
+            max_force_n=max_force_n,
+        )
         return
-    _lift_file(catalog, factory, output, log, object_ids, search, seed, epoch_ns, sweep.workers,
-               max_force_n, force, None if quiet else clock)  # fmt: skip
+    _lift_file(
+        catalog,
+        factory,
+        output,
+        log,
+        object_ids,
+        search,
+        seed,
+        epoch_ns,
+        sweep.workers,
+        max_force_n,
+        force,
+        None if quiet else clock,
+    )
 
 
 @translate_errors
@@ -164,8 +188,20 @@ def rig(
     MAX_FORCE_N.check_optional(max_force_n)  # None: the catalog's or the default ceiling
     object_ids = opt.parse_object_ids(objects)
     seed = start(protocol=search.protocol, dataset=False)
-    _lift_file(catalog, factory, output, log, object_ids, search, seed, None,
-               opt.NO_SWEEP.workers, max_force_n, force, None if quiet else clock)  # fmt: skip
+    _lift_file(
+        catalog,
+        factory,
+        output,
+        log,
+        object_ids,
+        search,
+        seed,
+        None,
+        opt.NO_SWEEP.workers,
+        max_force_n,
+        force,
+        None if quiet else clock,
+    )
 
 
 def _lift_file(
@@ -188,13 +224,22 @@ def _lift_file(
 
     with progress_bar(stderr_console(), "lift") as progress:
         run = lift_catalog_files(
-            catalog, factory, output=output, log=log, object_ids=object_ids, search=search,
-            progress=progress, force=force, log_epoch_ns=epoch_ns, seed=seed, warn=warn,
-            workers=workers, max_force_n=max_force_n,
-        )  # fmt: skip
+            catalog,
+            factory,
+            output=output,
+            log=log,
+            object_ids=object_ids,
+            search=search,
+            progress=progress,
+            force=force,
+            log_epoch_ns=epoch_ns,
+            seed=seed,
+            warn=warn,
+            workers=workers,
+            max_force_n=max_force_n,
+        )
     summary = None if clock is None else run_summary(run, clock, output, log)
-    report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)),
-               summary=summary)  # fmt: skip
+    report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)), summary=summary)
 
 
 #: ``lift`` and its subcommands (registered on the root app as one group).

@@ -39,6 +39,7 @@ def measure() -> None:
 
     One subcommand per source. The log stores each object's weight (and size, friction when
     given), the source sample rates and provenance (input sha256, command line, settings).
+    measure images writes an object's catalog row from two photos instead.
 
     Example: deformctl measure sim datasets/paper/objects.csv -o squeeze.mcap
     """

@@ -79,7 +79,7 @@ def catalog_from_coefficients(table: pd.DataFrame, path: str | None = None) -> p
             raise InputDataError(
                 f"{column} is missing for {format_ids(ids[bad])}: a coefficients table lifts "
                 f"only objects whose squeeze log recorded it (measure {flag}, or a catalog "
-                "with it to measure --sim)",
+                "with it to measure sim)",
                 path=path,
             )
         out[column] = values

@@ -88,7 +88,7 @@ def measure_images(
     top, side = images
     object_id, friction_mu = obj.object_id, obj.friction_mu
     if friction_mu is None:
-        raise UsageError("--images needs --friction-mu (the catalog requires friction_mu)")
+        raise UsageError("measure images needs --friction-mu (the catalog requires friction_mu)")
     if append and force:
         raise UsageError("--append and --force cannot be used together")
     if append and is_stdio(output):

@@ -70,7 +70,7 @@ def test_a_missing_size_or_weight_names_the_column_and_the_flag(
     line = _error(runner.invoke(app, ["lift", "sim", str(path), "-o", str(out)]), 65)
     assert line == (
         f"error: {path}: {drop} is missing for B: a coefficients table lifts only objects whose "
-        f"squeeze log recorded it (measure {flag}, or a catalog with it to measure --sim)"
+        f"squeeze log recorded it (measure {flag}, or a catalog with it to measure sim)"
     )
     assert not out.exists()
     write_table(table.drop(columns=[drop]), path, "coefficients", provenance=None, force=True)

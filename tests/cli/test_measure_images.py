@@ -308,7 +308,7 @@ def test_image_options_refused_with_other_sources(tmp_path: Path) -> None:
     result = run("measure", "images", "a.png", "b.png", "--marker-size-cm", 5,
                  "--object-id", "a", "--weight-n", 1, "-o", tmp_path / "o.csv")  # fmt: skip
     assert result.exit_code == 2
-    assert "--images needs --friction-mu" in one_line_error(result)
+    assert "measure images needs --friction-mu" in one_line_error(result)
 
 
 # ------------------------------------------------------------------------ slip from frames

@@ -399,7 +399,7 @@ def test_row_without_material_values_is_bad_input(tmp_path: Path, command: str) 
     assert one_line_error(res) == (
         f"error: {catalog}: object 'real_bag' has no material values "
         "(material_stiffness_n_per_cm, material_damping_ns_per_cm empty); "
-        "--sim needs material_stiffness_n_per_cm and material_damping_ns_per_cm"
+        "the simulator needs material_stiffness_n_per_cm and material_damping_ns_per_cm"
     )
     assert listing(tmp_path) == ["objects.csv"]
 
