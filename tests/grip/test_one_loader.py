@@ -111,6 +111,7 @@ FILES: dict[str, Callable[[Path], Path]] = {
     "target range reversed": _metadata(_set("target_range.lift_ratio_f_w", [2.0, 1.0])),
     "score x100": _metadata(_set("conformal_scores.0", 100.0)),
     "n_calibration": _metadata(_set("n_calibration", 3)),
+    "provenance not an object": _metadata(_set("provenance", "abc")),
 }
 
 
