@@ -244,10 +244,6 @@ class Predictor:
         if not isinstance(exp, dict):
             raise NoNumpyExportError("the model file has no numpy export", path=path)
         predictor = cls.from_export(exp, meta, path)
-        if meta.get("provenance") is not None:  # inspect shows it: refused alike everywhere
-            from deformctl.artifacts.provenance import Provenance
-
-            Provenance.from_dict(meta["provenance"], path=path)
         problem = file_problem(path, exp)  # the estimator agrees with the export (one loader)
         if problem is not None:
             raise InputDataError(f"not a usable lifting-force model: {problem}", path=path)
