@@ -151,6 +151,16 @@ def _dtype_name(series: pd.Series) -> str:
     return str(series.dtype)
 
 
+def _model_provenance(prov: Any, name: str) -> dict[str, Any] | None:
+    """A model file's provenance as a dict, or None (none stored, or a malformed record)."""
+    if prov is None:
+        return None
+    try:
+        return Provenance.from_dict(prov, path=name).to_dict()
+    except SchemaError:
+        return None
+
+
 def _table_summary(df: pd.DataFrame, kind: str) -> dict[str, Any]:
     spec = load_table_spec(kind)
     columns = []
@@ -422,7 +432,9 @@ def _model_summary(data: bytes, path: PathArg) -> dict[str, Any]:
         "adapted": meta.get("adapted") if isinstance(meta.get("adapted"), dict) else None,
         "tool_version": str(meta.get("tool_version", "unknown")),
         "blas": blas_record(meta.get("blas")),
-        "provenance": None if prov is None else Provenance.from_dict(prov, path=name).to_dict(),
+        # predict never reads it, so a malformed record is shown as missing, not refused: the
+        # same file gets the same verdict from inspect and predict (grip.modelfile)
+        "provenance": _model_provenance(prov, name),
     }
 
 
