@@ -317,9 +317,12 @@ def grip_law_spec(laws: str | dict[str, float] = DEFAULT_GRIP_LAW_MIX) -> dict[s
         "common": {
             "weight_n": span(GRIP_WEIGHT_N, "log-uniform"),
             "friction_mu": span(GRIP_FRICTION_MU, "uniform"),
-            "size_x_cm": span((10.0, 20.0), "uniform"),
-            "size_y_cm": span((10.0, 20.0), "uniform"),
-            "size_z_cm": span((8.0, 20.0), "uniform"),
+            **{
+                column: span(bounds, "uniform")
+                for column, bounds in zip(
+                    SIZE_COLUMNS, ((10.0, 20.0), (10.0, 20.0), (8.0, 20.0)), strict=True
+                )
+            },
             "max_strain_at_f_w": float(GRIP_MAX_STRAIN_AT_F_W),
         },
         "laws": {law: per_law[law] for law in mix},

@@ -106,12 +106,6 @@ def test_measure_bag_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -
     assert seen["segmentation"] == deformctl.Segmentation()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="the library reads a CSV position column as travel (the compression) by default; "
-    "the command's --position-is still defaults to palm until the CLI takes None for the "
-    "source's default (travel for --csv, palm for --bag)",
-)
 def test_measure_csv_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     seen = _record(monkeypatch, "deformctl.measure.csv_batch.measure_csv_files")
     columns = "time=t,force=f,compression=c"

@@ -190,6 +190,6 @@ MaxForceN = Annotated[
         "--max-force-n",
         metavar="N",
         help="Force ceiling per palm, N [default: the catalog's max_force_n, else 10 x F_w "
-        "or a known rupture force].",
+        "or a known rupture force]; with a rig never above its stated maximum (else 500 N).",
     ),
 ]

@@ -143,7 +143,7 @@ READ = OptionGroup(
     (
         ("columns", Columns, None),
         ("units", Units, None),
-        ("position_is", PositionIs, "palm"),
+        ("position_is", PositionIs, "travel"),
         ("position_increases_when", PositionIncreasesWhen, None),
         ("skip_rows", SkipRows, None),
         ("delimiter", Delimiter, None),

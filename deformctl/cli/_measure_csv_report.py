@@ -26,6 +26,8 @@ def _counted(lines: Sequence[str], of: int) -> list[str]:
 
 
 def report_files(result: CsvBatchResult, output: str) -> None:
+    from deformctl.measure.csv_batch import file_notices
+
     read = result.read
     total = len(result.outcomes)
     notes: list[str] = []
@@ -33,19 +35,8 @@ def report_files(result: CsvBatchResult, output: str) -> None:
         rec = o.recording
         assert rec is not None
         notes.append(rec.notes[0])
-        for line in rec.notes[1:]:
-            typer.echo(f"{display_name(o.file.path)}: {line}", err=True)
-        for line in rec.warnings:
-            typer.echo(
-                f"warning: {display_name(o.file.path)}: object {o.file.object_id!r}: {line}",
-                err=True,
-            )
-        for r in rec.ruptures:
-            typer.echo(
-                f"warning: {display_name(o.file.path)}: object {o.file.object_id!r}: rupture in "
-                f"{r.describe()}: cut off",
-                err=True,
-            )
+        for line in file_notices(o):
+            typer.echo(line, err=True)
     for line in _counted(notes, len(read)):
         typer.echo(line if total > 1 else f"{display_name(read[0].file.path)}: {line}", err=True)
     for o in result.failed:
@@ -76,6 +67,7 @@ def report_dataset(out_dir: str | PathLike[str]) -> None:
     """The columns, warnings and failures of a ``measure csv -o DIR/`` run, from its parts."""
     from deformctl.artifacts.dataset import read_dataset, read_failures
     from deformctl.errors import DeformctlError
+    from deformctl.measure.csv_batch import dataset_notices
 
     try:
         rows = read_dataset(out_dir)
@@ -84,11 +76,8 @@ def report_dataset(out_dir: str | PathLike[str]) -> None:
     if rows is not None and len(rows):
         for line in _counted([f"columns: {c}" for c in rows["columns"]], len(rows)):
             typer.echo(f"{out_dir}: {line}", err=True)
-        for rec in rows.to_dict("records"):
-            for text in filter(None, str(rec["warnings"]).split("\n")):
-                typer.echo(
-                    f"warning: {rec['source_file']}: object {rec['object_id']!r}: {text}", err=True
-                )
+        for line in dataset_notices(rows):
+            typer.echo(line, err=True)
     try:
         failures = read_failures(out_dir)
     except (DeformctlError, ValueError):

@@ -40,8 +40,8 @@ PositionIs = Annotated[
     str,
     typer.Option(
         "--position-is",
-        metavar="palm|gap",
-        help="d = 2 x palm travel, or gap(t0) - gap.",
+        metavar="travel|palm|gap",
+        help="d = the column's travel, 2 x one palm's travel, or gap(t0) - gap.",
     ),
 ]
 Columns = Annotated[

@@ -137,7 +137,7 @@ def predict(
       deformctl predict grip --weight-n 2.9 --deformability-n-per-cm 30 \\
           --damping-ns-per-cm 0.47 --friction-mu 0.5 --coverage 0.9
       deformctl predict model.skops coefficients.parquet --catalog objects.csv -o pred.parquet
-      deformctl measure --csv f.csv --weight-n 2.9 --friction-mu 0.6 -o - \\
+      deformctl measure csv f.csv --weight-n 2.9 --friction-mu 0.6 -o - \\
           | deformctl characterize - -o - | deformctl predict grip - --coverage 0.9
     """
     from deformctl.predict import (

@@ -100,7 +100,17 @@ def _rig_limit_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Ge
     rig = [sys.executable, "-I", "-S", str(RIG), repr(threshold), str(log)]
     rig += [] if stated is None else [repr(stated)]
     out = work / f"riglift{i}.parquet"
-    argv = ["lift", str(cat), "--rig", shlex.join(rig), "--max-attempts", "8", "-o", str(out)]
+    argv = [
+        "lift",
+        "rig",
+        str(cat),
+        "--command",
+        shlex.join(rig),
+        "--max-attempts",
+        "8",
+        "-o",
+        str(out),
+    ]
     argv += [] if flag is None else ["--max-force-n", repr(flag)]
     limit = DEFAULT_ABSOLUTE_MAX_FORCE_N if stated is None else stated
     own = DEFAULT_CEILING_RATIO * w / (2 * mu) if flag is None else flag
@@ -126,7 +136,7 @@ def _mu_tiny_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Gene
     cat = work / f"mucat{i}.csv"
     cat.write_text(f"{CATALOG_HEADER}\nA,8,5,4,2.1,{mu}\n")
     out = work / f"mulift{i}.parquet"
-    argv = ["lift", str(cat), "--rig", "true", "-o", str(out)]
+    argv = ["lift", "rig", str(cat), "--command", "true", "-o", str(out)]
     return _case(name=f"catalog μ {mu}: lift --rig", argv=argv, output=out, expect=(65,))
 
 
@@ -363,7 +373,7 @@ def _bag_args(out: Path) -> list[str]:
 def _reversed_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Generator) -> Any:
     seed = int(rng.integers(1, 3))
     out = work / f"rev{i}.mcap"
-    argv = ["measure", "--bag", str(base[f"reversed{seed}"]), *_bag_args(out)]
+    argv = ["measure", "bag", str(base[f"reversed{seed}"]), *_bag_args(out)]
     return _case(name=f"bag reversed in time (seed {seed}): measure", argv=argv, output=out,
                  expect=(0, 65), stderr_needs="energy_returned")  # fmt: skip
 
@@ -375,14 +385,14 @@ def _bag_nocrc_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Ge
     path = work / f"flip{i}.mcap"
     path.write_bytes(bytes(data))
     out = work / f"flip_out{i}.mcap"
-    argv = ["measure", "--bag", str(path), "--no-crc-check", *_bag_args(out)]
+    argv = ["measure", "bag", str(path), "--no-crc-check", *_bag_args(out)]
     return _case(name=f"bag bit {bit} flipped at {at}: measure --no-crc-check", argv=argv,
                  output=out, expect=(0, 65))  # fmt: skip
 
 
 def _device_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Generator) -> Any:
     out = work / f"dev{i}.mcap"
-    argv = ["measure", "--bag", "/dev/zero", *_bag_args(out)]
+    argv = ["measure", "bag", "/dev/zero", *_bag_args(out)]
     return _case(name="measure --bag /dev/zero", argv=argv, output=out, expect=(65,))
 
 
@@ -397,14 +407,14 @@ def _csv_cr_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Gener
     path = work / f"cr{i}.csv"
     path.write_bytes(("\r".join(_export_lines(base)) + "\r").encode())
     out = work / f"cr{i}.mcap"
-    argv = ["measure", "--csv", str(path), "--weight-n", "1", "--object-id", "A", "-o", str(out)]
+    argv = ["measure", "csv", str(path), "--weight-n", "1", "--object-id", "A", "-o", str(out)]
     return _case(name="CSV export with CR-only line ends: measure", argv=argv, output=out)
 
 
 def _csv_big_cell_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Generator) -> Any:
     size = int(rng.integers(131_073, 400_000))
     out = work / f"big{i}.mcap"
-    argv = ["measure", "--csv", "-", "--weight-n", "1", "--object-id", "A", "-o", str(out)]
+    argv = ["measure", "csv", "-", "--weight-n", "1", "--object-id", "A", "-o", str(out)]
     return _case(name=f"{size} bytes of zeros on stdin: measure --csv -", argv=argv, output=out,
                  stdin=b"0" * size, expect=(65,))  # fmt: skip
 
@@ -423,7 +433,7 @@ def _csv_text_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Gen
     path = work / f"text{i}.csv"
     path.write_text(",".join(head) + "\n" + "\n".join(rows) + "\n")
     out = work / f"text{i}.mcap"
-    argv = ["measure", "--csv", str(path), "--weight-n", "1", "--object-id", "A", "-o", str(out)]
+    argv = ["measure", "csv", str(path), "--weight-n", "1", "--object-id", "A", "-o", str(out)]
     return _case(name=f"CSV export with a text column at {at}: measure", argv=argv, output=out,
                  expect=(0,))  # fmt: skip
 
@@ -440,7 +450,7 @@ def _flipped_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Gene
     path = work / f"falling{i}.csv"
     path.write_text("Time (s),Load (N),Compression (mm)\n" + "\n".join(rows) + "\n")
     log = work / f"falling{i}.mcap"
-    measure = ["measure", "--csv", str(path), "--weight-n", "1", "--object-id", "A", "-o",
+    measure = ["measure", "csv", str(path), "--weight-n", "1", "--object-id", "A", "-o",
                str(log)]  # fmt: skip
     if CliRunner().invoke(app, measure).exit_code != 0:
         return _case(name="falling all-negative force: measure", argv=measure, output=log)

@@ -135,8 +135,9 @@ def test_catalog_rows(values: dict[str, Any]) -> None:
     except DeformctlError as err:
         _refused(err, 65)
         return
-    for key, (low, high) in BOUNDS.items():  # accepted: inside every bound
-        assert low <= float(row[key]) <= high, key
+    for key, (low, high) in BOUNDS.items():  # accepted: inside every bound it gives
+        if key in row:
+            assert low <= float(row[key]) <= high, key
     assert all(math.isfinite(x) and x > 0 for x in spec.size_m)
 
 

@@ -97,7 +97,7 @@ def test_a_tiny_mu_is_refused_by_its_rule(mu: str, tmp_path: Path) -> None:
     path = tmp_path / "cat.csv"
     path.write_text(",".join(HEADER) + "\n" + ",".join([*ROW[:5], mu]) + "\n")
     _one_error(["inspect", str(path)], 65, "friction_mu")
-    line = _one_error(["lift", str(path), "--rig", "true", "-o", str(tmp_path / "l.pq")], 65,
+    line = _one_error(["lift", "rig", str(path), "--command", "true", "-o", str(tmp_path / "l.pq")], 65,
                       "friction_mu")  # fmt: skip
     assert "inf" not in line
     _one_error(["predict", "grip", "--weight-n", "2", "--deformability-n-per-cm", "30",
@@ -107,8 +107,8 @@ def test_a_tiny_mu_is_refused_by_its_rule(mu: str, tmp_path: Path) -> None:
 def test_a_device_is_not_a_missing_bag(tmp_path: Path) -> None:
     args = ["--wrench-topic", "/left/wrench", "--position-topic", "/left/palm_pose",
             "--object-id", "A", "--weight-n", "1", "-o", str(tmp_path / "o.mcap")]  # fmt: skip
-    _one_error(["measure", "--bag", "/dev/zero", *args], 65, "not a regular file")
-    _one_error(["measure", "--bag", str(tmp_path / "none.mcap"), *args], 66, "no such")
+    _one_error(["measure", "bag", "/dev/zero", *args], 65, "not a regular file")
+    _one_error(["measure", "bag", str(tmp_path / "none.mcap"), *args], 66, "no such")
 
 
 def test_a_flipped_length_without_crc_checks_is_a_data_error(tmp_path: Path) -> None:
@@ -125,7 +125,7 @@ def test_a_flipped_length_without_crc_checks_is_a_data_error(tmp_path: Path) -> 
         path = tmp_path / "flip.mcap"
         path.write_bytes(bytes(damaged))
         out = tmp_path / "o.mcap"
-        res = runner.invoke(app, ["measure", "--bag", str(path), *args, "-o", str(out), "--force"])
+        res = runner.invoke(app, ["measure", "bag", str(path), *args, "-o", str(out), "--force"])
         assert res.exception is None or isinstance(res.exception, SystemExit), (at, bit)
         assert res.exit_code in (0, 65), (at, bit, res.stderr)
 

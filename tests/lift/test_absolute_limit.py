@@ -109,7 +109,15 @@ def test_cli_a_stated_maximum_caps_the_requests(tmp_path: Path) -> None:
     # F_w = 1000 N: above the 500 N default, below the 2000 N the rig states
     catalog.write_text(f"{HEADER}\nheavy,8,5,4,1000,0.5\n", encoding="utf-8")
     log, out = tmp_path / "req.jsonl", tmp_path / "lift.parquet"
-    args = ["lift", str(catalog), "--rig", _rig(1900.0, log, stated=2000.0), "-o", str(out)]
+    args = [
+        "lift",
+        "rig",
+        str(catalog),
+        "--command",
+        _rig(1900.0, log, stated=2000.0),
+        "-o",
+        str(out),
+    ]
     res = cli.invoke(app, args)
     assert res.exit_code == 0, res.stderr
     sent = [json.loads(line) for line in log.read_text().splitlines()]
@@ -123,7 +131,7 @@ def test_cli_a_version_1_rig_never_gets_more_than_the_default(tmp_path: Path) ->
     catalog = tmp_path / "objects.csv"
     catalog.write_text(f"{HEADER}\nheavy,8,5,4,1000,0.5\nlight,8,5,4,10,0.5\n", encoding="utf-8")
     log, out = tmp_path / "req.jsonl", tmp_path / "lift.parquet"
-    args = ["lift", str(catalog), "--rig", _rig(12.0, log), "--max-force-n", "1e6"]
+    args = ["lift", "rig", str(catalog), "--command", _rig(12.0, log), "--max-force-n", "1e6"]
     res = cli.invoke(app, [*args, "-o", str(out)])
     assert res.exit_code == 1  # heavy: no safe grip
     assert res.stderr.splitlines()[0] == (
@@ -142,7 +150,7 @@ def test_cli_a_tiny_mu_is_refused_before_any_request(tmp_path: Path) -> None:
     for mu in ("1e-9", "1e-100", "1e-300", "1e-308"):
         catalog = tmp_path / "objects.csv"
         catalog.write_text(f"{HEADER}\nA,8,5,4,2.1,{mu}\n", encoding="utf-8")
-        res = cli.invoke(app, ["lift", str(catalog), "--rig", _rig(1.0, log), "-o",
+        res = cli.invoke(app, ["lift", "rig", str(catalog), "--command", _rig(1.0, log), "-o",
                                str(tmp_path / "x.parquet")])  # fmt: skip
         assert res.exit_code == 65, (mu, res.stderr)
         assert res.stderr.count("\n") == 1
@@ -223,7 +231,9 @@ def test_cli_a_bad_stated_maximum_stops_the_run_before_any_attempt(tmp_path: Pat
     catalog.write_text(f"{HEADER}\nA,8,5,4,2,0.5\n", encoding="utf-8")
     echo = shlex.join([sys.executable, str(RIGS / "echo_rig.py"), '{"max_force_n": -5}'])
     out, log = tmp_path / "lift.parquet", tmp_path / "lift.mcap"
-    res = cli.invoke(app, ["lift", str(catalog), "--rig", echo, "-o", str(out), "--log", str(log)])
+    res = cli.invoke(
+        app, ["lift", "rig", str(catalog), "--command", echo, "-o", str(out), "--log", str(log)]
+    )
     assert res.exit_code == 1
     assert res.stderr == (
         "error: rig handshake: max_force_n must be a finite number > 0 (N), got -5\n"

@@ -82,7 +82,7 @@ def test_300_kb_of_zeros_on_stdin_is_one_error_line(tmp_path: Path) -> None:
     out = tmp_path / "z.mcap"
     res = runner.invoke(
         app,
-        ["measure", "--csv", "-", "--object-id", "z", "--weight-n", "1", "-o", str(out)],
+        ["measure", "csv", "-", "--object-id", "z", "--weight-n", "1", "-o", str(out)],
         input="0" * 300_000,
     )
     assert res.exit_code == EXIT_DATAERR

@@ -48,7 +48,7 @@ def test_reversed_is_flagged_forwards_is_not(seed: int, tmp_path: Path) -> None:
 
 def test_the_flag_reaches_characterize(tmp_path: Path) -> None:
     bag, log, coef = _bag(tmp_path / "r.mcap", 1.5, True), tmp_path / "log.mcap", tmp_path / "c.pq"
-    res = cli.invoke(app, ["measure", "--bag", str(bag), "--wrench-topic", LEFT,
+    res = cli.invoke(app, ["measure", "bag", str(bag), "--wrench-topic", LEFT,
                            "--position-topic", POSE, "--object-id", "A", "--weight-n", "1",
                            "-o", str(log)])  # fmt: skip
     assert res.exit_code == 0, res.stderr

@@ -53,7 +53,7 @@ def dataset(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, float]:
     logs, coef = d / "logs", d / "coef"
     result = runner.invoke(
         app,
-        ["measure", "--csv", str(d / "kiwi.csv"), str(d / "gel.csv"), "--weight-n", "1.0",
+        ["measure", "csv", str(d / "kiwi.csv"), str(d / "gel.csv"), "--weight-n", "1.0",
          "--friction-mu", "0.5", "-o", f"{logs}/"],
     )  # fmt: skip
     assert result.exit_code == 0, result.stderr
@@ -162,7 +162,7 @@ def test_a_failed_object_of_the_dataset_is_named(
     schema = pq.read_schema(failures)
     row = {
         "object_id": ["ghost"],
-        "error_type": ["InputDataError"],
+        "cause": ["bad_input"],
         "error_message": ["no squeeze"],
     }
     pq.write_table(pa.table(row, schema=schema), failures)

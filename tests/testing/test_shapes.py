@@ -91,7 +91,7 @@ def test_cli_measure_and_characterize_never_trace_back(tmp_path: Path, index: in
         extra += ["--units", ",".join(f"{k}={v}" for k, v in case.options["units"].items())]
     log, table = tmp_path / "log.mcap", tmp_path / "c.parquet"
     res = runner.invoke(
-        app, ["measure", "--csv", str(src), "--weight-n", "1", "-o", str(log), *extra]
+        app, ["measure", "csv", str(src), "--weight-n", "1", "-o", str(log), *extra]
     )
     assert res.exception is None or isinstance(res.exception, SystemExit), case.name
     assert res.exit_code in CLEAN_CODES, (case.name, res.stderr)
@@ -125,7 +125,7 @@ def test_the_many_files_form_and_its_sweeps_record_causes_not_classes(tmp_path: 
         files.append(str(path))
     logs, coef = tmp_path / "logs", tmp_path / "coef"
     res = runner.invoke(
-        app, ["measure", "--csv", *files, "--weight-n", "1", "--workers", "1", "-o", f"{logs}/"]
+        app, ["measure", "csv", *files, "--weight-n", "1", "--workers", "1", "-o", f"{logs}/"]
     )
     # the gripper logs (draws 1, 2, 4) need --units position=mm: refused, the others written
     assert res.exit_code == 1, res.stderr
