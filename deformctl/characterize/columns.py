@@ -33,13 +33,26 @@ _LAW_COLUMNS: dict[str, tuple[tuple[str, str], ...]] = {
         ("sls_arm_stiffness_n_per_cm", "arm_stiffness_n_per_m"),
         ("sls_relaxation_time_s", "relaxation_time_s"),
     ),
+    "exp": (
+        ("exp_stiffness_n_per_cm", "stiffness_n_per_m"),
+        ("exp_stiffening_per_cm", "stiffening_per_m"),
+        ("exp_damping_ns_per_cm", "damping_ns_per_m"),
+    ),
 }
 
 
 def _se_name(column: str) -> str:
     """``kv_damping_ns_per_cm`` → ``kv_damping_se_ns_per_cm``; ``hc_exponent`` →
     ``hc_exponent_se``; ``sls_relaxation_time_s`` → ``sls_relaxation_time_se_s``."""
-    for unit in ("_n_per_cm_pow_n", "_ns_per_cm_pow_n_plus_1", "_n_per_cm", "_ns_per_cm", "_s"):
+    units = (
+        "_n_per_cm_pow_n",
+        "_ns_per_cm_pow_n_plus_1",
+        "_n_per_cm",
+        "_ns_per_cm",
+        "_per_cm",
+        "_s",
+    )
+    for unit in units:
         if column.endswith(unit):
             return column[: -len(unit)] + "_se" + unit
     return column + "_se"
@@ -94,6 +107,8 @@ def _factor(column: str, exponent: float) -> float:
         return CM ** (exponent + 1.0)
     if column.endswith(("_n_per_cm", "_ns_per_cm")):
         return 1.0 / N_PER_CM
+    if column.endswith("_per_cm"):  # a rate per metre → per cm
+        return CM
     return 1.0
 
 

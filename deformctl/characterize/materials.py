@@ -38,6 +38,8 @@ import numpy as np
 
 from deformctl.characterize.laws import (
     DAMPING_PARAMETERS,
+    EXP_STIFFENING_MAX,
+    EXTRA_PARAMETERS,
     HC_EXPONENT_BOUNDS,
     PARAMETERS,
     cumulative_mean_parts,
@@ -346,10 +348,12 @@ class _Problem:
         self.shape_bounds: tuple[float, float] | None = None
         if model == "hc":
             self.shape_bounds = HC_EXPONENT_BOUNDS
+        elif model == "exp":
+            self.shape_bounds = (0.0, EXP_STIFFENING_MAX)
         elif model == "sls" and data.damping:
             dt = min(s.dt_s for s in data.squeezes)
             total = sum(s.duration_s for s in data.squeezes)
-            self.shape_bounds = (math.log(data.window_samples * dt), math.log(10.0 * total))
+            self.shape_bounds = (math.log(2.0 * dt), math.log(10.0 * total))
         self.lag_bounds = None if data.lag_s is not None else (0.0, data.lag_max_s)
 
     def target(self, lag: float) -> FloatArray:
@@ -549,6 +553,8 @@ def fit_material(model: str, data: FitData) -> MaterialFit:
     names = {"a": PARAMETERS[model][0], "b": PARAMETERS[model][-1]}
     if model == "hc":
         names["shape"] = "exponent"
+    elif model == "exp":
+        names["shape"] = "stiffening_per_m"
     elif model == "sls":
         names["b"] = "arm_stiffness_n_per_m"
         names["shape"] = "relaxation_time_s"
@@ -563,7 +569,8 @@ def fit_material(model: str, data: FitData) -> MaterialFit:
         r = resid[start : start + m]
         rms.append(float(np.sqrt(np.mean(r * r))) if m else math.nan)
         start += m
-    n_eff = max(data.n_eff, float(n_params + 1))
+    # the same evidence for every law: n_eff must not grow with the law's parameters
+    n_eff = max(data.n_eff, 2.0)
     sigma2 = max(rss / max(data.n_windows, 1), 1e-300)
     log_term = n_eff * math.log(sigma2)
     return MaterialFit(
@@ -681,7 +688,65 @@ def _physical_full(model: str, internal: dict[str, float], d_ref: float) -> dict
     return _physical(model, internal, d_ref)
 
 
-def choose(fits: Sequence[MaterialFit]) -> MaterialFit:
-    """The fit with the smallest BIC (the simplest law on a tie)."""
+def degenerate(fit: MaterialFit) -> bool:
+    """A fit no grip can use: its stiffness (KV's ``D``, HC's ``k``, SLS's ``k1``, exp's ``k0``)
+    at its lower bound 0, or not a positive number."""
+    name = PARAMETERS[fit.model][0]
+    value = fit.params.get(name, math.nan)
+    return name in fit.at_bound or not (math.isfinite(value) and value > 0)
+
+
+def extra_unidentified(fit: MaterialFit) -> tuple[str, ...]:
+    """The law's parameters beyond Kelvin–Voigt's
+    (:data:`deformctl.characterize.laws.EXTRA_PARAMETERS`) that the data do not identify: at a
+    bound (HC's ``n`` at 1 or 3, SLS's arm at 0 or ``τ`` at a bound, exp's ``B`` at 0 or its
+    largest value) or not fitted (SLS's arm without damping)."""
+    return tuple(
+        p
+        for p in EXTRA_PARAMETERS[fit.model]
+        if p in fit.at_bound or not math.isfinite(fit.params.get(p, math.nan))
+    )
+
+
+#: ``auto`` chooses a law richer than Kelvin–Voigt only when its BIC is lower by at least this:
+#: a Bayes factor of e⁵ ≈ 150 ("very strong" on Kass and Raftery's scale; for one extra parameter
+#: a likelihood-ratio test at p < 0.002). Measured on the textbook Kelvin–Voigt ramp-and-hold the
+#: richer laws gain at most ... (tests/characterize/test_law_choice.py).
+BIC_MARGIN = 10.0
+
+
+def choose(fits: Sequence[MaterialFit], margin: float = BIC_MARGIN) -> MaterialFit:
+    """The law ``auto`` reports: identify before choosing.
+
+    Kelvin–Voigt is the default. A richer law (HC, SLS, exp; each nests Kelvin–Voigt: ``n = 1``
+    up to its damping's form, ``k2 = 0`` or ``τ → ∞``, ``B = 0``) replaces it only when
+
+    * it is not degenerate (:func:`degenerate`: its stiffness above 0),
+    * its extra parameters are identified (:func:`extra_unidentified`: none at a bound, none left
+      unfitted; a parameter at its bound means the simpler law), and
+    * its BIC is lower than Kelvin–Voigt's by at least ``margin`` (:data:`BIC_MARGIN`);
+
+    among those, the smallest BIC. A degenerate Kelvin–Voigt fit is replaced by the best
+    non-degenerate law without a margin; when every law is degenerate, Kelvin–Voigt is reported
+    (and refused downstream as a stiffness that is not positive). One fit: that fit.
+    """
+    if len(fits) == 1:
+        return fits[0]
     order: dict[str, int] = {m: i for i, m in enumerate(MODELS)}
-    return min(fits, key=lambda f: (f.bic, order[f.model]))
+
+    def key(f: MaterialFit) -> tuple[float, int]:
+        return (f.bic, order[f.model])
+
+    base = next((f for f in fits if f.model == "kv"), None)
+    richer = [
+        f for f in fits if f.model != "kv" and not degenerate(f) and not extra_unidentified(f)
+    ]
+    if base is not None and not degenerate(base):
+        decisive = [f for f in richer if base.bic - f.bic >= margin]
+        return min(decisive, key=key) if decisive else base
+    if richer:
+        return min(richer, key=key)
+    sound = [f for f in fits if not degenerate(f)]
+    if sound:
+        return min(sound, key=key)
+    return base if base is not None else min(fits, key=key)

@@ -1,7 +1,10 @@
 """The known material parameters of the characterize tests, in SI: one set per material law
-(``kv`` Kelvin–Voigt, ``hc`` Hunt–Crossley, ``sls`` standard linear solid)."""
+(``kv`` Kelvin–Voigt, ``hc`` Hunt–Crossley, ``sls`` standard linear solid, ``exp`` exponential
+stiffening)."""
 
 from __future__ import annotations
+
+import numpy as np
 
 #: Each law's true parameters (SI).
 TRUTH: dict[str, dict[str, float]] = {
@@ -12,4 +15,20 @@ TRUTH: dict[str, dict[str, float]] = {
         "damping_ns_per_m_pow_n_plus_1": 100.0 / 0.01**1.8,
     },
     "sls": {"stiffness_n_per_m": 800.0, "arm_stiffness_n_per_m": 1200.0, "relaxation_time_s": 0.5},
+    "exp": {  # the tangent stiffness grows e^1.5 = 4.5× over 10 mm
+        "stiffness_n_per_m": 500.0,
+        "stiffening_per_m": 150.0,
+        "damping_ns_per_m": 50.0,
+    },
 }
+
+
+def loading_secant(force_n: np.ndarray, compression_m: np.ndarray, at_force_n: float) -> float:
+    """The secant (N/m) of a noise-free recording at a force: the force over the compression at
+    which the force (with whatever rate-dependent part the recording cannot separate) first
+    reaches it, linear between samples, from first contact (d = 0): what ``characterize`` states
+    as D."""
+    j = int(np.argmax(force_n >= at_force_n))
+    assert force_n[j] >= at_force_n > force_n[j - 1]
+    d = np.interp(at_force_n, force_n[j - 1 : j + 1], compression_m[j - 1 : j + 1])
+    return float(at_force_n / d)
