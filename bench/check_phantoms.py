@@ -9,6 +9,11 @@ at or above the force, interpolated, over its compression from the first row, wh
 contact point of a testing machine's export), their relative difference, and the quality flags.
 It exits 1 unless every file is fitted (none refused), D is within 5 % of the file's secant, and
 no file is flagged ``at_bound``.
+
+``--aic`` adds, per file, the AIC of Hunt–Crossley with its exponent allowed up to 6 (instead
+of 3) and of Hunt–Crossley within its bounds, each minus the exponential law's (positive: the
+exponential law is the better by AIC), and that exponent: the evidence for the law that widens
+the family (docs/explanation/materials.md).
 """
 
 from __future__ import annotations
@@ -44,7 +49,24 @@ def file_secant_n_per_cm(csv: Path, force_n: float) -> float:
     return force_n / d_at
 
 
-def check(csv: Path, work: Path, runner: CliRunner) -> dict[str, object]:
+def wide_hunt_crossley(log: Path, n_max: float) -> tuple[float, float]:
+    """AIC and exponent of Hunt–Crossley fitted to a squeeze log with ``n`` in ``[1, n_max]``."""
+    from deformctl.characterize import materials
+    from deformctl.characterize.material_options import MaterialOptions
+    from deformctl.characterize.options import FitOptions
+    from deformctl.characterize.stage import read_and_characterize
+
+    saved = materials.HC_EXPONENT_BOUNDS
+    materials.HC_EXPONENT_BOUNDS = (1.0, n_max)
+    try:
+        options = FitOptions(materials=MaterialOptions(model="hc"))
+        row = read_and_characterize(str(log), options).table.iloc[0]
+    finally:
+        materials.HC_EXPONENT_BOUNDS = saved
+    return float(row["hc_aic"]), float(row["hc_exponent"])
+
+
+def check(csv: Path, work: Path, runner: CliRunner, aic: bool = False) -> dict[str, object]:
     """One file through both commands; its row of the report."""
     log, out = work / f"{csv.stem}.mcap", work / f"{csv.stem}.parquet"
     res = runner.invoke(app, ["measure", "--csv", str(csv), "--weight-n", "0.62", "-o", str(log)])
@@ -57,6 +79,14 @@ def check(csv: Path, work: Path, runner: CliRunner) -> dict[str, object]:
     force = float(row["operating_force_n"])
     secant = file_secant_n_per_cm(csv, force)
     shape = {"hc": "hc_exponent", "exp": "exp_stiffening_per_cm"}.get(str(row["model"]))
+    extra: dict[str, object] = {}
+    if aic:
+        wide_aic, wide_n = wide_hunt_crossley(log, 6.0)
+        extra = {
+            "aic_hc6_minus_exp": wide_aic - row["exp_aic"],
+            "hc6_exponent": wide_n,
+            "aic_hc3_minus_exp": row["hc_aic"] - row["exp_aic"],
+        }
     return {
         "file": csv.stem,
         "refused": "",
@@ -68,15 +98,18 @@ def check(csv: Path, work: Path, runner: CliRunner) -> dict[str, object]:
         "rel_diff": row["deformability_n_per_cm"] / secant - 1.0,
         "at_bound": "at_bound" in str(row["quality"]).split(","),
         "quality": row["quality"],
+        **extra,
     }
 
 
 def main(argv: list[str]) -> int:
-    folder = Path(argv[0]) if argv else (SHARED if SHARED.is_dir() else SHIPPED)
+    aic = "--aic" in argv
+    args = [a for a in argv if a != "--aic"]
+    folder = Path(args[0]) if args else (SHARED if SHARED.is_dir() else SHIPPED)
     files = sorted(folder.glob("*.csv"))
     runner = CliRunner()
     with tempfile.TemporaryDirectory() as tmp:
-        table = pd.DataFrame([check(f, Path(tmp), runner) for f in files])
+        table = pd.DataFrame([check(f, Path(tmp), runner, aic) for f in files])
     with pd.option_context("display.width", 200, "display.max_rows", None):
         print(table.drop(columns=["quality"], errors="ignore").to_string(index=False))
     refused = int((table["refused"] != "").sum())
@@ -90,6 +123,9 @@ def main(argv: list[str]) -> int:
         f"by more than {100 * REL_TOL:g} % (largest {100 * worst:.2f} %), {bound} at_bound; "
         f"laws: {models}"
     )
+    if aic and len(fitted):
+        for col in ("aic_hc6_minus_exp", "aic_hc3_minus_exp", "hc6_exponent"):
+            print(f"{col}: {fitted[col].min():.4g} to {fitted[col].max():.4g}")
     return 0 if len(files) and refused == 0 and off == 0 and bound == 0 else 1
 
 

@@ -236,10 +236,13 @@ def _short_rate(d: FloatArray, window_samples: int, dt_s: float) -> FloatArray:
     return savgol(d, length, 3, deriv=1, delta=dt_s)
 
 
-def _crossing(x: FloatArray, y: FloatArray, force_n: float) -> tuple[float, int]:
-    """The first ``x`` at which ``y`` (from ``(0, 0)``, first contact) reaches ``force_n``,
-    linear between points, and the index of the point reached (NaN, -1: it never is)."""
-    xs = np.concatenate([[0.0], x])
+def _crossing(x: FloatArray, y: FloatArray, force_n: float, contact_m: float) -> tuple[float, int]:
+    """The first ``x`` at which ``y`` (from ``(contact_m, 0)``, first contact) reaches
+    ``force_n``, linear between points, and the index of the point reached (NaN, -1: it never
+    is)."""
+    keep = x > contact_m
+    x, y = x[keep], y[keep]
+    xs = np.concatenate([[contact_m], x])
     ys = np.concatenate([[0.0], y])
     above = np.flatnonzero(ys >= force_n)
     if above.size == 0 or above[0] == 0:
@@ -247,7 +250,44 @@ def _crossing(x: FloatArray, y: FloatArray, force_n: float) -> tuple[float, int]
     j = int(above[0])
     x0, x1, y0, y1 = xs[j - 1], xs[j], ys[j - 1], ys[j]
     d = float(x0 + (x1 - x0) * (force_n - y0) / (y1 - y0)) if y1 > y0 else float(x1)
-    return d, j - 1
+    return d, int(np.flatnonzero(keep)[j - 1])
+
+
+#: First contact is the law's zero of force when the law follows the recording's first loading
+#: windows to within this fraction of the stated force; else the log's zero of compression.
+CONTACT_FIT_FRAC = 0.05
+#: ... and its preload is more than this fraction of the stated force (and 2 standard errors):
+#: below it a linear law's D moves less, and a power law's flat start would turn a preload of
+#: noise into a contact far from the zero (n = 1.6: 0.2 % of the force moves D by 3 %).
+CONTACT_PRELOAD_FRAC = 0.01
+#: The first loading windows of each squeeze that judge it (two windows' length).
+CONTACT_WINDOWS = 2 * WINDOW_STRIDE_DIV
+
+
+def contact_compression(chosen: MaterialFit) -> float:
+    """The compression (m) at which the chosen law's rate-free force ``F0 + g(d)`` is 0: where a
+    law with a preload says the object was first touched (below the log's zero for a positive
+    preload: a seating preload, or a compression zero taken one noisy sample off); NaN when the
+    law has no such point (Hunt–Crossley below 0, an exponential law whose preload its curve
+    cannot cancel)."""
+    p = chosen.params
+    f0 = p["preload_n"]
+    if f0 == 0.0:
+        return 0.0
+    if chosen.model == "hc":
+        return (
+            float((-f0 / p["stiffness_n_per_m_pow_n"]) ** (1.0 / p["exponent"]))
+            if f0 < 0
+            else math.nan
+        )
+    k = p["stiffness_n_per_m"]
+    if not k > 0:
+        return math.nan
+    b = p.get("stiffening_per_m", 0.0) if chosen.model == "exp" else 0.0
+    if b > 0:
+        arg = 1.0 - f0 * b / k
+        return float(math.log(arg) / b) if arg > 0 else math.nan
+    return -f0 / k
 
 
 def _crossing_se(
@@ -272,10 +312,18 @@ def _crossing_se(
 
 def stated_compression(
     chosen: MaterialFit, data: FitData, grids: Sequence[Grid], force_n: float
-) -> tuple[float, float]:
-    """The compression (m, from the log's zero: first contact) at which the recording's loading
-    force, its rate-dependent part taken out, first reaches ``force_n``, and its standard error,
-    m; NaN when no squeeze's loading reaches it.
+) -> tuple[float, float, float]:
+    """The compression (m) from first contact at which the recording's loading force, its
+    rate-dependent part taken out, first reaches ``force_n``, its standard error (m), and where
+    first contact is (m on the log's compression); NaN when no squeeze's loading reaches it.
+
+    First contact: the law's zero of force (:func:`contact_compression`) when its preload is more
+    than 2 standard errors and :data:`CONTACT_PRELOAD_FRAC` of the force from 0 and the law
+    follows the first :data:`CONTACT_WINDOWS` loading windows to within
+    :data:`CONTACT_FIT_FRAC` of the force (a preload the law explains: a seating preload, a zero
+    one noisy sample off, or at one speed the viscous force of a ramp), else the log's zero (no
+    preload to speak of, or a law that misses the start of the curve: its preload is the
+    misfit's, not a contact's).
 
     Each loading window (in order of compression) gives the recording's rate-free force at its
     mean compression ``x̄``: its measured mean force, less the law's rate-dependent window
@@ -283,9 +331,9 @@ def stated_compression(
     law's curvature over the window (``mean g(d) − g(x̄)``, so a wide window on a stiffening
     curve is not biased); ``d`` is where that sequence, from ``(0, 0)``, first reaches the force
     (linear between windows); the median over the squeezes. The law only takes out what the
-    windows cannot see; the curve is the recording's, the force counts from 0 (not from a fitted
-    preload): a grip squeezing with F from first contact sees ``F / d``. The error: the larger of
-    the squeezes' scatter and each crossing's own (:func:`_crossing_se`).
+    windows cannot see; the curve is the recording's, the force counts from 0 at first contact
+    (not from a fitted preload): a grip squeezing with F from first contact sees ``F / d``. The
+    error: the larger of the squeezes' scatter and each crossing's own (:func:`_crossing_se`).
     """
     lag = chosen.params.get("lag_s", 0.0)
     lag = lag if math.isfinite(lag) else 0.0
@@ -294,6 +342,8 @@ def stated_compression(
     rate_rel_se = abs(value_se / value) if value and math.isfinite(value_se) else 0.0
     found: list[float] = []
     errors: list[float] = []
+    first: list[FloatArray] = []
+    curves: list[tuple[FloatArray, FloatArray, FloatArray]] = []
     for s, g in zip(data.squeezes, grids, strict=True):
         t = np.asarray(g.dt_s * np.arange(g.force_n.shape[0]), dtype=np.float64)
         stop = phase_slice(t, g.force_n, "loading", window_s=data.window_samples * g.dt_s).stop
@@ -306,17 +356,29 @@ def stated_compression(
         curvature -= chosen.params["preload_n"] + elastic_force(chosen.model, chosen.params, x)
         y = s.mean_force(lag) - rate - curvature
         order = np.argsort(x[sel], kind="stable")
-        xs, ys, rs = x[sel][order], y[sel][order], rate[sel][order]
-        d, j = _crossing(xs, ys, force_n)
-        if math.isfinite(d) and d > 0:
-            found.append(d)
+        curves.append((x[sel][order], y[sel][order], rate[sel][order]))
+        resid = (s.mean_force(lag) - chosen.window_prediction(s))[sel]
+        first.append(resid[:CONTACT_WINDOWS])
+    if not curves:
+        return math.nan, math.nan, math.nan
+    contact = contact_compression(chosen)
+    off = float(np.median(np.abs(np.concatenate(first))))
+    f0_se = chosen.se.get("preload_n", math.nan)
+    f0 = abs(chosen.params["preload_n"])
+    significant = math.isfinite(f0_se) and f0 > max(2.0 * f0_se, CONTACT_PRELOAD_FRAC * force_n)
+    if not (math.isfinite(contact) and significant and off <= CONTACT_FIT_FRAC * force_n):
+        contact = 0.0
+    for xs, ys, rs in curves:
+        d, j = _crossing(xs, ys, force_n, contact)
+        if math.isfinite(d) and d > contact:
+            found.append(d - contact)
             errors.append(_crossing_se(xs, ys, rs, max(j, 0), rate_rel_se))
     if not found:
-        return math.nan, math.nan
+        return math.nan, math.nan, contact
     d_all, e_all = np.asarray(found), np.asarray(errors)
     own = float(np.sqrt(np.mean(e_all**2)) / math.sqrt(d_all.size))
     spread = float(np.std(d_all, ddof=1) / math.sqrt(d_all.size)) if d_all.size > 1 else 0.0
-    return float(np.median(d_all)), max(own, spread) if math.isfinite(own) else spread
+    return float(np.median(d_all)), max(own, spread) if math.isfinite(own) else spread, contact
 
 
 def _secant_residual(
@@ -505,7 +567,7 @@ def fit_object(
     chosen = choose(fits)
     loading, loading_force = _loading(chosen, data, grids, identifiable)
     f_op, source = operating_force_n(at_force_n, weight_n, friction_mu, loading_force)
-    d_stated, d_stated_se = stated_compression(chosen, data, grids, f_op)
+    d_stated, d_stated_se, contact = stated_compression(chosen, data, grids, f_op)
     preload = chosen.params["preload_n"]
     f_peak = peak_force - preload
 
@@ -567,6 +629,6 @@ def fit_object(
             chosen,
             data,
             f_op if from_recording else above(chosen.params),
-            d_stated if from_recording else None,
+            d_stated + contact if from_recording else None,
         ),
     )

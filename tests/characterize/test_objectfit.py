@@ -59,8 +59,8 @@ def test_single_speed_cycle_has_no_damping_but_a_loop_energy() -> None:
     assert math.isnan(row["kv_damping_ns_per_cm"])
     loop = 2.0 * KV["damping_ns_per_m"] * speed * PEAK_M  # ∮ λ ḋ dd
     assert row["hysteresis_energy_j"] == pytest.approx(loop, rel=0.05)
-    # the law's stiffness is right; D, the recording's own secant from first contact, carries the
-    # loading's viscous force λv, which one speed cannot take out: F / ((F − λv) / k)
+    # the law's stiffness is right; D, the recording's own loading secant from first contact,
+    # carries the loading's viscous force λv, which one speed cannot take out: F / ((F − λv) / k)
     k, viscous = KV["stiffness_n_per_m"], KV["damping_ns_per_m"] * speed
     assert row["kv_deformability_n_per_cm"] == pytest.approx(k / 100, rel=0.02)
     f = row["operating_force_n"]
