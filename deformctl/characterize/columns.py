@@ -75,6 +75,8 @@ MATERIAL_COLUMNS: tuple[str, ...] = (
     "model",
     "operating_force_n",
     "operating_force_source",
+    "deformability_at_force_n",
+    "deformability_source",
     "deformability_small_strain_n_per_cm",
     "stiffening_ratio",
     "tangent_stiffness_spread",
@@ -93,6 +95,7 @@ MATERIAL_COLUMNS: tuple[str, ...] = (
 MATERIAL_DTYPES: dict[str, str] = {
     "model": "str",
     "operating_force_source": "str",
+    "deformability_source": "str",
     "params_at_bound": "str",
     "residual_rms_by_speed": "str",
     "n_speeds": "int64",
@@ -134,6 +137,7 @@ def empty_values(model: str = "") -> dict[str, object]:
     out.update(
         model=model,
         operating_force_source="",
+        deformability_source="",
         params_at_bound="",
         residual_rms_by_speed="",
         n_speeds=0,
@@ -151,6 +155,8 @@ def material_values(obj: ObjectFit) -> dict[str, object]:
     out.update(
         operating_force_n=obj.operating_force_n,
         operating_force_source=obj.operating_force_source,
+        deformability_at_force_n=obj.operating_force_n,
+        deformability_source=obj.deformability_source,
         deformability_small_strain_n_per_cm=obj.loading.small_strain_n_per_m / N_PER_CM,
         stiffening_ratio=obj.loading.stiffening_ratio,
         tangent_stiffness_spread=obj.loading.tangent_spread,

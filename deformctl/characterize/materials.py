@@ -353,7 +353,7 @@ class _Problem:
         elif model == "sls" and data.damping:
             dt = min(s.dt_s for s in data.squeezes)
             total = sum(s.duration_s for s in data.squeezes)
-            self.shape_bounds = (math.log(2.0 * dt), math.log(10.0 * total))
+            self.shape_bounds = (math.log(data.window_samples * dt), math.log(10.0 * total))
         self.lag_bounds = None if data.lag_s is not None else (0.0, data.lag_max_s)
 
     def target(self, lag: float) -> FloatArray:
