@@ -1,4 +1,4 @@
-"""The material fit: one law (kv, hc, sls) fitted to an object's squeezes, and the choice by BIC.
+"""The material fit: one law (kv, hc, sls, exp) fitted to an object's squeezes; ``auto``'s choice.
 
 Data. Each squeeze is on a uniform grid with its raw compression ``d`` and force ``f``. The fit
 compares, over windows of :attr:`FitData.window_samples` samples that start every
@@ -8,13 +8,15 @@ integrals of the law, so no sample is trimmed at either end and no derivative is
 whose compression never reaches :data:`MIN_COMPRESSION_FRAC` of the squeeze's peak (the palms
 in free air before contact) are left out.
 
-Parameters. Every law has a preload ``F0`` (free, or 0), two linear parameters and, for HC and
-SLS, a shape (``n``; ``τ``); a lag ``L`` of the force behind the compression (the recording's
-latency) is fitted in ``[0, L_max]`` or fixed. For a given shape and lag the linear parameters
-are a bounded linear least-squares problem (stiffness and damping terms ≥ 0,
+Parameters. Every law has a preload ``F0`` (free, or 0), two linear parameters and, for HC, SLS
+and exp, a shape (``n``; ``τ``; ``B``); a lag ``L`` of the force behind the compression (the
+recording's latency) is fitted in ``[0, L_max]`` or fixed. For a given shape and lag the linear
+parameters are a bounded linear least-squares problem (stiffness and damping terms ≥ 0,
 ``scipy.optimize.lsq_linear``); the shape and lag are found on a grid and refined by Powell's
-method on that profile, within their bounds (:data:`HC_EXPONENT_BOUNDS`, ``τ`` between two
-samples and ten times the recording, ``L`` below :data:`LAG_MAX_S`). A parameter left at its
+method on that profile, within their bounds (:data:`HC_EXPONENT_BOUNDS`, ``τ`` between one
+window and ten times the recording (a shorter ``τ`` is a low-pass on a dashpot, not a
+relaxation the windows can see), ``B d_ref`` up to :data:`EXP_STIFFENING_MAX`, ``L`` below
+:data:`LAG_MAX_S`). A parameter left at its
 bound is named in :attr:`MaterialFit.at_bound`.
 
 Errors and evidence. Standard errors are Newey–West (Bartlett weights, bandwidth one window,
@@ -22,10 +24,11 @@ within each squeeze) over the free parameters, from the residuals' Jacobian (the
 exactly, shape and lag by central differences). The windows overlap, so the evidence counts
 independent windows, ``n_eff = samples / window``: with ``σ̂²`` the mean squared window
 residual, ``AIC = n_eff ln σ̂² + 2p`` and ``BIC = n_eff ln σ̂² + p ln n_eff`` (``p`` counts the
-law's parameters, the preload and the lag when fitted). ``auto`` chooses by **BIC**: its penalty
-grows with the data, so a richer law that merely nests the true one (SLS with ``τ → 0`` is KV; HC
-with ``λ = 0, n = 1`` is a spring) does not win by chance as often as with AIC (measured in
-``tests/characterize/test_materials.py``).
+law's parameters, the preload and the lag when fitted); ``n_eff`` is the same for every law.
+``auto`` identifies before choosing (:func:`choose`): Kelvin–Voigt, unless a richer law that
+nests it (HC ``n = 1``, SLS ``k2 = 0`` or ``τ`` at a bound, exp ``B = 0``) has its extra
+parameters off their bounds, a stiffness above 0, and a BIC lower by :data:`BIC_MARGIN`
+(measured in ``tests/characterize/test_materials.py`` and ``test_law_choice.py``).
 """
 
 from __future__ import annotations
@@ -710,8 +713,8 @@ def extra_unidentified(fit: MaterialFit) -> tuple[str, ...]:
 
 #: ``auto`` chooses a law richer than Kelvin–Voigt only when its BIC is lower by at least this:
 #: a Bayes factor of e⁵ ≈ 150 ("very strong" on Kass and Raftery's scale; for one extra parameter
-#: a likelihood-ratio test at p < 0.002). Measured on the textbook Kelvin–Voigt ramp-and-hold the
-#: richer laws gain at most ... (tests/characterize/test_law_choice.py).
+#: a likelihood-ratio test at p < 0.002). The confusion matrices it gives are in
+#: docs/explanation/materials.md (tests/characterize/test_law_choice.py, test_materials.py).
 BIC_MARGIN = 10.0
 
 

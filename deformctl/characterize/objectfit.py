@@ -4,8 +4,9 @@
 (:func:`deformctl.characterize.prepare.validate_squeeze`), cuts it at a rupture and looks for
 relaxation (:mod:`deformctl.characterize.rupture`), judges whether damping can be identified
 (:func:`deformctl.characterize.stiffness.speed_summary` and
-:func:`deformctl.characterize.quality.damping_identifiable`), fits the asked law or all three
-(:func:`deformctl.characterize.materials.fit_material`; ``auto`` chooses by BIC) and states the
+:func:`deformctl.characterize.quality.damping_identifiable`), fits the asked law or all four
+(:func:`deformctl.characterize.materials.fit_material`; ``auto`` chooses by
+:func:`deformctl.characterize.materials.choose`) and states the
 deformability at the operating force, the small-strain stiffness and the stiffening of the
 loading curve, and the loop's dissipated energy.
 
@@ -91,7 +92,7 @@ class ObjectFit:
     """Everything :func:`fit_object` found for one object.
 
     Attributes:
-        fits: every law fitted (one, or three for ``auto``), in :data:`MODELS` order.
+        fits: every law fitted (one, or four for ``auto``), in :data:`MODELS` order.
         chosen: the law whose numbers the row reports.
         data: the windows the laws were fitted to.
         grids: the squeezes on their grids (after their rupture cuts).
@@ -517,7 +518,8 @@ def fit_object(
 
     Args:
         squeezes: the object's squeezes (same ``object_id``).
-        model: ``kv``, ``hc``, ``sls`` or ``auto`` (all three, chosen by BIC).
+        model: ``kv``, ``hc``, ``sls``, ``exp`` or ``auto`` (all four, chosen by
+            :func:`deformctl.characterize.materials.choose`).
         window_s: the averaging window, s (the Savitzky–Golay window the log's rate implies).
         fit_preload: fit a preload ``F0``.
         lag_s: the lag of the force behind the compression, s; None fits it.
