@@ -159,3 +159,26 @@ def test_textbook_confusion_matrix() -> None:
         lines.append(f"{law:<6} " + " ".join(f"{c:>5}" for c in counts))
     print("\n".join(lines))
     assert wrong <= 0.05 * DRAWS * len(MODELS)
+
+
+def test_single_ramp_confusion_matrix() -> None:
+    """The same recordings without the hold: one monotone ramp at one speed. The curve's shape
+    is still identified (hc, exp), damping never is (λ NaN for every draw), so a relaxing solid,
+    whose relaxation the ramp cannot show, is reported as the simpler law, Kelvin–Voigt."""
+    expected = {"kv": "kv", "hc": "hc", "sls": "kv", "exp": "exp"}
+    lines = [f"\nsingle ramp, no hold, {DRAWS} draws per law (rows true, columns chosen)"]
+    lines.append("true   " + " ".join(f"{m:>5}" for m in MODELS))
+    wrong = 0
+    for law in MODELS:
+        fits = [
+            _fit(synthetic_ramp_hold(law, TEXTBOOK[law], hold_s=0.0, seed=200 + seed))
+            for seed in range(DRAWS)
+        ]
+        assert not any(f.damping_identifiable for f in fits)
+        assert all(math.isnan(f.damping_ns_per_m) for f in fits)
+        chosen = [f.chosen.model for f in fits]
+        counts = [chosen.count(m) for m in MODELS]
+        wrong += DRAWS - chosen.count(expected[law])
+        lines.append(f"{law:<6} " + " ".join(f"{c:>5}" for c in counts))
+    print("\n".join(lines))
+    assert wrong <= 0.05 * DRAWS * len(MODELS)
