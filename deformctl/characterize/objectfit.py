@@ -275,15 +275,11 @@ def contact_compression(chosen: MaterialFit) -> float:
     f0 = p["preload_n"]
     if f0 == 0.0:
         return 0.0
-    if chosen.model == "hc":
-        return (
-            float((-f0 / p["stiffness_n_per_m_pow_n"]) ** (1.0 / p["exponent"]))
-            if f0 < 0
-            else math.nan
-        )
-    k = p["stiffness_n_per_m"]
+    k = p["stiffness_n_per_m_pow_n" if chosen.model == "hc" else "stiffness_n_per_m"]
     if not k > 0:
         return math.nan
+    if chosen.model == "hc":
+        return float((-f0 / k) ** (1.0 / p["exponent"])) if f0 < 0 else math.nan
     b = p.get("stiffening_per_m", 0.0) if chosen.model == "exp" else 0.0
     if b > 0:
         arg = 1.0 - f0 * b / k
