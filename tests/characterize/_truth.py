@@ -4,8 +4,6 @@ stiffening)."""
 
 from __future__ import annotations
 
-import numpy as np
-
 #: Each law's true parameters (SI).
 TRUTH: dict[str, dict[str, float]] = {
     "kv": {"stiffness_n_per_m": 1000.0, "damping_ns_per_m": 100.0},
@@ -21,14 +19,3 @@ TRUTH: dict[str, dict[str, float]] = {
         "damping_ns_per_m": 50.0,
     },
 }
-
-
-def loading_secant(force_n: np.ndarray, compression_m: np.ndarray, at_force_n: float) -> float:
-    """The secant (N/m) of a noise-free recording at a force: the force over the compression at
-    which the force (with whatever rate-dependent part the recording cannot separate) first
-    reaches it, linear between samples, from first contact (d = 0): what ``characterize`` states
-    as D."""
-    j = int(np.argmax(force_n >= at_force_n))
-    assert force_n[j] >= at_force_n > force_n[j - 1]
-    d = np.interp(at_force_n, force_n[j - 1 : j + 1], compression_m[j - 1 : j + 1])
-    return float(at_force_n / d)
