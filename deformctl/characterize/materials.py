@@ -731,7 +731,7 @@ def choose(fits: Sequence[MaterialFit], margin: float = BIC_MARGIN) -> MaterialF
 
     among those, the smallest BIC. A degenerate Kelvin–Voigt fit is replaced by the best
     non-degenerate law without a margin; when every law is degenerate, Kelvin–Voigt is reported
-    (and refused downstream as a stiffness that is not positive). One fit: that fit.
+    (its stiffness named in ``at_bound``, so the row is flagged). One fit: that fit.
     """
     if len(fits) == 1:
         return fits[0]
