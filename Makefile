@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
 .PHONY: install test lint bench golden-spread reproduce _report calibrate examples clean model hc-check \
-  sls-check grip-study-laws \
+  sls-check grip-study-laws phantom-check \
   _grip_train _grip_eval grip-study materials scene-figure fuzz
 
 install: $(STAMP)
@@ -28,10 +28,18 @@ lint: install
 bench: install
 	$(BIN)/python -m bench
 
-# The material laws' known-truth recovery and BIC choice over 400 seeded draws per law
-# (tests/characterize/test_materials.py; make test runs 20).
+# The material laws' known-truth recovery and auto's choice over 400 seeded draws per law, with
+# both confusion matrices (tests/characterize/test_materials.py and test_law_choice.py; make test
+# runs 5).
 materials: install
-	DEFORMCTL_MATERIAL_DRAWS=400 $(BIN)/python -m pytest -q -s tests/characterize/test_materials.py
+	DEFORMCTL_MATERIAL_DRAWS=400 $(BIN)/python -m pytest -q -s -p no:randomly \
+	  tests/characterize/test_materials.py tests/characterize/test_law_choice.py
+
+# Every shared silicone phantom through measure --weight-n 0.62 and characterize with no other
+# option: none refused, D within 5 % of each file's own secant, none at_bound; with the AIC of
+# Hunt-Crossley (n up to 6) against the exponential law (bench/check_phantoms.py, about a minute).
+phantom-check: install
+	$(BIN)/python -m bench.check_phantoms --aic
 
 # Seeded hostile inputs through the CLI (tests/fuzz/hostile_cli.py): prints the clean fraction
 # (issue 34 point 8). CASES and SEED change the set.

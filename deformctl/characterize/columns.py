@@ -33,13 +33,26 @@ _LAW_COLUMNS: dict[str, tuple[tuple[str, str], ...]] = {
         ("sls_arm_stiffness_n_per_cm", "arm_stiffness_n_per_m"),
         ("sls_relaxation_time_s", "relaxation_time_s"),
     ),
+    "exp": (
+        ("exp_stiffness_n_per_cm", "stiffness_n_per_m"),
+        ("exp_stiffening_per_cm", "stiffening_per_m"),
+        ("exp_damping_ns_per_cm", "damping_ns_per_m"),
+    ),
 }
 
 
 def _se_name(column: str) -> str:
     """``kv_damping_ns_per_cm`` → ``kv_damping_se_ns_per_cm``; ``hc_exponent`` →
     ``hc_exponent_se``; ``sls_relaxation_time_s`` → ``sls_relaxation_time_se_s``."""
-    for unit in ("_n_per_cm_pow_n", "_ns_per_cm_pow_n_plus_1", "_n_per_cm", "_ns_per_cm", "_s"):
+    units = (
+        "_n_per_cm_pow_n",
+        "_ns_per_cm_pow_n_plus_1",
+        "_n_per_cm",
+        "_ns_per_cm",
+        "_per_cm",
+        "_s",
+    )
+    for unit in units:
         if column.endswith(unit):
             return column[: -len(unit)] + "_se" + unit
     return column + "_se"
@@ -62,6 +75,8 @@ MATERIAL_COLUMNS: tuple[str, ...] = (
     "model",
     "operating_force_n",
     "operating_force_source",
+    "deformability_at_force_n",
+    "deformability_source",
     "deformability_small_strain_n_per_cm",
     "stiffening_ratio",
     "tangent_stiffness_spread",
@@ -80,6 +95,7 @@ MATERIAL_COLUMNS: tuple[str, ...] = (
 MATERIAL_DTYPES: dict[str, str] = {
     "model": "str",
     "operating_force_source": "str",
+    "deformability_source": "str",
     "params_at_bound": "str",
     "residual_rms_by_speed": "str",
     "n_speeds": "int64",
@@ -94,6 +110,8 @@ def _factor(column: str, exponent: float) -> float:
         return CM ** (exponent + 1.0)
     if column.endswith(("_n_per_cm", "_ns_per_cm")):
         return 1.0 / N_PER_CM
+    if column.endswith("_per_cm"):  # a rate per metre → per cm
+        return CM
     return 1.0
 
 
@@ -119,6 +137,7 @@ def empty_values(model: str = "") -> dict[str, object]:
     out.update(
         model=model,
         operating_force_source="",
+        deformability_source="",
         params_at_bound="",
         residual_rms_by_speed="",
         n_speeds=0,
@@ -136,6 +155,8 @@ def material_values(obj: ObjectFit) -> dict[str, object]:
     out.update(
         operating_force_n=obj.operating_force_n,
         operating_force_source=obj.operating_force_source,
+        deformability_at_force_n=obj.operating_force_n,
+        deformability_source=obj.deformability_source,
         deformability_small_strain_n_per_cm=obj.loading.small_strain_n_per_m / N_PER_CM,
         stiffening_ratio=obj.loading.stiffening_ratio,
         tangent_stiffness_spread=obj.loading.tangent_spread,

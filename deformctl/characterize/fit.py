@@ -427,7 +427,8 @@ def characterize(
         constrain_damping: lsq: kept for old callers; the lsq fits always bound λ ≥ 0.
         recorded_ruptures: object id → the ruptures ``measure`` cut off (from the log); they
             count for the ``rupture`` flag and the rupture columns with those found here.
-        model: lsq: ``kv``, ``hc``, ``sls`` or ``auto`` (all three, chosen by BIC).
+        model: lsq: ``kv``, ``hc``, ``sls``, ``exp`` or ``auto`` (all four, chosen by
+            :func:`deformctl.characterize.materials.choose`).
         at_force_n: lsq: the operating force D is stated at, N (None: F_w, else the median
             loading force).
         lag_s: lsq: the force's lag behind the compression, s, for every object or per object

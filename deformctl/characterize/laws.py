@@ -1,4 +1,5 @@
-"""Material laws of a squeeze: Kelvin–Voigt, Hunt–Crossley and the standard linear solid.
+"""Material laws of a squeeze: Kelvin–Voigt, Hunt–Crossley, the standard linear solid and an
+exponentially stiffening solid.
 
 Each law gives the force ``f`` between the palms from the compression history ``d(t)`` (SI:
 N, m, s). Every law carries a preload ``F0`` (a contact preload or a force-sensor offset at
@@ -11,11 +12,16 @@ N, m, s). Every law carries a preload ``F0`` (a contact preload or a force-senso
   spring ``k2`` in series with a dashpot ``c = k2 τ``: ``f = F0 + k1 d + σ`` with
   ``σ̇ = k2 ḋ − σ/τ``. Three parameters ``k1, k2, τ``; it relaxes at constant compression
   (``σ`` decays with time constant ``τ``) and creeps under constant force.
+* ``exp`` (exponential stiffening, Fung's law of soft tissue):
+  ``f = F0 + k0 (e^{B d} − 1)/B + λ e^{B d} ḋ``: ``k0`` is the stiffness at contact, the tangent
+  stiffness grows as ``k0 e^{B d}`` and the damping with it; ``B = 0`` is Kelvin–Voigt exactly.
+  ``B`` in ``[0, EXP_STIFFENING_MAX / d_ref]``.
 
 **Fitted in integral form.** The fit (:mod:`deformctl.characterize.materials`) never
 differentiates the compression: it compares the mean force over short windows with the mean of
 each law over the same windows, which needs only integrals of ``d``. The damping terms are exact
-derivatives (``λ ḋ = d/dt(λ d)``, ``λ dⁿ ḋ = d/dt(λ dⁿ⁺¹/(n+1))``), so their window means are
+derivatives (``λ ḋ = d/dt(λ d)``, ``λ dⁿ ḋ = d/dt(λ dⁿ⁺¹/(n+1))``,
+``λ e^{Bd} ḋ = d/dt(λ (e^{Bd} − 1)/B)``), so their window means are
 end-point differences (of the compression lightly smoothed, one-sided at the squeeze's ends, so
 that position noise is not divided by the window undamped), and the Maxwell arm is an exact
 recursion on the compression's increments (exact for a compression linear between samples).
@@ -23,10 +29,11 @@ recursion on the compression's increments (exact for a compression linear betwee
 biases them.
 
 **What a grip uses.** :func:`elastic_force` is a law's rate-free force–compression curve (KV and
-HC: the spring; SLS: the relaxed spring ``k1``, what a held grip settles to);
+HC, exp: the spring; SLS: the relaxed spring ``k1``, what a held grip settles to);
 :func:`secant_stiffness` is ``(F − F0)/d`` on that curve at a force ``F`` (for KV and SLS the
 stiffness itself); :func:`equivalent_damping` is ``∂f/∂ḋ`` at a compression (KV ``λ``; HC
-``λ dⁿ``; SLS ``k2 τ``, the Maxwell arm's damping at rates slow against ``1/τ``).
+``λ dⁿ``; exp ``λ e^{Bd}``; SLS ``k2 τ``, the Maxwell arm's damping at rates slow against
+``1/τ``).
 
 Internal parameters are scaled for the optimiser: compressions are divided by a reference
 compression ``d_ref`` (the largest compression fitted), so that HC's ``k`` and ``λ`` do not
@@ -47,19 +54,40 @@ from deformctl.series import FloatArray
 #: Hunt–Crossley exponent bounds (1: linear spring; 3: the stiffest law a soft object shows).
 #: The simulator's catalog column ``material_stiffness_exponent`` has the same rule.
 HC_EXPONENT_BOUNDS = (STIFFNESS_EXPONENT.low, STIFFNESS_EXPONENT.high)
+#: Largest stiffening of the exponential law over the fitted compression, ``B · d_ref`` (the
+#: tangent stiffness grows by ``e^{B d_ref}`` from contact to the largest compression: up to e^30;
+#: the shared silicone phantoms need 4–7). Its lower bound 0 is Kelvin–Voigt.
+EXP_STIFFENING_MAX = 30.0
 
 #: Each law's parameters (SI), in the order :func:`to_physical` returns them, after ``preload_n``.
 PARAMETERS: dict[str, tuple[str, ...]] = {
     "kv": ("stiffness_n_per_m", "damping_ns_per_m"),
     "hc": ("stiffness_n_per_m_pow_n", "exponent", "damping_ns_per_m_pow_n_plus_1"),
     "sls": ("stiffness_n_per_m", "arm_stiffness_n_per_m", "relaxation_time_s"),
+    "exp": ("stiffness_n_per_m", "stiffening_per_m", "damping_ns_per_m"),
+}
+#: The law's parameters beyond Kelvin–Voigt's (at their simple value the law is Kelvin–Voigt or a
+#: spring: HC ``n = 1``, SLS ``k2 = 0`` or ``τ`` at a bound, exp ``B = 0``).
+EXTRA_PARAMETERS: dict[str, tuple[str, ...]] = {
+    "kv": (),
+    "hc": ("exponent",),
+    "sls": ("arm_stiffness_n_per_m", "relaxation_time_s"),
+    "exp": ("stiffening_per_m",),
 }
 #: The parameters that describe damping (not identifiable from a single-speed test).
 DAMPING_PARAMETERS: dict[str, tuple[str, ...]] = {
     "kv": ("damping_ns_per_m",),
     "hc": ("damping_ns_per_m_pow_n_plus_1",),
     "sls": ("arm_stiffness_n_per_m", "relaxation_time_s"),
+    "exp": ("damping_ns_per_m",),
 }
+
+
+def _expm1_over(b: float, x: FloatArray) -> FloatArray:
+    """``(e^{b x} − 1)/b``, ``x`` at ``b = 0``."""
+    if b == 0.0:
+        return np.asarray(x, dtype=np.float64)
+    return np.asarray(np.expm1(b * x) / b, dtype=np.float64)
 
 
 def cumulative_mean_parts(x: FloatArray, dt_s: float) -> FloatArray:
@@ -111,17 +139,19 @@ def window_design(
     """Window means of a law's terms (after the preload column), ``[m, 2]``.
 
     Args:
-        model: ``kv``, ``hc`` or ``sls``.
+        model: ``kv``, ``hc``, ``sls`` or ``exp``.
         d: raw compression on a uniform grid, divided by the reference compression.
         d_end: the same compression lightly smoothed, for the damping terms' end points (an
             end-point difference of raw samples carries two samples' noise undivided).
         dt_s: grid interval, s.
         a, b: window start and end sample indices ``[m]``.
-        shape: HC's exponent ``n``; SLS's relaxation time ``τ`` (s); ignored for KV.
+        shape: HC's exponent ``n``; SLS's relaxation time ``τ`` (s); exp's ``B`` (per unit of
+            ``d``); ignored for KV.
 
     Returns:
         Columns ``[stiffness term, damping term]``: KV ``[mean d, Δd/T]``; HC
-        ``[mean dⁿ, Δ(dⁿ⁺¹)/((n+1) T)]``; SLS ``[mean d, mean s]`` (Maxwell strain).
+        ``[mean dⁿ, Δ(dⁿ⁺¹)/((n+1) T)]``; SLS ``[mean d, mean s]`` (Maxwell strain); exp
+        ``[mean (e^{Bd} − 1)/B, Δ((e^{Bd} − 1)/B)/T]``.
     """
     if model == "kv":
         first = window_mean(cumulative_mean_parts(d, dt_s), a, b, dt_s)
@@ -130,6 +160,10 @@ def window_design(
         pw = np.maximum(d, 0.0) ** shape
         first = window_mean(cumulative_mean_parts(pw, dt_s), a, b, dt_s)
         g = np.maximum(d_end, 0.0) ** (shape + 1.0) / (shape + 1.0)
+        second = (g[b] - g[a]) / ((b - a) * dt_s)
+    elif model == "exp":
+        first = window_mean(cumulative_mean_parts(_expm1_over(shape, d), dt_s), a, b, dt_s)
+        g = _expm1_over(shape, d_end)
         second = (g[b] - g[a]) / ((b - a) * dt_s)
     elif model == "sls":
         first = window_mean(cumulative_mean_parts(d, dt_s), a, b, dt_s)
@@ -145,8 +179,8 @@ def rate_force(
 ) -> FloatArray:
     """The rate-dependent part of a law's force per sample (SI), N ``[n]``.
 
-    KV ``λ ḋ``, HC ``λ dⁿ ḋ`` (from ``rate``, a smoothed ``ḋ``), SLS ``k2 s`` (the Maxwell
-    arm, from ``d`` alone). NaN parameters count as 0.
+    KV ``λ ḋ``, HC ``λ dⁿ ḋ``, exp ``λ e^{Bd} ḋ`` (from ``rate``, a smoothed ``ḋ``), SLS
+    ``k2 s`` (the Maxwell arm, from ``d`` alone). NaN parameters count as 0.
     """
 
     def p(name: str) -> float:
@@ -158,6 +192,8 @@ def rate_force(
     if model == "hc":
         dp = np.maximum(d, 0.0)
         return p("damping_ns_per_m_pow_n_plus_1") * dp ** params["exponent"] * rate
+    if model == "exp":
+        return p("damping_ns_per_m") * np.exp(params["stiffening_per_m"] * d) * rate
     tau = params["relaxation_time_s"]
     if not math.isfinite(tau) or tau <= 0:
         return np.zeros_like(d)
@@ -169,6 +205,8 @@ def elastic_force(model: str, params: Mapping[str, float], d: FloatArray) -> Flo
     dp = np.maximum(np.asarray(d, dtype=np.float64), 0.0)
     if model == "hc":
         return params["stiffness_n_per_m_pow_n"] * dp ** params["exponent"]
+    if model == "exp":
+        return params["stiffness_n_per_m"] * _expm1_over(params["stiffening_per_m"], dp)
     return params["stiffness_n_per_m"] * dp
 
 
@@ -180,6 +218,9 @@ def compression_at_force(model: str, params: Mapping[str, float], force_n: float
     k = params["stiffness_n_per_m_pow_n" if model == "hc" else "stiffness_n_per_m"]
     if not (force_n > 0 and k > 0):
         return math.nan
+    if model == "exp":
+        b = params["stiffening_per_m"]
+        return float(math.log1p(b * force_n / k) / b) if b > 0 else force_n / k
     n = params["exponent"] if model == "hc" else 1.0
     return float((force_n / k) ** (1.0 / n))
 
@@ -187,9 +228,10 @@ def compression_at_force(model: str, params: Mapping[str, float], force_n: float
 def secant_stiffness(model: str, params: Mapping[str, float], force_n: float) -> float:
     """``F / d(F)`` on the elastic curve at a force ``F`` above the preload, N/m.
 
-    KV and SLS: the (relaxed) stiffness, whatever the force. HC: ``k d(F)ⁿ⁻¹``.
+    KV and SLS: the (relaxed) stiffness, whatever the force. HC: ``k d(F)ⁿ⁻¹``; exp:
+    ``F / d(F)``.
     """
-    if model != "hc":
+    if model not in ("hc", "exp"):
         return float(params["stiffness_n_per_m"])
     d = compression_at_force(model, params, force_n)
     return force_n / d if d > 0 else math.nan
@@ -201,20 +243,25 @@ def tangent_stiffness(model: str, params: Mapping[str, float], d: FloatArray) ->
     if model == "hc":
         n = params["exponent"]
         return params["stiffness_n_per_m_pow_n"] * n * dp ** (n - 1.0)
+    if model == "exp":
+        return np.asarray(params["stiffness_n_per_m"] * np.exp(params["stiffening_per_m"] * dp))
     return np.full_like(dp, params["stiffness_n_per_m"])
 
 
 def equivalent_damping(model: str, params: Mapping[str, float], compression_m: float) -> float:
     """The damping a Kelvin–Voigt element would need at this compression, N·s/m.
 
-    KV ``λ``; HC ``λ dⁿ`` (``∂f/∂ḋ``); SLS ``k2 τ`` (the Maxwell arm at rates slow against
-    ``1/τ``, the limit in which it is a dashpot).
+    KV ``λ``; HC ``λ dⁿ`` (``∂f/∂ḋ``); exp ``λ e^{Bd}``; SLS ``k2 τ`` (the Maxwell arm at rates
+    slow against ``1/τ``, the limit in which it is a dashpot).
     """
     if model == "kv":
         return float(params["damping_ns_per_m"])
     if model == "hc":
         d = max(compression_m, 0.0)
         return float(params["damping_ns_per_m_pow_n_plus_1"] * d ** params["exponent"])
+    if model == "exp":
+        d = max(compression_m, 0.0)
+        return float(params["damping_ns_per_m"] * math.exp(params["stiffening_per_m"] * d))
     return float(params["arm_stiffness_n_per_m"] * params["relaxation_time_s"])
 
 
@@ -222,7 +269,8 @@ def to_physical(model: str, beta: FloatArray, shape: float, d_ref_m: float) -> d
     """SI parameters from the scaled fit ``beta = [F0, a, b]`` and the shape (``n`` or ``τ``).
 
     The scaled design divides compressions by ``d_ref_m``: KV ``D = a/d_ref``, ``λ = b/d_ref``;
-    HC ``k = a/d_refⁿ``, ``λ = b/d_refⁿ⁺¹``; SLS ``k1 = a/d_ref``, ``k2 = b/d_ref``.
+    HC ``k = a/d_refⁿ``, ``λ = b/d_refⁿ⁺¹``; SLS ``k1 = a/d_ref``, ``k2 = b/d_ref``; exp
+    ``k0 = a/d_ref``, ``B = shape/d_ref``, ``λ = b/d_ref``.
     """
     f0, a, b = (float(x) for x in beta)
     if model == "kv":
@@ -233,6 +281,13 @@ def to_physical(model: str, beta: FloatArray, shape: float, d_ref_m: float) -> d
             "stiffness_n_per_m_pow_n": a / d_ref_m**shape,
             "exponent": shape,
             "damping_ns_per_m_pow_n_plus_1": b / d_ref_m ** (shape + 1.0),
+        }
+    if model == "exp":
+        return {
+            "preload_n": f0,
+            "stiffness_n_per_m": a / d_ref_m,
+            "stiffening_per_m": shape / d_ref_m,
+            "damping_ns_per_m": b / d_ref_m,
         }
     return {
         "preload_n": f0,

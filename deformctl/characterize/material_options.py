@@ -15,10 +15,11 @@ from typing import Any, Literal
 from deformctl.errors import UsageError
 from deformctl.quantities import AT_FORCE_N
 
-Model = Literal["kv", "hc", "sls"]
-#: The laws (:mod:`deformctl.characterize.laws`), simplest first (``auto`` prefers the earlier
-#: one on a tie).
-MODELS: tuple[Model, ...] = ("kv", "hc", "sls")
+Model = Literal["kv", "hc", "sls", "exp"]
+#: The laws (:mod:`deformctl.characterize.laws`), Kelvin–Voigt first: ``auto`` keeps it unless
+#: another law's extra parameters are identified and decisively better
+#: (:func:`deformctl.characterize.materials.choose`).
+MODELS: tuple[Model, ...] = ("kv", "hc", "sls", "exp")
 #: ``characterize --model`` choices.
 MODEL_CHOICES: tuple[str, ...] = (*MODELS, "auto")
 
@@ -53,7 +54,8 @@ class MaterialOptions:
     """Which material law is fitted and where its deformability is stated.
 
     Attributes:
-        model: ``kv``, ``hc``, ``sls``, or ``auto`` (all three, chosen by BIC).
+        model: ``kv``, ``hc``, ``sls``, ``exp``, or ``auto`` (all four, chosen by
+            :func:`deformctl.characterize.materials.choose`).
         at_force_n: the operating force D is the secant stiffness at, N; None: F_w = W/(2μ)
             when the log knows the object's weight and friction, else its median loading force.
             Above an object's peak force it is an error (exit 2).

@@ -4,8 +4,9 @@
 (:func:`deformctl.characterize.prepare.validate_squeeze`), cuts it at a rupture and looks for
 relaxation (:mod:`deformctl.characterize.rupture`), judges whether damping can be identified
 (:func:`deformctl.characterize.stiffness.speed_summary` and
-:func:`deformctl.characterize.quality.damping_identifiable`), fits the asked law or all three
-(:func:`deformctl.characterize.materials.fit_material`; ``auto`` chooses by BIC) and states the
+:func:`deformctl.characterize.quality.damping_identifiable`), fits the asked law or all four
+(:func:`deformctl.characterize.materials.fit_material`; ``auto`` chooses by
+:func:`deformctl.characterize.materials.choose`) and states the
 deformability at the operating force, the small-strain stiffness and the stiffening of the
 loading curve, and the loop's dissipated energy.
 
@@ -36,6 +37,7 @@ from deformctl.characterize.laws import (
 from deformctl.characterize.material_options import MODELS
 from deformctl.characterize.materials import (
     MIN_COMPRESSION_FRAC,
+    WINDOW_STRIDE_DIV,
     FitData,
     FitSqueeze,
     MaterialFit,
@@ -90,12 +92,19 @@ class ObjectFit:
     """Everything :func:`fit_object` found for one object.
 
     Attributes:
-        fits: every law fitted (one, or three for ``auto``), in :data:`MODELS` order.
+        fits: every law fitted (one, or four for ``auto``), in :data:`MODELS` order.
         chosen: the law whose numbers the row reports.
         data: the windows the laws were fitted to.
         grids: the squeezes on their grids (after their rupture cuts).
-        deformability_n_per_m: secant stiffness at the operating force, N/m.
-        deformability_se_n_per_m: its standard error (delta method), N/m.
+        deformability_n_per_m: D, the secant stiffness at the operating force from first contact
+            (the log's zero of compression), N/m: the recording's own, the operating force over
+            :func:`stated_compression` (not the force above a fitted preload), or the chosen
+            law's above its preload when the loading never reaches the force or the law's
+            damping is held at its bound 0 (``deformability_source``).
+        deformability_se_n_per_m: its standard error (the law's, delta method, scaled), N/m.
+        law_deformability_n_per_m: the chosen law's own secant at the operating force above its
+            preload, N/m.
+        deformability_source: ``recording`` or ``law``.
         damping_ns_per_m: the equivalent damping at the operating compression, N·s/m (NaN when
             not identifiable).
         damping_se_ns_per_m: its standard error.
@@ -137,6 +146,8 @@ class ObjectFit:
     sample_r2: dict[str, float] = field(default_factory=dict)
     fit_preload: bool = False
     secant_residual_frac: float = math.nan
+    law_deformability_n_per_m: float = math.nan
+    deformability_source: str = "law"
 
     def fit(self, model: str) -> MaterialFit | None:
         """The fit of one law, or None when it was not fitted."""
@@ -165,7 +176,8 @@ def _identifiable(data: FitData) -> tuple[bool, float, SpeedSummary]:
 
     λ must be separable from a preload, from D and from a rate-independent force that only
     follows the direction of motion (hysteresis, friction: ``μ sign(ḋ)``): on the window means,
-    the share of the rate's mean square that ``[1, d, sign(ḋ)]`` cannot explain is the
+    the share of the rate's mean square that ``[1, d, sign(ḋ)]`` cannot explain (the sign kept
+    through a hold, :func:`_stick_direction`) is the
     excitation, and allowing the preload and the direction term moves λ by the sensitivity;
     :func:`deformctl.characterize.quality.damping_identifiable` judges them. A constant-rate
     ramp and a load–unload cycle at one rate (``ḋ = v sign(ḋ)``) give an excitation near 0.
@@ -180,7 +192,7 @@ def _identifiable(data: FitData) -> tuple[bool, float, SpeedSummary]:
     d, v = np.concatenate(comps), np.concatenate(rates)
     f = data.target()
     top = float(np.percentile(np.abs(v), 95)) if v.size else 0.0
-    direction = np.where(np.abs(v) > HOLD_RATE_FRAC * top, np.sign(v), 0.0)
+    direction = np.concatenate([_stick_direction(r, HOLD_RATE_FRAC * top) for r in rates])
     base = np.column_stack([np.ones_like(d), d, direction])
     excitation = _unexplained(v, base)
     sensitivity = math.inf
@@ -193,6 +205,17 @@ def _identifiable(data: FitData) -> tuple[bool, float, SpeedSummary]:
         pass
     ok = damping_identifiable(excitation, sensitivity) and not speeds.single_speed
     return ok, excitation, speeds
+
+
+def _stick_direction(rate: FloatArray, still: float) -> FloatArray:
+    """``sign(ḋ)`` of the windows, a hold keeping the last direction of motion (0 before the
+    first): a rate-independent force (friction, hysteresis) sticks at a hold, where a viscous
+    force vanishes, so a hold separates the two and a reversal at one speed does not."""
+    moving = np.abs(rate) > still
+    out = np.where(moving, np.sign(rate), 0.0)
+    idx = np.where(moving, np.arange(rate.shape[0]), -1)
+    last = np.maximum.accumulate(idx) if idx.size else idx
+    return np.asarray(np.where(last >= 0, out[np.maximum(last, 0)], 0.0), dtype=np.float64)
 
 
 def _unexplained(v: FloatArray, x: FloatArray) -> float:
@@ -214,12 +237,157 @@ def _short_rate(d: FloatArray, window_samples: int, dt_s: float) -> FloatArray:
     return savgol(d, length, 3, deriv=1, delta=dt_s)
 
 
-def _secant_residual(chosen: MaterialFit, data: FitData, force_n: float) -> float:
+def _crossing(x: FloatArray, y: FloatArray, force_n: float, contact_m: float) -> tuple[float, int]:
+    """The first ``x`` at which ``y`` (from ``(contact_m, 0)``, first contact) reaches
+    ``force_n``, linear between points, and the index of the point reached (NaN, -1: it never
+    is)."""
+    keep = x > contact_m
+    x, y = x[keep], y[keep]
+    xs = np.concatenate([[contact_m], x])
+    ys = np.concatenate([[0.0], y])
+    above = np.flatnonzero(ys >= force_n)
+    if above.size == 0 or above[0] == 0:
+        return math.nan, -1
+    j = int(above[0])
+    x0, x1, y0, y1 = xs[j - 1], xs[j], ys[j - 1], ys[j]
+    d = float(x0 + (x1 - x0) * (force_n - y0) / (y1 - y0)) if y1 > y0 else float(x1)
+    return d, int(np.flatnonzero(keep)[j - 1])
+
+
+#: First contact is the law's zero of force when the law follows the recording's first loading
+#: windows to within this fraction of the stated force; else the log's zero of compression.
+CONTACT_FIT_FRAC = 0.05
+#: ... and its preload is more than this fraction of the stated force (and 2 standard errors):
+#: below it a linear law's D moves less, and a power law's flat start would turn a preload of
+#: noise into a contact far from the zero (n = 1.6: 0.2 % of the force moves D by 3 %).
+CONTACT_PRELOAD_FRAC = 0.01
+#: The first loading windows of each squeeze that judge it (two windows' length).
+CONTACT_WINDOWS = 2 * WINDOW_STRIDE_DIV
+
+
+def contact_compression(chosen: MaterialFit) -> float:
+    """The compression (m) at which the chosen law's rate-free force ``F0 + g(d)`` is 0: where a
+    law with a preload says the object was first touched (below the log's zero for a positive
+    preload: a seating preload, or a compression zero taken one noisy sample off); NaN when the
+    law has no such point (Hunt–Crossley below 0, an exponential law whose preload its curve
+    cannot cancel)."""
+    p = chosen.params
+    f0 = p["preload_n"]
+    if f0 == 0.0:
+        return 0.0
+    k = p["stiffness_n_per_m_pow_n" if chosen.model == "hc" else "stiffness_n_per_m"]
+    if not k > 0:
+        return math.nan
+    if chosen.model == "hc":
+        return float((-f0 / k) ** (1.0 / p["exponent"])) if f0 < 0 else math.nan
+    b = p.get("stiffening_per_m", 0.0) if chosen.model == "exp" else 0.0
+    if b > 0:
+        arg = 1.0 - f0 * b / k
+        return float(math.log(arg) / b) if arg > 0 else math.nan
+    return -f0 / k
+
+
+def _crossing_se(
+    x: FloatArray, y: FloatArray, rate: FloatArray, j: int, rate_rel_se: float
+) -> float:
+    """Standard error of the crossing's compression, m: the windows' scatter about a straight
+    line through the :data:`WINDOW_STRIDE_DIV` windows either side of window ``j`` (a window in
+    :data:`WINDOW_STRIDE_DIV` independent) and the rate-dependent force taken out there times its
+    coefficient's relative error, over the line's slope (NaN: too few windows)."""
+    lo, hi = max(j - WINDOW_STRIDE_DIV, 0), min(j + WINDOW_STRIDE_DIV + 1, x.shape[0])
+    if hi - lo < 3 or not float(np.ptp(x[lo:hi])) > 0:
+        return math.nan
+    slope, icpt = np.polyfit(x[lo:hi], y[lo:hi], 1)
+    if not slope > 0:
+        return math.nan
+    resid = y[lo:hi] - (slope * x[lo:hi] + icpt)
+    noise = float(np.std(resid, ddof=2)) if hi - lo > 2 else 0.0
+    se_y = noise / math.sqrt(max((hi - lo) / WINDOW_STRIDE_DIV, 1.0))
+    se_y = math.hypot(se_y, float(abs(rate[j])) * rate_rel_se)
+    return se_y / float(slope)
+
+
+def stated_compression(
+    chosen: MaterialFit, data: FitData, grids: Sequence[Grid], force_n: float
+) -> tuple[float, float, float]:
+    """The compression (m) from first contact at which the recording's loading force, its
+    rate-dependent part taken out, first reaches ``force_n``, its standard error (m), and where
+    first contact is (m on the log's compression); NaN when no squeeze's loading reaches it.
+
+    First contact: the law's zero of force (:func:`contact_compression`) when its preload is more
+    than 2 standard errors and :data:`CONTACT_PRELOAD_FRAC` of the force from 0 and the law
+    follows the first :data:`CONTACT_WINDOWS` loading windows to within
+    :data:`CONTACT_FIT_FRAC` of the force (a preload the law explains: a seating preload, a zero
+    one noisy sample off, or at one speed the viscous force of a ramp), else the log's zero (no
+    preload to speak of, or a law that misses the start of the curve: its preload is the
+    misfit's, not a contact's).
+
+    Each loading window (in order of compression) gives the recording's rate-free force at its
+    mean compression ``x̄``: its measured mean force, less the law's rate-dependent window
+    integral (exact: nothing is differentiated, heavy damping costs no accuracy) and less the
+    law's curvature over the window (``mean g(d) − g(x̄)``, so a wide window on a stiffening
+    curve is not biased); ``d`` is where that sequence, from ``(0, 0)``, first reaches the force
+    (linear between windows); the median over the squeezes. The law only takes out what the
+    windows cannot see; the curve is the recording's, the force counts from 0 at first contact
+    (not from a fitted preload): a grip squeezing with F from first contact sees ``F / d``. The
+    error: the larger of the squeezes' scatter and each crossing's own (:func:`_crossing_se`).
+    """
+    lag = chosen.params.get("lag_s", 0.0)
+    lag = lag if math.isfinite(lag) else 0.0
+    name = DAMPING_PARAMETERS[chosen.model][0]
+    value, value_se = chosen.params.get(name, math.nan), chosen.se.get(name, math.nan)
+    rate_rel_se = abs(value_se / value) if value and math.isfinite(value_se) else 0.0
+    found: list[float] = []
+    errors: list[float] = []
+    first: list[FloatArray] = []
+    curves: list[tuple[FloatArray, FloatArray, FloatArray]] = []
+    for s, g in zip(data.squeezes, grids, strict=True):
+        t = np.asarray(g.dt_s * np.arange(g.force_n.shape[0]), dtype=np.float64)
+        stop = phase_slice(t, g.force_n, "loading", window_s=data.window_samples * g.dt_s).stop
+        sel = s.ends < max(int(stop), 1)
+        if not np.any(sel):
+            continue
+        x = s.mean_compression()
+        rate = chosen.rate_window_force(s)
+        curvature = chosen.window_prediction(s) - rate
+        curvature -= chosen.params["preload_n"] + elastic_force(chosen.model, chosen.params, x)
+        y = s.mean_force(lag) - rate - curvature
+        order = np.argsort(x[sel], kind="stable")
+        curves.append((x[sel][order], y[sel][order], rate[sel][order]))
+        resid = (s.mean_force(lag) - chosen.window_prediction(s))[sel]
+        first.append(resid[:CONTACT_WINDOWS])
+    if not curves:
+        return math.nan, math.nan, math.nan
+    contact = contact_compression(chosen)
+    off = float(np.median(np.abs(np.concatenate(first))))
+    f0_se = chosen.se.get("preload_n", math.nan)
+    f0 = abs(chosen.params["preload_n"])
+    significant = math.isfinite(f0_se) and f0 > max(2.0 * f0_se, CONTACT_PRELOAD_FRAC * force_n)
+    if not (math.isfinite(contact) and significant and off <= CONTACT_FIT_FRAC * force_n):
+        contact = 0.0
+    for xs, ys, rs in curves:
+        d, j = _crossing(xs, ys, force_n, contact)
+        if math.isfinite(d) and d > contact:
+            found.append(d - contact)
+            errors.append(_crossing_se(xs, ys, rs, max(j, 0), rate_rel_se))
+    if not found:
+        return math.nan, math.nan, contact
+    d_all, e_all = np.asarray(found), np.asarray(errors)
+    own = float(np.sqrt(np.mean(e_all**2)) / math.sqrt(d_all.size))
+    spread = float(np.std(d_all, ddof=1) / math.sqrt(d_all.size)) if d_all.size > 1 else 0.0
+    return float(np.median(d_all)), max(own, spread) if math.isfinite(own) else spread, contact
+
+
+def _secant_residual(
+    chosen: MaterialFit, data: FitData, force_n: float, d_op: float | None = None
+) -> float:
     """How far the chosen law misses the recording where D is stated: the median window residual
     (measured mean force − the law's) over the windows whose mean compression is within
-    :data:`SECANT_BAND` of the law's compression at ``force_n`` (above the preload), as a fraction
-    of ``force_n``; NaN when no window is there (the law is extrapolated, nothing to compare)."""
-    d_op = compression_at_force(chosen.model, chosen.params, force_n)
+    :data:`SECANT_BAND` of ``d_op`` (the recording's compression at ``force_n``; None: the law's,
+    above its preload), as a fraction of ``force_n``; NaN when no window is there (the law is
+    extrapolated, nothing to compare)."""
+    if d_op is None:
+        d_op = compression_at_force(chosen.model, chosen.params, force_n)
     if not (math.isfinite(d_op) and d_op > 0 and force_n > 0):
         return math.nan
     lag = chosen.params.get("lag_s", 0.0)
@@ -244,9 +412,7 @@ def _loading(
     """
     lag = chosen.params.get("lag_s", 0.0)
     lag = lag if math.isfinite(lag) else 0.0
-    name = {"kv": "damping_ns_per_m", "hc": "damping_ns_per_m_pow_n_plus_1"}.get(
-        chosen.model, "arm_stiffness_n_per_m"
-    )
+    name = DAMPING_PARAMETERS[chosen.model][0]
     value = chosen.params[name]
     unit = dict(chosen.params)
     unit[name] = 1.0
@@ -348,7 +514,8 @@ def fit_object(
 
     Args:
         squeezes: the object's squeezes (same ``object_id``).
-        model: ``kv``, ``hc``, ``sls`` or ``auto`` (all three, chosen by BIC).
+        model: ``kv``, ``hc``, ``sls``, ``exp`` or ``auto`` (all four, chosen by
+            :func:`deformctl.characterize.materials.choose`).
         window_s: the averaging window, s (the Savitzky–Golay window the log's rate implies).
         fit_preload: fit a preload ``F0``.
         lag_s: the lag of the force behind the compression, s; None fits it.
@@ -398,6 +565,7 @@ def fit_object(
     chosen = choose(fits)
     loading, loading_force = _loading(chosen, data, grids, identifiable)
     f_op, source = operating_force_n(at_force_n, weight_n, friction_mu, loading_force)
+    d_stated, d_stated_se, contact = stated_compression(chosen, data, grids, f_op)
     preload = chosen.params["preload_n"]
     f_peak = peak_force - preload
 
@@ -415,7 +583,13 @@ def fit_object(
     held = chosen.at_bound
     lam_held = any(p in DAMPING_PARAMETERS[chosen.model] for p in held)
     lam_se = chosen.derived_se(damping) if identifiable and not lam_held else math.nan
-    d_se = math.nan if PARAMETERS[chosen.model][0] in held else chosen.derived_se(secant)
+    law_d = secant(chosen.params)
+    law_se = math.nan if PARAMETERS[chosen.model][0] in held else chosen.derived_se(secant)
+    # a damping held at its bound 0 could not take the recording's rate-dependent force out of
+    # the loading (a lag read as negative damping): the loading's secant would carry it
+    from_recording = math.isfinite(d_stated) and d_stated > 0 and not lam_held
+    d_value = f_op / d_stated if from_recording else law_d
+    d_se = d_value * d_stated_se / d_stated if from_recording else law_se
     d_all = np.concatenate([s.compression_m for s in data.squeezes])
     f_all = np.concatenate([g.force_n for g in grids])
     rates = _sample_rates(data, grids)
@@ -424,8 +598,10 @@ def fit_object(
         chosen=chosen,
         data=data,
         grids=tuple(grids),
-        deformability_n_per_m=secant(chosen.params),
+        deformability_n_per_m=d_value,
         deformability_se_n_per_m=d_se,
+        law_deformability_n_per_m=law_d,
+        deformability_source="recording" if from_recording else "law",
         damping_ns_per_m=lam,
         damping_se_ns_per_m=lam_se,
         operating_force_n=f_op,
@@ -447,5 +623,10 @@ def fit_object(
         per_speed=_per_speed(speeds, chosen.residual_rms_n),
         sample_r2={f.model: _sample_r2(f, grids, rates) for f in fits},
         fit_preload=fit_preload,
-        secant_residual_frac=_secant_residual(chosen, data, above(chosen.params)),
+        secant_residual_frac=_secant_residual(
+            chosen,
+            data,
+            f_op if from_recording else above(chosen.params),
+            d_stated + contact if from_recording else None,
+        ),
     )

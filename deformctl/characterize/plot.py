@@ -33,7 +33,7 @@ FIGURE_SIZE_IN = (12.0, 9.0)
 DPI = 100
 PIXELS = (1200, 900)
 #: Colour of each law.
-COLOURS = {"kv": "tab:blue", "hc": "tab:orange", "sls": "tab:green"}
+COLOURS = {"kv": "tab:blue", "hc": "tab:orange", "sls": "tab:green", "exp": "tab:red"}
 
 
 def plot_path(plot_dir: str | Path, object_id: str) -> Path:

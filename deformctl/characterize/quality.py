@@ -386,7 +386,7 @@ def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
         return (
             f"{flag} (where D is stated, at {_num(row.get('operating_force_n'), '.3g')} N, the "
             f"recording's force is {pct} % of that force off the {row.get('model', '?')} law's: "
-            "D is not the material's there)"
+            "D is the recording's secant, the law's λ and curve do not hold there)"
         )
     return flag
 

@@ -6,14 +6,21 @@ generator's own discretisation; the force is delayed by a lag (the force sensor'
 seeded Gaussian noise is added to force and compression.
 
 * :func:`synthetic_law_squeeze`: a testing-machine squeeze (position control) of a ``kv``,
-  ``hc`` or ``sls`` material: a ramp at one speed to a peak compression, a hold, and a release at
-  another speed (two speeds and a hold, so damping is identifiable), velocity corners smoothed
-  over ``corner_s``.
+  ``hc``, ``sls`` or ``exp`` material: a ramp at one speed to a peak compression, a hold, and a
+  release at another speed (two speeds and a hold, so damping is identifiable), velocity corners
+  smoothed over ``corner_s``.
 * :func:`synthetic_rupture_backoff`: a force-controlled gripper squeezing a Kelvin–Voigt object
   that collapses at a known force, after which the controller backs off while the gripper holds
   its position.
 * :func:`synthetic_relaxation_hold`: a standard linear solid pressed to a compression and held:
   the force decays smoothly at constant position (stress relaxation, not rupture).
+* :func:`synthetic_ramp_hold`: the textbook recording of any law: one ramp at one speed to a
+  compression, then a hold, sampled slowly with a force noise in newtons (no lag, no position
+  noise). Its hold identifies damping; a ramp alone (``hold_s=0``) does not.
+* :func:`synthetic_force_hold_squeeze`: one of :data:`FORCE_HOLD_SHAPES`, force-controlled
+  squeezes of a heavily damped Kelvin–Voigt fruit whose controller lowers the force while the
+  jaws hold: a standard linear solid fits them best with its stiffness at 0 (a fluid), the
+  degenerate law ``auto`` must never choose.
 """
 
 from __future__ import annotations
@@ -205,3 +212,70 @@ def synthetic_relaxation_hold(
         force_noise_rel=force_noise_rel, position_noise_m=position_noise_m, seed=seed,
         object_id=object_id,
     )  # fmt: skip
+
+
+def synthetic_ramp_hold(
+    model: str,
+    params: Mapping[str, float],
+    *,
+    peak_compression_m: float = 0.006,
+    speed_m_per_s: float = 0.006,
+    hold_s: float = 1.0,
+    rate_hz: float = 100.0,
+    force_noise_n: float = 0.02,
+    seed: int = 0,
+    object_id: str = "ramp_hold",
+) -> SqueezeSeries:
+    """A ramp at ``speed_m_per_s`` to ``peak_compression_m`` and a hold of ``hold_s`` (sharp
+    corners), the force of a law with known parameters (SI) plus seeded noise of
+    ``force_noise_n`` (N). The defaults are the textbook Kelvin–Voigt test: 0.6 cm at 0.6 cm/s,
+    a 1 s hold, 100 Hz, 0.02 N (with ``f = 20 d + 1.0 ḋ`` in N, cm, s:
+    ``{"stiffness_n_per_m": 2000, "damping_ns_per_m": 100}``).
+    """
+    h = 1.0 / (rate_hz * FINE)
+    load_s = peak_compression_m / speed_m_per_s
+    duration = load_s + hold_s
+    t = np.arange(round(duration / h) + 1, dtype=np.float64) * h
+    v = np.where(t < load_s, speed_m_per_s, 0.0)
+    d = np.minimum(speed_m_per_s * t, peak_compression_m)
+    force = law_force(model, params, d, v, h)
+    return _sample(
+        t, force, d, rate_hz=rate_hz, lag_s=0.0, force_noise_n=force_noise_n,
+        position_noise_m=0.0, seed=seed, object_id=object_id, squeeze_index=0,
+    )  # fmt: skip
+
+
+#: Force-controlled squeezes on which a standard linear solid fits best with its stiffness at
+#: its bound 0 (each a :func:`synthetic_rupture_backoff` without a collapse, at 77 Hz: a heavily
+#: damped Kelvin–Voigt object, the force lowered while the jaws hold).
+FORCE_HOLD_SHAPES: dict[str, dict[str, float]] = {
+    "heavy_damping": {"damping_ns_per_m": 400.0, "backoff_s": 1.0, "backoff_to_frac": 0.2},
+    "fast_ramp": {
+        "damping_ns_per_m": 400.0,
+        "force_rate_n_per_s": 20.0,
+        "backoff_s": 0.5,
+        "backoff_to_frac": 0.2,
+    },
+    "soft": {
+        "stiffness_n_per_m": 500.0,
+        "damping_ns_per_m": 300.0,
+        "backoff_s": 1.0,
+        "backoff_to_frac": 0.2,
+    },
+    "lagged": {"damping_ns_per_m": 300.0, "lag_s": 0.17, "backoff_s": 1.0, "backoff_to_frac": 0.2},
+    "deep_backoff": {
+        "damping_ns_per_m": 250.0,
+        "backoff_s": 0.8,
+        "backoff_to_frac": 0.05,
+        "rest_s": 1.5,
+    },
+}
+
+
+def synthetic_force_hold_squeeze(shape: str, *, seed: int = 0) -> SqueezeSeries:
+    """One of :data:`FORCE_HOLD_SHAPES` (its Kelvin–Voigt truth: the shape's
+    ``stiffness_n_per_m`` and ``damping_ns_per_m`` over :func:`synthetic_rupture_backoff`'s
+    defaults)."""
+    return synthetic_rupture_backoff(
+        collapse_frac=0.0, rate_hz=77.0, seed=seed, object_id=shape, **FORCE_HOLD_SHAPES[shape]
+    )

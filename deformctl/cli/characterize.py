@@ -56,8 +56,10 @@ Model = Annotated[
         metavar="|".join(MODEL_CHOICES),
         help="lsq: the material law. kv: Kelvin-Voigt f = F0 + D d + λ d'; hc: Hunt-Crossley "
         "f = F0 + k d^n + λ d^n d' (n in [1, 3]); sls: standard linear solid (spring k1 beside "
-        "a spring k2 in series with a dashpot, relaxation time τ); auto: all three, the one "
-        "with the smallest BIC reported, every law's parameters, standard errors, AIC and BIC "
+        "a spring k2 in series with a dashpot, relaxation time τ); exp: exponential "
+        "stiffening f = F0 + k0 (e^(B d) - 1)/B + λ e^(B d) d'; auto: all four, Kelvin-Voigt "
+        "reported unless a richer law's extra parameters are off their bounds, its stiffness "
+        "above 0 and its BIC lower by 10; every law's parameters, standard errors, AIC and BIC "
         "in the table.",
     ),
 ]

@@ -1,5 +1,6 @@
 """The known material parameters of the characterize tests, in SI: one set per material law
-(``kv`` Kelvin–Voigt, ``hc`` Hunt–Crossley, ``sls`` standard linear solid)."""
+(``kv`` Kelvin–Voigt, ``hc`` Hunt–Crossley, ``sls`` standard linear solid, ``exp`` exponential
+stiffening)."""
 
 from __future__ import annotations
 
@@ -12,4 +13,9 @@ TRUTH: dict[str, dict[str, float]] = {
         "damping_ns_per_m_pow_n_plus_1": 100.0 / 0.01**1.8,
     },
     "sls": {"stiffness_n_per_m": 800.0, "arm_stiffness_n_per_m": 1200.0, "relaxation_time_s": 0.5},
+    "exp": {  # the tangent stiffness grows e^1.5 = 4.5× over 10 mm
+        "stiffness_n_per_m": 500.0,
+        "stiffening_per_m": 150.0,
+        "damping_ns_per_m": 50.0,
+    },
 }

@@ -5,8 +5,9 @@ the stiffness of the loading curve, against squeezes with known truth.
   λ NaN, and the loop's dissipated energy instead, against its closed form ``2 λ v d_max``.
 * Two such cycles of one object at two rates are one joint fit that identifies λ, with each
   speed's residual reported.
-* D is the secant stiffness at the operating force: F_w = W/(2μ) when the log knows W and μ, the
-  force given, else the median loading force; the Hunt–Crossley secant against its closed form.
+* D is the recording's own secant from first contact at the operating force: F_w = W/(2μ) when
+  the log knows W and μ, the force given, else the median loading force; the Hunt–Crossley
+  secant against its closed form.
 * ``nonlinear_stiffness`` fires on a stiffening law and stays silent on a linear one.
 """
 
@@ -58,7 +59,12 @@ def test_single_speed_cycle_has_no_damping_but_a_loop_energy() -> None:
     assert math.isnan(row["kv_damping_ns_per_cm"])
     loop = 2.0 * KV["damping_ns_per_m"] * speed * PEAK_M  # ∮ λ ḋ dd
     assert row["hysteresis_energy_j"] == pytest.approx(loop, rel=0.05)
-    assert row["deformability_n_per_cm"] == pytest.approx(KV["stiffness_n_per_m"] / 100, rel=0.02)
+    # the law's stiffness is right; D, the recording's own loading secant from first contact,
+    # carries the loading's viscous force λv, which one speed cannot take out: F / ((F − λv) / k)
+    k, viscous = KV["stiffness_n_per_m"], KV["damping_ns_per_m"] * speed
+    assert row["kv_deformability_n_per_cm"] == pytest.approx(k / 100, rel=0.02)
+    f = row["operating_force_n"]
+    assert row["deformability_n_per_cm"] == pytest.approx(f * k / (f - viscous) / 100, rel=0.02)
 
 
 def test_constant_rate_ramp_has_no_loop() -> None:
