@@ -69,7 +69,7 @@ def wide_hunt_crossley(log: Path, n_max: float) -> tuple[float, float]:
 def check(csv: Path, work: Path, runner: CliRunner, aic: bool = False) -> dict[str, object]:
     """One file through both commands; its row of the report."""
     log, out = work / f"{csv.stem}.mcap", work / f"{csv.stem}.parquet"
-    res = runner.invoke(app, ["measure", "--csv", str(csv), "--weight-n", "0.62", "-o", str(log)])
+    res = runner.invoke(app, ["measure", "csv", str(csv), "--weight-n", "0.62", "-o", str(log)])
     if res.exit_code != 0:
         return {"file": csv.stem, "refused": f"measure exit {res.exit_code}: {res.stderr.strip()}"}
     res = runner.invoke(app, ["characterize", str(log), "-o", str(out)])

@@ -84,7 +84,7 @@ def test_textbook_kelvin_voigt_through_the_cli(tmp_path: Path) -> None:
     np.savetxt(csv, rows, delimiter=",", header="Time (s),Compression (mm),Load (N)", comments="")
     runner = CliRunner()
     log, out = tmp_path / "x.mcap", tmp_path / "c.parquet"
-    res = runner.invoke(app, ["measure", "--csv", str(csv), "--weight-n", "1", "-o", str(log)])
+    res = runner.invoke(app, ["measure", "csv", str(csv), "--weight-n", "1", "-o", str(log)])
     assert res.exit_code == 0, res.stderr
     res = runner.invoke(app, ["characterize", str(log), "-o", str(out)])
     assert res.exit_code == 0, res.stderr

@@ -88,9 +88,7 @@ def test_d_is_the_files_own_secant_and_no_parameter_at_a_bound(tmp_path: Path, n
     exponential law follows a stiffening Hunt–Crossley's n = 3 cannot)."""
     export = DATA / f"{name}.csv"
     log, out = tmp_path / "log.mcap", tmp_path / "c.parquet"
-    res = runner.invoke(
-        app, ["measure", "csv", str(export), "--weight-n", "0.62", "-o", str(log)]
-    )
+    res = runner.invoke(app, ["measure", "csv", str(export), "--weight-n", "0.62", "-o", str(log)])
     assert res.exit_code == 0, res.stderr
     res = runner.invoke(app, ["characterize", str(log), "-o", str(out)])
     assert res.exit_code == 0, res.stderr
