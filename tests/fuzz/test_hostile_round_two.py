@@ -97,8 +97,8 @@ def test_a_tiny_mu_is_refused_by_its_rule(mu: str, tmp_path: Path) -> None:
     path = tmp_path / "cat.csv"
     path.write_text(",".join(HEADER) + "\n" + ",".join([*ROW[:5], mu]) + "\n")
     _one_error(["inspect", str(path)], 65, "friction_mu")
-    line = _one_error(["lift", "rig", str(path), "--command", "true", "-o", str(tmp_path / "l.pq")], 65,
-                      "friction_mu")  # fmt: skip
+    argv = ["lift", "rig", str(path), "--command", "true", "-o", str(tmp_path / "l.pq")]
+    line = _one_error(argv, 65, "friction_mu")
     assert "inf" not in line
     _one_error(["predict", "grip", "--weight-n", "2", "--deformability-n-per-cm", "30",
                 "--damping-ns-per-cm", "1", "--friction-mu", mu], 2, "--friction-mu")  # fmt: skip
