@@ -69,6 +69,16 @@ from deformctl.signals import quarter_window_length, savgol, sg_window_length, u
 #: The windows compared with the law where D is stated: mean compression within this fraction
 #: of the law's compression at the operating force (``secant_residual_frac``).
 SECANT_BAND = 0.1
+#: λ is reported only when its standard error is at most this fraction of it: a recording that
+#: determines λ more loosely (a force lag that trades against λ, a rate barely above the noise)
+#: gets λ = NaN and ``damping_unidentifiable``, so that no λ off by more than 20 % is written as
+#: ``ok``. Measured (``python -m deformctl.testing.shapes check --draws 2000``): the latency
+#: draws whose λ came out 67 % and 90 % low had standard errors of 61 % and 96 %; clean
+#: Kelvin–Voigt ramp-and-holds 0.3–3 %.
+DAMPING_SE_REL_MAX = 0.25
+#: ... or within this absolute error, N·s/m (0.05 N·s/cm: a λ near 0 is determined when its
+#: error is small against the paper's range, 0–13 N·s/cm, though not against itself).
+DAMPING_SE_FLOOR_NS_PER_M = 5.0
 #: Savitzky–Golay order of the window length (the window the log's rate implies, as ``paper``).
 POLYORDER = 3
 #: Windows slower than this fraction of the 95th-percentile speed have no direction of motion.
@@ -152,6 +162,18 @@ class ObjectFit:
     def fit(self, model: str) -> MaterialFit | None:
         """The fit of one law, or None when it was not fitted."""
         return next((f for f in self.fits if f.model == model), None)
+
+
+def _damping_determined(lam: float, lam_se: float, params: dict[str, float], data: FitData) -> bool:
+    """Whether the fit determines λ: its standard error is known and within
+    :data:`DAMPING_SE_REL_MAX` of it (or :data:`DAMPING_SE_FLOOR_NS_PER_M`), and a fitted force
+    lag is not at its largest value (there the lag could not take the delay out of the force,
+    and λ took it instead)."""
+    allowed = max(DAMPING_SE_REL_MAX * abs(lam), DAMPING_SE_FLOOR_NS_PER_M)
+    if not (math.isfinite(lam) and math.isfinite(lam_se) and lam_se <= allowed):
+        return False
+    lag = params.get("lag_s", 0.0)
+    return data.lag_s is not None or not lag >= data.lag_max_s * (1.0 - 1e-4)
 
 
 def _grid(s: SqueezeSeries, window_s: float) -> tuple[Grid, int]:
@@ -583,6 +605,8 @@ def fit_object(
     held = chosen.at_bound
     lam_held = any(p in DAMPING_PARAMETERS[chosen.model] for p in held)
     lam_se = chosen.derived_se(damping) if identifiable and not lam_held else math.nan
+    if identifiable and not lam_held and not _damping_determined(lam, lam_se, chosen.params, data):
+        identifiable, lam, lam_se = False, math.nan, math.nan
     law_d = secant(chosen.params)
     law_se = math.nan if PARAMETERS[chosen.model][0] in held else chosen.derived_se(secant)
     # a damping held at its bound 0 could not take the recording's rate-dependent force out of
