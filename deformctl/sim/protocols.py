@@ -209,11 +209,23 @@ def _kernels_ready() -> None:
 
 #: a small object: every kernel runs, none for long
 _WARM_SPEC = ObjectSpec("warmup", (4.0, 4.0, 4.0), 1.0, 0.5, 10.0, 0.5)
+#: ... and a standard linear solid (its Maxwell arms' kernels)
+_WARM_SLS = ObjectSpec(
+    "warmup-sls",
+    (4.0, 4.0, 4.0),
+    1.0,
+    0.5,
+    10.0,
+    0.0,
+    arm_stiffness_n_per_cm=5.0,
+    relaxation_time_s=0.5,
+)
 
 
 def compile_kernels() -> float:
     """Run every simulator kernel once (compiling or loading it), with the argument types of a
-    real run: a squeeze and a lift attempt with the direct solver and the iterative one
+    real run: a squeeze and a lift attempt of a Kelvin–Voigt object and of a standard linear
+    solid with the direct solver and the iterative one
     (multigrid CG), backward Euler and BDF2; returns the wall time, s."""
     first_use.mark_compiled()  # the runs below must not ask again (and mark at the end)
     t0 = time.perf_counter()
@@ -222,9 +234,10 @@ def compile_kernels() -> float:
             settings = SimSettings(
                 particles_per_side=4, solver=solver, integrator=integrator, grip_settle_s=0.01
             )
-            squeeze(_WARM_SPEC, peak_force_n=1.0, ramp_s=0.005, hold_s=0.005, settings=settings)
-            for mode in ("table", "support"):
-                lift_attempt(_WARM_SPEC, 2.0, settings=settings, release=SupportRelease(mode=mode))
+            for spec in (_WARM_SPEC, _WARM_SLS):
+                squeeze(spec, peak_force_n=1.0, ramp_s=0.005, hold_s=0.005, settings=settings)
+                for mode in ("table", "support"):
+                    lift_attempt(spec, 2.0, settings=settings, release=SupportRelease(mode=mode))
     build_model.cache_clear()
     first_use.mark_compiled()
     return time.perf_counter() - t0

@@ -155,7 +155,11 @@ def test_bag_position_of_the_wrong_sign_names_the_fix(
     coef = tmp_path / "c.parquet"
     assert runner.invoke(app, ["characterize", str(out), "-o", str(coef)]).exit_code == 0
     (row,) = read_table(coef, "coefficients").to_dict("records")
-    assert row["deformability_n_per_cm"] == pytest.approx(D_TRUE, rel=0.02)
+    # the law's stiffness within 2 % (29.88); D, the recording's secant from first contact at the
+    # median loading force (3.5 N, where the 50 Hz joint's zero weighs most), within the 5 % a row
+    # marked ok may be off (29.32, -2.3 %)
+    assert row["kv_deformability_n_per_cm"] == pytest.approx(D_TRUE, rel=0.02)
+    assert row["deformability_n_per_cm"] == pytest.approx(D_TRUE, rel=0.05)
     assert row["quality"] == "ok"
 
 
