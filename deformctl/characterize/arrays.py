@@ -1,9 +1,9 @@
 """``characterize`` of a recording a notebook already holds: time, force and compression arrays.
 
 :func:`characterize_arrays` gives the coefficients row ``measure csv`` then ``characterize``
-would write for the same samples, with the command's defaults: the arrays are cut into squeezes
-by the same code (:func:`deformctl.measure.segment._to_squeezes`: one squeeze unless
-``segment``, each kept up to a rupture), fitted as a rig recording (an intercept for a preload,
+would write for the same samples, with the command's defaults: the arrays are one squeeze, kept
+up to a rupture as ``measure`` keeps it (:func:`deformctl.characterize.rupture.cut_rupture`,
+which records it), fitted as a rig recording (an intercept for a preload,
 the force's lag fitted, the material law chosen by BIC), the Savitzky–Golay window chosen from
 the sample rate, and the quality policy applied. The arrays are in SI (s, N, m); nothing is
 read from or written to disk.
@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from deformctl.errors import InputDataError, UsageError
+from deformctl.series import SqueezeSeries
 
 if TYPE_CHECKING:  # pragma: no cover - pandas loads with the fit
     import pandas as pd
@@ -27,7 +28,8 @@ ARRAYS_SOURCE = "arrays"
 
 
 class CoefficientsWarning(UserWarning):
-    """A flagged object of :func:`characterize_arrays`: the row's ``quality`` names the flags."""
+    """A flagged object of :func:`characterize_arrays` (the row's ``quality`` names the flags),
+    or a rupture cut off."""
 
 
 def _series(name: str, values: ArrayLike) -> np.ndarray:
@@ -77,7 +79,6 @@ def characterize_arrays(
     at_force_n: float | None = None,
     window_s: float | None = None,
     preload: str | None = None,
-    segment: bool = False,
     strict: bool = False,
     allow_flagged: bool = False,
 ) -> pd.DataFrame:
@@ -95,14 +96,13 @@ def characterize_arrays(
         method, model, at_force_n, window_s, preload: as ``characterize --method --model
             --at-force-n --window-s --preload`` (None: the command's default, the window from
             the sample rate and, lsq, a fitted preload).
-        segment: split the recording into squeezes by force (``measure --segment``); default:
-            one squeeze, as ``measure csv`` reads a file.
         strict, allow_flagged: as ``characterize --strict`` / ``--allow-flagged``.
 
     Returns:
         One row with exactly the columns of a coefficients table
         (:data:`deformctl.characterize.COEFFICIENT_COLUMNS`). A flagged row (``quality`` not
-        ``ok``) also raises a :class:`CoefficientsWarning` naming the flags.
+        ``ok``) also raises a :class:`CoefficientsWarning` naming the flags, and so does a
+        rupture (the squeeze is kept up to it, and the row's rupture columns say where).
 
     Raises:
         InputDataError: arrays of different lengths, fewer than 2 samples, a value that is not
@@ -116,8 +116,7 @@ def characterize_arrays(
     from deformctl.characterize.options import FitOptions, QualityPolicy, check_method
     from deformctl.characterize.quality import enforce
     from deformctl.characterize.stage import _fit_object
-    from deformctl.measure.options import Segmentation
-    from deformctl.measure.segment import _detection_window_s, _to_squeezes
+    from deformctl.characterize.rupture import cut_rupture
     from deformctl.quantities import FRICTION_MU, WEIGHT_N
 
     t, f, d = (_series(n, v) for n, v in (("time_s", time_s), ("force_n", force_n),
@@ -135,13 +134,13 @@ def characterize_arrays(
     )
     policy = QualityPolicy(strict=strict, allow_flagged=allow_flagged)
     rate_hz = float(1.0 / np.median(np.diff(t)))
-    cut = Segmentation(segment=segment)
-    squeezes, ruptures = _to_squeezes(
-        t - t[0], f, d, object_id=object_id, segmentation=cut, segment=cut.segments(False),
-        path=object_id, window_s=_detection_window_s(rate_hz),
-    )  # fmt: skip
-    if not squeezes:
-        raise InputDataError(f"object {object_id!r}: no squeeze found in the arrays")
+    window = options.window_s if options.window_s is not None else default_window_s(rate_hz)
+    whole = SqueezeSeries(
+        object_id=object_id, squeeze_index=0, time_s=t - t[0], force_n=f, compression_m=d
+    )
+    squeeze, rupture = cut_rupture(
+        whole, window_s=default_window_s(rate_hz), recording_offset_s=0.0
+    )
     obj: dict[str, Any] = {
         "object_id": object_id,
         "weight_n": weight_n,
@@ -150,10 +149,14 @@ def characterize_arrays(
         "position_rate_hz": rate_hz,
         "source": ARRAYS_SOURCE,
     }
-    if ruptures:
-        obj["ruptures"] = [r.to_record() for r in ruptures]
-    window = options.window_s if options.window_s is not None else default_window_s(rate_hz)
-    row, _ = _fit_object(object_id, squeezes, obj, options, window_s=window)
+    if rupture is not None:
+        obj["ruptures"] = [rupture.to_record()]
+        warnings.warn(
+            f"object {object_id!r}: rupture in {rupture.describe()}: cut off",
+            CoefficientsWarning,
+            stacklevel=2,
+        )
+    row, _ = _fit_object(object_id, [squeeze], obj, options, window_s=window)
     table = _coefficient_frame([row])
     for line in enforce(table, strict=policy.strict, allow_flagged=policy.allow_flagged):
         warnings.warn(line, CoefficientsWarning, stacklevel=2)

@@ -18,6 +18,7 @@ from deformctl.characterize import (
     CoefficientsWarning,
     characterize_arrays,
     synthetic_kelvin_voigt_squeeze,
+    synthetic_rupture_backoff,
 )
 from deformctl.cli import app
 from deformctl.errors import InputDataError, UsageError
@@ -134,3 +135,12 @@ def test_bad_arrays_are_one_clear_error(recording: tuple, change, error, text) -
 def test_bad_options_are_usage_errors(recording: tuple, option: dict, text: str) -> None:  # type: ignore[type-arg]
     with pytest.raises(UsageError, match=text):
         characterize_arrays(*recording, **option)
+
+
+def test_a_rupture_is_cut_off_recorded_and_warned() -> None:
+    s = synthetic_rupture_backoff(rupture_force_n=12.0, seed=1)
+    with pytest.warns(CoefficientsWarning, match="rupture") as caught:
+        row = characterize_arrays(s.time_s, s.force_n, s.compression_m, object_id="crushed")
+    assert any("cut off" in str(w.message) for w in caught)
+    assert row["rupture_force_n"].iloc[0] == pytest.approx(12.0, rel=0.02)  # the true one
+    assert "rupture" in row["quality"].iloc[0].split(",")
