@@ -115,8 +115,8 @@ def characterize_arrays(
     from deformctl.characterize.material_options import MaterialOptions
     from deformctl.characterize.options import FitOptions, QualityPolicy, check_method
     from deformctl.characterize.quality import enforce
-    from deformctl.characterize.stage import _fit_object
     from deformctl.characterize.rupture import cut_rupture
+    from deformctl.characterize.stage import _fit_object
     from deformctl.quantities import FRICTION_MU, WEIGHT_N
 
     t, f, d = (_series(n, v) for n, v in (("time_s", time_s), ("force_n", force_n),
