@@ -10,19 +10,20 @@ from deformctl.errors import UsageError
 DEFAULT_ROWS = 20
 
 
-def parse_row_count(text: str | None) -> int | None:
-    """``--rows``: a whole number >= 0, or ``all`` (None); not given: :data:`DEFAULT_ROWS`.
+def parse_row_count(text: str | None, *, default: int | None = DEFAULT_ROWS) -> int | None:
+    """``--rows``: a whole number >= 1, or ``all`` (None); not given: ``default``
+    (:data:`DEFAULT_ROWS` for the text table; None, every row, for ``--json`` and ``--csv``).
 
     Raises:
-        UsageError: a negative or non-numeric count (exit 2).
+        UsageError: zero, a negative or a non-numeric count (exit 2).
     """
     if text is None:
-        return DEFAULT_ROWS
+        return default
     value = text.strip().lower()
     if value == "all":
         return None
-    if not value.isdigit():
-        raise UsageError(f"--rows must be a whole number >= 0 or 'all', got {text!r}")
+    if not value.isdigit() or int(value) < 1:
+        raise UsageError(f"--rows must be a whole number >= 1 or 'all', got {text!r}")
     return int(value)
 
 

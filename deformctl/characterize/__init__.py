@@ -38,6 +38,11 @@ from typing import TYPE_CHECKING
 from deformctl.lazy import lazy_exports
 
 if TYPE_CHECKING:  # the names below, for type checkers; at run time they load on first use
+    from deformctl.characterize.arrays import (
+        ARRAYS_SOURCE,
+        CoefficientsWarning,
+        characterize_arrays,
+    )
     from deformctl.characterize.coefficients import (
         COEFFICIENT_COLUMNS,
         CoefficientFit,
@@ -158,6 +163,9 @@ _EXPORTS: dict[str, str] = {
     "NO_COMPRESSION_NOISE_MULT": "deformctl.characterize.prepare",
     "validate_squeeze": "deformctl.characterize.prepare",
     "RIG_SOURCES": "deformctl.characterize.stage",
+    "ARRAYS_SOURCE": "deformctl.characterize.arrays",
+    "CoefficientsWarning": "deformctl.characterize.arrays",
+    "characterize_arrays": "deformctl.characterize.arrays",
     "CharacterizeTask": "deformctl.characterize.stage",
     "LogCoefficients": "deformctl.characterize.stage",
     "characterize_dir": "deformctl.characterize.stage",
@@ -178,6 +186,7 @@ __getattr__, __dir__ = lazy_exports(globals(), _EXPORTS)
 
 
 __all__ = [
+    "ARRAYS_SOURCE",
     "COEFFICIENT_COLUMNS",
     "COLLINEAR_COND",
     "DEFAULT_FIT",
@@ -199,6 +208,7 @@ __all__ = [
     "UNIFORM_DT_RTOL",
     "CharacterizeTask",
     "CoefficientFit",
+    "CoefficientsWarning",
     "FitOptions",
     "LogCoefficients",
     "MaterialOptions",
@@ -208,6 +218,7 @@ __all__ = [
     "Profile",
     "QualityPolicy",
     "characterize",
+    "characterize_arrays",
     "characterize_dir",
     "characterize_file",
     "characterize_items",

@@ -35,8 +35,9 @@ def check_model(model: object) -> str:
     return str(model)
 
 
-#: The ``source`` a squeeze log's object row carries when ``measure`` read a rig recording.
-RIG_SOURCES = ("ros2_bag", "csv")
+#: The ``source`` a squeeze log's object row carries when ``measure`` read a rig recording (and
+#: that of arrays given to :func:`deformctl.characterize.arrays.characterize_arrays`).
+RIG_SOURCES = ("ros2_bag", "csv", "arrays")
 
 
 def check_at_force_n(value: object) -> float | None:

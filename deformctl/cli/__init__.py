@@ -49,6 +49,7 @@ COMMAND_NAMES: tuple[str, ...] = (
     "predict",
     "adapt",
     "inspect",
+    "examples",
     "warmup",
 )
 

@@ -166,8 +166,10 @@ def run(
     output: str,
     force: bool,
     sweep: SweepOptions,
+    quiet: bool = False,
 ) -> None:
-    """Read every CSV file of ``paths`` and write their squeeze log or dataset directory."""
+    """Read every CSV file of ``paths`` and write their squeeze log or dataset directory (with
+    its summary line unless ``quiet``)."""
     from deformctl.measure.csv_batch import csv_objects, measure_csv_files, measure_csv_sweep
     from deformctl.parallel import single_file_workers
 
@@ -182,10 +184,10 @@ def run(
     if sweep.check(output, file_workers=True):
         summary = measure_csv_sweep(files, task, output=output, sweep=sweep, force=force)
         report_dataset(summary.out_dir)
-        finish_sweep(summary, "measure")
+        finish_sweep(summary, "measure", quiet=quiet)
         return
     workers = single_file_workers(sweep.workers, len(files))
     result = measure_csv_files(files, task, output=output, force=force, workers=workers)
-    report_files(result, output)
+    report_files(result, output, quiet=quiet)
     if result.exit_code:
         raise typer.Exit(result.exit_code)

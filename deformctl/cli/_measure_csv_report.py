@@ -25,7 +25,7 @@ def _counted(lines: Sequence[str], of: int) -> list[str]:
     ]
 
 
-def report_files(result: CsvBatchResult, output: str) -> None:
+def report_files(result: CsvBatchResult, output: str, *, quiet: bool = False) -> None:
     from deformctl.measure.csv_batch import file_notices
 
     read = result.read
@@ -41,7 +41,7 @@ def report_files(result: CsvBatchResult, output: str) -> None:
         typer.echo(line if total > 1 else f"{display_name(read[0].file.path)}: {line}", err=True)
     for o in result.failed:
         typer.echo(f"error: {o.error}", err=True)
-    if not read:
+    if not read or quiet:  # --quiet: no summary line
         return
     where = "stdout" if output == "-" else output
     squeezes = [s for o in read for s in o.recording.squeezes]  # type: ignore[union-attr]

@@ -20,9 +20,16 @@ if TYPE_CHECKING:  # pragma: no cover - OpenCV and the catalog writer load when 
 
 
 def measure_images(
-    images: Sequence[str], opts: ImageOptions, obj: MeasuredObject, *, output: str, force: bool
+    images: Sequence[str],
+    opts: ImageOptions,
+    obj: MeasuredObject,
+    *,
+    output: str,
+    force: bool,
+    quiet: bool = False,
 ) -> None:
-    """Measure the object in ``images = (top, side)`` and write (or append) its catalog row.
+    """Measure the object in ``images = (top, side)`` and write (or append) its catalog row;
+    print the size found unless ``quiet`` (warnings print).
 
     Raises:
         UsageError, MissingInputError, OutputExistsError, InputDataError: see
@@ -51,6 +58,8 @@ def measure_images(
             "calibration for sizes within 2 %)",
             err=True,
         )
+    if quiet:
+        return
     where = "stdout" if is_stdio(output) else output
     typer.echo(
         f"{where}: {obj.object_id!r} {round(size.size_x_cm, 2)} x {round(size.size_y_cm, 2)} x "

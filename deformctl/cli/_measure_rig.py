@@ -206,8 +206,10 @@ def run(
     obj: MeasuredObject,
     output: str,
     force: bool,
+    quiet: bool = False,
 ) -> None:
-    """Read the bag ``path`` and write its squeeze log."""
+    """Read the bag ``path`` and write its squeeze log (with its summary line unless
+    ``quiet``)."""
     from deformctl.measure.stage import measure_recording
 
     if is_stdio(path):
@@ -218,6 +220,8 @@ def run(
     for r in rec.ruptures:  # each squeeze is kept up to its rupture, recorded in the log
         warning = f"warning: {path}: object {obj.object_id!r}: rupture in {r.describe()}: cut off"
         typer.echo(warning, err=True)
+    if quiet:
+        return
     duration_s = sum(float(s.time_s[-1]) for s in rec.squeezes)
     where = "stdout" if is_stdio(output) else output
     typer.echo(

@@ -192,7 +192,7 @@ def run(
         )
         finish_sweep(summary, "measure", quiet=quiet)
         return
-    with progress_bar(console, "squeeze") as progress:
+    with progress_bar(console, "measure") as progress:  # counts objects
         rows, series = simulate_catalog_file(
             catalog,
             task,

@@ -17,15 +17,17 @@ from deformctl.errors import UsageError
 @translate_errors
 def inspect(
     file: str = typer.Argument(
-        ..., help="Any deformctl artifact (MCAP, Parquet, catalog CSV, model file); - for stdin."
+        ...,
+        help="Any deformctl artifact (MCAP, Parquet, catalog CSV, model file); - for stdin; "
+        "grip: the bundled model.",
     ),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON document instead of text."),
     rows: str | None = typer.Option(
         None,
         "--rows",
         metavar="N|all",
-        help=f"Show only the first N rows of a table (or of --attempts) [default: the summary "
-        f"and the first {DEFAULT_ROWS}]; all: every row; 0: none.",
+        help=f"Show only the first N (>= 1) rows of a table (or of --attempts) [default: the "
+        f"summary and the first {DEFAULT_ROWS}; --json and --csv: every row]; all: every row.",
     ),
     columns: str | None = typer.Option(
         None, "--columns", metavar="a,b,c", help="Show only these columns, in this order."
@@ -44,9 +46,13 @@ def inspect(
 
     A table (catalog, coefficients, lift results, index table, predictions, a dataset
     directory) shows its first 20 rows under the summary, units in the headers; --rows N (or
-    all), --columns and --attempts show the rows alone; --json adds them as "records", --csv
-    prints them as CSV. Numbers show 6 significant digits in the text table and every digit in
-    --json and --csv; long text is cut to the terminal width.
+    all), --columns and --attempts show the rows alone; --json adds every row as "records" and
+    --csv prints every row as CSV, unless --rows N is given. Numbers show 6 significant digits
+    in the text table and every digit in --json and --csv; long text is cut to the terminal
+    width.
+
+    FILE `grip` is the model bundled with deformctl (the one `predict grip` uses); a file of
+    that name in the working directory is ./grip.
 
     The file is fully validated first; a damaged or invalid file exits with 65. Temporary files
     a killed run left next to it (``.NAME.deformctl-PID-RANDOM.tmp``) are listed on stderr (and
@@ -60,8 +66,11 @@ def inspect(
     from deformctl.artifacts.describe import describe
     from deformctl.artifacts.rows import artifact_rows, rows_csv, rows_records, select_rows
     from deformctl.cli._rows import rows_footer, rows_text
+    from deformctl.grip.fast import BUNDLED_MODELS, resolve_model_path
 
-    limit = parse_row_count(rows)
+    if file in BUNDLED_MODELS:  # a bundled model's name, as predict resolves it
+        file = str(resolve_model_path(file))
+    limit = parse_row_count(rows, default=None if as_json or as_csv else DEFAULT_ROWS)
     chosen = parse_column_list(columns)
     explicit = rows is not None or chosen is not None or as_csv or attempts
     if os.path.isdir(file):  # a sweep dataset directory

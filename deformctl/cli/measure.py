@@ -86,6 +86,7 @@ def csv(
         str, typer.Option("-o", "--output", metavar="squeeze.mcap|DIR/", help="The squeeze log.")
     ],
     objects_from: _measure_csv.ObjectsFrom = None,
+    quiet: Quiet = False,
     force: opt.Force = False,
     options: CsvOptions = None,  # type: ignore[assignment]  # built by the option groups
     cut: Segmentation = None,  # type: ignore[assignment]
@@ -102,7 +103,7 @@ def csv(
     from deformctl.measure.csv_batch import CsvFileTask
 
     task: CsvFileTask = CsvFileTask(options, cut)
-    _measure_csv.run(files, task, objects_from, named, output, force, sweep)
+    _measure_csv.run(files, task, objects_from, named, output, force, sweep, quiet)
 
 
 @translate_errors
@@ -110,6 +111,7 @@ def csv(
 def bag(
     path: Annotated[str, typer.Argument(metavar="BAG.mcap", help="A ROS 2 bag, one MCAP file.")],
     output: Output,
+    quiet: Quiet = False,
     force: opt.Force = False,
     source: BagSource = None,  # type: ignore[assignment]  # built by the option groups
     cut: Segmentation = None,  # type: ignore[assignment]
@@ -124,7 +126,7 @@ def bag(
     --position-topic /left/palm_pose --object-id sand --weight-n 2.9 -o squeeze.mcap
     """
     obj = named.measured("measure bag")
-    _measure_rig.run(path, source, cut, obj, output, force)
+    _measure_rig.run(path, source, cut, obj, output, force, quiet)
 
 
 @translate_errors
@@ -136,6 +138,7 @@ def images(
         str,
         typer.Option("-o", "--output", metavar="catalog.csv", help="The catalog; - for stdout."),
     ],
+    quiet: Quiet = False,
     force: opt.Force = False,
     opts: img.ImageOptions = None,  # type: ignore[assignment]  # built by the option groups
     named: _measure_rig.ObjectFlags = None,  # type: ignore[assignment]
@@ -146,7 +149,7 @@ def images(
     --weight-n 2.9 -o catalog.csv
     """
     obj = named.measured("measure images")
-    _measure_images.measure_images((top, side), opts, obj, output=output, force=force)
+    _measure_images.measure_images((top, side), opts, obj, output=output, force=force, quiet=quiet)
 
 
 #: ``measure`` and its subcommands (registered on the root app as one group).

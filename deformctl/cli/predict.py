@@ -103,6 +103,12 @@ def predict(
     output: str | None = typer.Option(
         None, "-o", "--output", help="Write a predictions table (Parquet; - for stdout)."
     ),
+    as_json: bool = typer.Option(
+        False,
+        "--json",
+        help="Print the predictions as one JSON document: every column in every mode, null "
+        "where a run has no value (schemas/predict.schema.json); not with -o.",
+    ),
     force: Force = False,
 ) -> None:
     """Predict the minimum lifting force L_f (N) from weight, deformability, damping (and μ).
@@ -115,7 +121,9 @@ def predict(
     catalog's is used and a warning names the object.
 
     MODEL `grip` is the bundled model for robots (W 0.5-80 N, D 5-60 N/cm, λ 0-15 N·s/cm,
-    μ 0.2-1.0); it needs μ. Without -o the predictions are printed as CSV on stdout.
+    μ 0.2-1.0); it needs μ. Without -o the predictions are printed as CSV on stdout; --json
+    prints them as one JSON document instead, with the same columns whether the objects come
+    from flags or a table (null where a run has no value).
 
     --coverage P adds lift_force_upper_n, a split-conformal upper bound (from the model's
     calibration rows): at least P of the true L_f lie below it for objects drawn like the
@@ -158,6 +166,8 @@ def predict(
         "friction_mu": friction_mu,
     }
     _check_usage(flags, features, catalog)
+    if as_json and output is not None:
+        raise UsageError("give --json or -o, not both (--json prints to stdout)")
     _check_flags(flags, coverage)
     if output is not None:
         from deformctl.artifacts import check_output_path
@@ -182,7 +192,11 @@ def predict(
     for line in [*est.warnings, *quality_warnings(est.names.tolist(), inputs.get("quality"))]:
         typer.echo(f"warning: {line}", err=True)
     columns = output_columns(est, inputs, object_ids=ids, damping_assumed=assumed)
-    if output is None:
+    if as_json:
+        from deformctl.predict_json import json_text
+
+        typer.echo(json_text(columns), nl=False)
+    elif output is None:
         typer.echo(csv_text(columns), nl=False)
     else:
         _write(columns, output, predictor, [model_path, features, catalog], coverage, force)

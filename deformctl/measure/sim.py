@@ -28,7 +28,7 @@ if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported w
 HC_MIN_PEAK_OVER_F_W = 1.5
 
 SqueezeProgress = Callable[[str, int, int], None]
-"""``progress(object_id, squeezes_done, squeezes_total)``, called after each simulated squeeze."""
+"""``progress(object_id, objects_done, objects_total)``, called after each object's squeezes."""
 
 
 def default_peak_force_n(spec: ObjectSpec, strain: float = DEFAULT_SQUEEZE_STRAIN) -> float:
@@ -84,7 +84,7 @@ def simulate_squeezes(
             command's; :func:`deformctl.presets.sim_preset`).
         seed: noise seed; object ``i`` gets its own stream derived from (seed, i) and squeeze
             ``j`` of it that stream's seed + j. Same inputs and seed give the same bytes.
-        progress: called after each squeeze.
+        progress: called after each object (its squeezes done), with objects done and total.
         path: the catalog's name, for messages.
         first_index: the position of ``catalog``'s first row in the whole run's catalog: row
             ``i`` gets the noise stream of object ``first_index + i``, so squeezing a slice of
@@ -121,7 +121,6 @@ def simulate_squeezes(
     objects: list[dict[str, Any]] = []
     out: list[SqueezeSeries] = []
     squeezes = p.squeezes
-    total = squeezes * len(specs)
     for i, (spec, rec) in enumerate(zip(specs, records, strict=True)):
         peak = (
             p.peak_force_n if p.peak_force_n is not None else default_peak_force_n(spec, p.strain)
@@ -143,8 +142,8 @@ def simulate_squeezes(
                     scene_hz=scene_hz,
                 )
             )
-            if progress is not None:
-                progress(spec.object_id, i * squeezes + j + 1, total)
+        if progress is not None:
+            progress(spec.object_id, i + 1, len(specs))
         objects.append(
             {**rec, "force_rate_hz": rate_hz, "position_rate_hz": rate_hz, "sim_peak_force_n": peak}
         )

@@ -244,11 +244,12 @@ def _squeeze_in_workers(
 ) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
     """:func:`simulate_squeezes` of ``catalog`` with one task per object on local processes."""
     items = _positioned_items(catalog)
-    per_object = task.protocol.squeezes
+    finished = [0]
 
     def done(i: int, _: object) -> None:
+        finished[0] += 1
         if progress is not None:
-            progress(str(items[i]["object_id"]), (i + 1) * per_object, len(items) * per_object)
+            progress(str(items[i]["object_id"]), finished[0], len(items))
 
     outputs = map_in_order(task, items, workers=workers, on_result=done)
     objects = [out.payload[0] for out in outputs]

@@ -125,13 +125,18 @@ def test_select_rows_columns_and_count() -> None:
 
 
 @pytest.mark.parametrize(
-    ("text", "count"), [(None, DEFAULT_ROWS), ("all", None), ("ALL", None), ("0", 0), (" 7 ", 7)]
+    ("text", "count"), [(None, DEFAULT_ROWS), ("all", None), ("ALL", None), ("1", 1), (" 7 ", 7)]
 )
 def test_row_counts(text: str | None, count: int | None) -> None:
     assert parse_row_count(text) == count
 
 
-@pytest.mark.parametrize("text", ["-1", "x", "1.5", "", "1e3"])
+def test_no_row_count_is_the_default_given() -> None:
+    assert parse_row_count(None, default=None) is None  # --json and --csv: every row
+    assert parse_row_count("3", default=None) == 3
+
+
+@pytest.mark.parametrize("text", ["0", "00", "-1", "x", "1.5", "", "1e3"])
 def test_bad_row_counts_are_usage_errors(text: str) -> None:
     with pytest.raises(UsageError, match="--rows"):
         parse_row_count(text)

@@ -54,12 +54,6 @@ def test_rows_alone_with_columns_and_count() -> None:
     assert "rows shown" in result.stderr  # type: ignore[attr-defined]
 
 
-def test_rows_zero_is_the_summary_alone() -> None:
-    out = _ok(_run(DATA / "lift_results.parquet", "--rows", "0"))
-    assert "object_id" in out.splitlines()[0]  # the (empty) table's header only
-    assert "kind:" not in out
-
-
 def test_a_narrow_terminal_cuts_long_text_and_splits_the_columns() -> None:
     out = _ok(_run(DATA / "lift_results.parquet", "--rows", "all", columns=60))
     lines = out.splitlines()

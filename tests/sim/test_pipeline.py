@@ -241,13 +241,15 @@ def test_explicit_peak_force_and_progress_bar(
     terminal = partial(Console, stderr=True, force_terminal=True)
     monkeypatch.setattr(measure_cli, "stderr_console", terminal)
     log = tmp_path / "sq.mcap"
-    res = run("measure", "sim", PAPER_CATALOG, "-o", log, "--objects", "C", "--squeezes", "3",
-              "--peak-force-n", "4", "--ramp-s", "0.1", "--hold-s", "0.1")  # fmt: skip
+    res = run("measure", "sim", PAPER_CATALOG, "-o", log, "--objects", "C,D", "--squeezes", "3",
+              "--peak-force-n", "4", "--ramp-s", "0.1", "--hold-s", "0.1",
+              "--workers", "1")  # fmt: skip
     assert res.exit_code == 0, res.stderr
-    assert "3/3" in res.stderr  # the bar reached the last squeeze, on stderr
+    assert "2/2" in res.stderr  # the bar counts objects and reached the last one, on stderr
+    assert "6/6" not in res.stderr  # not squeezes
     _, squeezes = read_squeeze_log(log)
     peaks = [float(s.commanded_force_n.max()) for s in squeezes if s.commanded_force_n is not None]
-    assert peaks == pytest.approx([2.0, 3.0, 4.0])
+    assert peaks == pytest.approx([2.0, 3.0, 4.0] * 2)
 
 
 # ------------------------------------------------------------------------------ issue 5: lift
