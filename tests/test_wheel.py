@@ -101,10 +101,10 @@ squeeze(bag, peak_force_n=5.0, ramp_s=0.01, hold_s=0.01, settings=SimSettings(pa
 def test_a_fresh_venv_warms_up_and_runs_the_first_commands(
     fresh_venv: Path, tmp_path: Path
 ) -> None:
-    """``pip install`` of the wheel; ``python -m deformctl.sim.warmup`` (``make install`` runs
-    it) compiles every kernel a run uses into a fresh numba cache, so ``population``,
-    ``measure --sim``, ``lift --sim`` and squeezes and lifts of both presets and a fine cube
-    add nothing to the cache afterwards. (One test, so the kernels compile once.)"""
+    """``pip install`` of the wheel; ``deformctl warmup`` (``make install`` runs it) compiles
+    every kernel a run uses (the simulator's and the scene writer's) into a fresh numba cache,
+    so ``population``, ``measure sim``, ``lift sim`` and squeezes and lifts of both presets and
+    a fine cube add nothing to the cache afterwards. (One test, so the kernels compile once.)"""
     deformctl = str(fresh_venv / "bin" / "deformctl")
     python = str(fresh_venv / "bin" / "python")
     cache = tmp_path / "numba"
@@ -119,7 +119,7 @@ def test_a_fresh_venv_warms_up_and_runs_the_first_commands(
 
     where = run(python, "-c", "import deformctl; print(deformctl.__file__)")
     assert Path(where.stdout.strip()).is_relative_to(fresh_venv)
-    done = run(python, "-m", "deformctl.sim.warmup")
+    done = run(deformctl, "warmup")
     assert done.stdout == ""
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1

@@ -76,9 +76,11 @@ SECANT_BAND = 0.1
 #: draws whose λ came out 67 % and 90 % low had standard errors of 61 % and 96 %; clean
 #: Kelvin–Voigt ramp-and-holds 0.3–3 %.
 DAMPING_SE_REL_MAX = 0.25
-#: ... or within this absolute error, N·s/m (0.05 N·s/cm: a λ near 0 is determined when its
-#: error is small against the paper's range, 0–13 N·s/cm, though not against itself).
-DAMPING_SE_FLOOR_NS_PER_M = 5.0
+#: ... or within this absolute error, N·s/m (0.15 N·s/cm, about 1 % of the paper's λ range of
+#: 0–13 N·s/cm: a λ near 0 is determined when its error is small against that range, though not
+#: against itself; a 0.17 s lagged λ = 0 squeeze reads 0.05 ± 0.10 N·s/cm, the two latency
+#: draws above have errors of 0.24 and 0.26 N·s/cm).
+DAMPING_SE_FLOOR_NS_PER_M = 15.0
 #: Savitzky–Golay order of the window length (the window the log's rate implies, as ``paper``).
 POLYORDER = 3
 #: Windows slower than this fraction of the 95th-percentile speed have no direction of motion.
