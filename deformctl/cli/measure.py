@@ -108,7 +108,13 @@ def csv(
 @translate_errors
 @opt.with_options(_measure_rig.BAG, _measure_rig.CUT, _measure_rig.OBJECT)
 def bag(
-    path: Annotated[str, typer.Argument(metavar="BAG.mcap", help="A ROS 2 bag, one MCAP file.")],
+    path: Annotated[
+        str,
+        typer.Argument(
+            metavar="BAG.mcap|BAG/",
+            help="A ROS 2 bag: one MCAP file, or a rosbag2 folder (metadata.yaml, .mcap files).",
+        ),
+    ],
     output: Output,
     force: opt.Force = False,
     source: BagSource = None,  # type: ignore[assignment]  # built by the option groups
