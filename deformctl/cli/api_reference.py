@@ -66,7 +66,14 @@ def _signature(doc: Any, name: str) -> str:
     if isinstance(doc, pdoc.doc.Function):
         return f"def {name}{doc.signature}"
     if isinstance(doc, pdoc.doc.Class):
-        init = next((m for m in doc.own_members if m.name == "__init__"), None)
+        init = next(
+            (
+                m
+                for m in doc.own_members
+                if m.name == "__init__" and isinstance(m, pdoc.doc.Function)
+            ),
+            None,
+        )
         sig = str(init.signature_without_self) if init is not None else "()"
         return f"class {name}{sig}"
     return f"{name}: {doc.annotation_str.lstrip(': ') or type(doc.default_value).__name__}"

@@ -11,7 +11,7 @@ the squeezes a real run would write.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from deformctl.artifacts.io import display_name
@@ -35,7 +35,7 @@ def _sniffed(layout: dict[str, Any], key: str) -> str:
     return "found" if key in layout.get("sniffed", ()) else "given"
 
 
-def _preamble(details: dict[str, Any]) -> str:
+def _preamble(details: Mapping[str, Any]) -> str:
     layout = details["layout"]
     skipped = int(layout["header_line"]) - 1
     if skipped == 0:
