@@ -86,6 +86,14 @@ ObjectsFrom = Annotated[
     ),
 ]
 
+DryRun = Annotated[
+    bool,
+    typer.Option(
+        "--dry-run",
+        help="Print what would be detected in each file; write nothing (-o is not needed).",
+    ),
+]
+
 
 #: ``measure csv``'s budget: the rows of a CSV export and its log.
 MemoryBudgetGib = Annotated[
@@ -189,5 +197,36 @@ def run(
     workers = single_file_workers(sweep.workers, len(files))
     result = measure_csv_files(files, task, output=output, force=force, workers=workers)
     report_files(result, output, quiet=quiet)
+    if result.exit_code:
+        raise typer.Exit(result.exit_code)
+
+
+def dry_run(
+    paths: Sequence[str],
+    task: CsvFileTask,
+    objects_from: str | None,
+    named: ObjectFlags,
+    sweep: SweepOptions,
+) -> None:
+    """``measure csv --dry-run``: each file's detection on stdout, its error line on stderr;
+    the exit code a real run would give (65 for one bad file, 1 when some of many fail)."""
+    from deformctl.measure.csv_batch import csv_objects
+    from deformctl.measure.csv_dry_run import dry_run_files, outcome_lines
+    from deformctl.parallel import single_file_workers
+
+    files = csv_objects(
+        paths,
+        objects_from=objects_from,
+        object_id=named.object_id,
+        weight_n=named.weight_n,
+        size_cm=named.size_cm,
+        friction_mu=named.friction_mu,
+    )
+    result = dry_run_files(files, task, workers=single_file_workers(sweep.workers, len(files)))
+    for outcome in result.outcomes:
+        lines = outcome_lines(outcome)
+        for line in lines:
+            typer.echo(line, err=outcome.recording is None)
+    typer.echo(f"dry run: {len(result.read)} of {len(files)} file(s) read; nothing written")
     if result.exit_code:
         raise typer.Exit(result.exit_code)

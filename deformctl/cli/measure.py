@@ -20,6 +20,7 @@ from deformctl.cli import _options as opt
 from deformctl.cli._common import translate_errors
 from deformctl.cli._sources import MeasureGroup, source_group
 from deformctl.cli._summary import Quiet, stderr_console
+from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
 
 if TYPE_CHECKING:  # pragma: no cover - the library's options load when a source runs
@@ -83,8 +84,15 @@ def csv(
         typer.Argument(metavar="FILE...", help="CSV exports, one object each; - for stdin."),
     ],
     output: Annotated[
-        str, typer.Option("-o", "--output", metavar="squeeze.mcap|DIR/", help="The squeeze log.")
-    ],
+        str | None,
+        typer.Option(
+            "-o",
+            "--output",
+            metavar="squeeze.mcap|DIR/",
+            help="The squeeze log (needed unless --dry-run).",
+        ),
+    ] = None,
+    dry_run: _measure_csv.DryRun = False,
     objects_from: _measure_csv.ObjectsFrom = None,
     quiet: Quiet = False,
     force: opt.Force = False,
@@ -96,20 +104,33 @@ def csv(
     """Read CSV exports (one object each) into one squeeze log, or a dataset (-o DIR/).
 
     A preamble, the header and units in the names or in a units row are found; what was found
-    is printed once per distinct line.
+    is printed once per distinct line. --dry-run prints what would be detected in each file
+    (header row, preamble, delimiter, decimal mark, units, column roles, the position's
+    reading, the force sign) and writes nothing.
 
     Example: deformctl measure csv data/*.csv --position-is gap -o squeeze.mcap
     """
     from deformctl.measure.csv_batch import CsvFileTask
 
     task: CsvFileTask = CsvFileTask(options, cut)
+    if dry_run:
+        _measure_csv.dry_run(files, task, objects_from, named, sweep)
+        return
+    if output is None:
+        raise UsageError("measure csv needs -o/--output (or --dry-run)")
     _measure_csv.run(files, task, objects_from, named, output, force, sweep, quiet)
 
 
 @translate_errors
 @opt.with_options(_measure_rig.BAG, _measure_rig.CUT, _measure_rig.OBJECT)
 def bag(
-    path: Annotated[str, typer.Argument(metavar="BAG.mcap", help="A ROS 2 bag, one MCAP file.")],
+    path: Annotated[
+        str,
+        typer.Argument(
+            metavar="BAG.mcap|BAG/",
+            help="A ROS 2 bag: one MCAP file, or a rosbag2 folder (metadata.yaml, .mcap files).",
+        ),
+    ],
     output: Output,
     quiet: Quiet = False,
     force: opt.Force = False,

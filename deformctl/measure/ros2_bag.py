@@ -37,7 +37,7 @@ import zstandard
 from deformctl.artifacts.io import note_input
 from deformctl.artifacts.mcap.integrity import complete_prefix, locate_damage, tail_problem
 from deformctl.characterize.options import Phase
-from deformctl.errors import InputDataError, MissingInputError, UsageError
+from deformctl.errors import InputDataError, UsageError
 from deformctl.measure.defects import ENERGY_RETURNED, Defect
 from deformctl.measure.options import (
     DEFAULT_FORCE_THRESHOLD_FRAC,
@@ -57,6 +57,7 @@ from deformctl.measure.recording import (
     _compression,
     _rate_hz,
 )
+from deformctl.measure.rosbag2 import bag_parts, check_counts
 from deformctl.measure.segment import (
     _detection_window_s,
     _to_squeezes,
@@ -414,7 +415,7 @@ def read_ros2_bag(
     (recorded in the result) and reduced to ``phase`` (:mod:`deformctl.characterize.rupture`).
 
     Args:
-        path: the bag, one ``.mcap`` file.
+        path: the bag: one ``.mcap`` file, or a rosbag2 folder (:func:`read_bag`).
         wrench_topics: one or two ``geometry_msgs/msg/WrenchStamped`` topics (one per palm).
         position_topic: a ``geometry_msgs/msg/PoseStamped`` topic (palm pose) or a
             ``sensor_msgs/msg/JointState`` topic (with ``joint``).
@@ -441,8 +442,10 @@ def read_ros2_bag(
         rates of the first wrench topic and of the position topic, and the ruptures.
 
     Raises:
-        MissingInputError: the bag does not exist.
-        InputDataError: not an MCAP file, a topic not in the bag (the message lists those that
+        MissingInputError: the bag does not exist, or a file its ``metadata.yaml`` lists.
+        InputDataError: not an MCAP file, a SQLite (``.db3``) bag (with a converter to use), a
+            folder without a readable rosbag2 ``metadata.yaml`` or whose files hold other
+            message counts than it states, a topic not in the bag (the message lists those that
             are), a topic of the wrong type, a joint not in the JointState, NaN samples,
             non-monotonic header stamps, streams that do not overlap, no compression, no squeeze,
             or an implausible recording (the message names the likely cause).
@@ -482,7 +485,8 @@ def read_bag(
     """:func:`read_ros2_bag` with its options as the checked objects the command builds.
 
     Args:
-        path: the bag, one ``.mcap`` file.
+        path: the bag: one ``.mcap`` file, or a rosbag2 folder (``metadata.yaml`` and its
+            ``.mcap`` files, read in order: :mod:`deformctl.measure.rosbag2`).
         source: the topics, axis and position signal
             (:class:`~deformctl.measure.options.BagSource`).
         object_id: catalog id written into every squeeze.
@@ -494,11 +498,9 @@ def read_bag(
         see :func:`read_ros2_bag`.
     """
     p = Path(path)
-    if not p.exists():
-        raise MissingInputError("no such bag file", path=p)
-    if not p.is_file():  # /dev/zero, a FIFO, a directory: it exists, and it is no bag
-        raise InputDataError("not a bag: not a regular file (a device, pipe or directory)", path=p)
-    note_input(p)
+    parts = bag_parts(p)
+    for f in parts.files:
+        note_input(f)
     wrench_topics, position_topic = source.wrench_topics, source.position_topic
     joint, axis, phase = source.joint, source.axis, segmentation.phase
     crc_check = source.crc_check
@@ -510,7 +512,15 @@ def read_bag(
             f"{p}: chunk CRCs not checked (--no-crc-check): a damaged chunk can change samples "
             "without an error"
         )
-    data = _read_topics(p, roles, joint, axis, crc_check=crc_check, notes=notes)
+    data: dict[str, tuple[list[int], list[Any]]] = {t: ([], []) for t in roles}
+    for f in parts.files:  # a rosbag2 folder's files, in recording order
+        for topic, (stamps, values) in _read_topics(
+            f, roles, joint, axis, crc_check=crc_check, notes=notes
+        ).items():
+            data[topic][0].extend(stamps)
+            data[topic][1].extend(values)
+    if parts.metadata is not None and crc_check:
+        check_counts(parts, {t: len(data[t][0]) for t in data}, p)
     where = str(p)
 
     streams: list[tuple[FloatArray, FloatArray]] = []

@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import pandas as pd
@@ -389,7 +390,8 @@ def measure_recording(
         MissingInputError (66), OutputExistsError (1), InputDataError (65), UsageError (2): see
         the readers.
     """
-    check_input_path(path)
+    if not (isinstance(source, BagSource) and Path(path).is_dir()):  # a rosbag2 folder
+        check_input_path(path)
     check_output_path(output, force)
     recording = read_recording(
         path,
