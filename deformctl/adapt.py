@@ -54,6 +54,7 @@ from typing import Any
 import numpy as np
 
 from deformctl.errors import InputDataError
+from deformctl.grip.conformal import scores_digest
 from deformctl.grip.fast import Predictor, read_model_metadata, resolve_model_path
 
 __all__ = ["ALPHAS", "MIN_ROWS", "AdaptResult", "adapt_model", "ridge_loo", "rig_rows"]
@@ -197,6 +198,7 @@ def adapt_model(model: str, index: Any, *, index_path: str = "index") -> AdaptRe
     export["correction"] = [float(c) for c in coef]
     meta["numpy_model"] = export
     meta["conformal_scores"] = [float(s) for s in scores]
+    meta["conformal_digest"] = scores_digest(meta["conformal_scores"])  # grip.sanity
     meta["target_range"] = _widened_targets(meta, y_true / (W / (2.0 * mu)))
     meta["conformal"] = {}
     meta["n_calibration"] = len(rows)

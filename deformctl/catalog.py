@@ -91,8 +91,8 @@ COLUMN_QUANTITIES: dict[str, Quantity] = {
     ARM_COLUMN: ARM_STIFFNESS_N_PER_CM,
     RELAXATION_COLUMN: RELAXATION_TIME_S,
 }
-#: Physical bounds of each numeric column, ``(lowest, highest)``, in the column's unit (inclusive
-#: but for μ, whose 0 is excluded: :data:`deformctl.quantities.FRICTION_MU`, 0 < μ <= 3):
+#: Physical bounds of each numeric column, ``(lowest, highest)``, in the column's unit
+#: (inclusive; μ: :data:`deformctl.quantities.FRICTION_MU`, 0.01 <= μ <= 3):
 #: what a gripper can hold and the simulator can integrate (:mod:`deformctl.quantities` says why).
 #: The catalog spec (``schemas/catalog.columns.json``) states the same numbers as
 #: ``minimum``/``maximum``, so every reader refuses an out-of-bounds row before any numerics

@@ -9,11 +9,11 @@ parser (:mod:`deformctl.catalog`, whose bounds these are) and the population gen
 value gets the same rule and the same words whichever command, or library call, it came through:
 
 * a flag or a library argument: :meth:`Quantity.check` raises a
-  :class:`~deformctl.errors.UsageError` (exit 2), ``--friction-mu must be a number in (0, 3],
+  :class:`~deformctl.errors.UsageError` (exit 2), ``--friction-mu must be a number in [0.01, 3],
   got 0``;
 * a value read from a file: :meth:`Quantity.check_data` raises an
   :class:`~deformctl.errors.InputDataError` (exit 65) naming where it was read, ``object 'A':
-  friction_mu = 0 is outside its physical bounds (0, 3]``.
+  friction_mu = 0 is outside its physical bounds [0.01, 3]``.
 
 A quantity a recording gives (a sample rate, a peak force, a peak compression, a secant
 stiffness, an implied damping ratio) has its plausible band here too (:class:`Plausible`, the
@@ -114,7 +114,7 @@ class Quantity:
 
     @property
     def rule(self) -> str:
-        """What a value must be: ``a number in (0, 3]``, ``a finite number > 0 s``, ..."""
+        """What a value must be: ``a number in [0.01, 3]``, ``a finite number > 0 s``, ..."""
         kind = "an integer" if self.integer else "a finite number"
         if math.isfinite(self.low) and math.isfinite(self.high):
             lb, rb = "(" if self.low_open else "[", ")" if self.high_open else "]"
@@ -221,9 +221,13 @@ class Quantity:
 #: Bounds in the catalog's units (see the module docstring): the catalog columns, the flags of a
 #: measured object (``measure --bag/--csv/--images``) and the population ranges.
 
-#: μ: 0 < μ <= 3 (issue 30: μ <= 0 or μ > 3 is bad input; above 3 no palm pair is plausible and
-#: F_w = W / (2μ) would promise a grip no real contact gives).
-FRICTION_MU = Quantity("friction_mu", "--friction-mu", "", 0.0, 3.0, low_open=True)
+#: μ: 0.01 <= μ <= 3. Above 3 no palm pair is plausible and F_w = W / (2μ) would promise a grip
+#: no real contact gives. Below 0.01 no palm holds an object by friction: the slipperiest dry
+#: pair, PTFE on PTFE, gives about 0.04, lubricated metal 0.05-0.1, wet ice about 0.02; only a
+#: fluid film (a skate on ice, a journal bearing) goes lower, and a grip on it is no grip. There
+#: F_w = W / (2μ) is at least 50 W: a μ of 1e-9 would ask a rig for 5e8 W (a catalog mistake, a
+#: μ typed in percent or per mille, not an object).
+FRICTION_MU = Quantity("friction_mu", "--friction-mu", "", 0.01, 3.0)
 WEIGHT_N = Quantity("weight_n", "--weight-n", " N", 0.001, 5000.0)
 SIZE_CM = Quantity("size_cm", "--size-cm", " cm", 0.1, 200.0)
 #: D and λ, measured (``characterize``) or the simulator's material values (the catalog).

@@ -37,7 +37,13 @@ import pandas as pd
 from deformctl.catalog import rigid_grip_force_n
 from deformctl.errors import InputDataError, SchemaError, UsageError
 from deformctl.grip.groups import NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM
-from deformctl.quantities import MAX_LIFT_RATIO
+from deformctl.quantities import (
+    DAMPING_NS_PER_CM,
+    FRICTION_MU,
+    MAX_LIFT_RATIO,
+    STIFFNESS_N_PER_CM,
+    WEIGHT_N,
+)
 
 #: The columns of an index table, in order.
 INDEX_COLUMNS: tuple[str, ...] = (
@@ -90,12 +96,25 @@ def _duplicates(frame: pd.DataFrame, what: str) -> None:
         raise InputDataError(f"{what} list object(s) more than once: {format_ids(sorted(dup))}")
 
 
+#: The columns with documented bounds (:mod:`deformctl.quantities`, the catalog's): a row
+#: outside them is refused by every stage that reads the table (``table``, ``train``,
+#: ``table --lookup``, ``adapt``, ``lift --start-table``), as the catalog refuses it.
+DOCUMENTED_BOUNDS = {
+    "weight_n": WEIGHT_N,
+    "friction_mu": FRICTION_MU,
+    "deformability_n_per_cm": STIFFNESS_N_PER_CM,
+    "damping_ns_per_cm": DAMPING_NS_PER_CM,
+}
+
+
 def impossible_rows(table: pd.DataFrame, *, coefficients: bool = True) -> list[str]:
     """What is physically impossible in the rows of an index table, one clause per problem.
 
     Coefficients (``coefficients=True``): D ≤ 0 or not finite, λ < 0 (beyond a fit's noise,
     :data:`~deformctl.grip.groups.NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM`) or not finite. Weights
-    and μ ≤ 0 or not finite. Lifting forces: L_f not finite or ≤ 0, L_f below F_w by more than
+    and μ ≤ 0 or not finite. Any of them outside its documented bounds
+    (:data:`DOCUMENTED_BOUNDS`: W 0.001-5000 N, μ 0.01-3, D 0.01-1e5 N/cm, λ up to 1e4
+    N·s/cm). Lifting forces: L_f not finite or ≤ 0, L_f below F_w by more than
     :data:`F_W_TOLERANCE_REL` (a search never reports less than F_w), or above
     :data:`~deformctl.quantities.MAX_LIFT_RATIO` × F_w (a unit or catalog mistake). F_w is
     the ``f_w_n`` column, else W / (2 μ); without either the F_w checks are skipped.
@@ -131,6 +150,15 @@ def impossible_rows(table: pd.DataFrame, *, coefficients: bool = True) -> list[s
         bad = finite & ((values < floor) if rule == "< 0" else (values <= 0))
         if bad.any():
             out.append(f"{name} {rule} for {named(bad, values, unit)}")
+        quantity = DOCUMENTED_BOUNDS.get(name)
+        if quantity is not None:  # the catalog's documented bounds (quantities), past the sign
+            low = floor if name == "damping_ns_per_cm" else quantity.low  # a fit's noise at 0
+            outside = finite & ~bad & ((values < low) | (values > quantity.high))
+            if outside.any():
+                out.append(
+                    f"{name} outside its documented bounds [{quantity.low:g}, {quantity.high:g}]"
+                    f" for {named(outside, values, unit)}"
+                )
     lift, f_w = col("lift_force_n"), col("f_w_n")
     if f_w is None and "weight_n" in table.columns and "friction_mu" in table.columns:
         with np.errstate(divide="ignore", invalid="ignore"):

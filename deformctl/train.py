@@ -59,7 +59,7 @@ from threadpoolctl import threadpool_limits
 from deformctl.blas import blas_info
 from deformctl.catalog import rigid_grip_force_n
 from deformctl.errors import InputDataError, SchemaError, UsageError
-from deformctl.grip.conformal import coverage_report, relative_scores
+from deformctl.grip.conformal import coverage_report, relative_scores, scores_digest
 from deformctl.grip.groups import (
     GRIP_FEATURES,
     NEGATIVE_DAMPING_TOLERANCE_NS_PER_CM,
@@ -585,6 +585,7 @@ def model_metadata(result: TrainResult) -> dict[str, Any]:
     meta["check_points"] = _check_points(result.model, X.astype(np.float64))
     if result.calibration_scores:
         meta["conformal_scores"] = list(result.calibration_scores)
+        meta["conformal_digest"] = scores_digest(meta["conformal_scores"])  # grip.sanity
     return meta
 
 

@@ -30,7 +30,7 @@ from __future__ import annotations
 import json
 import os
 import zipfile
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as _dist_version
 from pathlib import Path
@@ -47,6 +47,7 @@ from deformctl.artifacts.io import atomic_output, note_input
 from deformctl.errors import InputDataError, MissingInputError, OutputExistsError, UsageError
 from deformctl.grip.groups import GRIP_FEATURES
 from deformctl.grip.model import GripForceRegressor
+from deformctl.grip.modelfile import ALLOWED_LOADERS, ALLOWED_TYPES, walk_types
 from deformctl.model import FEATURES, ScaledTargetRegressor
 
 #: The estimator classes a model file may hold.
@@ -95,67 +96,12 @@ MODEL_FORMAT = "deformctl-lift-force-model/2"
 #: Every format :func:`load_model` reads.
 READABLE_FORMATS = ("deformctl-lift-force-model/1", MODEL_FORMAT)
 
-#: Every type a model file may contain, as ``module.Class`` (the form skops reports).
-ALLOWED_TYPES: frozenset[str] = frozenset(
-    {
-        "builtins.dict",
-        "builtins.list",
-        "builtins.tuple",
-        "builtins.str",
-        "builtins.int",
-        "builtins.float",
-        "builtins.bool",
-        "builtins.NoneType",
-        "numpy.ndarray",
-        "numpy.float64",
-        "numpy.int64",
-        "numpy.random.mtrand.RandomState",
-        "sklearn.pipeline.Pipeline",
-        "sklearn.preprocessing._data.StandardScaler",
-        "sklearn.neural_network._multilayer_perceptron.MLPRegressor",
-        "deformctl.model.ScaledTargetRegressor",
-        "deformctl.train.ScaledTargetRegressor",  # files written before the class moved
-        "deformctl.grip.model.GripForceRegressor",
-    }
-)
-
-#: The skops node loaders a model file may use (no functions, methods, operators, partials).
-ALLOWED_LOADERS: frozenset[str] = frozenset(
-    {
-        "DictNode",
-        "ListNode",
-        "TupleNode",
-        "JsonNode",
-        "TypeNode",
-        "NdArrayNode",
-        "ObjectNode",
-        "RandomStateNode",
-    }
-)
-
 
 def _tool_version() -> str:
     try:
         return _dist_version("deformctl")
     except PackageNotFoundError:  # pragma: no cover - running from a source tree
         return "unknown"
-
-
-def _walk_types(node: Any) -> Iterator[tuple[str, str | None]]:
-    """Yield ``(module.Class, loader)`` for every typed node of a skops ``schema.json`` tree."""
-    stack = [node]
-    while stack:
-        item = stack.pop()
-        if isinstance(item, dict):
-            if "__class__" in item or "__module__" in item:
-                loader = item.get("__loader__")
-                yield (
-                    f"{item.get('__module__')}.{item.get('__class__')}",
-                    loader if isinstance(loader, str) else str(loader),
-                )
-            stack.extend(item.values())
-        elif isinstance(item, list):
-            stack.extend(item)
 
 
 def inspect_types(path: str | os.PathLike[str]) -> tuple[set[str], set[str]]:
@@ -187,7 +133,7 @@ def inspect_types(path: str | os.PathLike[str]) -> tuple[set[str], set[str]]:
         ) from None
     types: set[str] = set()
     loaders: set[str] = set()
-    for type_name, loader in _walk_types(schema):
+    for type_name, loader in walk_types(schema):
         types.add(type_name)
         if loader is not None and loader != "None":
             loaders.add(loader)
@@ -300,7 +246,12 @@ def load_model(path: str | os.PathLike[str]) -> tuple[LiftForceModel, dict[str, 
     if not isinstance(metadata, dict):
         raise InputDataError("the model file's metadata is not a JSON object", path=p)
     check_structure(model, path=p)
-    _predictor(model, metadata, p)  # its output at its own training points (grip.sanity)
+    if isinstance(metadata.get("numpy_model"), dict):  # the one validation predict and lift use
+        from deformctl.grip.fast import Predictor
+
+        Predictor.load(p)
+    else:  # model format 1: the estimator is all there is
+        _predictor(model, metadata, p)  # its output at its own training points (grip.sanity)
     return model, metadata
 
 

@@ -77,6 +77,8 @@ RECORDING_FLAGS: dict[str, str] = {
     "logging_gap": "the recording has a gap of more than 5 sample intervals",
     "coarse_force": "the force's resolution is coarser than 2 % of its peak",
     "force_lag": "the force lags the position; λ is low by D × the lag (measure --lag-s auto)",
+    "energy_returned": "the squeezes give energy back, which no passive object does: the "
+    "samples run backwards in time, or the force lags the position; λ is wrong",
     "force_unit_doubtful": "the peak force is implausible for a soft object (below 50 mN or "
     "above 3 kN, or a secant stiffness above 5000 N/cm): a unit slip such as kN read as N",
     "compression_unit_doubtful": "the peak compression is below 20 µm (or a secant stiffness "
@@ -428,7 +430,8 @@ def thresholds_help() -> str:
         f"(where D is stated the law misses the recorded force by > "
         f"{100 * SECANT_MISFIT_FRAC:g} % of the operating force), damping_ratio_implausible "
         "(ζ = λ / (2 √(D m)) > 1000 with a stated time unit); the recording's defects found by "
-        "measure: logging_gap, coarse_force, force_lag, and the unit doubts force_unit_doubtful "
+        "measure: logging_gap, coarse_force, force_lag, energy_returned (a bag whose squeezes give "
+        "energy back), and the unit doubts force_unit_doubtful "
         "(peak < 50 mN or > 3 kN, or secant > 5000 N/cm), compression_unit_doubtful (< 20 µm), "
         "time_unit_doubtful (no time unit, < 10 Hz or ζ > 1000)."
     )

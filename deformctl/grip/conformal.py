@@ -37,6 +37,7 @@ Example:
 
 from __future__ import annotations
 
+import hashlib
 import math
 from typing import Any
 
@@ -49,7 +50,9 @@ __all__ = [
     "conformal_min_scores",
     "conformal_rank",
     "coverage_report",
+    "min_coverage",
     "relative_scores",
+    "scores_digest",
     "upper_bound",
 ]
 
@@ -79,13 +82,32 @@ def relative_scores(y_true: Any, y_pred: Any) -> np.ndarray:
 
 
 def conformal_rank(n: int, coverage: float) -> int:
-    """k = ⌈(n + 1) P⌉: the rank (1-based) of the score that is the margin.
+    """k = ⌈(n + 1) P⌉: the rank (1-based) of the score that is the margin (at least 1).
 
     Computed so that a product that should be an integer (for example n = 9, P = 0.9) is not
-    pushed one rank up by rounding: ``(n + 1) P`` is rounded to 12 decimals first.
+    pushed one rank up by rounding: ``(n + 1) P`` is rounded to 12 decimals first. Below
+    :func:`min_coverage` that rounding gives 0; the rank is then 1 (the smallest score), never
+    the 0th (which numpy would read as the largest).
     """
     p = check_coverage(coverage)
-    return math.ceil(round((n + 1) * p, 12))
+    return max(1, math.ceil(round((n + 1) * p, 12)))
+
+
+def min_coverage(n: int) -> float:
+    """The smallest meaningful coverage with ``n`` calibration scores: 1 / (n + 1).
+
+    At or below it the rank ⌈(n + 1) P⌉ is 1 for every P: the bound is the smallest score's,
+    whatever P is asked, so a P below it states a guarantee the bound does not depend on.
+    ``predict --coverage`` refuses a P below it (exit 2).
+    """
+    return 1.0 / (n + 1)
+
+
+def scores_digest(scores: Any) -> str:
+    """``sha256:<hex>`` of the calibration scores as stored (float64, little-endian, in order):
+    the stored check a model file keeps of its scores, recomputed when it is loaded."""
+    s = np.asarray(scores, dtype="<f8").reshape(-1)
+    return "sha256:" + hashlib.sha256(s.tobytes()).hexdigest()
 
 
 def conformal_min_scores(coverage: float) -> int:

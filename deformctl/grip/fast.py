@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import math
 import operator
-import zipfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib.resources import files
@@ -41,13 +40,13 @@ from typing import Any
 
 import numpy as np
 
-from deformctl import jsonsafe
-from deformctl.errors import InputDataError, MissingInputError, UsageError
+from deformctl.errors import InputDataError, UsageError
 from deformctl.grip.activations import _activation, _activation_scalar
 from deformctl.grip.conformal import (
     conformal_margin,
     conformal_min_scores,
     conformal_rank,
+    min_coverage,
 )
 from deformctl.grip.groups import GRIP_FEATURES, ZETA_SHIFT
 from deformctl.grip.inputs import (  # their home; re-exported for predict and the tests
@@ -57,10 +56,17 @@ from deformctl.grip.inputs import (  # their home; re-exported for predict and t
     input_problems,
     input_rule,
 )
+from deformctl.grip.modelfile import (  # read_model_metadata: re-exported, its old home
+    file_problem,
+    read_model_metadata,
+)
 from deformctl.grip.sanity import (
+    SCORE_HIGH,
+    bound_problem,
     implausible,
     implausible_line,
     output_problem,
+    scores_problem,
     target_ratio_range,
 )
 from deformctl.quantities import (
@@ -90,10 +96,6 @@ __all__ = [
 
 #: Model names ``predict`` (and :meth:`Predictor.load`) resolve to a file shipped with deformctl.
 BUNDLED_MODELS: tuple[str, ...] = ("grip",)
-#: The model-file format tag (the same as :data:`deformctl.artifacts.model.MODEL_FORMAT`).
-MODEL_FORMATS = ("deformctl-lift-force-model/1", "deformctl-lift-force-model/2")
-#: The most bytes of ``schema.json`` read from a model file (the bundled model's is ~60 kB).
-MAX_SCHEMA_BYTES = 64 * 1024 * 1024
 
 #: Two friction coefficients this close (relative) are the same μ.
 _SAME_MU_RTOL = 1e-6
@@ -129,54 +131,6 @@ def resolve_model_path(model: str | Path) -> Path:
     if text in BUNDLED_MODELS:
         return Path(str(files("deformctl.datasets").joinpath("models", f"{text}.skops")))
     return Path(text)
-
-
-def read_model_metadata(path: str | Path) -> dict[str, Any]:
-    """A model file's metadata dict, read as JSON from the archive's ``schema.json``.
-
-    Raises:
-        MissingInputError: no such file (66).
-        InputDataError: not a deformctl model file (65).
-    """
-    p = Path(path)
-    if not p.is_file():
-        raise MissingInputError("model file not found", path=p)
-    try:
-        with zipfile.ZipFile(p) as archive:
-            info = archive.getinfo("schema.json")
-            if info.file_size > MAX_SCHEMA_BYTES:
-                raise InputDataError(
-                    f"schema.json is {info.file_size} bytes, more than a model file holds", path=p
-                )
-            schema = jsonsafe.loads(archive.read(info))
-        node = schema["content"]["metadata_json"]
-        fmt = jsonsafe.loads(schema["content"]["format"]["content"])
-        if node.get("__loader__") != "JsonNode" or node.get("__class__") != "str":
-            raise TypeError("metadata_json is not a string")
-        text = jsonsafe.loads(node["content"])
-        if not isinstance(text, str):
-            raise TypeError("metadata_json is not a string")
-    except InputDataError:
-        raise
-    except zipfile.BadZipFile:
-        raise InputDataError(
-            "not a skops model file (truncated or not a zip archive)", path=p
-        ) from None
-    except (KeyError, TypeError, ValueError, AttributeError, OSError, EOFError) as err:
-        raise InputDataError(f"not a deformctl model file ({type(err).__name__})", path=p) from None
-    if fmt not in MODEL_FORMATS:
-        raise InputDataError(
-            f"not a deformctl model file (expected format {MODEL_FORMATS[-1]})", path=p
-        )
-    try:
-        metadata = jsonsafe.loads(text, allow_nan=True)
-    except ValueError as err:
-        raise InputDataError(
-            f"the model file's metadata is not usable JSON ({err})", path=p
-        ) from None
-    if not isinstance(metadata, dict):
-        raise InputDataError("the model file's metadata is not a JSON object", path=p)
-    return metadata
 
 
 def _float_array(value: Any, shape: tuple[int, ...] | None, what: str, path: Path) -> np.ndarray:
@@ -289,7 +243,11 @@ class Predictor:
         exp = meta.get("numpy_model")
         if not isinstance(exp, dict):
             raise NoNumpyExportError("the model file has no numpy export", path=path)
-        return cls.from_export(exp, meta, path)
+        predictor = cls.from_export(exp, meta, path)
+        problem = file_problem(path, exp)  # the estimator agrees with the export (one loader)
+        if problem is not None:
+            raise InputDataError(f"not a usable lifting-force model: {problem}", path=path)
+        return predictor
 
     @classmethod
     def from_export(
@@ -325,6 +283,11 @@ class Predictor:
             shift = float(exp.get("zeta_shift", ZETA_SHIFT))
         except (KeyError, TypeError, ValueError, IndexError):
             raise InputDataError("the model's numpy export is malformed", path=path) from None
+        bad = [
+            k for k, (lo, hi) in ranges.items() if not (math.isfinite(lo) and lo <= hi < math.inf)
+        ]
+        if bad:
+            raise InputDataError(f"the model's training range of {bad[0]} is not finite", path=path)
         if form not in ("grip", "paper") or activation not in _ACTIVATIONS:
             raise InputDataError(f"the numpy export's form {form!r} is unknown", path=path)
         if form == "grip" and features != GRIP_FEATURES:
@@ -368,7 +331,15 @@ class Predictor:
         raw_scores = meta.get("conformal_scores")
         scores = None
         if raw_scores is not None:
-            scores = np.sort(_float_array(raw_scores, None, "calibration scores", path).ravel())
+            try:
+                stored = np.asarray(raw_scores, dtype=np.float64).ravel()
+            except (TypeError, ValueError):
+                what = "the model's calibration scores are not numbers"
+                raise InputDataError(what, path=path) from None
+            problem = scores_problem(stored, meta)  # the one check of a bound's scores
+            if problem is not None:
+                raise InputDataError(f"not a usable lifting-force model: {problem}", path=path)
+            scores = np.sort(stored)
         predictor = cls(
             path=path,
             metadata=meta,
@@ -490,17 +461,45 @@ class Predictor:
         if self.scores is None:
             raise InputDataError(NO_SCORES_MESSAGE, path=self.path)
         n = self.scores.size
+        if p < min_coverage(n):
+            raise UsageError(
+                f"--coverage must be at least 1/(n + 1) = {min_coverage(n):.3g} with the model's "
+                f"n = {n} calibration scores, got {p:g} (below it every P gives the same bound)"
+            )
         if self._thin(p) is not None:  # an adapted model on few rig rows: their largest score
-            return float(self.scores[-1])
+            return max(float(self.scores[-1]), 0.0)
         if conformal_rank(n, p) > n:
             need = conformal_min_scores(p)
             raise InputDataError(
                 f"--coverage {p:g} needs at least {need} calibration scores; the model has {n}",
                 path=self.path,
             )
-        q = conformal_margin(self.scores, p)
+        # a negative margin (a low P) would put the bound below the prediction: never
+        q = max(conformal_margin(self.scores, p), 0.0)
         self._cache[("margin", coverage)] = q
         return q
+
+    def _upper(self, lift: Any, f_w: Any, q: float) -> Any:
+        """The bound ``max(L_f (1 + q), F_w)`` (grip.sanity), checked: a bound that breaks
+        F_w <= L_f <= bound <= (1 + SCORE_HIGH) L_f refuses the file (its scores cannot be
+        right).
+
+        Raises:
+            InputDataError: such a bound (exit 65).
+        """
+        with np.errstate(over="ignore", invalid="ignore"):
+            upper = np.fmax(np.asarray(lift, dtype=np.float64) * (1.0 + q), f_w)
+        row = bound_problem(np.atleast_1d(lift), np.atleast_1d(upper), np.atleast_1d(f_w))
+        if row is not None:
+            value = float(np.atleast_1d(upper)[row])
+            raise InputDataError(
+                f"not a usable lifting-force model: its calibration scores give an upper bound of "
+                f"{value:.6g} N for a prediction of {float(np.atleast_1d(lift)[row]):.6g} N "
+                f"(F_w = {float(np.atleast_1d(f_w)[row]):.6g} N), outside [max(L_f, F_w), "
+                f"{1 + SCORE_HIGH:.4g} x L_f]",
+                path=self.path,
+            )
+        return upper
 
     def _thin(self, p: float | None) -> str | None:
         """The warning of an adapted model asked for a P its n rig rows cannot guarantee."""
@@ -595,7 +594,7 @@ class Predictor:
         if parts:
             outside = True
             warnings.append(f"{name}: outside the training range: {'; '.join(parts)}")
-        upper = math.nan if q is None else lift * (1.0 + q)
+        upper = math.nan if q is None else float(self._upper(lift, f_w, q))
         safe = math.nan if max_safe_force_n is None else float(max_safe_force_n)
         window_ok, line = _window(name, lift, upper, safe)
         if line:
@@ -704,7 +703,7 @@ class Predictor:
             if row_parts:
                 outside[k] = True
                 warnings.append(f"{labels[k]}: outside the training range: {'; '.join(row_parts)}")
-        upper = np.full(n, np.nan) if q is None else lift * (1.0 + q)
+        upper = np.full(n, np.nan) if q is None else self._upper(lift, f_w, q)
         safe = (
             np.full(n, np.nan)
             if max_safe_force_n is None

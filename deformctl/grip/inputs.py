@@ -37,7 +37,7 @@ MAX_FRICTION_MU = FRICTION_MU.high
 
 
 def input_rule(col: str) -> str:
-    """The rule of input ``col`` in words, e.g. ``must be a number in (0, 3]``."""
+    """The rule of input ``col`` in words, e.g. ``must be a number in [0.01, 3]``."""
     if col == "damping_ns_per_cm":
         rule = DAMPING_NS_PER_CM.rule
         return f"must be {rule} (a fitted {INPUT_RULES[col].low:g} counts as 0)"

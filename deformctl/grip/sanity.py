@@ -25,6 +25,22 @@ nonsense: weights scaled by 10^300 predict 10^301 N. Two checks, on the physics 
 
 F_w = W / (2 μ) needs μ: a μ-aware model has it per row, a single-μ model from its metadata;
 without μ only finiteness and sign are checked.
+
+**The calibration scores** (:func:`scores_problem`, on loading) are what an upper bound is made
+of, so a file whose scores were changed must not load. Each score ``(y - ŷ) / ŷ`` compares two
+lifting forces: a true one, y in [F_w, :data:`~deformctl.quantities.MAX_LIFT_RATIO` × F_w], and
+a usable model's prediction, ŷ in [(1 - :data:`BELOW_F_W_REL`) F_w, 10 F_w]. So every score lies
+in [:data:`SCORE_LOW`, :data:`SCORE_HIGH`] = [0.995 / 10 - 1, 10 / 0.995 - 1] ≈ [-0.90, 9.05]
+(half the bundled model's scores are below 0: a prediction above the truth). Their count must
+be the stored ``n_calibration``, and they must match the file's stored check: the digest
+``conformal_digest`` (:func:`~deformctl.grip.conformal.scores_digest`, written by ``train`` and
+``adapt``) or, in a file written before it, the margins at the coverages ``train`` reported
+(``conformal``). **Every bound** is then ``max(ŷ (1 + max(q, 0)), F_w)``: never below the
+prediction (a negative margin only comes from a low P) nor below F_w (no lifting force is), so
+``F_w ≤ bound`` and ``ŷ ≤ bound`` hold by construction. A bound of a plausible prediction that
+is not finite or is above ``(1 + SCORE_HIGH) ŷ`` (a margin no pair of lifting forces gives; the
+absolute limit of a bound, at most about 100 × F_w) cannot come from valid scores: the file is
+refused (:func:`bound_problem`, exit 65).
 """
 
 from __future__ import annotations
@@ -34,15 +50,20 @@ from typing import Any
 
 import numpy as np
 
+from deformctl.grip.conformal import conformal_margin, scores_digest
 from deformctl.quantities import MAX_LIFT_RATIO
 
 __all__ = [
     "BELOW_F_W_REL",
     "LOAD_FACTOR",
+    "SCORE_HIGH",
+    "SCORE_LOW",
     "TARGET_FACTOR",
+    "bound_problem",
     "implausible",
     "implausible_line",
     "output_problem",
+    "scores_problem",
     "target_ratio_range",
 ]
 
@@ -56,6 +77,12 @@ BELOW_F_W_REL = 0.005
 #: lifting force it learned. 1.5 leaves the bundled model's in-range predictions (at most 1 %
 #: outside its targets' range) a wide margin and catches a ratio of 3.1 where it learned 2.06.
 TARGET_FACTOR = 1.5
+
+#: The range of a calibration score (y - ŷ) / ŷ between two lifting forces (module doc).
+SCORE_LOW = (1.0 - BELOW_F_W_REL) / MAX_LIFT_RATIO - 1.0
+SCORE_HIGH = MAX_LIFT_RATIO / (1.0 - BELOW_F_W_REL) - 1.0
+#: How closely a legacy file's stored margins must match the ones its scores give.
+_MARGIN_RTOL = 1e-9
 
 #: (low, high) of the training targets' L_f / F_w, or None.
 RatioRange = tuple[float, float] | None
@@ -164,3 +191,70 @@ def output_problem(predictor: Any) -> str | None:
                 f"lifting force lies within [1, {MAX_LIFT_RATIO:g}] x F_w"
             )
     return None
+
+
+def scores_problem(scores: np.ndarray, metadata: Any) -> str | None:
+    """What is wrong with a model file's calibration scores (None: nothing; module doc).
+
+    Args:
+        scores: the scores as stored (not sorted), float64.
+        metadata: the model file's metadata.
+    """
+    if not np.all(np.isfinite(scores)):
+        return "its calibration scores are not all finite"
+    if scores.size == 0:
+        return "it stores an empty list of calibration scores"
+    low, high = float(np.min(scores)), float(np.max(scores))
+    if low < SCORE_LOW or high > SCORE_HIGH:
+        bad = low if low < SCORE_LOW else high
+        return (
+            f"a calibration score of {bad:.6g} is outside [{SCORE_LOW:.4g}, {SCORE_HIGH:.4g}], "
+            f"the range between two lifting forces in [1, {MAX_LIFT_RATIO:g}] x F_w"
+        )
+    stored_n = metadata.get("n_calibration")
+    if isinstance(stored_n, bool) or not isinstance(stored_n, int) or stored_n != scores.size:
+        return f"it has {scores.size} calibration scores but states n_calibration = {stored_n!r}"
+    digest = metadata.get("conformal_digest")
+    if digest is not None:
+        if digest != scores_digest(scores):
+            return "its calibration scores do not match their stored digest"
+        return None
+    report = metadata.get("conformal")
+    margins = [] if not isinstance(report, dict) else list(report.items())
+    checked = 0
+    for coverage, entry in margins:
+        stored = entry.get("margin") if isinstance(entry, dict) else None
+        try:
+            q = conformal_margin(scores, float(coverage))
+        except (TypeError, ValueError):
+            return f"its stored conformal report has a coverage {coverage!r}"
+        if stored is None and math.isinf(q):
+            continue
+        if not isinstance(stored, int | float) or not math.isclose(
+            q, float(stored), rel_tol=_MARGIN_RTOL, abs_tol=1e-15
+        ):
+            return (
+                f"its calibration scores give the margin {q:.6g} at P = {coverage}, "
+                f"not the stored {stored!r}"
+            )
+        checked += 1
+    if checked == 0:
+        return "its calibration scores are covered by no stored check (digest or margins)"
+    return None
+
+
+def bound_problem(lift_force_n: Any, upper_n: Any, f_w_n: Any) -> int | None:
+    """The first row whose bound is not ``F_w <= prediction <= bound <= (1 + SCORE_HIGH) x
+    prediction`` (finite) for a plausible prediction, or None (module doc)."""
+    lift = np.asarray(lift_force_n, dtype=np.float64)
+    upper = np.broadcast_to(np.asarray(upper_n, dtype=np.float64), lift.shape)
+    f_w = np.broadcast_to(np.asarray(f_w_n, dtype=np.float64), lift.shape)
+    known = np.isfinite(f_w) & (f_w > 0)
+    with np.errstate(invalid="ignore", over="ignore"):
+        plausible = known & np.isfinite(lift) & (lift >= f_w * (1 - BELOW_F_W_REL))
+        plausible &= lift <= MAX_LIFT_RATIO * f_w
+        bad = plausible & ~(np.isfinite(upper) & (upper >= lift) & (upper >= f_w))
+        bad |= plausible & (upper > (1.0 + SCORE_HIGH) * lift)
+        bad |= np.isfinite(lift) & (lift > 0) & ~np.isnan(upper) & ~(upper >= lift)
+    rows = np.flatnonzero(bad)
+    return int(rows[0]) if rows.size else None

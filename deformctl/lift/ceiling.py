@@ -16,6 +16,18 @@ five times the largest ratio seen is a unit or catalog mistake (a weight in gram
 more than its ceiling stops with "no safe grip" for that object; a seeded start above it is
 clamped to it (a warning says so); the rig request carries ``max_force_n`` so the driver can
 enforce it too (docs/rig-protocol.md).
+
+Over all of them sits the rig's **absolute limit** (:func:`absolute_limit`): the maximum force the
+rig states in its handshake (docs/rig-protocol.md), or :data:`DEFAULT_ABSOLUTE_MAX_FORCE_N` for a
+rig that states none. No request exceeds ``min(ceiling, absolute limit)``: ``--max-force-n`` and a
+catalog's ``max_force_n`` can lower the limit, never raise it. An object whose F_w is above it
+gets "no safe grip" without an attempt. The simulator has no hardware to protect and no absolute
+limit.
+
+Why 500 N: the strongest electric parallel grippers sold for robot arms close with a few hundred
+newtons at most (Robotiq 2F-85: 235 N, Franka Hand: 140 N peak); twice that is more than a
+gripper that did not say otherwise can give, and far below the kilonewtons a unit or catalog
+mistake asks for. A rig that can and may squeeze harder states its maximum in the handshake.
 """
 
 from __future__ import annotations
@@ -30,15 +42,22 @@ from deformctl.quantities import MAX_FORCE_N, MAX_LIFT_RATIO
 
 __all__ = [
     "CEILING_COLUMN",
+    "DEFAULT_ABSOLUTE_MAX_FORCE_N",
     "DEFAULT_CEILING_RATIO",
     "SAFE_FORCE_COLUMNS",
     "ForceCeiling",
+    "absolute_limit",
     "force_ceiling",
     "validate_max_force",
 ]
 
 #: The default ceiling, in multiples of the object's F_w (module doc).
 DEFAULT_CEILING_RATIO = MAX_LIFT_RATIO
+#: The absolute limit of a rig that states none in a handshake, N (module doc).
+DEFAULT_ABSOLUTE_MAX_FORCE_N = 500.0
+#: :attr:`ForceCeiling.source` of an absolute limit the rig stated / the default one.
+HANDSHAKE_SOURCE = "rig handshake"
+ABSOLUTE_DEFAULT_SOURCE = "absolute default"
 #: The catalog column that sets one object's ceiling, N.
 CEILING_COLUMN = "max_force_n"
 #: Coefficient columns holding a force the object does not survive, N (``characterize``).
@@ -64,6 +83,8 @@ class ForceCeiling:
             "catalog": "the catalog's max_force_n",
             "--max-force-n": "--max-force-n",
             "default": f"{DEFAULT_CEILING_RATIO:g} x F_w",
+            HANDSHAKE_SOURCE: "the maximum force the rig stated",
+            ABSOLUTE_DEFAULT_SOURCE: "the absolute limit of a rig that states none",
         }.get(self.source, f"the object's {self.source}")
         return f"force ceiling {self.max_force_n:.6g} N ({why})"
 
@@ -80,6 +101,19 @@ def validate_max_force(value: Any, what: str = MAX_FORCE_N.flag) -> float | None
         UsageError: it is not (``what`` names the flag; exit 2).
     """
     return cast(float | None, MAX_FORCE_N.check_optional(value, label=what))
+
+
+def absolute_limit(rig_max_force_n: float | None) -> ForceCeiling:
+    """A rig's absolute limit: the maximum force it stated in its handshake (a finite number
+    > 0, N), or :data:`DEFAULT_ABSOLUTE_MAX_FORCE_N` when it stated none (None).
+
+    Raises:
+        UsageError: a stated maximum that is not a finite number > 0 (exit 2).
+    """
+    if rig_max_force_n is None:
+        return ForceCeiling(DEFAULT_ABSOLUTE_MAX_FORCE_N, ABSOLUTE_DEFAULT_SOURCE)
+    value = MAX_FORCE_N.check(rig_max_force_n, label="the rig's max_force_n")
+    return ForceCeiling(value, HANDSHAKE_SOURCE)
 
 
 def _number(value: Any) -> float | None:
@@ -100,8 +134,9 @@ def force_ceiling(
     max_force_n: float | None = None,
     coefficients: Mapping[str, Any] | None = None,
     path: str | None = None,
+    absolute: ForceCeiling | None = None,
 ) -> ForceCeiling:
-    """The ceiling of one object (module doc for the order).
+    """The ceiling of one object (module doc for the order), never above ``absolute``.
 
     Args:
         object_id: the object, for messages.
@@ -110,12 +145,27 @@ def force_ceiling(
         max_force_n: ``--max-force-n``, N, or None.
         coefficients: its coefficients row (``rupture_force_n`` / ``yield_force_n``), or None.
         path: the catalog's name, for messages.
+        absolute: the runner's absolute limit (:func:`absolute_limit`; None: none, the
+            simulator); the result is the smaller of it and the object's own ceiling.
 
     Raises:
         InputDataError: the catalog's ``max_force_n`` for the object breaks the rule of
             :data:`~deformctl.quantities.MAX_FORCE_N` (exit 65, naming the object).
     """
-    row = row or {}
+    own = _own_ceiling(object_id, f_w_n, row or {}, max_force_n, coefficients, path)
+    if absolute is not None and absolute.max_force_n < own.max_force_n:
+        return absolute
+    return own
+
+
+def _own_ceiling(
+    object_id: str,
+    f_w_n: float,
+    row: Mapping[str, Any],
+    max_force_n: float | None,
+    coefficients: Mapping[str, Any] | None,
+    path: str | None,
+) -> ForceCeiling:
     if CEILING_COLUMN in row:
         raw = row[CEILING_COLUMN]
         if raw is not None and not (isinstance(raw, float) and math.isnan(raw)):

@@ -110,6 +110,10 @@ class RunnerFactory:
             no measured D and λ are given (:func:`deformctl.lift.seeded.object_features`).
         journal: every attempt is costly (a real rig): :func:`lift_catalog_files` keeps the
             table and the log on disk as the run goes (:mod:`deformctl.lift.journal`).
+        absolute_limit: ``absolute_limit() -> ForceCeiling``: the runner's absolute force limit
+            (the rig's handshake, :func:`deformctl.lift.ceiling.absolute_limit`), asked once
+            before the first attempt; no object's ceiling is above it. None: no absolute
+            limit (the simulator).
     """
 
     name: str
@@ -120,6 +124,7 @@ class RunnerFactory:
     check: Callable[[Sequence[CatalogObject], str | None], None] | None = None
     material_features: bool = False
     journal: bool = False
+    absolute_limit: Callable[[], ForceCeiling] | None = None
 
 
 @dataclass(frozen=True)
@@ -270,7 +275,8 @@ def lift_catalog(
         for estimate in starts.values():
             if estimate.warning is not None and warn is not None:
                 warn(estimate.warning)
-    ceilings = _ceilings(objects, f_w, max_force_n, seed, path)
+    absolute = None if factory.absolute_limit is None else factory.absolute_limit()
+    ceilings = _ceilings(objects, f_w, max_force_n, seed, path, absolute)
     for obj, f_w_n in zip(objects, f_w, strict=True):
         clamp = _clamp_warning(obj.object_id, f_w_n, starts.get(obj.object_id), seed, ceilings)
         if clamp is not None and warn is not None:
@@ -681,6 +687,7 @@ def _ceilings(
     max_force_n: float | None,
     seed: StartSeed | None,
     path: str | None,
+    absolute: ForceCeiling | None = None,
 ) -> dict[str, ForceCeiling]:
     """Each object's force ceiling (:func:`~deformctl.lift.ceiling.force_ceiling`)."""
     coefficients: dict[str, Mapping[str, Any]] = {}
@@ -694,6 +701,7 @@ def _ceilings(
             max_force_n=max_force_n,
             coefficients=coefficients.get(obj.object_id),
             path=path,
+            absolute=absolute,
         )
         for obj, f_w_n in zip(objects, f_w, strict=True)
     }

@@ -71,7 +71,7 @@ def test_population_n_is_bounded_naming_the_flag(tmp_path: Path) -> None:
     ("args", "line"),
     [
         (["--weight-n", "0,10"], "error: --weight-n must be a number in [0.001, 5000] N, got 0"),
-        (["--friction-mu", "0"], "error: --friction-mu must be a number in (0, 3], got 0"),
+        (["--friction-mu", "0"], "error: --friction-mu must be a number in [0.01, 3], got 0"),
     ],
 )
 def test_population_range_errors_name_the_flag(tmp_path: Path, args: list[str], line: str) -> None:

@@ -26,7 +26,7 @@ def test_from_catalog_row_reads_every_column(sponge_row: dict[str, Any]) -> None
     [
         ("material_stiffness_n_per_cm", math.nan, "material_stiffness_n_per_cm is missing"),
         ("material_damping_ns_per_cm", None, "material_damping_ns_per_cm is not a number"),
-        ("friction_mu", 0.0, r"friction_mu = 0 is outside its physical bounds \(0, 3\]"),
+        ("friction_mu", 0.0, r"friction_mu = 0 is outside its physical bounds \[0.01, 3\]"),
         ("friction_mu", -0.3, "friction_mu = -0.3 is outside its physical bounds"),
         ("weight_n", 0.0, "weight_n = 0 is outside its physical bounds"),
     ],

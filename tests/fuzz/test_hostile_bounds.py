@@ -31,10 +31,10 @@ def test_the_catalog_spec_states_the_catalog_bounds() -> None:
         if "maximum" in c
     }
     assert stated == BOUNDS
-    # μ's 0 is excluded (quantities.FRICTION_MU: 0 < μ <= 3), as the spec says
+    # μ's physical floor (quantities.FRICTION_MU: 0.01 <= μ <= 3), as the spec says
     mu = next(c for c in spec["columns"] if c["name"] == "friction_mu")
-    assert "minimum" not in mu
-    assert mu["exclusive_minimum"] == 0.0
+    assert "exclusive_minimum" not in mu
+    assert mu["minimum"] == 0.01
 
 
 EXTREMES = [

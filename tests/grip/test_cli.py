@@ -95,7 +95,7 @@ def test_predict_one_object_with_its_bound(setup: dict[str, Path]) -> None:
 
 
 #: μ's one rule, as every command prints it (deformctl.quantities.FRICTION_MU).
-MU_RULE = "error: --friction-mu must be a number in (0, 3], got "
+MU_RULE = "error: --friction-mu must be a number in [0.01, 3], got "
 
 
 @pytest.mark.parametrize(
@@ -168,7 +168,7 @@ def test_bad_mu_in_a_table_exits_65_naming_the_rows(setup: dict[str, Path], tmp_
     table = read_table(setup["index"], "index_table")
     # (μ <= 0 cannot be written: the index table's schema refuses it on both sides)
     for value, line in (
-        (12.0, "friction_mu must be a number in (0, 3]; it is 12 for P003"),
+        (12.0, "friction_mu must be a number in [0.01, 3]; it is 12 for P003"),
         (float("nan"), "friction_mu is NaN or not a finite number for P003"),
     ):
         bad = table.copy()

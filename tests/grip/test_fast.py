@@ -97,8 +97,8 @@ def test_scalar_and_batch_agree_on_every_field(files: dict[str, Path]) -> None:
 @pytest.mark.parametrize(
     ("args", "line"),
     [
-        ((2.0, 10.0, 0.5, 0.0), "friction_mu must be a number in (0, 3]; it is 0 for A"),
-        ((2.0, 10.0, 0.5, 3.5), "friction_mu must be a number in (0, 3]; it is 3.5 for A"),
+        ((2.0, 10.0, 0.5, 0.0), "friction_mu must be a number in [0.01, 3]; it is 0 for A"),
+        ((2.0, 10.0, 0.5, 3.5), "friction_mu must be a number in [0.01, 3]; it is 3.5 for A"),
         ((2.0, 10.0, 0.5, math.nan), "friction_mu is NaN or not a finite number for A"),
         ((math.inf, 10.0, 0.5, 0.5), "weight_n is NaN or not a finite number for A"),
         (

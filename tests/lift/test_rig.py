@@ -14,6 +14,7 @@ import pytest
 
 from deformctl.errors import InputDataError, RigError, SearchError, UsageError
 from deformctl.lift import RigSearchAbortedError, find_min_lift_force
+from deformctl.lift.ceiling import DEFAULT_ABSOLUTE_MAX_FORCE_N
 from deformctl.lift.runners.rig import RigAttemptError, RigRunner, parse_rig_response
 from deformctl.series import TrialOutcome
 
@@ -65,6 +66,7 @@ def test_threshold_rig_search_matches_pure_threshold_search(protocol: str, tmp_p
         "weight_n": 10.0,
         "friction_mu": 0.5,
         "size_cm": [8.0, 5.0, 4.0],
+        "max_force_n": DEFAULT_ABSOLUTE_MAX_FORCE_N,  # a rig's absolute limit: always sent
     }
 
 
@@ -84,6 +86,7 @@ def test_command_string_is_shlex_split_and_size_is_optional(tmp_path: Path) -> N
         "grip_force_n": 20.0,
         "weight_n": 1.0,
         "friction_mu": 0.25,
+        "max_force_n": DEFAULT_ABSOLUTE_MAX_FORCE_N,
     }
 
 
@@ -339,7 +342,7 @@ def _json_blocks(markdown: str) -> list[str]:
 
 def test_protocol_doc_examples_match_the_code(tmp_path: Path) -> None:
     doc = (Path(__file__).parents[2] / "docs" / "rig-protocol.md").read_text(encoding="utf-8")
-    request_text, decided_text, frames_text = _json_blocks(doc)
+    request_text, decided_text, frames_text, *_handshake = _json_blocks(doc)
     request = json.loads(request_text)
     keys = ("object_id", "weight_n", "friction_mu", "size_cm", "max_force_n")
     obj = {k: request[k] for k in keys}

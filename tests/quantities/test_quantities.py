@@ -50,8 +50,8 @@ runner = CliRunner()
     [
         (
             FRICTION_MU,
-            [1e-9, 0.01, 0.5, 3],
-            [0.0, -1e-9, 3.0001, 10, -1, math.nan, math.inf, "0.5", None],
+            [0.01, 0.5, 3],
+            [0.0, 1e-9, 0.0099, 1e-308, 3.0001, 10, -1, math.nan, math.inf, "0.5", None],
         ),
         (WEIGHT_N, [0.001, 5000], [0.0, -1, 5000.5, math.nan]),
         (SIZE_CM, [0.1, 200], [0.09, 201, math.inf]),
@@ -79,7 +79,7 @@ def test_a_file_value_gets_the_same_rule_as_a_data_error() -> None:
     with pytest.raises(InputDataError) as info:
         FRICTION_MU.check_data(0.0, where="object 'A'", path="cat.csv")
     assert str(info.value) == (
-        "cat.csv: object 'A': friction_mu = 0 is outside its physical bounds (0, 3]"
+        "cat.csv: object 'A': friction_mu = 0 is outside its physical bounds [0.01, 3]"
     )
     assert info.value.exit_code == 65
     assert FRICTION_MU.check_data(0.5, where="object 'A'") == 0.5
@@ -147,7 +147,7 @@ def _lifted(grip_force_n: float, attempt_index: int) -> TrialOutcome:
 
 def test_friction_is_refused_alike_by_every_command(tmp_path: Path) -> None:
     """μ = 0: ``measure --csv`` used to accept what ``lift`` refused."""
-    want = "error: --friction-mu must be a number in (0, 3], got 0"
+    want = "error: --friction-mu must be a number in [0.01, 3], got 0"
     mu = ("--weight-n", "1", "--friction-mu", "0")
     assert _error(_csv(tmp_path, *mu)) == want
     assert _error(_bag(tmp_path, *mu)) == want
@@ -159,7 +159,7 @@ def test_friction_is_refused_alike_by_every_command(tmp_path: Path) -> None:
     assert _lib(lambda: make_population(3, seed=0, friction_mu=0.0)) == want
     assert _lib(lambda: csv_objects(["r.csv"], weight_n=1.0, friction_mu=0.0)) == want
     # read from a file: the same rule, as a data error naming where it was read (exit 65)
-    rule = "friction_mu = 0 is outside its physical bounds (0, 3]"
+    rule = "friction_mu = 0 is outside its physical bounds [0.01, 3]"
     assert _mapped(tmp_path, "friction_mu", "0") == f"line 2: {rule}"
     assert _predicted(friction_mu=0.0) == f"friction_mu must be {FRICTION_MU.rule}; it is 0 for A"
 
@@ -168,22 +168,23 @@ def test_friction_above_3_is_refused_alike_by_every_command(
     tmp_path: Path, catalog_row: dict[str, Any], write_catalog: Any
 ) -> None:
     """Issue 30: μ > 3 is bad input, from a flag (exit 2) or a file (exit 65); μ = 3 is not."""
-    want = "error: --friction-mu must be a number in (0, 3], got 3.5"
+    want = "error: --friction-mu must be a number in [0.01, 3], got 3.5"
     assert _error(_csv(tmp_path, "--weight-n", "1", "--friction-mu", "3.5")) == want
     assert _error(_population(tmp_path, "--friction-mu", "0.5,3.5")) == want
     assert _error(_predict(tmp_path, "--friction-mu", "3.5")) == want
     assert _lib(lambda: MeasuredObject("a", 1.0, friction_mu=3.5)) == want
     assert _mapped(tmp_path, "friction_mu", "3.5") == (
-        "line 2: friction_mu = 3.5 is outside its physical bounds (0, 3]"
+        "line 2: friction_mu = 3.5 is outside its physical bounds [0.01, 3]"
     )
-    assert _predicted(friction_mu=3.5) == "friction_mu must be a number in (0, 3]; it is 3.5 for A"
+    want = "friction_mu must be a number in [0.01, 3]; it is 3.5 for A"
+    assert _predicted(friction_mu=3.5) == want
     catalog = write_catalog(tmp_path / "cat.csv", [{**catalog_row, "friction_mu": 3.5}])
     result = runner.invoke(app, ["inspect", str(catalog)])  # the catalog spec states the bound
     assert result.exit_code == 65
     assert "'friction_mu'" in result.stderr
     assert "<= 3, got 3.5" in result.stderr
     with pytest.raises(
-        InputDataError, match=r"friction_mu = 3.5 is outside its physical bounds \(0, 3\]"
+        InputDataError, match=r"friction_mu = 3.5 is outside its physical bounds \[0.01, 3\]"
     ):
         CatalogObject.from_row({**catalog_row, "friction_mu": 3.5})
     assert MeasuredObject("a", 1.0, friction_mu=3.0).friction_mu == 3.0

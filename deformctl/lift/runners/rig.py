@@ -5,10 +5,19 @@ reads one JSON answer from its stdout. It is a :class:`deformctl.lift.search.Tri
 :func:`deformctl.lift.search.find_min_lift_force` drives a rig exactly as it drives the
 simulator; :func:`rig_runner_factory` makes one per catalog object for the ``lift`` stage.
 
-Rig protocol, version 1
+Rig protocol, version 2
 -----------------------
 The command is given as a string (split with :func:`shlex.split`, never run through a shell) or
 as an argument list. deformctl starts it once per attempt, in ``cwd`` when given.
+
+Handshake (version 2). Before the first attempt of a run, deformctl starts the command once with
+``{"handshake": true, "protocol_version": 2}`` on stdin. The rig must not move; it answers
+``{"protocol_version": 2, "max_force_n": 120.0}``: the largest grip force it can and may apply,
+N. No request of the run asks for more (:mod:`deformctl.lift.ceiling`). A rig that answers
+anything else (a version-1 rig fails to read ``grip_force_n`` and exits non-zero, or answers
+without ``max_force_n``) has stated no maximum: the absolute default
+(:data:`~deformctl.lift.ceiling.DEFAULT_ABSOLUTE_MAX_FORCE_N`) applies. A ``max_force_n`` that is
+not a finite number > 0 is a :class:`~deformctl.errors.RigError`.
 
 Request (stdin, one JSON object, UTF-8, followed by a newline; then stdin is closed)::
 
@@ -20,8 +29,9 @@ Request (stdin, one JSON object, UTF-8, followed by a newline; then stdin is clo
 * ``grip_force_n`` (number > 0, N): the normal force each palm must apply during the lift.
 * ``weight_n`` (number > 0, N) and ``friction_mu`` (number > 0): the object's catalog values.
 * ``size_cm`` ([x, y, z] numbers, cm): the object's size, present only when the catalog knows it.
-* ``max_force_n`` (number > 0, N): the object's force ceiling (``lift`` always sends one); no
-  request asks for more, and a driver may refuse a ``grip_force_n`` above it.
+* ``max_force_n`` (number > 0, N): the object's force ceiling, never above the rig's absolute
+  limit (always sent); no request asks for more, and a driver may refuse a ``grip_force_n``
+  above it.
 
 The rig grips the object with ``grip_force_n``, lifts it (the paper: by half its height), checks
 for slip and answers.
@@ -67,13 +77,16 @@ from typing import Any, TypeGuard
 from deformctl import jsonsafe
 from deformctl.catalog import CatalogObject
 from deformctl.errors import DeformctlError, RigError, UsageError
+from deformctl.lift.ceiling import DEFAULT_ABSOLUTE_MAX_FORCE_N, ForceCeiling, absolute_limit
 from deformctl.lift.options import DEFAULT_RIG_TIMEOUT_S
 from deformctl.lift.search import AttemptError, TrialRunner
 from deformctl.lift.stage import RunnerFactory
 from deformctl.quantities import FRICTION_MU, RIG_TIMEOUT_S, SIZE_CM, WEIGHT_N
 from deformctl.series import TrialOutcome
 
-RIG_PROTOCOL_VERSION = 1
+RIG_PROTOCOL_VERSION = 2
+#: What deformctl sends to ask the rig for its maximum force (module doc).
+HANDSHAKE_REQUEST: dict[str, Any] = {"handshake": True, "protocol_version": RIG_PROTOCOL_VERSION}
 
 SlipFromFrames = Callable[[Path, Path], tuple[bool, float]]
 """``(before_frame, after_frame) -> (lifted, slip_m)``: decide a lift from two camera frames."""
@@ -83,12 +96,14 @@ _MAX_SHOWN_CHARS = 120  # how much of a bad answer or stderr line goes into an e
 __all__ = [
     "DEFAULT_RIG_TIMEOUT_S",
     "FRAMES_SLIP_CRITERION",
+    "HANDSHAKE_REQUEST",
     "RIG_PROTOCOL_VERSION",
     "RIG_SLIP_CRITERION",
     "RigAttemptError",
     "RigRunner",
     "SlipFromFrames",
     "parse_rig_response",
+    "rig_handshake",
     "rig_object",
     "rig_runner_factory",
 ]
@@ -202,9 +217,13 @@ class RigRunner:
             the current directory when None.
         slip_from_frames: decides ``(lifted, slip_m)`` from ``(before_path, after_path)`` for a rig
             that answers with frames only; without it such an answer is a :class:`RigError`.
+        absolute_max_force_n: the rig's absolute limit, N (its handshake's ``max_force_n``;
+            default :data:`~deformctl.lift.ceiling.DEFAULT_ABSOLUTE_MAX_FORCE_N`): no request
+            above it (nor above the object's ``max_force_n``) is ever sent.
 
     Raises:
-        UsageError: an empty command, a bad ``timeout_s`` or a bad object description.
+        UsageError: an empty command, a bad ``timeout_s``, a bad object description or a bad
+            ``absolute_max_force_n``.
 
     Example:
         >>> import sys
@@ -220,16 +239,20 @@ class RigRunner:
         object: Mapping[str, Any],
         cwd: str | os.PathLike[str] | None = None,
         slip_from_frames: SlipFromFrames | None = None,
+        absolute_max_force_n: float = DEFAULT_ABSOLUTE_MAX_FORCE_N,
     ) -> None:
         argv = shlex.split(command) if isinstance(command, str) else [str(a) for a in command]
         if not argv:
             raise UsageError("rig command is empty")
         RIG_TIMEOUT_S.check(timeout_s)
+        self.absolute_max_force_n = absolute_limit(absolute_max_force_n).max_force_n
         self.argv: list[str] = argv
         self.timeout_s = float(timeout_s)
         self.cwd: Path | None = None if cwd is None else Path(cwd)
         self.slip_from_frames = slip_from_frames
         self.object_id, self._object_fields = self._check_object(object)
+        own = self._object_fields.get("max_force_n", math.inf)
+        self._object_fields["max_force_n"] = min(own, self.absolute_max_force_n)
 
     @staticmethod
     def _check_object(obj: Mapping[str, Any]) -> tuple[str, dict[str, Any]]:
@@ -267,8 +290,7 @@ class RigRunner:
         }
         if "size_cm" in self._object_fields:
             req["size_cm"] = list(self._object_fields["size_cm"])
-        if "max_force_n" in self._object_fields:
-            req["max_force_n"] = self._object_fields["max_force_n"]
+        req["max_force_n"] = self._object_fields["max_force_n"]
         return req
 
     def __call__(self, grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
@@ -278,7 +300,7 @@ class RigRunner:
             RigAttemptError: the command could not start, failed, timed out or answered badly.
         """
         where = (attempt_index, grip_force_n)
-        ceiling = self._object_fields.get("max_force_n", math.inf)
+        ceiling = self._object_fields["max_force_n"]
         if not grip_force_n <= ceiling:  # the search never asks: refuse rather than send it
             raise self._error(where, f"grip force above the force ceiling {ceiling:.6g} N")
         payload = json.dumps(self.request(grip_force_n, attempt_index)) + "\n"
@@ -384,6 +406,60 @@ class RigRunner:
         return bool(lifted), float(slip_m)
 
 
+def rig_handshake(
+    command: str | Sequence[str],
+    *,
+    timeout_s: float,
+    cwd: str | os.PathLike[str] | None = None,
+) -> ForceCeiling:
+    """Ask the rig for its maximum force (the handshake of the module doc); its absolute limit.
+
+    Returns:
+        :func:`~deformctl.lift.ceiling.absolute_limit` of the stated maximum, or of None (the
+        default) when the rig states none: it cannot be started, exits non-zero, runs past
+        ``timeout_s``, or answers without ``max_force_n`` (a version-1 rig).
+
+    Raises:
+        RigError: the answer states a ``max_force_n`` that is not a finite number > 0.
+    """
+    argv = shlex.split(command) if isinstance(command, str) else [str(a) for a in command]
+    try:
+        proc = subprocess.Popen(
+            argv,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            cwd=None if cwd is None else Path(cwd),
+            start_new_session=True,
+        )
+    except OSError:  # the first attempt reports it, as it always did
+        return absolute_limit(None)
+    payload = json.dumps(HANDSHAKE_REQUEST) + "\n"
+    try:
+        out_b, _ = proc.communicate(payload.encode("utf-8"), timeout=float(timeout_s))
+    except subprocess.TimeoutExpired:
+        RigRunner._kill(proc)
+        return absolute_limit(None)
+    except OSError:  # it closed stdin without reading (a version-1 rig that gave up)
+        proc.kill()
+        proc.communicate()
+        return absolute_limit(None)
+    if proc.returncode != 0:
+        return absolute_limit(None)
+    try:
+        answer = jsonsafe.loads(out_b.decode("utf-8", errors="replace"))
+    except ValueError:
+        return absolute_limit(None)
+    if not isinstance(answer, dict) or "max_force_n" not in answer:
+        return absolute_limit(None)
+    stated = answer["max_force_n"]
+    if not _is_positive(stated):
+        raise RigError(
+            f"rig handshake: max_force_n must be a finite number > 0 (N), got {stated!r}"
+        )
+    return absolute_limit(float(stated))
+
+
 def rig_object(obj: CatalogObject) -> dict[str, Any]:
     """The object description a :class:`RigRunner` sends: id, W, mu, size (cm) and, when the
     lift gave the object one, its force ceiling ``max_force_n`` (N)."""
@@ -435,6 +511,13 @@ def rig_runner_factory(
         raise UsageError("rig command is empty")
     RIG_TIMEOUT_S.check(timeout_s)
 
+    stated: list[ForceCeiling] = []  # the handshake's answer, asked once per factory
+
+    def limit() -> ForceCeiling:
+        if not stated:
+            stated.append(rig_handshake(argv, timeout_s=float(timeout_s), cwd=cwd))
+        return stated[0]
+
     def make(obj: CatalogObject) -> TrialRunner:
         return RigRunner(
             argv,
@@ -442,6 +525,7 @@ def rig_runner_factory(
             object=rig_object(obj),
             cwd=cwd,
             slip_from_frames=slip_from_frames,
+            absolute_max_force_n=limit().max_force_n,
         )
 
     frame_options = dict(getattr(slip_from_frames, "keywords", None) or {})
@@ -465,4 +549,5 @@ def rig_runner_factory(
         stop_on_failure=True,
         settings=settings,
         journal=True,  # every attempt costs a grip on a real robot: keep them as they happen
+        absolute_limit=limit,
     )
