@@ -133,7 +133,7 @@ def predict(
         csv_text,
         load_predictor,
         output_columns,
-        predict_objects,
+        predict_objects_with_laws,
         read_prediction_inputs,
     )
 
@@ -157,17 +157,22 @@ def predict(
         frame = read_prediction_inputs(features, catalog, joined)
         for line in joined:
             typer.echo(f"warning: {features if features != '-' else 'stdin'}: {line}", err=True)
-        inputs = {c: frame[c].to_numpy(dtype=float) for c in frame.columns if c != "object_id"}
+        inputs = {
+            c: frame[c].to_numpy(dtype=object if c == "model" else float)
+            for c in frame.columns
+            if c != "object_id"
+        }
         ids = frame["object_id"].astype(str).tolist() if "object_id" in frame.columns else None
     inputs, assumed, lines = assume_damping(predictor, inputs, ids)
     for line in lines:
         typer.echo(f"warning: {line}", err=True)
-    est = predict_objects(
+    laws = predict_objects_with_laws(
         predictor, inputs, coverage=coverage, names=ids, source=features or "command line"
     )
+    est = laws.estimates
     for line in est.warnings:
         typer.echo(f"warning: {line}", err=True)
-    columns = output_columns(est, inputs, object_ids=ids, damping_assumed=assumed)
+    columns = output_columns(est, inputs, object_ids=ids, damping_assumed=assumed, laws=laws)
     if output is None:
         typer.echo(csv_text(columns), nl=False)
         return
