@@ -201,7 +201,7 @@ def _lift(
         lam = sls_damping_ns_per_cm(
             D, omega, params["arm_stiffness_ratio"], params["relaxation_time_omega_n"]
         )
-    Z = law_groups(law, W, D, lam, params, net.zeta_shift)
+    Z = law_groups(law, W, D, lam, W / (2.0 * f_w), params, net.zeta_shift)  # μ = W / (2 F_w)
     return np.asarray(np.exp(net._network(Z)) * f_w)
 
 

@@ -7,7 +7,8 @@ law's parameters in its own columns. The grip model takes them in a dimensionles
 * ``kv`` (Kelvin–Voigt): nothing more; the bundled network of ``[log10 ω_n, log10(ζ + ζ_0)]``
   (:mod:`deformctl.grip.groups`) exactly as before;
 * ``hc`` (Hunt–Crossley): the exponent ``n`` (column ``hc_exponent``), a network of
-  ``[log10 ω_n, log10(ζ + ζ_0), n]`` (D and λ are the row's, stated at F_w);
+  ``[log10 ω_n, log10(ζ + ζ_0), n, log10 μ]`` (D and λ are the row's, stated at F_w; μ, which
+  only scales F_w for Kelvin–Voigt, moves a stiffening object's ratio by 2.7 %);
 * ``sls`` (standard linear solid): the arm's stiffness over the relaxed one ``k2 / D`` and the
   relaxation time in units of the object's own time scale ``τ ω_n``, a network of
   ``[log10 ω_n, log10(k2 / D), log10(τ ω_n)]`` (its damping λ = k2 τ is then fixed by them).
@@ -41,6 +42,7 @@ __all__ = [
     "law_groups",
     "law_parameter_values",
     "read_laws",
+    "recognised_laws",
     "unknown_law_line",
 ]
 
@@ -64,11 +66,20 @@ LAW_PARAMETER_COLUMNS: dict[str, tuple[str, ...]] = {
 }
 
 
+def recognised_laws() -> tuple[str, ...]:
+    """Every law a coefficients row may state: the grip model's (:data:`KNOWN_LAWS`) and any
+    other law ``characterize`` fits (a row of such a law is "another law's row": predicted by
+    the Kelvin–Voigt network, bound not guaranteed)."""
+    from deformctl.characterize.laws import PARAMETERS
+
+    return (*KNOWN_LAWS, *(law for law in PARAMETERS if law not in KNOWN_LAWS))
+
+
 def unknown_law_line(value: object, ids: str) -> str:
     """The one line for a ``model`` value the grip model does not know."""
     return (
-        f"column {LAW_COLUMN!r} is {value!r} for {ids}; the grip model knows the laws "
-        f"{', '.join(KNOWN_LAWS)} (a blank cell: characterize could not tell)"
+        f"column {LAW_COLUMN!r} is {value!r} for {ids}; the known laws are "
+        f"{', '.join(recognised_laws())} (a blank cell: characterize could not tell)"
     )
 
 
@@ -82,10 +93,11 @@ def read_laws(values: Sequence[Any], names: Sequence[str]) -> np.ndarray:
     out = []
     bad: list[str] = []
     first: object = None
+    known = recognised_laws()
     for value, name in zip(values, names, strict=True):
         blank = value is None or (isinstance(value, float) and math.isnan(value))
         text = "" if blank else str(value).strip().lower()
-        if text and text not in KNOWN_LAWS:
+        if text and text not in known:
             bad.append(str(name))
             first = value if first is None else first
         out.append(text)
@@ -122,6 +134,7 @@ def law_groups(
     W: np.ndarray,
     D: np.ndarray,
     lam: np.ndarray,
+    mu: np.ndarray,
     params: Mapping[str, np.ndarray],
     zeta_shift: float,
 ) -> np.ndarray:
@@ -129,7 +142,12 @@ def law_groups(
     omega, zeta = group_values(W, D, lam)
     if law == "hc":
         return np.column_stack(
-            [np.log10(omega), np.log10(zeta + zeta_shift), params["stiffness_exponent"]]
+            [
+                np.log10(omega),
+                np.log10(zeta + zeta_shift),
+                params["stiffness_exponent"],
+                np.log10(np.broadcast_to(mu, omega.shape)),
+            ]
         )
     if law == "sls":
         return np.column_stack(
@@ -149,6 +167,7 @@ def law_features(law: str) -> tuple[str, ...]:
             "log10_natural_frequency_rad_s",
             "log10_damping_ratio_shifted",
             "stiffness_exponent",
+            "log10_friction_mu",
         )
     return (
         "log10_natural_frequency_rad_s",

@@ -74,6 +74,12 @@ def join_laws(index_table: pd.DataFrame, coefficients: pd.DataFrame) -> pd.DataF
             f"column {LAW_COLUMN!r} is blank for {', '.join(ids[laws == ''][:5])}: a training "
             "object's law must be known"
         )
+    other = [law for law in dict.fromkeys(laws) if law not in KNOWN_LAWS]
+    if other:
+        raise InputDataError(
+            f"the grip model has no network for the law {other[0]!r} (objects "
+            f"{', '.join(ids[laws == other[0]][:5])}); it learns {', '.join(KNOWN_LAWS)}"
+        )
     out[LAW_COLUMN] = laws
     return out
 
@@ -97,7 +103,7 @@ def _inputs(law: str, frame: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, dict
             bad = frame["object_id"].astype(str)[~(np.isfinite(v) & (v > 0))].tolist()
             raise InputDataError(f"{law} parameter {k} is missing or <= 0 for {', '.join(bad[:5])}")
     lam0 = np.maximum(np.where(np.isfinite(lam), lam, 0.0), 0.0)
-    return law_groups(law, W, D, lam0, params, ZETA_SHIFT), rigid_grip_force_n(W, mu), params
+    return law_groups(law, W, D, lam0, mu, params, ZETA_SHIFT), rigid_grip_force_n(W, mu), params
 
 
 def _ranges(law: str, frame: pd.DataFrame, params: dict[str, np.ndarray]) -> dict[str, list[float]]:

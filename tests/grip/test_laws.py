@@ -115,14 +115,14 @@ def test_per_law_error_and_coverage_on_fresh_objects(setup: dict[str, Path]) -> 
 
 
 def test_unknown_law_value_exits_65_naming_column_and_laws(setup: dict[str, Path]) -> None:
-    fresh = read_table(setup["fresh"]).head(3).assign(model=["kv", "exp", "hc"])
+    fresh = read_table(setup["fresh"]).head(3).assign(model=["kv", "zener9", "hc"])
     path = setup["dir"] / "bad-law.parquet"
     write_table(fresh, path, "index_table", provenance=None)
     out = setup["dir"] / "bad.parquet"
     line = _error(runner.invoke(app, ["predict", str(setup["mixed"]), str(path), "-o", str(out)]),
                   65)  # fmt: skip
     assert "'model'" in line
-    assert "'exp'" in line
+    assert "'zener9'" in line
     assert "kv, hc, sls" in line
     assert "T" in line
     assert not out.exists()
