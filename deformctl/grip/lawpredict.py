@@ -314,8 +314,8 @@ def predict_laws(
     for i in range(n):
         law = str(laws[i])
         if law in per_law and i in per_law[law]:
-            lf, up, parts, assumed = per_law[law][i]
-            lift[i], params_assumed[i], law_used[i] = lf, assumed, law
+            lf, up, parts, was_assumed = per_law[law][i]
+            lift[i], params_assumed[i], law_used[i] = lf, was_assumed, law
             upper[i] = up if coverage is not None else np.nan
             outside[i] = bool(parts)
             replaced[i] = []
@@ -323,13 +323,13 @@ def predict_laws(
                 replaced[i].append(
                     f"{labels[i]}: outside the {law} training range: {'; '.join(parts)}"
                 )
-            if assumed:
+            if was_assumed:
                 replaced[i].append(
                     f"{labels[i]}: a {law} parameter is unknown (damping not identifiable); "
                     f"predicted at the value of the model's {law} range with the largest L_f "
                     "(damping_assumed = true)"
                 )
-            guaranteed[i] = coverage is not None and not parts and not assumed
+            guaranteed[i] = coverage is not None and not parts and not was_assumed
         elif law == "":
             law_assumed[i] = True
             options = {"kv": (float(lift[i]), float(upper[i]))}

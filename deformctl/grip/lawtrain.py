@@ -149,6 +149,9 @@ def fit_law(
     from deformctl.model import scaled_mlp
 
     table = rows.sort_values("object_id").reset_index(drop=True)
+    usable = np.all([np.isfinite(v) & (v > 0) for v in _params(law, table).values()], axis=0)
+    dropped = table["object_id"].astype(str)[~usable].tolist()  # a parameter not identified
+    table = table[usable].reset_index(drop=True)
     if len(table) < train_size + calibration_size or train_size < 2:
         raise InputDataError(
             f"{len(table)} {law} rows: fewer than --train-size {train_size} + "
@@ -210,6 +213,7 @@ def fit_law(
             "log_ratio": [float(v) for v in best.predict(Z[:_CHECK_POINTS])],
         },
         "split": {k: v["object_id"].astype(str).tolist() for k, v in parts.items()},
+        "dropped_unidentified": dropped,
     }
     if scores:
         entry["conformal_scores"] = scores

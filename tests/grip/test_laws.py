@@ -191,3 +191,21 @@ def test_unknown_sls_damping_takes_the_most_cautious_parameters(setup: dict[str,
     assert out.parameters_assumed[0]
     assert not out.estimates.bound_guaranteed[0]
     assert out.estimates.lift_force_n[0] >= _predict(setup["mixed"], row).estimates.lift_force_n[0]
+
+
+def test_training_drops_unidentified_law_rows_and_refuses_unknown_laws(tmp_path: Path) -> None:
+    from deformctl.errors import InputDataError
+    from deformctl.grip.lawtrain import train_laws
+
+    index = law_index(200, seed=5, noise=0.01)
+    sls = index.index[index["model"] == "sls"][:3]
+    index.loc[sls, "sls_arm_stiffness_n_per_cm"] = np.nan
+    _, section = train_laws(index.drop(columns=LAW_COLS), index, train_size=20,
+                            calibration_size=20, seed=0)  # fmt: skip
+    dropped = section["models"]["sls"]["dropped_unidentified"]
+    assert dropped == sorted(index.loc[sls, "object_id"].tolist())
+    used = {i for ids in section["models"]["sls"]["split"].values() for i in ids}
+    assert not set(dropped) & used
+    bad = index.assign(model=np.where(index["model"] == "hc", "zener9", index["model"]))
+    with pytest.raises(InputDataError, match="'model' is 'zener9'"):
+        train_laws(index.drop(columns=LAW_COLS), bad, train_size=20, calibration_size=20)
