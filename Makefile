@@ -35,7 +35,7 @@ materials: install
 
 # Seeded hostile inputs through the CLI (tests/fuzz/hostile_cli.py): prints the clean fraction
 # (issue 34 point 8). CASES and SEED change the set.
-CASES ?= 600
+CASES ?= 1000
 SEED ?= 0
 fuzz: install
 	$(BIN)/python -m tests.fuzz.hostile_cli --cases $(CASES) --seed $(SEED)

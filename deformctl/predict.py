@@ -427,9 +427,9 @@ def prediction_inputs(
         SchemaError: a feature column is missing and cannot be joined; ``object_id`` missing
             when a catalog is given.
         SchemaError: no ``weight_n`` column and no catalog (naming ``--catalog``).
-        InputDataError: an object missing from the catalog; without a catalog, a weight (or
-            some but not all μ) missing for some objects (the messages name the ids and
-            ``--catalog``).
+        InputDataError: a table without rows; an object missing from the catalog; without a
+            catalog, a weight (or some but not all μ) missing for some objects (the messages
+            name the ids and ``--catalog``).
     """
     import pandas as pd
 
@@ -437,6 +437,8 @@ def prediction_inputs(
     from deformctl.table import format_ids
 
     frame = table.copy()
+    if len(frame) == 0:  # before any column is asked for: "needs friction" would mislead
+        raise InputDataError("the table has no rows: no object to predict")
     if catalog is not None:
         if "object_id" not in frame.columns:
             raise SchemaError("the input has no column 'object_id' to join on", field="object_id")

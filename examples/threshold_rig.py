@@ -2,9 +2,10 @@
 """A stand-in rig for ``deformctl lift --rig``: lifts when the grip beats a threshold force.
 
 It follows the rig protocol (docs/rig-protocol.md): one JSON request on stdin, one JSON answer
-on stdout, notes on stderr. Instead of a robot it pretends each object needs
-``F_w + extra`` newtons, where ``F_w = W / (2 mu)`` comes from the request and ``extra``
-(``--extra-n``, default 0.5 N) plays the part of the deformation surplus F_d. So
+on stdout, notes on stderr; to the handshake it states ``--max-force-n`` (default 500 N).
+Instead of a robot it pretends each object needs ``F_w + extra`` newtons, where
+``F_w = W / (2 mu)`` comes from the request and ``extra`` (``--extra-n``, default 0.5 N) plays the
+part of the deformation surplus F_d. So
 ``deformctl lift`` should report ``f_d_n`` close to ``extra`` (within the search tolerance).
 With ``--lift-force-from TABLE`` (a lift results table, e.g. the demo's of
 ``examples/synthetic_index.py``) each object needs that table's ``lift_force_n`` instead.
@@ -48,8 +49,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--extra-n", type=float, default=0.5, help="F_d the object needs, N")
     parser.add_argument("--lift-force-from", metavar="TABLE", help="each object needs its L_f here")
+    parser.add_argument(
+        "--max-force-n", type=float, default=500.0, help="the maximum force it states, N"
+    )
     args = parser.parse_args()
     request = json.load(sys.stdin)
+    if request.get("handshake"):  # rig protocol 2: state the maximum force, do not move
+        print(json.dumps({"protocol_version": 2, "max_force_n": args.max_force_n}))
+        return
     needs_n = None
     if args.lift_force_from is not None:
         needs_n = lift_force_from(args.lift_force_from, request["object_id"])

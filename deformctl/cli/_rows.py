@@ -64,8 +64,10 @@ def render_rows(rows: Rows, width: int | None) -> str:
     if not names:
         return "(no columns)"
     headers = [f"{n} [{rows.units[n]}]" if rows.units.get(n) else n for n in names]
-    texts = [[_cell(v) for v in values] for values in rows.frame.itertuples(index=False, name=None)]
-    numeric = [_is_number_column(rows.frame[c]) for c in rows.frame.columns]
+    frame = rows.frame.copy(deep=False)
+    frame.attrs = {}  # pandas deep-copies attrs into every column it hands out: quadratic
+    texts = [[_cell(v) for v in values] for values in frame.itertuples(index=False, name=None)]
+    numeric = [_is_number_column(frame[c]) for c in frame.columns]
     widths = [max([len(headers[j])] + [len(r[j]) for r in texts]) for j in range(len(names))]
     if width is not None:
         first = widths[0] + len(GAP)

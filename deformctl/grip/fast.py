@@ -15,7 +15,7 @@ Example (the bundled grip model)::
                        damping_ns_per_cm=0.47, friction_mu=0.5, coverage=0.9)
     est.lift_force_n, est.lift_force_upper_n, est.warnings
 
-One call validates its inputs (finite; W, D > 0; λ >= 0; 0 < μ <= 3), predicts L_f, the upper
+One call validates its inputs (finite; W, D > 0; λ >= 0; 0.01 <= μ <= 3), predicts L_f, the upper
 bound at a coverage P when asked (:mod:`deformctl.grip.conformal`: ``L_f (1 + q_P)`` with the
 model's stored calibration scores), flags inputs outside the training ranges
 (``outside_training_range``; the bound is then not guaranteed, ``bound_guaranteed = False``) and,

@@ -227,7 +227,10 @@ def _read_topics(
                 stamps, values = out[channel.topic]
                 stamps.append(_stamp_ns(msg, where, path))
                 values.append(_extract(msg, types[channel.topic], axis, joint, where, path))
-        except (McapError, ValueError, EOFError, OSError, zstandard.ZstdError) as err:
+        except (  # a flipped length field (read without CRC checks) asks for 2**63 bytes
+            McapError, ValueError, EOFError, OSError, OverflowError, MemoryError,
+            zstandard.ZstdError, struct.error,
+        ) as err:  # fmt: skip
             raise _damage_error(fh, size, path, crc_check, err) from None
     return out
 
@@ -270,7 +273,15 @@ def _open_bag(
     try:
         reader = make_reader(fh, validate_crcs=crc_check)
         summary = reader.get_summary()
-    except (McapError, ValueError, OSError, struct.error, EOFError) as err:
+    except (
+        McapError,
+        ValueError,
+        OSError,
+        struct.error,
+        EOFError,
+        OverflowError,
+        MemoryError,
+    ) as err:
         raise _damage_error(fh, size, path, crc_check, err) from None
     if summary is None:
         raise InputDataError("MCAP file has no summary (unindexed bag)", path=path)
@@ -483,8 +494,10 @@ def read_bag(
         see :func:`read_ros2_bag`.
     """
     p = Path(path)
-    if not p.is_file():
+    if not p.exists():
         raise MissingInputError("no such bag file", path=p)
+    if not p.is_file():  # /dev/zero, a FIFO, a directory: it exists, and it is no bag
+        raise InputDataError("not a bag: not a regular file (a device, pipe or directory)", path=p)
     note_input(p)
     wrench_topics, position_topic = source.wrench_topics, source.position_topic
     joint, axis, phase = source.joint, source.axis, segmentation.phase

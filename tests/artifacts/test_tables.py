@@ -159,7 +159,7 @@ def test_edited_metadata_is_detected(tmp_path: Path) -> None:
     [
         ("A,1,1,1,,0.5", "field 'weight_n': object 'A': missing value (NaN) in a required column"),
         ("A,1,1,1,-0.7,0.5", "field 'weight_n': object 'A': must be >= 0.001, got -0.7"),
-        ("A,1,1,1,0.7,-0.5", "field 'friction_mu': object 'A': must be > 0, got -0.5"),
+        ("A,1,1,1,0.7,-0.5", "field 'friction_mu': object 'A': must be >= 0.01, got -0.5"),
         ("A,1,1,1,heavy,0.5", "field 'weight_n': expected float64"),
         ("A,1,1,1,0.7,0.5\nA,2,2,2,1.0,0.5", "field 'object_id': duplicate value 'A'"),
     ],

@@ -19,8 +19,16 @@ an index whose rig rows ``adapt`` must refuse or use, a hostile ``--max-force-n`
 ``lift`` output (single file and ``-o DIR/``), and a model whose stored training ranges or
 target range are damaged (``predict``).
 
-Usage: ``python -m tests.fuzz.hostile_cli --cases 600 --seed 0`` (``make fuzz``); it prints the
-clean fraction and every unclean case, and exits 1 when one is unclean.
+The second hostile run's classes (tests/fuzz/hostile_cases.py: the rig's absolute limit, a
+tiny μ, tampered calibration scores, a coverage below 1/(n + 1), one model loader, the
+documented bounds at every stage, a reversed bag, a flipped bit without CRC checks, a catalog of
+thousands of columns, a relabelled log, a short row, a table without rows, a device as a bag and
+the CSV exports) also hold each case to its right exit code, a flag it must carry, the rig
+requests it must not exceed, or the verdict a second command must share.
+
+Usage: ``python -m tests.fuzz.hostile_cli --cases 1000 --seed 0`` (``make fuzz``); it prints
+every unclean case, the clean count per class and the clean fraction, and exits 1 when one is
+unclean.
 """
 
 from __future__ import annotations
@@ -40,9 +48,12 @@ import numpy as np
 import pandas as pd
 
 REPO = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(REPO))  # the checkout, for tests._helpers and tests.fuzz
+from tests.fuzz.hostile_cases import CLASSES, ELSEWHERE, write_extra_base  # noqa: E402
+
 KINDS = (
     "catalog", "squeeze_log", "bag", "tables", "index", "model",
-    "recording", "rig_rows", "max_force", "model_meta",
+    "recording", "rig_rows", "max_force", "model_meta", *CLASSES,
 )  # fmt: skip
 VALUES = ("1e308", "-20", "0", "nan", "inf", "-1e-300", "abc", "")
 
@@ -54,11 +65,16 @@ class Case:
     output: Path | None
     check: Callable[[str], str | None] | None = None  # stdout -> problem, for exit 0
     needs_warning: bool = False  # exit 0 must carry a "plausible ..." warning (a unit slip)
+    expect: tuple[int, ...] | None = None  # the exit codes that are right (None: any clean one)
+    stderr_needs: str | None = None  # exit 0 must say this on stderr (a flag's name)
+    after: Callable[[], str | None] | None = None  # files the command left -> problem
+    same_as: list[str] | None = None  # a command that must accept or refuse alike
+    max_s: float | None = None  # the longest the command may take, s
+    stdin: bytes | None = None
 
 
 def _write_base(root: Path) -> dict[str, Path]:
     """The good artifacts every case starts from."""
-    sys.path.insert(0, str(REPO))  # the checkout, for tests._helpers
     from deformctl.artifacts import write_table
     from deformctl.artifacts.mcap import write_squeeze_log
     from deformctl.measure.recording import SqueezeSeries
@@ -105,6 +121,7 @@ def _write_base(root: Path) -> dict[str, Path]:
     )
     rows = [f"{a:.4f},{b:.6f},{c * 1e3:.6f}" for a, b, c in zip(tr, fr, dr, strict=True)]
     base["recording"].write_text("Time (s),Load (N),Compression (mm)\n" + "\n".join(rows) + "\n")
+    write_extra_base(root, base)
     return base
 
 
@@ -279,6 +296,8 @@ def make_case(i: int, base: dict[str, Path], work: Path, rng: np.random.Generato
              "max_force": _max_force_case, "model_meta": _model_meta_case}  # fmt: skip
     if kind in later:
         return later[kind](i, base, work, rng)
+    if kind in CLASSES:
+        return CLASSES[kind](i, base, work, rng)
     if kind == "catalog":
         what, text = _csv_damage(base["catalog"].read_text(encoding="utf-8"), rng)
         path = work / f"cat{i}.csv"
@@ -334,6 +353,13 @@ def judge(case: Case, result: object) -> str | None:
         return f"{type(exc).__name__}: {exc}"
     if code not in (0, 1, 2, 65, 66):
         return f"exit {code}"
+    if case.expect is not None and code not in case.expect:
+        err_line = (result.stderr or "").strip().splitlines()[-1:]  # type: ignore[attr-defined]
+        return f"exit {code}, expected {'/'.join(map(str, case.expect))}: {err_line}"
+    if case.after is not None:
+        problem = case.after()
+        if problem is not None:
+            return problem
     err = result.stderr  # type: ignore[attr-defined]
     if "Traceback" in err:
         return "traceback"
@@ -348,12 +374,21 @@ def judge(case: Case, result: object) -> str | None:
         ln.startswith("warning: ") and "plausible" in ln for ln in err.splitlines()
     ):
         return "a unit slip passed without a warning naming the unit"
+    if case.stderr_needs is not None and case.stderr_needs not in err:
+        return f"exit 0 without {case.stderr_needs!r} on stderr"
     if case.check is not None:
         return case.check(result.stdout)  # type: ignore[attr-defined]
     return None
 
 
-def run(cases: int, seed: int, codes: dict[int, int] | None = None) -> tuple[int, list[str]]:
+def run(
+    cases: int,
+    seed: int,
+    codes: dict[int, int] | None = None,
+    per_kind: dict[str, list[int]] | None = None,
+) -> tuple[int, list[str]]:
+    """Run ``cases`` seeded cases; (clean count, one line per unclean case). ``per_kind``
+    collects [clean, total] per artifact kind."""
     from typer.testing import CliRunner
 
     from deformctl.cli import app
@@ -366,12 +401,28 @@ def run(cases: int, seed: int, codes: dict[int, int] | None = None) -> tuple[int
         base = _write_base(root)
         for i in range(cases):
             case = make_case(i, base, root, rng)
-            result = runner.invoke(app, case.argv)
+            started = time.perf_counter()
+            result = runner.invoke(app, case.argv, input=case.stdin)
+            took = time.perf_counter() - started
             if codes is not None:
                 codes[result.exit_code] = codes.get(result.exit_code, 0) + 1
             problem = judge(case, result)
+            if problem is None and case.max_s is not None and took > case.max_s:
+                problem = f"took {took:.1f} s, more than {case.max_s:g} s"
+            if problem is None and case.same_as is not None:
+                other = runner.invoke(app, case.same_as)
+                problem = judge(Case(case.name, case.same_as, None), other)
+                if problem is None and (other.exit_code == 0) != (result.exit_code == 0):
+                    problem = (
+                        f"{case.argv[0]} exits {result.exit_code}, {case.same_as[0]} "
+                        f"{other.exit_code}: two verdicts on one file"
+                    )
             if problem is not None:
                 unclean.append(f"case {i} ({case.name}): {problem}")
+            if per_kind is not None:
+                tally = per_kind.setdefault(KINDS[i % len(KINDS)], [0, 0])
+                tally[0] += problem is None
+                tally[1] += 1
     return cases - len(unclean), unclean
 
 
@@ -382,9 +433,13 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     started = time.perf_counter()
     codes: dict[int, int] = {}
-    clean, unclean = run(args.cases, args.seed, codes)
+    per_kind: dict[str, list[int]] = {}
+    clean, unclean = run(args.cases, args.seed, codes, per_kind)
     for line in unclean:
         print(line)
+    for kind, (good, total) in per_kind.items():
+        where = " (fixed on the CSV branch)" if kind in ELSEWHERE else ""
+        print(f"  {kind:<16} {good}/{total} clean{where}")
     seconds = time.perf_counter() - started
     print(
         f"fuzz: {clean}/{args.cases} clean ({100.0 * clean / args.cases:.1f} %), seed {args.seed}, "

@@ -12,7 +12,7 @@ from .hostile_cli import Case, _lift_force_ok, _prediction_ok, judge, run
 
 
 def test_a_small_seeded_set_is_clean() -> None:
-    clean, unclean = run(20, seed=1)  # two cases of each artifact kind
+    clean, unclean = run(20, seed=1)  # the first 20 artifact kinds, one case each
     assert unclean == []
     assert clean == 20
 
@@ -45,3 +45,24 @@ def test_the_judge_fails_what_is_not_clean(tmp_path: Path) -> None:
     assert (
         _prediction_ok("f_w_n,predicted_lift_force_n,prediction_implausible\n2,500,True\n") is None
     )
+
+
+def test_the_judge_holds_each_case_to_its_right_verdict() -> None:
+    refused = Case("x", [], None, expect=(65,))
+    assert judge(refused, _result(0)) is not None  # a tampered file accepted
+    assert judge(refused, _result(2, "error: a\n")).startswith("exit 2, expected 65")
+    assert judge(refused, _result(65, "error: a\n")) is None
+    flagged = Case("x", [], None, stderr_needs="energy_returned")
+    assert judge(flagged, _result(0, "")) == "exit 0 without 'energy_returned' on stderr"
+    assert judge(flagged, _result(0, "warning: ... (flagged energy_returned)\n")) is None
+    over = Case("x", [], None, after=lambda: "request of 600 N above min(50, 500)")
+    assert judge(over, _result(0)) == "request of 600 N above min(50, 500)"
+
+
+def test_every_class_of_the_second_run_is_in_the_harness() -> None:
+    from .hostile_cases import CLASSES, ELSEWHERE
+    from .hostile_cli import KINDS
+
+    assert set(CLASSES) <= set(KINDS)
+    assert set(ELSEWHERE) <= set(CLASSES)
+    assert len(CLASSES) == 17

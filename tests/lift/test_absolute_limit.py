@@ -216,3 +216,17 @@ def test_no_request_ever_exceeds_the_limit(
         assert request["grip_force_n"] <= min(relative, limit)
         assert request["max_force_n"] <= limit
         assert request["grip_force_n"] <= request["max_force_n"]
+
+
+def test_cli_a_bad_stated_maximum_stops_the_run_before_any_attempt(tmp_path: Path) -> None:
+    catalog = tmp_path / "objects.csv"
+    catalog.write_text(f"{HEADER}\nA,8,5,4,2,0.5\n", encoding="utf-8")
+    echo = shlex.join([sys.executable, str(RIGS / "echo_rig.py"), '{"max_force_n": -5}'])
+    out, log = tmp_path / "lift.parquet", tmp_path / "lift.mcap"
+    res = cli.invoke(app, ["lift", str(catalog), "--rig", echo, "-o", str(out), "--log", str(log)])
+    assert res.exit_code == 1
+    assert res.stderr == (
+        "error: rig handshake: max_force_n must be a finite number > 0 (N), got -5\n"
+    )
+    assert not out.exists()
+    assert not log.exists()

@@ -69,7 +69,7 @@ def test_custom_ranges_and_prefix() -> None:
         ({"n": 3, "weight_n": (0.0, 10.0)}, "--weight-n must be a number in \\[0.001, 5000\\]"),
         ({"n": 3, "damping_ns_per_cm": (-1.0, 2.0)}, r"--damping-ns-per-cm must be .*\[0, 10000\]"),
         ({"n": 3, "deformability_n_per_cm": (50.0, 30.0)}, "low <= high"),
-        ({"n": 3, "friction_mu": 0.0}, "--friction-mu must be a number in \\(0, 3\\]"),
+        ({"n": 3, "friction_mu": 0.0}, "--friction-mu must be a number in \\[0.01, 3\\]"),
     ],
 )
 def test_bad_ranges_are_usage_errors(kwargs: dict[str, object], fragment: str) -> None:

@@ -421,7 +421,8 @@ def test_friction_not_positive_under_sim(tmp_path: Path, command: str) -> None:
     res = run(command, catalog, "--sim", "-o", tmp_path / "out.file")
     assert res.exit_code == EXIT_DATAERR
     line = one_line_error(res)
-    assert line.startswith(f"error: {catalog}: field 'friction_mu': object 'slick': must be > 0")
+    want = f"error: {catalog}: field 'friction_mu': object 'slick': must be >= 0.01"
+    assert line.startswith(want)
     assert listing(tmp_path) == ["objects.csv"]
 
 

@@ -179,8 +179,17 @@ class McapContents:
             InputDataError: one line naming both kinds and a topic (exit 65).
         """
         declared, found = self.kind, self.kind_from_topics()
+        names = {f[0] for f in (topic_schema(c.topic) for c in self.channels.values()) if f}
+        present = [k for k, schemas in KIND_SCHEMAS.items() if names & set(schemas)]
+        if found is None and present and (declared not in present or len(present) > 1):
+            found = next(k for k in present if k != declared)  # beside other channels too
         if declared in MCAP_KINDS and found is not None and found != declared:
-            topic = sorted(c.topic for c in self.channels.values() if c.topic)[0]
+            schemas = set(KIND_SCHEMAS[found])
+            topic = sorted(
+                c.topic
+                for c in self.channels.values()
+                if c.topic and (topic_schema(c.topic) or ("",))[0] in schemas
+            )[0]
             raise InputDataError(
                 f"declares kind {declared!r} but its channels are a {found}'s ({topic!r}): "
                 "the content does not match the label",
