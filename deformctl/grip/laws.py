@@ -201,6 +201,13 @@ def law_summary_lines(summary: Mapping[str, Any] | None) -> list[str]:
     """``inspect``'s lines of :func:`law_summary`: the mix, each law's ranges and figures."""
     if summary is None:
         return ["material laws: no law mix stated (Kelvin–Voigt objects only)"]
+    try:
+        return _summary_lines(summary)
+    except (AttributeError, KeyError, TypeError, ValueError, IndexError):
+        return ["material laws: the model's law section is malformed"]
+
+
+def _summary_lines(summary: Mapping[str, Any]) -> list[str]:
     mix = summary.get("mix") or {}
     lines = [
         "material law mix: "
