@@ -3,10 +3,12 @@
 Every model is evaluated by :class:`deformctl.grip.fast.Predictor` (numpy only):
 :func:`load_predictor` opens a model file (or a bundled name such as ``grip``) through its numpy
 export, or an older file without one through skops' allow-list. :func:`read_prediction_inputs`
-reads the objects from a coefficients, index or predictions table (weights and μ joined from a
-catalog; the safe force from a rupture or yield force), :func:`predict_objects` predicts them
-(with the bound at a coverage, the flags and the warnings) and :func:`output_columns` /
-:func:`csv_text` lay out the predictions table.
+reads the objects from a coefficients, index or predictions table or dataset directory (weights
+and μ joined from a catalog; the safe force from a rupture or yield force, less the margin of
+:func:`deformctl.characterize.rupture.safe_force_n`; ``characterize``'s quality),
+:func:`predict_objects` predicts them (with the bound at a coverage, the flags and the warnings),
+:func:`output_columns` / :func:`csv_text` lay out the predictions table, and
+:func:`quality_warnings` / :func:`strict_problems` say which rows a robot should not act on.
 
 Importing this module imports numpy and the predictor only: pandas, pyarrow and scikit-learn are
 imported by the functions that need them (a table, an older model file), so one object given by
@@ -19,6 +21,7 @@ import contextlib
 import csv
 import io
 import math
+import os
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -38,12 +41,15 @@ __all__ = [
     "SAFE_FORCE_COLUMNS",
     "assume_damping",
     "csv_text",
+    "frame_inputs",
     "load_predictor",
     "output_columns",
     "predict_objects",
     "predict_objects_with_laws",
     "prediction_inputs",
+    "quality_warnings",
     "read_prediction_inputs",
+    "strict_problems",
 ]
 
 #: Table kinds predictions are made from.
@@ -84,12 +90,15 @@ def read_prediction_inputs(
     from deformctl.artifacts import detect_kind, read_catalog, read_table
     from deformctl.artifacts.io import display_name, is_stdio
 
-    kind = None if is_stdio(path) else detect_kind(path)
-    if kind is not None and kind not in INPUT_KINDS:
-        raise SchemaError(
-            f"is a {kind} file; predict reads {', '.join(INPUT_KINDS)} tables", path=path
-        )
-    table = read_table(path, kind)
+    if not is_stdio(path) and os.path.isdir(path):
+        table = _read_dataset_dir(path, warnings)
+    else:
+        kind = None if is_stdio(path) else detect_kind(path)
+        if kind is not None and kind not in INPUT_KINDS:
+            raise SchemaError(
+                f"is a {kind} file; predict reads {', '.join(INPUT_KINDS)} tables", path=path
+            )
+        table = read_table(path, kind)
     if table.attrs.get("kind") not in INPUT_KINDS:
         raise SchemaError(
             f"is a {table.attrs.get('kind')} table; predict reads {', '.join(INPUT_KINDS)} tables",
@@ -97,13 +106,43 @@ def read_prediction_inputs(
         )
     cat = None if catalog is None else read_catalog(catalog)
     try:
-        return prediction_inputs(table, cat, warnings=warnings, catalog_name=str(catalog))
+        frame = prediction_inputs(table, cat, warnings=warnings, catalog_name=str(catalog))
+        frame.attrs["failed_objects"] = table.attrs.get("failed_objects", [])
+        return frame
     except SchemaError as err:
         raise SchemaError(err.message, path=path) from None
     except InputDataError as err:
         if err.path is not None or catalog is not None:  # (a catalog's message names the ids)
             raise
         raise InputDataError(err.message, path=display_name(path)) from None
+
+
+def _read_dataset_dir(path: str, warnings: list[str] | None) -> pd.DataFrame:
+    """The rows of a dataset directory of one of :data:`INPUT_KINDS` (``characterize -o DIR/``),
+    with its failed objects in ``attrs["failed_objects"]`` (``(id, message)``) and one line
+    each in ``warnings``.
+
+    Raises:
+        SchemaError: a directory of another kind (65).
+        InputDataError: not a dataset directory, or an incomplete or damaged one (65).
+    """
+    from deformctl.artifacts.dataset import describe_dataset, read_failures, read_table_any
+
+    kind = describe_dataset(path).get("kind")
+    if kind not in INPUT_KINDS:
+        raise SchemaError(
+            f"is a {kind} dataset; predict reads {', '.join(INPUT_KINDS)} tables", path=path
+        )
+    table = read_table_any(path, str(kind))
+    failures = read_failures(path)
+    id_col = str(failures.columns[0]) if len(failures.columns) else "object_id"
+    failed = [
+        (str(row[id_col]), str(row.get("error_message", ""))) for row in failures.to_dict("records")
+    ]
+    table.attrs["failed_objects"] = failed
+    if warnings is not None:
+        warnings.extend(f"{i}: no prediction: {kind} failed on it ({msg})" for i, msg in failed)
+    return table
 
 
 #: λ values tried over the model's training range for an object whose λ is unknown.
@@ -254,12 +293,13 @@ def output_columns(
     """The predictions table's columns, in order (optional ones only when they say something):
     the inputs, ``friction_mu`` and ``f_w_n`` (when μ is an input), ``predicted_lift_force_n``,
     the bound's ``lift_force_upper_n``, ``coverage`` and ``bound_guaranteed`` (with a coverage),
-    ``max_safe_force_n`` and ``window_ok`` (with a safe force), ``outside_training_range``,
-    ``prediction_implausible`` when a prediction is not a lifting force
-    (:mod:`deformctl.grip.sanity`) and ``damping_assumed`` (when some λ was unknown,
-    :func:`assume_damping`, or a law parameter, :mod:`deformctl.grip.lawpredict`);
-    ``material_law`` (the law whose network predicted the row) when the rows state their law,
-    and ``law_assumed`` when some row's law was unknown."""
+    ``max_safe_force_n`` and ``window_ok`` (when the input has safe forces: null where the
+    object's is unknown), ``outside_training_range``, ``prediction_implausible`` when a
+    prediction is not a lifting force (:mod:`deformctl.grip.sanity`), ``damping_assumed`` (when
+    some λ was unknown, :func:`assume_damping`, or a law parameter,
+    :mod:`deformctl.grip.lawpredict`), ``quality`` (``characterize``'s flags, when the input
+    carries them), ``material_law`` (the law whose network predicted the row) when the rows
+    state their law, and ``law_assumed`` when some row's law was unknown."""
     cols: dict[str, Any] = {}
     if object_ids is not None:
         cols["object_id"] = list(object_ids)
@@ -288,7 +328,66 @@ def output_columns(
         cols["material_law"] = [str(v) for v in laws.law_used]
         if np.any(laws.law_assumed):
             cols["law_assumed"] = np.asarray(laws.law_assumed, dtype=bool)
+    if inputs.get("quality") is not None:
+        cols["quality"] = list(inputs["quality"])
     return cols
+
+
+def frame_inputs(
+    frame: pd.DataFrame,
+) -> tuple[dict[str, Any], list[str] | None, list[str]]:
+    """The model's inputs from :func:`read_prediction_inputs`' frame: the columns as arrays
+    (``quality`` and the law, ``model``, as objects, the others as floats), the object ids
+    (None without them) and the ids of the objects the input's dataset failed on."""
+    inputs = {
+        c: frame[c].to_numpy(dtype=object if c in ("quality", "model") else float)
+        for c in frame.columns
+        if c != "object_id"
+    }
+    ids = frame["object_id"].astype(str).tolist() if "object_id" in frame.columns else None
+    return inputs, ids, [str(i) for i, _ in frame.attrs.get("failed_objects", [])]
+
+
+def quality_warnings(names: Sequence[str], quality: Sequence[str | None] | None) -> list[str]:
+    """One line per object that ``characterize`` flagged (its ``quality`` is not ``ok``), naming
+    the flags (no ``warning:`` prefix)."""
+    if quality is None:
+        return []
+    return [
+        f"{name}: characterize flagged it: {q or 'no quality recorded'} (quality); its "
+        "prediction is only as good as its coefficients"
+        for name, q in zip(names, quality, strict=True)
+        if q != "ok"
+    ]
+
+
+def strict_problems(columns: Mapping[str, Any], failed: Sequence[str] = ()) -> list[str]:
+    """What ``predict --strict`` refuses: ``object (causes)`` for every row that is not
+    window-ok (``window_ok`` true: a safe force known and L_f and its bound below it), not
+    guaranteed (``bound_guaranteed`` true: a ``--coverage`` bound inside the training range) or
+    not quality-ok (``quality`` ok, where the input carries characterize's flags), and for every
+    object the input's dataset failed on (``failed``)."""
+    n = len(columns["predicted_lift_force_n"])
+    names = columns.get("object_id") or [f"row {i}" for i in range(n)]
+    window = columns.get("window_ok")
+    bound = columns.get("bound_guaranteed")
+    quality = columns.get("quality")
+    out = [f"{name} (not characterized)" for name in failed]
+    for i in range(n):
+        causes = []
+        if window is None or window[i] is None:
+            causes.append("no safe force known")
+        elif not window[i]:
+            causes.append("window_ok false")
+        if bound is None:
+            causes.append("no --coverage bound")
+        elif not bound[i]:
+            causes.append("bound not guaranteed")
+        if quality is not None and quality[i] != "ok":
+            causes.append(f"quality {quality[i]}")
+        if causes:
+            out.append(f"{names[i]} ({', '.join(causes)})")
+    return out
 
 
 def csv_text(columns: Mapping[str, Any]) -> str:
@@ -296,6 +395,8 @@ def csv_text(columns: Mapping[str, Any]) -> str:
     True/False, NaN empty)."""
 
     def cell(value: Any) -> str:
+        if value is None:
+            return ""
         if isinstance(value, str):
             return value
         if isinstance(value, bool | np.bool_):
@@ -419,9 +520,11 @@ def prediction_inputs(
 
     Returns:
         ``[n]`` rows in the table's order: ``object_id`` (when the table has it),
-        :data:`OBJECT_COLUMNS`, ``friction_mu`` (when known) and ``max_safe_force_n`` (the
-        smallest of :data:`SAFE_FORCE_COLUMNS` the table has, NaN where none is finite; only
-        when the table has one of them).
+        :data:`OBJECT_COLUMNS`, ``friction_mu`` (when known), ``max_safe_force_n`` (the
+        smallest of :data:`SAFE_FORCE_COLUMNS` the table has less the margin
+        :data:`deformctl.characterize.rupture.SAFE_FORCE_MARGIN`, NaN where none is finite;
+        only when the table has one of them) and ``quality`` (``characterize``'s flags, when
+        the table has them).
 
     Raises:
         SchemaError: a feature column is missing and cannot be joined; ``object_id`` missing
@@ -463,7 +566,11 @@ def prediction_inputs(
     out = frame[keep].reset_index(drop=True)
     safe_cols = [c for c in SAFE_FORCE_COLUMNS if c in frame.columns]
     if safe_cols:
+        from deformctl.characterize.rupture import safe_force_n
+
         safe = frame[safe_cols].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=np.float64)
         safe = np.where(np.isfinite(safe) & (safe > 0), safe, np.inf).min(axis=1)
-        out["max_safe_force_n"] = np.where(np.isfinite(safe), safe, np.nan)
+        out["max_safe_force_n"] = safe_force_n(np.where(np.isfinite(safe), safe, np.nan))
+    if "quality" in frame.columns:
+        out["quality"] = [None if pd.isna(q) else str(q) for q in frame["quality"]]
     return out

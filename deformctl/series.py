@@ -170,14 +170,15 @@ class LiftAttempt:
 
 @dataclass(frozen=True)
 class Rupture:
-    """Where a squeeze ruptured: its force peak before the collapse.
+    """Where a squeeze ruptured: the onset of its collapse (the force peak before it, unless the
+    force fell from that peak before collapsing: :mod:`deformctl.characterize.rupture`).
 
     Attributes:
         squeeze_index: the squeeze.
-        time_s: time of the peak since the start of the squeeze, s.
-        force_n: the force at the peak, N (the force the object could bear).
-        compression_m: the compression at the peak, m.
-        recording_time_s: time of the peak in the source recording, s (None when not known).
+        time_s: time of the onset since the start of the squeeze, s.
+        force_n: the force at the onset, N (the force the object could bear).
+        compression_m: the compression at the onset, m.
+        recording_time_s: time of the onset in the source recording, s (None when not known).
     """
 
     squeeze_index: int

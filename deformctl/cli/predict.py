@@ -64,8 +64,9 @@ def predict(
     features: str | None = typer.Argument(
         None,
         metavar="[COEFFICIENTS]",
-        help="A coefficients, index or predictions table (Parquet) with the objects to predict; "
-        "- for stdin (characterize - -o - | predict grip -).",
+        help="A coefficients, index or predictions table (Parquet), or a dataset directory "
+        "(characterize LOGS/ -o DIR/), with the objects to predict; - for stdin "
+        "(characterize - -o - | predict grip -).",
     ),
     weight_n: float | None = typer.Option(None, "--weight-n", help="W of one object, N."),
     deformability_n_per_cm: float | None = typer.Option(
@@ -92,6 +93,13 @@ def predict(
         help="Object catalog (CSV/Parquet) whose weight_n and friction_mu are joined by "
         "object_id; it wins over the table's values (a warning names each one that differs).",
     ),
+    strict: bool = typer.Option(
+        False,
+        "--strict",
+        help="Exit 1 (after writing the predictions) when any object is not safe to act on: "
+        "window_ok not true, bound_guaranteed not true (needs --coverage), quality not ok, or "
+        "not characterized (a dataset directory's _failures); one line names them.",
+    ),
     output: str | None = typer.Option(
         None, "-o", "--output", help="Write a predictions table (Parquet; - for stdout)."
     ),
@@ -112,9 +120,13 @@ def predict(
     --coverage P adds lift_force_upper_n, a split-conformal upper bound (from the model's
     calibration rows): at least P of the true L_f lie below it for objects drawn like the
     training ones; bound_guaranteed is false outside the training ranges. A rupture or yield
-    force in the table (rupture_force_n from characterize) adds max_safe_force_n and window_ok,
-    false when L_f or its bound exceeds the safe force. Every flag set (outside_training_range,
-    window_ok = false, another μ than a single-μ model's) prints a warning naming the object.
+    force column in the table (rupture_force_n from characterize) adds max_safe_force_n (the
+    smallest of them less a 15 % margin) and window_ok: true only when the safe force is known
+    and L_f and its bound lie below it, false when either exceeds it, empty (null) when the
+    object has no safe force. characterize's quality flags are carried into a quality column.
+    Every flag set (outside_training_range, window_ok false or null, quality not ok, another μ
+    than a single-μ model's) prints a warning naming the object; --strict makes any of them,
+    or a row without a guaranteed bound, exit 1.
     An object whose λ is unknown (NaN: characterize could not identify it, as from a test at one
     speed) is predicted at the λ of the model's range with the largest L_f, flagged
     damping_assumed, with a warning.
@@ -131,9 +143,11 @@ def predict(
     from deformctl.predict import (
         assume_damping,
         csv_text,
+        frame_inputs,
         load_predictor,
         output_columns,
         predict_objects_with_laws,
+        quality_warnings,
         read_prediction_inputs,
     )
 
@@ -151,18 +165,14 @@ def predict(
         check_output_path(output, force)  # fail before any work
     predictor = load_predictor(model_path)
     inputs: dict[str, Any] = {k: None if v is None else [v] for k, v in flags.items()}
-    ids = None
+    ids: list[str] | None = None
+    failed: list[str] = []
     if features is not None:
         joined: list[str] = []
         frame = read_prediction_inputs(features, catalog, joined)
         for line in joined:
             typer.echo(f"warning: {features if features != '-' else 'stdin'}: {line}", err=True)
-        inputs = {
-            c: frame[c].to_numpy(dtype=object if c == "model" else float)
-            for c in frame.columns
-            if c != "object_id"
-        }
-        ids = frame["object_id"].astype(str).tolist() if "object_id" in frame.columns else None
+        inputs, ids, failed = frame_inputs(frame)
     inputs, assumed, lines = assume_damping(predictor, inputs, ids)
     for line in lines:
         typer.echo(f"warning: {line}", err=True)
@@ -170,13 +180,30 @@ def predict(
         predictor, inputs, coverage=coverage, names=ids, source=features or "command line"
     )
     est = laws.estimates
-    for line in est.warnings:
+    for line in [*est.warnings, *quality_warnings(est.names.tolist(), inputs.get("quality"))]:
         typer.echo(f"warning: {line}", err=True)
     columns = output_columns(est, inputs, object_ids=ids, damping_assumed=assumed, laws=laws)
     if output is None:
         typer.echo(csv_text(columns), nl=False)
-        return
-    _write(columns, output, predictor, [model_path, features, catalog], coverage, force)
+    else:
+        _write(columns, output, predictor, [model_path, features, catalog], coverage, force)
+    if strict:
+        _strict(columns, failed)
+
+
+def _strict(columns: dict[str, Any], failed: list[str]) -> None:
+    """``--strict``: exit 1 with one line naming every object not safe to act on."""
+    from deformctl.predict import strict_problems
+
+    problems = strict_problems(columns, failed)
+    if problems:
+        more = f"; … {len(problems) - 5} more" if len(problems) > 5 else ""
+        typer.echo(
+            f"error: predict --strict: {len(problems)} object(s) not safe to act on: "
+            f"{'; '.join(problems[:5])}{more}",
+            err=True,
+        )
+        raise typer.Exit(1)
 
 
 def _write(

@@ -20,7 +20,9 @@ bound at a coverage P when asked (:mod:`deformctl.grip.conformal`: ``L_f (1 + q_
 model's stored calibration scores), flags inputs outside the training ranges
 (``outside_training_range``; the bound is then not guaranteed, ``bound_guaranteed = False``) and,
 given the object's safe force (a rupture or yield force), says whether a grip window exists
-(``window_ok``). Every flag comes with a warning line naming the object and the cause.
+(``window_ok``: true only when the safe force is known and L_f and the bound lie at or below it;
+None, with a warning, when the safe force given is NaN; None without one when none is given).
+Every flag comes with a warning line naming the object and the cause.
 
 A model trained at one friction coefficient (the paper's network) has no μ input. Asked about
 another μ, its prediction is rescaled by F_w (L_f ∝ 1/μ, as the simulator shows: docs/explanation/
@@ -160,7 +162,8 @@ class Estimates:
         bound_guaranteed: the bound holds with probability >= P (inside the range, finite);
             all False when no coverage was asked.
         max_safe_force_n: the object's safe force, N (NaN when unknown).
-        window_ok: False when L_f or the bound exceeds the safe force (True when unknown).
+        window_ok: True when the safe force is known and L_f and the bound lie at or below it,
+            False when either exceeds it, None when no safe force is known (object array).
         warnings: one line per cause and object (no ``warning:`` prefix).
     """
 
@@ -192,7 +195,7 @@ class Estimate:
     outside_training_range: bool
     bound_guaranteed: bool
     max_safe_force_n: float
-    window_ok: bool
+    window_ok: bool | None
     warnings: tuple[str, ...] = ()
     prediction_implausible: bool = False
 
@@ -596,7 +599,9 @@ class Predictor:
             warnings.append(f"{name}: outside the training range: {'; '.join(parts)}")
         upper = math.nan if q is None else float(self._upper(lift, f_w, q))
         safe = math.nan if max_safe_force_n is None else float(max_safe_force_n)
-        window_ok, line = _window(name, lift, upper, safe)
+        window_ok, line = (
+            (None, None) if max_safe_force_n is None else _window(name, lift, upper, safe)
+        )
         if line:
             warnings.append(line)
         targets = target_ratio_range(self.metadata)
@@ -709,11 +714,12 @@ class Predictor:
             if max_safe_force_n is None
             else np.array(np.broadcast_to(np.asarray(max_safe_force_n, dtype=np.float64), (n,)))
         )
-        window_ok = np.ones(n, dtype=bool)
-        for i in np.flatnonzero(np.isfinite(safe)):
-            window_ok[i], line = _window(str(labels[i]), lift[i], upper[i], safe[i])
-            if line:
-                warnings.append(line)
+        window_ok = np.full(n, None, dtype=object)
+        if max_safe_force_n is not None:
+            for i in range(n):
+                window_ok[i], line = _window(str(labels[i]), lift[i], upper[i], safe[i])
+                if line:
+                    warnings.append(line)
         targets = target_ratio_range(self.metadata)
         odd = implausible(lift, f_w, targets)
         warnings += [
@@ -744,10 +750,14 @@ def _same_mu(a: float, b: float) -> bool:
     return abs(a - b) <= _SAME_MU_RTOL * abs(b)
 
 
-def _window(label: str, lift: float, upper: float, safe: float) -> tuple[bool, str | None]:
-    """(window_ok, warning): no safe grip when L_f or the bound exceeds the safe force."""
+def _window(label: str, lift: float, upper: float, safe: float) -> tuple[bool | None, str | None]:
+    """(window_ok, warning): unknown (None) without a safe force, false when L_f or the bound
+    exceeds it."""
     if not math.isfinite(safe):
-        return True, None
+        return None, (
+            f"{label}: no safe force known (no rupture or yield force measured): whether the "
+            "grip crushes it is unknown (window_ok = null)"
+        )
     need = max(lift, upper) if math.isfinite(upper) else lift
     if need <= safe:
         return True, None

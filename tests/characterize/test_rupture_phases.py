@@ -84,3 +84,15 @@ def test_phases_of_a_ramp_hold_release() -> None:
     assert float(np.max(s.force_n[unload])) > 9.5
     with pytest.raises(UsageError, match="phase must be one of loading, unloading, all"):
         phase_slice(s.time_s, s.force_n, "hold", window_s=WINDOW_S)
+
+
+def test_phases_of_a_force_that_never_turns_positive() -> None:
+    # a sign mistake upstream must not become an IndexError: the peak is the largest value
+    s = synthetic_kelvin_voigt_squeeze(20.0, 1.0, profile="ramp_hold_release", seed=0)
+    neg = -np.abs(s.force_n) - 0.05
+    load = phase_slice(s.time_s, neg, "loading", window_s=WINDOW_S)
+    unload = phase_slice(s.time_s, neg, "unloading", window_s=WINDOW_S)
+    assert 0 < load.stop <= len(s)
+    assert 0 <= unload.start < len(s)
+    top = int(np.argmax(neg))
+    assert load.stop - 1 <= top + 5

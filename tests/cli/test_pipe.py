@@ -65,6 +65,14 @@ def _predict(data: bytes, *args: str) -> tuple[pd.DataFrame, Result]:
     return pd.read_csv(io.StringIO(result.stdout)), result
 
 
+def _no_safe_force(object_id: str) -> str:
+    """predict's line for an object without a rupture or yield force (window_ok null)."""
+    return (
+        f"warning: {object_id}: no safe force known (no rupture or yield force measured): "
+        "whether the grip crushes it is unknown (window_ok = null)"
+    )
+
+
 def test_characterize_copies_the_object_and_its_source(foam: bytes) -> None:
     row = _frame(foam).iloc[0]
     assert (row["weight_n"], row["friction_mu"], row["source"]) == (2.9, 0.6, "csv")
@@ -76,7 +84,7 @@ def test_characterize_copies_the_object_and_its_source(foam: bytes) -> None:
 
 def test_the_pipe_predicts_what_the_flags_predict(foam: bytes) -> None:
     got, result = _predict(foam, "--coverage", "0.9")
-    assert "warning" not in result.stderr
+    assert result.stderr.splitlines() == [_no_safe_force("foam")]  # it never ruptured
     row = _frame(foam).iloc[0]
     flags = ["--weight-n", "2.9", "--friction-mu", "0.6", "--coverage", "0.9",
              "--deformability-n-per-cm", repr(float(row["deformability_n_per_cm"])),
@@ -96,12 +104,13 @@ def test_a_catalog_wins_and_a_differing_value_is_a_warning(foam: bytes, tmp_path
     assert got.loc[0, "weight_n"] == 3.1
     assert result.stderr.splitlines() == [
         f"warning: stdin: weight_n differs between the table and {cat} for foam (2.9 vs 3.1); "
-        "using the catalog's"
+        "using the catalog's",
+        _no_safe_force("foam"),
     ]
     same = tmp_path / "same.csv"
     same.write_text(cat.read_text().replace("3.1", "2.9"))
     got, result = _predict(foam, "--catalog", str(same))
-    assert result.stderr == ""
+    assert result.stderr.splitlines() == [_no_safe_force("foam")]
     assert got.loc[0, "weight_n"] == 2.9
 
 
@@ -169,7 +178,7 @@ def test_a_simulated_squeeze_travels_with_its_catalog_values() -> None:
         0.5,
     ]
     alone, result = _predict(table, "--coverage", "0.9")
-    assert result.stderr == ""
+    assert result.stderr.splitlines() == [_no_safe_force("C")]  # a simulated object never breaks
     joined, result = _predict(table, "--coverage", "0.9", "--catalog", str(paper))
-    assert result.stderr == ""  # the same values: nothing to warn about
+    assert result.stderr.splitlines() == [_no_safe_force("C")]  # the same values: no other line
     pd.testing.assert_frame_equal(alone, joined)

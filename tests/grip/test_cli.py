@@ -9,11 +9,13 @@ import os
 import zipfile
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 from typer.testing import CliRunner, Result
 
 from deformctl.artifacts import read_table, write_catalog, write_table
+from deformctl.characterize.rupture import SAFE_FORCE_MARGIN
 from deformctl.cli import app
 from deformctl.grip.fast import NO_SCORES_MESSAGE
 from tests.grip._synthetic import grip_index
@@ -203,12 +205,16 @@ def test_coefficients_with_a_rupture_force_get_the_window(
     )  # fmt: skip
     assert result.exit_code == 0, result.stderr
     csv = pd.read_csv(io.StringIO(result.stdout))
-    assert csv["window_ok"].tolist() == [True, False, True]
+    # true only with a known safe force above the bound; unknown (empty) without one
+    assert csv["window_ok"].tolist()[:2] == [True, False]
+    assert np.isnan(csv["window_ok"].iloc[2])
     assert csv["max_safe_force_n"].isna().tolist() == [False, False, True]
+    assert csv["max_safe_force_n"].iloc[0] == pytest.approx(1000.0 * (1 - SAFE_FORCE_MARGIN))
     lines = result.stderr.splitlines()
-    assert len(lines) == 1
-    assert lines[0].startswith("warning: P001: no safe grip: its upper bound ")
+    assert len(lines) == 2
+    assert lines[0].startswith("warning: P001: no safe grip: its ")
     assert lines[0].endswith("(window_ok = false)")
+    assert lines[1].startswith("warning: P002: no safe force known")
 
 
 def test_bundled_name_and_model_metadata(setup: dict[str, Path]) -> None:

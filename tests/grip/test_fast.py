@@ -180,9 +180,20 @@ def test_the_force_window(files: dict[str, Path]) -> None:
     low = p.predict(5.0, 20.0, 0.5, 0.5, max_safe_force_n=1.0, name="X")
     assert not low.window_ok
     assert "its lifting force" in low.warnings[0]
-    nan = p.predict(5.0, 20.0, 0.5, 0.5, max_safe_force_n=math.nan)
-    assert nan.window_ok
-    assert nan.warnings == ()
+    # no safe force known: the window is unknown (None), never true, and a warning says so
+    nan = p.predict(5.0, 20.0, 0.5, 0.5, max_safe_force_n=math.nan, name="Y")
+    assert nan.window_ok is None
+    assert len(nan.warnings) == 1
+    assert nan.warnings[0].startswith("Y: no safe force known")
+    assert nan.warnings[0].endswith("(window_ok = null)")
+    many = p.predict_many([5.0] * 3, 20.0, 0.5, 0.5, max_safe_force_n=[100.0, 1.0, math.nan])
+    assert many.window_ok.tolist() == [True, False, None]
+    assert [w.split(":")[0] for w in many.warnings] == ["row 1", "row 2"]
+    # not asked about a safe force at all: unknown, without a warning
+    free_many = p.predict_many([5.0], 20.0, 0.5, 0.5)
+    assert free.window_ok is None
+    assert free.warnings == ()
+    assert free_many.window_ok.tolist() == [None]
 
 
 def test_a_single_mu_model_asked_about_another_mu(files: dict[str, Path]) -> None:

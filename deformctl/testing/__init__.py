@@ -1,0 +1,1 @@
+"""Seeded generators of synthetic recordings with known truth, for tests and checks."""
