@@ -63,9 +63,7 @@ def test_table_train_lookup_adapt_predict_refuse_it(
     rig.to_parquet(rig_path)
     _one_line_65(["adapt", "grip", str(rig_path), "-o", str(tmp_path / "a.skops")], column)
     # table: the coefficients and the lift results it joins
-    coef = frame[["object_id", "deformability_n_per_cm", "damping_ns_per_cm"]].assign(
-        quality="ok"
-    )
+    coef = frame[["object_id", "deformability_n_per_cm", "damping_ns_per_cm"]].assign(quality="ok")
     lift = frame[["object_id", "weight_n", "friction_mu", "f_w_n", "lift_force_n"]].assign(
         converged=True, attempts=6, protocol="refine", f_d_n=0.05 * frame["f_w_n"]
     )
