@@ -33,6 +33,8 @@ from deformctl.grip.fast import Estimates, NoNumpyExportError, Predictor, resolv
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
+    from deformctl.grip.lawpredict import LawPrediction
+
 __all__ = [
     "INPUT_KINDS",
     "OBJECT_COLUMNS",
@@ -43,6 +45,7 @@ __all__ = [
     "load_predictor",
     "output_columns",
     "predict_objects",
+    "predict_objects_with_laws",
     "prediction_inputs",
     "quality_warnings",
     "read_prediction_inputs",
@@ -233,12 +236,59 @@ def predict_objects(
         return est
 
 
+def predict_objects_with_laws(
+    predictor: Predictor,
+    inputs: Mapping[str, Any],
+    *,
+    coverage: float | None = None,
+    names: Sequence[str] | None = None,
+    source: str | None = None,
+) -> LawPrediction:
+    """:func:`predict_objects` of rows that state their material law (``inputs["model"]``, a
+    coefficients table's column) with the model's law networks
+    (:func:`deformctl.grip.lawpredict.predict_laws`); without that column, every row is
+    Kelvin–Voigt.
+
+    Raises:
+        InputDataError: an unknown law (naming the column and the known laws), a row of
+            another law than Kelvin–Voigt and a model file without a law mix (65); as
+            :func:`predict_objects`.
+    """
+    from deformctl.grip.lawpredict import LawPrediction, predict_laws
+    from deformctl.grip.laws import LAW_COLUMN, read_laws
+
+    n = len(np.atleast_1d(np.asarray(inputs["weight_n"])))
+    labels = list(names) if names is not None else [f"row {i}" for i in range(n)]
+    if inputs.get(LAW_COLUMN) is None:
+        est = predict_objects(predictor, inputs, coverage=coverage, names=names, source=source)
+        kv = np.array(["kv"] * n, dtype=object)
+        return LawPrediction(est, kv, np.zeros(n, dtype=bool), np.zeros(n, dtype=bool))
+    with error_context(source) if source else contextlib.nullcontext():
+        laws = read_laws(list(inputs[LAW_COLUMN]), labels)
+    if predictor.needs_friction and inputs.get("friction_mu") is None:
+        predict_objects(predictor, inputs, coverage=coverage, names=names)  # its usage error
+    if coverage is not None:
+        predictor.margin(coverage)
+    with error_context(source) if source else contextlib.nullcontext():
+        out = predict_laws(predictor, inputs, laws, coverage=coverage, names=labels)
+        est = out.estimates
+        not_force = ~(np.isfinite(est.lift_force_n) & (est.lift_force_n > 0))
+        if not_force.any():
+            first = int(np.flatnonzero(not_force)[0])
+            raise InputDataError(
+                f"the model predicts {float(est.lift_force_n[first])!r} N for "
+                f"{', '.join(map(str, est.names[not_force][:5]))}: not a force (refused)"
+            )
+    return out
+
+
 def output_columns(
     est: Estimates,
     inputs: Mapping[str, Any],
     *,
     object_ids: Sequence[str] | None = None,
     damping_assumed: Any = None,
+    laws: LawPrediction | None = None,
 ) -> dict[str, Any]:
     """The predictions table's columns, in order (optional ones only when they say something):
     the inputs, ``friction_mu`` and ``f_w_n`` (when μ is an input), ``predicted_lift_force_n``,
@@ -246,8 +296,10 @@ def output_columns(
     ``max_safe_force_n`` and ``window_ok`` (when the input has safe forces: null where the
     object's is unknown), ``outside_training_range``, ``prediction_implausible`` when a
     prediction is not a lifting force (:mod:`deformctl.grip.sanity`), ``damping_assumed`` (when
-    some λ was unknown, :func:`assume_damping`) and ``quality`` (``characterize``'s flags, when
-    the input carries them)."""
+    some λ was unknown, :func:`assume_damping`, or a law parameter,
+    :mod:`deformctl.grip.lawpredict`), ``quality`` (``characterize``'s flags, when the input
+    carries them), ``material_law`` (the law whose network predicted the row) when the rows
+    state their law, and ``law_assumed`` when some row's law was unknown."""
     cols: dict[str, Any] = {}
     if object_ids is not None:
         cols["object_id"] = list(object_ids)
@@ -267,8 +319,15 @@ def output_columns(
     cols["outside_training_range"] = est.outside_training_range
     if est.prediction_implausible is not None and est.prediction_implausible.any():
         cols["prediction_implausible"] = est.prediction_implausible
+    if laws is not None:
+        assumed = laws.parameters_assumed
+        damping_assumed = assumed if damping_assumed is None else assumed | damping_assumed
     if damping_assumed is not None and np.any(damping_assumed):
         cols["damping_assumed"] = np.asarray(damping_assumed, dtype=bool)
+    if laws is not None and inputs.get("model") is not None:
+        cols["material_law"] = [str(v) for v in laws.law_used]
+        if np.any(laws.law_assumed):
+            cols["law_assumed"] = np.asarray(laws.law_assumed, dtype=bool)
     if inputs.get("quality") is not None:
         cols["quality"] = list(inputs["quality"])
     return cols
@@ -278,10 +337,10 @@ def frame_inputs(
     frame: pd.DataFrame,
 ) -> tuple[dict[str, Any], list[str] | None, list[str]]:
     """The model's inputs from :func:`read_prediction_inputs`' frame: the columns as arrays
-    (``quality`` as objects, the others as floats), the object ids (None without them) and the
-    ids of the objects the input's dataset failed on."""
+    (``quality`` and the law, ``model``, as objects, the others as floats), the object ids
+    (None without them) and the ids of the objects the input's dataset failed on."""
     inputs = {
-        c: frame[c].to_numpy(dtype=object if c == "quality" else float)
+        c: frame[c].to_numpy(dtype=object if c in ("quality", "model") else float)
         for c in frame.columns
         if c != "object_id"
     }
@@ -351,6 +410,13 @@ def csv_text(columns: Mapping[str, Any]) -> str:
     for row in zip(*columns.values(), strict=True):
         writer.writerow([cell(v) for v in row])
     return buffer.getvalue()
+
+
+def _law_columns() -> tuple[str, ...]:
+    """The material law column and every law's parameter columns (a coefficients table's)."""
+    from deformctl.grip.laws import LAW_COLUMN, LAW_PARAMETER_COLUMNS
+
+    return (LAW_COLUMN, *(c for cols in LAW_PARAMETER_COLUMNS.values() for c in cols))
 
 
 #: Coefficients-table columns that bound the grip force (the smallest finite one is the object's
@@ -496,6 +562,7 @@ def prediction_inputs(
             raise SchemaError(f"the input has no column {col!r}{hint}", field=col)
     keep = ["object_id"] if "object_id" in frame.columns else []
     keep += [*_FEATURES, *(["friction_mu"] if "friction_mu" in frame.columns else [])]
+    keep += [c for c in _law_columns() if c in frame.columns and "model" in frame.columns]
     out = frame[keep].reset_index(drop=True)
     safe_cols = [c for c in SAFE_FORCE_COLUMNS if c in frame.columns]
     if safe_cols:

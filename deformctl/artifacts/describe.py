@@ -430,12 +430,20 @@ def _model_summary(data: bytes, path: PathArg) -> dict[str, Any]:
         "conformal": conformal,
         "notes": {str(k): str(v) for k, v in notes.items()},
         "adapted": meta.get("adapted") if isinstance(meta.get("adapted"), dict) else None,
+        "laws": law_summary(meta),
         "tool_version": str(meta.get("tool_version", "unknown")),
         "blas": blas_record(meta.get("blas")),
         # predict never reads it, so a malformed record is shown as missing, not refused: the
         # same file gets the same verdict from inspect and predict (grip.modelfile)
         "provenance": _model_provenance(prov, name),
     }
+
+
+def law_summary(meta: dict[str, Any]) -> dict[str, Any] | None:
+    """A grip model's material law mix, ranges and per-law figures (None: none stated)."""
+    from deformctl.grip.laws import law_summary as summary
+
+    return summary(meta)
 
 
 def describe(path: PathArg, *, data: bytes | None = None) -> dict[str, Any]:

@@ -63,6 +63,10 @@ def _model_lines(info: dict[str, Any]) -> list[str]:
             f"{r['predicted_before_n']:.4g} N before, {r['predicted_after_n']:.4g} N after"
             for r in rows
         )
+    if info.get("form") == "grip":
+        from deformctl.grip.laws import law_summary_lines
+
+        lines += law_summary_lines(info.get("laws"))
     if info.get("notes"):
         lines.append("notes: " + ", ".join(f"{k}={v}" for k, v in sorted(info["notes"].items())))
     return lines

@@ -154,7 +154,7 @@ def predict(
         frame_inputs,
         load_predictor,
         output_columns,
-        predict_objects,
+        predict_objects_with_laws,
         quality_warnings,
         read_prediction_inputs,
     )
@@ -186,12 +186,13 @@ def predict(
     inputs, assumed, lines = assume_damping(predictor, inputs, ids)
     for line in lines:
         typer.echo(f"warning: {line}", err=True)
-    est = predict_objects(
+    laws = predict_objects_with_laws(
         predictor, inputs, coverage=coverage, names=ids, source=features or "command line"
     )
+    est = laws.estimates
     for line in [*est.warnings, *quality_warnings(est.names.tolist(), inputs.get("quality"))]:
         typer.echo(f"warning: {line}", err=True)
-    columns = output_columns(est, inputs, object_ids=ids, damping_assumed=assumed)
+    columns = output_columns(est, inputs, object_ids=ids, damping_assumed=assumed, laws=laws)
     if as_json:
         from deformctl.predict_json import json_text
 

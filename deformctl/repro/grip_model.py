@@ -55,6 +55,12 @@ TARGET_MU_RATIO = 0.05
 TARGET_COVERAGE = {0.9: 0.85, 0.95: 0.9}
 TARGET_MARGIN_90 = 0.12
 TARGET_TABLE_I = 0.10
+#: Issue 47's targets per material law: P = 0.9 coverage and mean margin as above, the first-lift
+#: rate (the P = 0.95 bound is >= L_f and <= 1.10 L_f) and the change of the 13 published
+#: points' predictions from the reference model (today's bundled one).
+TARGET_FIRST_LIFT = 0.90
+FIRST_LIFT_EXTRA = 0.10
+TARGET_PUBLISHED_CHANGE = 0.01
 
 
 def mu_catalog(population: pd.DataFrame, n: int = N_MU_PAIRS) -> pd.DataFrame:
@@ -113,7 +119,9 @@ class _Lines:
             self.missed.append(text)
 
 
-def report(run_dir: str | Path, model: str | Path) -> tuple[str, list[str]]:
+def report(
+    run_dir: str | Path, model: str | Path, reference: str | Path | None = "grip"
+) -> tuple[str, list[str]]:
     """The evaluation report's text and the targets missed (see the module docstring)."""
     from deformctl.artifacts import read_table
 
@@ -132,7 +140,7 @@ def report(run_dir: str | Path, model: str | Path) -> tuple[str, list[str]]:
         + ", ".join(f"{k}={v}" for k, v in sorted(notes.items()))
     )
 
-    train, test = tables["train"], tables["test"]
+    train, test = tables["train"], _kv_rows(tables["test"], run)
     y = test["lift_force_n"].to_numpy()
     est = _predict(predictor, test, None)
     rel = _rel(est.lift_force_n, y)
@@ -143,7 +151,10 @@ def report(run_dir: str | Path, model: str | Path) -> tuple[str, list[str]]:
         "nearest training entry (its L_f/F_w x F_w)": _nearest_ratio(train, test),
     }
     out.add("")
-    out.add(f"## Fresh population: {len(test)} objects (truth: lift --sim; D, λ: characterize)")
+    out.add(
+        f"## Fresh population: {len(test)} Kelvin–Voigt objects (truth: lift --sim; D, λ: "
+        "characterize)"
+    )
     out.add("")
     out.check(
         f"model median relative error {np.median(rel):.2%}", float(np.median(rel)), TARGET_MEDIAN
@@ -226,6 +237,9 @@ def report(run_dir: str | Path, model: str | Path) -> tuple[str, list[str]]:
     for line in p_est.warnings:
         out.add(f"warning: {line}")
 
+    _law_section(out, predictor, run)
+    _published_section(out, predictor, reference)
+
     out.add("")
     out.add("## Why this form: the same network on the raw inputs")
     out.add("")
@@ -288,6 +302,117 @@ def _raw_form_lines(
     ]
 
 
+def _with_laws(index: pd.DataFrame, run: Path) -> pd.DataFrame | None:
+    """The test index with each object's law columns from ``test/coefficients.parquet`` (None
+    when the run has no coefficients table or it states no law)."""
+    from deformctl.artifacts import read_table
+    from deformctl.grip.lawtrain import join_laws
+
+    path = run / "test" / "coefficients.parquet"
+    if not path.exists():
+        return None
+    coef = read_table(path, "coefficients")
+    if "model" not in coef.columns:
+        return None
+    return join_laws(index, coef)
+
+
+def _kv_rows(index: pd.DataFrame, run: Path) -> pd.DataFrame:
+    """The Kelvin–Voigt rows of the test index (all of them when it states no law)."""
+    joined = _with_laws(index, run)
+    if joined is None:
+        return index
+    return index[(joined["model"] == "kv").to_numpy()].reset_index(drop=True)
+
+
+def _law_section(out: _Lines, predictor: Predictor, run: Path) -> None:
+    """Per law, on the fresh population: error, P = 0.9 coverage and margin, first-lift rate."""
+    from deformctl.artifacts import read_table
+    from deformctl.grip.laws import KNOWN_LAWS
+    from deformctl.predict import predict_objects_with_laws
+
+    joined = _with_laws(read_table(run / RUN_FILES["test"], "index_table"), run)
+    if joined is None:
+        return
+    out.add("")
+    out.add("## Per material law (the row's law as characterize states it)")
+    out.add("")
+    keep = ["model", "hc_exponent", "sls_stiffness_n_per_cm", "sls_arm_stiffness_n_per_cm",
+            "sls_relaxation_time_s", "weight_n", "deformability_n_per_cm", "damping_ns_per_cm",
+            "friction_mu"]  # fmt: skip
+    inputs = {
+        c: joined[c].to_numpy(dtype=object if c == "model" else float)
+        for c in keep
+        if c in joined.columns
+    }
+    names = joined["object_id"].astype(str).tolist()
+    y = joined["lift_force_n"].to_numpy()
+    res = {p: predict_objects_with_laws(predictor, inputs, coverage=p, names=names)
+           for p in (0.9, 0.95)}  # fmt: skip
+    for law in KNOWN_LAWS:
+        sel = (joined["model"] == law).to_numpy()
+        if not sel.any():
+            continue
+        est9, est95 = res[0.9].estimates, res[0.95].estimates
+        rel = _rel(est9.lift_force_n[sel], y[sel])
+        up9, up95 = est9.lift_force_upper_n[sel], est95.lift_force_upper_n[sel]
+        out.add(f"### {law}: {int(sel.sum())} objects, "
+                f"{int(np.sum(est9.bound_guaranteed[sel]))} with bound_guaranteed")  # fmt: skip
+        out.check(f"{law} median relative error {np.median(rel):.2%}", float(np.median(rel)),
+                  TARGET_MEDIAN)  # fmt: skip
+        out.check(f"{law} max relative error {rel.max():.2%}", float(rel.max()), TARGET_MAX)
+        cov = float(np.mean(y[sel] <= up9))
+        out.check(f"{law} P = 0.9 coverage {cov:.3f}", cov, TARGET_COVERAGE[0.9], at_least=True,
+                  pct=False)  # fmt: skip
+        margin = float(np.mean(up9 / y[sel] - 1.0))
+        out.check(f"{law} P = 0.9 mean margin {margin:.2%}", margin, TARGET_MARGIN_90)
+        first = float(np.mean((up95 >= y[sel]) & (up95 <= (1 + FIRST_LIFT_EXTRA) * y[sel])))
+        out.check(f"{law} first-lift rate (P = 0.95 bound in [L_f, 1.10 L_f]) {first:.3f}",
+                  first, TARGET_FIRST_LIFT, at_least=True, pct=False)  # fmt: skip
+
+
+def published_points() -> pd.DataFrame:
+    """The 13 published points (Table II's four bags, Table III's nine cubes) at μ = 0.5."""
+    from importlib.resources import files
+
+    root = files("deformctl.datasets").joinpath("paper")
+    t2 = pd.read_csv(str(root.joinpath("table2.csv")))
+    t3 = pd.read_csv(str(root.joinpath("table3_cubes.csv")))
+    objects = pd.read_csv(str(root.joinpath("objects.csv")))
+    w = dict(zip(objects["object_id"], objects["weight_n"], strict=True))
+    return pd.DataFrame({
+        "object_id": [*t2["object_id"], *t3["object_id"]],
+        "weight_n": [*(w[i] for i in t2["object_id"]), *t3["weight_n"]],
+        "deformability_n_per_cm": [*t2["deformability_calculated_n_per_cm"],
+                                   *t3["material_stiffness_n_per_cm"]],
+        "damping_ns_per_cm": [*t2["damping_calculated_ns_per_cm"],
+                              *t3["material_damping_ns_per_cm"]],
+        "friction_mu": 0.5,
+    })  # fmt: skip
+
+
+def _published_section(out: _Lines, predictor: Predictor, reference: str | Path | None) -> None:
+    """The 13 published points' predictions against the reference model's (today's)."""
+    if reference is None:
+        return
+    ref = Predictor.load(reference)
+    points = published_points()
+    new = _predict(predictor, points, None).lift_force_n
+    old = _predict(ref, points, None).lift_force_n
+    change = np.abs(new / old - 1)
+    out.add("")
+    out.add(f"## The 13 published points against {reference} (today's predictions)")
+    out.add("")
+    out.add("| point | W N | D N/cm | λ N·s/cm | today N | this model N | change |")
+    out.add("|---|---|---|---|---|---|---|")
+    for i, row in enumerate(points.itertuples()):
+        out.add(f"| {row.object_id} | {row.weight_n:g} | {row.deformability_n_per_cm:g} | "
+                f"{row.damping_ns_per_cm:g} | {old[i]:.4g} | {new[i]:.4g} | "
+                f"{new[i] / old[i] - 1:+.2%} |")  # fmt: skip
+    out.check(f"13 published points: largest change {change.max():.2%}", float(change.max()),
+              TARGET_PUBLISHED_CHANGE)  # fmt: skip
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m deformctl.repro.grip_model")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -297,6 +422,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     rep = sub.add_parser("report", help="evaluate the model on the run directory")
     rep.add_argument("run_dir")
     rep.add_argument("--model", default="grip")
+    rep.add_argument(
+        "--reference",
+        default="grip",
+        help="the model whose predictions of the 13 published points are today's ('none': skip)",
+    )
     rep.add_argument("--no-gate", action="store_true", help="exit 0 even when a target is missed")
     try:
         args = parser.parse_args(list(sys.argv[1:] if argv is None else argv))
@@ -308,7 +438,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
             write_catalog(mu_catalog(read_catalog(args.population)), args.output, force=True)
             return 0
-        text, missed = report(args.run_dir, args.model)
+        ref = None if args.reference == "none" else args.reference
+        text, missed = report(args.run_dir, args.model, ref)
     except DeformctlError as err:
         print(f"error: {err}", file=sys.stderr)
         return err.exit_code

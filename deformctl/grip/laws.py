@@ -1,0 +1,238 @@
+"""The grip model per material law: what a coefficients row's law adds to (W, D, λ, μ).
+
+A coefficients row states its material law in its ``model`` column (:data:`KNOWN_LAWS`) and that
+law's parameters in its own columns. The grip model takes them in a dimensionless form
+(measured in docs/explanation/model.md, ``python -m deformctl.repro.grip_study_laws``):
+
+* ``kv`` (Kelvin–Voigt): nothing more; the bundled network of ``[log10 ω_n, log10(ζ + ζ_0)]``
+  (:mod:`deformctl.grip.groups`) exactly as before;
+* ``hc`` (Hunt–Crossley): the exponent ``n`` (column ``hc_exponent``), a network of
+  ``[log10 ω_n, log10(ζ + ζ_0), n, log10 μ]`` (D and λ are the row's, stated at F_w; μ, which
+  only scales F_w for Kelvin–Voigt, moves a stiffening object's ratio by 2.7 %);
+* ``sls`` (standard linear solid): the arm's stiffness over the relaxed one ``k2 / D`` and the
+  relaxation time in units of the object's own time scale ``τ ω_n``, a network of
+  ``[log10 ω_n, log10(k2 / D), log10(τ ω_n)]`` (its damping λ = k2 τ is then fixed by them).
+
+Each law has its own network, training ranges and calibration scores (group-conditional split
+conformal: a bound for an ``hc`` row is calibrated on ``hc`` rows only, so it holds within the
+group, :mod:`deformctl.grip.conformal`). A model file states them in its metadata under
+``laws`` (:data:`LAW_MIX_KEY`); a file without it (written before) knows Kelvin–Voigt only.
+
+Numpy only (the predictor's side); training is :mod:`deformctl.grip.lawtrain`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from deformctl.errors import InputDataError
+from deformctl.grip.groups import group_values
+
+__all__ = [
+    "KNOWN_LAWS",
+    "LAW_COLUMN",
+    "LAW_MIX_KEY",
+    "LAW_PARAMETERS",
+    "LAW_PARAMETER_COLUMNS",
+    "law_features",
+    "law_groups",
+    "law_parameter_values",
+    "read_laws",
+    "recognised_laws",
+    "unknown_law_line",
+]
+
+#: The coefficients table's column that states the row's law.
+LAW_COLUMN = "model"
+#: The laws the grip model knows, in order (kv first: the model file's main network).
+KNOWN_LAWS: tuple[str, ...] = ("kv", "hc", "sls")
+#: Where a model file's metadata states its law mix, ranges, networks and scores.
+LAW_MIX_KEY = "laws"
+#: Each law's physically meaningful parameters the model sees (beyond W, D, λ, μ), in order.
+LAW_PARAMETERS: dict[str, tuple[str, ...]] = {
+    "kv": (),
+    "hc": ("stiffness_exponent",),
+    "sls": ("arm_stiffness_ratio", "relaxation_time_omega_n"),
+}
+#: The coefficients columns each law's parameters are computed from.
+LAW_PARAMETER_COLUMNS: dict[str, tuple[str, ...]] = {
+    "kv": (),
+    "hc": ("hc_exponent",),
+    "sls": ("sls_stiffness_n_per_cm", "sls_arm_stiffness_n_per_cm", "sls_relaxation_time_s"),
+}
+
+
+def recognised_laws() -> tuple[str, ...]:
+    """Every law a coefficients row may state: the grip model's (:data:`KNOWN_LAWS`) and any
+    other law ``characterize`` fits (a row of such a law is "another law's row": predicted by
+    the Kelvin–Voigt network, bound not guaranteed)."""
+    from deformctl.characterize.laws import PARAMETERS
+
+    return (*KNOWN_LAWS, *(law for law in PARAMETERS if law not in KNOWN_LAWS))
+
+
+def unknown_law_line(value: object, ids: str) -> str:
+    """The one line for a ``model`` value the grip model does not know."""
+    return (
+        f"column {LAW_COLUMN!r} is {value!r} for {ids}; the known laws are "
+        f"{', '.join(recognised_laws())} (a blank cell: characterize could not tell)"
+    )
+
+
+def read_laws(values: Sequence[Any], names: Sequence[str]) -> np.ndarray:
+    """``[n]`` law per row (``""`` where blank: the law is unknown) from a ``model`` column.
+
+    Raises:
+        InputDataError: a value that is not a known law nor blank (one line naming the column
+            and the known laws; exit 65).
+    """
+    out = []
+    bad: list[str] = []
+    first: object = None
+    known = recognised_laws()
+    for value, name in zip(values, names, strict=True):
+        blank = value is None or (isinstance(value, float) and math.isnan(value))
+        text = "" if blank else str(value).strip().lower()
+        if text and text not in known:
+            bad.append(str(name))
+            first = value if first is None else first
+        out.append(text)
+    if bad:
+        shown = ", ".join(bad[:5]) + (f" and {len(bad) - 5} more" if len(bad) > 5 else "")
+        raise InputDataError(unknown_law_line(first, shown))
+    return np.asarray(out, dtype=object)
+
+
+def law_parameter_values(
+    law: str, columns: Mapping[str, Any], weight_n: Any, deformability_n_per_cm: Any
+) -> dict[str, np.ndarray]:
+    """The law's parameters (:data:`LAW_PARAMETERS`) from its coefficients columns, ``[n]``
+    arrays (NaN where a column is NaN, e.g. SLS's arm when damping is not identifiable)."""
+    if law == "kv":
+        return {}
+    if law == "hc":
+        return {"stiffness_exponent": np.asarray(columns["hc_exponent"], dtype=np.float64)}
+    k1 = np.asarray(columns["sls_stiffness_n_per_cm"], dtype=np.float64)
+    k2 = np.asarray(columns["sls_arm_stiffness_n_per_cm"], dtype=np.float64)
+    tau = np.asarray(columns["sls_relaxation_time_s"], dtype=np.float64)
+    omega, _ = group_values(weight_n, deformability_n_per_cm, np.zeros_like(k1))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return {"arm_stiffness_ratio": k2 / k1, "relaxation_time_omega_n": tau * omega}
+
+
+def sls_damping_ns_per_cm(D: Any, omega: Any, ratio: Any, tau_omega: Any) -> np.ndarray:
+    """λ = k2 τ of a standard linear solid from ``k2 / D`` and ``τ ω_n`` (N·s/cm)."""
+    return np.asarray(ratio * np.asarray(D) * np.asarray(tau_omega) / np.asarray(omega))
+
+
+def law_groups(
+    law: str,
+    W: np.ndarray,
+    D: np.ndarray,
+    lam: np.ndarray,
+    mu: np.ndarray,
+    params: Mapping[str, np.ndarray],
+    zeta_shift: float,
+) -> np.ndarray:
+    """``[n, k]`` network inputs of a non-KV law (module doc)."""
+    omega, zeta = group_values(W, D, lam)
+    if law == "hc":
+        return np.column_stack(
+            [
+                np.log10(omega),
+                np.log10(zeta + zeta_shift),
+                params["stiffness_exponent"],
+                np.log10(np.broadcast_to(mu, omega.shape)),
+            ]
+        )
+    if law == "sls":
+        return np.column_stack(
+            [
+                np.log10(omega),
+                np.log10(params["arm_stiffness_ratio"]),
+                np.log10(params["relaxation_time_omega_n"]),
+            ]
+        )
+    raise ValueError(f"no law network for {law!r}")
+
+
+def law_features(law: str) -> tuple[str, ...]:
+    """The names of the law network's inputs (:func:`law_groups`' columns)."""
+    if law == "hc":
+        return (
+            "log10_natural_frequency_rad_s",
+            "log10_damping_ratio_shifted",
+            "stiffness_exponent",
+            "log10_friction_mu",
+        )
+    return (
+        "log10_natural_frequency_rad_s",
+        "log10_arm_stiffness_ratio",
+        "log10_relaxation_time_omega_n",
+    )
+
+
+#: A law network's entries a summary leaves out (arrays, ids).
+_BULK = ("weights", "biases", "scaler_mean", "scaler_scale", "conformal_scores", "check_points",
+         "split")  # fmt: skip
+
+
+def law_summary(metadata: Mapping[str, Any]) -> dict[str, Any] | None:
+    """The ``laws`` section of a model file's metadata without its arrays (``inspect``), or
+    None for a file without a law mix (it knows Kelvin–Voigt objects only)."""
+    section = metadata.get(LAW_MIX_KEY)
+    if not isinstance(section, Mapping):
+        return None
+    out = {k: v for k, v in section.items() if k != "models"}
+    models = section.get("models")
+    out["models"] = {
+        str(law): {k: v for k, v in m.items() if k not in _BULK}
+        for law, m in (models.items() if isinstance(models, Mapping) else ())
+        if isinstance(m, Mapping)
+    }
+    return out
+
+
+def law_summary_lines(summary: Mapping[str, Any] | None) -> list[str]:
+    """``inspect``'s lines of :func:`law_summary`: the mix, each law's ranges and figures."""
+    if summary is None:
+        return ["material laws: no law mix stated (Kelvin–Voigt objects only)"]
+    try:
+        return _summary_lines(summary)
+    except (AttributeError, KeyError, TypeError, ValueError, IndexError):
+        return ["material laws: the model's law section is malformed"]
+
+
+def _summary_lines(summary: Mapping[str, Any]) -> list[str]:
+    mix = summary.get("mix") or {}
+    lines = [
+        "material law mix: "
+        + ", ".join(
+            f"{law} {m['rows']} rows ({100 * m['fraction']:.0f} %)" for law, m in mix.items()
+        )
+    ]
+    if summary.get("population"):
+        lines.append(f"  population law spec: {summary['population']}")
+    models = summary.get("models") or {}
+    for law, ranges in (summary.get("ranges") or {}).items():
+        lines.append(f"  {law} training range:")
+        lines += [f"    {k:<26} {v[0]:.6g} .. {v[1]:.6g}" for k, v in ranges.items()]
+        m = models.get(law)
+        if m:
+            conf = (m.get("conformal") or {}).get("0.9") or {}
+            lines.append(
+                f"    {law} network: {m.get('n_train')} train / {m.get('n_calibration')} "
+                f"calibration / {m.get('n_test')} test; test median rel. error "
+                f"{_pct(m.get('test_median_rel_error'))}, max {_pct(m.get('test_max_rel_error'))}"
+                f"; P = 0.9 coverage {_pct(conf.get('coverage'))}, mean margin "
+                f"{_pct(conf.get('mean_margin'))}"
+            )
+    return lines
+
+
+def _pct(value: Any) -> str:
+    return "n/a" if value is None else f"{100.0 * float(value):.2f} %"
