@@ -746,3 +746,35 @@ def train_report(result: TrainResult) -> dict[str, Any]:
             "predictions": records,
         }
     )
+
+
+def train_laws(
+    index_table: pd.DataFrame, coefficients: pd.DataFrame, **options: Any
+) -> tuple[TrainResult, dict[str, Any]]:
+    """``train --laws``: the Kelvin–Voigt rows through :func:`train_model`, every other law's
+    rows through its own network (:func:`deformctl.grip.lawtrain.train_laws`, whose keyword
+    ``options`` these are: ``train_size``, ``calibration_size``, ``seed``, ``hidden``)."""
+    from deformctl.grip.lawtrain import train_laws as train_per_law
+
+    result, section = train_per_law(
+        index_table, coefficients, train_main=train_model, restarts=DEFAULT_RESTARTS, **options
+    )
+    return result, section
+
+
+def train_with_laws(
+    table: pd.DataFrame, laws: pd.DataFrame | None, **options: Any
+) -> tuple[TrainResult, dict[str, Any] | None, dict[str, Any]]:
+    """``train`` (``laws`` None: :func:`train_model`) or ``train --laws`` (:func:`train_laws`):
+    the result, the model file's ``laws`` section (None without) and the metrics report
+    (:func:`train_report`, with the laws' figures)."""
+    if laws is None:
+        result, section = train_model(table, **options), None
+    else:
+        result, section = train_laws(table, laws, **options)
+    report = train_report(result)
+    if section is not None:
+        from deformctl.grip.lawtrain import law_report
+
+        report["laws"] = law_report(section)
+    return result, section, report

@@ -28,11 +28,6 @@ PREDICTORS = (
 )
 
 
-#: A law network's entries left out of the printed report (arrays, ids).
-_LAW_BULK = ("weights", "biases", "scaler_mean", "scaler_scale", "conformal_scores",
-             "check_points", "split")  # fmt: skip
-
-
 def _pct(value: Any) -> str:
     return "n/a" if value is None else f"{100.0 * value:.2f} %"
 
@@ -148,13 +143,7 @@ def train(
     ] = None,
     seed: int = typer.Option(0, "--seed", help="Seeds the split and the initial weights.", min=0),
     laws: str | None = typer.Option(
-        None,
-        "--laws",
-        metavar="COEFFICIENTS",
-        help="Train per material law: a coefficients table (or any table with object_id) whose "
-        "`model` column states each "
-        "object's law (kv, hc, sls). Kelvin–Voigt rows train the main network as without it; "
-        "each other law gets its own network and calibration (sizes per law).",
+        None, "--laws", metavar="COEFFICIENTS", help="Per material law: a table of model (law)."
     ),
     metrics: str | None = typer.Option(
         None, "--metrics", help="Also write the metrics as JSON here (- for stdout)."
@@ -194,7 +183,7 @@ def train(
     from deformctl.artifacts import Provenance, atomic_output, check_output_path, read_table
     from deformctl.artifacts.model import save_model
     from deformctl.table import flagged_rows
-    from deformctl.train import model_metadata, parse_hidden, train_model, train_report
+    from deformctl.train import model_metadata, parse_hidden, train_with_laws
 
     sizes = None if hidden is None else parse_hidden(hidden, max_parameters=max_parameters)
     notes = parse_notes(note)
@@ -207,47 +196,16 @@ def train(
         check_output_path(metrics, force, binary=False)
 
     table = read_table(index, "index_table")
-    section = None
-    if laws is None:
-        result = train_model(
-            table,
-            hidden=sizes,
-            train_size=train_size,
-            calibration_size=calibration_size,
-            seed=seed,
-        )
-    else:
-        from deformctl.grip.lawtrain import train_laws
-
-        result, section = train_laws(
-            table,
-            read_table(laws),
-            train_size=train_size,
-            calibration_size=calibration_size,
-            seed=seed,
-            hidden=sizes,
-        )
-    report = train_report(result)
-    if section is not None:
-        report["laws"] = {k: v for k, v in section.items() if k != "models"}
-        report["laws"]["models"] = {
-            law: {k: v for k, v in m.items() if k not in _LAW_BULK}
-            for law, m in section["models"].items()
-        }
-    provenance = Provenance.from_invocation(
-        [index],
-        seed=seed,
-        settings={
-            "hidden": report["hyperparameters"]["hidden"],
-            "train_size": train_size,
-            "calibration_size": calibration_size,
-        },
+    options = {"hidden": sizes, "train_size": train_size, "calibration_size": calibration_size}
+    result, section, report = train_with_laws(
+        table, None if laws is None else read_table(laws), seed=seed, **options
     )
+    settings = {**options, "hidden": report["hyperparameters"]["hidden"]}
+    provenance = Provenance.from_invocation([index], seed=seed, settings=settings)
     report["provenance"] = provenance.to_dict()
     report["notes"] = notes
     metadata = {**model_metadata(result), "provenance": report["provenance"], "notes": notes}
-    if section is not None:
-        metadata["laws"] = section
+    metadata |= {} if section is None else {"laws": section}
 
     with committed_together():  # the model and the metrics file: both or neither
         save_model(output, result.model, metadata=metadata, force=force)
@@ -279,20 +237,7 @@ def print_report(report: dict[str, Any], metrics: str | None) -> None:
             "the metrics above are what it reached",
             err=True,
         )
+    from deformctl.grip.lawtrain import law_lines
+
     for line in law_lines(report):
         typer.echo(line, err=console.file is sys.stderr)
-
-
-def law_lines(report: dict[str, Any]) -> list[str]:
-    """One line per law network of ``train --laws``: its rows and its test figures."""
-    out = []
-    section = report.get("laws") or {}
-    for law, m in (section.get("models") or {}).items():
-        conf = (m.get("conformal") or {}).get("0.9") or {}
-        out.append(
-            f"{law}: {m['n_train']} train / {m['n_calibration']} calibration / {m['n_test']} "
-            f"test rows; test median rel. error {_pct(m.get('test_median_rel_error'))}, max "
-            f"{_pct(m.get('test_max_rel_error'))}; P = 0.9 coverage "
-            f"{_pct(conf.get('coverage'))}, mean margin {_pct(conf.get('mean_margin'))}"
-        )
-    return out

@@ -258,8 +258,13 @@ def train_laws(
     calibration_size: int,
     seed: int = 0,
     hidden: tuple[int, ...] | None = None,
+    train_main: Any,
+    restarts: int,
 ) -> tuple[Any, dict[str, Any]]:
-    """``(TrainResult of the Kelvin–Voigt rows, the laws section)``: ``train --laws``.
+    """``(TrainResult of the Kelvin–Voigt rows, the laws section)``: ``train --laws``
+    (:func:`deformctl.train.train_laws`, which passes ``train_main``, the stage's
+    :func:`deformctl.train.train_model`, and its ``restarts``: the grip package sits below the
+    training stage).
 
     ``train_size`` and ``calibration_size`` are per law. The Kelvin–Voigt rows go through
     :func:`deformctl.train.train_model` unchanged (the model file's main network); every other
@@ -277,7 +282,6 @@ def train_laws(
         DEFAULT_SOLVER,
         DEFAULT_TOL,
     )
-    from deformctl.train import DEFAULT_RESTARTS, train_model
 
     joined = join_laws(index_table, coefficients)
     laws = joined[LAW_COLUMN].to_numpy(dtype=object)
@@ -286,7 +290,7 @@ def train_laws(
             "train --laws needs Kelvin–Voigt rows (model = kv): they train the main network"
         )
     kv_rows = index_table[laws == "kv"].reset_index(drop=True)
-    result = train_model(
+    result = train_main(
         kv_rows, hidden=hidden, train_size=train_size, calibration_size=calibration_size,
         seed=seed, form="grip",
     )  # fmt: skip
@@ -299,7 +303,7 @@ def train_laws(
             calibration_size=calibration_size,
             seed=seed,
             hidden=sizes,
-            restarts=DEFAULT_RESTARTS,
+            restarts=restarts,
             activation=DEFAULT_ACTIVATION,
             solver=DEFAULT_SOLVER,
             alpha=DEFAULT_ALPHA,
@@ -311,3 +315,37 @@ def train_laws(
     }
     population = coefficients.attrs.get("grip_laws") if hasattr(coefficients, "attrs") else None
     return result, law_section(joined, result.training_range, models, population)
+
+
+#: A law network's entries left out of the printed report (arrays, ids).
+_LAW_BULK = ("weights", "biases", "scaler_mean", "scaler_scale", "conformal_scores",
+             "check_points", "split")  # fmt: skip
+
+
+def law_report(section: dict[str, Any]) -> dict[str, Any]:
+    """The metrics file's ``laws``: :func:`law_section` without the networks' arrays."""
+    report = {k: v for k, v in section.items() if k != "models"}
+    report["models"] = {
+        law: {k: v for k, v in m.items() if k not in _LAW_BULK}
+        for law, m in section["models"].items()
+    }
+    return report
+
+
+def _percent(value: Any) -> str:
+    return "n/a" if value is None else f"{100.0 * value:.2f} %"
+
+
+def law_lines(report: dict[str, Any]) -> list[str]:
+    """One line per law network of ``train --laws``: its rows and its test figures."""
+    out = []
+    section = report.get("laws") or {}
+    for law, m in (section.get("models") or {}).items():
+        conf = (m.get("conformal") or {}).get("0.9") or {}
+        out.append(
+            f"{law}: {m['n_train']} train / {m['n_calibration']} calibration / {m['n_test']} "
+            f"test rows; test median rel. error {_percent(m.get('test_median_rel_error'))}, max "
+            f"{_percent(m.get('test_max_rel_error'))}; P = 0.9 coverage "
+            f"{_percent(conf.get('coverage'))}, mean margin {_percent(conf.get('mean_margin'))}"
+        )
+    return out

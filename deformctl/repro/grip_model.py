@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from deformctl.catalog import MATERIAL_COLUMNS
 from deformctl.errors import DeformctlError
 from deformctl.grip.fast import Estimates, Predictor
 from deformctl.population import GRIP_MAX_STRAIN_AT_F_W, grip_strain_at_f_w
@@ -384,9 +385,9 @@ def published_points() -> pd.DataFrame:
         "object_id": [*t2["object_id"], *t3["object_id"]],
         "weight_n": [*(w[i] for i in t2["object_id"]), *t3["weight_n"]],
         "deformability_n_per_cm": [*t2["deformability_calculated_n_per_cm"],
-                                   *t3["material_stiffness_n_per_cm"]],
+                                   *t3[MATERIAL_COLUMNS[0]]],
         "damping_ns_per_cm": [*t2["damping_calculated_ns_per_cm"],
-                              *t3["material_damping_ns_per_cm"]],
+                              *t3[MATERIAL_COLUMNS[1]]],
         "friction_mu": 0.5,
     })  # fmt: skip
 

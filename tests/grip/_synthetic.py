@@ -8,9 +8,14 @@ grip_population` (the bundled model's law).
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
+from typer.testing import CliRunner
 
+from deformctl.artifacts import write_table
+from deformctl.cli import app
 from deformctl.grip.groups import group_values
 from deformctl.population import grip_population
 
@@ -97,3 +102,20 @@ def law_index(
             "sls_relaxation_time_s": np.where(law == "sls", tau, nan),
         }
     )
+
+
+LAW_COLS = ["model", "hc_exponent", "sls_stiffness_n_per_cm", "sls_arm_stiffness_n_per_cm",
+            "sls_relaxation_time_s"]  # fmt: skip
+
+
+def train_cli(d: Path, index: pd.DataFrame, name: str, laws: bool = True) -> Path:
+    write_table(index.drop(columns=LAW_COLS), d / f"{name}-index.parquet", "index_table",
+                provenance=None)  # fmt: skip
+    write_table(index, d / f"{name}-laws.parquet", "index_table", provenance=None)
+    out = d / f"{name}.skops"
+    args = ["train", str(d / f"{name}-index.parquet"), "-o", str(out), "--train-size", "70",
+            "--calibration-size", "30", "--seed", "0"]  # fmt: skip
+    result = CliRunner().invoke(app, [*args, *(["--laws", str(d / f"{name}-laws.parquet")] if laws
+                                          else [])])  # fmt: skip
+    assert result.exit_code == 0, result.stderr
+    return out

@@ -16,11 +16,10 @@ from deformctl.cli import app
 from deformctl.grip.fast import Predictor
 from deformctl.grip.laws import KNOWN_LAWS
 from deformctl.predict import predict_objects_with_laws
-from tests.grip._synthetic import law_index
+from tests.grip._synthetic import LAW_COLS, law_index
+from tests.grip._synthetic import train_cli as _train
 
 runner = CliRunner()
-LAW_COLS = ["model", "hc_exponent", "sls_stiffness_n_per_cm", "sls_arm_stiffness_n_per_cm",
-            "sls_relaxation_time_s"]  # fmt: skip
 
 
 def _error(result: Result, code: int) -> str:
@@ -28,19 +27,6 @@ def _error(result: Result, code: int) -> str:
     assert result.stderr.startswith("error: "), result.stderr
     assert result.stderr.count("\n") == 1, result.stderr
     return result.stderr.strip()
-
-
-def _train(d: Path, index: pd.DataFrame, name: str, laws: bool = True) -> Path:
-    write_table(index.drop(columns=LAW_COLS), d / f"{name}-index.parquet", "index_table",
-                provenance=None)  # fmt: skip
-    write_table(index, d / f"{name}-laws.parquet", "index_table", provenance=None)
-    out = d / f"{name}.skops"
-    args = ["train", str(d / f"{name}-index.parquet"), "-o", str(out), "--train-size", "70",
-            "--calibration-size", "30", "--seed", "0"]  # fmt: skip
-    result = runner.invoke(app, [*args, *(["--laws", str(d / f"{name}-laws.parquet")] if laws
-                                          else [])])  # fmt: skip
-    assert result.exit_code == 0, result.stderr
-    return out
 
 
 @pytest.fixture(scope="module")
@@ -195,7 +181,7 @@ def test_unknown_sls_damping_takes_the_most_cautious_parameters(setup: dict[str,
 
 def test_training_drops_unidentified_law_rows_and_refuses_unknown_laws(tmp_path: Path) -> None:
     from deformctl.errors import InputDataError
-    from deformctl.grip.lawtrain import train_laws
+    from deformctl.train import train_laws
 
     index = law_index(200, seed=5, noise=0.01)
     sls = index.index[index["model"] == "sls"][:3]
@@ -209,3 +195,10 @@ def test_training_drops_unidentified_law_rows_and_refuses_unknown_laws(tmp_path:
     bad = index.assign(model=np.where(index["model"] == "hc", "zener9", index["model"]))
     with pytest.raises(InputDataError, match="'model' is 'zener9'"):
         train_laws(index.drop(columns=LAW_COLS), bad, train_size=20, calibration_size=20)
+
+
+def test_the_recognised_laws_are_every_law_characterize_fits() -> None:
+    from deformctl.characterize.laws import PARAMETERS
+    from deformctl.grip.laws import recognised_laws
+
+    assert sorted(recognised_laws()) == sorted(PARAMETERS)

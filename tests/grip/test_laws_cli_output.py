@@ -16,7 +16,7 @@ from typer.testing import CliRunner
 from deformctl.artifacts import read_table, write_table
 from deformctl.cli import app
 from tests.grip._synthetic import law_index
-from tests.grip.test_laws import _train
+from tests.grip._synthetic import train_cli as _train
 
 runner = CliRunner()
 
