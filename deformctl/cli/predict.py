@@ -120,12 +120,10 @@ def predict(
     object_id instead (for a table without them); where the table has another value, the
     catalog's is used and a warning names the object.
 
-    MODEL `grip` is the bundled model for robots, trained on objects drawn from W 0.5-80 N,
-    D 5-60 N/cm, λ 0-15 N·s/cm, μ 0.2-1.0; it guarantees its bound within the range of its
-    training rows, which `deformctl inspect grip` prints, and needs μ. Without -o the
-    predictions are printed as CSV on stdout; --json prints them as one JSON document
-    instead, with the same columns whether the objects come from flags or a table (null where
-    a run has no value).
+    MODEL `grip` is the bundled model for robots (its training range: `deformctl inspect
+    grip`); it needs μ. Without -o the predictions are printed as CSV on stdout; --json prints
+    them as one JSON document instead, with the same columns whether the objects come from
+    flags or a table (null where a run has no value).
 
     --coverage P adds lift_force_upper_n, a split-conformal upper bound (from the model's
     calibration rows): at least P of the true L_f lie below it for objects drawn like the
