@@ -226,13 +226,7 @@ def predict_objects(
             max_safe_force_n=inputs.get("max_safe_force_n"),
             names=names,
         )
-        not_force = ~(np.isfinite(est.lift_force_n) & (est.lift_force_n > 0))
-        if not_force.any():  # never printed: a robot would act on it
-            first = int(np.flatnonzero(not_force)[0])
-            raise InputDataError(
-                f"the model predicts {float(est.lift_force_n[first])!r} N for "
-                f"{', '.join(map(str, est.names[not_force][:5]))}: not a force (refused)"
-            )
+        _refuse_non_forces(est)
         return est
 
 
@@ -271,15 +265,20 @@ def predict_objects_with_laws(
         predictor.margin(coverage)
     with error_context(source) if source else contextlib.nullcontext():
         out = predict_laws(predictor, inputs, laws, coverage=coverage, names=labels)
-        est = out.estimates
-        not_force = ~(np.isfinite(est.lift_force_n) & (est.lift_force_n > 0))
-        if not_force.any():
-            first = int(np.flatnonzero(not_force)[0])
-            raise InputDataError(
-                f"the model predicts {float(est.lift_force_n[first])!r} N for "
-                f"{', '.join(map(str, est.names[not_force][:5]))}: not a force (refused)"
-            )
+        _refuse_non_forces(out.estimates)
     return out
+
+
+def _refuse_non_forces(est: Estimates) -> None:
+    """A predicted lifting force that is not a positive finite force is never printed (a robot
+    would act on it): the objects are named, exit 65."""
+    not_force = ~(np.isfinite(est.lift_force_n) & (est.lift_force_n > 0))
+    if not_force.any():
+        first = int(np.flatnonzero(not_force)[0])
+        raise InputDataError(
+            f"the model predicts {float(est.lift_force_n[first])!r} N for "
+            f"{', '.join(map(str, est.names[not_force][:5]))}: not a force (refused)"
+        )
 
 
 def output_columns(

@@ -18,7 +18,6 @@ from __future__ import annotations
 import importlib
 import sys
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 HEADER = """\
@@ -116,28 +115,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ImportError:
         print("error: pdoc is not installed: pip install -e '.[dev]'", file=sys.stderr)
         return 1
-    text = render()
-    if not args:
-        sys.stdout.write(text)
-        return 0
-    if len(args) == 2 and args[0] == "--write":
-        Path(args[1]).write_text(text, encoding="utf-8")
-        print(f"wrote {args[1]}")
-        return 0
-    if len(args) == 2 and args[0] == "--check":
-        path = Path(args[1])
-        if path.exists() and path.read_text(encoding="utf-8") == text:
-            return 0
-        print(
-            f"{path} is stale: run python -m deformctl.cli.api_reference --write {path}",
-            file=sys.stderr,
-        )
-        return 1
-    print(
-        "usage: python -m deformctl.cli.api_reference [--write PATH | --check PATH]",
-        file=sys.stderr,
-    )
-    return 2
+    from deformctl.cli.reference import write_or_check
+
+    return write_or_check(args, render, "deformctl.cli.api_reference")
 
 
 if __name__ == "__main__":

@@ -13,7 +13,7 @@ fails the suite). After changing a command::
 from __future__ import annotations
 
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 #: The width the help texts are wrapped at (the terminal's width must not leak in).
@@ -63,7 +63,14 @@ def render() -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m deformctl.cli.reference [--write PATH | --check PATH]``."""
-    args = list(sys.argv[1:] if argv is None else argv)
+    return write_or_check(sys.argv[1:] if argv is None else argv, render, "deformctl.cli.reference")
+
+
+def write_or_check(argv: Sequence[str], render: Callable[[], str], module: str) -> int:
+    """A generated page's command line: print ``render()``, ``--write PATH`` it, or ``--check
+    PATH`` that the file is current (exit 1 naming the command that regenerates it); 2 for any
+    other arguments."""
+    args = list(argv)
     text = render()
     if not args:
         sys.stdout.write(text)
@@ -76,12 +83,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         path = Path(args[1])
         if path.exists() and path.read_text(encoding="utf-8") == text:
             return 0
-        print(
-            f"{path} is stale: run python -m deformctl.cli.reference --write {path}",
-            file=sys.stderr,
-        )
+        print(f"{path} is stale: run python -m {module} --write {path}", file=sys.stderr)
         return 1
-    print("usage: python -m deformctl.cli.reference [--write PATH | --check PATH]", file=sys.stderr)
+    print(f"usage: python -m {module} [--write PATH | --check PATH]", file=sys.stderr)
     return 2
 
 
