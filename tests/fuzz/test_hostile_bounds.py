@@ -95,12 +95,15 @@ def test_steps_are_counted_before_they_are_allocated(catalog_row: dict[str, Any]
 def test_a_huge_single_log_is_refused_before_simulating(
     tmp_path: Path, catalog_row: dict[str, Any], write_catalog: Any
 ) -> None:
-    rows = [{**catalog_row, "object_id": f"o{i}"} for i in range(100_000)]
+    # 5,000 objects x 3 squeezes x 1,251 steps x 400 bytes: 7.5 GB, over three times the 2 GiB
+    # default budget (the refusal is the whole-log estimate, not each object's)
+    rows = [{**catalog_row, "object_id": f"o{i}"} for i in range(5_000)]
     cat = write_catalog(tmp_path / "big.csv", rows)
     out = tmp_path / "x.mcap"
     result = runner.invoke(app, ["measure", "sim", str(cat), "-o", str(out)])
     assert result.exit_code == 2
     line = _one_line(result.stderr)
+    assert "one squeeze log of 5,000 objects" in line
     assert "dataset directory" in line
     assert "--memory-budget-gib" in line
     assert not out.exists()
