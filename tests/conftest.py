@@ -31,11 +31,17 @@ from hypothesis import settings
 from tests._helpers.dask_cluster import dask_cluster  # noqa: F401 - a shared fixture
 
 
+#: the markers of the long tests, which a developer's inner loop can skip with
+#: ``pytest -m "not slow and not e2e and not docs"`` (``make test`` and CI run them all)
+LONG_MARKERS = ("slow", "e2e", "docs")
+
+
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Tests marked ``slow`` run first (stable order otherwise): ``make test``'s two xdist workers
-    then share the long ones from the start instead of one worker finishing a 100 s test alone
-    at the end. Every worker sorts the same collection the same way, as xdist requires."""
-    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+    """Tests marked ``slow``, ``e2e`` or ``docs`` run first (stable order otherwise): ``make
+    test``'s two xdist workers then share the long ones from the start instead of one worker
+    finishing a 100 s test alone at the end. Every worker sorts the same collection the same
+    way, as xdist requires."""
+    items.sort(key=lambda item: not any(item.get_closest_marker(m) for m in LONG_MARKERS))
 
 
 settings.register_profile("deterministic", derandomize=True, database=None)

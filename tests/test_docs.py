@@ -28,6 +28,8 @@ import pytest
 
 from tests._helpers import docs_output
 
+pytestmark = pytest.mark.docs
+
 REPO = Path(__file__).resolve().parents[1]
 BLOCK = re.compile(
     r"(?:<!-- docs-test: skip \((?P<why>[^)]*)\) -->\n)?```sh\n(?P<code>.*?)```", re.S

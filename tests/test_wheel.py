@@ -20,6 +20,8 @@ import pytest
 
 from deformctl.presets import paper_preset
 
+pytestmark = pytest.mark.e2e
+
 REPO = Path(__file__).resolve().parents[1]
 SKIP = (".venv", ".git", "build", "dist", "*.egg-info", "__pycache__", ".*_cache", ".examples")
 

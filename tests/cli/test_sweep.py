@@ -98,6 +98,7 @@ def serial_lift(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, pd.Data
     return cat, read_table(tmp / "lift.parquet", "lift_results")
 
 
+@pytest.mark.e2e
 def test_dask_cluster_gives_the_local_and_serial_rows(
     dask_cluster: Cluster,
     serial_lift: tuple[Path, pd.DataFrame],
@@ -177,6 +178,7 @@ def _kill_group(proc: subprocess.Popen[bytes]) -> None:
     proc.wait(timeout=10)
 
 
+@pytest.mark.e2e
 @pytest.mark.parametrize("victim", ["client", "worker"])
 def test_killed_sweep_resumes_with_nothing_lost_or_duplicated(
     victim: str, serial_lift: tuple[Path, pd.DataFrame], tmp_path: Path

@@ -14,6 +14,8 @@ import pytest
 from deformctl.errors import RigError
 from deformctl.lift.runners.rig import RigRunner
 
+pytestmark = pytest.mark.e2e
+
 OBJECT = {"object_id": "sponge", "weight_n": 10.0, "friction_mu": 0.5, "size_cm": [8, 5, 4]}
 
 #: A rig whose grandchild starts its own session (out of the rig's process group) and keeps the

@@ -58,6 +58,7 @@ def _attempts_match_requests(log: Path, requests: list[dict[str, object]]) -> No
         assert a.outcome.lifted is (a.outcome.grip_force_n >= THRESHOLD_N)
 
 
+@pytest.mark.e2e
 def test_kill_mid_search_keeps_every_attempt(tmp_path: Path) -> None:
     catalog = tmp_path / "objects.csv"
     catalog.write_text(CATALOG, encoding="utf-8")
