@@ -30,7 +30,6 @@ from hypothesis import settings
 
 from tests._helpers.dask_cluster import dask_cluster  # noqa: F401 - a shared fixture
 
-
 #: the markers of the long tests, which a developer's inner loop can skip with
 #: ``pytest -m "not slow and not e2e and not docs"`` (``make test`` and CI run them all)
 LONG_MARKERS = ("slow", "e2e", "docs")
