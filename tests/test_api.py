@@ -236,7 +236,7 @@ def test_the_library_reads_an_export_as_the_command_does(kv_csv: Path, tmp_path:
     argv = ["measure", "csv", str(kv_csv), "--object-id", "kv", "--weight-n", "1", "-o", str(log)]
     assert runner.invoke(app, argv).exit_code == 0
     assert runner.invoke(app, ["characterize", str(log), "-o", str(table)]).exit_code == 0
-    rec = deformctl.read_recording(str(kv_csv), deformctl.CsvOptions(), object_id="kv")
+    rec = deformctl.read_recording(str(kv_csv), deformctl.CsvOptions(), "kv")
     (cli_squeeze,) = read_squeeze_log(log)[1]
     np.testing.assert_allclose(rec.squeezes[0].force_n, cli_squeeze.force_n)
     np.testing.assert_allclose(rec.squeezes[0].compression_m, cli_squeeze.compression_m)

@@ -241,13 +241,8 @@ class CsvFileTask:
     def read(self, file: CsvFile) -> Recording:
         """The file's recording (raises what :func:`read_csv` raises)."""
         size = file.row.get(SIZE_COLUMNS[0])
-        return read_csv(
-            file.path,
-            self.options,
-            object_id=file.object_id,
-            segmentation=self.segmentation,
-            size_x_cm=None if size is None else float(size),
-        )
+        size_x_cm = None if size is None else float(size)
+        return read_csv(file.path, self.options, file.object_id, self.segmentation, size_x_cm)
 
     def __call__(self, item: Mapping[str, Any]) -> TaskOutput:
         """One sweep item (``object_id``, ``path``, ``row``): its summary row and its log."""

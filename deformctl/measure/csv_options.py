@@ -1,7 +1,7 @@
 """The options of a CSV export, checked once: how its text is read and what its columns mean.
 
 ``measure --csv`` builds them from its flags and the library takes them
-(:func:`deformctl.measure.csv.read_csv_export`); :meth:`CsvOptions.as_dict` is what the squeeze
+(:func:`deformctl.measure.stage.read_recording`); :meth:`CsvOptions.as_dict` is what the squeeze
 log's provenance records. Every field left ``None`` is found in the file itself (the delimiter,
 the decimal mark, the header row, the columns and their units, the force's sign) and what was
 found is recorded next to what was given (:class:`deformctl.measure.csv_table.CsvLayout`).
