@@ -205,7 +205,7 @@ def test_results_print_on_a_few_lines(kv_squeeze: Any, small_lattice: Any) -> No
         }
     )
 
-    def make(obj: Any) -> Any:
+    def make(obj: Any, max_force_n: float) -> Any:
         return lambda f, i: TrialOutcome(f, f >= 1.3 * obj.f_w_n(), 0.0)
 
     run = lift_catalog(catalog, RunnerFactory("test", make))
