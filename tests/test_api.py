@@ -107,7 +107,7 @@ def test_measure_bag_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -
 
 
 def test_measure_csv_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
-    seen = _record(monkeypatch, "deformctl.measure.csv_batch.measure_csv_files")
+    seen = _record(monkeypatch, "deformctl.measure.csv.batch.measure_csv_files")
     columns = "time=t,force=f,compression=c"
     _run(["measure", "csv", str(tmp_path / "r.csv"), "--columns", columns,
           "--object-id", "a", "--weight-n", "1", "-o", str(tmp_path / "s.mcap")])  # fmt: skip
@@ -215,7 +215,7 @@ def test_results_print_on_a_few_lines(kv_squeeze: Any, small_lattice: Any) -> No
 
 
 def test_the_predictor_and_the_csv_options_print_on_a_few_lines() -> None:
-    from deformctl.measure.csv_batch import CsvFileTask
+    from deformctl.measure.csv.batch import CsvFileTask
 
     predictor = deformctl.load_predictor("grip")
     assert "weights=(array[" in _short(predictor)  # was 19,648 characters of metadata

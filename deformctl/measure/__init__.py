@@ -4,10 +4,11 @@ images.
 One module per source, each a reader the ``measure`` command calls:
 
 * :mod:`~deformctl.measure.ros2_bag`: a ROS 2 bag (``measure bag``);
-* :mod:`~deformctl.measure.csv`: a CSV export (``measure csv``), with the text of an
-  export in :mod:`~deformctl.measure.csv_table`, its columns and units in
-  :mod:`~deformctl.measure.csv_columns`, its options in :mod:`~deformctl.measure.csv_options`
-  and many files per call in :mod:`~deformctl.measure.csv_batch`;
+* :mod:`~deformctl.measure.csv`: a CSV export (``measure csv``), a package: the text of an
+  export in :mod:`~deformctl.measure.csv.table`, its columns and units in
+  :mod:`~deformctl.measure.csv.columns`, its options in :mod:`~deformctl.measure.csv.options`,
+  the reader in :mod:`~deformctl.measure.csv.reader` and many files per call in
+  :mod:`~deformctl.measure.csv.batch`;
 * :mod:`~deformctl.measure.sim`: :func:`simulate_squeezes` (``measure sim``), squeezing
   catalog objects in :mod:`deformctl.sim`;
 * :mod:`~deformctl.measure.images`: :func:`~deformctl.measure.images.measure_images`
@@ -16,7 +17,7 @@ One module per source, each a reader the ``measure`` command calls:
 
 The options the command builds and the library takes are in :mod:`~deformctl.measure.options`
 (:class:`BagSource`, :class:`Segmentation`, :class:`SqueezeProtocol`; a CSV's
-:class:`CsvOptions` are in :mod:`~deformctl.measure.csv_options`). One door reads a recording
+:class:`CsvOptions` are in :mod:`~deformctl.measure.csv.options`). One door reads a recording
 of either source: :func:`read_recording` (path, the source's options, the object, the
 segmentation). It returns a :class:`Recording` (:mod:`~deformctl.measure.recording`: the
 squeezes in SI, the source sample rates and the ruptures; the compression from a position signal),
@@ -43,10 +44,7 @@ from typing import TYPE_CHECKING
 from deformctl.lazy import lazy_exports
 
 if TYPE_CHECKING:  # the names below, for type checkers; at run time they load on first use
-    from deformctl.measure.csv import (
-        ABSOLUTE_TIME_MIN_S,
-    )
-    from deformctl.measure.csv_batch import (
+    from deformctl.measure.csv.batch import (
         CSV_MEASURE_SCHEMA,
         CsvBatchResult,
         CsvFile,
@@ -56,10 +54,13 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
         measure_csv_sweep,
         read_objects_from,
     )
-    from deformctl.measure.csv_options import (
+    from deformctl.measure.csv.options import (
         DEFAULT_CSV_MEMORY_BUDGET_GIB,
         CsvDialect,
         CsvOptions,
+    )
+    from deformctl.measure.csv.reader import (
+        ABSOLUTE_TIME_MIN_S,
     )
     from deformctl.measure.images import (
         ImagesResult,
@@ -115,18 +116,18 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
 #: a module that needs one of them (the command line's options) does not pay for the others
 #: (pandas, pyarrow, numba, the MCAP readers).
 _EXPORTS: dict[str, str] = {
-    "ABSOLUTE_TIME_MIN_S": "deformctl.measure.csv",
-    "CSV_MEASURE_SCHEMA": "deformctl.measure.csv_batch",
-    "CsvBatchResult": "deformctl.measure.csv_batch",
-    "CsvFile": "deformctl.measure.csv_batch",
-    "CsvFileTask": "deformctl.measure.csv_batch",
-    "csv_objects": "deformctl.measure.csv_batch",
-    "measure_csv_files": "deformctl.measure.csv_batch",
-    "measure_csv_sweep": "deformctl.measure.csv_batch",
-    "read_objects_from": "deformctl.measure.csv_batch",
-    "DEFAULT_CSV_MEMORY_BUDGET_GIB": "deformctl.measure.csv_options",
-    "CsvDialect": "deformctl.measure.csv_options",
-    "CsvOptions": "deformctl.measure.csv_options",
+    "ABSOLUTE_TIME_MIN_S": "deformctl.measure.csv.reader",
+    "CSV_MEASURE_SCHEMA": "deformctl.measure.csv.batch",
+    "CsvBatchResult": "deformctl.measure.csv.batch",
+    "CsvFile": "deformctl.measure.csv.batch",
+    "CsvFileTask": "deformctl.measure.csv.batch",
+    "csv_objects": "deformctl.measure.csv.batch",
+    "measure_csv_files": "deformctl.measure.csv.batch",
+    "measure_csv_sweep": "deformctl.measure.csv.batch",
+    "read_objects_from": "deformctl.measure.csv.batch",
+    "DEFAULT_CSV_MEMORY_BUDGET_GIB": "deformctl.measure.csv.options",
+    "CsvDialect": "deformctl.measure.csv.options",
+    "CsvOptions": "deformctl.measure.csv.options",
     "ImagesResult": "deformctl.measure.images",
     "measure_images": "deformctl.measure.images",
     "DEFAULT_FORCE_THRESHOLD_FRAC": "deformctl.measure.options",

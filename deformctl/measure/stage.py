@@ -25,8 +25,8 @@ from deformctl.artifacts.mcap import LOG_EPOCH_NS
 from deformctl.artifacts.provenance import Provenance, input_digest
 from deformctl.catalog import CatalogObject, MeasuredObject, select_objects
 from deformctl.errors import InputDataError, UsageError
-from deformctl.measure.csv import read_csv
-from deformctl.measure.csv_options import CsvOptions
+from deformctl.measure.csv.options import CsvOptions
+from deformctl.measure.csv.reader import read_csv
 from deformctl.measure.options import (
     DEFAULT_SEGMENTATION,
     BagSource,
@@ -413,11 +413,10 @@ def measure_recording(
         check_input_path(path)
     check_output_path(output, force)
     recording = read_recording(path, source, obj, segmentation)
-    segment = segmentation.segments(isinstance(source, BagSource))
     settings = {
         "source": source.kind,
         **source.as_dict(),
-        **dataclasses.replace(segmentation, segment=segment).as_dict(),
+        **segmentation.as_dict(isinstance(source, BagSource)),
     }
     recording_log(path, recording, obj.record(), settings, output=output, force=force)
     return recording

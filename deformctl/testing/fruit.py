@@ -398,7 +398,7 @@ def _through_csv(
     the reader flipped the force's sign (every draw's compressive force is positive)."""
     import os
 
-    from deformctl.measure.csv_options import CsvOptions
+    from deformctl.measure.csv.options import CsvOptions
     from deformctl.measure.stage import read_recording
 
     path = os.path.join(folder, f"{fs.series.object_id}.csv")

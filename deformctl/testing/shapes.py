@@ -109,7 +109,7 @@ class Case:
     Attributes:
         name: ``<seed>-<index>-<shape>-<layout>``, for messages.
         data: the CSV file's bytes.
-        options: keyword arguments of :class:`deformctl.measure.csv_options.CsvOptions` (and
+        options: keyword arguments of :class:`deformctl.measure.csv.options.CsvOptions` (and
             ``encoding`` for its dialect) that a user would pass (a unit the header leaves out,
             the encoding the error line names).
         truth: the recording's truth.
@@ -389,7 +389,7 @@ def _run(case: Case, workdir: Path) -> Outcome:
     from deformctl.artifacts.provenance import Provenance
     from deformctl.catalog import object_record
     from deformctl.characterize.stage import read_and_characterize
-    from deformctl.measure.csv_options import CsvDialect, CsvOptions
+    from deformctl.measure.csv.options import CsvDialect, CsvOptions
     from deformctl.measure.stage import read_recording, recording_log
 
     src = workdir / "export.csv"

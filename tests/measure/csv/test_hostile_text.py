@@ -17,13 +17,13 @@ from typer.testing import CliRunner
 from deformctl.cli import app
 from deformctl.errors import EXIT_DATAERR, InputDataError
 from deformctl.measure import read_recording
-from deformctl.measure.csv_batch import CsvFile, CsvFileTask, dataset_notices, summary_row
-from deformctl.measure.csv_options import CsvOptions
+from deformctl.measure.csv.batch import CsvFile, CsvFileTask, dataset_notices, summary_row
+from deformctl.measure.csv.options import CsvOptions
 
-from ._exports import Squeeze, kv_squeeze, write_export
+from .._exports import Squeeze, kv_squeeze, write_export
 
 runner = CliRunner()
-PHANTOM = Path(__file__).resolve().parents[2] / "datasets" / "examples" / "phantom"
+PHANTOM = Path(__file__).resolve().parents[3] / "datasets" / "examples" / "phantom"
 
 
 @pytest.fixture(scope="module")

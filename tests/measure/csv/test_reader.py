@@ -18,7 +18,7 @@ import pytest
 from deformctl.errors import EXIT_DATAERR, EXIT_USAGE, InputDataError, UsageError
 from deformctl.measure import CsvDialect, CsvOptions, read_recording
 
-from ._exports import Squeeze, kv_squeeze, write_export
+from .._exports import Squeeze, kv_squeeze, write_export
 
 PREAMBLE = (
     "EF10_0T_A_sample_1",

@@ -16,7 +16,7 @@ from deformctl.characterize import fit_lsq, kelvin_voigt_piecewise_linear
 from deformctl.errors import EXIT_USAGE, InputDataError, MissingInputError, UsageError
 from deformctl.measure import CsvOptions, read_recording
 
-from ._errors import _err
+from .._errors import _err
 
 
 def _csv_rows(rate_hz: float = 500.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

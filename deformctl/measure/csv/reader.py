@@ -2,9 +2,9 @@
 export (``measure csv``; the library's door is :func:`deformctl.measure.stage.read_recording`
 with a :class:`CsvOptions`).
 
-The file is read as it comes (:mod:`deformctl.measure.csv_table`: encoding, delimiter, decimal
+The file is read as it comes (:mod:`deformctl.measure.csv.table`: encoding, delimiter, decimal
 mark, preamble, header, units row), the time, force and position columns are found by name with
-their units (:mod:`deformctl.measure.csv_columns`), and the numbers are converted to SI. Then:
+their units (:mod:`deformctl.measure.csv.columns`), and the numbers are converted to SI. Then:
 
 1. time must not go back (the row is named); repeated timestamps are merged;
 2. a sample rate, peak force or peak compression that a unit mistake explains is refused with
@@ -28,9 +28,9 @@ from typing import Any
 import numpy as np
 
 from deformctl.errors import DeformctlError, InputDataError, UsageError
-from deformctl.measure.csv_columns import ColumnRole, column_roles, describe_roles
-from deformctl.measure.csv_options import CsvOptions
-from deformctl.measure.csv_table import CsvLayout, CsvSource, read_columns, read_layout
+from deformctl.measure.csv.columns import ColumnRole, column_roles, describe_roles
+from deformctl.measure.csv.options import CsvOptions
+from deformctl.measure.csv.table import CsvLayout, CsvSource, read_columns, read_layout
 from deformctl.measure.defects import (
     Defect,
     coarse_force,

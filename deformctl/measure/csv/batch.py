@@ -17,7 +17,6 @@ friction. A file that cannot be read does not stop the others: it is recorded wi
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -37,8 +36,8 @@ from deformctl.catalog import (
     object_record,
 )
 from deformctl.errors import EXIT_FAILURE, DeformctlError, InputDataError, UsageError
-from deformctl.measure.csv import read_csv
-from deformctl.measure.csv_options import CsvOptions
+from deformctl.measure.csv.options import CsvOptions
+from deformctl.measure.csv.reader import read_csv
 from deformctl.measure.options import DEFAULT_SEGMENTATION, Segmentation
 from deformctl.measure.recording import Recording
 from deformctl.measure.stage import LOG_SAMPLE_BYTES, MEASURE_SCHEMA
@@ -253,8 +252,7 @@ class CsvFileTask:
 
     def settings(self) -> dict[str, Any]:
         """What the provenance records of the options."""
-        cut = dataclasses.replace(self.segmentation, segment=self.segmentation.segments(False))
-        return {"source": "csv", **self.options.as_dict(), **cut.as_dict()}
+        return {"source": "csv", **self.options.as_dict(), **self.segmentation.as_dict(False)}
 
 
 def summary_row(file: CsvFile, rec: Recording) -> dict[str, Any]:
