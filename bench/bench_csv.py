@@ -16,7 +16,7 @@ core; the target), the same into one log, ``characterize DIR/ --model kv``, and 
 printed). The five dialects of a recording must give the same D (the spread is printed).
 
 ``--memory`` also measures the peak memory per data row (1 million rows against 10,000; the
-figure behind ``deformctl.measure.csv.CSV_ROW_BYTES``).
+figure behind ``deformctl.measure.csv.reader.CSV_ROW_BYTES``).
 
 Run: ``python -m bench.bench_csv`` (about a minute on 2 cores; ``make bench`` runs it).
 """

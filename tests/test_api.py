@@ -107,7 +107,7 @@ def test_measure_bag_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -
 
 
 def test_measure_csv_defaults(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
-    seen = _record(monkeypatch, "deformctl.measure.csv_batch.measure_csv_files")
+    seen = _record(monkeypatch, "deformctl.measure.csv.batch.measure_csv_files")
     columns = "time=t,force=f,compression=c"
     _run(["measure", "csv", str(tmp_path / "r.csv"), "--columns", columns,
           "--object-id", "a", "--weight-n", "1", "-o", str(tmp_path / "s.mcap")])  # fmt: skip
@@ -205,7 +205,7 @@ def test_results_print_on_a_few_lines(kv_squeeze: Any, small_lattice: Any) -> No
         }
     )
 
-    def make(obj: Any) -> Any:
+    def make(obj: Any, max_force_n: float) -> Any:
         return lambda f, i: TrialOutcome(f, f >= 1.3 * obj.f_w_n(), 0.0)
 
     run = lift_catalog(catalog, RunnerFactory("test", make))
@@ -215,7 +215,7 @@ def test_results_print_on_a_few_lines(kv_squeeze: Any, small_lattice: Any) -> No
 
 
 def test_the_predictor_and_the_csv_options_print_on_a_few_lines() -> None:
-    from deformctl.measure.csv_batch import CsvFileTask
+    from deformctl.measure.csv.batch import CsvFileTask
 
     predictor = deformctl.load_predictor("grip")
     assert "weights=(array[" in _short(predictor)  # was 19,648 characters of metadata
@@ -236,7 +236,7 @@ def test_the_library_reads_an_export_as_the_command_does(kv_csv: Path, tmp_path:
     argv = ["measure", "csv", str(kv_csv), "--object-id", "kv", "--weight-n", "1", "-o", str(log)]
     assert runner.invoke(app, argv).exit_code == 0
     assert runner.invoke(app, ["characterize", str(log), "-o", str(table)]).exit_code == 0
-    rec = deformctl.read_recording(str(kv_csv), deformctl.CsvOptions(), object_id="kv")
+    rec = deformctl.read_recording(str(kv_csv), deformctl.CsvOptions(), "kv")
     (cli_squeeze,) = read_squeeze_log(log)[1]
     np.testing.assert_allclose(rec.squeezes[0].force_n, cli_squeeze.force_n)
     np.testing.assert_allclose(rec.squeezes[0].compression_m, cli_squeeze.compression_m)

@@ -43,6 +43,38 @@ def _sources() -> list[Path]:
     return sorted(PACKAGE.rglob("*.py"))
 
 
+#: The most parameters a function of the package takes (``self`` and ``cls`` not counted): more
+#: is a bundle of options that belongs in an options type.
+MAX_PARAMETERS = 15
+
+
+def parameter_counts(tree: ast.AST) -> dict[str, int]:
+    """Each function's parameters (positional, keyword-only, ``*args``, ``**kwargs``), by name."""
+    counts = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            a = node.args
+            names = [p.arg for p in (*a.posonlyargs, *a.args, *a.kwonlyargs)]
+            names += [p.arg for p in (a.vararg, a.kwarg) if p is not None]
+            counts[f"{node.name}:{node.lineno}"] = len(names) - (names[:1] in (["self"], ["cls"]))
+    return counts
+
+
+def test_parameter_counts_are_counted() -> None:
+    tree = ast.parse("def f(a, /, b, *c, d, **e): ...\nclass C:\n    def m(self, x): ...")
+    assert parameter_counts(tree) == {"f:1": 5, "m:3": 1}
+
+
+def test_no_function_takes_more_than_fifteen_parameters() -> None:
+    wide = {
+        f"{path.relative_to(PACKAGE)}:{name}": n
+        for path in _sources()
+        for name, n in parameter_counts(ast.parse(path.read_text())).items()
+        if n > MAX_PARAMETERS
+    }
+    assert not wide, wide
+
+
 def test_restated_heavy_defaults_are_the_librarys() -> None:
     from deformctl.measure.sim import simulate_squeezes
     from deformctl.sim import LiftProfile, SimSettings, SlipCriterion

@@ -171,18 +171,31 @@ Tolerance = Annotated[
 MaxAttempts = Annotated[
     int, typer.Option("--max-attempts", metavar="N", help="Most attempts per object.")
 ]
+MaxForceN = Annotated[
+    float | None,
+    typer.Option(
+        "--max-force-n",
+        metavar="N",
+        help="Force ceiling per palm, N [default: the catalog's max_force_n, else 10 x F_w "
+        "or a known rupture force]; with a rig never above its stated maximum (else 500 N).",
+    ),
+]
 
 
-def _search(*, protocol: str, growth: float, tolerance: float, max_attempts: int) -> SearchOptions:
+def _search(
+    *, protocol: str, growth: float, tolerance: float, max_attempts: int, max_force_n: float | None
+) -> SearchOptions:
     return SearchOptions(
         protocol=protocol,  # type: ignore[arg-type]  # checked by SearchOptions
         growth=growth,
         tolerance_rel=tolerance,
         max_attempts=max_attempts,
+        max_force_n=max_force_n,
     )
 
 
-#: ``--protocol``, ``--growth``, ``--tolerance``, ``--max-attempts`` as one ``SearchOptions``.
+#: ``--protocol``, ``--growth``, ``--tolerance``, ``--max-attempts``, ``--max-force-n`` as one
+#: ``SearchOptions``.
 SEARCH = OptionGroup(
     "search",
     (
@@ -190,6 +203,7 @@ SEARCH = OptionGroup(
         ("growth", Growth, DEFAULT_GROWTH),
         ("tolerance", Tolerance, DEFAULT_TOLERANCE_REL),
         ("max_attempts", MaxAttempts, DEFAULT_MAX_ATTEMPTS),
+        ("max_force_n", MaxForceN, None),
     ),
     _search,
 )
@@ -207,7 +221,6 @@ def lift_dataset(
     object_ids: Sequence[str] | None,
     force: bool,
     quiet: bool = False,
-    max_force_n: float | None = None,
 ) -> None:
     """``lift sim -o DIR/``: every object's search (under its force ceiling) through the sweep
     executor, then its summary (unless ``quiet``); each part's log has the scene at ``scene_hz``.
@@ -219,13 +232,7 @@ def lift_dataset(
         raise UsageError("--log is not used with a dataset directory output (DIR/_logs/ has them)")
     from deformctl.lift.runners.sim import LiftTask, lift_sweep
 
-    task = LiftTask(
-        preset=preset,
-        search=search,
-        log_epoch_ns=log_epoch_ns,
-        scene_hz=scene_hz,
-        max_force_n=max_force_n,
-    )
+    task = LiftTask(preset=preset, search=search, log_epoch_ns=log_epoch_ns, scene_hz=scene_hz)
     summary = lift_sweep(
         catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
     )

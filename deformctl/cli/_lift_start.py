@@ -182,14 +182,3 @@ def report_run(run: CatalogLiftResult, *, quiet: bool, summary: str | None = Non
         typer.echo(summary, err=True)
     if message is not None:
         raise SearchError(message)
-
-
-MaxForceN = Annotated[
-    float | None,
-    typer.Option(
-        "--max-force-n",
-        metavar="N",
-        help="Force ceiling per palm, N [default: the catalog's max_force_n, else 10 x F_w "
-        "or a known rupture force]; with a rig never above its stated maximum (else 500 N).",
-    ),
-]

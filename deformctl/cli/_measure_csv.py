@@ -25,11 +25,11 @@ from deformctl.cli._measure_rig import (
     Units,
 )
 from deformctl.cli._options import OptionGroup
-from deformctl.measure.csv_options import DEFAULT_CSV_MEMORY_BUDGET_GIB as DEFAULT_BUDGET
-from deformctl.measure.csv_options import CsvDialect, CsvOptions
+from deformctl.measure.csv.options import DEFAULT_CSV_MEMORY_BUDGET_GIB as DEFAULT_BUDGET
+from deformctl.measure.csv.options import CsvDialect, CsvOptions
 
 if TYPE_CHECKING:  # pragma: no cover - the readers (pandas, pyarrow, MCAP) load when it runs
-    from deformctl.measure.csv_batch import CsvFileTask
+    from deformctl.measure.csv.batch import CsvFileTask
     from deformctl.parallel import SweepOptions
 
 SkipRows = Annotated[
@@ -178,7 +178,7 @@ def run(
 ) -> None:
     """Read every CSV file of ``paths`` and write their squeeze log or dataset directory (with
     its summary line unless ``quiet``)."""
-    from deformctl.measure.csv_batch import csv_objects, measure_csv_files, measure_csv_sweep
+    from deformctl.measure.csv.batch import csv_objects, measure_csv_files, measure_csv_sweep
     from deformctl.parallel import single_file_workers
 
     files = csv_objects(
@@ -210,8 +210,8 @@ def dry_run(
 ) -> None:
     """``measure csv --dry-run``: each file's detection on stdout, its error line on stderr;
     the exit code a real run would give (65 for one bad file, 1 when some of many fail)."""
-    from deformctl.measure.csv_batch import csv_objects
-    from deformctl.measure.csv_dry_run import dry_run_files, outcome_lines
+    from deformctl.measure.csv.batch import csv_objects
+    from deformctl.measure.csv.dry_run import dry_run_files, outcome_lines
     from deformctl.parallel import single_file_workers
 
     files = csv_objects(

@@ -13,7 +13,7 @@ import typer
 from deformctl.artifacts.io import display_name
 
 if TYPE_CHECKING:  # pragma: no cover - the batch reader loads when it runs
-    from deformctl.measure.csv_batch import CsvBatchResult
+    from deformctl.measure.csv.batch import CsvBatchResult
 
 
 def _counted(lines: Sequence[str], of: int) -> list[str]:
@@ -26,7 +26,7 @@ def _counted(lines: Sequence[str], of: int) -> list[str]:
 
 
 def report_files(result: CsvBatchResult, output: str, *, quiet: bool = False) -> None:
-    from deformctl.measure.csv_batch import file_notices
+    from deformctl.measure.csv.batch import file_notices
 
     read = result.read
     total = len(result.outcomes)
@@ -67,7 +67,7 @@ def report_dataset(out_dir: str | PathLike[str]) -> None:
     """The columns, warnings and failures of a ``measure csv -o DIR/`` run, from its parts."""
     from deformctl.artifacts.dataset import read_dataset, read_failures
     from deformctl.errors import DeformctlError
-    from deformctl.measure.csv_batch import dataset_notices
+    from deformctl.measure.csv.batch import dataset_notices
 
     try:
         rows = read_dataset(out_dir)

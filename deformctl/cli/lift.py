@@ -33,19 +33,12 @@ from deformctl.cli import _options as opt
 from deformctl.cli._common import progress_bar, translate_errors, warn
 from deformctl.cli._lift_frames import FRAMES
 from deformctl.cli._lift_runner import PRESET, SEARCH, RigTimeout, lift_dataset
-from deformctl.cli._lift_start import (
-    START,
-    CatalogArg,
-    MaxForceN,
-    report_run,
-    run_summary,
-)
+from deformctl.cli._lift_start import START, CatalogArg, report_run, run_summary
 from deformctl.cli._sources import LiftGroup, source_group
 from deformctl.cli._summary import Quiet, RunClock, stderr_console
 from deformctl.errors import UsageError
 from deformctl.lift.options import DEFAULT_RIG_TIMEOUT_S
 from deformctl.parallel import SweepOptions
-from deformctl.quantities import MAX_FORCE_N
 
 if TYPE_CHECKING:  # pragma: no cover - the runners (numba; pandas, MCAP) load when they run
     from deformctl.lift.options import SearchOptions
@@ -86,7 +79,6 @@ def sim(
     output: Output,
     log: Log = None,
     objects: opt.Objects = None,
-    max_force_n: MaxForceN = None,
     log_epoch: opt.LogEpoch = None,
     scene_hz: opt.SceneHz = None,
     quiet: Quiet = False,
@@ -112,7 +104,6 @@ def sim(
     from deformctl.lift.runners.sim import sim_runner_factory
 
     factory = sim_runner_factory(preset=preset, scene_hz=scene)
-    MAX_FORCE_N.check_optional(max_force_n)  # None: the catalog's or the default ceiling
     object_ids = opt.parse_object_ids(objects)
     seed = start(protocol=search.protocol, dataset=dataset)
     epoch_ns = opt.parse_log_epoch(log_epoch)
@@ -129,7 +120,6 @@ def sim(
             object_ids,
             force,
             quiet,
-            max_force_n=max_force_n,
         )
         return
     _lift_file(
@@ -142,7 +132,6 @@ def sim(
         seed,
         epoch_ns,
         sweep.workers,
-        max_force_n,
         force,
         None if quiet else clock,
     )
@@ -164,7 +153,6 @@ def rig(
     rig_timeout: RigTimeout = None,
     log: Log = None,
     objects: opt.Objects = None,
-    max_force_n: MaxForceN = None,
     quiet: Quiet = False,
     force: opt.Force = False,
     judge: SlipFromFrames = None,  # type: ignore[assignment]  # built by the option groups
@@ -185,7 +173,6 @@ def rig(
 
     timeout_s = DEFAULT_RIG_TIMEOUT_S if rig_timeout is None else rig_timeout
     factory = rig_runner_factory(command, timeout_s=timeout_s, slip_from_frames=judge)
-    MAX_FORCE_N.check_optional(max_force_n)  # None: the catalog's or the default ceiling
     object_ids = opt.parse_object_ids(objects)
     seed = start(protocol=search.protocol, dataset=False)
     _lift_file(
@@ -198,7 +185,6 @@ def rig(
         seed,
         None,
         opt.NO_SWEEP.workers,
-        max_force_n,
         force,
         None if quiet else clock,
     )
@@ -214,7 +200,6 @@ def _lift_file(
     seed: StartSeed | None,
     epoch_ns: int | None,
     workers: int | Auto | None,
-    max_force_n: float | None,
     force: bool,
     clock: RunClock | None,
 ) -> None:
@@ -236,7 +221,6 @@ def _lift_file(
             seed=seed,
             warn=warn,
             workers=workers,
-            max_force_n=max_force_n,
         )
     summary = None if clock is None else run_summary(run, clock, output, log)
     report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)), summary=summary)

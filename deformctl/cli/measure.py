@@ -24,8 +24,8 @@ from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
 
 if TYPE_CHECKING:  # pragma: no cover - the library's options load when a source runs
-    from deformctl.measure.csv_batch import CsvFileTask
-    from deformctl.measure.csv_options import CsvOptions
+    from deformctl.measure.csv.batch import CsvFileTask
+    from deformctl.measure.csv.options import CsvOptions
     from deformctl.measure.options import BagSource, Segmentation
     from deformctl.measure.stage import SimulateCatalogTask
 
@@ -110,7 +110,7 @@ def csv(
 
     Example: deformctl measure csv data/*.csv --position-is gap -o squeeze.mcap
     """
-    from deformctl.measure.csv_batch import CsvFileTask
+    from deformctl.measure.csv.batch import CsvFileTask
 
     task: CsvFileTask = CsvFileTask(options, cut)
     if dry_run:

@@ -35,7 +35,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, cast, overload
+from typing import Any
 
 from deformctl.errors import InputDataError
 from deformctl.quantities import MAX_FORCE_N, MAX_LIFT_RATIO
@@ -48,7 +48,6 @@ __all__ = [
     "ForceCeiling",
     "absolute_limit",
     "force_ceiling",
-    "validate_max_force",
 ]
 
 #: The default ceiling, in multiples of the object's F_w (module doc).
@@ -87,20 +86,6 @@ class ForceCeiling:
             ABSOLUTE_DEFAULT_SOURCE: "the absolute limit of a rig that states none",
         }.get(self.source, f"the object's {self.source}")
         return f"force ceiling {self.max_force_n:.6g} N ({why})"
-
-
-@overload
-def validate_max_force(value: None, what: str = ...) -> None: ...
-@overload
-def validate_max_force(value: float, what: str = ...) -> float: ...
-def validate_max_force(value: Any, what: str = MAX_FORCE_N.flag) -> float | None:
-    """``value`` as a ceiling, N, under the one rule of :data:`~deformctl.quantities.MAX_FORCE_N`
-    (a finite number > 0; None passes: no ceiling given).
-
-    Raises:
-        UsageError: it is not (``what`` names the flag; exit 2).
-    """
-    return cast(float | None, MAX_FORCE_N.check_optional(value, label=what))
 
 
 def absolute_limit(rig_max_force_n: float | None) -> ForceCeiling:
@@ -142,7 +127,8 @@ def force_ceiling(
         object_id: the object, for messages.
         f_w_n: its F_w, N.
         row: its catalog row (``max_force_n``, and safe-force columns when present).
-        max_force_n: ``--max-force-n``, N, or None.
+        max_force_n: ``--max-force-n``, N (checked where it was given:
+            :class:`~deformctl.lift.options.SearchOptions`), or None.
         coefficients: its coefficients row (``rupture_force_n`` / ``yield_force_n``), or None.
         path: the catalog's name, for messages.
         absolute: the runner's absolute limit (:func:`absolute_limit`; None: none, the
@@ -176,8 +162,8 @@ def _own_ceiling(
                     f"{where}: {CEILING_COLUMN} {MAX_FORCE_N.problem(raw)}", path=path
                 )
             return ForceCeiling(MAX_FORCE_N.check_data(value, where=where, path=path), "catalog")
-    if max_force_n is not None:
-        return ForceCeiling(validate_max_force(max_force_n, "--max-force-n"), "--max-force-n")
+    if max_force_n is not None:  # checked once, by SearchOptions
+        return ForceCeiling(float(max_force_n), "--max-force-n")
     ceiling = ForceCeiling(DEFAULT_CEILING_RATIO * f_w_n, "default")
     for source in (coefficients or {}, row):
         for column in SAFE_FORCE_COLUMNS:

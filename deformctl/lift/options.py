@@ -1,8 +1,9 @@
 """The lifting-force search's options, checked once: :class:`SearchOptions`.
 
 The ``lift`` command builds a :class:`SearchOptions` from ``--protocol``, ``--growth``,
-``--tolerance`` and ``--max-attempts``; the stage (:func:`deformctl.lift.stage.lift_catalog`), the
-sweep task (:class:`deformctl.lift.runners.sim.LiftTask`) and each object's search take it, and
+``--tolerance``, ``--max-attempts`` and ``--max-force-n``; the stage
+(:func:`deformctl.lift.stage.lift_catalog`), the sweep task
+(:class:`deformctl.lift.runners.sim.LiftTask`) and each object's search take it, and
 :meth:`SearchOptions.as_dict` is what the outputs' provenance records. Each number's rule is its
 :mod:`deformctl.quantities` entry.
 """
@@ -13,7 +14,7 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from deformctl.errors import UsageError
-from deformctl.quantities import GROWTH, MAX_ATTEMPTS, TOLERANCE_REL
+from deformctl.quantities import GROWTH, MAX_ATTEMPTS, MAX_FORCE_N, TOLERANCE_REL
 
 SearchProtocol = Literal["refine", "paper", "seeded"]
 #: The protocols ``lift --protocol`` chooses from; ``seeded`` is chosen by a start force
@@ -40,6 +41,9 @@ class SearchOptions:
         growth: the ramp factor between attempts (> 1; the paper's 1.2).
         tolerance_rel: refine stops when ``(high - low) / high <= tolerance_rel``; in (0, 1).
         max_attempts: the most attempts per object (>= 1).
+        max_force_n: the force ceiling of every object, N (``--max-force-n``, > 0); None: each
+            object's own (the catalog's ``max_force_n``, else the default of
+            :mod:`deformctl.lift.ceiling`). No attempt requests more.
 
     Raises:
         UsageError: an unknown protocol or a number outside its rule (exit 2).
@@ -49,6 +53,7 @@ class SearchOptions:
     growth: float = DEFAULT_GROWTH
     tolerance_rel: float = DEFAULT_TOLERANCE_REL
     max_attempts: int = DEFAULT_MAX_ATTEMPTS
+    max_force_n: float | None = None
 
     def __post_init__(self) -> None:
         if self.protocol not in PROTOCOLS:
@@ -58,15 +63,19 @@ class SearchOptions:
         GROWTH.check(self.growth)
         TOLERANCE_REL.check(self.tolerance_rel)
         MAX_ATTEMPTS.check(self.max_attempts)
+        MAX_FORCE_N.check_optional(self.max_force_n)
 
     def as_dict(self) -> dict[str, Any]:
-        """The options by name, for provenance."""
-        return {
+        """The options by name, for provenance (the ceiling only when given)."""
+        out: dict[str, Any] = {
             "protocol": self.protocol,
             "growth": self.growth,
             "tolerance_rel": self.tolerance_rel,
             "max_attempts": self.max_attempts,
         }
+        if self.max_force_n is not None:
+            out["max_force_n"] = self.max_force_n
+        return out
 
 
 #: The default search (the command's defaults), for signatures.

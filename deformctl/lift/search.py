@@ -539,10 +539,24 @@ def find_min_lift_force(
     _validate(
         weight_n=weight_n, friction_mu=friction_mu, object_id=object_id, max_force_n=max_force_n
     )
-    SearchOptions(
+    search = SearchOptions(
         protocol=protocol, growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts
     )
-    s = _new_search(object_id, weight_n, friction_mu, protocol, growth, tolerance_rel, max_attempts)
+    return search_lift_force(runner, object_id, weight_n, friction_mu, search, max_force_n)
+
+
+def search_lift_force(
+    runner: TrialRunner,
+    object_id: str,
+    weight_n: float,
+    friction_mu: float,
+    search: SearchOptions,
+    max_force_n: float,
+) -> LiftSearchResult:
+    """:func:`find_min_lift_force` with values already checked (the stage's: the object's W and
+    μ by the catalog, the search by :class:`SearchOptions`, the ceiling by
+    :mod:`deformctl.lift.ceiling`); ``search.protocol`` is ``refine`` or ``paper``."""
+    s = _new_search(object_id, weight_n, friction_mu, search.protocol, search)
     s.max_force_n = float(max_force_n)
     # Phase 1: the paper's ramp F_w * growth**k until a force lifts.
     failed = s.ramp_up(runner, s.f_w_n)
@@ -628,7 +642,7 @@ def find_min_lift_force_seeded(
     _validate(
         weight_n=weight_n, friction_mu=friction_mu, object_id=object_id, max_force_n=max_force_n
     )
-    SearchOptions(growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts)
+    search = SearchOptions(growth=growth, tolerance_rel=tolerance_rel, max_attempts=max_attempts)
     validate_start_margin(margin)
     where = f"object {object_id!r}: "
     if isinstance(predicted_lift_force_n, bool) or not (
@@ -640,7 +654,39 @@ def find_min_lift_force_seeded(
             f"{where}predicted lifting force must be a finite number > 0 N, "
             f"got {predicted_lift_force_n!r}"
         )
-    s = _new_search(object_id, weight_n, friction_mu, "seeded", growth, tolerance_rel, max_attempts)
+    start = SearchStart(float(predicted_lift_force_n), float(margin), source)
+    return search_lift_force_seeded(
+        runner, object_id, weight_n, friction_mu, search, max_force_n, start
+    )
+
+
+@dataclass(frozen=True)
+class SearchStart:
+    """A seeded search's start: the predicted L_f, N, the margin above it and its source."""
+
+    predicted_lift_force_n: float
+    margin: float
+    source: str
+
+
+def search_lift_force_seeded(
+    runner: TrialRunner,
+    object_id: str,
+    weight_n: float,
+    friction_mu: float,
+    search: SearchOptions,
+    max_force_n: float,
+    start: SearchStart,
+) -> LiftSearchResult:
+    """:func:`find_min_lift_force_seeded` with values already checked (as
+    :func:`search_lift_force`)."""
+    predicted_lift_force_n, margin, source = (
+        start.predicted_lift_force_n,
+        start.margin,
+        start.source,
+    )
+    max_attempts = search.max_attempts
+    s = _new_search(object_id, weight_n, friction_mu, "seeded", search)
     s.max_force_n = float(max_force_n)
     wanted_n = max(s.f_w_n, float(predicted_lift_force_n) * float(margin))
     start_n = min(wanted_n, s.max_force_n)
@@ -692,9 +738,7 @@ def _new_search(
     weight_n: float,
     friction_mu: float,
     protocol: SearchProtocol,
-    growth: float,
-    tolerance_rel: float,
-    max_attempts: int,
+    search: SearchOptions,
 ) -> _Search:
     return _Search(
         object_id=object_id,
@@ -702,9 +746,9 @@ def _new_search(
         friction_mu=float(friction_mu),
         f_w_n=rigid_grip_force_n(float(weight_n), float(friction_mu)),
         protocol=protocol,
-        growth=float(growth),
-        tolerance_rel=float(tolerance_rel),
-        max_attempts=max_attempts,
+        growth=float(search.growth),
+        tolerance_rel=float(search.tolerance_rel),
+        max_attempts=search.max_attempts,
         trials=[],
     )
 

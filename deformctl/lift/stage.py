@@ -15,7 +15,7 @@ Example:
     >>> from deformctl.series import TrialOutcome
     >>> box = CatalogObject.from_row({"object_id": "A", "size_x_cm": 10, "size_y_cm": 10,
     ...     "size_z_cm": 8, "weight_n": 5.0, "friction_mu": 0.5})
-    >>> def make(obj: CatalogObject) -> TrialRunner:
+    >>> def make(obj: CatalogObject, max_force_n: float) -> TrialRunner:
     ...     return lambda grip_force_n, attempt_index: TrialOutcome(grip_force_n,
     ...                                                             grip_force_n >= 7.0, 0.0)
     >>> run = lift_catalog([box], RunnerFactory("test", make))
@@ -52,9 +52,11 @@ from deformctl.lift.search import (
     LiftAttempt,
     LiftSearchResult,
     SearchAbortedError,
+    SearchStart,
     TrialRunner,
     find_min_lift_force,
-    find_min_lift_force_seeded,
+    search_lift_force,
+    search_lift_force_seeded,
 )
 from deformctl.parallel import map_in_order, single_file_workers
 from deformctl.parallel.auto import AUTO, Auto
@@ -92,9 +94,10 @@ class RunnerFactory:
 
     Attributes:
         name: the runner's name, stored in the table's ``runner`` column (``"rig"``, ``"sim"``).
-        make: ``make(obj) -> TrialRunner`` for one object; ``obj`` is its
+        make: ``make(obj, max_force_n) -> TrialRunner`` for one object; ``obj`` is its
             :class:`~deformctl.catalog.CatalogObject` (typed attributes, and a read-only mapping
-            of the row).
+            of the row), ``max_force_n`` its force ceiling, N (:mod:`deformctl.lift.ceiling`;
+            the rig request carries it).
         row_fields: ``row_fields(obj) -> {column: value}``: the table columns this runner fills
             for the object (lift profile ``lift_accel_m_s2``, ``lift_speed_m_s``,
             ``lift_height_m``, ``slip_tolerance_m``, ``slip_criterion``).
@@ -117,7 +120,7 @@ class RunnerFactory:
     """
 
     name: str
-    make: Callable[[CatalogObject], TrialRunner]
+    make: Callable[[CatalogObject, float], TrialRunner]
     row_fields: Callable[[CatalogObject], Mapping[str, object]] = _no_row_fields
     stop_on_failure: bool = True
     settings: Mapping[str, Any] = field(default_factory=dict)
@@ -205,7 +208,6 @@ def lift_catalog(
     warn: Warn | None = None,
     workers: int | Auto = 1,
     journal: LiftJournal | None = None,
-    max_force_n: float | None = None,
 ) -> CatalogLiftResult:
     """Search the minimum lifting force of every object of a catalog, one after another.
 
@@ -224,8 +226,12 @@ def lift_catalog(
         catalog: a validated catalog (see :func:`deformctl.artifacts.read_catalog`), already cut
             to the objects to lift (:func:`~deformctl.catalog.select_objects`), or its objects.
         factory: builds the runner of each object.
-        search: the search's protocol, growth, tolerance and attempt budget
-            (:class:`~deformctl.lift.options.SearchOptions`, checked when built).
+        search: the search's protocol, growth, tolerance, attempt budget and force ceiling
+            (:class:`~deformctl.lift.options.SearchOptions`, checked when built). Each object's
+            ceiling is ``search.max_force_n`` (``--max-force-n``) unless the catalog gives the
+            object one, else the default of :mod:`deformctl.lift.ceiling`; no attempt requests
+            more, the runner gets it (the rig request carries it) and a seeded start above it
+            is clamped (``warn`` says so).
         progress: called after each object as ``progress(object_id, done, total)``.
         path: the catalog's file name, for error messages.
         seed: start each search from a predicted L_f (a model or an index table,
@@ -241,10 +247,6 @@ def lift_catalog(
             (the rig) always runs in this process, one object after another.
         journal: record every attempt and every finished row in it as they happen
             (:mod:`deformctl.lift.journal`); the objects then run in this process.
-        max_force_n: the force ceiling of every object, N (``--max-force-n``); None: the
-            catalog's ``max_force_n`` or the default of :mod:`deformctl.lift.ceiling`. No
-            attempt requests more; the runner gets it as the row's ``max_force_n`` (the rig
-            request carries it); a seeded start above it is clamped and ``warn`` says so.
 
     Returns:
         A :class:`CatalogLiftResult`.
@@ -276,17 +278,12 @@ def lift_catalog(
             if estimate.warning is not None and warn is not None:
                 warn(estimate.warning)
     absolute = None if factory.absolute_limit is None else factory.absolute_limit()
-    ceilings = _ceilings(objects, f_w, max_force_n, seed, path, absolute)
+    ceilings = _ceilings(objects, f_w, search.max_force_n, seed, path, absolute)
     for obj, f_w_n in zip(objects, f_w, strict=True):
         clamp = _clamp_warning(obj.object_id, f_w_n, starts.get(obj.object_id), seed, ceilings)
         if clamp is not None and warn is not None:
             warn(clamp)
-    objects = [
-        dataclasses.replace(
-            obj, row={**obj.row, CEILING_COLUMN: ceilings[obj.object_id].max_force_n}
-        )
-        for obj in objects
-    ]
+    ceiling_n = [ceilings[obj.object_id].max_force_n for obj in objects]
     rows: list[dict[str, object]] = []
     attempts: list[LiftAttempt] = []
     results: list[LiftSearchResult] = []
@@ -295,14 +292,17 @@ def lift_catalog(
     stopped_at: str | None = None
     story: dict[str, dict[str, Any]] = {}  # a seeded run: each start and its outcome, for the log
     search_one = _ObjectSearch(factory, None if seed is None else seed.margin, search)
-    jobs = [(obj, starts.get(obj.object_id)) for obj in objects]
+    jobs = [(obj, starts.get(obj.object_id), c) for obj, c in zip(objects, ceiling_n, strict=True)]
+    records = [
+        {**obj.record(), CEILING_COLUMN: c} for obj, c in zip(objects, ceiling_n, strict=True)
+    ]
     if journal is not None:
 
         def placeholder(i: int, error: str, n: int) -> dict[str, object]:
-            row = _not_run_row(objects[i], f_w[i], factory, search, error, n)
+            row = _not_run_row(objects[i], f_w[i], ceiling_n[i], factory, search, error, n)
             return {**row, **_start_columns(jobs[i][1], math.nan)}
 
-        journal.begin([obj.record() for obj in objects], placeholder)
+        journal.begin(records, placeholder)
 
     def record(obj: CatalogObject, outcome: tuple[LiftSearchResult, str | None, bool]) -> None:
         result, error, aborted = outcome
@@ -330,10 +330,10 @@ def lift_catalog(
             record(obj, outcome)
     else:
         for i, (job, f_w_n) in enumerate(zip(jobs, f_w, strict=True)):
-            obj, start = job
+            obj, start, ceiling = job
             if stopped_at is not None:
                 why = f"not run: the run stopped at object {stopped_at!r} after a runner failure"
-                row = _not_run_row(obj, f_w_n, factory, search, why)
+                row = _not_run_row(obj, f_w_n, ceiling, factory, search, why)
                 rows.append({**row, **_start_columns(start, math.nan)})
                 not_run.append(obj.object_id)
             else:
@@ -353,8 +353,8 @@ def lift_catalog(
         attempts=tuple(attempts),
         results=tuple(results),
         objects=tuple(
-            {**obj.record(), **({"start": story[obj.object_id]} if obj.object_id in story else {})}
-            for obj in objects
+            {**record, **({"start": story[obj.object_id]} if obj.object_id in story else {})}
+            for obj, record in zip(objects, records, strict=True)
         ),
         failures=tuple(failures),
         not_run=tuple(not_run),
@@ -375,7 +375,6 @@ def lift_catalog_files(
     seed: StartSeed | None = None,
     warn: Warn | None = None,
     workers: int | Auto | None = AUTO,
-    max_force_n: float | None = None,
 ) -> CatalogLiftResult:
     """:func:`lift_catalog` from a catalog file: the lift_results table and the lift log written.
 
@@ -395,7 +394,7 @@ def lift_catalog_files(
         output: the lift_results table (``-`` for stdout).
         log: the lift log with every attempt (``-`` for stdout), or None.
         object_ids: these objects, in this order (None: all).
-        search, progress, seed, warn, max_force_n: as for :func:`lift_catalog`.
+        search, progress, seed, warn: as for :func:`lift_catalog`.
         force: overwrite existing outputs.
         log_epoch_ns: where the log's attempts without a wall clock (simulated ones) begin, ns
             since the Unix epoch (None: the log writer's fixed epoch, 2000-01-01).
@@ -423,7 +422,6 @@ def lift_catalog_files(
             "runner": factory.name,
             **factory.settings,
             **search.as_dict(),
-            **({"max_force_n": max_force_n} if max_force_n is not None else {}),
             "objects": list(selected["object_id"]),
             **({"start": {"source": seed.source, **seed.settings}} if seed is not None else {}),
         },
@@ -441,7 +439,6 @@ def lift_catalog_files(
             warn=warn,
             workers=single_file_workers(workers, len(selected)),  # the rig runs in-process anyway
             journal=journal if journal is not None and journal.active else None,
-            max_force_n=max_force_n,
         )
     except DeformctlError as err:
         if journal is not None and journal.written:  # say what survived the failure
@@ -518,6 +515,7 @@ def start_story(
 def _not_run_row(
     obj: CatalogObject,
     f_w_n: float,
+    max_force_n: float,
     factory: RunnerFactory,
     search: SearchOptions,
     error: str,
@@ -539,7 +537,7 @@ def _not_run_row(
         "tolerance_rel": math.nan if search.protocol == "paper" else float(search.tolerance_rel),
         "runner": factory.name,
         "error": error,
-        "max_force_n": float(obj.get(CEILING_COLUMN, math.nan)),
+        "max_force_n": max_force_n,
     }
     row.update(factory.row_fields(obj))
     return row
@@ -577,10 +575,14 @@ def _start_columns(start: StartEstimate | None, start_force_n: float) -> dict[st
     }
 
 
+_Job = tuple[CatalogObject, "StartEstimate | None", float]
+"""One object's search: the object, its start (None: from F_w) and its force ceiling, N."""
+
+
 @dataclass(frozen=True)
 class _ObjectSearch:
     """One object's search as a picklable task (:func:`lift_catalog` with ``workers > 1`` runs
-    it in worker processes): ``(object, start) -> (result, error, aborted)``.
+    it in worker processes): ``(object, start, ceiling) -> (result, error, aborted)``.
 
     Attributes:
         factory: the runner factory (picklable for a parallel run).
@@ -597,23 +599,19 @@ class _ObjectSearch:
         """The modules the runner's local workers load first (the simulator's kernels)."""
         return tuple(getattr(self.factory.make, "worker_preload", ()))
 
-    def __call__(
-        self, job: tuple[CatalogObject, StartEstimate | None]
-    ) -> tuple[LiftSearchResult, str | None, bool]:
+    def __call__(self, job: _Job) -> tuple[LiftSearchResult, str | None, bool]:
         return self.run(job)
 
     def run(
-        self,
-        job: tuple[CatalogObject, StartEstimate | None],
-        on_attempt: Callable[[LiftAttempt], None] | None = None,
+        self, job: _Job, on_attempt: Callable[[LiftAttempt], None] | None = None
     ) -> tuple[LiftSearchResult, str | None, bool]:
         """The search; ``on_attempt`` gets every attempt as its answer arrives."""
-        obj, start = job
-        runner = self.factory.make(obj)
+        obj, start, max_force_n = job
+        runner = self.factory.make(obj, max_force_n)
         if on_attempt is not None:
             runner = _Reporting(runner, obj.object_id, on_attempt)
         try:
-            result = _search(runner, obj, start, self.margin, self.search)
+            result = _search(runner, obj, start, self.margin, self.search, max_force_n)
         except _RecordingFailed as failed:  # not the runner's failure: the run stops
             raise failed.error from None
         except SearchAbortedError as err:
@@ -654,31 +652,15 @@ def _search(
     start: StartEstimate | None,
     margin: float | None,
     search: SearchOptions,
+    max_force_n: float,
 ) -> LiftSearchResult:
-    """One object's search: from its start when it has a usable one, else ``search.protocol``."""
+    """One object's search under its ceiling: from its start when it has a usable one, else
+    ``search.protocol``."""
+    who = (runner, obj.object_id, obj.weight_n, obj.friction_mu, search, max_force_n)
     if start is not None and start.in_range and margin is not None:
-        return find_min_lift_force_seeded(
-            runner,
-            weight_n=obj.weight_n,
-            friction_mu=obj.friction_mu,
-            predicted_lift_force_n=start.predicted_lift_force_n,
-            margin=margin,
-            growth=search.growth,
-            tolerance_rel=search.tolerance_rel,
-            max_attempts=search.max_attempts,
-            object_id=obj.object_id,
-            source=start.source,
-            max_force_n=float(obj[CEILING_COLUMN]),
-        )
-    result = find_min_lift_force(
-        runner,
-        weight_n=obj.weight_n,
-        friction_mu=obj.friction_mu,
-        object_id=obj.object_id,
-        max_force_n=float(obj.get(CEILING_COLUMN, math.inf)),
-        **search.as_dict(),
-    )
-    return _fallback(result, start)
+        seed = SearchStart(start.predicted_lift_force_n, margin, start.source)
+        return search_lift_force_seeded(*who, seed)
+    return _fallback(search_lift_force(*who), start)
 
 
 def _ceilings(

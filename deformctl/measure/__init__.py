@@ -3,22 +3,23 @@ images.
 
 One module per source, each a reader the ``measure`` command calls:
 
-* :mod:`~deformctl.measure.ros2_bag`: :func:`read_ros2_bag` (``--bag``);
-* :mod:`~deformctl.measure.csv`: :func:`read_csv_export` (``--csv``), with the text of an
-  export in :mod:`~deformctl.measure.csv_table`, its columns and units in
-  :mod:`~deformctl.measure.csv_columns`, its options in :mod:`~deformctl.measure.csv_options`
-  and many files per call in :mod:`~deformctl.measure.csv_batch`;
-* :mod:`~deformctl.measure.sim`: :func:`simulate_squeezes` (``--sim``), squeezing catalog objects
-  in :mod:`deformctl.sim`;
+* :mod:`~deformctl.measure.ros2_bag`: a ROS 2 bag (``measure bag``);
+* :mod:`~deformctl.measure.csv`: a CSV export (``measure csv``), a package: the text of an
+  export in :mod:`~deformctl.measure.csv.table`, its columns and units in
+  :mod:`~deformctl.measure.csv.columns`, its options in :mod:`~deformctl.measure.csv.options`,
+  the reader in :mod:`~deformctl.measure.csv.reader` and many files per call in
+  :mod:`~deformctl.measure.csv.batch`;
+* :mod:`~deformctl.measure.sim`: :func:`simulate_squeezes` (``measure sim``), squeezing
+  catalog objects in :mod:`deformctl.sim`;
 * :mod:`~deformctl.measure.images`: :func:`~deformctl.measure.images.measure_images`
-  (``--images``), an object-catalog row from a top and a side image (OpenCV, imported when used).
+  (``measure images``), an object-catalog row from a top and a side image (OpenCV, imported
+  when used).
 
 The options the command builds and the library takes are in :mod:`~deformctl.measure.options`
 (:class:`BagSource`, :class:`Segmentation`, :class:`SqueezeProtocol`; a CSV's
-:class:`CsvOptions` are in :mod:`~deformctl.measure.csv_options`; the
-readers :func:`read_bag` and :func:`read_csv` take them, :func:`read_ros2_bag` and
-:func:`read_csv_export` build them from keyword arguments). Both recording readers return a
-:class:`Recording` (:mod:`~deformctl.measure.recording`: the
+:class:`CsvOptions` are in :mod:`~deformctl.measure.csv.options`). One door reads a recording
+of either source: :func:`read_recording` (path, the source's options, the object, the
+segmentation). It returns a :class:`Recording` (:mod:`~deformctl.measure.recording`: the
 squeezes in SI, the source sample rates and the ruptures; the compression from a position signal),
 cut into squeezes by :mod:`~deformctl.measure.segment` (segmentation, rupture and phase cuts).
 :mod:`~deformctl.measure.stage` writes the squeeze logs: :func:`recording_log` for a recording,
@@ -43,13 +44,7 @@ from typing import TYPE_CHECKING
 from deformctl.lazy import lazy_exports
 
 if TYPE_CHECKING:  # the names below, for type checkers; at run time they load on first use
-    from deformctl.measure.csv import (
-        ABSOLUTE_TIME_MIN_S,
-        read_csv,
-        read_csv_export,
-        squeeze_from_csv,
-    )
-    from deformctl.measure.csv_batch import (
+    from deformctl.measure.csv.batch import (
         CSV_MEASURE_SCHEMA,
         CsvBatchResult,
         CsvFile,
@@ -59,10 +54,13 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
         measure_csv_sweep,
         read_objects_from,
     )
-    from deformctl.measure.csv_options import (
+    from deformctl.measure.csv.options import (
         DEFAULT_CSV_MEMORY_BUDGET_GIB,
         CsvDialect,
         CsvOptions,
+    )
+    from deformctl.measure.csv.reader import (
+        ABSOLUTE_TIME_MIN_S,
     )
     from deformctl.measure.images import (
         ImagesResult,
@@ -94,9 +92,6 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
         JOINT_STATE_TYPE,
         POSE_TYPE,
         WRENCH_TYPE,
-        read_bag,
-        read_ros2_bag,
-        squeeze_from_ros2_bag,
     )
     from deformctl.measure.segment import (
         segment_squeezes,
@@ -110,6 +105,7 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
         LOG_SAMPLE_BYTES,
         MEASURE_SCHEMA,
         SimulateCatalogTask,
+        read_recording,
         recording_log,
         sim_provenance,
         simulate_catalog_file,
@@ -120,21 +116,18 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
 #: a module that needs one of them (the command line's options) does not pay for the others
 #: (pandas, pyarrow, numba, the MCAP readers).
 _EXPORTS: dict[str, str] = {
-    "ABSOLUTE_TIME_MIN_S": "deformctl.measure.csv",
-    "read_csv": "deformctl.measure.csv",
-    "read_csv_export": "deformctl.measure.csv",
-    "squeeze_from_csv": "deformctl.measure.csv",
-    "CSV_MEASURE_SCHEMA": "deformctl.measure.csv_batch",
-    "CsvBatchResult": "deformctl.measure.csv_batch",
-    "CsvFile": "deformctl.measure.csv_batch",
-    "CsvFileTask": "deformctl.measure.csv_batch",
-    "csv_objects": "deformctl.measure.csv_batch",
-    "measure_csv_files": "deformctl.measure.csv_batch",
-    "measure_csv_sweep": "deformctl.measure.csv_batch",
-    "read_objects_from": "deformctl.measure.csv_batch",
-    "DEFAULT_CSV_MEMORY_BUDGET_GIB": "deformctl.measure.csv_options",
-    "CsvDialect": "deformctl.measure.csv_options",
-    "CsvOptions": "deformctl.measure.csv_options",
+    "ABSOLUTE_TIME_MIN_S": "deformctl.measure.csv.reader",
+    "CSV_MEASURE_SCHEMA": "deformctl.measure.csv.batch",
+    "CsvBatchResult": "deformctl.measure.csv.batch",
+    "CsvFile": "deformctl.measure.csv.batch",
+    "CsvFileTask": "deformctl.measure.csv.batch",
+    "csv_objects": "deformctl.measure.csv.batch",
+    "measure_csv_files": "deformctl.measure.csv.batch",
+    "measure_csv_sweep": "deformctl.measure.csv.batch",
+    "read_objects_from": "deformctl.measure.csv.batch",
+    "DEFAULT_CSV_MEMORY_BUDGET_GIB": "deformctl.measure.csv.options",
+    "CsvDialect": "deformctl.measure.csv.options",
+    "CsvOptions": "deformctl.measure.csv.options",
     "ImagesResult": "deformctl.measure.images",
     "measure_images": "deformctl.measure.images",
     "DEFAULT_FORCE_THRESHOLD_FRAC": "deformctl.measure.options",
@@ -158,9 +151,6 @@ _EXPORTS: dict[str, str] = {
     "JOINT_STATE_TYPE": "deformctl.measure.ros2_bag",
     "POSE_TYPE": "deformctl.measure.ros2_bag",
     "WRENCH_TYPE": "deformctl.measure.ros2_bag",
-    "read_bag": "deformctl.measure.ros2_bag",
-    "read_ros2_bag": "deformctl.measure.ros2_bag",
-    "squeeze_from_ros2_bag": "deformctl.measure.ros2_bag",
     "segment_squeezes": "deformctl.measure.segment",
     "SqueezeProgress": "deformctl.measure.sim",
     "default_peak_force_n": "deformctl.measure.sim",
@@ -168,6 +158,7 @@ _EXPORTS: dict[str, str] = {
     "LOG_SAMPLE_BYTES": "deformctl.measure.stage",
     "MEASURE_SCHEMA": "deformctl.measure.stage",
     "SimulateCatalogTask": "deformctl.measure.stage",
+    "read_recording": "deformctl.measure.stage",
     "recording_log": "deformctl.measure.stage",
     "sim_provenance": "deformctl.measure.stage",
     "simulate_catalog_file": "deformctl.measure.stage",
@@ -218,17 +209,12 @@ __all__ = [
     "measure_csv_files",
     "measure_csv_sweep",
     "measure_images",
-    "read_bag",
-    "read_csv",
-    "read_csv_export",
     "read_objects_from",
-    "read_ros2_bag",
+    "read_recording",
     "recording_log",
     "segment_squeezes",
     "sim_provenance",
     "simulate_catalog_file",
     "simulate_catalog_sweep",
     "simulate_squeezes",
-    "squeeze_from_csv",
-    "squeeze_from_ros2_bag",
 ]

@@ -5,7 +5,7 @@ The command builds them from its flags and the library takes them (each number's
 :mod:`deformctl.quantities` entry); :meth:`as_dict` is what the squeeze log's provenance records:
 
 * :class:`BagSource`: where force and position are in a ROS 2 bag, and what the position is
-  (a CSV export's are :class:`deformctl.measure.csv_options.CsvOptions`);
+  (a CSV export's are :class:`deformctl.measure.csv.options.CsvOptions`);
 * :class:`Segmentation`: how a recording is cut into squeezes and which phase is kept;
 * :class:`SqueezeProtocol`: the force-controlled squeezes ``measure --sim`` simulates;
 * :class:`ScaleReference` and :class:`ObjectMask`: the scale reference in the photos of
@@ -123,9 +123,13 @@ class Segmentation:
         """Whether to split, with ``default`` the source's when :attr:`segment` is None."""
         return default if self.segment is None else self.segment
 
-    def as_dict(self) -> dict[str, Any]:
-        """The options by name, for provenance."""
-        return dataclasses.asdict(self)
+    def as_dict(self, default: bool | None = None) -> dict[str, Any]:
+        """The options by name, for provenance; with the source's ``default``, ``segment`` is
+        resolved (:meth:`segments`)."""
+        out = dataclasses.asdict(self)
+        if default is not None:
+            out["segment"] = self.segments(default)
+        return out
 
 
 @dataclass(frozen=True)

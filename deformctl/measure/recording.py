@@ -1,7 +1,7 @@
 """A rig recording: what the readers return, and the compression from a position signal.
 
-Both readers (:func:`~deformctl.measure.ros2_bag.read_ros2_bag`,
-:func:`~deformctl.measure.csv.read_csv_export`) return a :class:`Recording`: the squeezes as
+The one reader of both sources (:func:`~deformctl.measure.stage.read_recording`) returns a
+:class:`Recording`: the squeezes as
 ``list[SqueezeSeries]`` in SI units with compression ``d`` as defined in :mod:`deformctl.series`
 (total compression between the palms, positive when squeezed), plus the source streams' sample
 rates, which ``measure`` stores with the object so that ``characterize`` can widen its
@@ -50,8 +50,7 @@ class Recording:
     """The squeezes read from one recording, with the sample rates of its source streams.
 
     Attributes:
-        squeezes: the squeezes, in SI, as returned by :func:`squeeze_from_ros2_bag` /
-            :func:`squeeze_from_csv`.
+        squeezes: the squeezes, in SI.
         force_rate_hz: median sample rate of the (first) force stream, Hz.
         position_rate_hz: median sample rate of the position stream, Hz. Position is
             interpolated onto the force timestamps, so a slow position stream carries fewer

@@ -1,4 +1,5 @@
-"""The ROS 2 bag source of ``measure``: one object's squeezes from an MCAP bag (``--bag``).
+"""The ROS 2 bag source of ``measure``: one object's squeezes from an MCAP bag (``measure bag``;
+the library's door is :func:`deformctl.measure.stage.read_recording` with a :class:`BagSource`).
 
 **Force.** ``geometry_msgs/msg/WrenchStamped`` ``wrench.force.<axis>``: the force felt is its
 magnitude; with two wrench topics (one per palm) it is the mean of the two palms' magnitudes, the
@@ -36,21 +37,9 @@ import zstandard
 
 from deformctl.artifacts.io import note_input
 from deformctl.artifacts.mcap.integrity import complete_prefix, locate_damage, tail_problem
-from deformctl.characterize.options import Phase
 from deformctl.errors import InputDataError, UsageError
 from deformctl.measure.defects import ENERGY_RETURNED, Defect
-from deformctl.measure.options import (
-    DEFAULT_FORCE_THRESHOLD_FRAC,
-    DEFAULT_MIN_GAP_S,
-    DEFAULT_MIN_SQUEEZE_S,
-    DEFAULT_SEGMENTATION,
-    Axis,
-    BagSource,
-    CompressionZero,
-    IncreasesWhen,
-    PositionIs,
-    Segmentation,
-)
+from deformctl.measure.options import Axis, BagSource, Segmentation
 from deformctl.measure.recording import (
     Recording,
     _check_stream,
@@ -389,52 +378,32 @@ def _extract(
     return _number(positions[i], "position", where, path)
 
 
-def read_ros2_bag(
+def read_bag(
     path: str | PathLike[str],
-    *,
-    wrench_topics: Sequence[str],
-    position_topic: str,
+    source: BagSource,
     object_id: str,
-    axis: Axis = "x",
-    joint: str | None = None,
-    position_is: PositionIs = "palm",
-    compression_zero: CompressionZero = "lead_in",
-    segment: bool = True,
-    force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
-    min_gap_s: float = DEFAULT_MIN_GAP_S,
-    min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
-    phase: Phase = "all",
-    position_increases_when: IncreasesWhen | None = None,
-    size_x_cm: float | None = None,
-    crc_check: bool = True,
+    segmentation: Segmentation,
+    size_x_cm: float | None,
 ) -> Recording:
-    """Read the squeezes of one object from a ROS 2 MCAP bag (``ros2msg`` schemas, ``cdr``).
+    """The ROS 2 bag source of :func:`deformctl.measure.stage.read_recording` (its door).
 
     The recording is checked for plausibility (:mod:`deformctl.plausibility`: sample rates, peak
     force, the force's axis, the compression's sign and size); every squeeze is cut at a rupture
-    (recorded in the result) and reduced to ``phase`` (:mod:`deformctl.characterize.rupture`).
+    (recorded in the result) and reduced to the segmentation's phase
+    (:mod:`deformctl.characterize.rupture`).
 
     Args:
-        path: the bag: one ``.mcap`` file, or a rosbag2 folder (:func:`read_bag`).
-        wrench_topics: one or two ``geometry_msgs/msg/WrenchStamped`` topics (one per palm).
-        position_topic: a ``geometry_msgs/msg/PoseStamped`` topic (palm pose) or a
-            ``sensor_msgs/msg/JointState`` topic (with ``joint``).
+        path: the bag: one ``.mcap`` file, or a rosbag2 folder (``metadata.yaml`` and its
+            ``.mcap`` files, read in order: :mod:`deformctl.measure.rosbag2`).
+        source: the topics, axis and position signal
+            (:class:`~deformctl.measure.options.BagSource`); with ``crc_check`` False
+            (``--no-crc-check``) a damaged bag is read anyway, and a cut one up to its last
+            complete record (``notes`` say so).
         object_id: catalog id written into every squeeze.
-        axis: the squeeze axis in the wrench and pose frames.
-        joint: joint name in a JointState topic (its ``position`` in m).
-        position_is: ``"palm"`` (one palm's travel, symmetric partner: d = 2·travel) or
-            ``"gap"`` (the distance between the palms: d = gap(t0) − gap).
-        compression_zero: ``"lead_in"`` (median over the unloaded lead-in) or ``"first"``.
-        segment: split the recording into squeezes (else one squeeze).
-        force_threshold_frac, min_gap_s, min_squeeze_s: segmentation (module docstring).
-        phase: ``"all"``, ``"loading"`` (each squeeze up to its peak force) or ``"unloading"``.
-        position_increases_when: ``"closing"`` or ``"opening"``: the direction in which the
-            position grows; None: a gap grows when opening, one palm's sign is automatic.
+        segmentation: how the recording is cut (a bag is split into squeezes unless
+            ``segmentation.segment`` is False).
         size_x_cm: the object's size along the squeeze axis, when known (a compression larger
             than it is refused).
-        crc_check: check the summary CRC and every chunk's CRC (a damaged or cut bag is
-            refused naming the byte offset); False (``--no-crc-check``) reads a damaged bag
-            anyway, and a cut one up to its last complete record (``notes`` say so).
 
     Returns:
         The squeezes (time in s from each squeeze's first sample, on the (first) wrench
@@ -449,53 +418,8 @@ def read_ros2_bag(
             are), a topic of the wrong type, a joint not in the JointState, NaN samples,
             non-monotonic header stamps, streams that do not overlap, no compression, no squeeze,
             or an implausible recording (the message names the likely cause).
-        UsageError: no or more than two wrench topics, an unknown axis or position kind, a
-            JointState topic without ``joint``.
-    """
-    source = BagSource(
-        wrench_topics=tuple(wrench_topics),
-        position_topic=position_topic,
-        joint=joint,
-        axis=axis,
-        position_is=position_is,
-        compression_zero=compression_zero,
-        position_increases_when=position_increases_when,
-        crc_check=crc_check,
-    )
-    segmentation = Segmentation(
-        segment=segment,
-        force_threshold_frac=force_threshold_frac,
-        min_gap_s=min_gap_s,
-        min_squeeze_s=min_squeeze_s,
-        phase=phase,
-    )
-    return read_bag(
-        path, source, object_id=object_id, segmentation=segmentation, size_x_cm=size_x_cm
-    )
-
-
-def read_bag(
-    path: str | PathLike[str],
-    source: BagSource,
-    *,
-    object_id: str,
-    segmentation: Segmentation = DEFAULT_SEGMENTATION,
-    size_x_cm: float | None = None,
-) -> Recording:
-    """:func:`read_ros2_bag` with its options as the checked objects the command builds.
-
-    Args:
-        path: the bag: one ``.mcap`` file, or a rosbag2 folder (``metadata.yaml`` and its
-            ``.mcap`` files, read in order: :mod:`deformctl.measure.rosbag2`).
-        source: the topics, axis and position signal
-            (:class:`~deformctl.measure.options.BagSource`).
-        object_id: catalog id written into every squeeze.
-        segmentation: how the recording is cut (a bag is split into squeezes unless
-            ``segmentation.segment`` is False).
-        size_x_cm: the object's size along the squeeze axis, when known.
-
-    Raises:
-        see :func:`read_ros2_bag`.
+        UsageError: a JointState topic without ``joint`` (the other options are checked when
+            the :class:`BagSource` is built).
     """
     p = Path(path)
     parts = bag_parts(p)
@@ -657,8 +581,3 @@ def _energy_returned(squeezes: Sequence[SqueezeSeries], what: str) -> Defect | N
         "force lag the position? λ is wrong (flagged energy_returned)",
         {"loop_work_frac": frac},
     )
-
-
-def squeeze_from_ros2_bag(path: str | PathLike[str], **options: Any) -> list[SqueezeSeries]:
-    """The squeezes of :func:`read_ros2_bag` (same keyword arguments and errors), no rates."""
-    return read_ros2_bag(path, **options).squeezes

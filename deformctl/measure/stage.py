@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -24,8 +25,8 @@ from deformctl.artifacts.mcap import LOG_EPOCH_NS
 from deformctl.artifacts.provenance import Provenance, input_digest
 from deformctl.catalog import CatalogObject, MeasuredObject, select_objects
 from deformctl.errors import InputDataError, UsageError
-from deformctl.measure.csv import read_csv
-from deformctl.measure.csv_options import CsvOptions
+from deformctl.measure.csv.options import CsvOptions
+from deformctl.measure.csv.reader import read_csv
 from deformctl.measure.options import (
     DEFAULT_SEGMENTATION,
     BagSource,
@@ -316,7 +317,7 @@ def recording_log(
 
     Args:
         source: the recording file (hashed into the provenance).
-        recording: what :func:`read_ros2_bag` or :func:`read_csv_export` read.
+        recording: what :func:`read_recording` read.
         obj: the object's row (:func:`deformctl.catalog.object_record`); the source sample
             rates are added, as they are to the provenance's ``settings``, with the source,
             phase and ruptures (:meth:`Recording.log_fields`).
@@ -339,26 +340,44 @@ def recording_log(
 
 
 def read_recording(
-    path: str,
+    path: str | PathLike[str],
     source: BagSource | CsvOptions,
-    *,
-    object_id: str,
+    obj: MeasuredObject | str,
     segmentation: Segmentation = DEFAULT_SEGMENTATION,
-    size_x_cm: float | None = None,
 ) -> Recording:
-    """One object's recording: a ROS 2 bag (:func:`read_bag`) or a CSV export (:func:`read_csv`).
+    """One object's recording: a ROS 2 bag or a CSV export, read with the options the command
+    builds (``measure bag`` / ``measure csv``).
+
+    Args:
+        path: the recording: a bag (one ``.mcap`` file, or a rosbag2 folder), or a CSV file
+            (``-``: stdin).
+        source: where and what the streams are: a :class:`BagSource` (topics, axis, position
+            signal; :mod:`~deformctl.measure.ros2_bag`) or a :class:`CsvOptions` (dialect,
+            columns, units, force sign, lag; :mod:`deformctl.measure.csv`).
+        obj: the object measured (:class:`~deformctl.catalog.MeasuredObject`: its id is
+            written into every squeeze, its size along the squeeze axis bounds the
+            compression), or only its id when its size is not known.
+        segmentation: how the recording is cut into squeezes and which phase is kept; its
+            ``segment=None`` is the source's default (a bag is split, a CSV export is one
+            squeeze).
+
+    Returns:
+        The squeezes in SI, the source sample rates, the ruptures cut off, the recording's
+        defects and what was found in the file (:class:`Recording`).
 
     Raises:
-        see :func:`~deformctl.measure.ros2_bag.read_ros2_bag` and
-        :func:`~deformctl.measure.csv.read_csv_export`.
+        MissingInputError: the file (or a file a rosbag2 folder lists) does not exist (exit 66).
+        InputDataError: a file that cannot be read as the source, a stream or column not found,
+            NaN samples, time going back, no squeeze, or an implausible recording (a sample
+            rate, peak force or compression a unit mistake explains); the message names the
+            file and the likely fix (exit 65).
+        UsageError: a CSV's ambiguous columns, a unit contradicting the file, a file above the
+            memory budget; a JointState topic without a joint (exit 2).
     """
+    object_id, size_x_cm = (obj, None) if isinstance(obj, str) else (obj.object_id, obj.size_x_cm)
     if isinstance(source, BagSource):
-        return read_bag(
-            path, source, object_id=object_id, segmentation=segmentation, size_x_cm=size_x_cm
-        )
-    return read_csv(
-        path, source, object_id=object_id, segmentation=segmentation, size_x_cm=size_x_cm
-    )
+        return read_bag(path, source, object_id, segmentation, size_x_cm)
+    return read_csv(path, source, object_id, segmentation, size_x_cm)
 
 
 def measure_recording(
@@ -393,18 +412,11 @@ def measure_recording(
     if not (isinstance(source, BagSource) and Path(path).is_dir()):  # a rosbag2 folder
         check_input_path(path)
     check_output_path(output, force)
-    recording = read_recording(
-        path,
-        source,
-        object_id=obj.object_id,
-        segmentation=segmentation,
-        size_x_cm=obj.size_x_cm,
-    )
-    segment = segmentation.segments(isinstance(source, BagSource))
+    recording = read_recording(path, source, obj, segmentation)
     settings = {
         "source": source.kind,
         **source.as_dict(),
-        **dataclasses.replace(segmentation, segment=segment).as_dict(),
+        **segmentation.as_dict(isinstance(source, BagSource)),
     }
     recording_log(path, recording, obj.record(), settings, output=output, force=force)
     return recording

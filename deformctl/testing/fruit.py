@@ -398,11 +398,12 @@ def _through_csv(
     the reader flipped the force's sign (every draw's compressive force is positive)."""
     import os
 
-    from deformctl.measure.csv import read_csv_export
+    from deformctl.measure.csv.options import CsvOptions
+    from deformctl.measure.stage import read_recording
 
     path = os.path.join(folder, f"{fs.series.object_id}.csv")
     write_csv(fs, path)
-    rec = read_csv_export(path, object_id=fs.series.object_id)
+    rec = read_recording(path, CsvOptions(), fs.series.object_id)
     os.remove(path)
     rate = rec.position_rate_hz or fs.rate_hz
     flipped = bool(rec.details.get("force_sign", {}).get("flipped", False))

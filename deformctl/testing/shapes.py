@@ -32,13 +32,13 @@ Chinese header (``--encoding gbk``), a gripper log with an unnamed index column,
 ``Pos`` (mm, grows while closing) next to a commanded force and a text column, ``;`` with a
 decimal comma, the compressive force negative.
 
-:func:`run_case` runs one case through :func:`deformctl.measure.csv.read_csv`, the squeeze-log
-writer, :func:`deformctl.characterize.stage.read_and_characterize` and the coefficients writer,
-and sorts the outcome: ``row`` (a table was written), ``refused`` (one clear error of the
-tool's own kind) or ``internal`` (any other exception: a defect). :func:`check` runs
-:func:`draw` ``draws`` times; ``python -m deformctl.testing.shapes check --draws 2000 --seed 0``
-prints the counts and the confidently wrong rows (quality ``ok`` with D off by more than
-:data:`D_TOL` or, where the recording identifies it, λ off by more than :data:`LAMBDA_TOL`).
+:func:`run_case` runs one case through :func:`deformctl.measure.stage.read_recording`, the
+squeeze-log writer, :func:`deformctl.characterize.stage.read_and_characterize` and the coefficients
+writer, and sorts the outcome: ``row`` (a table was written), ``refused`` (one clear error of the
+tool's own kind) or ``internal`` (any other exception: a defect). :func:`check` runs :func:`draw`
+``draws`` times; ``python -m deformctl.testing.shapes check --draws 2000 --seed 0`` prints the
+counts and the confidently wrong rows (quality ``ok`` with D off by more than :data:`D_TOL` or,
+where the recording identifies it, λ off by more than :data:`LAMBDA_TOL`).
 """
 
 from __future__ import annotations
@@ -109,7 +109,7 @@ class Case:
     Attributes:
         name: ``<seed>-<index>-<shape>-<layout>``, for messages.
         data: the CSV file's bytes.
-        options: keyword arguments of :class:`deformctl.measure.csv_options.CsvOptions` (and
+        options: keyword arguments of :class:`deformctl.measure.csv.options.CsvOptions` (and
             ``encoding`` for its dialect) that a user would pass (a unit the header leaves out,
             the encoding the error line names).
         truth: the recording's truth.
@@ -389,16 +389,15 @@ def _run(case: Case, workdir: Path) -> Outcome:
     from deformctl.artifacts.provenance import Provenance
     from deformctl.catalog import object_record
     from deformctl.characterize.stage import read_and_characterize
-    from deformctl.measure.csv import read_csv
-    from deformctl.measure.csv_options import CsvDialect, CsvOptions
-    from deformctl.measure.stage import recording_log
+    from deformctl.measure.csv.options import CsvDialect, CsvOptions
+    from deformctl.measure.stage import read_recording, recording_log
 
     src = workdir / "export.csv"
     src.write_bytes(case.data)
     opts = dict(case.options)
     dialect = CsvDialect(encoding=opts.pop("encoding", "utf-8"))
     options = CsvOptions(dialect=dialect, **opts)
-    rec = read_csv(src, options, object_id="obj")
+    rec = read_recording(src, options, "obj")
     log = workdir / "log.mcap"
     obj = object_record("obj", weight_n=1.0)
     recording_log(str(src), rec, obj, options.as_dict(), output=str(log), force=True)

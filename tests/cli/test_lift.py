@@ -520,7 +520,7 @@ def test_table_to_stdout(catalog: Path, tmp_path: Path) -> None:
 
 
 def _threshold_runner(threshold_n: float, fail_for: str | None) -> RunnerFactory:
-    def make(obj: Mapping[str, Any]) -> TrialRunner:
+    def make(obj: Mapping[str, Any], max_force_n: float) -> TrialRunner:
         def trial(grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
             if obj["object_id"] == fail_for and attempt_index == 1:
                 raise SimulationError("state went non-finite")

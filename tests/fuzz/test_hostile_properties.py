@@ -412,7 +412,7 @@ def bag_bytes(tmp_path_factory: pytest.TempPathFactory) -> bytes:
 def test_ros2_bags(bag_bytes: bytes, data: st.DataObject) -> None:
     from mcap.reader import make_reader
 
-    from deformctl.measure import read_ros2_bag
+    from deformctl.measure import BagSource, read_recording
     from tests._helpers.ros2_bags import JOINT_STATE, LEFT, POSE, POSE_STAMPED, WRENCH_STAMPED
 
     definitions = [WRENCH_STAMPED, POSE_STAMPED, JOINT_STATE, "", "float64 x", "not ( a msg"]
@@ -454,7 +454,7 @@ def test_ros2_bags(bag_bytes: bytes, data: st.DataObject) -> None:
         path.write_bytes(out.getvalue())
         untouched = mode == "none" and schema_edit in (None, WRENCH_STAMPED)
         try:
-            rec = read_ros2_bag(path, wrench_topics=[LEFT], position_topic=POSE, object_id="x")
+            rec = read_recording(path, BagSource(wrench_topics=[LEFT], position_topic=POSE), "x")
         except DeformctlError as err:
             _refused(err, 2, 65)
             rec = None

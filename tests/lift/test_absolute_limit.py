@@ -34,6 +34,7 @@ from deformctl.lift.ceiling import (
     absolute_limit,
     force_ceiling,
 )
+from deformctl.lift.options import SearchOptions
 from deformctl.lift.runners import rig as rig_module
 from deformctl.lift.runners.rig import RigRunner, rig_handshake, rig_runner_factory
 from deformctl.lift.stage import lift_catalog
@@ -215,7 +216,7 @@ def test_no_request_ever_exceeds_the_limit(
         mock.patch.object(rig_module, "rig_handshake", return_value=absolute_limit(stated)),
     ):
         factory = rig_runner_factory("rig", timeout_s=1)
-        lift_catalog(catalog, factory, max_force_n=flag)
+        lift_catalog(catalog, factory, search=SearchOptions(max_force_n=flag))
     for request in sent:
         row = rows[int(request["object_id"][1:])]
         f_w_n = row["weight_n"] / (2 * row["friction_mu"])

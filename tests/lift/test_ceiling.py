@@ -129,9 +129,9 @@ def test_the_stage_warns_for_a_clamped_start_and_gives_the_runner_the_ceiling() 
     runners: dict[str, Threshold] = {}
     seen: dict[str, float] = {}
 
-    def make(obj: object) -> Threshold:
+    def make(obj: object, max_force_n: float) -> Threshold:
         oid = obj.object_id  # type: ignore[attr-defined]
-        seen[oid] = obj["max_force_n"]  # type: ignore[index]
+        seen[oid] = max_force_n
         runners[oid] = Threshold(THRESHOLD_N)
         return runners[oid]
 

@@ -21,7 +21,7 @@ from deformctl.artifacts import read_lift_log
 from deformctl.artifacts.dataset import read_failures, read_table_any
 from deformctl.cli import app
 from deformctl.errors import EXIT_USAGE, InputDataError, UsageError
-from deformctl.lift.ceiling import DEFAULT_CEILING_RATIO, force_ceiling, validate_max_force
+from deformctl.lift.ceiling import DEFAULT_CEILING_RATIO, force_ceiling
 from deformctl.lift.options import SearchOptions
 from deformctl.lift.search import find_min_lift_force, find_min_lift_force_seeded
 from deformctl.quantities import MAX_FORCE_N
@@ -70,12 +70,9 @@ BAD: list[Any] = [0.0, -3.0, math.nan]
 
 @pytest.mark.parametrize("value", BAD)
 def test_every_library_entry_gives_the_rule_s_words(value: float) -> None:
-    from deformctl.lift.runners.sim import LiftTask
-    from deformctl.presets import sim_preset
-
     expected = f"{RULE}{MAX_FORCE_N.problem(value).split('got ')[1]}"  # type: ignore[union-attr]
     calls = {
-        "validate_max_force": lambda: validate_max_force(value),
+        "SearchOptions": lambda: SearchOptions(max_force_n=value),
         "find_min_lift_force": lambda: find_min_lift_force(
             _lifts, weight_n=1.0, friction_mu=0.5, object_id="A", max_force_n=value
         ),
@@ -87,8 +84,6 @@ def test_every_library_entry_gives_the_rule_s_words(value: float) -> None:
             object_id="A",
             max_force_n=value,
         ),
-        "force_ceiling": lambda: force_ceiling("A", 1.0, max_force_n=value),
-        "LiftTask": lambda: LiftTask(sim_preset(), SearchOptions(), max_force_n=value),
     }
     for name, call in calls.items():
         with pytest.raises(UsageError) as info:

@@ -185,7 +185,7 @@ def _objects(*rows: dict[str, object]) -> list[CatalogObject]:
 def _threshold_factory(thresholds: dict[str, float]) -> tuple[RunnerFactory, list[tuple]]:
     calls: list[tuple] = []
 
-    def make(obj: CatalogObject) -> ThresholdRunner:
+    def make(obj: CatalogObject, max_force_n: float) -> ThresholdRunner:
         runner = ThresholdRunner(thresholds[obj.object_id])
         runner.calls = calls  # every object's calls, in order
         return runner

@@ -18,7 +18,7 @@ import pytest
 from typer.testing import CliRunner
 
 from deformctl.cli import app
-from deformctl.measure import read_csv_export
+from deformctl.measure import CsvOptions, read_recording
 from deformctl.measure.defects import (
     coarse_force,
     estimate_lag,
@@ -69,14 +69,14 @@ def test_coarse_force_is_flagged(tmp_path: Path) -> None:
         tmp_path / "utm.csv", s, names=("Time (s)", "Force (kN)", "Compression (mm)"),
         units=("s", "kN", "mm"), digits=4,
     )  # fmt: skip
-    rec = read_csv_export(path, object_id="x")
+    rec = read_recording(path, CsvOptions(), "x")
     assert rec.flags == ("coarse_force",)
     assert rec.defects[0]["force_resolution_n"] == pytest.approx(0.1, rel=1e-6)
     text = rec.defects[0]["text"]
     assert text.startswith("coarse_force: the force moves in steps of 0.1 N, 5.0")
     assert text.endswith("% of its 2 N peak (20 levels; more than 2 %)")
     fine = write_export(tmp_path / "fine.csv", s, digits=3)  # 1 mN steps: 0.05 % of the peak
-    assert read_csv_export(fine, object_id="x").flags == ()
+    assert read_recording(fine, CsvOptions(), "x").flags == ()
     assert force_resolution(np.round(s.f, 3)) == pytest.approx(0.001, rel=1e-6)
     assert coarse_force(np.zeros(10)) is None
     row, _ = _characterize(path)
@@ -92,7 +92,7 @@ def test_repeated_timestamps_are_merged_and_reported(tmp_path: Path) -> None:
     assert merged == len(range(0, s.t.size, 10))
     np.testing.assert_array_equal(t, s.t)
     np.testing.assert_allclose(f, s.f)
-    rec = read_csv_export(write_export(tmp_path / "dup.csv", dup), object_id="x")
+    rec = read_recording(write_export(tmp_path / "dup.csv", dup), CsvOptions(), "x")
     assert rec.details["merged_timestamps"] == 81
     assert rec.warnings == (
         "81 sample(s) repeat the timestamp of the one before: merged (averaged)",

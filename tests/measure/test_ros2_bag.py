@@ -2,7 +2,7 @@
 
 The bags hold a known Kelvin–Voigt response: two WrenchStamped palms at 1 kHz (1 % noise) and
 one PoseStamped palm at 100 Hz (0.05 mm noise), three squeezes in one recording. Going through
-``squeeze_from_ros2_bag`` and ``fit_lsq`` must give back the D and λ the bag was written with.
+``read_recording`` and ``fit_lsq`` must give back the D and λ the bag was written with.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from deformctl.errors import (
     MissingInputError,
     UsageError,
 )
-from deformctl.measure import segment_squeezes, squeeze_from_ros2_bag
+from deformctl.measure import BagSource, Segmentation, read_recording, segment_squeezes
 from tests._helpers.ros2_bags import (
     JOINTS,
     LEFT,
@@ -50,9 +50,9 @@ def good_bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_bag_two_palms_recovers_d_and_lambda(good_bag: Path) -> None:
-    squeezes = squeeze_from_ros2_bag(
-        good_bag, wrench_topics=[LEFT, RIGHT], position_topic=POSE, object_id="sand"
-    )
+    squeezes = read_recording(
+        good_bag, BagSource(wrench_topics=[LEFT, RIGHT], position_topic=POSE), "sand"
+    ).squeezes
     assert [s.squeeze_index for s in squeezes] == [0, 1, 2]
     assert all(s.object_id == "sand" for s in squeezes)
     # 1 kHz force timestamps survive: uniform 1 ms steps
@@ -67,9 +67,12 @@ def test_bag_two_palms_recovers_d_and_lambda(good_bag: Path) -> None:
 
 
 def test_bag_one_palm_and_one_squeeze(good_bag: Path) -> None:
-    (whole,) = squeeze_from_ros2_bag(
-        good_bag, wrench_topics=[RIGHT], position_topic=POSE, object_id="sand", segment=False
-    )
+    (whole,) = read_recording(
+        good_bag,
+        BagSource(wrench_topics=[RIGHT], position_topic=POSE),
+        "sand",
+        Segmentation(segment=False),
+    ).squeezes
     # the overlap is the pose span 3 ms..13.793 s (inclusive), and so is the force time base
     assert whole.time_s[0] == 0.0
     assert whole.time_s[-1] == pytest.approx(13.793 - 0.003, abs=1e-6)
@@ -82,14 +85,16 @@ def test_bag_one_palm_and_one_squeeze(good_bag: Path) -> None:
 def test_bag_joint_state_gap(tmp_path: Path) -> None:
     path = tmp_path / "js.mcap"
     write_bag(path, 13.03, 0.33, seed=2, joint_state=True)
-    squeezes = squeeze_from_ros2_bag(
+    squeezes = read_recording(
         path,
-        wrench_topics=[LEFT, RIGHT],
-        position_topic=JOINTS,
-        joint="gripper_width",
-        position_is="gap",
-        object_id="cotton",
-    )
+        BagSource(
+            wrench_topics=[LEFT, RIGHT],
+            position_topic=JOINTS,
+            joint="gripper_width",
+            position_is="gap",
+        ),
+        "cotton",
+    ).squeezes
     assert len(squeezes) == 3
     fit = fit_lsq(squeezes, window_s=BAG_WINDOW_S)
     assert fit.deformability_n_per_cm == pytest.approx(13.03, rel=0.02)
@@ -109,8 +114,10 @@ def test_segmentation_finds_each_squeeze() -> None:
 
 def test_bag_topic_not_in_bag_lists_topics(good_bag: Path) -> None:
     msg = _err(
-        lambda: squeeze_from_ros2_bag(
-            good_bag, wrench_topics=["/ft"], position_topic=POSE, object_id="x"
+        lambda: (
+            read_recording(
+                good_bag, BagSource(wrench_topics=["/ft"], position_topic=POSE), "x"
+            ).squeezes
         ),
         InputDataError,
         "topic '/ft' is not in the bag",
@@ -121,8 +128,10 @@ def test_bag_topic_not_in_bag_lists_topics(good_bag: Path) -> None:
 
 def test_bag_topic_of_wrong_type(good_bag: Path) -> None:
     _err(
-        lambda: squeeze_from_ros2_bag(
-            good_bag, wrench_topics=[POSE], position_topic=LEFT, object_id="x"
+        lambda: (
+            read_recording(
+                good_bag, BagSource(wrench_topics=[POSE], position_topic=LEFT), "x"
+            ).squeezes
         ),
         InputDataError,
         f"topic '{POSE}' has type geometry_msgs/msg/PoseStamped, expected "
@@ -132,8 +141,8 @@ def test_bag_topic_of_wrong_type(good_bag: Path) -> None:
 
 def test_bag_missing_file(tmp_path: Path) -> None:
     with pytest.raises(MissingInputError, match="no such bag file") as info:
-        squeeze_from_ros2_bag(
-            tmp_path / "nope.mcap", wrench_topics=[LEFT], position_topic=POSE, object_id="x"
+        read_recording(
+            tmp_path / "nope.mcap", BagSource(wrench_topics=[LEFT], position_topic=POSE), "x"
         )
     assert info.value.exit_code == EXIT_NOINPUT
 
@@ -142,8 +151,8 @@ def test_bag_not_mcap(tmp_path: Path) -> None:
     path = tmp_path / "junk.mcap"
     path.write_bytes(b"not an mcap file at all")
     _err(
-        lambda: squeeze_from_ros2_bag(
-            path, wrench_topics=[LEFT], position_topic=POSE, object_id="x"
+        lambda: (
+            read_recording(path, BagSource(wrench_topics=[LEFT], position_topic=POSE), "x").squeezes
         ),
         InputDataError,
         "not a readable MCAP file",
@@ -172,8 +181,10 @@ def test_bag_bad_streams(tmp_path: Path, kwargs: dict[str, object], match: str) 
     path = tmp_path / "bad.mcap"
     write_bag(path, 20.0, 1.0, n_squeezes=1, **kwargs)  # type: ignore[arg-type]
     msg = _err(
-        lambda: squeeze_from_ros2_bag(
-            path, wrench_topics=[LEFT, RIGHT], position_topic=POSE, object_id="x"
+        lambda: (
+            read_recording(
+                path, BagSource(wrench_topics=[LEFT, RIGHT], position_topic=POSE), "x"
+            ).squeezes
         ),
         InputDataError,
         match,
@@ -185,11 +196,13 @@ def test_bag_joint_state_needs_joint(tmp_path: Path) -> None:
     path = tmp_path / "js.mcap"
     write_bag(path, 20.0, 1.0, joint_state=True, n_squeezes=1)
     with pytest.raises(UsageError, match="pass a joint name") as info:
-        squeeze_from_ros2_bag(path, wrench_topics=[LEFT], position_topic=JOINTS, object_id="x")
+        read_recording(path, BagSource(wrench_topics=[LEFT], position_topic=JOINTS), "x")
     assert info.value.exit_code == EXIT_USAGE
     _err(
-        lambda: squeeze_from_ros2_bag(
-            path, wrench_topics=[LEFT], position_topic=JOINTS, joint="finger", object_id="x"
+        lambda: (
+            read_recording(
+                path, BagSource(wrench_topics=[LEFT], position_topic=JOINTS, joint="finger"), "x"
+            ).squeezes
         ),
         InputDataError,
         "joint 'finger' not in the JointState names",

@@ -16,7 +16,8 @@ from typer.testing import CliRunner
 
 from deformctl.artifacts import read_table
 from deformctl.cli import app
-from deformctl.measure.ros2_bag import ENERGY_RETURNED_FRAC, read_ros2_bag
+from deformctl.measure import BagSource, read_recording
+from deformctl.measure.ros2_bag import ENERGY_RETURNED_FRAC
 from tests._helpers.ros2_bags import LEFT, POSE, write_bag
 
 cli = CliRunner()
@@ -33,7 +34,7 @@ def _bag(path: Path, lam: float, reverse: bool, seed: int = 1) -> Path:
 
 
 def _flags(path: Path) -> tuple[str, ...]:
-    rec = read_ros2_bag(path, wrench_topics=[LEFT], position_topic=POSE, object_id="A")
+    rec = read_recording(path, BagSource(wrench_topics=[LEFT], position_topic=POSE), "A")
     return rec.flags
 
 

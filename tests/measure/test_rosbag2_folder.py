@@ -21,14 +21,14 @@ from typer.testing import CliRunner
 from deformctl.characterize import fit_lsq
 from deformctl.cli import app
 from deformctl.errors import InputDataError, MissingInputError
-from deformctl.measure import squeeze_from_ros2_bag
+from deformctl.measure import BagSource, read_recording
 from tests._helpers.cli import _error
 from tests._helpers.ros2_bags import LEFT, POSE, RIGHT, write_bag
 
 from ._errors import _err
 
 runner = CliRunner()
-TOPICS = {"wrench_topics": [LEFT, RIGHT], "position_topic": POSE, "object_id": "sand"}
+TOPICS = BagSource(wrench_topics=(LEFT, RIGHT), position_topic=POSE)
 CLI_TOPICS = ["--wrench-topic", LEFT, "--wrench-topic", RIGHT, "--position-topic", POSE,
               "--object-id", "sand", "--weight-n", "2.9"]  # fmt: skip
 
@@ -118,8 +118,8 @@ def test_a_folder_reads_as_its_single_file(bags: tuple[Path, Path, dict[str, int
     single, folder, counts = bags
     assert len(list(folder.glob("*.mcap"))) == 2
     assert counts[LEFT] == counts[RIGHT] > 10_000  # 1 kHz over ~17 s, split mid-recording
-    one = squeeze_from_ros2_bag(single, **TOPICS)
-    split = squeeze_from_ros2_bag(folder, **TOPICS)
+    one = read_recording(single, TOPICS, "sand").squeezes
+    split = read_recording(folder, TOPICS, "sand").squeezes
     assert len(split) == len(one) == 3
     for a, b in zip(one, split, strict=True):
         np.testing.assert_array_equal(a.time_s, b.time_s)
@@ -146,7 +146,11 @@ def test_files_listed_out_of_order_are_refused(
     _, folder, counts = bags
     bad = _copy(folder, tmp_path)
     write_metadata(bad, ["run_1.mcap", "run_0.mcap"], counts)
-    _err(lambda: squeeze_from_ros2_bag(bad, **TOPICS), InputDataError, "non-monotonic timestamps")
+    _err(
+        lambda: read_recording(bad, TOPICS, "sand").squeezes,
+        InputDataError,
+        "non-monotonic timestamps",
+    )
 
 
 def test_a_file_left_out_is_caught_by_the_message_counts(
@@ -155,7 +159,7 @@ def test_a_file_left_out_is_caught_by_the_message_counts(
     _, folder, counts = bags
     bad = _copy(folder, tmp_path)
     write_metadata(bad, ["run_0.mcap"], counts)  # the index still states both files' messages
-    msg = _err(lambda: squeeze_from_ros2_bag(bad, **TOPICS), InputDataError, "states")
+    msg = _err(lambda: read_recording(bad, TOPICS, "sand").squeezes, InputDataError, "states")
     assert f"states {counts[LEFT]} messages on topic '{LEFT}'" in msg
 
 
@@ -165,7 +169,7 @@ def test_a_listed_file_that_is_missing_exits_66(
     _, folder, _ = bags
     bad = _copy(folder, tmp_path)
     (bad / "run_1.mcap").unlink()
-    _err(lambda: squeeze_from_ros2_bag(bad, **TOPICS), MissingInputError, "run_1.mcap")
+    _err(lambda: read_recording(bad, TOPICS, "sand").squeezes, MissingInputError, "run_1.mcap")
     res = runner.invoke(app, ["measure", "bag", str(bad), *CLI_TOPICS, "-o", str(tmp_path / "o")])
     assert "run_1.mcap" in _error(res, 66)
 
@@ -228,8 +232,8 @@ def test_another_storage_or_a_compressed_file_is_refused(tmp_path: Path) -> None
     folder.mkdir()
     write_metadata(folder, ["run_0.mcap"], {LEFT: 1}, storage="rosbag_v1")
     with pytest.raises(InputDataError, match="storage_identifier 'rosbag_v1'"):
-        squeeze_from_ros2_bag(folder, **TOPICS)
+        read_recording(folder, TOPICS, "sand")
     write_metadata(folder, ["run_0.mcap.zstd"], {LEFT: 1})
-    _err(lambda: squeeze_from_ros2_bag(folder, **TOPICS), InputDataError, "decompress")
+    _err(lambda: read_recording(folder, TOPICS, "sand").squeezes, InputDataError, "decompress")
     write_metadata(folder, ["../elsewhere.mcap"], {LEFT: 1})
-    _err(lambda: squeeze_from_ros2_bag(folder, **TOPICS), InputDataError, "outside the bag")
+    _err(lambda: read_recording(folder, TOPICS, "sand").squeezes, InputDataError, "outside the bag")

@@ -26,8 +26,7 @@ from typer.testing import CliRunner
 from deformctl.artifacts import read_table
 from deformctl.cli import app
 from deformctl.errors import InputDataError
-from deformctl.measure import read_csv_export
-from deformctl.measure.ros2_bag import read_ros2_bag
+from deformctl.measure import BagSource, CsvOptions, read_recording
 from deformctl.plausibility import DOUBT_FLAGS
 from deformctl.units import UNITS, parse_unit
 
@@ -67,7 +66,7 @@ def test_ms_stamps_read_as_seconds_are_flagged_by_zeta(
     squeeze = kv_squeeze(rate_hz=rate_hz, duration_s=2.0 if rate_hz < 5000 else 1.0)
     names = (time_name, "Load (N)", "Compression (mm)")
     csv = write_export(tmp_path / "ms.csv", squeeze, names=names, units=("ms", "N", "mm"))
-    flags = read_csv_export(csv, object_id="A").flags
+    flags = read_recording(csv, CsvOptions(), "A").flags
     assert not set(flags) & set(DOUBT_FLAGS)  # measure alone cannot tell
     quality, stderr = _characterize(tmp_path, csv)
     assert flag in quality.split(",")
@@ -128,7 +127,7 @@ def test_n_values_under_a_kn_label_below_the_peak_band(
     squeeze = kv_squeeze(d_n_per_cm=peak_n / 0.3, lam_ns_per_cm=0.1, peak_n=peak_n)
     names = ("Time (s)", "Load [kN]", "Compression (mm)")
     csv = write_export(tmp_path / "kn.csv", squeeze, names=names, units=("s", "N", "mm"), digits=9)
-    rec = read_csv_export(csv, object_id="A")
+    rec = read_recording(csv, CsvOptions(), "A")
     assert ("force_unit_doubtful" in rec.flags) is flagged, (rec.flags, rec.warnings)
     if flagged:
         line = next(w for w in rec.warnings if "force_unit" in w or "column 'Load [kN]'" in w)
@@ -142,7 +141,7 @@ def test_the_right_kn_label_is_silent(tmp_path: Path) -> None:
     names = ("Time (s)", "Load [kN]", "Compression (mm)")
     csv = write_export(tmp_path / "kn.csv", kv_squeeze(), names=names, units=("s", "kN", "mm"),
                        digits=9)  # fmt: skip
-    rec = read_csv_export(csv, object_id="A")
+    rec = read_recording(csv, CsvOptions(), "A")
     assert not set(rec.flags) & set(DOUBT_FLAGS)
 
 
@@ -193,10 +192,16 @@ def kn_bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def _bag_flags(bag: Path) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    rec = read_ros2_bag(
-        bag, wrench_topics=["/left/wrench", "/right/wrench"], position_topic="/joint_states",
-        joint="gripper_width", position_is="gap", object_id="sponge",
-    )  # fmt: skip
+    rec = read_recording(
+        bag,
+        BagSource(
+            wrench_topics=["/left/wrench", "/right/wrench"],
+            position_topic="/joint_states",
+            joint="gripper_width",
+            position_is="gap",
+        ),
+        "sponge",
+    )
     return rec.flags, rec.warnings
 
 
@@ -319,13 +324,14 @@ def test_every_unit_of_the_list_is_read_wherever_a_unit_is_given(
         tmp_path / "u.csv", role, unit, header="name" if where == "header" else "plain",
         units_row=where == "units row",
     )  # fmt: skip
-    options: dict[str, Any] = {"object_id": "A"}
+    options = CsvOptions()
     if where == "--units":
-        options["units"] = {role: unit}
+        units = {role: unit}
         other = {"time": "s", "force": "N", "compression": "m"}
-        options["units"].update({r: u for r, u in other.items() if r != role})
-        options["columns"] = {"time": "Time", "force": "Load", "compression": "Compression"}
-    rec = read_csv_export(path, **options)
+        units.update({r: u for r, u in other.items() if r != role})
+        columns = {"time": "Time", "force": "Load", "compression": "Compression"}
+        options = CsvOptions(columns=columns, units=units)
+    rec = read_recording(path, options, "A")
     column = rec.details["columns"][role]
     assert parse_unit(column["unit"]) == parse_unit(unit), column
     peak_f = max(float(s.force_n.max()) for s in rec.squeezes)
@@ -342,6 +348,6 @@ def test_a_lbf_column_is_converted_not_read_as_newtons(tmp_path: Path) -> None:
     lines += [f"{t:.4f},{f / 4.4482216152605:.9f},{d * 1e3:.6f}" for t, f, d in
               zip(s.t, s.f, s.d, strict=True)]  # fmt: skip
     (tmp_path / "lbf.csv").write_text("\n".join(lines) + "\n")
-    rec = read_csv_export(tmp_path / "lbf.csv", object_id="A")
+    rec = read_recording(tmp_path / "lbf.csv", CsvOptions(), "A")
     assert rec.details["columns"]["force"]["unit"] == "lbf"
     assert max(float(q.force_n.max()) for q in rec.squeezes) == pytest.approx(s.f.max(), rel=1e-6)

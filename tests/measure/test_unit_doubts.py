@@ -17,7 +17,7 @@ from typer.testing import CliRunner
 
 from deformctl.artifacts import read_table
 from deformctl.cli import app
-from deformctl.measure import read_csv_export
+from deformctl.measure import CsvOptions, read_recording
 from deformctl.plausibility import DOUBT_FLAGS
 
 from ._exports import kv_squeeze, write_export
@@ -26,7 +26,7 @@ runner = CliRunner()
 
 
 def _flags(path: Path) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    rec = read_csv_export(path, object_id="A")
+    rec = read_recording(path, CsvOptions(), "A")
     return rec.flags, rec.warnings
 
 

@@ -284,7 +284,7 @@ class _Called(Exception):
     [
         ("deformctl.measure.stage.simulate_catalog_file", ["measure", "sim", "-o", "s.mcap"]),
         ("deformctl.lift.stage.lift_catalog_files", ["lift", "sim", "-o", "l.parquet"]),
-        ("deformctl.measure.csv_batch.measure_csv_files",
+        ("deformctl.measure.csv.batch.measure_csv_files",
          ["measure", "csv", "--columns", "time=t,force=f,compression=c", "--weight-n", "1",
           "-o", "s.mcap"]),
     ],

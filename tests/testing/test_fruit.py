@@ -19,7 +19,7 @@ import pytest
 from deformctl.characterize import characterize
 from deformctl.characterize.fit import default_window_s
 from deformctl.characterize.rupture import SAFE_FORCE_MARGIN, cut_rupture, safe_force_n
-from deformctl.measure.csv import read_csv_export
+from deformctl.measure import CsvOptions, read_recording
 from deformctl.testing.fruit import SHAPES, check, fruit_squeeze, main, write_csv
 
 DRAWS = 160
@@ -99,7 +99,7 @@ def test_through_the_csv_reader_the_same_rupture(tmp_path: Path) -> None:
     # draw 9 of seed 0 as a CSV export, read as measure --csv reads it: the same onset
     fs = fruit_squeeze(0, 9)
     write_csv(fs, str(tmp_path / "kiwi.csv"))
-    rec = read_csv_export(tmp_path / "kiwi.csv", object_id="kiwi")
+    rec = read_recording(tmp_path / "kiwi.csv", CsvOptions(), "kiwi")
     assert len(rec.ruptures) == 1
     assert rec.ruptures[0].force_n == pytest.approx(fs.onset_force_n, rel=0.1)
     res = check(6, seed=0, through_csv=True)

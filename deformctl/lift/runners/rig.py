@@ -460,18 +460,16 @@ def rig_handshake(
     return absolute_limit(float(stated))
 
 
-def rig_object(obj: CatalogObject) -> dict[str, Any]:
-    """The object description a :class:`RigRunner` sends: id, W, mu, size (cm) and, when the
-    lift gave the object one, its force ceiling ``max_force_n`` (N)."""
-    described: dict[str, Any] = {
+def rig_object(obj: CatalogObject, max_force_n: float) -> dict[str, Any]:
+    """The object description a :class:`RigRunner` sends: id, W, mu, size (cm) and the force
+    ceiling ``max_force_n`` (N) the lift gave the object."""
+    return {
         "object_id": obj.object_id,
         "weight_n": obj.weight_n,
         "friction_mu": obj.friction_mu,
         "size_cm": list(obj.size_cm),
+        "max_force_n": max_force_n,
     }
-    if obj.get("max_force_n") is not None:
-        described["max_force_n"] = obj.get("max_force_n")
-    return described
 
 
 def rig_runner_factory(
@@ -518,11 +516,11 @@ def rig_runner_factory(
             stated.append(rig_handshake(argv, timeout_s=float(timeout_s), cwd=cwd))
         return stated[0]
 
-    def make(obj: CatalogObject) -> TrialRunner:
+    def make(obj: CatalogObject, max_force_n: float) -> TrialRunner:
         return RigRunner(
             argv,
             timeout_s=float(timeout_s),
-            object=rig_object(obj),
+            object=rig_object(obj, max_force_n),
             cwd=cwd,
             slip_from_frames=slip_from_frames,
             absolute_max_force_n=limit().max_force_n,

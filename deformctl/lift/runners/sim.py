@@ -50,7 +50,6 @@ from deformctl.lift.options import DEFAULT_SEARCH, SearchOptions
 from deformctl.lift.search import TrialRunner
 from deformctl.lift.stage import RunnerFactory, lift_catalog
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
-from deformctl.quantities import MAX_FORCE_N
 from deformctl.scene import DEFAULT_SCENE_HZ, scene_every_steps
 
 if TYPE_CHECKING:  # pragma: no cover - the simulator is imported where it runs (see below)
@@ -168,7 +167,7 @@ class _SimRunnerMaker:
     preset: SimPreset
     scene_hz: float = 0.0
 
-    def __call__(self, obj: CatalogObject) -> TrialRunner:
+    def __call__(self, obj: CatalogObject, max_force_n: float) -> TrialRunner:
         return _SimAttempt(self.preset, obj.to_sim_spec(), self.scene_hz)
 
 
@@ -206,12 +205,6 @@ class LiftTask:
         log_epoch_ns: where each part's lift log begins, ns since the Unix epoch (None: the
             log writer's fixed epoch, 2000-01-01).
         scene_hz: scene frames per simulated second in the part logs (0: none).
-        max_force_n: the force ceiling of every object, N (``--max-force-n``, under the rule of
-            :data:`~deformctl.quantities.MAX_FORCE_N`); None: the catalog's ``max_force_n``, else
-            the default of :mod:`deformctl.lift.ceiling`, as for a single-file output.
-
-    Raises:
-        UsageError: ``max_force_n`` breaks its rule (exit 2).
     """
 
     #: loaded by the fork server of local workers (:mod:`deformctl.sim._warm_worker`)
@@ -221,10 +214,6 @@ class LiftTask:
     search: SearchOptions = DEFAULT_SEARCH
     log_epoch_ns: int | None = None
     scene_hz: float = DEFAULT_SCENE_HZ
-    max_force_n: float | None = None
-
-    def __post_init__(self) -> None:
-        MAX_FORCE_N.check_optional(self.max_force_n)
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """One object's search: its lift_results row, its attempts as the payload.
@@ -233,12 +222,7 @@ class LiftTask:
             InputDataError: the object cannot be lifted or simulated (recorded as failed).
         """
         factory = sim_runner_factory(preset=self.preset, scene_hz=self.scene_hz)
-        run = lift_catalog(
-            [CatalogObject.from_row(item)],
-            factory,
-            search=self.search,
-            max_force_n=self.max_force_n,
-        )
+        run = lift_catalog([CatalogObject.from_row(item)], factory, search=self.search)
         error = run.error_message()
         return TaskOutput(
             rows=spec_rows(run.table, "lift_results"),
@@ -294,11 +278,13 @@ def lift_sweep(
     factory = sim_runner_factory(preset=task.preset, scene_hz=task.scene_hz)
     catalog = select_objects(read_lift_objects(catalog_path), object_ids)
     _check_budgets(catalog, task)
-    run_settings = {"runner": factory.name, **factory.settings, **task.search.as_dict()}
+    search = task.search.as_dict()
+    ceiling = search.pop("max_force_n", None)
+    run_settings = {"runner": factory.name, **factory.settings, **search}
     if task.log_epoch_ns is not None:
         run_settings["log_epoch_ns"] = task.log_epoch_ns
-    if task.max_force_n is not None:  # a resumed run must use the same ceiling
-        run_settings["max_force_n"] = task.max_force_n
+    if ceiling is not None:  # a resumed run must use the same ceiling
+        run_settings["max_force_n"] = ceiling
     provenance = Provenance.from_invocation([catalog_path], settings=run_settings)
     fingerprint = dataset_fingerprint(
         "lift", "lift_results", run_settings, {"catalog": input_digest(catalog_path)}

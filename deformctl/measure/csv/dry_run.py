@@ -15,7 +15,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from deformctl.artifacts.io import display_name
-from deformctl.measure.csv_batch import CsvBatchResult, CsvFile, CsvFileTask, FileOutcome, _Catching
+from deformctl.measure.csv.batch import CsvBatchResult, CsvFile, CsvFileTask, FileOutcome, _Catching
 from deformctl.measure.recording import Recording
 from deformctl.parallel import map_in_order
 from deformctl.parallel.auto import AUTO, Auto
@@ -93,7 +93,7 @@ def describe(file: CsvFile, rec: Recording) -> list[str]:
         *(_column(role, col) for role, col in columns.items()),
     ]
     reading = d["position_reading"]
-    from deformctl.measure.csv import POSITION_RULES
+    from deformctl.measure.csv.reader import POSITION_RULES
 
     lines.append(
         f"position: column {reading['column']!r} ({reading['role']}) read as "

@@ -20,7 +20,7 @@ from deformctl.artifacts.mcap.contents import decode_provenance
 from deformctl.cli import app
 from deformctl.errors import EXIT_DATAERR, EXIT_FAILURE, EXIT_NOINPUT, EXIT_USAGE
 
-from ._exports import kv_squeeze, write_export
+from .._exports import kv_squeeze, write_export
 
 runner = CliRunner()
 HEADER = "Time (s),Load (N),Compression (mm)\n"

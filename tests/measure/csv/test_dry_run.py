@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 from deformctl.cli import app
 from deformctl.errors import EXIT_DATAERR, EXIT_FAILURE, EXIT_NOINPUT, EXIT_USAGE
 
-from ._exports import kv_squeeze, write_export
+from .._exports import kv_squeeze, write_export
 
 runner = CliRunner()
 

@@ -16,14 +16,14 @@ from typer.testing import CliRunner
 
 from deformctl.cli import app
 from deformctl.errors import EXIT_DATAERR, InputDataError
-from deformctl.measure import read_csv_export
-from deformctl.measure.csv_batch import CsvFile, CsvFileTask, dataset_notices, summary_row
-from deformctl.measure.csv_options import CsvOptions
+from deformctl.measure import read_recording
+from deformctl.measure.csv.batch import CsvFile, CsvFileTask, dataset_notices, summary_row
+from deformctl.measure.csv.options import CsvOptions
 
-from ._exports import Squeeze, kv_squeeze, write_export
+from .._exports import Squeeze, kv_squeeze, write_export
 
 runner = CliRunner()
-PHANTOM = Path(__file__).resolve().parents[2] / "datasets" / "examples" / "phantom"
+PHANTOM = Path(__file__).resolve().parents[3] / "datasets" / "examples" / "phantom"
 
 
 @pytest.fixture(scope="module")
@@ -44,7 +44,7 @@ def test_line_ends_with_a_preamble(
         tmp_path / "x.csv", squeeze, preamble=[f"Key {k}: {k}" for k in range(preamble)]
     )
     path.write_bytes(path.read_bytes().replace(b"\n", end.encode()))
-    rec = read_csv_export(path, object_id="x")
+    rec = read_recording(path, CsvOptions(), "x")
     s = rec.squeezes[0]
     assert s.time_s.shape == squeeze.t.shape
     _same(s.force_n, squeeze.f)
@@ -55,10 +55,10 @@ def test_line_ends_with_a_preamble(
 def test_a_crlf_or_cr_copy_of_a_phantom_file_reads_as_the_original(
     tmp_path: Path, end: bytes
 ) -> None:
-    original = read_csv_export(PHANTOM / "EF10_0T_A1.csv", object_id="p").squeezes[0]
+    original = read_recording(PHANTOM / "EF10_0T_A1.csv", CsvOptions(), "p").squeezes[0]
     copy = tmp_path / "copy.csv"
     copy.write_bytes((PHANTOM / "EF10_0T_A1.csv").read_bytes().replace(b"\n", end))
-    got = read_csv_export(copy, object_id="p").squeezes[0]
+    got = read_recording(copy, CsvOptions(), "p").squeezes[0]
     np.testing.assert_array_equal(got.force_n, original.force_n)
     np.testing.assert_array_equal(got.compression_m, original.compression_m)
 
@@ -67,14 +67,14 @@ def test_blank_first_lines_and_blank_lines_in_the_preamble(
     tmp_path: Path, squeeze: Squeeze
 ) -> None:
     path = write_export(tmp_path / "x.csv", squeeze, preamble=["", "", "Sample: A", ""])
-    rec = read_csv_export(path, object_id="x")
+    rec = read_recording(path, CsvOptions(), "x")
     _same(rec.squeezes[0].force_n, squeeze.f)
     assert rec.details["preamble"] == {"Sample": "A"}
 
 
 def test_a_cell_over_128_kib_in_the_preamble_is_read_past(tmp_path: Path, squeeze: Squeeze) -> None:
     path = write_export(tmp_path / "x.csv", squeeze, preamble=["Notes: " + "x" * 140_000])
-    rec = read_csv_export(path, object_id="x")
+    rec = read_recording(path, CsvOptions(), "x")
     _same(rec.squeezes[0].force_n, squeeze.f)
 
 
@@ -99,7 +99,7 @@ def test_a_text_column_beside_the_numbers_is_left_out(tmp_path: Path, squeeze: S
     ]
     path = tmp_path / "x.csv"
     path.write_text("Time (s),Load (N),Step,Compression (mm)\n" + "\n".join(rows) + "\n")
-    rec = read_csv_export(path, object_id="x")
+    rec = read_recording(path, CsvOptions(), "x")
     _same(rec.squeezes[0].force_n, squeeze.f)
     assert set(rec.details["columns"]) == {"time", "force", "compression"}
 
@@ -113,7 +113,7 @@ def test_a_relaxation_keeps_its_positive_force(tmp_path: Path) -> None:
         "Time (s),Force (N),Displacement (mm)\n"
         + "".join(f"{a:.3f},{b:.5f},{c:.5f}\n" for a, b, c in zip(t, f, d, strict=True))
     )
-    rec = read_csv_export(path, object_id="r")
+    rec = read_recording(path, CsvOptions(), "r")
     assert rec.details["force_sign"]["flipped"] is False
     assert rec.details["force_sign"]["by"] == "one_sign"
     assert float(rec.squeezes[0].force_n.max()) == pytest.approx(5.0, abs=1e-3)
@@ -124,14 +124,14 @@ def test_a_position_column_is_read_as_the_compression_by_default(
     tmp_path: Path, squeeze: Squeeze, name: str
 ) -> None:
     path = write_export(tmp_path / "x.csv", squeeze, names=("Time (s)", "Load (N)", name))
-    rec = read_csv_export(path, object_id="x")
+    rec = read_recording(path, CsvOptions(), "x")
     _same(rec.squeezes[0].compression_m, squeeze.d)
     reading = rec.details["position_reading"]
     assert (reading["role"], reading["reading"], reading["factor"]) == ("position", "travel", 1.0)
     assert any(
         n.startswith(f"position: column {name!r} (position) read as travel") for n in rec.notes
     )
-    palm = read_csv_export(path, object_id="x", position_is="palm")  # opt-in: one palm's travel
+    palm = read_recording(path, CsvOptions(position_is="palm"), "x")  # opt-in: one palm's travel
     _same(palm.squeezes[0].compression_m, 2.0 * squeeze.d)
     assert palm.details["position_reading"]["factor"] == 2.0
 
@@ -159,7 +159,7 @@ def test_a_file_with_no_numbers_is_still_one_error(tmp_path: Path) -> None:
     path = tmp_path / "words.csv"
     path.write_text("a,b,c\r\nx,y,z\r\nu,v,w\r\n")
     with pytest.raises(InputDataError, match="no rows of numbers"):
-        read_csv_export(path, object_id="w")
+        read_recording(path, CsvOptions(), "w")
 
 
 def test_the_unit_hint_keeps_the_position_role_and_its_reading(
@@ -167,7 +167,7 @@ def test_the_unit_hint_keeps_the_position_role_and_its_reading(
 ) -> None:
     path = write_export(tmp_path / "pos.csv", squeeze, names=("Time (s)", "Load (N)", "Pos"))
     with pytest.raises(InputDataError, match=r"did you mean --units position=mm\?"):
-        read_csv_export(path, object_id="p")  # mm values read as m: 5 m of compression
-    rec = read_csv_export(path, object_id="p", units={"position": "mm"})
+        read_recording(path, CsvOptions(), "p")  # mm values read as m: 5 m of compression
+    rec = read_recording(path, CsvOptions(units={"position": "mm"}), "p")
     _same(rec.squeezes[0].compression_m, squeeze.d)  # the hint's reading is the compression
     assert rec.details["position_reading"]["reading"] == "travel"

@@ -1,4 +1,4 @@
-"""``read_csv_export`` reads exports as testing machines and grippers write them.
+"""``read_recording`` reads exports as testing machines and grippers write them.
 
 Every file here is a known Kelvin–Voigt squeeze (:mod:`measure._exports`) written in one dialect;
 the reader must give back the same samples in SI (to the digits written), with the columns,
@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 from deformctl.errors import EXIT_DATAERR, EXIT_USAGE, InputDataError, UsageError
-from deformctl.measure import CsvDialect, CsvOptions, read_csv_export
+from deformctl.measure import CsvDialect, CsvOptions, read_recording
 
-from ._exports import Squeeze, kv_squeeze, write_export
+from .._exports import Squeeze, kv_squeeze, write_export
 
 PREAMBLE = (
     "EF10_0T_A_sample_1",
@@ -45,7 +45,7 @@ def _same(rec_squeeze: object, s: Squeeze, *, atol_f: float = 2e-6, atol_d: floa
 def test_phantom_layout_preamble_header_units(tmp_path: Path, squeeze: Squeeze) -> None:
     """A 5-line preamble, units in the names: found with no option; the preamble is kept."""
     path = write_export(tmp_path / "p.csv", squeeze, preamble=PREAMBLE)
-    rec = read_csv_export(path, object_id="x")
+    rec = read_recording(path, CsvOptions(), "x")
     _same(rec.squeezes[0], squeeze)
     csv = rec.details
     assert csv["layout"]["header_line"] == 6
@@ -67,7 +67,7 @@ def test_phantom_layout_preamble_header_units(tmp_path: Path, squeeze: Squeeze) 
     )
     assert rec.warnings == ()
     assert rec.flags == ()
-    same = read_csv_export(path, object_id="x", options=CsvOptions(CsvDialect(skip_rows=5)))
+    same = read_recording(path, CsvOptions(CsvDialect(skip_rows=5)), "x")
     np.testing.assert_array_equal(same.squeezes[0].force_n, rec.squeezes[0].force_n)
 
 
@@ -91,7 +91,7 @@ def test_dialects_read_back_the_same_squeeze(
 ) -> None:
     """Each dialect, with no option, gives back the samples (to the digits written) in SI."""
     path = write_export(tmp_path / "e.csv", squeeze, **dialect)  # type: ignore[arg-type]
-    rec = read_csv_export(path, object_id="x")
+    rec = read_recording(path, CsvOptions(), "x")
     digits = int(dialect.get("digits", 6))  # type: ignore[call-overload]
     units = dialect.get("units", ("s", "N", "mm"))
     scale_f = {"N": 1.0, "kN": 1e3, "mN": 1e-3}[units[1]]  # type: ignore[index]
@@ -106,12 +106,12 @@ def test_gbk_header_needs_encoding_and_is_then_read(tmp_path: Path, squeeze: Squ
         tmp_path / "gbk.csv", squeeze, names=("时间(s)", "力(N)", "位移(mm)"), encoding="gbk"
     )
     with pytest.raises(InputDataError) as info:
-        read_csv_export(path, object_id="x")
+        read_recording(path, CsvOptions(), "x")
     assert str(info.value) == (
         f"{path}: not UTF-8 text: byte 0xbc on line 1 does not decode; pass --encoding gbk (it "
         "reads as gbk: '时间(s),力(N),位移(mm)')"
     )
-    rec = read_csv_export(path, object_id="x", options=CsvOptions(CsvDialect(encoding="gbk")))
+    rec = read_recording(path, CsvOptions(CsvDialect(encoding="gbk")), "x")
     _same(rec.squeezes[0], squeeze)
     assert [c["column"] for c in rec.details["columns"].values()] == [
         "时间(s)",
@@ -124,7 +124,7 @@ def test_negative_compressive_force_is_flipped_and_recorded(
     tmp_path: Path, squeeze: Squeeze
 ) -> None:
     path = write_export(tmp_path / "instron.csv", squeeze, force_sign=-1.0)
-    rec = read_csv_export(path, object_id="x")
+    rec = read_recording(path, CsvOptions(), "x")
     _same(rec.squeezes[0], squeeze)
     assert rec.details["force_sign"] == {
         "option": "auto",
@@ -136,12 +136,12 @@ def test_negative_compressive_force_is_flipped_and_recorded(
         "the force is negative under compression in column 'Load (N)': sign flipped "
         "(--force-sign auto)"
     )
-    same = read_csv_export(path, object_id="x", options=CsvOptions(force_sign="negative"))
+    same = read_recording(path, CsvOptions(force_sign="negative"), "x")
     _same(same.squeezes[0], squeeze)
     with pytest.raises(InputDataError, match="pass --force-sign negative \\(or auto\\)") as info:
-        read_csv_export(path, object_id="x", options=CsvOptions(force_sign="positive"))
+        read_recording(path, CsvOptions(force_sign="positive"), "x")
     assert info.value.exit_code == EXIT_DATAERR
-    plain = read_csv_export(write_export(tmp_path / "p.csv", squeeze), object_id="x")
+    plain = read_recording(write_export(tmp_path / "p.csv", squeeze), CsvOptions(), "x")
     assert plain.details["force_sign"]["flipped"] is False
     assert len(plain.notes) == 1
 
@@ -153,22 +153,22 @@ def test_millimetres_under_half_a_millimetre_are_never_metres(tmp_path: Path) ->
     s = kv_squeeze(150.0, 0.5, peak_n=6.0, position_noise_m=1e-8)  # peak d = 0.4 mm
     assert 0.3e-3 < float(s.d.max()) < 0.5e-3
     path = write_export(tmp_path / "stiff.csv", s, digits=7)
-    rec = read_csv_export(path, object_id="x")
+    rec = read_recording(path, CsvOptions(), "x")
     fit = fit_lsq(rec.squeezes, preload="fit", window_s=0.43)
     assert fit.deformability_n_per_cm == pytest.approx(150.0, rel=0.02)
     with pytest.raises(UsageError) as info:
-        read_csv_export(path, object_id="x", units={"compression": "m"})
+        read_recording(path, CsvOptions(units={"compression": "m"}), "x")
     assert str(info.value) == (
         f"{path}: --units compression=m contradicts the file: column 'Compression (mm)' is in "
         "mm (its header says 'mm')"
     )
     assert info.value.exit_code == EXIT_USAGE
     plain = write_export(tmp_path / "plain.csv", s, names=("t", "load", "compression"), digits=7)
-    rec = read_csv_export(plain, object_id="x", units={"compression": "mm"})
+    rec = read_recording(plain, CsvOptions(units={"compression": "mm"}), "x")
     assert fit_lsq(rec.squeezes, preload="fit", window_s=0.43).deformability_n_per_cm == (
         pytest.approx(150.0, rel=0.02)
     )
-    unitless = read_csv_export(plain, object_id="x")  # read in m: said on a warning line
+    unitless = read_recording(plain, CsvOptions(), "x")  # read in m: said on a warning line
     assert unitless.warnings == (
         "column 't' (time) states no unit: read in s (pass --units time=UNIT to say which)",
         "column 'load' (force) states no unit: read in N (pass --units force=UNIT to say which)",
@@ -181,7 +181,7 @@ def test_implausible_values_name_the_plausible_unit(tmp_path: Path, squeeze: Squ
     """Values implausible for the unit in force (file or flag) exit 65 with the unit that fits."""
     as_m = write_export(tmp_path / "m.csv", squeeze, names=("t", "Load", "compression"))
     with pytest.raises(InputDataError) as info:  # mm values (to 5 mm) without a unit: metres
-        read_csv_export(as_m, object_id="x")
+        read_recording(as_m, CsvOptions(), "x")
     assert str(info.value).endswith(
         "column 'compression': peak compression 4.94 m is implausible (above 0.5 m): did you "
         "mean --units compression=mm?"
@@ -189,7 +189,7 @@ def test_implausible_values_name_the_plausible_unit(tmp_path: Path, squeeze: Squ
     big = Squeeze(squeeze.t, squeeze.f, squeeze.d * 200)  # 1 m of compression, in mm
     path = write_export(tmp_path / "mm.csv", big, names=("t", "Load", "Compression (mm)"), digits=3)
     with pytest.raises(InputDataError) as info:
-        read_csv_export(path, object_id="x")
+        read_recording(path, CsvOptions(), "x")
     assert str(info.value).endswith(
         "peak compression 0.987 m is implausible (above 0.5 m): the file's header says mm; the "
         "values are plausible in µm: is the header wrong?"
@@ -197,7 +197,7 @@ def test_implausible_values_name_the_plausible_unit(tmp_path: Path, squeeze: Squ
     strong = kv_squeeze(peak_n=20.0)
     kn = write_export(tmp_path / "kn.csv", strong, names=("t", "Force [kN]", "Compression (mm)"))
     with pytest.raises(InputDataError) as info:  # N values under a kN label: a 20 kN peak
-        read_csv_export(kn, object_id="x", options=CsvOptions())
+        read_recording(kn, CsvOptions(), "x")
     assert "the values are plausible in N: is the header wrong?" in str(info.value)
     assert info.value.exit_code == EXIT_DATAERR
 
@@ -210,7 +210,7 @@ def test_column_roles_by_name_and_ambiguity(tmp_path: Path, squeeze: Squeeze) ->
         for a, b, c in zip(squeeze.t, squeeze.f, squeeze.d, strict=True)
     ]
     path.write_text("\n".join(rows) + "\n")
-    rec = read_csv_export(path, object_id="x", position_is="gap")
+    rec = read_recording(path, CsvOptions(position_is="gap"), "x")
     assert {k: v["column"] for k, v in rec.details["columns"].items()} == {
         "time": "Zeit (s)",
         "force": "Standard force (N)",
@@ -221,7 +221,7 @@ def test_column_roles_by_name_and_ambiguity(tmp_path: Path, squeeze: Squeeze) ->
         "Time (s),Force A (N),Force B (N),Displacement (mm)\n0,0,0,0\n1,1,1,1\n2,2,2,2\n"
     )
     with pytest.raises(UsageError) as info:
-        read_csv_export(two, object_id="x")
+        read_recording(two, CsvOptions(), "x")
     assert str(info.value) == (
         f"{two}: cannot tell which column is the force: 'Force A (N)', 'Force B (N)'; pass "
         "--columns force=NAME"
@@ -229,19 +229,22 @@ def test_column_roles_by_name_and_ambiguity(tmp_path: Path, squeeze: Squeeze) ->
     pos = tmp_path / "pos.csv"
     pos.write_text("Time (s),Load (N),Displacement (mm),Position (mm)\n0,0,0,0\n1,1,1,1\n2,2,2,2\n")
     with pytest.raises(UsageError, match="position signal: 'Position \\(mm\\)', 'Displacement"):
-        read_csv_export(pos, object_id="x")
+        read_recording(pos, CsvOptions(), "x")
     none = tmp_path / "none.csv"
     none.write_text("a,b,c\n0,0,0\n1,1,1\n2,2,2\n")
     with pytest.raises(InputDataError) as info:
-        read_csv_export(none, object_id="x")
+        read_recording(none, CsvOptions(), "x")
     assert str(info.value) == (
         f"{none}: no column for the time in the header (line 1: 'a', 'b', 'c'); pass --columns "
         "(e.g. time=NAME), or --skip-rows N if the header is another line"
     )
-    rec = read_csv_export(
-        none, object_id="x", columns={"time": "a", "force": "b", "compression": "c"},
-        units={"compression": "mm"},
-    )  # fmt: skip
+    rec = read_recording(
+        none,
+        CsvOptions(
+            columns={"time": "a", "force": "b", "compression": "c"}, units={"compression": "mm"}
+        ),
+        "x",
+    )
     assert rec.details["columns"]["force"]["column_from"] == "--columns"
 
 
@@ -250,7 +253,7 @@ def test_ambiguous_decimal_comma_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "amb.csv"
     path.write_text("t;f;d\n1;1,234;2,000\n2;2,345;3,000\n3;3,456;4,000\n")
     with pytest.raises(UsageError) as info:
-        read_csv_export(path, object_id="x")
+        read_recording(path, CsvOptions(), "x")
     assert str(info.value) == (
         f"{path}: cannot tell whether ',' is the decimal mark or the thousands separator (every "
         "number with a comma reads as digit groups, e.g. 1,234); pass --decimal , or --thousands ,"

@@ -39,7 +39,7 @@ import numpy as np
 
 from deformctl.artifacts.io import check_input_path
 from deformctl.errors import InputDataError, UsageError
-from deformctl.measure.csv_options import DELIMITER_NAMES, DELIMITERS, THOUSANDS, CsvDialect
+from deformctl.measure.csv.options import DELIMITER_NAMES, DELIMITERS, THOUSANDS, CsvDialect
 from deformctl.series import FloatArray
 from deformctl.units import parse_unit
 

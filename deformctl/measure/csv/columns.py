@@ -23,8 +23,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from deformctl.errors import InputDataError, UsageError
-from deformctl.measure.csv_options import POSITION_ROLES, ROLE_DIMENSION, ROLES, CsvOptions
-from deformctl.measure.csv_table import CsvLayout
+from deformctl.measure.csv.options import POSITION_ROLES, ROLE_DIMENSION, ROLES, CsvOptions
+from deformctl.measure.csv.table import CsvLayout
 from deformctl.units import UNITS, Unit, clean_unit_text, parse_unit, split_header, unit_names
 
 #: The words that name each role (lower case; CJK words match anywhere in a name).

@@ -1,6 +1,6 @@
 """CSV exports read with the columns and units given by option or by the file's header rows.
 
-A known Kelvin–Voigt squeeze written as CSV must read back, through ``squeeze_from_csv`` and
+A known Kelvin–Voigt squeeze written as CSV must read back, through ``read_recording`` and
 ``fit_lsq``, to the D and λ it was written with; a missing column, an unknown or conflicting unit
 and a bad columns mapping are one-line errors naming what is wrong.
 """
@@ -14,9 +14,9 @@ import pytest
 
 from deformctl.characterize import fit_lsq, kelvin_voigt_piecewise_linear
 from deformctl.errors import EXIT_USAGE, InputDataError, MissingInputError, UsageError
-from deformctl.measure import squeeze_from_csv
+from deformctl.measure import CsvOptions, read_recording
 
-from ._errors import _err
+from .._errors import _err
 
 
 def _csv_rows(rate_hz: float = 500.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -36,12 +36,14 @@ def test_csv_plain_with_option_units(tmp_path: Path) -> None:
         for ti, fi, di in zip(t, f, d, strict=True)
     ]
     path.write_text("\n".join(lines) + "\n")
-    (sq,) = squeeze_from_csv(
+    (sq,) = read_recording(
         path,
-        columns={"time": "Time", "force": "Load", "compression": "Crosshead"},
-        units={"time": "ms", "force": "lbf", "compression": "mm"},
-        object_id="foam",
-    )
+        CsvOptions(
+            columns={"time": "Time", "force": "Load", "compression": "Crosshead"},
+            units={"time": "ms", "force": "lbf", "compression": "mm"},
+        ),
+        "foam",
+    ).squeezes
     np.testing.assert_allclose(sq.time_s, t, atol=1e-9)
     np.testing.assert_allclose(sq.force_n, f, atol=1e-7)
     np.testing.assert_allclose(sq.compression_m, d, atol=1e-11)
@@ -62,18 +64,17 @@ def _two_header_csv(path: Path, units: tuple[str, str, str]) -> None:
 def test_csv_two_header_rows_units_from_file(tmp_path: Path) -> None:
     path = tmp_path / "machine.csv"
     _two_header_csv(path, ("s", "[kN]", "(in)"))
-    (sq,) = squeeze_from_csv(
-        path, columns={"time": "Zeit", "force": "Kraft", "gap": "Weg"}, object_id="foam"
-    )
+    (sq,) = read_recording(
+        path, CsvOptions(columns={"time": "Zeit", "force": "Kraft", "gap": "Weg"}), "foam"
+    ).squeezes
     _, f, d = _csv_rows()
     np.testing.assert_allclose(sq.force_n, f, atol=1e-8)
     np.testing.assert_allclose(sq.compression_m, d, atol=1e-12)
     # an option that agrees with the file is fine
-    squeeze_from_csv(
+    read_recording(
         path,
-        columns={"time": "Zeit", "force": "Kraft", "gap": "Weg"},
-        units={"force": "kN"},
-        object_id="foam",
+        CsvOptions(columns={"time": "Zeit", "force": "Kraft", "gap": "Weg"}, units={"force": "kN"}),
+        "foam",
     )
 
 
@@ -81,8 +82,10 @@ def test_csv_missing_column(tmp_path: Path) -> None:
     path = tmp_path / "m.csv"
     _two_header_csv(path, ("s", "kN", "in"))
     msg = _err(
-        lambda: squeeze_from_csv(
-            path, columns={"time": "Zeit", "force": "Force", "gap": "Weg"}, object_id="x"
+        lambda: (
+            read_recording(
+                path, CsvOptions(columns={"time": "Zeit", "force": "Force", "gap": "Weg"}), "x"
+            ).squeezes
         ),
         InputDataError,
         "--columns force='Force' names no column of the header \\(line 1: 'Zeit', 'Kraft', "
@@ -96,13 +99,13 @@ def test_csv_unknown_unit_in_file_and_option(tmp_path: Path) -> None:
     _two_header_csv(path, ("s", "kgm", "in"))
     cols = {"time": "Zeit", "force": "Kraft", "gap": "Weg"}
     _err(
-        lambda: squeeze_from_csv(path, columns=cols, object_id="x"),
+        lambda: read_recording(path, CsvOptions(columns=cols), "x").squeezes,
         InputDataError,
         "column 'Kraft' \\(force\\): unit 'kgm' in the units row is not a known force unit; known: "
         "N, kN, mN, daN, lbf, ozf, kgf, gf",
     )
     with pytest.raises(UsageError, match="unknown time unit 'fortnight'") as info:
-        squeeze_from_csv(path, columns=cols, units={"time": "fortnight"}, object_id="x")
+        read_recording(path, CsvOptions(columns=cols, units={"time": "fortnight"}), "x")
     assert info.value.exit_code == EXIT_USAGE
 
 
@@ -110,11 +113,14 @@ def test_csv_conflicting_units(tmp_path: Path) -> None:
     path = tmp_path / "c.csv"
     _two_header_csv(path, ("s", "kN", "in"))
     _err(
-        lambda: squeeze_from_csv(
-            path,
-            columns={"time": "Zeit", "force": "Kraft", "gap": "Weg"},
-            units={"gap": "mm"},
-            object_id="x",
+        lambda: (
+            read_recording(
+                path,
+                CsvOptions(
+                    columns={"time": "Zeit", "force": "Kraft", "gap": "Weg"}, units={"gap": "mm"}
+                ),
+                "x",
+            ).squeezes
         ),
         UsageError,
         "--units gap=mm contradicts the file: column 'Weg' is in in \\(its units row says 'in'\\)",
@@ -123,14 +129,14 @@ def test_csv_conflicting_units(tmp_path: Path) -> None:
 
 def test_csv_bad_columns_mapping_and_missing_file(tmp_path: Path) -> None:
     with pytest.raises(MissingInputError):
-        squeeze_from_csv(
-            tmp_path / "no.csv", columns={"time": "t", "force": "f", "gap": "g"}, object_id="x"
+        read_recording(
+            tmp_path / "no.csv", CsvOptions(columns={"time": "t", "force": "f", "gap": "g"}), "x"
         )
     path = tmp_path / "c.csv"
     _two_header_csv(path, ("s", "kN", "in"))
     with pytest.raises(UsageError, match="--columns maps position and gap: give one position"):
-        squeeze_from_csv(
+        read_recording(
             path,
-            columns={"time": "Zeit", "force": "Kraft", "gap": "Weg", "position": "Weg"},
-            object_id="x",
+            CsvOptions(columns={"time": "Zeit", "force": "Kraft", "gap": "Weg", "position": "Weg"}),
+            "x",
         )

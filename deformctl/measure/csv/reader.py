@@ -1,9 +1,10 @@
 """The CSV source of ``measure``: one object's squeezes from a testing machine's or a gripper's
-export (``--csv``).
+export (``measure csv``; the library's door is :func:`deformctl.measure.stage.read_recording`
+with a :class:`CsvOptions`).
 
-The file is read as it comes (:mod:`deformctl.measure.csv_table`: encoding, delimiter, decimal
+The file is read as it comes (:mod:`deformctl.measure.csv.table`: encoding, delimiter, decimal
 mark, preamble, header, units row), the time, force and position columns are found by name with
-their units (:mod:`deformctl.measure.csv_columns`), and the numbers are converted to SI. Then:
+their units (:mod:`deformctl.measure.csv.columns`), and the numbers are converted to SI. Then:
 
 1. time must not go back (the row is named); repeated timestamps are merged;
 2. a sample rate, peak force or peak compression that a unit mistake explains is refused with
@@ -26,11 +27,10 @@ from typing import Any
 
 import numpy as np
 
-from deformctl.characterize.options import Phase
 from deformctl.errors import DeformctlError, InputDataError, UsageError
-from deformctl.measure.csv_columns import ColumnRole, column_roles, describe_roles
-from deformctl.measure.csv_options import CsvOptions
-from deformctl.measure.csv_table import CsvLayout, CsvSource, read_columns, read_layout
+from deformctl.measure.csv.columns import ColumnRole, column_roles, describe_roles
+from deformctl.measure.csv.options import CsvOptions
+from deformctl.measure.csv.table import CsvLayout, CsvSource, read_columns, read_layout
 from deformctl.measure.defects import (
     Defect,
     coarse_force,
@@ -41,16 +41,7 @@ from deformctl.measure.defects import (
     merge_duplicate_times,
     shift_force,
 )
-from deformctl.measure.options import (
-    DEFAULT_FORCE_THRESHOLD_FRAC,
-    DEFAULT_MIN_GAP_S,
-    DEFAULT_MIN_SQUEEZE_S,
-    DEFAULT_SEGMENTATION,
-    CompressionZero,
-    IncreasesWhen,
-    PositionIs,
-    Segmentation,
-)
+from deformctl.measure.options import Segmentation
 from deformctl.measure.recording import (
     Recording,
     _check_stream,
@@ -71,7 +62,7 @@ from deformctl.plausibility import (
     suggest_unit,
     unit_doubts,
 )
-from deformctl.series import FloatArray, SqueezeSeries
+from deformctl.series import FloatArray
 from deformctl.units import GIB, NS_PER_S, UNITS
 
 #: Multiply a value in the unit by the factor to get SI; keys are lower-case unit names.
@@ -105,100 +96,15 @@ def _unit_hint(role: ColumnRole, unit: str | None, what: str) -> str:
     return f"did you mean --units {role.role}={unit}?"
 
 
-def _options(
-    columns: Mapping[str, str] | None,
-    units: Mapping[str, str] | None,
-    position_is: PositionIs,
-    compression_zero: CompressionZero,
-    position_increases_when: IncreasesWhen | None,
-) -> CsvOptions:
-    return CsvOptions(
-        columns=dict(columns or {}),
-        units=dict(units or {}),
-        position_is=position_is,
-        compression_zero=compression_zero,
-        position_increases_when=position_increases_when,
-    )
-
-
-def read_csv_export(
-    path: str | PathLike[str],
-    *,
-    object_id: str,
-    options: CsvOptions | None = None,
-    columns: Mapping[str, str] | None = None,
-    units: Mapping[str, str] | None = None,
-    position_is: PositionIs = "travel",
-    compression_zero: CompressionZero = "first",
-    segment: bool = False,
-    force_threshold_frac: float = DEFAULT_FORCE_THRESHOLD_FRAC,
-    min_gap_s: float = DEFAULT_MIN_GAP_S,
-    min_squeeze_s: float = DEFAULT_MIN_SQUEEZE_S,
-    phase: Phase = "all",
-    position_increases_when: IncreasesWhen | None = None,
-    size_x_cm: float | None = None,
-) -> Recording:
-    """Read one object's squeezes from a CSV export (see the module docstring).
-
-    Args:
-        path: the CSV file, or ``-`` for stdin.
-        object_id: catalog id written into the squeezes.
-        options: how to read the file and what its columns are (:class:`CsvOptions`); when
-            None, built from ``columns``, ``units``, ``position_is``, ``compression_zero``
-            and ``position_increases_when`` (the other fields found in the file).
-        columns: role → column name for the roles not to find by name: ``time``, ``force``
-            and one of ``position`` (a travel, see ``position_is``), ``gap`` (between
-            the palms) or ``compression`` (e.g. a testing machine's crosshead travel).
-        units: role → unit for the roles whose unit the file does not state (time
-            s/ms/µs/ns/min, force N/kN/mN/daN/lbf/ozf/kgf/gf, lengths m/cm/mm/µm/in).
-        position_is: how a ``position`` column is read: ``"travel"`` (the compression, the
-            default), ``"palm"`` (one palm's travel: d = 2 × travel) or ``"gap"``.
-        compression_zero: ``"first"`` (the first row) or ``"lead_in"``.
-        segment: split the file into squeezes (default: one squeeze per file).
-        force_threshold_frac, min_gap_s, min_squeeze_s: segmentation
-            (:mod:`deformctl.measure.segment`).
-        phase, position_increases_when, size_x_cm: as :func:`read_ros2_bag` (a compression
-            column grows when closing unless ``position_increases_when="opening"``).
-
-    Returns:
-        The squeezes in SI, the file's median sample rate (for force and position alike), the
-        ruptures, the recording's defects and what was found in the file.
-
-    Raises:
-        MissingInputError: the file does not exist (exit 66).
-        InputDataError: an empty file, text that does not decode, no header, a column that is
-            not found, a unit the file states that is unknown, non-numeric or empty cells,
-            time going back, fewer than two rows, or an implausible recording (a sample rate,
-            peak force or peak compression a unit mistake explains, the force or compression
-            of the wrong sign); the message names the file (exit 65).
-        UsageError: a bad option, ambiguous columns, a ``units`` value that contradicts the
-            file, a file above the memory budget (exit 2).
-    """
-    if options is None:
-        options = _options(columns, units, position_is, compression_zero, position_increases_when)
-    elif columns or units:
-        raise UsageError("give columns and units in options, not beside it")
-    segmentation = Segmentation(
-        segment=segment,
-        force_threshold_frac=force_threshold_frac,
-        min_gap_s=min_gap_s,
-        min_squeeze_s=min_squeeze_s,
-        phase=phase,
-    )
-    return read_csv(
-        path, options, object_id=object_id, segmentation=segmentation, size_x_cm=size_x_cm
-    )
-
-
 def read_csv(
     path: str | PathLike[str],
     options: CsvOptions,
-    *,
     object_id: str,
-    segmentation: Segmentation = DEFAULT_SEGMENTATION,
-    size_x_cm: float | None = None,
+    segmentation: Segmentation,
+    size_x_cm: float | None,
 ) -> Recording:
-    """:func:`read_csv_export` with its options as the checked objects the command builds.
+    """The CSV source of :func:`deformctl.measure.stage.read_recording` (its door; the steps
+    are the module docstring's).
 
     Args:
         path: the CSV file, or ``-`` for stdin.
@@ -209,7 +115,14 @@ def read_csv(
         size_x_cm: the object's size along the squeeze axis, when known.
 
     Raises:
-        see :func:`read_csv_export`.
+        MissingInputError: the file does not exist (exit 66).
+        InputDataError: an empty file, text that does not decode, no header, a column that is
+            not found, a unit the file states that is unknown, non-numeric or empty cells,
+            time going back, fewer than two rows, or an implausible recording (a sample rate,
+            peak force or peak compression a unit mistake explains, the force or compression
+            of the wrong sign); the message names the file (exit 65).
+        UsageError: ambiguous columns, a ``units`` value that contradicts the file, a file
+            above the memory budget (exit 2).
     """
     source = CsvSource.open(path)
     try:
@@ -528,8 +441,3 @@ def _check_compression(
     check_peak_compression(
         peak_m, size_x_cm=size_x_cm, what=what, path=where, hint=_unit_hint(role, unit, what)
     )
-
-
-def squeeze_from_csv(path: str | PathLike[str], **options: Any) -> list[SqueezeSeries]:
-    """The squeezes of :func:`read_csv_export` (same keyword arguments and errors), no rates."""
-    return read_csv_export(path, **options).squeezes

@@ -1,10 +1,10 @@
 """The options of a CSV export, checked once: how its text is read and what its columns mean.
 
 ``measure --csv`` builds them from its flags and the library takes them
-(:func:`deformctl.measure.csv.read_csv_export`); :meth:`CsvOptions.as_dict` is what the squeeze
+(:func:`deformctl.measure.stage.read_recording`); :meth:`CsvOptions.as_dict` is what the squeeze
 log's provenance records. Every field left ``None`` is found in the file itself (the delimiter,
 the decimal mark, the header row, the columns and their units, the force's sign) and what was
-found is recorded next to what was given (:class:`deformctl.measure.csv_table.CsvLayout`).
+found is recorded next to what was given (:class:`deformctl.measure.csv.table.CsvLayout`).
 """
 
 from __future__ import annotations
@@ -152,7 +152,7 @@ class CsvOptions:
         dialect: how the text is read (:class:`CsvDialect`).
         columns: role → column, for the roles to take from a given column (a header name,
             with or without its unit, e.g. ``Load (N)`` or ``Load``); the roles not given are
-            found by name (:mod:`deformctl.measure.csv_columns`). Roles: ``time``, ``force``
+            found by name (:mod:`deformctl.measure.csv.columns`). Roles: ``time``, ``force``
             and at most one of ``position`` (a travel, read as ``position_is`` says), ``gap``
             (between the palms) or ``compression`` (a testing machine's crosshead travel).
         units: role → unit, for the roles whose unit the file does not state; a unit the file

@@ -17,7 +17,6 @@ friction. A file that cannot be read does not stop the others: it is recorded wi
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -37,8 +36,8 @@ from deformctl.catalog import (
     object_record,
 )
 from deformctl.errors import EXIT_FAILURE, DeformctlError, InputDataError, UsageError
-from deformctl.measure.csv import read_csv
-from deformctl.measure.csv_options import CsvOptions
+from deformctl.measure.csv.options import CsvOptions
+from deformctl.measure.csv.reader import read_csv
 from deformctl.measure.options import DEFAULT_SEGMENTATION, Segmentation
 from deformctl.measure.recording import Recording
 from deformctl.measure.stage import LOG_SAMPLE_BYTES, MEASURE_SCHEMA
@@ -241,13 +240,8 @@ class CsvFileTask:
     def read(self, file: CsvFile) -> Recording:
         """The file's recording (raises what :func:`read_csv` raises)."""
         size = file.row.get(SIZE_COLUMNS[0])
-        return read_csv(
-            file.path,
-            self.options,
-            object_id=file.object_id,
-            segmentation=self.segmentation,
-            size_x_cm=None if size is None else float(size),
-        )
+        size_x_cm = None if size is None else float(size)
+        return read_csv(file.path, self.options, file.object_id, self.segmentation, size_x_cm)
 
     def __call__(self, item: Mapping[str, Any]) -> TaskOutput:
         """One sweep item (``object_id``, ``path``, ``row``): its summary row and its log."""
@@ -258,8 +252,7 @@ class CsvFileTask:
 
     def settings(self) -> dict[str, Any]:
         """What the provenance records of the options."""
-        cut = dataclasses.replace(self.segmentation, segment=self.segmentation.segments(False))
-        return {"source": "csv", **self.options.as_dict(), **cut.as_dict()}
+        return {"source": "csv", **self.options.as_dict(), **self.segmentation.as_dict(False)}
 
 
 def summary_row(file: CsvFile, rec: Recording) -> dict[str, Any]:
