@@ -214,6 +214,12 @@ EX ?= .examples
 examples: install
 	rm -rf $(EX) && mkdir -p $(EX)
 	cd $(EX) && ../$(BIN)/python ../examples/render_scene.py scene
+	cd $(EX) && ../$(DC) measure images scene/top.png scene/side.png --marker-size-cm 5 \
+	  --camera-matrix scene/camera.yaml --object-id red-box --weight-n 2.5 --friction-mu 0.6 \
+	  -o scene/objects.csv
+	cd $(EX) && ../$(DC) lift rig scene/objects.csv \
+	  --command "../$(BIN)/python ../examples/frames_render_rig.py 3.0 2.6" --slip-from-frames \
+	  --palm-marker-ids 1,2 --frame-marker-size-cm 2.4 -o scene/lift-frames.parquet
 	cd $(EX) && ../$(BIN)/python ../examples/synthetic_index.py demo
 	cd $(EX) && ../$(BIN)/python ../examples/doubtful_exports.py doubtful
 	cd $(EX) && ../$(BIN)/python ../examples/make_sample_recordings.py recordings

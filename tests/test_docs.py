@@ -4,9 +4,12 @@ Each file's blocks run in order in one scratch folder of their own, which links 
 ``datasets/``, ``examples/`` and ``tests/`` (the docs' commands name them) and nothing else.
 ``python``, ``python3`` and ``deformctl`` are the test interpreter's (an activated ``.venv``). A
 block preceded by ``<!-- docs-test: skip (why) -->`` is not run (the reason is part of the page);
-every other block must exit 0, and the test names the file, line and block that did not. The CLI
-reference (docs/reference/cli.md) must be what ``python -m deformctl.cli.reference`` prints now,
-and every relative link of the docs must name a file that exists.
+every other block must exit 0, and the test names the file, line and block that did not. The
+README and the task guides (docs/guide/) run a second time as a wheel user runs them: from a
+venv with only the built wheel installed, each page in a folder that ``deformctl examples``
+filled, with no checkout on the path (so a block that needs a file the wheel lacks fails). The
+CLI reference (docs/reference/cli.md) must be what ``python -m deformctl.cli.reference`` prints
+now, and every relative link of the docs must name a file that exists.
 
 Printed output never goes stale: every ``text`` block (but the generated CLI reference's) is
 either marked with the commands that print it, and equal to what they print now (numbers at a
@@ -27,6 +30,7 @@ from pathlib import Path
 import pytest
 
 from tests._helpers import docs_output
+from tests._helpers.wheel import seed_kernel_cache, venv_env
 
 pytestmark = pytest.mark.docs
 
@@ -59,15 +63,19 @@ def _id(path: Path) -> str:
 RUNNABLE = [p for p in doc_files() if shell_blocks(p)]
 
 
-def _run(code: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+def _checkout_env() -> dict[str, str]:
+    """The environment of a developer who activated the checkout's ``.venv``."""
+    path = f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"
+    return {**os.environ, "PATH": path}
+
+
+def _run(code: str, cwd: Path, env: dict[str, str]) -> subprocess.CompletedProcess[str]:
     """Run ``code`` as a docs block: bash -e, pipefail, stdout and stderr in one stream, each
     command announced (:data:`docs_output.TRAP`)."""
-    path = f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"
-    env = {**os.environ, "PATH": path, "PYTHONUNBUFFERED": "1"}
     return subprocess.run(
         ["bash", "-e", "-o", "pipefail", "-c", docs_output.TRAP + code],
         cwd=cwd,
-        env=env,
+        env={**env, "PYTHONUNBUFFERED": "1"},
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
@@ -75,32 +83,30 @@ def _run(code: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     )
 
 
-def _printed(item: docs_output.Item, seen: dict[str, str], cwd: Path) -> str:
+def _printed(item: docs_output.Item, seen: dict[str, str], cwd: Path, env: dict[str, str]) -> str:
     """What the commands of an output block print: as a block of the page printed it before,
     else run here."""
     parts = []
     for command in item.commands:
         key = docs_output.norm_command(command)
         if key not in seen:
-            proc = _run(command, cwd)
+            proc = _run(command, cwd, env)
             seen.update(docs_output.split_by_command(proc.stdout))
             seen.setdefault(key, proc.stdout)
         parts.append(seen[key])
     return "\n".join(parts)
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("path", RUNNABLE, ids=_id)
-def test_every_shell_block_runs_and_prints_what_the_page_shows(path: Path, tmp_path: Path) -> None:
-    for name in ("datasets", "examples", "tests"):
-        (tmp_path / name).symlink_to(REPO / name)
+def _run_page(path: Path, cwd: Path, env: dict[str, str]) -> list[str]:
+    """Run the ``sh`` blocks of ``path`` in order in ``cwd`` (fails the test at the first one
+    that exits non-zero); the page's stale output blocks, one message each."""
     seen: dict[str, str] = {}
     stale: list[str] = []
     for item in docs_output.items(path.read_text(encoding="utf-8")):
         where = f"{_id(path)}:{item.line}"
         if item.code is None:
             if item.commands:
-                printed = _printed(item, seen, tmp_path)
+                printed = _printed(item, seen, cwd, env)
                 problem = docs_output.mismatch(item.out or "", printed, item.rel)
                 if problem:
                     stale.append(f"{where}: the output block is stale: {problem}\n--- printed:\n"
@@ -109,12 +115,50 @@ def test_every_shell_block_runs_and_prints_what_the_page_shows(path: Path, tmp_p
         if item.why is not None:
             assert item.why.strip(), f"{where}: a skipped block must say why"
             continue
-        proc = _run(item.code, tmp_path)
+        proc = _run(item.code, cwd, env)
         seen.update(docs_output.split_by_command(proc.stdout))
         if proc.returncode != 0:
             lines = [x for x in proc.stdout.splitlines() if not x.startswith(docs_output.SENTINEL)]
             tail = "\n".join("\n".join(lines).strip().splitlines()[-8:])
             pytest.fail(f"{where}: block exited {proc.returncode}:\n{item.code}\n{tail}")
+    return stale
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", RUNNABLE, ids=_id)
+def test_every_shell_block_runs_and_prints_what_the_page_shows(path: Path, tmp_path: Path) -> None:
+    for name in ("datasets", "examples", "tests"):
+        (tmp_path / name).symlink_to(REPO / name)
+    stale = _run_page(path, tmp_path, _checkout_env())
+    assert not stale, "\n\n".join(stale)
+
+
+#: What a wheel user follows: the README (its first example) and the task guides.
+WHEEL_PAGES = [REPO / "README.md", *sorted((REPO / "docs" / "guide").glob("*.md"))]
+
+
+@pytest.mark.slow
+def test_the_guides_run_from_a_wheel_installed_venv(fresh_venv: Path, tmp_path: Path) -> None:
+    """As a wheel user follows them: ``pip install`` of the wheel into a fresh venv, its
+    ``bin/`` first on PATH (``deformctl``, ``python`` and ``python3`` are the venv's, the
+    checkout is nowhere on the path), ``deformctl warmup``, then per page ``deformctl examples
+    DIR`` and the page's ``sh`` blocks in order in ``DIR``, its output blocks checked as above.
+    The simulator's kernels come compiled from the checkout (:func:`seed_kernel_cache`)."""
+    seed_kernel_cache(fresh_venv)
+    env = venv_env(fresh_venv)
+    found = subprocess.run(
+        ["bash", "-c", "command -v deformctl python python3; "
+         "python -c 'import deformctl; print(deformctl.__file__)'; deformctl warmup"],
+        cwd=tmp_path, env=env, capture_output=True, text=True, check=True,
+    ).stdout.split()  # fmt: skip
+    assert len(found) == 4, found
+    assert all(Path(p).is_relative_to(fresh_venv) for p in found), found
+    stale: list[str] = []
+    for path in WHEEL_PAGES:
+        cwd = tmp_path / path.stem
+        subprocess.run([fresh_venv / "bin" / "deformctl", "examples", cwd], env=env, check=True,
+                       capture_output=True)  # fmt: skip
+        stale += _run_page(path, cwd, env)
     assert not stale, "\n\n".join(stale)
 
 

@@ -1,8 +1,9 @@
 """The built wheel works without the checkout: bundled schemas and datasets come with it.
 
 The wheel is built once per session from a clean copy of the source tree (no build isolation,
-so no download), unpacked, and run with only the unpacked wheel on ``PYTHONPATH`` from a folder
-outside the checkout; the dependencies are the test environment's.
+so no download: tests/_helpers/wheel.py), unpacked, and run with only the unpacked wheel on
+``PYTHONPATH`` from a folder outside the checkout, or installed into a fresh venv; the
+dependencies are the test environment's.
 """
 
 from __future__ import annotations
@@ -12,7 +13,6 @@ import os
 import shutil
 import subprocess
 import sys
-import sysconfig
 import zipfile
 from pathlib import Path
 
@@ -23,33 +23,6 @@ from deformctl.presets import paper_preset
 pytestmark = pytest.mark.e2e
 
 REPO = Path(__file__).resolve().parents[1]
-SKIP = (".venv", ".git", "build", "dist", "*.egg-info", "__pycache__", ".*_cache", ".examples")
-
-
-@pytest.fixture(scope="session")
-def wheel_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The wheel of the current source tree, built from a clean copy."""
-    tmp = tmp_path_factory.mktemp("wheel")
-    src = tmp / "src"
-    shutil.copytree(REPO, src, ignore=shutil.ignore_patterns(*SKIP, "reports"))
-    subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "pip",
-            "wheel",
-            str(src),
-            "--no-deps",
-            "--no-build-isolation",
-            "-w",
-            str(tmp / "dist"),
-            "-q",
-        ],
-        check=True,
-        capture_output=True,
-    )
-    (wheel,) = (tmp / "dist").glob("deformctl-*.whl")
-    return wheel
 
 
 @pytest.fixture(scope="session")
@@ -59,30 +32,6 @@ def wheel_dir(wheel_file: Path) -> Path:
     with zipfile.ZipFile(wheel_file) as zf:
         zf.extractall(unpacked)
     return unpacked
-
-
-@pytest.fixture(scope="session")
-def fresh_venv(wheel_file: Path) -> Path:
-    """A new virtual environment with ``pip install dist/deformctl-*.whl`` done (no download:
-    the dependencies are the test environment's, reached through a ``.pth`` line that adds its
-    site-packages after the venv's own, where the installed deformctl comes first)."""
-    venv = wheel_file.parent.parent / "venv"
-    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
-    python = venv / "bin" / "python"
-    subprocess.run(
-        [sys.executable, "-m", "pip", "--python", str(python), "install", "--no-deps",
-         "--no-index", "-q", str(wheel_file)],
-        check=True,
-        capture_output=True,
-    )  # fmt: skip
-    site = subprocess.run(
-        [str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
-        check=True,
-        capture_output=True,
-        text=True,
-    ).stdout.strip()
-    Path(site, "test_dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
-    return venv
 
 
 #: Runs beyond the first commands that must compile nothing after the warm-up: squeezes and

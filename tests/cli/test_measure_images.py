@@ -36,7 +36,7 @@ from deformctl.vision.synth import (
 )
 
 REPO = Path(__file__).resolve().parents[2]
-RIG = REPO / "tests" / "rigs" / "frames_render_rig.py"
+RIG = REPO / "examples" / "frames_render_rig.py"
 MARKER_CM = 5.0
 NOISE = {"noise_sigma": 4.0, "gradient": (0.75, 1.15)}
 
@@ -320,7 +320,7 @@ PALM_RISE_M = 0.03
 
 
 def expected_slip_m(force_n: float) -> float:
-    """What the rig renders (tests/rigs/frames_render_rig.py): the object's lag behind the palms."""
+    """What the rig renders (examples/frames_render_rig.py): the object's lag behind the palms."""
     if force_n >= THRESHOLD_N:
         return 0.002
     return PALM_RISE_M - (0.015 if force_n >= PARTIAL_FROM_N else 0.0)

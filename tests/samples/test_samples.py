@@ -22,6 +22,7 @@ GUIDE_INPUTS = (
     "datasets/examples/phantom/DATA_LICENSE.md",  # the phantom recordings' credit travels along
     "datasets/paper/objects.csv",
     "examples/threshold_rig.py",
+    "examples/frames_render_rig.py",
     "examples/render_scene.py",
     "examples/synthetic_index.py",
 )
