@@ -5,7 +5,7 @@ Each file's blocks run in order in one scratch folder of their own, which links 
 ``python``, ``python3`` and ``deformctl`` are the test interpreter's (an activated ``.venv``). A
 block preceded by ``<!-- docs-test: skip (why) -->`` is not run (the reason is part of the page);
 every other block must exit 0, and the test names the file, line and block that did not. The
-README and the task guides (docs/guide/) run a second time as a wheel user runs them: from a
+README and the task guides (docs/guide/) run instead as a wheel user runs them: from a
 venv with only the built wheel installed, each page in a folder that ``deformctl examples``
 filled, with no checkout on the path (so a block that needs a file the wheel lacks fails). The
 CLI reference (docs/reference/cli.md) must be what ``python -m deformctl.cli.reference`` prints
@@ -60,7 +60,11 @@ def _id(path: Path) -> str:
     return str(path.relative_to(REPO))
 
 
-RUNNABLE = [p for p in doc_files() if shell_blocks(p)]
+#: What a wheel user follows: the README (its first example) and the task guides. These pages run
+#: from a wheel-installed venv only (the wheel is built from this checkout, so an edit to the
+#: code or the page is tested the same), every other page from the checkout.
+WHEEL_PAGES = [REPO / "README.md", *sorted((REPO / "docs" / "guide").glob("*.md"))]
+RUNNABLE = [p for p in doc_files() if shell_blocks(p) and p not in WHEEL_PAGES]
 
 
 def _checkout_env() -> dict[str, str]:
@@ -133,16 +137,15 @@ def test_every_shell_block_runs_and_prints_what_the_page_shows(path: Path, tmp_p
     assert not stale, "\n\n".join(stale)
 
 
-#: What a wheel user follows: the README (its first example) and the task guides.
-WHEEL_PAGES = [REPO / "README.md", *sorted((REPO / "docs" / "guide").glob("*.md"))]
-
-
 @pytest.mark.slow
-def test_the_guides_run_from_a_wheel_installed_venv(fresh_venv: Path, tmp_path: Path) -> None:
-    """As a wheel user follows them: ``pip install`` of the wheel into a fresh venv, its
+@pytest.mark.parametrize("path", WHEEL_PAGES, ids=_id)
+def test_the_guides_run_from_a_wheel_installed_venv(
+    path: Path, fresh_venv: Path, tmp_path: Path
+) -> None:
+    """As a wheel user follows a page: ``pip install`` of the wheel into a fresh venv, its
     ``bin/`` first on PATH (``deformctl``, ``python`` and ``python3`` are the venv's, the
-    checkout is nowhere on the path), ``deformctl warmup``, then per page ``deformctl examples
-    DIR`` and the page's ``sh`` blocks in order in ``DIR``, its output blocks checked as above.
+    checkout is nowhere on the path), ``deformctl warmup``, then ``deformctl examples DIR``
+    and the page's ``sh`` blocks in order in ``DIR``, its output blocks checked as above.
     The simulator's kernels come compiled from the checkout (:func:`seed_kernel_cache`)."""
     seed_kernel_cache(fresh_venv)
     env = venv_env(fresh_venv)
@@ -153,12 +156,10 @@ def test_the_guides_run_from_a_wheel_installed_venv(fresh_venv: Path, tmp_path: 
     ).stdout.split()  # fmt: skip
     assert len(found) == 4, found
     assert all(Path(p).is_relative_to(fresh_venv) for p in found), found
-    stale: list[str] = []
-    for path in WHEEL_PAGES:
-        cwd = tmp_path / path.stem
-        subprocess.run([fresh_venv / "bin" / "deformctl", "examples", cwd], env=env, check=True,
-                       capture_output=True)  # fmt: skip
-        stale += _run_page(path, cwd, env)
+    cwd = tmp_path / path.stem
+    subprocess.run([fresh_venv / "bin" / "deformctl", "examples", cwd], env=env, check=True,
+                   capture_output=True)  # fmt: skip
+    stale = _run_page(path, cwd, env)
     assert not stale, "\n\n".join(stale)
 
 
