@@ -16,11 +16,19 @@ import pandas as pd
 import pytest
 
 from deformctl.artifacts import read_catalog
-from deformctl.repro.golden import EXPECTED_PATH, TOLERANCES, compare, compute_golden
 from deformctl.lift import DEFAULT_TOLERANCE_REL, find_min_lift_force
 from deformctl.population import golden_population
 from deformctl.repro import golden
-from deformctl.repro.golden import REPORTED_ONLY, SEARCH_STEP_REL, family, flatten
+from deformctl.repro.golden import (
+    EXPECTED_PATH,
+    REPORTED_ONLY,
+    SEARCH_STEP_REL,
+    TOLERANCES,
+    compare,
+    compute_golden,
+    family,
+    flatten,
+)
 from deformctl.series import TrialOutcome
 from deformctl.train import train_model
 
