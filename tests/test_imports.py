@@ -59,6 +59,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "blas",
         "summary",
         "lazy",
+        "arraytypes",
     ),
 )
 

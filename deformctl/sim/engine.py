@@ -140,8 +140,8 @@ from typing import Literal
 
 import numpy as np
 import scipy.sparse
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.errors import UsageError
 from deformctl.quantities import MEMORY_BUDGET_GIB
 from deformctl.sim.hunt_crossley import hc_law, spec_elements
@@ -173,10 +173,6 @@ from deformctl.sim.step import (
     integrate_iterative,
 )
 from deformctl.units import CM, GRAVITY_M_S2
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-
 
 #: The time steps the simulator accepts, s: below 10 µs a one-second squeeze is 100,000 steps of
 #: recorded state (a 1e-12 s step would ask for hundreds of GiB), above 50 ms the contact and

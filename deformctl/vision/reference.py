@@ -20,10 +20,10 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 
 ImageSource = str | PathLike[str] | NDArray[np.uint8]
-FloatArray = NDArray[np.float64]
 ViewName = Literal["top", "side"]
 
 
