@@ -219,7 +219,7 @@ def compression_has_wrong_sign(compression_m: FloatArray, force_n: FloatArray) -
     return bool(np.median(compression_m[loaded]) < 0)
 
 
-# -- the "too small" side (issue 34 point 1): flags, since a small reading can be right ---------
+# -- the "too small" side: flags, since a small reading can be right -----------------------------
 
 MIN_PEAK_FORCE_N = RECORDED_PEAK_FORCE_N.doubt_low
 DOUBTFUL_PEAK_FORCE_N = RECORDED_PEAK_FORCE_N.doubt_high

@@ -33,7 +33,7 @@ BLOCK = re.compile(
     r"(?:<!-- docs-test: skip \((?P<why>[^)]*)\) -->\n)?```sh\n(?P<code>.*?)```", re.S
 )
 LINK = re.compile(r"\]\((?!https?://|#|mailto:)(?P<target>[^)#\s]+)(?:#[^)]*)?\)")
-#: The README stays short: what, for whom, install, a first example and links (issue 31).
+#: The README stays short: what, for whom, install, a first example and links.
 README_MAX_LINES = 150
 
 

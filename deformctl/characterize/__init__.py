@@ -1,5 +1,5 @@
 """Deformability D and damping λ from squeeze logs: the paper's Kelvin model and the material laws
-real objects follow (issue 33).
+real objects follow.
 
 A squeeze is fitted with a material law (:mod:`~deformctl.characterize.laws`: Kelvin–Voigt
 ``f = F0 + D d + λ ḋ``, Hunt–Crossley ``f = F0 + k dⁿ + λ dⁿ ḋ`` or a standard linear solid),

@@ -15,7 +15,7 @@ and two special sets through the same pipeline and calls this module:
     nearest-entry baselines (the last two fitted on the *training* index), the coverage and mean
     margin of the P = 0.9 and 0.95 bounds and the share of objects flagged outside the training
     range; the friction pairs' predicted against simulated L_f(0.25) / L_f(1.0); the paper's Table
-    I objects A-D, predicted against simulated. Each line ends with its target (issue 30) and
+    I objects A-D, predicted against simulated. Each line ends with its target and
     ``ok`` or ``MISSED``; the report is also written to ``RUN_DIR/report.md``. Exit 1 when a target
     is missed (``--no-gate`` reports only).
 
@@ -48,7 +48,7 @@ RUN_FILES = {
 #: How many objects the friction pairs take, and their two μ.
 N_MU_PAIRS = 8
 MU_PAIR = (0.25, 1.0)
-#: Issue 30's targets.
+#: The grip model's targets.
 TARGET_MEDIAN = 0.03
 TARGET_MAX = 0.10
 TARGET_BASELINE_SHARE = 1.0 / 3.0
@@ -56,7 +56,7 @@ TARGET_MU_RATIO = 0.05
 TARGET_COVERAGE = {0.9: 0.85, 0.95: 0.9}
 TARGET_MARGIN_90 = 0.12
 TARGET_TABLE_I = 0.10
-#: Issue 47's targets per material law: P = 0.9 coverage and mean margin as above, the first-lift
+#: The targets per material law: P = 0.9 coverage and mean margin as above, the first-lift
 #: rate (the P = 0.95 bound is >= L_f and <= 1.10 L_f) and the change of the 13 published
 #: points' predictions from the reference model (today's bundled one).
 TARGET_FIRST_LIFT = 0.90
