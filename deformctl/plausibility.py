@@ -294,9 +294,12 @@ def unit_doubts(
     def suggest(kind: str, value_si: float, judge: Any, to_value: Any = None) -> str | None:
         reading = readings[kind]
         unit = suggest_unit(
-            value_si / reading.si, SUGGESTED_UNITS[kind], to_value=to_value or (lambda v: v),
-            ok=judge.plausible, target=judge.target,
-        )  # fmt: skip
+            value_si / reading.si,
+            SUGGESTED_UNITS[kind],
+            to_value=to_value or (lambda v: v),
+            ok=judge.plausible,
+            target=judge.target,
+        )
         return None if unit == reading.unit else unit
 
     def no_reading(kind: str, value_si: float, judge: Any, text: str, to_value: Any = None) -> None:
