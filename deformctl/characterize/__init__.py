@@ -49,7 +49,6 @@ if TYPE_CHECKING:  # for type checkers; at run time each loads on first use
         CoefficientFit,
     )
     from deformctl.characterize.fit import (
-        COLLINEAR_COND,
         DEFAULT_MIN_COMPRESSION_FRAC,
         DEFAULT_MIN_RATE_FRAC,
         DEFAULT_POLYORDER,

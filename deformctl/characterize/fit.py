@@ -88,8 +88,6 @@ DEFAULT_MIN_COMPRESSION_FRAC = 0.02
 DEFAULT_MIN_RATE_FRAC = 0.05
 #: Relative spread of the sampling interval above which a log is resampled to a uniform grid.
 UNIFORM_DT_RTOL = 1e-3
-#: Condition number of ``XᵀX`` of ``[d, d']`` above which D cannot be estimated at all.
-COLLINEAR_COND = 1e12
 
 
 @dataclass(frozen=True)
