@@ -41,8 +41,8 @@ materials: install
 phantom-check: install
 	$(BIN)/python -m bench.check_phantoms --aic
 
-# Seeded hostile inputs through the CLI (tests/fuzz/hostile_cli.py): prints the clean fraction
-# (issue 34 point 8). CASES and SEED change the set.
+# Seeded hostile inputs through the CLI (tests/fuzz/hostile_cli.py): prints the clean fraction.
+# CASES and SEED change the set.
 CASES ?= 1000
 SEED ?= 0
 fuzz: install
@@ -137,7 +137,7 @@ calibrate: install
 # ω_n and ζ, as before). Then a fresh population (seed MODEL_EVAL_SEED, same mix), the friction
 # pairs and the paper's Table I objects go through the same pipeline, and
 # deformctl.repro.grip_model prints the model's errors, baselines, bound coverage and margins
-# (Kelvin–Voigt rows, issue 30's targets), the same per law with the first-lift rate, and the
+# (Kelvin–Voigt rows, against the grip model's targets), the same per law with the first-lift rate, and the
 # 13 published points against MODEL_REFERENCE (today's model, copied first) (exit 1 when a
 # target is missed). Prints the wall and CPU time of the training and of the evaluation.
 # Intermediate files in $(MODEL_RUN)/. MODEL_SIM_ARGS is passed to lift sim and measure sim

@@ -1,4 +1,4 @@
-"""Issue 36 point 4: ``adapt`` closes a sim-to-real gap we control (deformctl.repro.adapt_gap).
+"""``adapt`` closes a sim-to-real gap we control (deformctl.repro.adapt_gap).
 
 Lifts the 38 objects of ``population --grip -n 38 --seed 11`` with ``lift --sim --sim-preset
 table`` (the "reality"), checks the lifts against the cached ones the test uses

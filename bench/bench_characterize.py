@@ -1,4 +1,4 @@
-"""``characterize`` at sweep speed (issue 15): its time against the ``measure`` that made the log.
+"""``characterize`` at sweep speed: its time against the ``measure`` that made the log.
 
 A seeded population (``deformctl population -n N --seed 0``, the paper's ranges) is squeezed with
 the defaults a user runs (``measure pop.csv --sim --seed 0 -o squeeze/``: the ``paper`` preset,
@@ -131,7 +131,7 @@ def main(argv: list[str] | None = None) -> None:
               f"scipy.signal import (once per process): {phases['imports']:.1f} s; "
               f"sum {total:.1f} s")  # fmt: skip
         ref, m = phases["reference read"], phases["reference objects"]
-        print(f"  the reference reader (load_mcap + per-message checks, before issue 15 item 6) "
+        print(f"  the reference reader (load_mcap + per-message checks, before the bulk reader) "
               f"on the first {m:.0f} objects' logs: {ref * 1000 / m:.1f} ms per object, "
               f"{ref / phases['read of those']:.1f}x the bulk reader's time")  # fmt: skip
 

@@ -1,4 +1,4 @@
-"""``measure --csv`` on 190 real-sized exports in one call (issue 32: ≤ 60 s on 2 cores).
+"""``measure --csv`` on 190 real-sized exports in one call (target: ≤ 60 s on 2 cores).
 
 The 190 files are made from the real silicone phantom recordings (the 38 of the shared folder
 when it is there, else the 3 shipped in ``datasets/examples/phantom/``, cycled), each written in

@@ -1,4 +1,4 @@
-"""Cost of one complete object at each simulator preset (issue 12's "<= 2 s per object").
+"""Cost of one complete object at each simulator preset (target: <= 2 s per object).
 
 For each Table I object: three squeezes (as ``measure --sim`` does) and the default ``refine``
 search (to 0.5 %) at the ``paper`` and at the ``table`` preset, wall seconds and attempts, both

@@ -1,6 +1,6 @@
 """Attempts per object: the paper ramp, refine, and searches seeded by the model or the table.
 
-Issue 16's measurement. On the ``make reproduce`` objects (``population -n 73 --seed 0``, squeezed
+The measurement. On the ``make reproduce`` objects (``population -n 73 --seed 0``, squeezed
 and lifted in the simulator, ``train --train-size 40 --seed 0``) it lifts the 33 *test* objects
 four ways with the ``deformctl`` command, in this run:
 
@@ -197,7 +197,7 @@ def main(argv: list[str] | None = None) -> None:
             dev = np.abs(frames[n]["lift_force_n"] / refine["lift_force_n"] - 1)
             inside = frames[n]["start_in_training_range"].to_numpy(dtype=bool)
             pred = frames[n]["predicted_lift_force_n"] / refine["lift_force_n"] - 1
-            goal = (  # issue 16 asks it of the model seed
+            goal = (  # the target of the model seed
                 f", must be <= 0.5x: {'ok' if med[n] <= med['refine'] / 2 else 'NOT MET'}"
                 if n == "model"
                 else ""

@@ -1,5 +1,5 @@
 """Simulator speed: one sponge lift attempt, one complete object, force-kernel throughput,
-implicit-step cost relative to one force evaluation, and the scaling table of issue 13 (cubes of
+implicit-step cost relative to one force evaluation, and the scaling table (cubes of
 5^3 .. 21^3 particles: model build, one lift attempt, step time, step / one force evaluation, the
 fitted exponent of step time against particle count, peak memory), the damped cube's wall time
 per simulated second (the MuJoCo comparison), one V-cycle with and without its stencil levels
@@ -172,7 +172,7 @@ def main() -> None:
 CUBE = ObjectSpec("cube", (10.0, 10.0, 10.0), 5.0, 0.5, 30.0, 1.0)
 #: the issue's MuJoCo comparison: 9 cm cube, 5 N, D 20 N/cm, lambda 1 N·s/cm, 10 N squeeze
 DAMPED = ObjectSpec("damped", (9.0, 9.0, 9.0), 5.0, 0.5, 20.0, 1.0)
-#: MuJoCo 4.0 flex on the same damped cube, wall s per simulated s (issue 13)
+#: MuJoCo 4.0 flex on the same damped cube, wall s per simulated s
 MUJOCO_S_PER_SIM_S = {5: 1.34, 8: 13.3, 11: 69.0}
 SIZES = (5, 8, 11, 16, 21)
 REPEATS = 3
@@ -315,7 +315,7 @@ def _row_in_subprocess(n: int, solver: str = "auto") -> dict[str, float | str]:
 
 
 def scaling() -> None:
-    """Issue 13's scaling table, the solver candidates and the MuJoCo comparison."""
+    """The scaling table, the solver candidates and the MuJoCo comparison."""
     print(
         "scaling, 10 cm cube (W 5 N, D 30 N/cm, lambda 1 N·s/cm), gripped at 1.2 x rigid limit, "
         f"best of {REPEATS}:"
@@ -358,7 +358,7 @@ def scaling() -> None:
         ours = float(by_n[n]["damped_s_per_sim_s"]) if n in by_n else math.nan
         mj = MUJOCO_S_PER_SIM_S[n]
         print(
-            f"  {n:>2}^3: {ours:.3f} wall s per simulated s; MuJoCo 4.0 flex {mj} (issue 13): "
+            f"  {n:>2}^3: {ours:.3f} wall s per simulated s; MuJoCo 4.0 flex {mj}: "
             f"{mj / ours:.1f}x faster (target at 11^3: >= 20x, <= 3.4 s)"
         )
     v_cycle_cost()

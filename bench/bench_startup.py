@@ -1,4 +1,4 @@
-"""A command line that answers at once (issue 35 point 5): how long ``deformctl --help`` and each
+"""A command line that answers at once: how long ``deformctl --help`` and each
 ``deformctl <command> --help`` take, beside ``python -c pass`` measured in the same run.
 
 Prints, for ``python -c pass``, ``deformctl --help`` and ``deformctl <command> --help`` of every

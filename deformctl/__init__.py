@@ -38,52 +38,46 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from deformctl.errors import DeformctlError
-from deformctl.lazy import lazy_exports
+from deformctl.lazy import lazy_face
 
 if TYPE_CHECKING:  # pragma: no cover - read on first use (module __getattr__)
     __version__: str
 
-#: Each library call exported here → the module that defines it.
-_API: dict[str, str] = {
-    "make_population": "deformctl.population",
-    "paper_objects": "deformctl.population",
-    "simulate_squeezes": "deformctl.measure.sim",
-    "read_recording": "deformctl.measure.stage",
-    "measure_images": "deformctl.measure.images",
-    "BagSource": "deformctl.measure.options",
-    "CsvOptions": "deformctl.measure.csv.options",
-    "CsvDialect": "deformctl.measure.csv.options",
-    "Segmentation": "deformctl.measure.options",
-    "SqueezeProtocol": "deformctl.measure.options",
-    "ScaleReference": "deformctl.measure.options",
-    "ObjectMask": "deformctl.measure.options",
-    "MeasuredObject": "deformctl.catalog",
-    "read_and_characterize": "deformctl.characterize.stage",
-    "FitOptions": "deformctl.characterize.options",
-    "QualityPolicy": "deformctl.characterize.options",
-    "MaterialOptions": "deformctl.characterize.material_options",
-    "lift_catalog": "deformctl.lift.stage",
-    "sim_runner_factory": "deformctl.lift.runners.sim",
-    "rig_runner_factory": "deformctl.lift.runners.rig",
-    "SearchOptions": "deformctl.lift.options",
-    "SimOptions": "deformctl.presets",
-    "sim_preset": "deformctl.presets",
-    "build_index_table": "deformctl.table",
-    "train_model": "deformctl.train",
-    "load_predictor": "deformctl.predict",
-    "predict_objects": "deformctl.predict",
-    "read_prediction_inputs": "deformctl.predict",
-    "describe": "deformctl.artifacts",
-    "read_catalog": "deformctl.artifacts",
-    "read_table": "deformctl.artifacts",
-    "read_squeeze_log": "deformctl.artifacts",
-    "read_lift_log": "deformctl.artifacts",
-}
+# ruff: noqa: F401 - the imports below are the library calls (deformctl.lazy.lazy_face)
+if TYPE_CHECKING:  # for type checkers; at run time each loads on first use
+    from deformctl.artifacts import (
+        describe,
+        read_catalog,
+        read_lift_log,
+        read_squeeze_log,
+        read_table,
+    )
+    from deformctl.catalog import MeasuredObject
+    from deformctl.characterize.material_options import MaterialOptions
+    from deformctl.characterize.options import FitOptions, QualityPolicy
+    from deformctl.characterize.stage import read_and_characterize
+    from deformctl.lift.options import SearchOptions
+    from deformctl.lift.runners.rig import rig_runner_factory
+    from deformctl.lift.runners.sim import sim_runner_factory
+    from deformctl.lift.stage import lift_catalog
+    from deformctl.measure.csv.options import CsvDialect, CsvOptions
+    from deformctl.measure.images import measure_images
+    from deformctl.measure.options import (
+        BagSource,
+        ObjectMask,
+        ScaleReference,
+        Segmentation,
+        SqueezeProtocol,
+    )
+    from deformctl.measure.sim import simulate_squeezes
+    from deformctl.measure.stage import read_recording
+    from deformctl.population import make_population, paper_objects
+    from deformctl.predict import load_predictor, predict_objects, read_prediction_inputs
+    from deformctl.presets import SimOptions, sim_preset
+    from deformctl.table import build_index_table
+    from deformctl.train import train_model
 
-__all__ = ["DeformctlError", "__version__", *sorted(_API)]
-
-
-_api_getattr, _api_dir = lazy_exports(globals(), _API)
+_api_getattr, _api_dir = lazy_face(globals(), first=("DeformctlError", "__version__"))
 
 
 def __getattr__(name: str) -> Any:

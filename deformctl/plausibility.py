@@ -219,7 +219,7 @@ def compression_has_wrong_sign(compression_m: FloatArray, force_n: FloatArray) -
     return bool(np.median(compression_m[loaded]) < 0)
 
 
-# -- the "too small" side (issue 34 point 1): flags, since a small reading can be right ---------
+# -- the "too small" side: flags, since a small reading can be right -----------------------------
 
 MIN_PEAK_FORCE_N = RECORDED_PEAK_FORCE_N.doubt_low
 DOUBTFUL_PEAK_FORCE_N = RECORDED_PEAK_FORCE_N.doubt_high
@@ -294,9 +294,12 @@ def unit_doubts(
     def suggest(kind: str, value_si: float, judge: Any, to_value: Any = None) -> str | None:
         reading = readings[kind]
         unit = suggest_unit(
-            value_si / reading.si, SUGGESTED_UNITS[kind], to_value=to_value or (lambda v: v),
-            ok=judge.plausible, target=judge.target,
-        )  # fmt: skip
+            value_si / reading.si,
+            SUGGESTED_UNITS[kind],
+            to_value=to_value or (lambda v: v),
+            ok=judge.plausible,
+            target=judge.target,
+        )
         return None if unit == reading.unit else unit
 
     def no_reading(kind: str, value_si: float, judge: Any, text: str, to_value: Any = None) -> None:

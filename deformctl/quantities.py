@@ -300,7 +300,7 @@ MAX_FORCE_N = Quantity("max_force_n", "--max-force-n", " N", 0.0, low_open=True)
 COVERAGE = Quantity("coverage", "--coverage", "", 0.0, 1.0, low_open=True, high_open=True)
 
 # ---------------------------------------------------------------------- a recording's plausibility
-#: What a gripper squeeze or a testing machine on a soft object can record (issue 34 point 1).
+#: What a gripper squeeze or a testing machine on a soft object can record.
 #: :mod:`deformctl.plausibility` judges every recording against these (``measure --csv`` and
 #: ``--bag``; the implied damping ratio in ``characterize``): a value outside ``low``–``high`` is
 #: refused (exit 65), one outside ``doubt_low``–``doubt_high`` flagged, and either line names the

@@ -27,13 +27,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import BoolArray, FloatArray, IntArray
 from deformctl.errors import UsageError
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-BoolArray = NDArray[np.bool_]
 
 #: Scene frames per second of simulated time unless asked otherwise (a video's rate).
 DEFAULT_SCENE_HZ = 30.0

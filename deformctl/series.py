@@ -21,14 +21,12 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray
 from deformctl.reprs import short_repr
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from deformctl.scene import SceneFrames
-
-FloatArray = NDArray[np.float64]
 
 
 def _as_1d(name: str, value: object, n: int | None) -> FloatArray:

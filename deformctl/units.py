@@ -27,9 +27,6 @@ def s_to_ns(t_s: float) -> int:
 
 # ---------------------------------------------------------------------------- unit names
 
-#: The physical dimensions a unit name can have.
-DIMENSIONS: tuple[str, ...] = ("time", "force", "length")
-
 LBF_N = 4.4482216152605  #: newtons per pound-force (exact by definition)
 OZF_N = LBF_N / 16.0  #: newtons per ounce-force
 KGF_N = GRAVITY_M_S2  #: newtons per kilogram-force

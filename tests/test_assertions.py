@@ -1,4 +1,4 @@
-"""Every test asserts something: no test that cannot fail (issue 31, point 8).
+"""Every test asserts something: no test that cannot fail.
 
 A test function passes the check when its body, read as Python (``ast``), contains an
 ``assert``, a ``raise``, ``pytest.raises`` / ``pytest.warns`` / ``pytest.fail``, a call whose name

@@ -15,11 +15,14 @@ Printed output never goes stale: every ``text`` block (but the generated CLI ref
 either marked with the commands that print it, and equal to what they print now (numbers at a
 stated tolerance: tests/_helpers/docs_output.py), or is a benchmark's (``<!-- bench:NAME -->``,
 rewritten by ``make bench``). No block names a folder a fresh clone lacks, and the ranges the
-docs state for the bundled grip model and its population are the ones the code holds.
+docs state for the bundled grip model and its population are the ones the code holds;
+docs/development.md names only modules, files and names that exist.
 """
 
 from __future__ import annotations
 
+import ast
+import importlib
 import math
 import os
 import re
@@ -39,7 +42,7 @@ BLOCK = re.compile(
     r"(?:<!-- docs-test: skip \((?P<why>[^)]*)\) -->\n)?```sh\n(?P<code>.*?)```", re.S
 )
 LINK = re.compile(r"\]\((?!https?://|#|mailto:)(?P<target>[^)#\s]+)(?:#[^)]*)?\)")
-#: The README stays short: what, for whom, install, a first example and links (issue 31).
+#: The README stays short: what, for whom, install, a first example and links.
 README_MAX_LINES = 150
 
 
@@ -337,3 +340,68 @@ def test_api_reference_covers_every_exported_name_and_catches_a_stale_file(
     stale = tmp_path / "api.md"
     stale.write_text(text.replace("BagSource", "BagSauce", 1), encoding="utf-8")
     assert apidoc.main(["--check", str(stale)]) == 1
+
+
+def _defined_names() -> set[str]:
+    """Every module, class, function, method and module-level name defined in deformctl/."""
+    names: set[str] = set()
+    for path in (REPO / "deformctl").rglob("*.py"):
+        names.update(path.relative_to(REPO).with_suffix("").parts)
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.FunctionDef | ast.ClassDef):
+                names.add(node.name)
+            elif isinstance(node, ast.Assign | ast.AnnAssign):
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                names.update(t.id for t in targets if isinstance(t, ast.Name))
+    return names
+
+
+def _resolve(dotted: str) -> object:
+    """The object ``dotted`` names: its longest importable module prefix, then attributes."""
+    parts = dotted.split(".")
+    for k in range(len(parts), 0, -1):
+        try:
+            value: object = importlib.import_module(".".join(parts[:k]))
+        except ModuleNotFoundError:
+            continue
+        for part in parts[k:]:
+            value = getattr(value, part)
+        return value
+    raise ModuleNotFoundError(dotted)
+
+
+def test_development_md_names_only_what_exists() -> None:
+    import deformctl
+
+    text = (REPO / "docs" / "development.md").read_text(encoding="utf-8")
+    top = {p.stem for p in (REPO / "deformctl").iterdir() if p.suffix == ".py" or p.is_dir()}
+    defined = _defined_names()
+    missing = []
+    # words in backquotes that are not deformctl's: the extras' name, a placeholder, typing's flag
+    others = {"dev", "COMMAND", "TYPE_CHECKING"}
+    for token in sorted(set(re.findall(r"`([A-Za-z_][\w.]*)(?:\(\))?`", text)) - others):
+        if token.endswith(".py"):
+            continue  # a file: checked below
+        head = token.split(".")[0]
+        if head == "deformctl" and token != "deformctl.datasets":  # datasets is package data
+            try:
+                _resolve(token)
+            except (ImportError, AttributeError):
+                missing.append(token)
+        elif "." in token and head in top:
+            try:
+                _resolve(f"deformctl.{token}")
+            except (ImportError, AttributeError):
+                missing.append(token)
+        elif "." not in token and token not in defined:
+            missing.append(token)
+    for path in re.findall(r"`((?:deformctl|tests|cli|datasets)/[\w/.]+|[\w/]+\.py)`", text):
+        where = [REPO / path, REPO / "deformctl" / path]
+        if not any(p.exists() for p in where) and not list(REPO.glob(f"deformctl/**/{path}")):
+            missing.append(path)
+    # the library calls listed for ``import deformctl`` are the ones it exports
+    calls = text.split("- `deformctl/__init__.py`:", 1)[1].split("\n- ", 1)[0]
+    for name in re.findall(r"`([A-Za-z_]\w*)`", calls):
+        if name not in deformctl.__all__:
+            missing.append(f"deformctl.{name}")
+    assert not missing, f"docs/development.md names what does not exist: {missing}"

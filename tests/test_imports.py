@@ -23,7 +23,7 @@ ROOT = "deformctl"
 LAYERS: tuple[tuple[str, ...], ...] = (
     # the package's face (its library calls, imported when used) and the command
     ("__init__", "__main__", "cli"),
-    ("repro", "golden", "testing"),
+    ("repro", "testing"),
     # the stages, each one module or package (they may import each other, never in a cycle)
     (
         "population",
@@ -59,6 +59,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "blas",
         "summary",
         "lazy",
+        "arraytypes",
     ),
 )
 

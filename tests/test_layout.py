@@ -164,7 +164,7 @@ def test_make_examples_runs_every_example() -> None:
 
 
 def layout_problems(files: Mapping[str, str], source: set[str]) -> list[str]:
-    """What breaks the tests' layout (issue 31, point 8), one line each.
+    """What breaks the tests' layout, one line each.
 
     ``files`` maps each Python file under ``tests/`` (its path there, ``cli/test_lift.py``) to its
     text, ``source`` holds the paths of the package's files under ``deformctl/``. The rules:

@@ -16,9 +16,10 @@ import sys
 import types
 from typing import TYPE_CHECKING, Any
 
-from deformctl.lazy import lazy_exports
+from deformctl.lazy import lazy_face
 
-if TYPE_CHECKING:  # the names below, for type checkers; at run time they load on first use
+# ruff: noqa: F401 - the imports below are the public names (deformctl.lazy.lazy_face)
+if TYPE_CHECKING:  # for type checkers; at run time each loads on first use
     from deformctl.artifacts.describe import describe, detect_kind
     from deformctl.artifacts.io import (
         atomic_output,
@@ -44,37 +45,10 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
     from deformctl.artifacts.tables import read_catalog, read_table, write_catalog, write_table
     from deformctl.series import LiftAttempt
 
-#: Public name -> the submodule that defines it. Importing this package imports none of them,
-#: so a command that needs one module (``predict``: the atomic writes of ``io``) does not pay
-#: for pandas, pyarrow and the MCAP readers the others bring.
-_EXPORTS: dict[str, str] = {
-    "describe": "deformctl.artifacts.describe",
-    "detect_kind": "deformctl.artifacts.describe",
-    "atomic_output": "deformctl.artifacts.io",
-    "check_input_path": "deformctl.artifacts.io",
-    "check_output_path": "deformctl.artifacts.io",
-    "read_input_bytes": "deformctl.artifacts.io",
-    "read_lift_log": "deformctl.artifacts.mcap",
-    "read_squeeze_log": "deformctl.artifacts.mcap",
-    "write_lift_log": "deformctl.artifacts.mcap",
-    "write_squeeze_log": "deformctl.artifacts.mcap",
-    "Provenance": "deformctl.artifacts.provenance",
-    "sha256_file": "deformctl.artifacts.provenance",
-    "TABLE_KINDS": "deformctl.artifacts.schema",
-    "json_validator": "deformctl.artifacts.schema",
-    "load_json_schema": "deformctl.artifacts.schema",
-    "load_table_spec": "deformctl.artifacts.schema",
-    "validate_frame": "deformctl.artifacts.schema",
-    "validate_message": "deformctl.artifacts.schema",
-    "read_catalog": "deformctl.artifacts.tables",
-    "read_table": "deformctl.artifacts.tables",
-    "write_catalog": "deformctl.artifacts.tables",
-    "write_table": "deformctl.artifacts.tables",
-    "LiftAttempt": "deformctl.series",
-}
 
-
-__getattr__, __dir__ = lazy_exports(globals(), _EXPORTS)
+#: Importing this package imports none of the modules above, so a command that needs one
+#: (``predict``: the atomic writes of ``io``) does not pay for the others' pandas, pyarrow and MCAP.
+__getattr__, __dir__ = lazy_face(globals())
 
 
 class _Package(types.ModuleType):
@@ -85,36 +59,9 @@ class _Package(types.ModuleType):
     everything eagerly."""
 
     def __setattr__(self, name: str, value: Any) -> None:
-        if name in _EXPORTS and isinstance(value, types.ModuleType):
+        if name in self.__all__ and isinstance(value, types.ModuleType):
             return
         super().__setattr__(name, value)
 
 
 sys.modules[__name__].__class__ = _Package
-
-
-__all__ = [
-    "TABLE_KINDS",
-    "LiftAttempt",
-    "Provenance",
-    "atomic_output",
-    "check_input_path",
-    "check_output_path",
-    "describe",
-    "detect_kind",
-    "json_validator",
-    "load_json_schema",
-    "load_table_spec",
-    "read_catalog",
-    "read_input_bytes",
-    "read_lift_log",
-    "read_squeeze_log",
-    "read_table",
-    "sha256_file",
-    "validate_frame",
-    "validate_message",
-    "write_catalog",
-    "write_lift_log",
-    "write_squeeze_log",
-    "write_table",
-]

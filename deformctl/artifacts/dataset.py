@@ -112,8 +112,9 @@ def spec_rows(df: pd.DataFrame, kind: str) -> pa.Table:
         if fld.name in norm.columns:
             values = list(norm[fld.name])
             if pa.types.is_string(fld.type):
-                values = [None if v is None or (isinstance(v, float) and v != v) else v
-                          for v in values]  # fmt: skip
+                values = [
+                    None if v is None or (isinstance(v, float) and v != v) else v for v in values
+                ]
             arrays.append(pa.array(values, type=fld.type, from_pandas=True))
         else:
             arrays.append(pa.nulls(len(norm), type=fld.type))

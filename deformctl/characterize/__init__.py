@@ -1,5 +1,5 @@
 """Deformability D and damping λ from squeeze logs: the paper's Kelvin model and the material laws
-real objects follow (issue 33).
+real objects follow.
 
 A squeeze is fitted with a material law (:mod:`~deformctl.characterize.laws`: Kelvin–Voigt
 ``f = F0 + D d + λ ḋ``, Hunt–Crossley ``f = F0 + k dⁿ + λ dⁿ ḋ`` or a standard linear solid),
@@ -35,9 +35,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from deformctl.lazy import lazy_exports
+from deformctl.lazy import lazy_face
 
-if TYPE_CHECKING:  # the names below, for type checkers; at run time they load on first use
+# ruff: noqa: F401 - the imports below are the public names (deformctl.lazy.lazy_face)
+if TYPE_CHECKING:  # for type checkers; at run time each loads on first use
     from deformctl.characterize.arrays import (
         ARRAYS_SOURCE,
         CoefficientsWarning,
@@ -48,7 +49,6 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
         CoefficientFit,
     )
     from deformctl.characterize.fit import (
-        COLLINEAR_COND,
         DEFAULT_MIN_COMPRESSION_FRAC,
         DEFAULT_MIN_RATE_FRAC,
         DEFAULT_POLYORDER,
@@ -117,131 +117,6 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
         synthetic_rupture_backoff,
     )
 
-#: Public name -> the submodule that defines it. Importing this package imports none of them, so
-#: a module that needs one of them (the command line's options) does not pay for the others
-#: (pandas, pyarrow, numba, the MCAP readers).
-_EXPORTS: dict[str, str] = {
-    "COEFFICIENT_COLUMNS": "deformctl.characterize.coefficients",
-    "CoefficientFit": "deformctl.characterize.coefficients",
-    "COLLINEAR_COND": "deformctl.characterize.fit",
-    "DEFAULT_MIN_COMPRESSION_FRAC": "deformctl.characterize.fit",
-    "DEFAULT_MIN_RATE_FRAC": "deformctl.characterize.fit",
-    "DEFAULT_POLYORDER": "deformctl.characterize.fit",
-    "DEFAULT_WINDOW_RATE_HZ": "deformctl.characterize.fit",
-    "DEFAULT_WINDOW_S": "deformctl.characterize.fit",
-    "UNIFORM_DT_RTOL": "deformctl.characterize.fit",
-    "characterize": "deformctl.characterize.fit",
-    "damping_excitation": "deformctl.characterize.fit",
-    "default_window_s": "deformctl.characterize.fit",
-    "fit_lsq": "deformctl.characterize.fit",
-    "fit_paper": "deformctl.characterize.fit",
-    "MODEL_CHOICES": "deformctl.characterize.material_options",
-    "MODELS": "deformctl.characterize.material_options",
-    "DEFAULT_MATERIALS": "deformctl.characterize.material_options",
-    "MaterialOptions": "deformctl.characterize.material_options",
-    "check_at_force_n": "deformctl.characterize.material_options",
-    "default_lag": "deformctl.characterize.material_options",
-    "Profile": "deformctl.characterize.models",
-    "kelvin_voigt_piecewise_linear": "deformctl.characterize.models",
-    "kelvin_voigt_response": "deformctl.characterize.models",
-    "synthetic_kelvin_voigt_squeeze": "deformctl.characterize.models",
-    "ObjectFit": "deformctl.characterize.objectfit",
-    "fit_object": "deformctl.characterize.objectfit",
-    "DEFAULT_FIT": "deformctl.characterize.options",
-    "DEFAULT_POLICY": "deformctl.characterize.options",
-    "METHODS": "deformctl.characterize.options",
-    "PRELOADS": "deformctl.characterize.options",
-    "FitOptions": "deformctl.characterize.options",
-    "Method": "deformctl.characterize.options",
-    "Preload": "deformctl.characterize.options",
-    "QualityPolicy": "deformctl.characterize.options",
-    "check_method": "deformctl.characterize.options",
-    "check_paper_options": "deformctl.characterize.options",
-    "check_preload": "deformctl.characterize.options",
-    "MIN_SAMPLES": "deformctl.characterize.prepare",
-    "NO_COMPRESSION_M": "deformctl.characterize.prepare",
-    "NO_COMPRESSION_NOISE_MULT": "deformctl.characterize.prepare",
-    "validate_squeeze": "deformctl.characterize.prepare",
-    "RIG_SOURCES": "deformctl.characterize.stage",
-    "ARRAYS_SOURCE": "deformctl.characterize.arrays",
-    "CoefficientsWarning": "deformctl.characterize.arrays",
-    "characterize_arrays": "deformctl.characterize.arrays",
-    "CharacterizeTask": "deformctl.characterize.stage",
-    "LogCoefficients": "deformctl.characterize.stage",
-    "characterize_dir": "deformctl.characterize.stage",
-    "characterize_file": "deformctl.characterize.stage",
-    "characterize_items": "deformctl.characterize.stage",
-    "characterize_sweep": "deformctl.characterize.stage",
-    "default_preload": "deformctl.characterize.stage",
-    "read_and_characterize": "deformctl.characterize.stage",
-    "squeeze_log_parts": "deformctl.characterize.stage",
-    "sweep_warnings": "deformctl.characterize.stage",
-    "synthetic_law_squeeze": "deformctl.characterize.synthetic",
-    "synthetic_relaxation_hold": "deformctl.characterize.synthetic",
-    "synthetic_rupture_backoff": "deformctl.characterize.synthetic",
-}
-
-
-__getattr__, __dir__ = lazy_exports(globals(), _EXPORTS)
-
-
-__all__ = [
-    "ARRAYS_SOURCE",
-    "COEFFICIENT_COLUMNS",
-    "COLLINEAR_COND",
-    "DEFAULT_FIT",
-    "DEFAULT_MATERIALS",
-    "DEFAULT_MIN_COMPRESSION_FRAC",
-    "DEFAULT_MIN_RATE_FRAC",
-    "DEFAULT_POLICY",
-    "DEFAULT_POLYORDER",
-    "DEFAULT_WINDOW_RATE_HZ",
-    "DEFAULT_WINDOW_S",
-    "METHODS",
-    "MIN_SAMPLES",
-    "MODELS",
-    "MODEL_CHOICES",
-    "NO_COMPRESSION_M",
-    "NO_COMPRESSION_NOISE_MULT",
-    "PRELOADS",
-    "RIG_SOURCES",
-    "UNIFORM_DT_RTOL",
-    "CharacterizeTask",
-    "CoefficientFit",
-    "CoefficientsWarning",
-    "FitOptions",
-    "LogCoefficients",
-    "MaterialOptions",
-    "Method",
-    "ObjectFit",
-    "Preload",
-    "Profile",
-    "QualityPolicy",
-    "characterize",
-    "characterize_arrays",
-    "characterize_dir",
-    "characterize_file",
-    "characterize_items",
-    "characterize_sweep",
-    "check_at_force_n",
-    "check_method",
-    "check_paper_options",
-    "check_preload",
-    "damping_excitation",
-    "default_lag",
-    "default_preload",
-    "default_window_s",
-    "fit_lsq",
-    "fit_object",
-    "fit_paper",
-    "kelvin_voigt_piecewise_linear",
-    "kelvin_voigt_response",
-    "read_and_characterize",
-    "squeeze_log_parts",
-    "sweep_warnings",
-    "synthetic_kelvin_voigt_squeeze",
-    "synthetic_law_squeeze",
-    "synthetic_relaxation_hold",
-    "synthetic_rupture_backoff",
-    "validate_squeeze",
-]
+#: Importing this package imports none of the modules above, so a module that needs one of them
+#: (the command line's options) does not pay for the others (pandas, pyarrow, numba, MCAP).
+__getattr__, __dir__ = lazy_face(globals())

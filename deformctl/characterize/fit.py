@@ -88,8 +88,6 @@ DEFAULT_MIN_COMPRESSION_FRAC = 0.02
 DEFAULT_MIN_RATE_FRAC = 0.05
 #: Relative spread of the sampling interval above which a log is resampled to a uniform grid.
 UNIFORM_DT_RTOL = 1e-3
-#: Condition number of ``XᵀX`` of ``[d, d']`` above which D cannot be estimated at all.
-COLLINEAR_COND = 1e12
 
 
 @dataclass(frozen=True)
@@ -170,23 +168,6 @@ def _check_options(window_s: float, polyorder: int, min_compression_frac: float)
         raise UsageError(f"min_compression_frac must be in [0, 1), got {min_compression_frac}")
 
 
-def _hac_meat(x: FloatArray, resid: FloatArray, lags: int) -> FloatArray:
-    """Newey–West (Bartlett) estimate of ``Σ_t Σ_s w_|t−s| (x_t e_t)(x_s e_s)ᵀ``, ``[p, p]``.
-
-    Args:
-        x: regressors of one squeeze, ``[m, p]``.
-        resid: residuals ``[m]``.
-        lags: bandwidth in samples (the SG window: the span over which smoothed regressors,
-            and so residuals, are correlated).
-    """
-    u = x * resid[:, None]
-    meat = u.T @ u
-    for lag in range(1, min(lags, u.shape[0] - 1) + 1):
-        g = u[lag:].T @ u[:-lag]
-        meat += (1.0 - lag / (lags + 1)) * (g + g.T)
-    return np.asarray(meat, dtype=np.float64)
-
-
 def _r2(f: FloatArray, pred: FloatArray) -> float:
     ss_tot = float(np.sum((f - f.mean()) ** 2))
     ss_res = float(np.sum((f - pred) ** 2))
@@ -206,34 +187,6 @@ def _unit_rms(x: FloatArray) -> tuple[FloatArray, FloatArray]:
     scale = np.sqrt(np.mean(x * x, axis=0))
     scale = np.where(scale > 0, scale, 1.0)
     return x / scale, scale
-
-
-def _lstsq(x: FloatArray, f: FloatArray) -> FloatArray:
-    """Least-squares coefficients of ``f ≈ x c`` (columns scaled for conditioning)."""
-    xs, scale = _unit_rms(x)
-    coef, *_ = np.linalg.lstsq(xs, f, rcond=None)
-    return np.asarray(coef / scale, dtype=np.float64)
-
-
-def _hac_cov(x: FloatArray, resid: FloatArray, prepared: Sequence[_Prepared]) -> FloatArray:
-    """Newey–West covariance of the coefficients of ``f ≈ x c``, within each squeeze, ``[p, p]``."""
-    xs, scale = _unit_rms(x)
-    p = x.shape[1]
-    meat = np.zeros((p, p))
-    start = 0
-    for prep in prepared:
-        stop = start + prep.force_n.shape[0]
-        meat += _hac_meat(xs[start:stop], resid[start:stop], prep.window_samples)
-        start = stop
-    n = x.shape[0]
-    bread = np.linalg.pinv(xs.T @ xs)
-    cov = bread @ meat @ bread * (n / max(n - p, 1))
-    return np.asarray(cov / np.outer(scale, scale), dtype=np.float64)
-
-
-def _relative_change(a: float, b: float) -> float:
-    big = max(abs(a), abs(b))
-    return abs(a - b) / big if big > 0 else 0.0
 
 
 def _ranges(f: FloatArray, d: FloatArray) -> dict[str, float]:

@@ -237,17 +237,6 @@ def secant_stiffness(model: str, params: Mapping[str, float], force_n: float) ->
     return force_n / d if d > 0 else math.nan
 
 
-def tangent_stiffness(model: str, params: Mapping[str, float], d: FloatArray) -> FloatArray:
-    """``∂f/∂d`` of the elastic curve, N/m (``d`` in m)."""
-    dp = np.maximum(np.asarray(d, dtype=np.float64), 0.0)
-    if model == "hc":
-        n = params["exponent"]
-        return params["stiffness_n_per_m_pow_n"] * n * dp ** (n - 1.0)
-    if model == "exp":
-        return np.asarray(params["stiffness_n_per_m"] * np.exp(params["stiffening_per_m"] * dp))
-    return np.full_like(dp, params["stiffness_n_per_m"])
-
-
 def equivalent_damping(model: str, params: Mapping[str, float], compression_m: float) -> float:
     """The damping a Kelvin–Voigt element would need at this compression, N·s/m.
 

@@ -33,8 +33,10 @@ def _model_lines(info: dict[str, Any]) -> list[str]:
     if hp:
         lines.append(f"hyperparameters: {json.dumps(hp, sort_keys=True)}")
     cal = f"{info['n_calibration']} calibration / " if info.get("n_calibration") else ""
-    lines.append(f"form: {info.get('form', 'paper')}; split: {info['n_train']} train / {cal}"
-                 f"{info['n_test']} test")  # fmt: skip
+    lines.append(
+        f"form: {info.get('form', 'paper')}; split: {info['n_train']} train / {cal}"
+        f"{info['n_test']} test"
+    )
     if info.get("blas") is not None:  # older model files did not record it
         lines.append(f"BLAS of the fit: {blas_summary(info['blas'])}")
     for key, entry in info["metrics"].items():
@@ -150,8 +152,10 @@ def render_text(info: dict[str, Any]) -> str:
         lines.append(f"messages: {info['messages']}")
         rng = info.get("time_range")
         if rng:
-            lines.append(f"time range: {_utc(rng['start_ns'])} .. {_utc(rng['end_ns'])} "
-                         f"({rng['duration_s']:.3f} s)")  # fmt: skip
+            lines.append(
+                f"time range: {_utc(rng['start_ns'])} .. {_utc(rng['end_ns'])} "
+                f"({rng['duration_s']:.3f} s)"
+            )
         for key in ("squeezes", "attempts", "lifted"):
             if key in info:
                 lines.append(f"{key}: {info[key]}")

@@ -1,4 +1,4 @@
-"""The grip model: a lifting force a robot can trust (issue 30).
+"""The grip model: a lifting force a robot can trust.
 
 * :mod:`~deformctl.grip.groups`: the model's inputs (W, D, λ, μ) and the dimensionless groups
   (ω_n, ζ) its network learns from;

@@ -172,9 +172,11 @@ def _law_rows(
     grids = [np.linspace(*net.ranges.get(k, (np.nan, np.nan)), _PARAMETER_GRID) for k in names]
     for i in np.flatnonzero(unknown):
         cand = np.array(
-            [[c[j] if not math.isfinite(used[k][i]) else used[k][i] for j, k in enumerate(names)]
-             for c in itertools.product(*grids)]
-        )  # fmt: skip
+            [
+                [c[j] if not math.isfinite(used[k][i]) else used[k][i] for j, k in enumerate(names)]
+                for c in itertools.product(*grids)
+            ]
+        )
         cand = np.unique(cand, axis=0)
         m = cand.shape[0]
         p = {k: cand[:, j] for j, k in enumerate(names)}
@@ -308,8 +310,12 @@ def predict_laws(
         entry: dict[int, tuple[float, float, list[str], bool]] = {}
         for j, i in enumerate(idx.tolist()):
             parts = _outside(net, checked, j)
-            entry[i] = (float(law_lift[j]), float(upper[i] if q is None else law_upper[j]),
-                        parts, bool(assumed[j]))  # fmt: skip
+            entry[i] = (
+                float(law_lift[j]),
+                float(upper[i] if q is None else law_upper[j]),
+                parts,
+                bool(assumed[j]),
+            )
         per_law[law] = entry
     for i in range(n):
         law = str(laws[i])

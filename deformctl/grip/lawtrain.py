@@ -291,9 +291,13 @@ def train_laws(
         )
     kv_rows = index_table[laws == "kv"].reset_index(drop=True)
     result = train_main(
-        kv_rows, hidden=hidden, train_size=train_size, calibration_size=calibration_size,
-        seed=seed, form="grip",
-    )  # fmt: skip
+        kv_rows,
+        hidden=hidden,
+        train_size=train_size,
+        calibration_size=calibration_size,
+        seed=seed,
+        form="grip",
+    )
     sizes = tuple(hidden or DEFAULT_GRIP_HIDDEN)
     models = {
         law: fit_law(

@@ -1,4 +1,4 @@
-"""Is a lifting-force model's output a lifting force? (issue 34 point 3)
+"""Is a lifting-force model's output a lifting force?
 
 A model file can be structurally sound (the right layers, finite weights) and still predict
 nonsense: weights scaled by 10^300 predict 10^301 N. Two checks, on the physics of the answer:

@@ -27,9 +27,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from deformctl.lazy import lazy_exports
+from deformctl.lazy import lazy_face
 
-if TYPE_CHECKING:  # the names below, for type checkers; at run time they load on first use
+# ruff: noqa: F401 - the imports below are the public names (deformctl.lazy.lazy_face)
+if TYPE_CHECKING:  # for type checkers; at run time each loads on first use
     from deformctl.lift.search import (
         DEFAULT_GROWTH,
         DEFAULT_MAX_ATTEMPTS,
@@ -50,26 +51,4 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
         validate_start_margin,
     )
 
-#: The search's public names (:mod:`deformctl.lift.search`), the package's face.
-__all__ = [
-    "DEFAULT_GROWTH",
-    "DEFAULT_MAX_ATTEMPTS",
-    "DEFAULT_START_MARGIN",
-    "DEFAULT_TOLERANCE_REL",
-    "PROTOCOLS",
-    "AttemptError",
-    "LiftAttempt",
-    "LiftSearchResult",
-    "RigSearchAbortedError",
-    "SearchAbortedError",
-    "SearchOptions",
-    "SearchProtocol",
-    "TrialRunner",
-    "find_min_lift_force",
-    "find_min_lift_force_seeded",
-    "rigid_grip_force_n",
-    "validate_start_margin",
-]
-
-
-__getattr__, __dir__ = lazy_exports(globals(), dict.fromkeys(__all__, "deformctl.lift.search"))
+__getattr__, __dir__ = lazy_face(globals())

@@ -1,4 +1,4 @@
-"""The force ceiling of a lift: no grip force above it is ever requested (issue 34 point 4).
+"""The force ceiling of a lift: no grip force above it is ever requested.
 
 Each object's ceiling, N, is the first of:
 

@@ -140,9 +140,13 @@ class LiftJournal:
             return
         if self.log is not None and not is_stdio(self.log):
             write_lift_log(
-                self.log, self.objects, self._attempts, provenance=self.provenance, force=True,
+                self.log,
+                self.objects,
+                self._attempts,
+                provenance=self.provenance,
+                force=True,
                 **self.log_epoch,
-            )  # fmt: skip
+            )
             self._log_written = len(self._attempts)
         if not is_stdio(self.output):
             write_table(

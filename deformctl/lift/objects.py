@@ -1,6 +1,6 @@
 """What ``lift`` lifts: a catalog, or a coefficients table whose objects carry their own values.
 
-:func:`read_lift_objects` reads either. A coefficients table from ``characterize`` (issue 36)
+:func:`read_lift_objects` reads either. A coefficients table from ``characterize``
 carries each object's weight, size and μ as the squeeze log recorded them; as a catalog its
 measured D and λ become the object's material (``material_stiffness_n_per_cm``,
 ``material_damping_ns_per_cm``), so ``lift coefficients.parquet --sim`` lifts, in the simulator,

@@ -41,9 +41,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from deformctl.lazy import lazy_exports
+from deformctl.lazy import lazy_face
 
-if TYPE_CHECKING:  # the names below, for type checkers; at run time they load on first use
+# ruff: noqa: F401 - the imports below are the public names (deformctl.lazy.lazy_face)
+if TYPE_CHECKING:  # for type checkers; at run time each loads on first use
     from deformctl.measure.csv.batch import (
         CSV_MEASURE_SCHEMA,
         CsvBatchResult,
@@ -112,109 +113,6 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
         simulate_catalog_sweep,
     )
 
-#: Public name -> the submodule that defines it. Importing this package imports none of them, so
-#: a module that needs one of them (the command line's options) does not pay for the others
-#: (pandas, pyarrow, numba, the MCAP readers).
-_EXPORTS: dict[str, str] = {
-    "ABSOLUTE_TIME_MIN_S": "deformctl.measure.csv.reader",
-    "CSV_MEASURE_SCHEMA": "deformctl.measure.csv.batch",
-    "CsvBatchResult": "deformctl.measure.csv.batch",
-    "CsvFile": "deformctl.measure.csv.batch",
-    "CsvFileTask": "deformctl.measure.csv.batch",
-    "csv_objects": "deformctl.measure.csv.batch",
-    "measure_csv_files": "deformctl.measure.csv.batch",
-    "measure_csv_sweep": "deformctl.measure.csv.batch",
-    "read_objects_from": "deformctl.measure.csv.batch",
-    "DEFAULT_CSV_MEMORY_BUDGET_GIB": "deformctl.measure.csv.options",
-    "CsvDialect": "deformctl.measure.csv.options",
-    "CsvOptions": "deformctl.measure.csv.options",
-    "ImagesResult": "deformctl.measure.images",
-    "measure_images": "deformctl.measure.images",
-    "DEFAULT_FORCE_THRESHOLD_FRAC": "deformctl.measure.options",
-    "DEFAULT_MIN_GAP_S": "deformctl.measure.options",
-    "DEFAULT_MIN_SQUEEZE_S": "deformctl.measure.options",
-    "DEFAULT_SEGMENTATION": "deformctl.measure.options",
-    "DEFAULT_SIM_HOLD_S": "deformctl.measure.options",
-    "DEFAULT_SIM_RAMP_S": "deformctl.measure.options",
-    "DEFAULT_SIM_SQUEEZES": "deformctl.measure.options",
-    "DEFAULT_SQUEEZE_PROTOCOL": "deformctl.measure.options",
-    "DEFAULT_SQUEEZE_STRAIN": "deformctl.measure.options",
-    "INCREASES_WHEN": "deformctl.measure.options",
-    "Axis": "deformctl.measure.options",
-    "BagSource": "deformctl.measure.options",
-    "CompressionZero": "deformctl.measure.options",
-    "IncreasesWhen": "deformctl.measure.options",
-    "PositionIs": "deformctl.measure.options",
-    "Segmentation": "deformctl.measure.options",
-    "SqueezeProtocol": "deformctl.measure.options",
-    "Recording": "deformctl.measure.recording",
-    "JOINT_STATE_TYPE": "deformctl.measure.ros2_bag",
-    "POSE_TYPE": "deformctl.measure.ros2_bag",
-    "WRENCH_TYPE": "deformctl.measure.ros2_bag",
-    "segment_squeezes": "deformctl.measure.segment",
-    "SqueezeProgress": "deformctl.measure.sim",
-    "default_peak_force_n": "deformctl.measure.sim",
-    "simulate_squeezes": "deformctl.measure.sim",
-    "LOG_SAMPLE_BYTES": "deformctl.measure.stage",
-    "MEASURE_SCHEMA": "deformctl.measure.stage",
-    "SimulateCatalogTask": "deformctl.measure.stage",
-    "read_recording": "deformctl.measure.stage",
-    "recording_log": "deformctl.measure.stage",
-    "sim_provenance": "deformctl.measure.stage",
-    "simulate_catalog_file": "deformctl.measure.stage",
-    "simulate_catalog_sweep": "deformctl.measure.stage",
-}
-
-
-__getattr__, __dir__ = lazy_exports(globals(), _EXPORTS)
-
-
-__all__ = [
-    "ABSOLUTE_TIME_MIN_S",
-    "CSV_MEASURE_SCHEMA",
-    "DEFAULT_CSV_MEMORY_BUDGET_GIB",
-    "DEFAULT_FORCE_THRESHOLD_FRAC",
-    "DEFAULT_MIN_GAP_S",
-    "DEFAULT_MIN_SQUEEZE_S",
-    "DEFAULT_SEGMENTATION",
-    "DEFAULT_SIM_HOLD_S",
-    "DEFAULT_SIM_RAMP_S",
-    "DEFAULT_SIM_SQUEEZES",
-    "DEFAULT_SQUEEZE_PROTOCOL",
-    "DEFAULT_SQUEEZE_STRAIN",
-    "INCREASES_WHEN",
-    "JOINT_STATE_TYPE",
-    "LOG_SAMPLE_BYTES",
-    "MEASURE_SCHEMA",
-    "POSE_TYPE",
-    "WRENCH_TYPE",
-    "Axis",
-    "BagSource",
-    "CompressionZero",
-    "CsvBatchResult",
-    "CsvDialect",
-    "CsvFile",
-    "CsvFileTask",
-    "CsvOptions",
-    "ImagesResult",
-    "IncreasesWhen",
-    "PositionIs",
-    "Recording",
-    "Segmentation",
-    "SimulateCatalogTask",
-    "SqueezeProgress",
-    "SqueezeProtocol",
-    "csv_objects",
-    "default_peak_force_n",
-    "measure_csv_files",
-    "measure_csv_sweep",
-    "measure_images",
-    "read_objects_from",
-    "read_recording",
-    "recording_log",
-    "segment_squeezes",
-    "sim_provenance",
-    "simulate_catalog_file",
-    "simulate_catalog_sweep",
-    "simulate_squeezes",
-]
+#: Importing this package imports none of the modules above, so a module that needs one of them
+#: (the command line's options) does not pay for the others (pandas, pyarrow, numba, MCAP).
+__getattr__, __dir__ = lazy_face(globals())

@@ -32,9 +32,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from deformctl.lazy import lazy_exports
+from deformctl.lazy import lazy_face
 
-if TYPE_CHECKING:  # the names below, for type checkers; at run time they load on first use
+# ruff: noqa: F401 - the imports below are the public names (deformctl.lazy.lazy_face)
+if TYPE_CHECKING:  # for type checkers; at run time each loads on first use
     from deformctl.parallel.auto import WorkerChoice, choose_workers
     from deformctl.parallel.backends import TaskOutput, connect_dask
     from deformctl.parallel.options import (
@@ -50,39 +51,4 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
         single_file_workers,
     )
 
-#: Public name -> the submodule that defines it. Importing this package imports none of them,
-#: so a command that needs one module (the CLI's sweep options) does not pay
-#: for pyarrow and the dataset writer the executor brings.
-_EXPORTS: dict[str, str] = {
-    "WorkerChoice": "deformctl.parallel.auto",
-    "choose_workers": "deformctl.parallel.auto",
-    "TaskOutput": "deformctl.parallel.backends",
-    "connect_dask": "deformctl.parallel.backends",
-    "DEFAULT_CONNECT_TIMEOUT_S": "deformctl.parallel.options",
-    "DEFAULT_PARTITION_SIZE": "deformctl.parallel.options",
-    "SweepOptions": "deformctl.parallel.options",
-    "MIN_PARALLEL_OBJECTS": "deformctl.parallel.sweep",
-    "SweepSummary": "deformctl.parallel.sweep",
-    "map_in_order": "deformctl.parallel.sweep",
-    "run_sweep": "deformctl.parallel.sweep",
-    "single_file_workers": "deformctl.parallel.sweep",
-}
-
-
-__getattr__, __dir__ = lazy_exports(globals(), _EXPORTS)
-
-
-__all__ = [
-    "DEFAULT_CONNECT_TIMEOUT_S",
-    "DEFAULT_PARTITION_SIZE",
-    "MIN_PARALLEL_OBJECTS",
-    "SweepOptions",
-    "SweepSummary",
-    "TaskOutput",
-    "WorkerChoice",
-    "choose_workers",
-    "connect_dask",
-    "map_in_order",
-    "run_sweep",
-    "single_file_workers",
-]
+__getattr__, __dir__ = lazy_face(globals())

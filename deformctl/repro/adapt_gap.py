@@ -1,4 +1,4 @@
-"""Issue 36 point 4: ``adapt`` on a sim-to-real gap we control (``make bench``: bench_adapt).
+"""``adapt`` on a sim-to-real gap we control (``make bench``: bench_adapt).
 
 "Reality" is the simulator's ``table`` preset (lifted from a table along an S-curve); the
 "simulator" is the ``paper`` preset, which the bundled grip model was trained on. (The gap is a

@@ -282,8 +282,10 @@ def calibrate(
     ratios = grid / paper[:, None, None]
     everyone = list(range(len(points)))
     fit = fit_minimax(ratios, grid_r, grid_a, everyone)
-    say(f"fit: r = {fit.shear_damping_ratio:.4f}, a = {fit.lift_accel_m_s2:.4f} m/s^2 "
-        f"(worst interpolated error {fit.worst_interpolated:.1%})")  # fmt: skip
+    say(
+        f"fit: r = {fit.shear_damping_ratio:.4f}, a = {fit.lift_accel_m_s2:.4f} m/s^2 "
+        f"(worst interpolated error {fit.worst_interpolated:.1%})"
+    )
     loo_fits = [
         fit_minimax(ratios, grid_r, grid_a, [j for j in everyone if j != i]) for i in everyone
     ]
@@ -393,8 +395,10 @@ def format_record(record: dict[str, Any]) -> str:
             f"{q['lift_force_paper_n']:9.3f} {q['ratio_ours']:8.3f} {q['ratio_paper']:9.3f} "
             f"{q['error']:+7.1%} {lo['error']:+9.1%}"
         )
-    lines.append(f"worst error {record['worst_error']:.1%}; leave-one-out worst error "
-                 f"{record['leave_one_out']['worst']:.1%}")  # fmt: skip
+    lines.append(
+        f"worst error {record['worst_error']:.1%}; leave-one-out worst error "
+        f"{record['leave_one_out']['worst']:.1%}"
+    )
     dc = record["density_check"]
     lines.append(
         f"Table III cubes at {dc['density_g_cm3']} g/cm^3 instead of "
@@ -449,11 +453,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         Path(args.write).write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
     flagged = flagged_points(record)
     if flagged:
-        print(f"warning: left out of the fit, {len(flagged)} point(s) miss by more than the "
-              f"worst in-sample error {record['worst_error']:.1%}: {', '.join(flagged)}",
-              file=sys.stderr)  # fmt: skip
-    clock.finish(done=len(record["points"]), flagged=len(flagged), failed=0,
-                 output=args.write or "stdout", quiet=args.quiet)  # fmt: skip
+        print(
+            f"warning: left out of the fit, {len(flagged)} point(s) miss by more than the "
+            f"worst in-sample error {record['worst_error']:.1%}: {', '.join(flagged)}",
+            file=sys.stderr,
+        )
+    clock.finish(
+        done=len(record["points"]),
+        flagged=len(flagged),
+        failed=0,
+        output=args.write or "stdout",
+        quiet=args.quiet,
+    )
     return 0
 
 

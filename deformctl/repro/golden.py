@@ -167,7 +167,7 @@ TOLERANCES: dict[str, Tolerance] = {
     "model.baseline_nearest_test_max_rel_error": _ONE_STEP_IN_P_AND_T,
     "model.baseline_f_w_test_max_rel_error": _ONE_STEP_IN_P_AND_T,
     "model.baseline_constant_ratio_test_max_rel_error": _ONE_STEP_IN_P_AND_T,
-    # spread 4.4e-5 since the material fit (issue 33) feeds it D and λ (3.9e-5 before)
+    # spread 4.4e-5 since the material-law fit feeds it D and λ (3.9e-5 before)
     "model.network_train_max_rel_error": _of_spread(abs_spread=4.4e-5),
     # 0.05950 (Katmai) .. 0.06017 (SkylakeX)
     "reference_network.test_max_rel_error": _of_spread(abs_spread=6.8e-4),

@@ -245,9 +245,12 @@ def print_spread(rows: Sequence[dict[str, Any]]) -> None:
 
 
 def run_tests(
-    kernels: dict[str, str], threads: Sequence[int | None], files: Sequence[str], jobs: int,
+    kernels: dict[str, str],
+    threads: Sequence[int | None],
+    files: Sequence[str],
+    jobs: int,
     pytest_args: Sequence[str],
-) -> bool:  # fmt: skip
+) -> bool:
     """Each test file set under each kernel x thread count; prints one line per run."""
     combos = [(k, t) for k in kernels for t in threads]
 
@@ -321,9 +324,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("|---|---|---|---|---|")
         for run in runs:
             moved = compare(expected, run.golden) if run.golden is not None else []
-            verdict = run.error.splitlines()[-1] if run.error else (
-                f"{len(moved)} moved" if moved else "within tolerance"
-            )  # fmt: skip
+            verdict = (
+                run.error.splitlines()[-1]
+                if run.error
+                else (f"{len(moved)} moved" if moved else "within tolerance")
+            )
             ok &= not run.error and not moved
             print(
                 f"| {run.kernel} | {run.architecture} | {run.num_threads} | {run.seconds:.1f} "

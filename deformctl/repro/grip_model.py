@@ -15,7 +15,7 @@ and two special sets through the same pipeline and calls this module:
     nearest-entry baselines (the last two fitted on the *training* index), the coverage and mean
     margin of the P = 0.9 and 0.95 bounds and the share of objects flagged outside the training
     range; the friction pairs' predicted against simulated L_f(0.25) / L_f(1.0); the paper's Table
-    I objects A-D, predicted against simulated. Each line ends with its target (issue 30) and
+    I objects A-D, predicted against simulated. Each line ends with its target and
     ``ok`` or ``MISSED``; the report is also written to ``RUN_DIR/report.md``. Exit 1 when a target
     is missed (``--no-gate`` reports only).
 
@@ -48,7 +48,7 @@ RUN_FILES = {
 #: How many objects the friction pairs take, and their two μ.
 N_MU_PAIRS = 8
 MU_PAIR = (0.25, 1.0)
-#: Issue 30's targets.
+#: The grip model's targets.
 TARGET_MEDIAN = 0.03
 TARGET_MAX = 0.10
 TARGET_BASELINE_SHARE = 1.0 / 3.0
@@ -56,7 +56,7 @@ TARGET_MU_RATIO = 0.05
 TARGET_COVERAGE = {0.9: 0.85, 0.95: 0.9}
 TARGET_MARGIN_90 = 0.12
 TARGET_TABLE_I = 0.10
-#: Issue 47's targets per material law: P = 0.9 coverage and mean margin as above, the first-lift
+#: The targets per material law: P = 0.9 coverage and mean margin as above, the first-lift
 #: rate (the P = 0.95 bound is >= L_f and <= 1.10 L_f) and the change of the 13 published
 #: points' predictions from the reference model (today's bundled one).
 TARGET_FIRST_LIFT = 0.90
@@ -348,8 +348,10 @@ def _law_section(out: _Lines, predictor: Predictor, run: Path) -> None:
     }
     names = joined["object_id"].astype(str).tolist()
     y = joined["lift_force_n"].to_numpy()
-    res = {p: predict_objects_with_laws(predictor, inputs, coverage=p, names=names)
-           for p in (0.9, 0.95)}  # fmt: skip
+    res = {
+        p: predict_objects_with_laws(predictor, inputs, coverage=p, names=names)
+        for p in (0.9, 0.95)
+    }
     for law in KNOWN_LAWS:
         sel = (joined["model"] == law).to_numpy()
         if not sel.any():
@@ -357,19 +359,30 @@ def _law_section(out: _Lines, predictor: Predictor, run: Path) -> None:
         est9, est95 = res[0.9].estimates, res[0.95].estimates
         rel = _rel(est9.lift_force_n[sel], y[sel])
         up9, up95 = est9.lift_force_upper_n[sel], est95.lift_force_upper_n[sel]
-        out.add(f"### {law}: {int(sel.sum())} objects, "
-                f"{int(np.sum(est9.bound_guaranteed[sel]))} with bound_guaranteed")  # fmt: skip
-        out.check(f"{law} median relative error {np.median(rel):.2%}", float(np.median(rel)),
-                  TARGET_MEDIAN)  # fmt: skip
+        out.add(
+            f"### {law}: {int(sel.sum())} objects, "
+            f"{int(np.sum(est9.bound_guaranteed[sel]))} with bound_guaranteed"
+        )
+        out.check(
+            f"{law} median relative error {np.median(rel):.2%}",
+            float(np.median(rel)),
+            TARGET_MEDIAN,
+        )
         out.check(f"{law} max relative error {rel.max():.2%}", float(rel.max()), TARGET_MAX)
         cov = float(np.mean(y[sel] <= up9))
-        out.check(f"{law} P = 0.9 coverage {cov:.3f}", cov, TARGET_COVERAGE[0.9], at_least=True,
-                  pct=False)  # fmt: skip
+        out.check(
+            f"{law} P = 0.9 coverage {cov:.3f}", cov, TARGET_COVERAGE[0.9], at_least=True, pct=False
+        )
         margin = float(np.mean(up9 / y[sel] - 1.0))
         out.check(f"{law} P = 0.9 mean margin {margin:.2%}", margin, TARGET_MARGIN_90)
         first = float(np.mean((up95 >= y[sel]) & (up95 <= (1 + FIRST_LIFT_EXTRA) * y[sel])))
-        out.check(f"{law} first-lift rate (P = 0.95 bound in [L_f, 1.10 L_f]) {first:.3f}",
-                  first, TARGET_FIRST_LIFT, at_least=True, pct=False)  # fmt: skip
+        out.check(
+            f"{law} first-lift rate (P = 0.95 bound in [L_f, 1.10 L_f]) {first:.3f}",
+            first,
+            TARGET_FIRST_LIFT,
+            at_least=True,
+            pct=False,
+        )
 
 
 def published_points() -> pd.DataFrame:
@@ -381,15 +394,18 @@ def published_points() -> pd.DataFrame:
     t3 = pd.read_csv(str(root.joinpath("table3_cubes.csv")))
     objects = pd.read_csv(str(root.joinpath("objects.csv")))
     w = dict(zip(objects["object_id"], objects["weight_n"], strict=True))
-    return pd.DataFrame({
-        "object_id": [*t2["object_id"], *t3["object_id"]],
-        "weight_n": [*(w[i] for i in t2["object_id"]), *t3["weight_n"]],
-        "deformability_n_per_cm": [*t2["deformability_calculated_n_per_cm"],
-                                   *t3[MATERIAL_COLUMNS[0]]],
-        "damping_ns_per_cm": [*t2["damping_calculated_ns_per_cm"],
-                              *t3[MATERIAL_COLUMNS[1]]],
-        "friction_mu": 0.5,
-    })  # fmt: skip
+    return pd.DataFrame(
+        {
+            "object_id": [*t2["object_id"], *t3["object_id"]],
+            "weight_n": [*(w[i] for i in t2["object_id"]), *t3["weight_n"]],
+            "deformability_n_per_cm": [
+                *t2["deformability_calculated_n_per_cm"],
+                *t3[MATERIAL_COLUMNS[0]],
+            ],
+            "damping_ns_per_cm": [*t2["damping_calculated_ns_per_cm"], *t3[MATERIAL_COLUMNS[1]]],
+            "friction_mu": 0.5,
+        }
+    )
 
 
 def _published_section(out: _Lines, predictor: Predictor, reference: str | Path | None) -> None:
@@ -407,11 +423,16 @@ def _published_section(out: _Lines, predictor: Predictor, reference: str | Path 
     out.add("| point | W N | D N/cm | λ N·s/cm | today N | this model N | change |")
     out.add("|---|---|---|---|---|---|---|")
     for i, row in enumerate(points.itertuples()):
-        out.add(f"| {row.object_id} | {row.weight_n:g} | {row.deformability_n_per_cm:g} | "
-                f"{row.damping_ns_per_cm:g} | {old[i]:.4g} | {new[i]:.4g} | "
-                f"{new[i] / old[i] - 1:+.2%} |")  # fmt: skip
-    out.check(f"13 published points: largest change {change.max():.2%}", float(change.max()),
-              TARGET_PUBLISHED_CHANGE)  # fmt: skip
+        out.add(
+            f"| {row.object_id} | {row.weight_n:g} | {row.deformability_n_per_cm:g} | "
+            f"{row.damping_ns_per_cm:g} | {old[i]:.4g} | {new[i]:.4g} | "
+            f"{new[i] / old[i] - 1:+.2%} |"
+        )
+    out.check(
+        f"13 published points: largest change {change.max():.2%}",
+        float(change.max()),
+        TARGET_PUBLISHED_CHANGE,
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -152,8 +152,12 @@ def _standard_linear_solid(jobs: int) -> None:
     )
     for i, (om, _w) in enumerate(SLS_OMEGAS):
         row = ratios[i * k : (i + 1) * k]
-        print(f"{om:>6g} " + " ".join(f"{r:>8.4f}" for r in row[: len(arms)]) + "  "
-              + " ".join(f"{r:>8.4f}" for r in row[len(arms) :]))  # fmt: skip
+        print(
+            f"{om:>6g} "
+            + " ".join(f"{r:>8.4f}" for r in row[: len(arms)])
+            + "  "
+            + " ".join(f"{r:>8.4f}" for r in row[len(arms) :])
+        )
     print("   (each column k2/D / τ)", flush=True)
 
 

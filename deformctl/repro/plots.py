@@ -84,9 +84,12 @@ def draw_plots(
     ax.legend()
     fig.tight_layout()
     hidden = hidden_points(
-        ax, list(predictions["object_id"]), predictions["lift_force_n"],
-        predictions["predicted_lift_force_n"], "L_f",
-    )  # fmt: skip
+        ax,
+        list(predictions["object_id"]),
+        predictions["lift_force_n"],
+        predictions["predicted_lift_force_n"],
+        "L_f",
+    )
     plots.append(Plot(out_dir / "predicted_vs_measured.png", tuple(hidden)))
     fig.savefig(plots[-1].path, dpi=120)
     plt.close(fig)
@@ -97,9 +100,12 @@ def draw_plots(
     for oid in order:
         for k, s in enumerate(squeezes_by_object[oid]):
             ax.plot(
-                s.compression_m * 100.0, s.force_n, lw=1, color=f"C{order.index(oid)}",
+                s.compression_m * 100.0,
+                s.force_n,
+                lw=1,
+                color=f"C{order.index(oid)}",
                 label=f"{oid} ({names.get(oid, oid)})" if k == 0 else None,
-            )  # fmt: skip
+            )
     ax.set_xlabel("compression d (cm), simulated (ours)")
     ax.set_ylabel("force felt f (N), simulated (ours)")
     ax.set_title("Squeezes of the Table I objects")
@@ -116,17 +122,33 @@ def draw_plots(
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
     ratio = index["lift_force_n"] / index["f_w_n"]
     sc = ax.scatter(
-        zeta, ratio, c=index["weight_n"], s=16, cmap="viridis", label="our population",
-    )  # fmt: skip
+        zeta,
+        ratio,
+        c=index["weight_n"],
+        s=16,
+        cmap="viridis",
+        label="our population",
+    )
     fig.colorbar(sc, ax=ax, label="weight W (N)")
     ax.scatter(
-        landscape["zeta"], landscape["ratio_paper"], marker="*", s=90, color="C3",
-        edgecolor="k", label="the paper's simulation (Tables II, III)", zorder=3,
-    )  # fmt: skip
+        landscape["zeta"],
+        landscape["ratio_paper"],
+        marker="*",
+        s=90,
+        color="C3",
+        edgecolor="k",
+        label="the paper's simulation (Tables II, III)",
+        zorder=3,
+    )
     ax.scatter(
-        landscape["zeta"], landscape["ratio_ours"], marker="x", s=50, color="k",
-        label="simulated (ours), same 13 objects", zorder=3,
-    )  # fmt: skip
+        landscape["zeta"],
+        landscape["ratio_ours"],
+        marker="x",
+        s=50,
+        color="k",
+        label="simulated (ours), same 13 objects",
+        zorder=3,
+    )
     ax.axhline(1.0, color="k", lw=1, ls="--")
     ax.set_xscale("symlog", linthresh=0.05)  # linear near zeta = 0 (the water bag), log above
     ax.set_xlim(left=0.0)

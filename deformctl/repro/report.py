@@ -238,10 +238,15 @@ def compare_landscape(
     out = pd.DataFrame(
         rows,
         columns=[
-            "point", "weight_n", "deformability_n_per_cm", "damping_ns_per_cm",
-            "lift_force_paper_n", "lift_force_paper_nn_n", "lift_force_ours_n",
+            "point",
+            "weight_n",
+            "deformability_n_per_cm",
+            "damping_ns_per_cm",
+            "lift_force_paper_n",
+            "lift_force_paper_nn_n",
+            "lift_force_ours_n",
         ],
-    )  # fmt: skip
+    )
     out["zeta"] = damping_ratio(
         out["weight_n"], out["deformability_n_per_cm"], out["damping_ns_per_cm"]
     )

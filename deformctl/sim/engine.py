@@ -1,134 +1,35 @@
 """The simulation model: settings, lattice + palms + table assembled for the implicit integrator.
 
-Integrator choice
------------------
-Heavily damped lattices are stiff: with lambda = 15 N·s/cm on a coarse lattice the damper time
-scale ``m_p / c_e`` is microseconds, so any explicit scheme would need microsecond steps. We use
-**linearised backward Euler with the tangent frozen at the rest configuration**::
+**Integrator.** Linearised backward Euler with the tangent frozen at the rest configuration::
 
     (M + dt C + dt^2 K) dv = dt (f(x, v) + f_ext - dt K v) + J^T Lambda
 
-where ``f`` is the exact nonlinear Kelvin element force, ``K`` the lattice stiffness at rest and
-``C`` the damping matrix at rest, assembled from the element dampers ``c_e`` exactly as ``K`` is
-from the springs ``k_e`` (today ``c_e = k_e lambda / D``, see :mod:`deformctl.sim.lattice`; any
-per-element ``c_e`` works). For the linear small-strain lattice (``nonlinear_springs=False``)
-this *is* backward Euler, unconditionally stable (A-stable, L-stable) for any stiffness, damping
-and step. With the geometrically exact springs (default) it is a one-Newton-iteration backward
-Euler step whose Jacobian error is of the order of the rotations and strains, which stay small in
-the grip. The system matrix ``A`` does not change, so its solver is built **once per model**.
-No dense ``N x N`` array is built anywhere (the calibration solves are sparse too), and the
-model's memory is estimated from the particle counts before anything is built and refused above
-``SimSettings.memory_budget_gib``.
+with ``f`` the exact nonlinear element force and ``K``, ``C`` the lattice stiffness and damping
+matrices at rest (``C`` from the element dampers ``c_e`` as ``K`` from the springs ``k_e``, see
+:mod:`deformctl.sim.lattice`). With the linear springs this is backward Euler, stable for any
+stiffness, damping and step; with the geometrically exact springs (default) it is one Newton
+iteration of it. ``A`` never changes, so its solver is built once per model, and nothing dense of
+size ``N x N`` is built. The model's memory is estimated from the particle counts before anything
+is built and refused above ``SimSettings.memory_budget_gib``. ``integrator="bdf2"`` is linearised
+BDF2 (second order, the same single solve with ``h = 2 dt / 3``).
 
-Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
-    * **direct**, up to ``direct_max_dofs = 32`` DOFs (lattices of 2 particles per side; from
-      3^3 on the iterative solver is faster: one lift attempt of the 10 cm cube, same run,
-      ``bench/bench_sim.py``'s solver candidates, 2^3 3 ms direct vs 4 ms iterative, 3^3 9 vs
-      8 ms, 4^3 29 vs 16 ms, 5^3 69 vs 30 ms, 8^3 0.51 vs 0.14 s): ``A = L D L^T``
-      in geometric nested-dissection order (:mod:`deformctl.sim.solver`), a pair of sparse
-      triangular solves per step, contacts from exact columns ``A^-1 e_d``. Exact, and
-      bit-identical to the former dense inverse's results to 1e-12 (tests/sim/
-      test_dense_reference.py). Its fill grows as ``N^1.5`` (21^3 cube: 12.2 M entries, a
-      triangular-solve pair ~25-40 ms against ~0.8 ms for one force evaluation), so it does not
-      scale.
-    * **iterative** above that: CG preconditioned by one geometric-multigrid V-cycle
-      (:mod:`deformctl.sim.multigrid`; convergence ~0.1 per iteration whatever the size),
-      warm-started from the least-squares combination of the last three steps' velocity changes
-      (the one whose image under ``A`` best matches the step's right-hand side; it contains the
-      linear extrapolation, and halves the CG iterations against it), to an RMS residual of
-      ``cg_tolerance_m_s = 2e-7`` m/s. Contacts become *fixed DOFs* (an active row prescribes its
-      DOF's velocity exactly, so sticking holds exactly), palm-plane rows a Schur complement on
-      CG-solved columns; a coarse DOF whose interpolation reaches a fixed DOF is fixed too, so
-      the coarse corrections are the free subsystem's (:func:`deformctl.sim.multigrid.
-      fix_levels`: with the object held on the table CG converges as fast as with nothing
-      held). Cost per step: one force pass, ~0.3 matrix-vector products (by the stencil) and
-      ~0.35-0.7 CG iterations of 2.6-3.9 matrix-vector products' time each (the V-cycle, which
-      also returns CG's ``A p``; the finest level and level 1 are swept particle by particle as
-      lattice stencils, :mod:`deformctl.sim.stencil`, the rest by compressed rows;
-      :mod:`deformctl.sim.multigrid`), linear in the lattice size.
-      The warm start's image ``A dv`` comes from CG's final residual, and CG's initial product
-      is carried from step to step through the same combination of images as the guess
-      (``PRODUCT_CARRY_FRACTION``): it is formed again only when its error bound reaches 1 % of
-      the CG tolerance, about every third step (measured error: at most 5e-8 of that limit,
-      8^3 cube; the bound held in every step). A lift's centre-of-mass path
-      stays within about 1e-9 m of a 100x tighter solve
-      (11^3 cube), squeeze D/lambda within 1e-6.
-      The step's row loops visit only the rows that can act: a table or palm-plane row that is
-      inactive and at least half an element from its surface is left out until the lattice has
-      moved 0.2 element or a velocity could close that gap in one step
-      (``ROW_MARGIN_FRACTION``, :func:`deformctl.sim.step.contact._choose_rows`; bit-identical
-      results; a 21^3 lift attempt checks 117 of its 25,143 rows per round on average). A table row
-      whose impulse, extrapolated from the last two steps, is not positive is released before the
-      first round (``PREDICT_RELEASE``): the support peels off the table in fewer rounds (21^3: 0.69
-      -> 0.66 CG iterations per step).
-    * Measured candidates (``bench/bench_sim.py``, 10 cm cube, one lift attempt, 2-core machine
-      under load): SuperLU's MMD ordering fills 2x more than nested dissection (24 M at 21^3),
-      COLAMD 3.4x; CHOLMOD (``scikit-sparse``) has no wheel on PyPI (source only, needs the
-      SuiteSparse headers), so CI could not install it; a banded Cholesky after RCM was not
-      built (its band is a lattice cross-section, so its fill grows as ``N^{5/3}``, more than
-      nested dissection's); float32 multigrid levels gave no speed-up.
-      The V-cycle's levels were first swept by compressed rows, one DOF at a time; with the
-      finest level and level 1 as stencils (block Gauss–Seidel per particle, no column indices)
-      one V-cycle costs 3.6 matrix-vector products instead of 5.1 at 16^3 and 3.2 instead of
-      5.0 at 21^3 (``bench/bench_sim.py``, ``v_cycle`` alone, same run); with the transfer
-      between those two levels by axis factors on the lattice (:mod:`deformctl.sim.multigrid`),
-      2.8 and 2.6 (finest level alone as a stencil: 3.4 and 3.2). The squeeze D/lambda
-      and L_f of the former dense path are kept within 0.5 % at 5^3 and 8^3 by the iterative
-      solver too (tests/sim/test_dense_reference.py).
+**Solver** (``SimSettings.solver``, ``"auto"`` by default): **direct** up to ``direct_max_dofs``
+DOFs, ``A = L D L^T`` in nested-dissection order (:mod:`deformctl.sim.solver`), contacts from
+exact columns ``A^-1 e_d``; **iterative** above, CG preconditioned by one geometric-multigrid
+V-cycle (:mod:`deformctl.sim.multigrid`, :mod:`deformctl.sim.stencil`), warm-started from the
+last steps' velocity changes, with contacts as fixed DOFs. The step's row loops visit only the
+rows that can act (``ROW_MARGIN_FRACTION``) and a table row predicted to release is released
+first (``PREDICT_RELEASE``).
 
-The step is chosen for accuracy, not
-stability: the default ``dt = 1 ms`` resolves the lift profile's 50 ms jerk ramps; backward
-Euler's lag of about dt/2 on the retardation time lambda/D is 3 % at lambda/D = 17 ms and
-negligible above. Measured (Table I objects, search to 0.1 %): halving dt to 0.5 ms moves the
-lifting force by 0.0 % (sponge), 0.1 % (cotton), 0.0 % (sand), 0.4 % (undamped water bag);
-doubling it to 2 ms by <= 0.7 %. Halving alpha (9 instead of 5 particles per longest side) moves
-it by 0.0-2.8 %, so the default is 5 particles per longest side.
+The step (``dt = 1 ms``) is chosen for accuracy, not stability: it resolves the lift profile's
+50 ms jerk ramps. Contacts are velocity-level constraints (:mod:`deformctl.sim.step`) with
+Coulomb friction that sticks exactly inside the cone. Each palm is rigid and flat; its face
+layer is bonded to it along x and moves as one rigid patch along z, sticking or sliding.
 
-Contacts are velocity-level constraints solved each step (:mod:`deformctl.sim.step`): unilateral
-table contact on the bottom layer, and Coulomb friction between each palm and its face patch with
-a true static regime (exact stick, impulse bounded by ``mu N dt``) and a kinetic regime (impulse at
-the bound, opposing sliding). There is no regularised friction, so a hold inside the cone does not
-creep.
-
-Model options of the ``paper`` preset (:mod:`deformctl.presets`), each found by measurement
---------------------------------------------------------------------------------------------
-The paper's F_d comes from the hanging body's dynamic response to the weight arriving as a step
-(``SupportRelease(mode="support")`` in :mod:`deformctl.sim.protocols`): an undamped body's sag
-overshoots to about twice its static value, so the shear at the palms, and the grip it needs,
-does too; damping removes the overshoot. Four choices make that response converge and match the
-squeeze test:
-
-* ``palm_layer="surface"``: the gripped faces are massless palm surfaces and the lattice's
-  interior layers sit at slab centres (the half slabs at the palms weighted accordingly), so no
-  mass rides rigidly with the palms. With particle face layers, 2/n of the mass is bonded to the
-  palms and the hanging mode's mass and frequency drift as O(1/n) with the lattice; with
-  surfaces the hanging frequency stays within 1.5 % from 5 to 13 particles per side.
-* ``shear_damping_ratio`` r: the lattice dampers carry ``r lambda / D`` times each spring and the
-  rest, ``(1 - r) lambda``, acts across the gripped width between the two palms' x DOFs. The
-  squeeze test sees the sum, so its lambda is exact whatever r (tests/sim/test_paper_model.py,
-  Kelvin-Voigt creep); the hanging (shear) mode sees only r. With every damper stiffness-
-  proportional (r = 1) a bag of sand or water is heavily overdamped in shear and L_f stays at the
-  rigid limit. r is one of the preset's two fitted parameters (``make calibrate``).
-* ``min_shear_retardation_s``: a floor (0.2 ms) on the lattice dampers' retardation time; an
-  undamped lattice would otherwise ring in its lattice-scale modes for ever, and the strict slip
-  judgement would see that ringing. The width damper is reduced by ``D`` times the floor, so the
-  squeeze lambda stays exact.
-* ``integrator="bdf2"``: linearised BDF2 (second order, L-stable, the same single solve per step
-  with ``h = 2 dt / 3``): backward Euler's first-order numerical damping eats into an undamped
-  object's overshoot, which is the very effect being measured; BDF2's error is second order
-  (tests/sim/test_paper_model.py measures the order; ``make calibrate`` the L_f
-  moves at dt / 2, recorded in ``datasets/calibration/paper.json``).
-  It needs the linear springs (``nonlinear_springs=False``): with the frozen tangent of the
-  geometrically exact springs BDF2 went unstable at 9 particles per side.
-
-Palm model
-----------
-Each palm is rigid and flat and its face layer is bonded to it along x (the face moves with the
-palm; the palm DOF receives the commanded force, so the normal force felt equals the command up to
-the palm's own inertia, ``palm_mass_kg``). Along z, the face patch moves as one rigid patch with
-one DOF per palm: it follows the palm while friction sticks and slides (with the accumulated
-slip recorded) when the tangential load exceeds ``mu N``. Along y the face particles are free (no
-y load arises in the symmetric grip).
+The measurements behind each choice (solver crossover, fill, CG iterations, step and lattice
+convergence) are in docs/performance.md; the ``paper`` preset's model options
+(``palm_layer="surface"``, ``shear_damping_ratio``, ``min_shear_retardation_s``, BDF2) in
+docs/explanation/presets.md.
 """
 
 from __future__ import annotations
@@ -140,8 +41,8 @@ from typing import Literal
 
 import numpy as np
 import scipy.sparse
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.errors import UsageError
 from deformctl.quantities import MEMORY_BUDGET_GIB
 from deformctl.sim.hunt_crossley import hc_law, spec_elements
@@ -173,10 +74,6 @@ from deformctl.sim.step import (
     integrate_iterative,
 )
 from deformctl.units import CM, GRAVITY_M_S2
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-
 
 #: The time steps the simulator accepts, s: below 10 µs a one-second squeeze is 100,000 steps of
 #: recorded state (a 1e-12 s step would ask for hundreds of GiB), above 50 ms the contact and

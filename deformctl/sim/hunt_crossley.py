@@ -70,6 +70,7 @@ import scipy.sparse
 import scipy.sparse.linalg
 from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray
 from deformctl.errors import SimulationError
 from deformctl.sim.lattice import (
     Lattice,
@@ -97,8 +98,6 @@ class Settings(Hashable, Protocol):
 
     def alpha_m(self, spec: ObjectSpec) -> float: ...
 
-
-FloatArray = NDArray[np.float64]
 
 #: the implicit step's damping matrix holds the Hunt–Crossley dampers at the compression of this
 #: multiple of the operating force (its stiffness matrix, the tangent at the operating force)

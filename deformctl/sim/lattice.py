@@ -43,11 +43,9 @@ import numpy as np
 import scipy.sparse
 from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.reprs import short_repr
 from deformctl.sim.solver import LDLFactor, dof_order, ldl_factor, nested_dissection_order
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 _AXIAL_OFFSETS = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
 _DIAGONAL_OFFSETS = ((1, 1, 0), (1, -1, 0), (1, 0, 1), (1, 0, -1), (0, 1, 1), (0, 1, -1))

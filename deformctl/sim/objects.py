@@ -154,11 +154,6 @@ class ObjectSpec:
             return self.stiffness_n_per_m * d
         return self.hc_stiffness_n_per_m_pow_n * d**self.stiffness_exponent
 
-    @property
-    def retardation_time_s(self) -> float:
-        """Kelvin–Voigt retardation time lambda/D, s."""
-        return self.damping_ns_per_cm / self.stiffness_n_per_cm
-
 
 def f_w_n(spec: ObjectSpec) -> float:
     """Quasi-static lifting force per palm of a rigid object, W/(2 mu), N.

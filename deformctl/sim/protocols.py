@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray
 from deformctl.errors import SimulationError, UsageError
 from deformctl.scene import scene_every_steps
 from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
@@ -23,8 +23,6 @@ from deformctl.sim.objects import ObjectSpec
 from deformctl.sim.scene import frame_buffer, scene_frames
 from deformctl.sim.step import record as K
 from deformctl.units import GRAVITY_M_S2
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

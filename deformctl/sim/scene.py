@@ -12,14 +12,11 @@ the frame rows out of it and judges stick and slip from the per-step sliding spe
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.scene import NO_PALM, STICK_SPEED_M_S, SceneFrames
 from deformctl.sim.engine import Model, positions_m
 from deformctl.sim.step import record as K
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 #: The drawn particles' diameter, as a fraction of the lattice's shortest element.
 PARTICLE_DIAMETER_FRACTION = 0.35

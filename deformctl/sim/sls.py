@@ -35,12 +35,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray
 from deformctl.sim.objects import ObjectSpec
 from deformctl.sim.step.bundles import Maxwell
-
-FloatArray = NDArray[np.float64]
 
 #: the arms of an object without any (a Kelvin or Hunt–Crossley material)
 NO_ARMS = Maxwell(np.zeros(0), math.inf, np.zeros(0), np.zeros(0), np.zeros(0))

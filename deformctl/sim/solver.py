@@ -23,11 +23,8 @@ import numpy as np
 import scipy.sparse
 import scipy.sparse.linalg
 from numba import njit
-from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Int32Array = NDArray[np.int32]
+from deformctl.arraytypes import FloatArray, Int32Array, IntArray
 
 
 class LDLFactor(NamedTuple):

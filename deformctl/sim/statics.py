@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.sim.hunt_crossley import weight_prestress_n
 from deformctl.sim.lattice import (
     Lattice,
@@ -25,10 +25,6 @@ from deformctl.sim.lattice import (
 from deformctl.sim.multigrid import build_hierarchy, solve
 from deformctl.sim.stencil import build_stencil
 from deformctl.sim.step.bundles import HuntCrossley
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-
 
 #: calibration solves above this many DOFs use multigrid CG instead of a sparse factor
 DIRECT_CALIBRATION_MAX_DOFS = 1000

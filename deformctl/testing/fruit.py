@@ -471,9 +471,13 @@ def write_csv(fs: FruitSqueeze, path: str) -> None:
     s = fs.series
     rows = np.column_stack([s.time_s, s.force_n, 1e3 * s.compression_m])
     np.savetxt(
-        path, rows, fmt="%.6f", delimiter=",", header="Time (s),Load (N),Compression (mm)",
+        path,
+        rows,
+        fmt="%.6f",
+        delimiter=",",
+        header="Time (s),Load (N),Compression (mm)",
         comments="",
-    )  # fmt: skip
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -506,9 +510,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     if args.command == "show":
         fs = fruit_squeeze(args.seed, args.draw)
-        print(f"shape {fs.shape}, onset {fs.onset_force_n:.4g} N at {fs.onset_time_s:.3f} s, "
-              f"collapse {fs.collapse_frac:.2f}, lag {fs.lag_s:.3f} s, rate {fs.rate_hz:.1f} Hz, "
-              f"{len(fs.series)} samples")  # fmt: skip
+        print(
+            f"shape {fs.shape}, onset {fs.onset_force_n:.4g} N at {fs.onset_time_s:.3f} s, "
+            f"collapse {fs.collapse_frac:.2f}, lag {fs.lag_s:.3f} s, rate {fs.rate_hz:.1f} Hz, "
+            f"{len(fs.series)} samples"
+        )
         print(", ".join(f"{k} {v:.4g}" for k, v in fs.params.items()))
         return 0
     if args.draws < 1:

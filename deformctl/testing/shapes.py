@@ -289,11 +289,15 @@ def shape_relaxation(rng: np.random.Generator) -> tuple[Samples, Truth]:
 
     k = _u(rng, 200.0, 3000.0)
     s = synthetic_relaxation_hold(
-        stiffness_n_per_m=k, arm_stiffness_n_per_m=k * _u(rng, 0.5, 3.0),
-        relaxation_time_s=_u(rng, 0.3, 3.0), peak_compression_m=_u(rng, 0.002, 0.01),
-        load_s=_u(rng, 0.05, 0.5), hold_s=_u(rng, 3.0, 10.0),
-        rate_hz=float(rng.choice([50.0, 100.0, 200.0])), seed=int(rng.integers(2**31)),
-    )  # fmt: skip
+        stiffness_n_per_m=k,
+        arm_stiffness_n_per_m=k * _u(rng, 0.5, 3.0),
+        relaxation_time_s=_u(rng, 0.3, 3.0),
+        peak_compression_m=_u(rng, 0.002, 0.01),
+        load_s=_u(rng, 0.05, 0.5),
+        hold_s=_u(rng, 3.0, 10.0),
+        rate_hz=float(rng.choice([50.0, 100.0, 200.0])),
+        seed=int(rng.integers(2**31)),
+    )
     return _from_series(s), Truth("relaxation", d_defined=False)
 
 

@@ -29,9 +29,9 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray
 from deformctl.errors import InputDataError, MissingInputError
 
-FloatArray = NDArray[np.float64]
 #: Lengths of an OpenCV distortion vector.
 _DISTORTION_LENGTHS = (0, 4, 5, 8, 12, 14)
 

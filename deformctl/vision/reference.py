@@ -20,10 +20,10 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray
 from deformctl.errors import InputDataError, MissingInputError, UsageError
 
 ImageSource = str | PathLike[str] | NDArray[np.uint8]
-FloatArray = NDArray[np.float64]
 ViewName = Literal["top", "side"]
 
 
@@ -506,8 +506,9 @@ class _Debug:
 
     def write_view(self, view: MeasuredView, img: NDArray[np.uint8], text: str) -> None:
         out = img.copy()
-        cv2.polylines(out, [np.round(view.reference_outline_px).astype(np.int32)], True,
-                      (255, 0, 0), 2)  # fmt: skip
+        cv2.polylines(
+            out, [np.round(view.reference_outline_px).astype(np.int32)], True, (255, 0, 0), 2
+        )
         cv2.drawContours(out, [np.round(view.contour_px).astype(np.int32)], -1, (0, 255, 0), 1)
         h_plane_to_img = _f64(np.linalg.inv(view.homography_img_to_plane))
         rect_px = _apply_h(h_plane_to_img, view.rect_corners_cm)

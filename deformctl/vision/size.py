@@ -17,6 +17,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray
 from deformctl.catalog import catalog_row as new_catalog_row
 from deformctl.errors import InputDataError, UsageError
 from deformctl.reprs import short_repr
@@ -24,7 +25,6 @@ from deformctl.vision.camera import CameraCalibration, undistort
 from deformctl.vision.reference import (
     DEFAULT_HFOV_DEG,
     MARKER_MASK_GROWTH,
-    FloatArray,
     ImageSource,
     ViewName,
     _apply_h,

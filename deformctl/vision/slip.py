@@ -17,12 +17,12 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray
 from deformctl.errors import InputDataError, UsageError
 from deformctl.reprs import short_repr
 from deformctl.units import CM
 from deformctl.vision.reference import (
     MARKER_MASK_GROWTH,
-    FloatArray,
     ImageSource,
     _Debug,
     _detect_markers,

@@ -22,7 +22,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+from deformctl.arraytypes import FloatArray
 
 
 @dataclass(frozen=True)

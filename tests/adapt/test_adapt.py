@@ -1,4 +1,4 @@
-"""Issue 36 points 3-4 (the library and the command): ``adapt`` corrects a grip model with rig rows.
+"""The library and the command: ``adapt`` corrects a grip model with rig rows.
 
 Known truth: a "reality" whose L_f is the bundled model's times ``exp(c0 + c · x)`` (x: the
 network's scaled inputs) with 1 % noise. The ridge correction recovers c, the adapted model's

@@ -1,4 +1,4 @@
-"""Issue 34 point 2 for ``adapt``: the rig rows get the refusal list ``table``, ``train`` and
+"""Guards for ``adapt``: the rig rows get the refusal list ``table``, ``train`` and
 ``table --lookup`` apply (:func:`deformctl.table.impossible_rows`, the one function), one exit-65
 line naming the rows, nothing written; a prediction that is not a finite force > 0 is refused, never
 stored or printed. Good rig rows are adapted without a word about them.

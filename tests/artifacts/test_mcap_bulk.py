@@ -1,4 +1,4 @@
-"""Issue 15, item 6: the bulk squeeze-log reader is the reference reader, only faster.
+"""The bulk squeeze-log reader is the reference reader, only faster.
 
 ``read_squeeze_log`` first tries the bulk reader (its own record loop, the samples parsed as one
 JSON array and checked a column at a time) and reads the file the reference way (``load_mcap``,

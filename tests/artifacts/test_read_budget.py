@@ -1,4 +1,4 @@
-"""Issue 34 point 7: reading budgets and bounds (inspect /dev/zero, population -n).
+"""Reading budgets and bounds (inspect /dev/zero, population -n).
 
 A device is refused before any byte is read; a file or stdin larger than the reading budget is
 refused naming the budget; a file within it reads as before. ``population -n`` above its bound

@@ -1,4 +1,4 @@
-"""Issue 34 point 7: ``inspect`` checks a log's content against its declared kind.
+"""``inspect`` checks a log's content against its declared kind.
 
 A squeeze log rewritten (with the mcap library, every CRC valid) so that its ``deformctl``
 record says ``lift_log`` is refused with one line naming both kinds (exit 65); the log as

@@ -1,4 +1,4 @@
-"""Bad input to ``characterize`` (issue 33): refused or flagged, never an ``ok`` number.
+"""Bad input to ``characterize``: refused or flagged, never an ``ok`` number.
 
 * A constant force, a compression that never grows: refused (exit 65, one line, nothing written).
 * A force that falls as the compression grows: ``negative_stiffness`` (exit 65 unless

@@ -308,7 +308,7 @@ def test_unknown_method_and_mixed_objects() -> None:
 
 
 def test_one_smoothing_per_squeeze_and_one_table_per_log() -> None:
-    """Issue 15, item 6: the fits reuse the rupture search's smoothing of a squeeze that did not
+    """The fits reuse the rupture search's smoothing of a squeeze that did not
     rupture, and a log's table is built once from all rows; both give the numbers and the table
     the per-squeeze smoothing and the concatenated one-row tables gave."""
     from deformctl.characterize.coefficients import _coefficient_frame

@@ -148,7 +148,7 @@ def test_nonlinear_stiffness_fires_on_a_stiffening_law_only() -> None:
 
 
 def test_a_loading_phase_that_ends_at_its_peak_loses_no_sample() -> None:
-    # issue 33 point 5: the stiffest samples are the last ones; none is trimmed, and the secant
+    # the stiffest samples are the last ones; none is trimmed, and the secant
     # near the peak is the closed form's (an undamped HC ramp: the rate force cannot be told)
     undamped = {**TRUTH["hc"], "damping_ns_per_m_pow_n_plus_1": 0.0}
     for seed in range(2):

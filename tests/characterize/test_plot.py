@@ -1,4 +1,4 @@
-"""``characterize --plot DIR``: one PNG per object, read back (issue 33, point 6).
+"""``characterize --plot DIR``: one PNG per object, read back.
 
 Each PNG must have the documented size and four non-blank panels: the force–compression panel
 holds the samples (grey) and every law's fit in its colour, the time panel the force (red) and

@@ -61,7 +61,7 @@ def test_clean_squeezes_are_ok_with_every_option() -> None:
 
 
 def test_negative_damping_is_held_at_the_bound() -> None:
-    # issue 33: λ is never negative with ok; the lsq fits are bounded (λ >= 0) and say so
+    # λ is never negative with ok; the lsq fits are bounded (λ >= 0) and say so
     squeezes = _two(d_n_per_cm=20.0, lam_ns_per_cm=-2.0)
     for kw in ({}, {"constrain_damping": True}):
         fit = fit_lsq(squeezes, **kw)  # type: ignore[arg-type]
@@ -74,8 +74,8 @@ def test_negative_damping_is_held_at_the_bound() -> None:
 
 
 def test_a_negative_damping_is_flagged_whatever_its_standard_error() -> None:
-    # the paper estimator is not bounded: any λ < 0 is flagged (the rule before issue 33 needed
-    # λ < -0.1 N·s/cm and 2 standard errors, and let 11 of 14 fruit loadings through as ok)
+    # the paper estimator is not bounded: any λ < 0 is flagged (the rule before the bounded fits
+    # needed λ < -0.1 N·s/cm and 2 standard errors, and let 11 of 14 fruit loadings through as ok)
     assert assess(
         deformability_n_per_cm=20.0, damping_ns_per_cm=-0.01, damping_se_ns_per_cm=5.0,
         r2=0.99, n_samples=1000, window_samples=10,
@@ -179,7 +179,7 @@ def test_paper_method_flags_a_monotonic_loading() -> None:
     assert "damping_unidentifiable" in fit.flags
     row = characterize({"obj": ramps}, "paper").iloc[0]
     assert "not identifiable by the paper estimator" in describe_row(row)
-    # lsq on the same ramps (issue 33): one speed cannot tell a material's rate dependence from
+    # lsq on the same ramps: one speed cannot tell a material's rate dependence from
     # a preload, however exactly the start's transient pins a Kelvin-Voigt λ; D is still right
     lsq = fit_lsq(ramps)
     assert lsq.quality == "damping_unidentifiable"

@@ -1,4 +1,4 @@
-"""Rupture as grippers see it, and stress relaxation that is not one (issue 33, point 4).
+"""Rupture as grippers see it, and stress relaxation that is not one.
 
 * A force-controlled gripper squeezes a Kelvin–Voigt object that collapses at 12 N: the force
   falls 20 % within 30 ms (less than the 30 % a rupture needs on its own) and the controller

@@ -37,7 +37,7 @@ def test_rupture_found_at_the_collapse(d: float, lam: float, keep: float, closin
 
 
 def test_a_sudden_force_drop_with_the_gripper_stopped_is_a_rupture() -> None:
-    # issue 33: a collapse while the compression holds is a rupture (a force-controlled gripper
+    # a collapse while the compression holds is a rupture (a force-controlled gripper
     # that backs off after it keeps its fingers still); a smooth decay is relaxation
     # (tests/characterize/test_rupture.py)
     s = rupture(30.0, 6.47, keep=0.3, closing=0.0)

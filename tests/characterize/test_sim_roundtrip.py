@@ -1,4 +1,4 @@
-"""Issue 33 point 7: squeeze a simulated Hunt–Crossley object, fit it with ``--model hc``, and get
+"""Squeeze a simulated Hunt–Crossley object, fit it with ``--model hc``, and get
 back the law the catalog gave the simulator (k and n within 3 %, D at F_w within 3 %)."""
 
 from __future__ import annotations

@@ -52,7 +52,7 @@ def _negative_damping() -> list[SqueezeSeries]:
 
 #: flag → (the flagged object's squeezes, text the warning must contain)
 CASES: dict[str, tuple[Callable[[], list[SqueezeSeries]], str]] = {
-    # issue 33: the lsq fits are bounded, so a negative λ is held at 0 and said so; only the
+    # the lsq fits are bounded, so a negative λ is held at 0 and said so; only the
     # paper estimator (unbounded) writes λ < 0, flagged whatever its standard error
     "at_bound": (_negative_damping, "at_bound (damping_ns_per_m of the kv law at its bound)"),
     "negative_damping": (_negative_damping, "negative_damping (λ = -2"),

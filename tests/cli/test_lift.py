@@ -347,7 +347,7 @@ def test_friction_not_positive_is_bad_input_data(tmp_path: Path, mu: str, messag
 
 
 def test_zero_friction_object_not_selected_is_still_refused(tmp_path: Path) -> None:
-    # friction_mu = 0 is outside the catalog's physical bounds (issue 17): the file is wrong,
+    # friction_mu = 0 is outside the catalog's physical bounds: the file is wrong,
     # whichever objects are selected.
     cat = tmp_path / "objects.csv"
     cat.write_text(HEADER + "sponge,8,5,4,10,0.5\nflat,8,5,4,10,0\n", encoding="utf-8")

@@ -1,4 +1,4 @@
-"""Issue 36 point 2: ``lift coefficients.parquet --sim`` lifts the measured object.
+"""``lift coefficients.parquet --sim`` lifts the measured object.
 
 The coefficients table of a simulated squeeze carries the catalog's size, weight and μ
 (characterize copies them) and the measured D and λ, which become the object's material: its

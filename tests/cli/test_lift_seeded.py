@@ -36,7 +36,7 @@ CATALOG = HEADER + "sponge,8,5,4,10,0.5\nbrick,6,6,6,16,0.5\nanvil,5,5,5,40,0.5\
 COEFFICIENTS = {"sponge": (30.0, 2.0), "brick": (40.0, 5.0), "anvil": (35.0, 3.0)}
 REQUEST_KEYS = {
     *("object_id", "attempt_index", "grip_force_n", "weight_n", "friction_mu", "size_cm"),
-    "max_force_n",  # the force ceiling (issue 34 point 4)
+    "max_force_n",  # the force ceiling
 }
 
 
@@ -186,7 +186,7 @@ def test_a_model_for_another_feature_set_is_refused(
     result = run("rig", catalog, "--command", rig("threshold_rig.py", THRESHOLD_N), "--start-model",
                  files["other"], "--coefficients", files["coefficients"], "-o", out)  # fmt: skip
     assert result.exit_code == 65
-    # the model file's structure check (deformctl.train, issue 17) refuses it on loading
+    # the model file's structure check (deformctl.train) refuses it on loading
     assert one_line_error(result) == (
         f"error: {files['other']}: not a usable lifting-force model: the model takes 2 features, "
         "expected 3"

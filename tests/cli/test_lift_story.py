@@ -1,4 +1,4 @@
-"""Issue 36 point 5: the log of a seeded lift tells each object's story.
+"""The log of a seeded lift tells each object's story.
 
 ``lift --start-model`` stores with each object of its log the prediction, its bound, the attempts
 and the outcome, and the attempts a search from F_w would have taken (the refine search replayed

@@ -310,7 +310,7 @@ def test_csv_columns_syntax(plain_csv: Path, tmp_path: Path) -> None:
 
 def test_default_window_matters_for_100_hz_positions(bag_run: tuple[Path, Path, Path]) -> None:
     """The 1 kHz default window (0.2 s) on 100 Hz positions: λ biased low, as documented (the
-    window fit of issue 33 halves the bias of the pointwise derivative: -4.9 %, was < -10 %)."""
+    window fit halves the bias of the pointwise derivative: -4.9 %, was < -10 %)."""
     _, log, coef = bag_run
     out = coef.parent / "w02.parquet"
     res = runner.invoke(app, ["characterize", str(log), "-o", str(out), "--window-s", "0.2"])

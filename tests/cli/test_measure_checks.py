@@ -1,6 +1,6 @@
 """``measure --csv/--bag`` refuses what a unit, axis or sign mistake makes of a recording.
 
-One test per mistake of issue 14 ("Why"): the exit code, the one-line message naming the likely
+One test per mistake: the exit code, the one-line message naming the likely
 cause and the fix, and no output file. Then the good paths of the new options: the
 ``--position-increases-when`` that the wrong-sign message names makes the same recording work,
 ``--phase`` keeps the loading or unloading of each squeeze, and a rupture is cut off, recorded in

@@ -2,7 +2,7 @@
 
 The scenes are rendered here (deformctl.vision.synth) with known geometry: boxes of several sizes
 and colours, a tilted top camera (up to 15 degrees), Gaussian noise and a lighting gradient.
-Sizes must come back within 3 % or 2 mm, whichever is larger (issue 7). The CLI has no camera
+Sizes must come back within 3 % or 2 mm, whichever is larger. The CLI has no camera
 matrix option, so it assumes a 60-degree horizontal field of view; one case is rendered with a
 different focal length (900 px, 56 degrees) to show that the guess only needs to be rough.
 """

@@ -1,4 +1,4 @@
-"""Issue 36 point 1: from a recording to a grip force in one pipe.
+"""From a recording to a grip force in one pipe.
 
 ``measure … -o - | characterize - -o - | predict grip -``: characterize copies each object's
 weight, size, μ and source from the squeeze log into the coefficients table, so predict needs no

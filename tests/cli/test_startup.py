@@ -1,4 +1,4 @@
-"""A command line that answers at once (issue 35 point 5): ``import deformctl.cli``, ``deformctl
+"""A command line that answers at once: ``import deformctl.cli``, ``deformctl
 --help`` and every ``deformctl <command> --help`` import none of the heavy libraries; the
 commands import them when they run. The timings are ``make bench``'s (bench/bench_startup.py):
 wall times vary with the machine's load, the imports do not.

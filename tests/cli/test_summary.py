@@ -1,4 +1,4 @@
-"""Progress and the summary line (issue 35 point 3): a bar with done/total, elapsed and ETA on a
+"""Progress and the summary line: a bar with done/total, elapsed and ETA on a
 terminal only; one summary line at the end of ``measure --sim`` and ``lift`` (objects done,
 flagged, failed, wall time, output), dropped by ``--quiet``."""
 

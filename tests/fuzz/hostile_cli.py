@@ -1,6 +1,6 @@
 """``make fuzz``: seeded hostile inputs through the CLI, and the fraction handled cleanly.
 
-Issue 34 point 8. Good artifacts are written once (a catalog, a squeeze log, a ROS 2 bag, the
+Good artifacts are written once (a catalog, a squeeze log, a ROS 2 bag, the
 coefficients / lift-results / index tables, the bundled grip model), then each case damages one
 of them the way a disk, a cable, a recorder or a user does (a flipped bit, a cut, zeroed bytes,
 a value replaced by 1e308, -20, 0, NaN, text or nothing, a column scaled by 10^3, a short row)
@@ -12,9 +12,9 @@ and runs the command that reads it, in process (typer's runner). A case is **cle
 * a success prints no force that is not a force: an interpolated or predicted L_f is finite and
   > 0, and one outside [F_w, 10 F_w] carries ``prediction_implausible``;
 * a recording with a unit slip of 10³ (a column scaled, or its label changed) that ``measure``
-  accepts carries a warning naming the unit that would make it plausible (issue 34 point 1).
+  accepts carries a warning naming the unit that would make it plausible.
 
-The later kinds (issue 34 points 1-3 and 7): a CSV export with a unit slip (``measure --csv``),
+The later kinds: a CSV export with a unit slip (``measure --csv``),
 an index whose rig rows ``adapt`` must refuse or use, a hostile ``--max-force-n`` on every
 ``lift`` output (single file and ``-o DIR/``), and a model whose stored training ranges or
 target range are damaged (``predict``).

@@ -1,4 +1,4 @@
-"""Issue 17, numeric extremes: physical bounds and resource budgets, refused before numerics."""
+"""Physical bounds and resource budgets, refused before numerics."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Issue 17, exit paths: usage errors in the one-line form, warnings folded, clean exits."""
+"""Usage errors in the one-line form, warnings folded, clean exits."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Issue 17, item 5: silent acceptance closed. Duplicate catalog headers are refused; every log a
+"""Silent acceptance closed. Duplicate catalog headers are refused; every log a
 command reads must say (in its ``deformctl`` record) that it is the kind the command expects.
 """
 

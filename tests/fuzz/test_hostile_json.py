@@ -1,4 +1,4 @@
-"""Issue 17, item 2: untrusted JSON (MCAP samples and metadata, table and model metadata, rig
+"""Untrusted JSON (MCAP samples and metadata, table and model metadata, rig
 answers) parsed with depth, size and finite-number limits; beyond them exit 65, naming the file.
 """
 

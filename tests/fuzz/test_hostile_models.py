@@ -1,4 +1,4 @@
-"""Issue 17, item 4: model files that pass the type allow-list but are structurally wrong.
+"""Model files that pass the type allow-list but are structurally wrong.
 
 Each is refused on load with one line (exit 65) before anything predicts.
 """

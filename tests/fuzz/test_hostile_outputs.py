@@ -1,4 +1,4 @@
-"""Issue 17, items 6 and 7: temporary files of killed writers, outputs committed together, and
+"""Temporary files of killed writers, outputs committed together, and
 the output checks made before any work.
 """
 

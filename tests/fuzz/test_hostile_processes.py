@@ -1,4 +1,4 @@
-"""Issue 17, items 9 and 10: no process outlives its client, and a rig timeout holds."""
+"""No process outlives its client, and a rig timeout holds."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Issue 17, item 12: a property-based fuzz suite grown from the hostile-input classes.
+"""A property-based fuzz suite grown from the hostile-input classes.
 
 Every generated case must end in a :class:`~deformctl.errors.DeformctlError` (the one-line
 error the CLI prints, with its exit code: 2 usage, 65 data, 66 missing, 1 output) or be

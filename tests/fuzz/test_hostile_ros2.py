@@ -1,4 +1,4 @@
-"""Issue 17, item 3: ROS 2 bags whose message definitions or payloads do not match the type name.
+"""ROS 2 bags whose message definitions or payloads do not match the type name.
 
 Every case ends in one ``error:`` line naming the bag, the topic, the type and the field (exit 65).
 """

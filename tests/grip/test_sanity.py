@@ -1,4 +1,4 @@
-"""Issue 34 point 3: a model is checked, not trusted; every prediction is a lifting force.
+"""A model is checked, not trusted; every prediction is a lifting force.
 
 A model whose weights are finite but absurd (the output layer's bias raised by 690, so it
 predicts about 10^299 x F_w, its stored check points computed from the same weights) passes every

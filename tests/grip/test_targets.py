@@ -1,4 +1,4 @@
-"""Issue 34 point 3, the last part: a prediction far from the model's training targets.
+"""A prediction far from the model's training targets.
 
 ``train`` stores the range of its training rows' L_f / F_w (``target_range.lift_ratio_f_w``); a
 prediction more than :data:`~deformctl.grip.sanity.TARGET_FACTOR` (1.5) outside it is flagged

@@ -1,4 +1,4 @@
-"""Issue 34 point 4: a force ceiling for every rig request.
+"""A force ceiling for every rig request.
 
 No attempt asks for more than the object's ceiling (the catalog's ``max_force_n``,
 ``--max-force-n``, or 10 x F_w lowered to a known rupture force); a search that would need more

@@ -1,4 +1,4 @@
-"""Issue 34 point 7: the force ceiling on ``lift --sim -o DIR/`` (the dataset/sweep path), and
+"""The force ceiling on ``lift --sim -o DIR/`` (the dataset/sweep path), and
 ``max_force_n`` as one quantity (:data:`deformctl.quantities.MAX_FORCE_N`).
 
 The sweep task carries ``--max-force-n`` (:class:`~deformctl.lift.runners.sim.LiftTask`) into

@@ -1,4 +1,4 @@
-"""Issue 34, point 5: no lost attempts. A rig run keeps its log and table on disk as it goes.
+"""No lost attempts. A rig run keeps its log and table on disk as it goes.
 
 Two ways a run ends early, each checked against what the rig itself saw (its request log):
 

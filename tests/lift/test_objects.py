@@ -1,5 +1,5 @@
 """lift's objects from a coefficients table: a Hunt–Crossley fit becomes a Hunt–Crossley material
-whose D and λ are restated at F_w (issue 33 point 7)."""
+whose D and λ are restated at F_w."""
 
 from __future__ import annotations
 

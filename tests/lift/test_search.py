@@ -294,7 +294,7 @@ def test_ramp_overflow_stops_without_trying_an_infinite_force() -> None:
 
 
 def test_the_package_face_is_the_search_s_public_names() -> None:
-    # deformctl/lift/__init__.py restates the search's __all__ (its lazy face must name them
+    # deformctl/lift/__init__.py names the search's public names (its lazy face must name them
     # without importing the search): the two lists stay the same, and each name resolves to
     # the search's own object
     import deformctl.lift as face

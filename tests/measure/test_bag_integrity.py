@@ -1,4 +1,4 @@
-"""Issue 34 point 6: bags and deformctl logs are read with CRC checks; damage is named by offset.
+"""Bags and deformctl logs are read with CRC checks; damage is named by offset.
 
 Real MCAP files are written (``mcap_ros2`` / the project's log writer), damaged on disk (one bit
 flipped inside a compressed chunk, a chunk's zstd frame overwritten, the file cut inside a chunk,

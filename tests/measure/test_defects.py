@@ -138,7 +138,7 @@ def test_constant_rate_lag_is_not_identifiable() -> None:
 
 def test_force_lag_flag_and_lag_auto_remove_the_negative_damping(tmp_path: Path) -> None:
     """0.17 s of latency on D = 20 N/cm, λ = 0: an unshifted fit would give λ ≈ −3.4 N·s/cm;
-    the bounded fit (issue 33) holds it at 0 and says so; --lag-s auto: λ ≈ 0, ok."""
+    the bounded fit holds it at 0 and says so; --lag-s auto: λ ≈ 0, ok."""
     path = write_export(tmp_path / "kiwi.csv", _lagged(0.17))
     row, err = _characterize(path)
     assert "force_lag" in row["quality"].split(",")

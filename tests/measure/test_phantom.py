@@ -66,7 +66,7 @@ def _check_folder(files: list[Path], tmp_path: Path) -> pd.DataFrame:
         secant = _file_secant_n_per_cm(f, row["deformability_at_force_n"])
         assert row["deformability_n_per_cm"] == pytest.approx(secant, rel=0.01), f.name
         assert row["compression_max_cm"] == pytest.approx(2.0, abs=0.01), f.name  # 20 mm
-        # a straight line is a poor fit of a material that stiffens 20-50x (issue 33): said
+        # a straight line is a poor fit of a material that stiffens 20-50x: said
         # and where D is stated the straight line misses the recording (secant_misfit) on most
         flags = {"damping_unidentifiable", "low_r2", "nonlinear_stiffness"}
         assert flags <= set(row["quality"].split(",")) <= {*flags, "secant_misfit"}, f.name

@@ -1,4 +1,4 @@
-"""Issue 34 point 1, finished: two-sided plausibility for every recorded quantity.
+"""Two-sided plausibility for every recorded quantity.
 
 * the implied damping ratio ζ = λ / (2 √(D m)) (its closed form and the bands' home: in
   tests/plausibility/): ms stamps read as seconds (stated or not) flagged by ``characterize``

@@ -1,5 +1,4 @@
-"""Issue 34 point 1 (the part that does not wait for issue 31's one home per quantity): the
-"too small" side of the plausibility checks, as flags with a line naming the unit.
+"""The "too small" side of the plausibility checks, as flags with a line naming the unit.
 
 Each unit slip of the issue is written as a CSV export of a known Kelvin–Voigt squeeze (10 N
 peak, 3 mm compression, 100 Hz): the recording is read, flagged (``force_unit_doubtful``,

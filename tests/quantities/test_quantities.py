@@ -167,7 +167,7 @@ def test_friction_is_refused_alike_by_every_command(tmp_path: Path) -> None:
 def test_friction_above_3_is_refused_alike_by_every_command(
     tmp_path: Path, catalog_row: dict[str, Any], write_catalog: Any
 ) -> None:
-    """Issue 30: μ > 3 is bad input, from a flag (exit 2) or a file (exit 65); μ = 3 is not."""
+    """Μ > 3 is bad input, from a flag (exit 2) or a file (exit 65); μ = 3 is not."""
     want = "error: --friction-mu must be a number in [0.01, 3], got 3.5"
     assert _error(_csv(tmp_path, "--weight-n", "1", "--friction-mu", "3.5")) == want
     assert _error(_population(tmp_path, "--friction-mu", "0.5,3.5")) == want

@@ -1,4 +1,4 @@
-"""Issue 36 point 4 on the cached lifts (deformctl.repro.adapt_gap; bench_adapt remakes them).
+"""``adapt`` on the cached lifts (deformctl.repro.adapt_gap; bench_adapt remakes them).
 
 The targets, never weakened: the adapted model's median error on the 30 new objects at most half
 the unadapted model's, and at least 0.8 of them below its P = 0.9 bound.

@@ -1,5 +1,5 @@
 """``make calibrate`` (``python -m deformctl.repro.calibrate``) ends with the commands' summary
-line (issue 35 point 3): the points done, the points flagged (left out of the fit, the refit
+line: the points done, the points flagged (left out of the fit, the refit
 misses them by more than the worst in-sample error; a warning names them), 0 failed, the wall
 time and the record written; ``--quiet`` drops the line and keeps the warning.
 

@@ -16,11 +16,19 @@ import pandas as pd
 import pytest
 
 from deformctl.artifacts import read_catalog
-from deformctl.golden import EXPECTED_PATH, TOLERANCES, compare, compute_golden
 from deformctl.lift import DEFAULT_TOLERANCE_REL, find_min_lift_force
 from deformctl.population import golden_population
 from deformctl.repro import golden
-from deformctl.repro.golden import REPORTED_ONLY, SEARCH_STEP_REL, family, flatten
+from deformctl.repro.golden import (
+    EXPECTED_PATH,
+    REPORTED_ONLY,
+    SEARCH_STEP_REL,
+    TOLERANCES,
+    compare,
+    compute_golden,
+    family,
+    flatten,
+)
 from deformctl.series import TrialOutcome
 from deformctl.train import train_model
 
@@ -161,3 +169,15 @@ def test_a_broken_network_moves_the_reference_numbers(expected: dict) -> None:
     assert moved
     assert all(line.startswith("reference_network.") for line in moved), moved
     assert any(line.startswith("reference_network.prediction_n.") for line in moved)
+
+
+def test_help_and_unknown_arguments_stop_before_the_pipeline(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    for args, code in ((["--help"], 0), (["--bogus"], 2)):
+        with pytest.raises(SystemExit) as stop:
+            golden.main(args)
+        assert stop.value.code == code
+    out = capsys.readouterr()
+    assert "usage: python -m deformctl.repro.golden" in out.out + out.err
+    assert "unrecognized arguments: --bogus" in out.err

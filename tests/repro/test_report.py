@@ -176,7 +176,7 @@ def _tables(text: str) -> list[list[str]]:
 
 
 def test_the_report_says_how_it_was_made_and_what_each_column_is(run_dir: Path) -> None:
-    """Issue 31 point 6: version, commit, date, command line; the calibration (which parameters,
+    """Version, commit, date, command line; the calibration (which parameters,
     to which of the paper's points, the leave-one-out error); a source on every column with a
     unit; and no point left out of a plot without a note naming it."""
     from datetime import UTC, datetime

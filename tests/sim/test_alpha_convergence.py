@@ -1,5 +1,5 @@
 """Refining alpha twice (5 -> 9 -> 17 particles along the longest side): the measured squeeze
-stiffness and the lifting force move less at each refinement (issue 13)."""
+stiffness and the lifting force move less at each refinement."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""The sparse implicit solve reproduces the former dense path (dense ``A^-1``, main before
-issue 13): the factor solves like a dense inverse, and squeeze D/lambda and L_f at 5^3 and 8^3
+"""The sparse implicit solve reproduces the former dense path (dense ``A^-1``, before the
+sparse solvers): the factor solves like a dense inverse, and squeeze D/lambda and L_f at 5^3 and 8^3
 particles match values recorded from the dense path."""
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ DENSE = {
 }
 
 
-# λ with the material-law estimator of issue 33 (lsq in integral form, D as the secant at the
+# λ with the material-law estimator (lsq in integral form, D as the secant at the
 # operating force), on the sparse path whose D and L_f still match the dense values above within
 # 8e-5 and the bisection: the estimator moved λ by -0.54 % on the cube and -0.15 % on the sponge
 # (the golden objects moved by the same order). The solver is what this file checks; λ against the

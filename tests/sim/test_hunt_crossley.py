@@ -1,4 +1,4 @@
-"""Issue 33 point 7: the simulator carries a stiffening material (deformctl.sim.hunt_crossley).
+"""The simulator carries a stiffening material (deformctl.sim.hunt_crossley).
 
 Known truth: the linear lattice's own calibration (n = 1), the homogeneity of the power-law
 squeeze (any closing gives the same C_n), the object's law ``k dⁿ + λ_hc dⁿ ḋ`` for a slow

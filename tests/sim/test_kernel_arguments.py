@@ -1,4 +1,4 @@
-"""The simulator's kernels take their arrays as a few named-tuple bundles (issue 31): no numba
+"""The simulator's kernels take their arrays as a few named-tuple bundles: no numba
 kernel of deformctl.sim has more than 12 parameters, and no module of it more than 800 lines."""
 
 from __future__ import annotations

@@ -2,13 +2,13 @@
 
 What is measured (default settings unless stated):
 
-* Issue 4, range: six catalog objects spanning the paper's range (W 0.5–60 N, D 5–60 N/cm,
+* Range: six catalog objects spanning the paper's range (W 0.5–60 N, D 5–60 N/cm,
   λ 0–15 N·s/cm) squeezed on the table: D within 5 % and λ within 15 % of the catalog's material
   values; for λ = 0 the absolute tolerance is :data:`LAMBDA_ZERO_ABS_NS_PER_CM`.
-* Issue 4, regression: ``datasets/paper/objects.csv`` characterizes to Table II's D and λ
+* Regression: ``datasets/paper/objects.csv`` characterizes to Table II's D and λ
   (``datasets/paper/table2.csv``) within 5 %; the water bag's λ = 0 within the same absolute
   tolerance.
-* Issue 5: the rigid limit m (g + a_max) / (2 mu) within 3 % through the CLI at two lift
+* Lift: the rigid limit m (g + a_max) / (2 mu) within 3 % through the CLI at two lift
   accelerations; every L_f >= F_w; 0.97 L_f slips (``lift_attempt`` run directly with the
   same settings); ``paper`` and ``refine`` agree (refine's L_f in paper's last bracket, paper's
   <= 1.2 x refine's).
@@ -119,7 +119,7 @@ def check_recovery(
     assert not failures, failures
 
 
-# --------------------------------------------------------------------------- issue 4: squeezes
+# ----------------------------------------------------------------------------------------- squeezes
 
 
 def test_range_objects_recover_d_and_lambda(tmp_path: Path) -> None:
@@ -252,7 +252,7 @@ def test_explicit_peak_force_and_progress_bar(
     assert peaks == pytest.approx([2.0, 3.0, 4.0] * 2)
 
 
-# ------------------------------------------------------------------------------ issue 5: lift
+# --------------------------------------------------------------------------------------------- lift
 
 
 @pytest.fixture(scope="module")

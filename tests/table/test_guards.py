@@ -1,4 +1,4 @@
-"""Issue 34 point 2: quality travels with the numbers; impossible rows are refused, named.
+"""Quality travels with the numbers; impossible rows are refused, named.
 
 ``table`` refuses (65) coefficients that are physically impossible (D <= 0, λ < 0) unless
 ``--allow-flagged``, which keeps them with their flags in the index table's ``quality``;

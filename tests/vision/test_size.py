@@ -1,6 +1,6 @@
 """Object sizes (deformctl.vision.size) on images rendered with known geometry (tests/_helpers/).
 
-Sizes must come back within 3 % or 2 mm, whichever is larger (issue 7); every scene has a
+Sizes must come back within 3 % or 2 mm, whichever is larger; every scene has a
 perspective tilt, Gaussian noise and a lighting gradient.
 """
 

@@ -37,7 +37,6 @@ from deformctl.units import NS_PER_S
 
 #: The schema name Foxglove recognises (its published JSON Schema's title).
 SCENE_SCHEMA_NAME = "foxglove.SceneUpdate"
-PALMS_SCHEMA = "palm_contact"
 FRAME_ID = "world"
 #: Colours (r, g, b, a): a free surface particle, a stuck contact, a slipping one, palms, table.
 GREY = (0.72, 0.74, 0.78, 1.0)

@@ -6,17 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import BoolArray, FloatArray
 from deformctl.sim.multigrid.cycle import _stencil_level, csr_matvec, v_cycle
 from deformctl.sim.multigrid.levels import MultigridArrays, fix_levels
 from deformctl.sim.multigrid.scratch import pcg_scratch, stencil_scratch_offsets
 from deformctl.sim.stencil import N_COEF, Rows, Stencil, stencil_product
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Int32Array = NDArray[np.int32]
-BoolArray = NDArray[np.bool_]
 
 
 @njit(cache=True)

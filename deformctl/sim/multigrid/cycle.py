@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import BoolArray, FloatArray, Int32Array, IntArray
 from deformctl.sim.multigrid.levels import MultigridArrays, StencilArrays, _coarse_free_solve
 from deformctl.sim.multigrid.scratch import stencil_scratch_offsets
 from deformctl.sim.multigrid.transfer import _grid_prolong_add, _grid_restrict
@@ -19,11 +18,6 @@ from deformctl.sim.stencil import (
     forward_sweep_from_zero,
     residual_after_forward,
 )
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Int32Array = NDArray[np.int32]
-BoolArray = NDArray[np.bool_]
 
 
 @njit(cache=True)

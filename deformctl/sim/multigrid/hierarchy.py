@@ -9,8 +9,8 @@ from functools import cached_property
 
 import numpy as np
 import scipy.sparse
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import BoolArray, FloatArray, Int32Array, IntArray
 from deformctl.sim.lattice import shape_dof_map
 from deformctl.sim.multigrid.cg import pcg
 from deformctl.sim.multigrid.levels import LevelArrays, MultigridArrays, StencilArrays, fix_levels
@@ -18,11 +18,6 @@ from deformctl.sim.multigrid.scratch import coarse_scratch_size, pcg_work_size
 from deformctl.sim.multigrid.transfer import _coarse_point
 from deformctl.sim.solver import LDLFactor, dof_order, ldl_factor, nested_dissection_order
 from deformctl.sim.stencil import Stencil, build_block_stencil, grid_matrix
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Int32Array = NDArray[np.int32]
-BoolArray = NDArray[np.bool_]
 
 
 @dataclass(frozen=True, eq=False)

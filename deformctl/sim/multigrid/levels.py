@@ -8,14 +8,9 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import BoolArray, FloatArray, Int32Array, IntArray
 from deformctl.sim.solver import LDLFactor
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Int32Array = NDArray[np.int32]
-BoolArray = NDArray[np.bool_]
 
 
 class LevelArrays(NamedTuple):

@@ -6,14 +6,9 @@ from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray, Int32Array, IntArray
 from deformctl.sim.lattice import Lattice
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Int32Array = NDArray[np.int32]
-BoolArray = NDArray[np.bool_]
 
 #: the 9 element directions (grid offsets), each element stored with its lower-index particle:
 #: axial x, y, z, then the face diagonals (as :mod:`deformctl.sim.lattice` builds them)

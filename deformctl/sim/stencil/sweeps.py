@@ -8,15 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import BoolArray, FloatArray, Int32Array, IntArray
 from deformctl.sim.stencil.build import Rows, Stencil
 from deformctl.sim.stencil.sums import _kernel_offsets, _scatter, _sums_in, _sums_out
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Int32Array = NDArray[np.int32]
-BoolArray = NDArray[np.bool_]
 
 
 @njit(cache=True, inline="always")

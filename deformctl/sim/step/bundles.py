@@ -14,12 +14,9 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.sim.multigrid import MultigridArrays
 from deformctl.sim.solver import LDLFactor
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-BoolArray = NDArray[np.bool_]
 
 
 class HuntCrossley(NamedTuple):

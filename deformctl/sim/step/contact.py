@@ -4,14 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import BoolArray, FloatArray, IntArray
 from deformctl.sim.step.bundles import Contacts, Palms, RowTargets
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Int32Array = NDArray[np.int32]
-BoolArray = NDArray[np.bool_]
 
 
 @njit(cache=True)

@@ -7,15 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.sim.solver import LDLFactor, ldl_solve
 from deformctl.sim.step.dense import _lu_factor, _lu_solve, _solve_dense
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Int32Array = NDArray[np.int32]
-BoolArray = NDArray[np.bool_]
 
 
 @njit(cache=True)

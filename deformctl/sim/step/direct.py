@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray
 from deformctl.sim.solver import ldl_solve
 from deformctl.sim.step.bundles import (
     Body,
@@ -30,11 +30,6 @@ from deformctl.sim.step.delassus import (
 from deformctl.sim.step.forces import _predict, _step_impulse
 from deformctl.sim.step.maxwell import _arm_predict, _arm_update
 from deformctl.sim.step.record import N_REC, _record_step, _slipped_past
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Int32Array = NDArray[np.int32]
-BoolArray = NDArray[np.bool_]
 
 
 @njit(cache=True)

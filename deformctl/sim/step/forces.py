@@ -11,15 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.sim.step.bundles import Body, Palms
 from deformctl.sim.step.maxwell import _arm_rhs
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Int32Array = NDArray[np.int32]
-BoolArray = NDArray[np.bool_]
 
 
 @njit(cache=True)

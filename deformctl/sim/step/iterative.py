@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import BoolArray, FloatArray, Int32Array, IntArray
 from deformctl.sim.multigrid import pcg, pcg_work_size, product
 from deformctl.sim.step.bundles import (
     Body,
@@ -24,12 +24,6 @@ from deformctl.sim.step.dense import _solve_dense
 from deformctl.sim.step.forces import _predict, _step_impulse
 from deformctl.sim.step.maxwell import _arm_predict, _arm_update
 from deformctl.sim.step.record import N_REC, _record_step, _slipped_past
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Int32Array = NDArray[np.int32]
-BoolArray = NDArray[np.bool_]
-
 
 #: rounding allowed for each carried product ``A dv`` in :func:`integrate_iterative`, relative to
 #: ``max_i sum_j |A_ij| * |dv|_2`` (the scale of a product's rounding: a row of about 80 entries

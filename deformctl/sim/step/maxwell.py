@@ -22,11 +22,9 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray
 from deformctl.sim.step.bundles import Body, Maxwell
-
-FloatArray = NDArray[np.float64]
 
 
 @njit(cache=True)

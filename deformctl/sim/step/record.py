@@ -4,15 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
 
+from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.sim.step.bundles import Body, Contacts, Drive, Palms, StepState, Tally
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-Int32Array = NDArray[np.int32]
-BoolArray = NDArray[np.bool_]
-
 
 # columns of the record matrix returned by the step loops
 REC_TIME = 0
