@@ -19,8 +19,9 @@ chosen by BIC with ``auto``; D is the secant stiffness at a stated operating for
   the table's columns;
 * :mod:`~deformctl.characterize.quality`: the quality flags and the policy applied before a table
   is written;
-* :mod:`~deformctl.characterize.rupture`: where a squeeze stops being a Kelvin–Voigt squeeze
-  (rupture, the loading and unloading phases), used by ``measure`` too;
+* :mod:`deformctl.squeeze`, below both stages (not in this package): the phases, the rupture
+  cut, the smoothing window (:func:`default_window_s`, re-exported here) and the recording flags
+  that ``measure`` and ``characterize`` share;
 * :mod:`~deformctl.characterize.models`: the exact Kelvin–Voigt response and synthetic squeezes
   with known D and λ (ground truth for tests and examples);
 * :mod:`~deformctl.characterize.options`: the options the command builds and the stage takes
@@ -52,12 +53,9 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
         DEFAULT_MIN_COMPRESSION_FRAC,
         DEFAULT_MIN_RATE_FRAC,
         DEFAULT_POLYORDER,
-        DEFAULT_WINDOW_RATE_HZ,
-        DEFAULT_WINDOW_S,
         UNIFORM_DT_RTOL,
         characterize,
         damping_excitation,
-        default_window_s,
         fit_lsq,
         fit_paper,
     )
@@ -116,6 +114,11 @@ if TYPE_CHECKING:  # the names below, for type checkers; at run time they load o
         synthetic_relaxation_hold,
         synthetic_rupture_backoff,
     )
+    from deformctl.squeeze.window import (
+        DEFAULT_WINDOW_RATE_HZ,
+        DEFAULT_WINDOW_S,
+        default_window_s,
+    )
 
 #: Public name -> the submodule that defines it. Importing this package imports none of them, so
 #: a module that needs one of them (the command line's options) does not pay for the others
@@ -127,12 +130,12 @@ _EXPORTS: dict[str, str] = {
     "DEFAULT_MIN_COMPRESSION_FRAC": "deformctl.characterize.fit",
     "DEFAULT_MIN_RATE_FRAC": "deformctl.characterize.fit",
     "DEFAULT_POLYORDER": "deformctl.characterize.fit",
-    "DEFAULT_WINDOW_RATE_HZ": "deformctl.characterize.fit",
-    "DEFAULT_WINDOW_S": "deformctl.characterize.fit",
+    "DEFAULT_WINDOW_RATE_HZ": "deformctl.squeeze.window",
+    "DEFAULT_WINDOW_S": "deformctl.squeeze.window",
     "UNIFORM_DT_RTOL": "deformctl.characterize.fit",
     "characterize": "deformctl.characterize.fit",
     "damping_excitation": "deformctl.characterize.fit",
-    "default_window_s": "deformctl.characterize.fit",
+    "default_window_s": "deformctl.squeeze.window",
     "fit_lsq": "deformctl.characterize.fit",
     "fit_paper": "deformctl.characterize.fit",
     "MODEL_CHOICES": "deformctl.characterize.material_options",

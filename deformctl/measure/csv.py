@@ -26,7 +26,6 @@ from typing import Any
 
 import numpy as np
 
-from deformctl.characterize.options import Phase
 from deformctl.errors import DeformctlError, InputDataError, UsageError
 from deformctl.measure.csv_columns import ColumnRole, column_roles, describe_roles
 from deformctl.measure.csv_options import CsvOptions
@@ -72,6 +71,7 @@ from deformctl.plausibility import (
     unit_doubts,
 )
 from deformctl.series import FloatArray, SqueezeSeries
+from deformctl.squeeze.phase import Phase
 from deformctl.units import GIB, NS_PER_S, UNITS
 
 #: Multiply a value in the unit by the factor to get SI; keys are lower-case unit names.

@@ -36,9 +36,8 @@ import zstandard
 
 from deformctl.artifacts.io import note_input
 from deformctl.artifacts.mcap.integrity import complete_prefix, locate_damage, tail_problem
-from deformctl.characterize.options import Phase
 from deformctl.errors import InputDataError, UsageError
-from deformctl.measure.defects import ENERGY_RETURNED, Defect
+from deformctl.measure.defects import Defect
 from deformctl.measure.options import (
     DEFAULT_FORCE_THRESHOLD_FRAC,
     DEFAULT_MIN_GAP_S,
@@ -71,6 +70,8 @@ from deformctl.plausibility import (
     unit_doubts,
 )
 from deformctl.series import FloatArray, SqueezeSeries
+from deformctl.squeeze.flags import ENERGY_RETURNED
+from deformctl.squeeze.phase import Phase
 from deformctl.units import NS_PER_S
 
 WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
@@ -412,7 +413,7 @@ def read_ros2_bag(
 
     The recording is checked for plausibility (:mod:`deformctl.plausibility`: sample rates, peak
     force, the force's axis, the compression's sign and size); every squeeze is cut at a rupture
-    (recorded in the result) and reduced to ``phase`` (:mod:`deformctl.characterize.rupture`).
+    (recorded in the result) and reduced to ``phase`` (:mod:`deformctl.squeeze.rupture`).
 
     Args:
         path: the bag: one ``.mcap`` file, or a rosbag2 folder (:func:`read_bag`).

@@ -28,7 +28,7 @@ from deformctl.cli import app
 from deformctl.errors import InputDataError
 from deformctl.measure import read_csv_export
 from deformctl.measure.ros2_bag import read_ros2_bag
-from deformctl.plausibility import DOUBT_FLAGS
+from deformctl.squeeze.flags import DOUBT_FLAGS
 from deformctl.units import UNITS, parse_unit
 
 from ._exports import kv_squeeze, write_export
