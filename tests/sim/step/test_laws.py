@@ -83,7 +83,8 @@ def test_the_static_solve_balances_the_closed_form_element_forces() -> None:
     residual = b.T @ f
     free = np.setdiff1d(np.arange(n_dof), fixed)
     assert np.abs(residual[free]).max() <= 1e-9 * np.abs(residual[[px[0]]]).max()
-    assert residual[px[0]] < 0.0 < residual[px[1]]  # the squeezed object pushes the palms apart
+    # the palms push into the object: the energy's gradient points the way each palm closes
+    assert residual[px[1]] < 0.0 < residual[px[0]]
 
 
 def _sources() -> dict[str, str]:
