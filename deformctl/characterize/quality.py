@@ -322,7 +322,7 @@ def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
             f"{flag} ({row.get('n_samples')} samples < {FEW_SAMPLES_WINDOWS:g} windows of "
             f"{row.get('window_samples')})"
         )
-    if flag == DAMPING_RATIO_IMPLAUSIBLE or flag == TIME_UNIT_DOUBTFUL:
+    if flag in (DAMPING_RATIO_IMPLAUSIBLE, TIME_UNIT_DOUBTFUL):
         from deformctl.plausibility import damping_ratio_doubt, implied_damping_ratio
 
         zeta = implied_damping_ratio(

@@ -31,7 +31,8 @@ def test_the_flags_measure_raises_are_the_ones_characterize_carries() -> None:
     t = np.r_[np.arange(100) * 0.01, 3.0 + np.arange(100) * 0.01]  # a 2 s gap
     gap = logging_gaps(t)
     coarse = coarse_force(np.round(np.linspace(0.0, 10.0, 200)))  # 1 N steps on a 10 N peak
-    assert gap is not None and coarse is not None
+    assert gap is not None
+    assert coarse is not None
     for defect in (gap, coarse):
         assert defect.flag in RECORDING_FLAGS
         assert with_recording_flags("ok", [defect.flag]) == defect.flag
