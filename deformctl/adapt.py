@@ -56,6 +56,7 @@ import numpy as np
 from deformctl.errors import InputDataError
 from deformctl.grip.conformal import scores_digest
 from deformctl.grip.fast import Predictor, read_model_metadata, resolve_model_path
+from deformctl.physics import rigid_grip_force_n
 
 __all__ = ["ALPHAS", "MIN_ROWS", "AdaptResult", "adapt_model", "ridge_loo", "rig_rows"]
 
@@ -199,7 +200,7 @@ def adapt_model(model: str, index: Any, *, index_path: str = "index") -> AdaptRe
     meta["numpy_model"] = export
     meta["conformal_scores"] = [float(s) for s in scores]
     meta["conformal_digest"] = scores_digest(meta["conformal_scores"])  # grip.sanity
-    meta["target_range"] = _widened_targets(meta, y_true / (W / (2.0 * mu)))
+    meta["target_range"] = _widened_targets(meta, y_true / rigid_grip_force_n(W, mu))
     meta["conformal"] = {}
     meta["n_calibration"] = len(rows)
     check = dict(meta.get("check_points") or {})

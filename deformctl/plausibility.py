@@ -46,6 +46,7 @@ from deformctl.quantities import (
     RECORDED_SECANT_N_PER_CM,
 )
 from deformctl.series import FloatArray
+from deformctl.squeeze.flags import COMPRESSION_UNIT_DOUBTFUL, TIME_UNIT_DOUBTFUL
 from deformctl.units import UNITS
 
 # The numbers live with their quantities (:mod:`deformctl.quantities`, "a recording's
@@ -227,9 +228,6 @@ MIN_PEAK_COMPRESSION_M = RECORDED_PEAK_COMPRESSION_M.doubt_low
 MIN_UNSTATED_RATE_HZ = RECORDED_RATE_HZ.doubt_low
 MAX_SECANT_N_PER_CM = RECORDED_SECANT_N_PER_CM.doubt_high
 MAX_DAMPING_RATIO = IMPLIED_DAMPING_RATIO.doubt_high
-#: The recording's doubt flags (``measure``); the implied damping ratio's flag
-#: (``damping_ratio_implausible``) is ``characterize``'s, which fits λ.
-DOUBT_FLAGS = ("force_unit_doubtful", "compression_unit_doubtful", "time_unit_doubtful")
 
 
 @dataclass(frozen=True)
@@ -391,7 +389,7 @@ def _secant_doubt(
     fixes = [f"the force in {force_fix}"] if force_fix else []
     fixes += [f"the compression in {length_fix}"] if length_fix else []
     clause = f"; plausible with {' or '.join(fixes)}: is a unit right?" if fixes else ""
-    flag = "compression_unit_doubtful" if length_fix and not force_fix else judge.flag
+    flag = COMPRESSION_UNIT_DOUBTFUL if length_fix and not force_fix else judge.flag
     return (
         flag,
         f"{force.what} / {length.what}: secant stiffness {secant:.3g} N/cm (peak force "
@@ -440,7 +438,7 @@ def damping_ratio_doubt(zeta: float, *, time_unit_stated: bool) -> tuple[str, st
         hint = f"plausible with time stamps {times:,} times shorter ({unit} read as s?)"
     else:
         hint = "no time unit fixes it"
-    flag = judge.flag if time_unit_stated else "time_unit_doubtful"
+    flag = judge.flag if time_unit_stated else TIME_UNIT_DOUBTFUL
     stated = "" if time_unit_stated else "time unit not stated and "
     return flag, (
         f"{stated}implied damping ratio ζ = λ / (2 √(D m)) = {zeta:.3g} is above "

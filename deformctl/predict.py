@@ -5,7 +5,7 @@ Every model is evaluated by :class:`deformctl.grip.fast.Predictor` (numpy only):
 export, or an older file without one through skops' allow-list. :func:`read_prediction_inputs`
 reads the objects from a coefficients, index or predictions table or dataset directory (weights
 and μ joined from a catalog; the safe force from a rupture or yield force, less the margin of
-:func:`deformctl.characterize.rupture.safe_force_n`; ``characterize``'s quality),
+:func:`deformctl.squeeze.rupture.safe_force_n`; ``characterize``'s quality),
 :func:`predict_objects` predicts them (with the bound at a coverage, the flags and the warnings),
 :func:`output_columns` / :func:`csv_text` lay out the predictions table, and
 :func:`quality_warnings` / :func:`strict_problems` say which rows a robot should not act on.
@@ -521,7 +521,7 @@ def prediction_inputs(
         ``[n]`` rows in the table's order: ``object_id`` (when the table has it),
         :data:`OBJECT_COLUMNS`, ``friction_mu`` (when known), ``max_safe_force_n`` (the
         smallest of :data:`SAFE_FORCE_COLUMNS` the table has less the margin
-        :data:`deformctl.characterize.rupture.SAFE_FORCE_MARGIN`, NaN where none is finite;
+        :data:`deformctl.squeeze.rupture.SAFE_FORCE_MARGIN`, NaN where none is finite;
         only when the table has one of them) and ``quality`` (``characterize``'s flags, when
         the table has them).
 
@@ -565,7 +565,7 @@ def prediction_inputs(
     out = frame[keep].reset_index(drop=True)
     safe_cols = [c for c in SAFE_FORCE_COLUMNS if c in frame.columns]
     if safe_cols:
-        from deformctl.characterize.rupture import safe_force_n
+        from deformctl.squeeze.rupture import safe_force_n
 
         safe = frame[safe_cols].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=np.float64)
         safe = np.where(np.isfinite(safe) & (safe > 0), safe, np.inf).min(axis=1)

@@ -11,7 +11,7 @@ Compression ``d`` is defined once, here: the *total* compression between the two
 sample of the squeeze (palms touching the unloaded object). It is positive when squeezed.
 
 Beside the series: :class:`Rupture` (where a squeeze ruptured, as a squeeze log stores it; found
-by :mod:`deformctl.characterize.rupture`) and :class:`LiftAttempt` (one attempt's
+by :mod:`deformctl.squeeze.rupture`) and :class:`LiftAttempt` (one attempt's
 :class:`TrialOutcome` as a lift log stores it).
 """
 
@@ -169,7 +169,7 @@ class LiftAttempt:
 @dataclass(frozen=True)
 class Rupture:
     """Where a squeeze ruptured: the onset of its collapse (the force peak before it, unless the
-    force fell from that peak before collapsing: :mod:`deformctl.characterize.rupture`).
+    force fell from that peak before collapsing: :mod:`deformctl.squeeze.rupture`).
 
     Attributes:
         squeeze_index: the squeeze.

@@ -1,7 +1,7 @@
 """Small numerical helpers shared by the estimators and the recording checks.
 
 The estimators (:mod:`deformctl.characterize`) and the rupture and phase detection
-(:mod:`deformctl.characterize.rupture`) work on one uniform time grid with Savitzky–Golay (SG)
+(:mod:`deformctl.squeeze.rupture`) work on one uniform time grid with Savitzky–Golay (SG)
 smoothed compression ``d`` and rate ``d'``; these are the helpers both use, so a squeeze is
 smoothed the same way wherever it is judged. Arrays are 1-D float64 ``[n]``.
 """

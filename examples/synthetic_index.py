@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 
 from deformctl.artifacts import Provenance, write_catalog, write_table
+from deformctl.physics import rigid_grip_force_n
 from deformctl.population import make_population
 
 #: Relative amplitude of the uniform noise on L_f.
@@ -51,7 +52,7 @@ def synthetic_tables(n: int = 73, seed: int = 0) -> tuple[pd.DataFrame, pd.DataF
     d = cat["material_stiffness_n_per_cm"].to_numpy()
     lam = cat["material_damping_ns_per_cm"].to_numpy()
     mu = cat["friction_mu"].to_numpy()
-    f_w = w / (2.0 * mu)
+    f_w = rigid_grip_force_n(w, mu)
     lift = f_w * (1.0 + 0.6 * w / d * (0.5 + 0.5 * np.exp(-lam / 4.0)))
     lift *= 1.0 + NOISE_REL * np.random.default_rng(seed + 1000).uniform(-1.0, 1.0, n)
     coefficients = pd.DataFrame(

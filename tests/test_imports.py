@@ -43,6 +43,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("model", "grip", "catalog", "presets"),
     ("sim",),
     (
+        # what measure and characterize share about a squeeze (phase, rupture cut, window, flags)
+        "squeeze",
         "version",
         "errors",
         "units",

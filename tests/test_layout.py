@@ -140,7 +140,7 @@ def test_only_the_catalog_module_names_catalog_columns() -> None:
         "deformctl.artifacts.mcap",
         "deformctl.artifacts.mcap.write",
         "deformctl.characterize",
-        "deformctl.characterize.rupture",
+        "deformctl.squeeze.rupture",
         "deformctl.lift",
         "deformctl.lift.stage",
         "deformctl.lift.runners.sim",

@@ -19,8 +19,9 @@ chosen by BIC with ``auto``; D is the secant stiffness at a stated operating for
   the table's columns;
 * :mod:`~deformctl.characterize.quality`: the quality flags and the policy applied before a table
   is written;
-* :mod:`~deformctl.characterize.rupture`: where a squeeze stops being a Kelvin–Voigt squeeze
-  (rupture, the loading and unloading phases), used by ``measure`` too;
+* :mod:`deformctl.squeeze`, below both stages (not in this package): the phases, the rupture
+  cut, the smoothing window (:func:`default_window_s`, re-exported here) and the recording flags
+  that ``measure`` and ``characterize`` share;
 * :mod:`~deformctl.characterize.models`: the exact Kelvin–Voigt response and synthetic squeezes
   with known D and λ (ground truth for tests and examples);
 * :mod:`~deformctl.characterize.options`: the options the command builds and the stage takes
@@ -52,12 +53,9 @@ if TYPE_CHECKING:  # for type checkers; at run time each loads on first use
         DEFAULT_MIN_COMPRESSION_FRAC,
         DEFAULT_MIN_RATE_FRAC,
         DEFAULT_POLYORDER,
-        DEFAULT_WINDOW_RATE_HZ,
-        DEFAULT_WINDOW_S,
         UNIFORM_DT_RTOL,
         characterize,
         damping_excitation,
-        default_window_s,
         fit_lsq,
         fit_paper,
     )
@@ -115,6 +113,11 @@ if TYPE_CHECKING:  # for type checkers; at run time each loads on first use
         synthetic_law_squeeze,
         synthetic_relaxation_hold,
         synthetic_rupture_backoff,
+    )
+    from deformctl.squeeze.window import (
+        DEFAULT_WINDOW_RATE_HZ,
+        DEFAULT_WINDOW_S,
+        default_window_s,
     )
 
 #: Importing this package imports none of the modules above, so a module that needs one of them

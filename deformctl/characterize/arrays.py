@@ -2,7 +2,7 @@
 
 :func:`characterize_arrays` gives the coefficients row ``measure csv`` then ``characterize``
 would write for the same samples, with the command's defaults: the arrays are one squeeze, kept
-up to a rupture as ``measure`` keeps it (:func:`deformctl.characterize.rupture.cut_rupture`,
+up to a rupture as ``measure`` keeps it (:func:`deformctl.squeeze.rupture.cut_rupture`,
 which records it), fitted as a rig recording (an intercept for a preload,
 the force's lag fitted, the material law chosen by BIC), the Savitzky–Golay window chosen from
 the sample rate, and the quality policy applied. The arrays are in SI (s, N, m); nothing is
@@ -111,13 +111,13 @@ def characterize_arrays(
         UsageError: an option out of range (the command's rules).
     """
     from deformctl.characterize.coefficients import _coefficient_frame
-    from deformctl.characterize.fit import default_window_s
     from deformctl.characterize.material_options import MaterialOptions
     from deformctl.characterize.options import FitOptions, QualityPolicy, check_method
     from deformctl.characterize.quality import enforce
-    from deformctl.characterize.rupture import cut_rupture
     from deformctl.characterize.stage import _fit_object
     from deformctl.quantities import FRICTION_MU, WEIGHT_N
+    from deformctl.squeeze.rupture import cut_rupture
+    from deformctl.squeeze.window import default_window_s
 
     t, f, d = (_series(n, v) for n, v in (("time_s", time_s), ("force_n", force_n),
                                           ("compression_m", compression_m)))  # fmt: skip

@@ -42,7 +42,7 @@ Every fit carries its diagnostics (R², standard errors, samples, the loading ra
 excitation and design condition, the preload) and quality flags
 (:mod:`deformctl.characterize.quality`): λ is NaN when it cannot be told from a constant force or
 from D, a squeeze that ruptured is fitted up to its rupture
-(:mod:`deformctl.characterize.rupture`), and the policy (warnings, ``strict``, negative D) is
+(:mod:`deformctl.squeeze.rupture`), and the policy (warnings, ``strict``, negative D) is
 applied before a table is written. ``preload="fit"`` adds an intercept F0 (a
 contact preload) to the model; ``constrain_damping`` bounds λ ≥ 0 (``scipy.optimize.lsq_linear``).
 """
@@ -62,8 +62,6 @@ from deformctl.characterize.coefficients import CoefficientFit, _coefficient_fra
 from deformctl.characterize.material_options import check_model
 from deformctl.characterize.objectfit import ObjectFit, fit_object
 from deformctl.characterize.options import (
-    DEFAULT_WINDOW_RATE_HZ,
-    DEFAULT_WINDOW_S,
     Method,
     Preload,
     check_method,
@@ -72,12 +70,13 @@ from deformctl.characterize.options import (
 )
 from deformctl.characterize.prepare import _where, validate_squeeze
 from deformctl.characterize.quality import PAPER_MONOTONIC_FRAC
-from deformctl.characterize.rupture import Rupture, cut_rupture_smoothed
 from deformctl.characterize.stiffness import damping_excitation
 from deformctl.errors import InputDataError, UsageError
 from deformctl.quantities import WINDOW_S
 from deformctl.series import FloatArray, SqueezeSeries
 from deformctl.signals import sg_smooth, sg_window_length, uniform_grid
+from deformctl.squeeze.rupture import Rupture, cut_rupture_smoothed
+from deformctl.squeeze.window import DEFAULT_WINDOW_S
 from deformctl.units import N_PER_CM, NS_PER_CM
 
 #: Default Savitzky–Golay polynomial order (cubic: exact for d through a smooth corner).
@@ -467,30 +466,3 @@ def _fit_rows(
             fit = dataclasses.replace(fit, ruptures=tuple(merged))
         rows.append(fit.row(object_id))
     return rows
-
-
-def default_window_s(position_rate_hz: float | None) -> float:
-    """The Savitzky–Golay window for a log whose positions were sampled at ``position_rate_hz``.
-
-    A squeeze log from a rig may carry positions sampled far more slowly than its forces (a
-    100 Hz pose topic beside a 1 kHz wrench topic); ingestion interpolates them onto the force
-    timestamps, so a window of ``T`` seconds holds only ``N = rate · T`` independent position
-    samples. The noise variance of an SG derivative scales as ``σ² / (N T²) = σ² / (rate T³)``,
-    and that noise biases λ low (see :func:`fit_lsq`). The default keeps it at the level of
-    :data:`DEFAULT_WINDOW_S` at :data:`DEFAULT_WINDOW_RATE_HZ`::
-
-        T = DEFAULT_WINDOW_S · (DEFAULT_WINDOW_RATE_HZ / rate)^(1/3),  never below DEFAULT_WINDOW_S
-
-    (100 Hz → 0.43 s, 500 Hz → 0.25 s, ≥ 1 kHz → 0.2 s). A longer window costs smoothing bias
-    at the corners of the force profile, so squeezes should last several windows.
-
-    Args:
-        position_rate_hz: position sample rate, Hz; None (unknown) gives the default.
-
-    Returns:
-        The window, s.
-    """
-    if position_rate_hz is None or not math.isfinite(position_rate_hz) or position_rate_hz <= 0:
-        return DEFAULT_WINDOW_S
-    scale = (DEFAULT_WINDOW_RATE_HZ / position_rate_hz) ** (1.0 / 3.0)
-    return DEFAULT_WINDOW_S * max(1.0, scale)

@@ -2,7 +2,7 @@
 
 :func:`fit_object` is ``characterize --method lsq``: it validates each squeeze
 (:func:`deformctl.characterize.prepare.validate_squeeze`), cuts it at a rupture and looks for
-relaxation (:mod:`deformctl.characterize.rupture`), judges whether damping can be identified
+relaxation (:mod:`deformctl.squeeze.rupture`), judges whether damping can be identified
 (:func:`deformctl.characterize.stiffness.speed_summary` and
 :func:`deformctl.characterize.quality.damping_identifiable`), fits the asked law or all four
 (:func:`deformctl.characterize.materials.fit_material`; ``auto`` chooses by
@@ -47,13 +47,6 @@ from deformctl.characterize.materials import (
 )
 from deformctl.characterize.prepare import _where, validate_squeeze
 from deformctl.characterize.quality import damping_identifiable
-from deformctl.characterize.rupture import (
-    Relaxation,
-    Rupture,
-    cut_rupture,
-    find_relaxation,
-    phase_slice,
-)
 from deformctl.characterize.stiffness import (
     LoadingStiffness,
     SpeedSummary,
@@ -65,6 +58,13 @@ from deformctl.characterize.stiffness import (
 from deformctl.errors import InputDataError, UsageError
 from deformctl.series import FloatArray, SqueezeSeries
 from deformctl.signals import quarter_window_length, savgol, sg_window_length, uniform_grid
+from deformctl.squeeze.rupture import (
+    Relaxation,
+    Rupture,
+    cut_rupture,
+    find_relaxation,
+    phase_slice,
+)
 
 #: The windows compared with the law where D is stated: mean compression within this fraction
 #: of the law's compression at the operating force (``secant_residual_frac``).

@@ -20,30 +20,6 @@ from deformctl.characterize.quality import check_policy
 from deformctl.errors import UsageError
 from deformctl.quantities import WINDOW_S
 
-#: A squeeze's phases (``--phase``): up to its peak force, down from it, or the whole squeeze.
-Phase = Literal["loading", "unloading", "all"]
-PHASES: tuple[str, ...] = ("loading", "unloading", "all")
-
-
-def check_phase(phase: object) -> Phase:
-    """``phase`` when it is one of :data:`PHASES` (the one rule for ``--phase``).
-
-    Raises:
-        UsageError: an unknown phase (exit 2).
-    """
-    if phase not in PHASES:
-        raise UsageError(f"--phase must be one of {', '.join(PHASES)}, got {phase!r}")
-    return phase  # type: ignore[return-value]
-
-
-#: Default Savitzky–Golay window, s. Long enough that the derivative of 0.05 mm position noise is
-#: small against squeeze rates of a few mm/s (noise in ``d'`` biases λ low, see ``fit_lsq``), short
-#: enough that a cubic follows a squeeze of a few seconds (cubic smoothing bias < 0.1 % in tests).
-DEFAULT_WINDOW_S = 0.2
-#: Sample rate the default window was chosen for, Hz (see
-#: :func:`deformctl.characterize.fit.default_window_s`).
-DEFAULT_WINDOW_RATE_HZ = 1000.0
-
 Method = Literal["lsq", "paper"]
 METHODS: tuple[str, ...] = ("lsq", "paper")
 Preload = Literal["fit", "zero"]

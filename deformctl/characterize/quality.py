@@ -44,7 +44,7 @@ wrong sign, wrong units; numbers in each constant's docstring) and stated here o
 ``not_finite``                   a computed column came out infinite (a defect of an
                                  estimator): it is written as null (:func:`finite_row`)
 ``logging_gap``, ``coarse_force``, the recording's defects, found by ``measure`` and stored in
-``force_lag``                    the squeeze log (:mod:`deformctl.measure.defects`)
+``force_lag``, ...               the squeeze log (:mod:`deformctl.squeeze.flags`)
 ================================ ==============================================================
 
 Policy (:func:`enforce`): each flagged object gives one warning line naming the flags and their
@@ -59,6 +59,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from deformctl.errors import InputDataError, UsageError
+from deformctl.squeeze.flags import RECORDING_FLAGS, TIME_UNIT_DOUBTFUL
 
 if TYPE_CHECKING:  # pragma: no cover - a table is handed in; this module does not need pandas
     import pandas as pd
@@ -76,21 +77,6 @@ RELAXATION = "relaxation"
 SECANT_MISFIT = "secant_misfit"
 DAMPING_RATIO_IMPLAUSIBLE = "damping_ratio_implausible"
 NOT_FINITE = "not_finite"
-#: The recording's defects (:data:`deformctl.measure.defects.RECORDING_FLAGS`, restated here:
-#: imports only go down; a test checks that they agree) and what each means.
-RECORDING_FLAGS: dict[str, str] = {
-    "logging_gap": "the recording has a gap of more than 5 sample intervals",
-    "coarse_force": "the force's resolution is coarser than 2 % of its peak",
-    "force_lag": "the force lags the position; λ is low by D × the lag (measure --lag-s auto)",
-    "energy_returned": "the squeezes give energy back, which no passive object does: the "
-    "samples run backwards in time, or the force lags the position; λ is wrong",
-    "force_unit_doubtful": "the peak force is implausible for a soft object (below 50 mN or "
-    "above 3 kN, or a secant stiffness above 5000 N/cm): a unit slip such as kN read as N",
-    "compression_unit_doubtful": "the peak compression is below 20 µm (or a secant stiffness "
-    "above 5000 N/cm): a unit slip such as m read as mm",
-    "time_unit_doubtful": "no time unit stated and a sample rate below 10 Hz or an implied "
-    "damping ratio above 1000: ms stamps read as s",
-}
 #: Every flag, in the order ``quality`` lists them.
 FLAGS: tuple[str, ...] = (
     NEGATIVE_STIFFNESS,
@@ -336,7 +322,7 @@ def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
             f"{flag} ({row.get('n_samples')} samples < {FEW_SAMPLES_WINDOWS:g} windows of "
             f"{row.get('window_samples')})"
         )
-    if flag == DAMPING_RATIO_IMPLAUSIBLE or flag == "time_unit_doubtful":
+    if flag in (DAMPING_RATIO_IMPLAUSIBLE, TIME_UNIT_DOUBTFUL):
         from deformctl.plausibility import damping_ratio_doubt, implied_damping_ratio
 
         zeta = implied_damping_ratio(

@@ -1,7 +1,7 @@
 """The ``characterize`` stage: squeeze logs in, the coefficients table out.
 
 :func:`read_and_characterize` fits every object of a squeeze log (the window and preload chosen
-per object from what the log stores: :func:`~deformctl.characterize.fit.default_window_s`,
+per object from what the log stores: :func:`~deformctl.squeeze.window.default_window_s`,
 :func:`default_preload`), :func:`characterize_dir` those of a ``measure`` dataset directory, and
 :func:`characterize_file` writes their table; at scale, :class:`CharacterizeTask` is the sweep task
 of one object and :func:`characterize_sweep` writes a coefficients dataset directory.
@@ -31,7 +31,7 @@ from deformctl.artifacts.dataset import (
 )
 from deformctl.artifacts.provenance import Provenance, sha256_file
 from deformctl.characterize.coefficients import _coefficient_frame, object_fields
-from deformctl.characterize.fit import _fit_rows, default_window_s
+from deformctl.characterize.fit import _fit_rows
 from deformctl.characterize.material_options import RIG_SOURCES, default_lag
 from deformctl.characterize.options import (
     DEFAULT_FIT,
@@ -51,6 +51,7 @@ from deformctl.errors import InputDataError, MissingInputError, UsageError
 from deformctl.parallel import SweepOptions, SweepSummary, run_sweep
 from deformctl.reprs import short_repr
 from deformctl.series import SqueezeSeries, ruptures_from_object
+from deformctl.squeeze.window import default_window_s
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from deformctl.characterize.objectfit import ObjectFit

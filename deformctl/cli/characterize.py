@@ -10,7 +10,6 @@ import typer
 from deformctl.artifacts.io import is_stdio
 from deformctl.characterize.material_options import MODEL_CHOICES, MaterialOptions
 from deformctl.characterize.options import (
-    DEFAULT_WINDOW_S,
     FitOptions,
     QualityPolicy,
     check_method,
@@ -22,6 +21,7 @@ from deformctl.cli._common import finish_sweep, translate_errors
 from deformctl.cli._summary import Quiet, RunClock
 from deformctl.errors import UsageError
 from deformctl.parallel import SweepOptions
+from deformctl.squeeze.window import DEFAULT_WINDOW_S
 
 if TYPE_CHECKING:  # pragma: no cover - the fits (pandas, scipy) load when the command runs
     import pandas as pd

@@ -71,6 +71,7 @@ from deformctl.grip.sanity import (
     scores_problem,
     target_ratio_range,
 )
+from deformctl.physics import rigid_grip_force_n
 from deformctl.quantities import (
     COVERAGE,
     FRICTION_MU,
@@ -446,7 +447,7 @@ class Predictor:
         """L_f for ``X`` ``[n, len(features)]`` in the model's feature order (no checks)."""
         if self.form == "grip":
             W, D, lam, mu = X[:, 0], X[:, 1], X[:, 2], X[:, 3]
-            return np.exp(self._network(self._groups(W, D, lam))) * (W / (2.0 * mu))
+            return np.exp(self._network(self._groups(W, D, lam))) * rigid_grip_force_n(W, mu)
         out = self._network(X)
         return out * X[:, self.scale_index] if self.scale_index is not None else out
 
@@ -588,7 +589,7 @@ class Predictor:
             d_si = D * 100.0
             zeta = _max0(lam) * 100.0 / (2.0 * math.sqrt(d_si * mass))
             z = (math.log10(math.sqrt(d_si / mass)), math.log10(zeta + self.zeta_shift))
-            f_w = W / (2.0 * mu)
+            f_w = rigid_grip_force_n(W, mu)
             lift = math.exp(self._network_one(z)) * f_w
         else:
             lift, f_w = self._paper_scalar(W, D, lam, mu, name, warnings)
@@ -633,7 +634,7 @@ class Predictor:
             warnings.append(self._mu_warning(name, mu))
             lift *= mu_train / mu
         used = mu if mu is not None else mu_train
-        return lift, (W / (2.0 * used) if used is not None else math.nan)
+        return lift, (rigid_grip_force_n(W, used) if used is not None else math.nan)
 
     def predict_many(
         self,
@@ -681,12 +682,12 @@ class Predictor:
         if self.form == "grip":
             assert mu is not None
             lift = self._lift_force(np.column_stack([W, D, lam, mu]))
-            f_w = W / (2.0 * mu)
+            f_w = rigid_grip_force_n(W, mu)
         else:
             lift = self._lift_force(np.column_stack([values[c] for c in self.features]))
             mu_train = self.training_friction_mu
             used = mu if mu is not None else np.full(n, np.nan if mu_train is None else mu_train)
-            f_w = W / (2.0 * used)
+            f_w = rigid_grip_force_n(W, used)
             if mu is not None and mu_train is None:
                 warnings.append(UNRECORDED_MU_WARNING)
             elif mu is not None and mu_train is not None:

@@ -20,8 +20,9 @@ fit's squared error a relative error, the measure the model is judged by.
 Example:
     >>> import numpy as np
     >>> from sklearn.linear_model import LinearRegression
+    >>> from deformctl.physics import rigid_grip_force_n
     >>> X = np.array([[2.0, 10.0, 0.0, 0.5], [4.0, 10.0, 1.0, 1.0], [8.0, 40.0, 0.2, 0.3]])
-    >>> y = 1.5 * X[:, 0] / (2 * X[:, 3])  # L_f = 1.5 F_w
+    >>> y = 1.5 * rigid_grip_force_n(X[:, 0], X[:, 3])  # L_f = 1.5 F_w
     >>> m = GripForceRegressor(LinearRegression()).fit(X, y)
     >>> np.round(m.predict([[10.0, 20.0, 0.5, 0.25]]), 6).tolist()  # 1.5 * 10 / 0.5
     [30.0]

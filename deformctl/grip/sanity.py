@@ -51,6 +51,7 @@ from typing import Any
 import numpy as np
 
 from deformctl.grip.conformal import conformal_margin, scores_digest
+from deformctl.physics import rigid_grip_force_n
 from deformctl.quantities import MAX_LIFT_RATIO
 
 __all__ = [
@@ -183,7 +184,7 @@ def output_problem(predictor: Any) -> str | None:
         if weight is None or mu is None:
             continue
         m = float(mu[i]) if isinstance(mu, np.ndarray) else float(mu)
-        f_w = float(weight[i]) / (2.0 * m)
+        f_w = rigid_grip_force_n(float(weight[i]), m)
         ratio = value / f_w
         if not (1.0 / LOAD_FACTOR <= ratio <= MAX_LIFT_RATIO * LOAD_FACTOR):
             return (

@@ -31,7 +31,7 @@ reported, not fitted over (:mod:`~deformctl.measure.defects`). Every reader chec
 recording's plausibility (:mod:`deformctl.plausibility`: a sample rate,
 peak force, peak compression, force axis or compression sign that a unit, axis or sign mistake
 explains is refused with the likely fix), and every squeeze is cut at a rupture and reduced to the
-``phase`` asked for (:mod:`deformctl.characterize.rupture`); the :class:`Recording` carries the
+``phase`` asked for (:mod:`deformctl.squeeze.rupture`); the :class:`Recording` carries the
 ruptures, which the log stores with the object (:meth:`Recording.log_fields`).
 
 The public names of the readers and the stage are re-exported here.

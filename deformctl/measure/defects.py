@@ -36,25 +36,9 @@ from typing import Any
 
 import numpy as np
 
-from deformctl.plausibility import DOUBT_FLAGS
 from deformctl.series import FloatArray
 from deformctl.signals import sg_smooth, sg_window_length
-
-LOGGING_GAP = "logging_gap"
-COARSE_FORCE = "coarse_force"
-FORCE_LAG = "force_lag"
-#: The squeezes give energy back (their force-compression loops run the wrong way): the samples
-#: run backwards in time, or the force lags the position (:mod:`deformctl.measure.ros2_bag`).
-ENERGY_RETURNED = "energy_returned"
-#: Every recording flag, in the order ``quality`` lists them.
-#: The two-sided plausibility flags (:data:`deformctl.plausibility.DOUBT_FLAGS`) come last.
-RECORDING_FLAGS: tuple[str, ...] = (
-    LOGGING_GAP,
-    COARSE_FORCE,
-    FORCE_LAG,
-    ENERGY_RETURNED,
-    *DOUBT_FLAGS,
-)
+from deformctl.squeeze.flags import COARSE_FORCE, FORCE_LAG, LOGGING_GAP
 
 #: ``logging_gap``: an interval longer than this many median intervals.
 GAP_INTERVALS = 5.0

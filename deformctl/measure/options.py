@@ -20,7 +20,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from deformctl.characterize.options import Phase, check_phase
 from deformctl.errors import UsageError
 from deformctl.quantities import (
     FORCE_THRESHOLD_FRAC,
@@ -37,6 +36,7 @@ from deformctl.quantities import (
     SQUEEZES,
     STRAIN,
 )
+from deformctl.squeeze.phase import Phase, check_phase
 
 Axis = Literal["x", "y", "z"]
 PositionIs = Literal["travel", "gap", "palm"]

@@ -38,7 +38,7 @@ import zstandard
 from deformctl.artifacts.io import note_input
 from deformctl.artifacts.mcap.integrity import complete_prefix, locate_damage, tail_problem
 from deformctl.errors import InputDataError, UsageError
-from deformctl.measure.defects import ENERGY_RETURNED, Defect
+from deformctl.measure.defects import Defect
 from deformctl.measure.options import Axis, BagSource, Segmentation
 from deformctl.measure.recording import (
     Recording,
@@ -60,6 +60,7 @@ from deformctl.plausibility import (
     unit_doubts,
 )
 from deformctl.series import FloatArray, SqueezeSeries
+from deformctl.squeeze.flags import ENERGY_RETURNED
 from deformctl.units import NS_PER_S
 
 WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
@@ -390,7 +391,7 @@ def read_bag(
     The recording is checked for plausibility (:mod:`deformctl.plausibility`: sample rates, peak
     force, the force's axis, the compression's sign and size); every squeeze is cut at a rupture
     (recorded in the result) and reduced to the segmentation's phase
-    (:mod:`deformctl.characterize.rupture`).
+    (:mod:`deformctl.squeeze.rupture`).
 
     Args:
         path: the bag: one ``.mcap`` file, or a rosbag2 folder (``metadata.yaml`` and its

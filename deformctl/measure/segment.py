@@ -9,7 +9,7 @@ one squeeze. Bags default to segmenting (a rig logs several squeezes per object,
 three); CSV exports default to one squeeze per file (one test per export).
 
 **Cuts.** Every squeeze is then cut at a rupture and reduced to the ``phase`` asked for
-(:mod:`deformctl.characterize.rupture`), judged with the smoothing window ``characterize`` will
+(:mod:`deformctl.squeeze.rupture`), judged with the smoothing window ``characterize`` will
 use for the recording's position rate.
 """
 
@@ -19,7 +19,6 @@ import itertools
 
 import numpy as np
 
-from deformctl.characterize.rupture import cut_rupture, phase_slice, slice_squeeze
 from deformctl.errors import InputDataError
 from deformctl.measure.options import (
     DEFAULT_FORCE_THRESHOLD_FRAC,
@@ -28,6 +27,8 @@ from deformctl.measure.options import (
     Segmentation,
 )
 from deformctl.series import FloatArray, Rupture, SqueezeSeries
+from deformctl.squeeze.rupture import cut_rupture, phase_slice, slice_squeeze
+from deformctl.squeeze.window import DEFAULT_WINDOW_S, default_window_s
 from deformctl.units import NS_PER_S
 
 
@@ -104,8 +105,6 @@ def _to_squeezes(
     Raises:
         InputDataError: no squeeze found, or ``phase="unloading"`` on a squeeze that ruptured.
     """
-    from deformctl.characterize.fit import DEFAULT_WINDOW_S
-
     phase = segmentation.phase
     window = DEFAULT_WINDOW_S if window_s is None else window_s
     if segment:
@@ -154,6 +153,4 @@ def _to_squeezes(
 
 def _detection_window_s(position_rate_hz: float) -> float:
     """The SG window rupture and phase detection use: the one ``characterize`` will use."""
-    from deformctl.characterize.fit import default_window_s
-
     return default_window_s(position_rate_hz)

@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 
 from deformctl.catalog import catalog_objects
+from deformctl.physics import rigid_grip_force_n
 from deformctl.population import PAPER_POPULATION_SIZE, make_population
 
 #: Relative amplitude of the uniform noise on L_f.
@@ -37,7 +38,7 @@ def synthetic_lift_force_n(
     w = np.asarray(weight_n, dtype=np.float64)
     d = np.asarray(deformability_n_per_cm, dtype=np.float64)
     lam = np.asarray(damping_ns_per_cm, dtype=np.float64)
-    f_w = w / (2.0 * np.asarray(friction_mu, dtype=np.float64))
+    f_w = rigid_grip_force_n(w, np.asarray(friction_mu, dtype=np.float64))
     return f_w * (1.0 + 0.6 * w / d * (0.5 + 0.5 * np.exp(-lam / 4.0)))
 
 
@@ -71,7 +72,7 @@ def synthetic_index_table(
             "damping_ns_per_cm": lam,
             "lift_force_n": lift,
             "friction_mu": mu,
-            "f_w_n": w / (2.0 * mu),
+            "f_w_n": rigid_grip_force_n(w, mu),
             "converged": True,
         }
     )

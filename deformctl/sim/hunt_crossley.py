@@ -81,6 +81,7 @@ from deformctl.sim.lattice import (
 )
 from deformctl.sim.objects import ObjectSpec
 from deformctl.sim.step.bundles import HuntCrossley
+from deformctl.sim.step.laws import hunt_crossley_springs
 
 
 class Settings(Hashable, Protocol):
@@ -163,7 +164,7 @@ def unit_squeeze_power(
         fixed = np.union1d(fixed, bottom_z_dofs(lattice, dof_of))
     u, b = power_static(lattice, p, n, dof_of, u, fixed, np.zeros(n_dof))
     s = b @ u
-    force = float((b[:, [px[0]]].T @ (p * np.abs(s) ** n * np.sign(s)))[0])
+    force = float((b[:, [px[0]]].T @ hunt_crossley_springs(p, s, n))[0])
     mode = s / closing
     return force / closing**n, float(np.sum(p * np.abs(mode) ** (n + 2.0) / rest))
 
@@ -213,7 +214,7 @@ def power_static(
     scale = 0.0
     for _ in range(NEWTON_MAX_ITERATIONS):
         s = b @ u
-        f = power * np.abs(s) ** n * np.sign(s)
+        f = hunt_crossley_springs(power, s, n)
         grad = bft @ f - lf
         scale = max(scale, float(np.linalg.norm(b.T @ f)), float(np.linalg.norm(lf)))
         if float(np.linalg.norm(grad)) <= NEWTON_TOLERANCE * scale:

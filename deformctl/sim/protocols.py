@@ -15,6 +15,7 @@ import numpy as np
 
 from deformctl.arraytypes import FloatArray
 from deformctl.errors import SimulationError, UsageError
+from deformctl.physics import rigid_grip_force_n
 from deformctl.scene import scene_every_steps
 from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
 from deformctl.sim import first_use
@@ -519,5 +520,9 @@ def free_run(
 
 
 def rigid_lift_force_n(spec: ObjectSpec, profile: LiftProfile) -> float:
-    """Grip force per palm lifting a rigid object through ``profile``: m (g + a_max)/(2 mu), N."""
-    return spec.mass_kg * (GRAVITY_M_S2 + profile.peak_accel_m_s2) / (2.0 * spec.friction_mu)
+    """Grip force per palm lifting a rigid object through ``profile``: m (g + a_max)/(2 mu), N
+    (:func:`deformctl.physics.rigid_grip_force_n` of the object's weight at the peak
+    acceleration)."""
+    return rigid_grip_force_n(
+        spec.mass_kg * (GRAVITY_M_S2 + profile.peak_accel_m_s2), spec.friction_mu
+    )

@@ -23,7 +23,7 @@ noise) and its truth. Shapes (:data:`SHAPES`):
 The truth of a rupture shape is its **onset force**: the force at the onset of the collapse (the
 break force), and where the onset appears in the recording (``onset_time_s``: the break plus
 the sensor's lag). :func:`check` runs the rupture detector of ``characterize`` and ``measure``
-(:func:`deformctl.characterize.rupture.cut_rupture`, with the window ``characterize`` uses at the
+(:func:`deformctl.squeeze.rupture.cut_rupture`, with the window ``characterize`` uses at the
 recording's rate) over many draws and counts what it finds; the command line prints it::
 
     python -m deformctl.testing.fruit check --draws 500 --seed 0
@@ -418,8 +418,8 @@ def check(
     written as a CSV export (its force sign, lag and cut included)."""
     import tempfile
 
-    from deformctl.characterize.fit import default_window_s
-    from deformctl.characterize.rupture import cut_rupture, find_relaxation, safe_force_n
+    from deformctl.squeeze.rupture import cut_rupture, find_relaxation, safe_force_n
+    from deformctl.squeeze.window import default_window_s
 
     res = CheckResult()
     folder = tempfile.TemporaryDirectory(prefix="fruit-") if through_csv else None

@@ -20,8 +20,8 @@ from deformctl.characterize.quality import (
     describe_flag,
     finite_row,
 )
-from deformctl.characterize.rupture import phase_slice
 from deformctl.characterize.stiffness import LoadingStiffness, loading_stiffness
+from deformctl.squeeze.rupture import phase_slice
 
 
 def test_a_falling_stretch_has_a_null_spread_and_is_flagged() -> None:

@@ -313,8 +313,8 @@ def test_one_smoothing_per_squeeze_and_one_table_per_log() -> None:
     the per-squeeze smoothing and the concatenated one-row tables gave."""
     from deformctl.characterize.coefficients import _coefficient_frame
     from deformctl.characterize.fit import _fit_rows
-    from deformctl.characterize.rupture import _POLYORDER, cut_rupture_smoothed
     from deformctl.signals import sg_smooth, sg_window_length, uniform_grid
+    from deformctl.squeeze.rupture import _POLYORDER, cut_rupture_smoothed
 
     ramp = synthetic_kelvin_voigt_squeeze(13.0, 1.0, profile="ramp_hold_release", seed=5)
     squeezes = [*_squeezes(30.0, 6.47, "sine", 11), ramp]

@@ -24,7 +24,6 @@ from typer.testing import CliRunner
 from deformctl.artifacts import read_table
 from deformctl.characterize import fit_object
 from deformctl.characterize.coefficients import CoefficientFit
-from deformctl.characterize.fit import default_window_s
 from deformctl.characterize.laws import secant_stiffness
 from deformctl.characterize.material_options import MODELS
 from deformctl.characterize.materials import degenerate
@@ -36,6 +35,7 @@ from deformctl.characterize.synthetic import (
 )
 from deformctl.cli import app
 from deformctl.series import SqueezeSeries
+from deformctl.squeeze.window import default_window_s
 from deformctl.units import N_PER_CM, NS_PER_CM
 
 DRAWS = int(os.environ.get("DEFORMCTL_MATERIAL_DRAWS", "5"))

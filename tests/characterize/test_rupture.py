@@ -27,9 +27,9 @@ from deformctl.characterize import (
     synthetic_relaxation_hold,
     synthetic_rupture_backoff,
 )
-from deformctl.characterize.rupture import cut_rupture, find_relaxation
 from deformctl.cli import app
 from deformctl.series import SqueezeSeries
+from deformctl.squeeze.rupture import cut_rupture, find_relaxation
 from tests._helpers.doubtful_logs import csv_text
 
 from ._truth import TRUTH

@@ -1,4 +1,4 @@
-"""Rupture detection and the loading/unloading phases (``deformctl.characterize.rupture``).
+"""Rupture detection and the loading/unloading phases (``deformctl.squeeze.rupture``).
 
 The rupture criterion must fire on a force collapse while the gripper keeps closing or holds
 still, at the collapse, and stay silent on every Kelvin–Voigt squeeze, including heavily damped
@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 from deformctl.characterize import synthetic_kelvin_voigt_squeeze
-from deformctl.characterize.rupture import Rupture, cut_rupture, phase_slice, ruptures_from_object
 from deformctl.errors import UsageError
 from deformctl.measure import simulate_squeezes
 from deformctl.population import golden_population
+from deformctl.squeeze.rupture import Rupture, cut_rupture, phase_slice, ruptures_from_object
 from tests._helpers.doubtful_logs import rupture
 
 WINDOW_S = 0.2

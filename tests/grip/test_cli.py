@@ -15,9 +15,9 @@ import pytest
 from typer.testing import CliRunner, Result
 
 from deformctl.artifacts import read_table, write_catalog, write_table
-from deformctl.characterize.rupture import SAFE_FORCE_MARGIN
 from deformctl.cli import app
 from deformctl.grip.fast import NO_SCORES_MESSAGE
+from deformctl.squeeze.rupture import SAFE_FORCE_MARGIN
 from tests.grip._synthetic import grip_index
 
 runner = CliRunner()

@@ -27,7 +27,7 @@ from deformctl.artifacts import read_table
 from deformctl.cli import app
 from deformctl.errors import InputDataError
 from deformctl.measure import BagSource, CsvOptions, read_recording
-from deformctl.plausibility import DOUBT_FLAGS
+from deformctl.squeeze.flags import DOUBT_FLAGS
 from deformctl.units import UNITS, parse_unit
 
 from ._exports import kv_squeeze, write_export

@@ -17,7 +17,7 @@ from typer.testing import CliRunner
 from deformctl.artifacts import read_table
 from deformctl.cli import app
 from deformctl.measure import CsvOptions, read_recording
-from deformctl.plausibility import DOUBT_FLAGS
+from deformctl.squeeze.flags import DOUBT_FLAGS
 
 from ._exports import kv_squeeze, write_export
 

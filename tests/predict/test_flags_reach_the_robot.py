@@ -24,9 +24,9 @@ import pytest
 from typer.testing import CliRunner
 
 from deformctl.artifacts import read_table, write_table
-from deformctl.characterize.rupture import SAFE_FORCE_MARGIN
 from deformctl.cli import app
 from deformctl.predict import strict_problems
+from deformctl.squeeze.rupture import SAFE_FORCE_MARGIN
 from deformctl.testing.fruit import fruit_squeeze
 
 runner = CliRunner()

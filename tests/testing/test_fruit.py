@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 from deformctl.characterize import characterize
-from deformctl.characterize.fit import default_window_s
-from deformctl.characterize.rupture import SAFE_FORCE_MARGIN, cut_rupture, safe_force_n
 from deformctl.measure import CsvOptions, read_recording
+from deformctl.squeeze.rupture import SAFE_FORCE_MARGIN, cut_rupture, safe_force_n
+from deformctl.squeeze.window import default_window_s
 from deformctl.testing.fruit import SHAPES, check, fruit_squeeze, main, write_csv
 
 DRAWS = 160

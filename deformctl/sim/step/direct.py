@@ -28,6 +28,7 @@ from deformctl.sim.step.delassus import (
     _warm_solve,
 )
 from deformctl.sim.step.forces import _predict, _step_impulse
+from deformctl.sim.step.laws import coulomb_bound
 from deformctl.sim.step.maxwell import _arm_predict, _arm_update
 from deformctl.sim.step.record import N_REC, _record_step, _slipped_past
 
@@ -151,7 +152,7 @@ def integrate(
         if nr > 0:
             _row_targets(
                 contacts, palms, all_rows, nr, all_bottoms, all_bottoms.shape[0], x, q,
-                palm_vz[step + 1], mu * max(f_now, 0.0) * h_step, h_step, targets,
+                palm_vz[step + 1], coulomb_bound(mu, f_now) * h_step, h_step, targets,
             )  # fmt: skip
             for r in range(nr):
                 forced[r] = False
@@ -257,7 +258,7 @@ def integrate(
                             r = lv[i]
                             t = row_type[r]
                             if t == 2:
-                                bound = mu_table * lam[row_link[r]]
+                                bound = coulomb_bound(mu_table, lam[row_link[r]])
                                 lo[r] = -bound
                                 hi[r] = bound
                             new = lam[r] - (u[r] - target[r]) / w[i, i]
@@ -277,7 +278,7 @@ def integrate(
                             break
                     for r in range(nr):
                         if row_type[r] == 2:
-                            bound = mu_table * lam[row_link[r]]
+                            bound = coulomb_bound(mu_table, lam[row_link[r]])
                             lo[r] = -bound
                             hi[r] = bound
                     _polish(w[:n_live, :n_live], vrow, target, lo, hi, lam, row_type, row_dof, lv)

@@ -14,6 +14,7 @@ from numba import njit
 
 from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.sim.step.bundles import Body, Palms
+from deformctl.sim.step.laws import hunt_crossley_damping, hunt_crossley_spring
 from deformctl.sim.step.maxwell import _arm_rhs
 
 
@@ -171,13 +172,9 @@ def _element_rhs_hc(body: Body, x: FloatArray, vel: FloatArray, h: float, out: F
             ny = ay
             nz = az
             stretch = dx * ax + dy * ay + dz * az - rest[e]
-        size = abs(stretch)
-        spring = power[e] * size**n_exp
-        if stretch < 0.0:
-            spring = -spring
-        spring += rest_force[e]
-        held = min(size, cap * rest[e])
-        damper = hc_ret * power[e] * held**n_exp / rest[e] + k[e] * retardation
+        spring = hunt_crossley_spring(power[e], stretch, n_exp) + rest_force[e]
+        damper = hunt_crossley_damping(power[e], stretch, n_exp, hc_ret, cap * rest[e], rest[e])
+        damper += k[e] * retardation
         f = spring + damper * (dvx * nx + dvy * ny + dvz * nz)
         g = (k[e] * h) * (dvx * ax + dvy * ay + dvz * az)
         fx = f * nx + g * ax

@@ -22,6 +22,7 @@ from deformctl.sim.step.bundles import (
 from deformctl.sim.step.contact import _choose_rows, _moved_less, _row_targets
 from deformctl.sim.step.dense import _solve_dense
 from deformctl.sim.step.forces import _predict, _step_impulse
+from deformctl.sim.step.laws import coulomb_bound
 from deformctl.sim.step.maxwell import _arm_predict, _arm_update
 from deformctl.sim.step.record import N_REC, _record_step, _slipped_past
 
@@ -326,7 +327,7 @@ def integrate_iterative(
                 chosen = _moved_less(x, x_ref, q, palm_x_dof, palm_ref, 0.4 * row_margin)
             if not chosen:
                 rows, n_rows, bottoms, n_bottoms = all_rows, nr, all_bottoms, all_bottoms.shape[0]
-        friction_bound = mu * max(f_now, 0.0) * h_step
+        friction_bound = coulomb_bound(mu, f_now) * h_step
         _row_targets(
             contacts, palms, rows, n_rows, bottoms, n_bottoms, x, q, palm_vz[step + 1],
             friction_bound, h_step, targets,
@@ -376,7 +377,7 @@ def integrate_iterative(
                     elif st != 0:
                         bt[d] += (1.0 if st > 0 else -1.0) * bound[r]
                 elif t == 2:
-                    bound[r] = mu_table * max(lam[row_link[r]], 0.0)
+                    bound[r] = coulomb_bound(mu_table, lam[row_link[r]])
                     if st == 1 and bound[r] > 0.0:
                         fixer[d] = r
                         cand[n_cand] = d

@@ -73,14 +73,13 @@ from typing import overload
 
 import numpy as np
 
-from deformctl.characterize.options import PHASES, Phase, check_phase
 from deformctl.series import FloatArray, Rupture, SqueezeSeries, ruptures_from_object
 from deformctl.signals import noise_std, sg_smooth, sg_window_length, uniform_grid
+from deformctl.squeeze.phase import check_phase
 from deformctl.units import NS_PER_S
 
 __all__ = [
     "HOLD_TOL_FRAC",
-    "PHASES",
     "PHASE_PEAK_TOL",
     "RELAXATION_FRAC",
     "RELAXATION_HOLD_S",
@@ -89,11 +88,9 @@ __all__ = [
     "RUPTURE_NOISE_MULT",
     "RUPTURE_SUDDEN_MULT",
     "SAFE_FORCE_MARGIN",
-    "Phase",
     "Relaxation",
     "Rupture",
     "Smoothed",
-    "check_phase",
     "cut_rupture",
     "cut_rupture_smoothed",
     "find_relaxation",
