@@ -50,9 +50,8 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       is carried from step to step through the same combination of images as the guess
       (``PRODUCT_CARRY_FRACTION``): it is formed again only when its error bound reaches 1 % of
       the CG tolerance, about every third step (measured error: at most 5e-8 of that limit,
-      8^3 cube; the bound held in every step). A lift's centre-of-mass path
-      stays within about 1e-9 m of a 100x tighter solve
-      (11^3 cube), squeeze D/lambda within 1e-6.
+      8^3 cube; the bound held in every step). A lift's centre-of-mass path stays within
+      about 1e-9 m of a 100x tighter solve (11^3 cube), squeeze D/lambda within 1e-6.
       The step's row loops visit only the rows that can act: a table or palm-plane row that is
       inactive and at least half an element from its surface is left out until the lattice has
       moved 0.2 element or a velocity could close that gap in one step
@@ -72,23 +71,21 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       one V-cycle costs 3.6 matrix-vector products instead of 5.1 at 16^3 and 3.2 instead of
       5.0 at 21^3 (``bench/bench_sim.py``, ``v_cycle`` alone, same run); with the transfer
       between those two levels by axis factors on the lattice (:mod:`deformctl.sim.multigrid`),
-      2.8 and 2.6 (finest level alone as a stencil: 3.4 and 3.2). The squeeze D/lambda
-      and L_f of the former dense path are kept within 0.5 % at 5^3 and 8^3 by the iterative
-      solver too (tests/sim/test_dense_reference.py).
+      2.8 and 2.6 (finest level alone as a stencil: 3.4 and 3.2). The squeeze D/lambda and L_f
+      of the former dense path are kept within 0.5 % at 5^3 and 8^3 by the iterative solver too
+      (tests/sim/test_dense_reference.py).
 
-The step is chosen for accuracy, not
-stability: the default ``dt = 1 ms`` resolves the lift profile's 50 ms jerk ramps; backward
-Euler's lag of about dt/2 on the retardation time lambda/D is 3 % at lambda/D = 17 ms and
-negligible above. Measured (Table I objects, search to 0.1 %): halving dt to 0.5 ms moves the
-lifting force by 0.0 % (sponge), 0.1 % (cotton), 0.0 % (sand), 0.4 % (undamped water bag);
-doubling it to 2 ms by <= 0.7 %. Halving alpha (9 instead of 5 particles per longest side) moves
-it by 0.0-2.8 %, so the default is 5 particles per longest side.
+The step is chosen for accuracy, not stability: the default ``dt = 1 ms`` resolves the lift
+profile's 50 ms jerk ramps; backward Euler's lag of about dt/2 on the retardation time lambda/D is
+3 % at lambda/D = 17 ms and negligible above. Measured (Table I objects, search to 0.1 %):
+halving dt to 0.5 ms moves the lifting force by 0.0 % (sponge), 0.1 % (cotton), 0.0 % (sand),
+0.4 % (undamped water bag); doubling it to 2 ms by <= 0.7 %. Halving alpha (9 instead of 5
+particles per longest side) moves it by 0.0-2.8 %, so the default is 5 particles per longest side.
 
 Contacts are velocity-level constraints solved each step (:mod:`deformctl.sim.step`): unilateral
 table contact on the bottom layer, and Coulomb friction between each palm and its face patch with
 a true static regime (exact stick, impulse bounded by ``mu N dt``) and a kinetic regime (impulse at
-the bound, opposing sliding). There is no regularised friction, so a hold inside the cone does not
-creep.
+the bound, opposing sliding). No regularised friction, so a hold inside the cone does not creep.
 
 Model options of the ``paper`` preset (:mod:`deformctl.presets`), each found by measurement
 --------------------------------------------------------------------------------------------
@@ -116,10 +113,10 @@ squeeze test:
 * ``integrator="bdf2"``: linearised BDF2 (second order, L-stable, the same single solve per step
   with ``h = 2 dt / 3``): backward Euler's first-order numerical damping eats into an undamped
   object's overshoot, which is the very effect being measured; BDF2's error is second order
-  (tests/sim/test_paper_model.py measures the order; ``make calibrate`` the L_f
-  moves at dt / 2, recorded in ``datasets/calibration/paper.json``).
-  It needs the linear springs (``nonlinear_springs=False``): with the frozen tangent of the
-  geometrically exact springs BDF2 went unstable at 9 particles per side.
+  (tests/sim/test_paper_model.py measures the order; ``make calibrate`` the L_f moves at dt / 2,
+  recorded in ``datasets/calibration/paper.json``). It needs the linear springs
+  (``nonlinear_springs=False``): with the frozen tangent of the geometrically exact springs BDF2
+  went unstable at 9 particles per side.
 
 Palm model
 ----------
@@ -490,12 +487,12 @@ def check_run_steps(
 
 
 def element_constants(
-    spec: ObjectSpec, settings: SimSettings
+    spec: ObjectSpec, settings: SimSettings, reference_m: float | None = None
 ) -> tuple[Lattice, FloatArray, FloatArray]:
     """Lattice and calibrated element stiffness (N/m) and damping (N·s/m; arms too), ``[m]``."""
     check_lattice_size(spec, settings)
     if spec.hunt_crossley:  # the tangent and damping at the reference strain
-        el = spec_elements(spec, settings)
+        el = spec_elements(spec, settings, reference_m)
         return el.lattice, el.tangent_n_per_m, el.damping_ns_per_m
     alpha_m = settings.alpha_m(spec)
     lattice, unit_d = _lattice_and_scale(spec.size_m, alpha_m, settings.palm_layer == "surface")
@@ -518,12 +515,14 @@ def element_retardation_s(spec: ObjectSpec, settings: SimSettings) -> float:
     return retardation
 
 
-def width_damping_ns_per_m(spec: ObjectSpec, settings: SimSettings) -> float:
+def width_damping_ns_per_m(
+    spec: ObjectSpec, settings: SimSettings, ref: float | None = None
+) -> float:
     """The damper across the gripped width, N·s/m: the squeeze damping the lattice does not carry,
     ``max(0, lambda - D (r lambda / D + min_shear_retardation_s))``; for a Hunt–Crossley object
     ``(1 - r) lambda`` at the operating compression, scaled by the step with the compression."""
     if spec.hunt_crossley:
-        return spec_elements(spec, settings).width_damping_ns_per_m
+        return spec_elements(spec, settings, ref).width_damping_ns_per_m
     lattice_part = (
         settings.shear_damping_ratio * spec.damping_ns_per_m
         + settings.min_shear_retardation_s * spec.stiffness_n_per_m
@@ -541,6 +540,7 @@ def build_model(
     table: bool = True,
     resting: bool = True,
     lift_m: float = 0.0,
+    reference_m: float | None = None,
 ) -> Model:
     """Assemble (and cache) the model of ``spec``.
 
@@ -550,9 +550,10 @@ def build_model(
         table: table contact at z = 0 on the bottom layer.
         resting: start from the static rest shape on the table under gravity (else undeformed).
         lift_m: start height of the bottom layer above the table, m.
+        reference_m: a Hunt–Crossley object's implicit step's compression (None: d_op).
     """
-    lattice, stiffness, damping = element_constants(spec, settings)
-    n, law = lattice.n_particles, hc_law(spec, settings)
+    lattice, stiffness, damping = element_constants(spec, settings, reference_m)
+    n, law = lattice.n_particles, hc_law(spec, settings, reference_m)
     masses = np.ones(n)
     if settings.palm_layer == "surface" and lattice.shape[0] >= 3:
         masses[lattice.face_mask(0) | lattice.face_mask(1)] = 0.0
@@ -577,7 +578,7 @@ def build_model(
     # (both are sums of element terms with the same pattern: assembled in one pass)
     a = reduced_stiffness(lattice, h * h * stiffness + h * damping, dof_of, n_dof)
     a = (a + scipy.sparse.diags(dof_mass, format="csr")).tocsr()
-    width_c = width_damping_ns_per_m(spec, settings) if gripped else 0.0
+    width_c = width_damping_ns_per_m(spec, settings, reference_m) if gripped else 0.0
     if width_c > 0.0:
         pl, pr = int(palm_x[0]), int(palm_x[1])
         width = h * width_c * np.array([1.0, -1.0, -1.0, 1.0])
