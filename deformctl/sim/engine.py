@@ -29,8 +29,7 @@ Solver choice (issue 13; ``SimSettings.solver``, ``"auto"`` by default)
       triangular solves per step, contacts from exact columns ``A^-1 e_d``. Exact, and
       bit-identical to the former dense inverse's results to 1e-12 (tests/sim/
       test_dense_reference.py). Its fill grows as ``N^1.5`` (21^3 cube: 12.2 M entries, a
-      triangular-solve pair ~25-40 ms against ~0.8 ms for one force evaluation), so it does not
-      scale.
+      triangular-solve pair ~25-40 ms against ~0.8 ms per force evaluation): it does not scale.
     * **iterative** above that: CG preconditioned by one geometric-multigrid V-cycle
       (:mod:`deformctl.sim.multigrid`; convergence ~0.1 per iteration whatever the size),
       warm-started from the least-squares combination of the last three steps' velocity changes

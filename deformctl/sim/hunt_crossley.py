@@ -52,7 +52,12 @@ The implicit step
     velocity's change within a step. The stiffness has room above F_op (the masses and the
     implicit damping carry it: squeezes to 5 F_op stay stable); the dampers, whose coefficient
     grows as ``|s|ⁿ``, do not: they stop growing at :data:`DAMPING_CAP` times their value in
-    ``A``, at about ``DAMPING_CAP · DAMPING_REFERENCE · F_op`` (3.8 F_op) of squeeze force. The
+    ``A``, at about ``DAMPING_CAP · DAMPING_REFERENCE · F_op`` (3.8 F_op) of squeeze force.
+    A run that presses harder than that room allows has its matrix built at a higher reference
+    (:func:`implicit_reference_m`: where the tangent is the run's peak tangent over
+    :data:`TANGENT_ROOM`): on a light object the masses no longer carry the difference, and a
+    squeeze to 500 F_w (the 1 % strain of a stiff, light object, whose law's tangent there is
+    60 times the one at F_w) diverged. The dampers' cap moves with the reference. The
     width damper of the ``paper`` preset (``(1 − r) λ`` across the palms) becomes
     ``(1 − r) λ_hc min(d, d_cap)ⁿ`` the same way; the dampers' floor
     (``min_shear_retardation_s``) stays a linear damper on the frozen tangent.
