@@ -387,12 +387,12 @@ def check_run_steps(
 
 
 def element_constants(
-    spec: ObjectSpec, settings: SimSettings
+    spec: ObjectSpec, settings: SimSettings, reference_m: float | None = None
 ) -> tuple[Lattice, FloatArray, FloatArray]:
     """Lattice and calibrated element stiffness (N/m) and damping (N·s/m; arms too), ``[m]``."""
     check_lattice_size(spec, settings)
     if spec.hunt_crossley:  # the tangent and damping at the reference strain
-        el = spec_elements(spec, settings)
+        el = spec_elements(spec, settings, reference_m)
         return el.lattice, el.tangent_n_per_m, el.damping_ns_per_m
     alpha_m = settings.alpha_m(spec)
     lattice, unit_d = _lattice_and_scale(spec.size_m, alpha_m, settings.palm_layer == "surface")
@@ -415,12 +415,14 @@ def element_retardation_s(spec: ObjectSpec, settings: SimSettings) -> float:
     return retardation
 
 
-def width_damping_ns_per_m(spec: ObjectSpec, settings: SimSettings) -> float:
+def width_damping_ns_per_m(
+    spec: ObjectSpec, settings: SimSettings, ref: float | None = None
+) -> float:
     """The damper across the gripped width, N·s/m: the squeeze damping the lattice does not carry,
     ``max(0, lambda - D (r lambda / D + min_shear_retardation_s))``; for a Hunt–Crossley object
     ``(1 - r) lambda`` at the operating compression, scaled by the step with the compression."""
     if spec.hunt_crossley:
-        return spec_elements(spec, settings).width_damping_ns_per_m
+        return spec_elements(spec, settings, ref).width_damping_ns_per_m
     lattice_part = (
         settings.shear_damping_ratio * spec.damping_ns_per_m
         + settings.min_shear_retardation_s * spec.stiffness_n_per_m
@@ -438,6 +440,7 @@ def build_model(
     table: bool = True,
     resting: bool = True,
     lift_m: float = 0.0,
+    reference_m: float | None = None,
 ) -> Model:
     """Assemble (and cache) the model of ``spec``.
 
@@ -447,9 +450,10 @@ def build_model(
         table: table contact at z = 0 on the bottom layer.
         resting: start from the static rest shape on the table under gravity (else undeformed).
         lift_m: start height of the bottom layer above the table, m.
+        reference_m: a Hunt–Crossley object's implicit step's compression (None: d_op).
     """
-    lattice, stiffness, damping = element_constants(spec, settings)
-    n, law = lattice.n_particles, hc_law(spec, settings)
+    lattice, stiffness, damping = element_constants(spec, settings, reference_m)
+    n, law = lattice.n_particles, hc_law(spec, settings, reference_m)
     masses = np.ones(n)
     if settings.palm_layer == "surface" and lattice.shape[0] >= 3:
         masses[lattice.face_mask(0) | lattice.face_mask(1)] = 0.0
@@ -474,7 +478,7 @@ def build_model(
     # (both are sums of element terms with the same pattern: assembled in one pass)
     a = reduced_stiffness(lattice, h * h * stiffness + h * damping, dof_of, n_dof)
     a = (a + scipy.sparse.diags(dof_mass, format="csr")).tocsr()
-    width_c = width_damping_ns_per_m(spec, settings) if gripped else 0.0
+    width_c = width_damping_ns_per_m(spec, settings, reference_m) if gripped else 0.0
     if width_c > 0.0:
         pl, pr = int(palm_x[0]), int(palm_x[1])
         width = h * width_c * np.array([1.0, -1.0, -1.0, 1.0])

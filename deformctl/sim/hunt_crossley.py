@@ -52,7 +52,12 @@ The implicit step
     velocity's change within a step. The stiffness has room above F_op (the masses and the
     implicit damping carry it: squeezes to 5 F_op stay stable); the dampers, whose coefficient
     grows as ``|s|ⁿ``, do not: they stop growing at :data:`DAMPING_CAP` times their value in
-    ``A``, at about ``DAMPING_CAP · DAMPING_REFERENCE · F_op`` (3.8 F_op) of squeeze force. The
+    ``A``, at about ``DAMPING_CAP · DAMPING_REFERENCE · F_op`` (3.8 F_op) of squeeze force.
+    A run that presses harder than that room allows has its matrix built at a higher reference
+    (:func:`implicit_reference_m`: where the tangent is the run's peak tangent over
+    :data:`TANGENT_ROOM`): on a light object the masses no longer carry the difference, and a
+    squeeze to 500 F_w (the 1 % strain of a stiff, light object, whose law's tangent there is
+    60 times the one at F_w) diverged. The dampers' cap moves with the reference. The
     width damper of the ``paper`` preset (``(1 − r) λ`` across the palms) becomes
     ``(1 − r) λ_hc min(d, d_cap)ⁿ`` the same way; the dampers' floor
     (``min_shear_retardation_s``) stays a linear damper on the frozen tangent.
@@ -60,6 +65,7 @@ The implicit step
 
 from __future__ import annotations
 
+import math
 from collections.abc import Hashable
 from dataclasses import dataclass
 from functools import lru_cache
@@ -106,12 +112,20 @@ DAMPING_REFERENCE = 2.0
 #: the Hunt–Crossley dampers stop growing at this multiple of their value in the implicit step
 #: (a frozen damping matrix is unstable below half the true damping)
 DAMPING_CAP = 1.9
+#: a run that presses harder has its implicit step built at a higher reference compression, so that
+#: the true tangent at the run's largest force is at most this multiple of the frozen one
+#: (:func:`implicit_reference_m`; a frozen-Jacobian step diverges above twice it once the masses
+#: and dampers no longer carry the difference: a light, stiff object)
+TANGENT_ROOM = 1.5
 #: the calibration's static solve: closing, as a fraction of the width (any closing gives the
 #: same C_n under small-strain kinematics; tests/sim/test_hunt_crossley.py checks it)
 CALIBRATION_STRAIN = 0.01
 #: Newton stops when the free DOFs' force residual is this small relative to the palm force
 NEWTON_TOLERANCE = 1e-11
 NEWTON_MAX_ITERATIONS = 200
+#: the line search's allowance for the energy's rounding, relative to the size of its terms (a sum
+#: over thousands of elements: far above the double's 1e-16, far below any real decrease)
+ENERGY_ROUNDING = 1e-12
 
 
 def _stretch_matrix(
@@ -180,7 +194,8 @@ def power_static(
 ) -> tuple[FloatArray, scipy.sparse.csr_matrix]:
     """Static equilibrium of the power-law lattice (``f_e = power_e |s|ⁿ sign(s)``, small-strain
     stretches ``s = B u``) under ``load`` (N, per DOF) with the DOFs ``fixed`` held at their
-    values in ``u``: Newton's method with a line search on the convex energy
+    values in ``u``: Newton's method with a line search (Armijo, up to the energy's rounding,
+    :data:`ENERGY_ROUNDING`) on the convex energy
     ``Σ power_e |s|ⁿ⁺¹ / (n + 1) − load · u``, from the linear lattice's solution (weights
     :attr:`Lattice.unit_stiffness`); rigid modes are held by a ``1e-10`` relative ridge.
 
@@ -198,9 +213,13 @@ def power_static(
     bft = bf.T.tocsr()
     lf = load[free]
 
-    def energy(v: FloatArray) -> float:
+    def energy(v: FloatArray) -> tuple[float, float]:  # the energy and its terms' magnitude
         s = b @ v
-        return float(np.sum(power * np.abs(s) ** (n + 1.0)) / (n + 1.0) - lf @ v[free])
+        stored, work = (
+            float(np.sum(power * np.abs(s) ** (n + 1.0)) / (n + 1.0)),
+            float(lf @ v[free]),
+        )
+        return stored - work, stored + abs(work)
 
     def solve(weights: FloatArray, rhs: FloatArray) -> FloatArray:
         h = (bft @ scipy.sparse.diags(weights) @ bf).tocsc()
@@ -221,10 +240,13 @@ def power_static(
             return u, b
         floor = 1e-6 * float(np.abs(s).max())
         step = solve(n * power * np.maximum(np.abs(s), floor) ** (n - 1.0), -grad)
-        e0 = energy(u)
+        e0, size = energy(u)
         slope = float(grad @ step)
+        # near the solution Newton's decrease is below the energy's rounding: not a reason to
+        # shorten the step (it stalled the line search: no convergence at n = 1)
+        slack = ENERGY_ROUNDING * size
         t = 1.0
-        while t > 1e-8 and energy(_moved(u, free, step, t)) > e0 + 1e-4 * t * slope:
+        while t > 1e-8 and energy(_moved(u, free, step, t))[0] > e0 + 1e-4 * t * slope + slack:
             t *= 0.5
         u = _moved(u, free, step, t)
     raise SimulationError(
@@ -269,7 +291,7 @@ class HuntCrossleyElements:
         cap_strain: the strain at which the dampers stop growing.
         width_damping_ns_per_m: the width damper at the compression of
             :data:`DAMPING_REFERENCE` times the operating force, N·s/m.
-        reference_m: the operating compression ``d_op``, m.
+        reference_m: the implicit step's reference compression (``d_op`` or above), m.
         unit_force: ``C_n`` of the lattice; unit_damping: ``G_n``.
     """
 
@@ -303,7 +325,8 @@ def hc_elements(
 
     Args:
         exponent, stiffness_n_per_m_pow_n, damping_ns_per_m_pow_n_plus_1: n, k and λ_hc.
-        reference_m: the operating compression d_op, m (the implicit step's reference).
+        reference_m: the implicit step's reference compression, m: the operating compression
+            d_op, or above it for a run that presses harder (:func:`implicit_reference_m`).
         shear_damping_ratio: r: the lattice's dampers carry ``r λ_hc``, the width damper the
             rest (as for a Kelvin object, :class:`~deformctl.sim.engine.SimSettings`).
         floor_s: ``min_shear_retardation_s``.
@@ -339,9 +362,32 @@ def hc_elements(
 LINEAR_LAW = HuntCrossley(1.0, np.zeros(1), 0.0, 0.0, 1.0, 1.0, np.zeros(1))
 
 
+def implicit_reference_m(spec: ObjectSpec, peak_force_n: float) -> float | None:
+    """The reference compression of the implicit step for a run whose palms press with at most
+    ``peak_force_n`` (N): ``None`` (the operating compression ``d_op``) unless the law's tangent
+    at that force, ``n k d_peakⁿ⁻¹``, exceeds :data:`TANGENT_ROOM` times the tangent at ``d_op``;
+    then the compression where the tangent is the peak's over :data:`TANGENT_ROOM`,
+    ``d_peak · TANGENT_ROOM^(−1/(n−1))``. Below it the frozen tangent exceeds the true one, a lag
+    of the order of the step (module docs); above it the step stays stable whatever the mass
+    and the damping (the massless, undamped step's factor ``1 − K_true/K_frozen`` stays in
+    (−1, 1)).
+
+    A Kelvin object (or ``peak_force_n`` not above 0) gives ``None``.
+    """
+    if not spec.hunt_crossley or not peak_force_n > 0:
+        return None
+    n = spec.stiffness_exponent
+    d_peak = (peak_force_n / spec.hc_stiffness_n_per_m_pow_n) ** (1.0 / n)
+    reference = d_peak * math.exp(-math.log(TANGENT_ROOM) / (n - 1.0))
+    return reference if reference > spec.operating_compression_m else None
+
+
 @lru_cache(maxsize=16)
-def spec_elements(spec: ObjectSpec, settings: Settings) -> HuntCrossleyElements:
-    """:func:`hc_elements` of a Hunt–Crossley object under ``settings``."""
+def spec_elements(
+    spec: ObjectSpec, settings: Settings, reference_m: float | None = None
+) -> HuntCrossleyElements:
+    """:func:`hc_elements` of a Hunt–Crossley object under ``settings``, its implicit step built
+    at ``reference_m`` (default: the operating compression; :func:`implicit_reference_m`)."""
     return hc_elements(
         spec.size_m,
         settings.alpha_m(spec),
@@ -349,18 +395,19 @@ def spec_elements(spec: ObjectSpec, settings: Settings) -> HuntCrossleyElements:
         exponent=spec.stiffness_exponent,
         stiffness_n_per_m_pow_n=spec.hc_stiffness_n_per_m_pow_n,
         damping_ns_per_m_pow_n_plus_1=spec.hc_damping_ns_per_m_pow_n_plus_1,
-        reference_m=spec.operating_compression_m,
+        reference_m=spec.operating_compression_m if reference_m is None else reference_m,
         shear_damping_ratio=settings.shear_damping_ratio,
         floor_s=settings.min_shear_retardation_s,
     )
 
 
-def hc_law(spec: ObjectSpec, settings: Settings) -> HuntCrossley:
+def hc_law(spec: ObjectSpec, settings: Settings, reference_m: float | None = None) -> HuntCrossley:
     """The kernels' :class:`~deformctl.sim.step.bundles.HuntCrossley` of ``spec`` (the linear
-    :data:`LINEAR_LAW` for a Kelvin object)."""
+    :data:`LINEAR_LAW` for a Kelvin object), its step built at ``reference_m``
+    (:func:`spec_elements`)."""
     if not spec.hunt_crossley:
         return LINEAR_LAW
-    el = spec_elements(spec, settings)
+    el = spec_elements(spec, settings, reference_m)
     return HuntCrossley(
         spec.stiffness_exponent,
         el.power,

@@ -20,6 +20,7 @@ from deformctl.scene import scene_every_steps
 from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
 from deformctl.sim import first_use
 from deformctl.sim.engine import SimSettings, build_model, check_run_steps, run_model
+from deformctl.sim.hunt_crossley import implicit_reference_m
 from deformctl.sim.objects import ObjectSpec
 from deformctl.sim.scene import frame_buffer, scene_frames
 from deformctl.sim.step import record as K
@@ -289,7 +290,10 @@ def squeeze(
     n_steps = max(1, round((ramp_s + hold_s) / s.dt_s))
     check_run_steps(spec, s, n_steps, "squeeze", every)
     _kernels_ready()
-    model = build_model(spec, s, gripped=True, gravity=gravity, table=gravity)
+    reference = implicit_reference_m(spec, peak_force_n)  # a stable step at the peak's tangent
+    model = build_model(
+        spec, s, gripped=True, gravity=gravity, table=gravity, reference_m=reference
+    )
     t = np.arange(n_steps + 1, dtype=np.float64) * s.dt_s
     force = peak_force_n * (np.clip(t / ramp_s, 0.0, 1.0) if ramp_s > 0 else np.ones_like(t))
     if ramp_s == 0:
@@ -397,7 +401,10 @@ def lift_attempt(
     every = scene_every_steps(scene_hz, s.dt_s)
     on_table = r.mode == "table"
     _kernels_ready()
-    model = build_model(spec, s, gripped=True, resting=on_table, table=on_table)
+    reference = implicit_reference_m(spec, grip_force_n)  # a stable step at the grip's tangent
+    model = build_model(
+        spec, s, gripped=True, resting=on_table, table=on_table, reference_m=reference
+    )
     dt = s.dt_s
     rise = p.rise_m(spec)
     n_grip = max(1, round((s.grip_ramp_s + s.grip_settle_s) / dt))

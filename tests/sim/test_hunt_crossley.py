@@ -141,6 +141,65 @@ def test_a_hard_squeeze_of_a_damped_object_stays_stable() -> None:
     assert float(sq.compression_m.max()) < 1.5 * d_static
 
 
+#: population --grip --laws kv=1,hc=1,sls=1 -n 1500 --seed 1, object P1224 (W 1.28 N, D 30 N/cm
+#: at F_w, n 2.92, d_op 0.02 cm): measure --sim's default squeeze goes to 500 F_w, where the law's
+#: tangent is 60 times the one at F_w; built at F_w the step diverged ("non-finite state")
+LIGHT_STIFF = ObjectSpec(
+    "P1224",
+    (18.266157255740307, 18.86999851884091, 13.783762496895122),
+    1.2823604904060122,
+    0.9791332774328168,
+    30.04844412194788,
+    0.03169091107723927,
+    2.923045909747441,
+)
+#: population --grip --laws kv=1,hc=1,sls=1 -n 600 --seed 2, object P524: the linear solve of its
+#: resting pre-stress (an 8 x 5 x 5 lattice with massless palm surfaces) stalled in the line search
+RESTING_SOLVE = ObjectSpec(
+    "P524",
+    (19.572004569303626, 10.999909598556165, 10.317548848590075),
+    6.8082023162896474,
+    0.8094479615576795,
+    53.80585036659134,
+    0.04559956484017079,
+    1.4410929780084056,
+)
+
+
+def test_a_light_stiff_object_squeezed_far_past_f_w_is_stable_and_follows_its_law() -> None:
+    from deformctl.measure.sim import default_peak_force_n
+
+    spec, paper = LIGHT_STIFF, sim_preset("paper").settings
+    peak = default_peak_force_n(spec)
+    assert peak > 400 * spec.operating_force_n
+    reference = hc.implicit_reference_m(spec, peak)
+    assert reference is not None  # the step is built above d_op, at the peak's tangent / room
+    d_peak = (peak / spec.hc_stiffness_n_per_m_pow_n) ** (1.0 / spec.stiffness_exponent)
+    tangent_ratio = (d_peak / reference) ** (spec.stiffness_exponent - 1.0)
+    assert tangent_ratio == pytest.approx(hc.TANGENT_ROOM, rel=1e-12)
+    sq = squeeze(spec, peak_force_n=peak, ramp_s=0.25, hold_s=1.0, settings=paper)
+    assert np.all(np.isfinite(sq.compression_m))
+    # known truth: the held compression is the law's static one, k dⁿ = F (within 1 %)
+    held = spec.elastic_force_n(float(sq.compression_m[-1]))
+    assert held == pytest.approx(peak, rel=0.01)
+    # below the room nothing changes: the operating force's step, the same model
+    assert hc.implicit_reference_m(spec, 1.5 * spec.operating_force_n) is None
+    assert hc.implicit_reference_m(_spec(1.0), 1e6) is None  # a Kelvin object
+
+
+def test_the_resting_solve_converges_and_carries_the_weight() -> None:
+    from deformctl.sim.engine import build_model, run_model
+    from deformctl.sim.step import record as K
+
+    paper = sim_preset("paper").settings
+    model = build_model(RESTING_SOLVE, paper, gripped=False, gravity=True, table=True)
+    assert model.lattice.shape == (8, 5, 5)
+    zeros = np.zeros(round(0.2 / paper.dt_s) + 1)
+    q, _, rec = run_model(model, zeros, zeros)
+    assert np.abs(q).max() < 1e-7  # m: the pre-stress balances gravity, no sag
+    assert rec[-1, K.REC_TABLE_N] == pytest.approx(RESTING_SOLVE.weight_n, rel=1e-3)
+
+
 #: sha256 of a seeded squeeze's and lift attempt's series computed by main 728c7b3 (before the
 #: Hunt–Crossley elements): n = 1 runs the linear kernels, bit for bit
 MAIN_BYTES = {
