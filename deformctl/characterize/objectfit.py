@@ -82,15 +82,15 @@ DAMPING_SE_REL_MAX = 0.25
 #: draws above have errors of 0.24 and 0.26 N·s/cm).
 DAMPING_SE_FLOOR_NS_PER_M = 15.0
 #: With a lag of the force fitted (not known), λ is reported only when the lag moves it by at
-#: most this fraction of it (or :data:`DAMPING_SE_FLOOR_NS_PER_M`): ``D·L``, the law's secant
-#: D times the lag L. A lag shifts the force in time, ``D d(t − L) + λ ḋ(t − L) ≈ D d + (λ − D L) ḋ``,
-#: so the ramps identify only ``λ − D L``; λ and L come apart at the few corners of the speed,
-#: and there the windows' standard errors are too small: over 60 lagged Kelvin–Voigt
-#: ramp-and-holds (``deformctl.testing.shapes``, ``latency``: lags 0.03–0.2 s) the fitted lag
-#: was unbiased (mean error −0.13 standard errors) but λ's errors spread 1.9 standard errors, up
-#: to 5.4, and λ came out 21 % and 34 % off with standard errors of 9 % and 14 %. A lag that
-#: could move λ by no more than this cannot make it wrong by more; a recording with a known
-#: latency gives it to ``measure --lag-s``.
+#: most this fraction of it (or :data:`DAMPING_SE_FLOOR_NS_PER_M`): ``D·L``, the law's secant D
+#: times the lag L. A lag shifts the force in time, ``D d(t − L) + λ ḋ(t − L) ≈ D d + (λ − D L)
+#: ḋ``, so the ramps identify only ``λ − D L``; λ and L come apart at the few corners of the
+#: speed, and there the windows' standard errors are too small: over 60 lagged Kelvin–Voigt
+#: ramp-and-holds (``deformctl.testing.shapes``, ``latency``: lags 0.03–0.2 s) the fitted lag was
+#: unbiased (mean error −0.13 standard errors) but λ's errors spread 1.9 standard errors, up to
+#: 5.4, and λ came out 21 % and 34 % off with standard errors of 9 % and 14 %. A lag that could
+#: move λ by no more than this cannot make it wrong by more; a recording with a known latency
+#: gives it to ``measure --lag-s``.
 DAMPING_LAG_SHARE_MAX = 0.2
 #: Savitzky–Golay order of the window length (the window the log's rate implies, as ``paper``).
 POLYORDER = 3

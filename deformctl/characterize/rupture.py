@@ -23,15 +23,15 @@ running force peak ``p`` where
    pattern the shared fruit recordings show; the rule before it required a growing compression
    and missed 8 of 25 such ruptures);
 3. the drop is not the object's own Kelvin–Voigt response: the force is more than
-   ``RUPTURE_DROP_FRAC · f[p]`` below ``D̂ d[i] + λ̂ d'[i]``, with ``D̂, λ̂ ≥ 0`` fitted to the loading
-   before the peak (``d`` smoothed over the squeeze's window, or over the longest window a
-   loading shorter than two of them holds: :func:`_loading_window`). Conditions 1 and 2 alone also hold for a heavily damped object after its
-   force peak: with ``λ/D`` long against the squeeze, the compression lags the force and still
-   grows while the force falls by half (measured on the synthetic squeezes of
-   ``tests/characterize/test_fit.py``, λ/D ≥ 0.5 s: 25 of 240 squeezes). With condition 3 none of
-   them, and none of the simulator's squeezes, is a rupture; a force collapse to 30–69 % of the
-   peak with the gripper still closing is found within 6–155 ms
-   (``tests/characterize/test_rupture_phases.py``).
+   ``RUPTURE_DROP_FRAC · f[p]`` below ``D̂ d[i] + λ̂ d'[i]``, with ``D̂, λ̂ ≥ 0`` fitted to the
+   loading before the peak (``d`` smoothed over the squeeze's window, or over the longest window
+   a loading shorter than two of them holds: :func:`_loading_window`). Conditions 1 and 2 alone
+   also hold for a heavily damped object after its force peak: with ``λ/D`` long against the
+   squeeze, the compression lags the force and still grows while the force falls by half
+   (measured on the synthetic squeezes of ``tests/characterize/test_fit.py``, λ/D ≥ 0.5 s: 25 of
+   240 squeezes). With condition 3 none of them, and none of the simulator's squeezes, is a
+   rupture; a force collapse to 30–69 % of the peak with the gripper still closing is found
+   within 6–155 ms (``tests/characterize/test_rupture_phases.py``).
 
 A force that falls while the compression recedes (a load–unload cycle, a release) is not a
 rupture.

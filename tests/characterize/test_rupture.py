@@ -132,7 +132,9 @@ def test_a_collapse_after_a_loading_shorter_than_two_windows_is_found(seed: int)
     wl = sg_window_length(FAST["window_s"], dt, 3)
     p = int(np.argmax(s.force_n))
     assert p < 2 * wl - 1  # the whole window does not fit: the shorter one judges
-    assert _loading_window(wl, p) is not None and _loading_window(wl, p) < wl
+    w = _loading_window(wl, p)
+    assert w is not None
+    assert w < wl
     cut, r = cut_rupture(s, window_s=FAST["window_s"])
     assert r is not None, seed
     assert r.force_n == pytest.approx(FAST["peak_n"], rel=0.1)
