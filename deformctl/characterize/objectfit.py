@@ -81,6 +81,17 @@ DAMPING_SE_REL_MAX = 0.25
 #: against itself; a 0.17 s lagged λ = 0 squeeze reads 0.05 ± 0.10 N·s/cm, the two latency
 #: draws above have errors of 0.24 and 0.26 N·s/cm).
 DAMPING_SE_FLOOR_NS_PER_M = 15.0
+#: With a lag of the force fitted (not known), λ is reported only when the lag moves it by at
+#: most this fraction of it (or :data:`DAMPING_SE_FLOOR_NS_PER_M`): ``D·L``, the law's secant D
+#: times the lag L. A lag shifts the force in time, ``D d(t − L) + λ ḋ(t − L) ≈ D d + (λ − D L)
+#: ḋ``, so the ramps identify only ``λ − D L``; λ and L come apart at the few corners of the
+#: speed, and there the windows' standard errors are too small: over 60 lagged Kelvin–Voigt
+#: ramp-and-holds (``deformctl.testing.shapes``, ``latency``: lags 0.03–0.2 s) the fitted lag was
+#: unbiased (mean error −0.13 standard errors) but λ's errors spread 1.9 standard errors, up to
+#: 5.4, and λ came out 21 % and 34 % off with standard errors of 9 % and 14 %. A lag that could
+#: move λ by no more than this cannot make it wrong by more; a recording with a known latency
+#: gives it to ``measure --lag-s``.
+DAMPING_LAG_SHARE_MAX = 0.2
 #: Savitzky–Golay order of the window length (the window the log's rate implies, as ``paper``).
 POLYORDER = 3
 #: Windows slower than this fraction of the 95th-percentile speed have no direction of motion.
@@ -166,19 +177,34 @@ class ObjectFit:
         return next((f for f in self.fits if f.model == model), None)
 
 
-def _damping_determined(lam: float, lam_se: float, params: dict[str, float], data: FitData) -> bool:
-    """Whether the fit determines λ: its standard error is known and within
-    :data:`DAMPING_SE_REL_MAX` of it (or :data:`DAMPING_SE_FLOOR_NS_PER_M`), and a fitted force
-    lag is not at its largest value (there the lag could not take the delay out of the force,
-    and λ took it instead)."""
+def _damping_determined(
+    lam: float, lam_se: float, stiffness_n_per_m: float, params: dict[str, float], data: FitData
+) -> bool:
+    """Whether the fit determines λ (N·s/m, its standard error ``lam_se``; the law's secant
+    stiffness where λ is stated, N/m; the law's parameters): its standard error is known and
+    within :data:`DAMPING_SE_REL_MAX` of it (or :data:`DAMPING_SE_FLOOR_NS_PER_M`), and, when
+    the force's lag was fitted (``data.lag_s`` None), the lag is not at its largest value (there
+    the lag could not take the delay out of the force, and λ took it instead) and moves λ by at
+    most :data:`DAMPING_LAG_SHARE_MAX` of it (``D·L``)."""
     allowed = max(DAMPING_SE_REL_MAX * abs(lam), DAMPING_SE_FLOOR_NS_PER_M)
     if not (math.isfinite(lam) and math.isfinite(lam_se) and lam_se <= allowed):
         return False
+    if data.lag_s is not None:  # known
+        return True
     lag = params.get("lag_s", 0.0)
-    return data.lag_s is not None or not lag >= data.lag_max_s * (1.0 - 1e-4)
+    if lag >= data.lag_max_s * (1.0 - 1e-4):
+        return False
+    share = max(DAMPING_LAG_SHARE_MAX * abs(lam), DAMPING_SE_FLOOR_NS_PER_M)
+    return lag <= 0.0 or abs(stiffness_n_per_m) * lag <= share
 
 
-def _grid(s: SqueezeSeries, window_s: float) -> tuple[Grid, int]:
+def _grid(s: SqueezeSeries, window_s: float, rupture: Rupture | None = None) -> tuple[Grid, int]:
+    """One squeeze on its uniform grid and its SG window, samples (``rupture``: where it was
+    cut, for the error line).
+
+    Raises:
+        InputDataError: fewer than two windows of samples.
+    """
     dt_s, _, (force_n, comp_m) = uniform_grid(s.time_s, s.force_n, s.compression_m)
     wl = sg_window_length(window_s, dt_s, POLYORDER)
     if force_n.shape[0] < 2 * wl:
@@ -188,9 +214,14 @@ def _grid(s: SqueezeSeries, window_s: float) -> tuple[Grid, int]:
             if not 1.0 <= rate_hz <= 1e5
             else " (use a shorter window)"
         )
+        cut = (
+            ""
+            if rupture is None
+            else f" up to its rupture at {rupture.time_s:.3g} s ({rupture.force_n:.3g} N)"
+        )
         raise InputDataError(
-            f"{_where(s)}: only {force_n.shape[0]} samples on the uniform grid, need at least "
-            f"{2 * wl} for a {wl}-sample window{why}"
+            f"{_where(s)}: only {force_n.shape[0]} samples on the uniform grid{cut}, need at "
+            f"least {2 * wl} for a {wl}-sample window{why}"
         )
     return Grid(s.squeeze_index, dt_s, force_n, comp_m), wl
 
@@ -566,7 +597,7 @@ def fit_object(
         relax = find_relaxation(cut, window_s=window_s)
         if relax is not None:
             relaxations.append(relax)
-        g, wl_i = _grid(cut, window_s)
+        g, wl_i = _grid(cut, window_s, rupture)
         wl = max(wl, wl_i)
         grids.append(g)
         fit_squeezes.append(fit_squeeze(g.squeeze_index, g.dt_s, g.force_n, g.compression_m, wl_i))
@@ -607,9 +638,10 @@ def fit_object(
     held = chosen.at_bound
     lam_held = any(p in DAMPING_PARAMETERS[chosen.model] for p in held)
     lam_se = chosen.derived_se(damping) if identifiable and not lam_held else math.nan
-    if identifiable and not lam_held and not _damping_determined(lam, lam_se, chosen.params, data):
-        identifiable, lam, lam_se = False, math.nan, math.nan
     law_d = secant(chosen.params)
+    determined = _damping_determined(lam, lam_se, law_d, chosen.params, data)
+    if identifiable and not lam_held and not determined:
+        identifiable, lam, lam_se = False, math.nan, math.nan
     law_se = math.nan if PARAMETERS[chosen.model][0] in held else chosen.derived_se(secant)
     # a damping held at its bound 0 could not take the recording's rate-dependent force out of
     # the loading (a lag read as negative damping): the loading's secant would carry it

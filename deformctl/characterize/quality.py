@@ -310,6 +310,20 @@ def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
         exc = _num(row.get("damping_excitation"), ".2g")
         energy = _num(row.get("hysteresis_energy_j"), ".3g")
         loop = f"; the loop dissipates {energy} J" if energy not in ("NaN", "?") else ""
+        excitation = row.get("damping_excitation")
+        if isinstance(excitation, int | float) and excitation >= DAMPING_EXCITATION_MIN:
+            lag = row.get("lag_s")
+            lagged = isinstance(lag, int | float) and lag > 0
+            rests = (
+                f", or λ rests on the fitted force lag of {_num(lag, '.3g')} s (a known latency "
+                "goes to measure --lag-s)"
+                if lagged
+                else ""
+            )
+            return (
+                f"{flag} (λ is not determined: a single speed without a hold or a standard "
+                f"error too large{rests}{loop})"
+            )
         return (
             f"{flag} (λ cannot be told from a preload, from D or from a rate-independent "
             f"force: a single speed without a hold, or rate excitation {exc} < "

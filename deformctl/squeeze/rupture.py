@@ -23,14 +23,15 @@ running force peak ``p`` where
    pattern the shared fruit recordings show; the rule before it required a growing compression
    and missed 8 of 25 such ruptures);
 3. the drop is not the object's own Kelvin–Voigt response: the force is more than
-   ``RUPTURE_DROP_FRAC · f[p]`` below ``D̂ d[i] + λ̂ d'[i]``, with ``D̂, λ̂ ≥ 0`` fitted to the loading
-   before the peak. Conditions 1 and 2 alone also hold for a heavily damped object after its
-   force peak: with ``λ/D`` long against the squeeze, the compression lags the force and still
-   grows while the force falls by half (measured on the synthetic squeezes of
-   ``tests/characterize/test_fit.py``, λ/D ≥ 0.5 s: 25 of 240 squeezes). With condition 3 none of
-   them, and none of the simulator's squeezes, is a rupture; a force collapse to 30–69 % of the
-   peak with the gripper still closing is found within 6–155 ms
-   (``tests/characterize/test_rupture_phases.py``).
+   ``RUPTURE_DROP_FRAC · f[p]`` below ``D̂ d[i] + λ̂ d'[i]``, with ``D̂, λ̂ ≥ 0`` fitted to the
+   loading before the peak (``d`` smoothed over the squeeze's window, or over the longest window
+   a loading shorter than two of them holds: :func:`_loading_window`). Conditions 1 and 2 alone
+   also hold for a heavily damped object after its force peak: with ``λ/D`` long against the
+   squeeze, the compression lags the force and still grows while the force falls by half
+   (measured on the synthetic squeezes of ``tests/characterize/test_fit.py``, λ/D ≥ 0.5 s: 25 of
+   240 squeezes). With condition 3 none of them, and none of the simulator's squeezes, is a
+   rupture; a force collapse to 30–69 % of the peak with the gripper still closing is found
+   within 6–155 ms (``tests/characterize/test_rupture_phases.py``).
 
 A force that falls while the compression recedes (a load–unload cycle, a release) is not a
 rupture.
@@ -142,6 +143,11 @@ ONSET_WINDOW_S = 0.5
 ONSET_FALL_FRAC = 0.05
 #: SG polynomial order of the smoothing used for rupture and phase detection.
 _POLYORDER = 3
+#: Condition 3's loading fit smooths the compression over the squeeze's SG window; a loading
+#: shorter than two windows (a fast squeeze to collapse: 0.9 s of loading at 77 Hz against a
+#: 0.47 s window) is smoothed over the longest window it holds, down to this many samples
+#: (:func:`_loading_window`; below it the peak is not judged).
+_MIN_LOADING_WINDOW = 2 * _POLYORDER + 3
 #: The most candidate peaks examined per squeeze (each costs one small bounded fit).
 _MAX_PEAKS = 20
 #: Phases: the force peak is the stretch within this fraction of the smoothed maximum force.
@@ -241,7 +247,7 @@ def _find_rupture(
     tol = np.maximum(3.0 * sigma / math.sqrt(m), HOLD_TOL_FRAC * np.abs(d_loc[peak_idx]))
     growing = d_loc > d_loc[peak_idx] + tol
     near = d_loc >= d_loc[peak_idx] - tol
-    half = wl // 2
+    shorter: dict[int, tuple[FloatArray, FloatArray]] = {wl: (d, v)}
     tried: set[int] = set()
     for i in np.flatnonzero(dropped & near):
         p = int(peak_idx[i])
@@ -250,15 +256,19 @@ def _find_rupture(
         if len(tried) >= _MAX_PEAKS:
             break
         tried.add(p)
-        lo, hi = half, p - half
-        if hi - lo < wl:  # too little loading before the peak to judge
+        w = _loading_window(wl, p)
+        if w is None:  # too little loading before the peak to judge
             continue
-        kc = _kv_loading_fit(d[lo:hi], v[lo:hi], f[lo:hi])
+        if w not in shorter:
+            shorter[w] = sg_smooth(comp, w, _POLYORDER, dt_s)
+        dw, vw = shorter[w]
+        lo, hi = w // 2, p - w // 2
+        kc = _kv_loading_fit(dw[lo:hi], vw[lo:hi], f[lo:hi])
         if kc is None:
             continue
         after = slice(p, n)
         held = np.minimum.accumulate(near[after])  # still near d[p] at every sample so far
-        predicted = kc[0] * d[after] + kc[1] * v[after]
+        predicted = kc[0] * dw[after] + kc[1] * vw[after]
         shortfall = predicted - f[after] > RUPTURE_DROP_FRAC * f[p]
         grows = growing[after] & dropped[after]
         holds = held & dropped[after]
@@ -270,6 +280,18 @@ def _find_rupture(
             if _sudden(f, dt_s, p, j):
                 return _found(time_s, grid, f, dt_s, p, j), smoothed
     return None, smoothed
+
+
+def _loading_window(wl: int, p: int) -> int | None:
+    """The SG window (samples) of the loading fit of condition 3 before a peak at grid sample
+    ``p``: ``wl``, or, when the loading is shorter than two of them, the longest odd window
+    that leaves a window's worth of samples clear of the filter's edges (``p ≥ 2w − 1``); None
+    below :data:`_MIN_LOADING_WINDOW` samples (too little loading to judge)."""
+    if p >= 2 * wl - 1:
+        return wl
+    w = (p + 1) // 2
+    w -= 1 - w % 2
+    return w if w >= _MIN_LOADING_WINDOW else None
 
 
 @dataclass(frozen=True)

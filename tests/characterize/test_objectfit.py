@@ -163,3 +163,70 @@ def test_a_loading_phase_that_ends_at_its_peak_loses_no_sample() -> None:
         )
         assert row["hc_exponent"] == pytest.approx(1.8, rel=0.02)
         assert "damping_unidentifiable" in row["quality"].split(",")
+
+
+def _lagged_kv(lag_s: float) -> SqueezeSeries:
+    """The Kelvin–Voigt truth (λ/D = 0.1 s) pressed, held and released at 500 Hz, the force
+    ``lag_s`` behind the compression."""
+    return synthetic_law_squeeze("kv", KV, lag_s=lag_s, force_noise_rel=0.002, seed=4)
+
+
+def test_damping_determined_by_its_standard_error() -> None:
+    from deformctl.characterize.objectfit import (
+        DAMPING_SE_FLOOR_NS_PER_M,
+        DAMPING_SE_REL_MAX,
+        _damping_determined,
+    )
+
+    fit = fit_object([_lagged_kv(0.0)], window_s=0.25, fit_preload=True, lag_s=0.0)
+    lam, se, k = fit.damping_ns_per_m, fit.damping_se_ns_per_m, KV["stiffness_n_per_m"]
+    assert lam == pytest.approx(KV["damping_ns_per_m"], rel=0.05)  # the truth, and determined
+    params, data = fit.chosen.params, fit.data
+    assert _damping_determined(lam, se, k, params, data)
+    edge = DAMPING_SE_REL_MAX * lam  # above the floor here
+    assert edge > DAMPING_SE_FLOOR_NS_PER_M
+    assert _damping_determined(lam, 0.999 * edge, k, params, data)
+    assert not _damping_determined(lam, 1.001 * edge, k, params, data)
+    # a λ near 0 is determined when its error is small against the floor
+    small = 0.5 * DAMPING_SE_FLOOR_NS_PER_M
+    assert _damping_determined(small, 0.999 * DAMPING_SE_FLOOR_NS_PER_M, k, params, data)
+    assert not _damping_determined(small, 1.001 * DAMPING_SE_FLOOR_NS_PER_M, k, params, data)
+    assert not _damping_determined(lam, math.nan, k, params, data)
+    assert not _damping_determined(math.nan, se, k, params, data)
+
+
+def test_damping_withheld_when_the_fitted_lag_is_at_its_bound() -> None:
+    from dataclasses import replace
+
+    from deformctl.characterize.objectfit import _damping_determined
+
+    fit = fit_object([_lagged_kv(0.0)], window_s=0.25, fit_preload=True, lag_s=None)
+    lam, se, k = fit.damping_ns_per_m, fit.damping_se_ns_per_m, KV["stiffness_n_per_m"]
+    assert lam == pytest.approx(KV["damping_ns_per_m"], rel=0.05)  # a fitted lag near 0 keeps λ
+    data = fit.data
+    assert data.lag_s is None
+    at_bound = {**fit.chosen.params, "lag_s": data.lag_max_s}
+    assert not _damping_determined(lam, se, k, at_bound, data)
+    # the same lag given (known), not fitted, determines λ
+    assert _damping_determined(lam, se, k, at_bound, replace(data, lag_s=data.lag_max_s))
+
+
+def test_a_fitted_lag_that_moves_lambda_withholds_it_a_known_one_does_not() -> None:
+    from deformctl.characterize.objectfit import DAMPING_LAG_SHARE_MAX, _damping_determined
+
+    lag = 0.15  # D·L = 150 N·s/m against λ = 100: the ramps identify only λ − D·L
+    s = _lagged_kv(lag)
+    fitted = fit_object([s], window_s=0.25, fit_preload=True, lag_s=None)
+    assert fitted.chosen.params["lag_s"] == pytest.approx(lag, abs=0.01)
+    assert not fitted.damping_identifiable
+    assert math.isnan(fitted.damping_ns_per_m)
+    assert fitted.deformability_n_per_m == pytest.approx(KV["stiffness_n_per_m"], rel=0.02)
+    known = fit_object([s], window_s=0.25, fit_preload=True, lag_s=lag)
+    assert known.damping_identifiable
+    assert known.damping_ns_per_m == pytest.approx(KV["damping_ns_per_m"], rel=0.05)
+    # the rule itself: the lag's share D·L of λ
+    k, lam = KV["stiffness_n_per_m"], KV["damping_ns_per_m"]
+    edge = DAMPING_LAG_SHARE_MAX * lam / k  # the largest lag that keeps λ, s
+    params, data = fitted.chosen.params, fitted.data
+    assert _damping_determined(lam, 1.0, k, {**params, "lag_s": 0.99 * edge}, data)
+    assert not _damping_determined(lam, 1.0, k, {**params, "lag_s": 1.01 * edge}, data)

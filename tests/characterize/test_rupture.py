@@ -85,6 +85,64 @@ def test_law_squeezes_are_no_rupture(law: str) -> None:
         assert (relax is not None) == (law == "sls"), (law, seed)  # only the SLS relaxes
 
 
+#: A heavily damped fruit (λ/D = 0.43 s) force-ramped to 7.4 N in 0.94 s at 77 Hz: a loading
+#: shorter than two of the 0.47 s windows characterize uses at that rate.
+FAST = {"k": 758.0, "c": 328.0, "peak_n": 7.4, "rate_n_s": 7.9, "rate_hz": 77.0, "window_s": 0.47}
+
+
+def _fast_squeeze(seed: int, *, collapse: bool) -> SqueezeSeries:
+    """:data:`FAST` to its peak; then ``collapse``: the force falls 70 % within 0.2 s while the
+    jaws close on at 2.5 mm/s for 0.3 s (the fruit gave way), else the controller lowers the
+    force as fast and the object's own creep moves the jaws (no rupture)."""
+    k, c, peak = FAST["k"], FAST["c"], FAST["peak_n"]
+    if collapse:
+        s = synthetic_rupture_backoff(
+            stiffness_n_per_m=k, damping_ns_per_m=c, rupture_force_n=peak,
+            force_rate_n_per_s=FAST["rate_n_s"], collapse_frac=0.7, collapse_s=0.2,
+            backoff_s=0.5, rate_hz=FAST["rate_hz"], force_noise_n=0.02, seed=seed,
+        )  # fmt: skip
+        t, f, d = s.time_s, s.force_n, s.compression_m.copy()
+        p = int(np.argmax(f))
+        d[p:] += np.minimum(t[p:] - t[p], 0.3) * 0.0025
+        return SqueezeSeries("fruit", 0, t, f, d)
+    h, t_peak = 1e-4, peak / FAST["rate_n_s"]
+    t_fine = np.arange(round((t_peak + 1.0) / h) + 1) * h
+    f_fine = np.where(
+        t_fine <= t_peak,
+        FAST["rate_n_s"] * t_fine,
+        peak * (1.0 - 0.7 * np.clip((t_fine - t_peak) / 0.2, 0.0, 1.0)),
+    )
+    d_fine = np.zeros_like(t_fine)
+    for i in range(1, t_fine.size):  # c ḋ + k d = f
+        d_fine[i] = d_fine[i - 1] + h * (f_fine[i - 1] - k * d_fine[i - 1]) / c
+    t = np.arange(round(t_fine[-1] * FAST["rate_hz"]) + 1) / FAST["rate_hz"]
+    rng = np.random.default_rng(seed)
+    f = np.interp(t, t_fine, f_fine) + rng.normal(0.0, 0.02, t.size)
+    d = np.interp(t, t_fine, d_fine) + rng.normal(0.0, 2e-6, t.size)
+    return SqueezeSeries("fruit", 0, t, f, d)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_a_collapse_after_a_loading_shorter_than_two_windows_is_found(seed: int) -> None:
+    from deformctl.characterize.rupture import _loading_window
+    from deformctl.signals import sg_window_length
+
+    s = _fast_squeeze(seed, collapse=True)
+    dt = float(np.median(np.diff(s.time_s)))
+    wl = sg_window_length(FAST["window_s"], dt, 3)
+    p = int(np.argmax(s.force_n))
+    assert p < 2 * wl - 1  # the whole window does not fit: the shorter one judges
+    w = _loading_window(wl, p)
+    assert w is not None
+    assert w < wl
+    cut, r = cut_rupture(s, window_s=FAST["window_s"])
+    assert r is not None, seed
+    assert r.force_n == pytest.approx(FAST["peak_n"], rel=0.1)
+    assert len(cut) <= p + 2
+    # the same fast loading whose force the controller lowers while the object creeps is not one
+    assert cut_rupture(_fast_squeeze(seed, collapse=False), window_s=FAST["window_s"])[1] is None
+
+
 def _crush_then_compact(seed: int = 0) -> SqueezeSeries:
     """A ramp to a collapse at 12 N, then the crushed object compacts to a higher peak."""
     s = synthetic_rupture_backoff(
