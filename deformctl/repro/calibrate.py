@@ -146,7 +146,7 @@ def simulated_lift_force_n(
         DeformctlError: the search did not converge (the message names the object).
     """
     from deformctl.lift.search import find_min_lift_force
-    from deformctl.sim.engine import build_model
+    from deformctl.sim.engine import clear_model_cache
 
     def runner(force_n: float, _index: int) -> Any:
         return preset.lift_attempt(spec, force_n)
@@ -161,7 +161,7 @@ def simulated_lift_force_n(
             object_id=spec.object_id,
         )
     finally:
-        build_model.cache_clear()
+        clear_model_cache()
     if not result.converged:
         raise DeformctlError(result.message)
     return float(result.lift_force_n)

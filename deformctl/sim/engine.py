@@ -430,7 +430,6 @@ def width_damping_ns_per_m(
     return max(0.0, spec.damping_ns_per_m - lattice_part)
 
 
-@lru_cache(maxsize=8)
 def build_model(
     spec: ObjectSpec,
     settings: SimSettings,
@@ -442,7 +441,8 @@ def build_model(
     lift_m: float = 0.0,
     reference_m: float | None = None,
 ) -> Model:
-    """Assemble (and cache) the model of ``spec``.
+    """Assemble (and cache) the model of ``spec``: one cached model per set of values, however
+    the call spells them (a default left out or passed explicitly is the same model).
 
     Args:
         gripped: palms bonded to the x faces (squeeze, lift) or a free object.
@@ -452,6 +452,25 @@ def build_model(
         lift_m: start height of the bottom layer above the table, m.
         reference_m: a Hunt–Crossley object's implicit step's compression (None: d_op).
     """
+    return _build_model(spec, settings, gripped, gravity, table, resting, lift_m, reference_m)
+
+
+def clear_model_cache() -> None:
+    """Forget every cached model (:func:`build_model`)."""
+    _build_model.cache_clear()
+
+
+@lru_cache(maxsize=8)
+def _build_model(
+    spec: ObjectSpec,
+    settings: SimSettings,
+    gripped: bool,
+    gravity: bool,
+    table: bool,
+    resting: bool,
+    lift_m: float,
+    reference_m: float | None,
+) -> Model:
     lattice, stiffness, damping = element_constants(spec, settings, reference_m)
     n, law = lattice.n_particles, hc_law(spec, settings, reference_m)
     masses = np.ones(n)

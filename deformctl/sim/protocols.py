@@ -19,7 +19,13 @@ from deformctl.physics import rigid_grip_force_n
 from deformctl.scene import scene_every_steps
 from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
 from deformctl.sim import first_use
-from deformctl.sim.engine import SimSettings, build_model, check_run_steps, run_model
+from deformctl.sim.engine import (
+    SimSettings,
+    build_model,
+    check_run_steps,
+    clear_model_cache,
+    run_model,
+)
 from deformctl.sim.hunt_crossley import implicit_reference_m
 from deformctl.sim.objects import ObjectSpec
 from deformctl.sim.scene import frame_buffer, scene_frames
@@ -238,7 +244,7 @@ def compile_kernels() -> float:
                 squeeze(spec, peak_force_n=1.0, ramp_s=0.005, hold_s=0.005, settings=settings)
                 for mode in ("table", "support"):
                     lift_attempt(spec, 2.0, settings=settings, release=SupportRelease(mode=mode))
-    build_model.cache_clear()
+    clear_model_cache()
     first_use.mark_compiled()
     return time.perf_counter() - t0
 

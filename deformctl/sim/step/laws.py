@@ -21,9 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+from deformctl.arraytypes import FloatArray
 
 
 @njit(cache=True, inline="always")
