@@ -35,8 +35,14 @@ The resting object
     So a Hunt–Crossley object on the table starts in its unloaded shape, each element carrying
     its share of the weight as a constant tension ``f0_e`` (:func:`weight_prestress_n`, the
     linear lattice's distribution, which balances gravity and the table exactly), and its power
-    law acts on the stretch from there: ``f_e = f0_e + p_e |s|ⁿ sign(s) + …``. For n = 1 this
-    is the sagged linear lattice again; n = 1 keeps that code path, bit for bit.
+    law acts on the stretch from there: ``f_e = f0_e + p_e |s|ⁿ sign(s) + …``. As n → 1 this
+    is the sagged linear lattice again under small-strain kinematics (with the exact geometry,
+    up to the resting strain's share); n = 1 itself runs the linear code path. Two conventions
+    keep the n → 1 object from being the Kelvin–Voigt object with the same D and λ: k is
+    stated at the squeeze on the table (``C_n`` above), a Kelvin–Voigt D at the floating squeeze
+    (the same lattice has ``D = k C_float / C_table``, 1–4 % lower), and the dampers follow
+    ``λ_hc dⁿ ḋ``, which at n → 1 is ``λ (d / d_op) ḋ``, not ``λ ḋ``
+    (tests/sim/test_hunt_crossley.py measures both).
 
 The implicit step
     The step's matrix ``A = M + h C + h² K`` is built once per model (:mod:`.engine`). It holds

@@ -6,7 +6,9 @@ gives it: D is the *secant* stiffness at the operating force ``F_op = F_w = W / 
 ``characterize`` writes as ``deformability_n_per_cm`` by default) and λ the equivalent damping
 ``λ_hc d_opⁿ`` at the operating compression ``d_op = F_op / D``; so ``k = F_op / d_opⁿ`` and
 ``λ_hc = λ / d_opⁿ`` (:attr:`ObjectSpec.hc_stiffness_n_per_m_pow_n`,
-:attr:`ObjectSpec.hc_damping_ns_per_m_pow_n_plus_1`). With ``n = 1`` both readings agree.
+:attr:`ObjectSpec.hc_damping_ns_per_m_pow_n_plus_1`). As n → 1 the elastic law tends to the
+Kelvin–Voigt one (``k → D``), the damping does not: ``λ_hc dⁿ ḋ → λ (d / d_op) ḋ``, λ at the
+operating compression only (n = 1 itself is the Kelvin–Voigt object).
 
 With an arm stiffness ``k2 > 0`` the material is a standard linear solid (Zener): D is its
 relaxed spring, and a Maxwell arm (``k2`` in series with a dashpot ``k2 τ``) acts beside it and
@@ -144,7 +146,8 @@ class ObjectSpec:
 
     @property
     def hc_damping_ns_per_m_pow_n_plus_1(self) -> float:
-        """Hunt–Crossley lambda_hc = lambda / d_opⁿ, N·s/m^(n+1) (lambda when n = 1)."""
+        """Hunt–Crossley lambda_hc = lambda / d_opⁿ, N·s/m^(n+1) (not lambda at n = 1: the
+        damper ``lambda_hc d ḋ`` there is lambda at d_op only)."""
         return self.damping_ns_per_m / self.operating_compression_m**self.stiffness_exponent
 
     def elastic_force_n(self, compression_m: float) -> float:
