@@ -24,7 +24,7 @@ from deformctl.characterize.columns import (
     material_values,
 )
 from deformctl.characterize.quality import (
-    BELOW_SQUEEZES_FACTOR,
+    BELOW_SQUEEZES_SHARE,
     SECANT_MISFIT_FRAC,
     assess,
     quality_text,
@@ -102,7 +102,7 @@ class CoefficientFit:
         secant_misfit: the law misses the recording where D is stated
             (:data:`deformctl.characterize.quality.SECANT_MISFIT_FRAC`).
         below_squeezes: a stiffening law states D far below every squeeze's peak force
-            (:data:`deformctl.characterize.quality.BELOW_SQUEEZES_FACTOR`).
+            (:data:`deformctl.characterize.quality.BELOW_SQUEEZES_SHARE`).
     """
 
     deformability_n_per_cm: float
@@ -301,10 +301,8 @@ def _condition(covariance: object) -> float:
 
 
 def _below_squeezes(obj: ObjectFit) -> bool:
-    """A stiffening law (``hc``, ``exp``) states D below every squeeze's peak force divided by
-    :data:`~deformctl.characterize.quality.BELOW_SQUEEZES_FACTOR` (a linear law's D does not
-    depend on the force)."""
-    if obj.chosen.model not in ("hc", "exp") or not obj.grids:
-        return False
-    smallest_peak = min(float(g.force_n.max()) for g in obj.grids)
-    return BELOW_SQUEEZES_FACTOR * obj.operating_force_n < smallest_peak
+    """A stiffening law (``hc``, ``exp``) states D where fewer than
+    :data:`~deformctl.characterize.quality.BELOW_SQUEEZES_SHARE` of the loading samples are at or
+    below the operating force (a linear law's D does not depend on the force)."""
+    share = obj.loading_share_below_operating
+    return obj.chosen.model in ("hc", "exp") and share < BELOW_SQUEEZES_SHARE

@@ -1,6 +1,6 @@
 """The ``below_squeezes`` flag (deformctl.characterize.coefficients): a stiffening law's D stated
-far below every squeeze's peak force is flagged, against known truth (a simulated light, stiff
-Hunt–Crossley object whose D at F_w comes out wrong there) and not for a linear law."""
+where few loading samples are at or below its force is flagged, against known truth (a simulated
+light, stiff Hunt–Crossley object whose D at F_w comes out wrong there), not for a linear law."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import dataclasses
 import pytest
 
 from deformctl.characterize import characterize
-from deformctl.characterize.quality import BELOW_SQUEEZES, BELOW_SQUEEZES_FACTOR, parse_quality
+from deformctl.characterize.quality import BELOW_SQUEEZES, parse_quality
 from deformctl.presets import sim_preset
 from deformctl.sim import ObjectSpec, squeeze_many
 
@@ -43,10 +43,9 @@ def _fit(spec: ObjectSpec, peak_force_n: float) -> dict[str, object]:
 
 def test_a_stiffening_law_stated_far_below_its_squeezes_is_flagged() -> None:
     f_w = P1224.operating_force_n
-    # 46 F_w: the smallest squeeze peaks at 23 F_w, far above 3 F_w
+    # 46 F_w: about 3 % of the loading samples are at or below F_w
     row = _fit(P1224, 30.0)
     assert row["model"] == "hc"
-    assert BELOW_SQUEEZES_FACTOR * f_w < 0.5 * 30.0
     assert BELOW_SQUEEZES in parse_quality(row["quality"])
     # the flag is deserved: D at F_w is far off the catalog's 30.05 N/cm there
     assert float(row["deformability_n_per_cm"]) > 2 * 30.04844412194788  # type: ignore[arg-type]
