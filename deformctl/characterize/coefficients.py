@@ -23,7 +23,12 @@ from deformctl.characterize.columns import (
     empty_values,
     material_values,
 )
-from deformctl.characterize.quality import SECANT_MISFIT_FRAC, assess, quality_text
+from deformctl.characterize.quality import (
+    BELOW_SQUEEZES_SHARE,
+    SECANT_MISFIT_FRAC,
+    assess,
+    quality_text,
+)
 from deformctl.series import Rupture
 from deformctl.units import CM, N_PER_CM, NS_PER_CM
 
@@ -96,6 +101,8 @@ class CoefficientFit:
         relaxations: squeezes whose force relaxed at constant compression.
         secant_misfit: the law misses the recording where D is stated
             (:data:`deformctl.characterize.quality.SECANT_MISFIT_FRAC`).
+        below_squeezes: a stiffening law states D far below every squeeze's peak force
+            (:data:`deformctl.characterize.quality.BELOW_SQUEEZES_SHARE`).
     """
 
     deformability_n_per_cm: float
@@ -122,6 +129,7 @@ class CoefficientFit:
     nonlinear_stiffness: bool = False
     relaxations: int = 0
     secant_misfit: bool = False
+    below_squeezes: bool = False
 
     @classmethod
     def from_object(cls, obj: ObjectFit) -> CoefficientFit:
@@ -156,6 +164,7 @@ class CoefficientFit:
             nonlinear_stiffness=obj.loading.nonlinear,
             relaxations=len(obj.relaxations),
             secant_misfit=abs(obj.secant_residual_frac) > SECANT_MISFIT_FRAC,
+            below_squeezes=_below_squeezes(obj),
         )
 
     @property
@@ -186,6 +195,7 @@ class CoefficientFit:
             nonlinear_stiffness=self.nonlinear_stiffness,
             relaxations=self.relaxations,
             secant_misfit=self.secant_misfit,
+            below_squeezes=self.below_squeezes,
         )
 
     @property
@@ -288,3 +298,11 @@ def _condition(covariance: object) -> float:
     if not np.all(d > 0):
         return math.nan
     return float(np.linalg.cond(c / np.outer(d, d)))
+
+
+def _below_squeezes(obj: ObjectFit) -> bool:
+    """A stiffening law (``hc``, ``exp``) states D where fewer than
+    :data:`~deformctl.characterize.quality.BELOW_SQUEEZES_SHARE` of the loading samples are at or
+    below the operating force (a linear law's D does not depend on the force)."""
+    share = obj.loading_share_below_operating
+    return obj.chosen.model in ("hc", "exp") and share < BELOW_SQUEEZES_SHARE

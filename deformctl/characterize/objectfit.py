@@ -171,6 +171,8 @@ class ObjectFit:
     secant_residual_frac: float = math.nan
     law_deformability_n_per_m: float = math.nan
     deformability_source: str = "law"
+    #: the share of the loading samples whose force is at or below the operating force
+    loading_share_below_operating: float = math.nan
 
     def fit(self, model: str) -> MaterialFit | None:
         """The fit of one law, or None when it was not fitted."""
@@ -686,5 +688,8 @@ def fit_object(
             data,
             f_op if from_recording else above(chosen.params),
             d_stated + contact if from_recording else None,
+        ),
+        loading_share_below_operating=(
+            float(np.mean(loading_force <= f_op)) if loading_force.size else math.nan
         ),
     )

@@ -36,6 +36,10 @@ wrong sign, wrong units; numbers in each constant's docstring) and stated here o
                                  relaxation, not rupture; ``rupture.find_relaxation``)
 ``secant_misfit``                where D is stated the law misses the recording by more than
                                  :data:`SECANT_MISFIT_FRAC` of the operating force
+``below_squeezes``               a stiffening law (``hc``, ``exp``) states D and λ at a force
+                                 with fewer than :data:`BELOW_SQUEEZES_SHARE` of the loading
+                                 samples at or below it: the squeezes pass it too fast to say
+                                 (squeeze to a few times that force)
 ``damping_ratio_implausible``    the implied damping ratio ζ = λ / (2 √(D m)) is above 1000
                                  (:data:`deformctl.quantities.IMPLIED_DAMPING_RATIO`) though the
                                  recording's time unit was stated: the line names the time unit
@@ -75,6 +79,7 @@ AT_BOUND = "at_bound"
 NONLINEAR_STIFFNESS = "nonlinear_stiffness"
 RELAXATION = "relaxation"
 SECANT_MISFIT = "secant_misfit"
+BELOW_SQUEEZES = "below_squeezes"
 DAMPING_RATIO_IMPLAUSIBLE = "damping_ratio_implausible"
 NOT_FINITE = "not_finite"
 #: Every flag, in the order ``quality`` lists them.
@@ -90,6 +95,7 @@ FLAGS: tuple[str, ...] = (
     NONLINEAR_STIFFNESS,
     RELAXATION,
     SECANT_MISFIT,
+    BELOW_SQUEEZES,
     DAMPING_RATIO_IMPLAUSIBLE,
     NOT_FINITE,
     *RECORDING_FLAGS,
@@ -102,6 +108,14 @@ OK = "ok"
 #: shared silicone phantoms (Hunt-Crossley, n at its bound 3) -0.6 to +9.6 % at the median
 #: loading force, 129 to 683 % in size at a tenth of it (all 38 flagged there).
 SECANT_MISFIT_FRAC = 0.25
+#: ``below_squeezes`` when a stiffening law's operating force has fewer than this share of the
+#: loading samples at or below it (three linear force ramps to 0.5, 0.75 and 1 × a peak P give
+#: 1.44 F/P). Measured on a light, stiff Hunt–Crossley object of the simulator (D 30 N/cm at
+#: F_w = 0.65 N, n 2.92), squeezed to P = 1.5 / 3 / 10 / 20 / 500 F_w (share 0.85 / 0.48 / 0.14 /
+#: 0.07 / 0.003): D at F_w +0.0 / +1.3 / +71 / +170 / +2,100 %. A slow squeeze stated at its
+#: median loading force has half its samples below it. A linear law's D does not depend on the
+#: force, so its rows are not judged.
+BELOW_SQUEEZES_SHARE = 0.25
 #: ``low_r2`` below this R²: more than 10 % of the force variance is not Kelvin–Voigt. Measured:
 #: clean and 1 %-noise synthetic squeezes ≥ 0.99, the simulator's Table II objects ≥ 0.9997 and a
 #: 73-object population ≥ 0.98, the simulator with 0.01 N + 0.05 mm noise 0.90–0.97; a force that
@@ -167,6 +181,7 @@ def assess(
     nonlinear_stiffness: bool = False,
     relaxations: int = 0,
     secant_misfit: bool = False,
+    below_squeezes: bool = False,
 ) -> tuple[str, ...]:
     """The flags of one fit, in :data:`FLAGS` order (empty: ok)."""
     flags: list[str] = []
@@ -193,6 +208,8 @@ def assess(
         flags.append(RELAXATION)
     if secant_misfit:
         flags.append(SECANT_MISFIT)
+    if below_squeezes:
+        flags.append(BELOW_SQUEEZES)
     return tuple(flags)
 
 
@@ -388,6 +405,13 @@ def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
             f"recording's force is {pct} % of that force off the {row.get('model', '?')} law's: "
             "D is the recording's secant, the law's λ and curve do not hold there)"
         )
+    if flag == BELOW_SQUEEZES:
+        return (
+            f"{flag} (D and λ are stated at {_num(row.get('operating_force_n'), '.3g')} N, with "
+            f"fewer than {100 * BELOW_SQUEEZES_SHARE:g} % of the loading samples at or below it "
+            f"(peak {_num(row.get('force_max_n'), '.3g')} N): the {row.get('model', '?')} law is "
+            "extrapolated there; squeeze to a few times that force)"
+        )
     return flag
 
 
@@ -486,7 +510,10 @@ def thresholds_help() -> str:
         "than 2x, or falls over a stretch), relaxation (the force decayed at constant "
         "compression), secant_misfit "
         f"(where D is stated the law misses the recorded force by > "
-        f"{100 * SECANT_MISFIT_FRAC:g} % of the operating force), damping_ratio_implausible "
+        f"{100 * SECANT_MISFIT_FRAC:g} % of the operating force), below_squeezes (a stiffening "
+        f"law states D with < {100 * BELOW_SQUEEZES_SHARE:g} % of the loading samples at or "
+        "below its force), "
+        "damping_ratio_implausible "
         "(ζ = λ / (2 √(D m)) > 1000 with a stated time unit), not_finite (a computed column "
         "came out infinite: written as null); the recording's defects found by "
         "measure: logging_gap, coarse_force, force_lag, energy_returned (a bag whose squeezes "

@@ -53,7 +53,7 @@ PeakForceN = Annotated[
         "--peak-force-n",
         metavar="F",
         help="Peak force of the largest squeeze, N [default: D x strain x size_x; Hunt-Crossley: "
-        "k (strain x size_x)^n; at least 1.5 F_w].",
+        "k (strain x size_x)^n, within 1.5..3 F_w].",
     ),
 ]
 Strain = Annotated[

@@ -26,6 +26,13 @@ if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported w
 
 #: a Hunt–Crossley object's default squeezes reach at least this multiple of F_w
 HC_MIN_PEAK_OVER_F_W = 1.5
+#: ... and at most this multiple of F_w: the grip's working range. The lifting force L_f is at
+#: most about 2 F_w (an undamped object; docs/explanation/model.md) and a bound is at most 1.1 L_f,
+#: so the largest squeeze's 0..3 F_w covers every force a grip applies. A stiffening object
+#: squeezed far past it (the 1 % strain of a light, stiff object: up to 1,300 F_w in the seed-1
+#: law mix) states D at F_w from a few samples at the start of a fast ramp: P1224 of that mix
+#: (D 30 N/cm at F_w) read 664 N/cm at 500 F_w, 139 N/cm at 46 F_w and 30.4 N/cm at 3 F_w.
+HC_MAX_PEAK_OVER_F_W = 3.0
 
 SqueezeProgress = Callable[[str, int, int], None]
 """``progress(object_id, objects_done, objects_total)``, called after each object's squeezes."""
@@ -35,10 +42,13 @@ def default_peak_force_n(spec: ObjectSpec, strain: float = DEFAULT_SQUEEZE_STRAI
     """The default peak squeeze force: ``D · strain · size_x``, N (the static force for ``strain``).
 
     A Hunt–Crossley object (:attr:`~deformctl.sim.ObjectSpec.hunt_crossley`) is squeezed to the
-    static force for ``strain`` on its own law, ``k (strain · size_x)ⁿ``, and to at least
-    :data:`HC_MIN_PEAK_OVER_F_W` times F_w, the force its D and λ are stated at: the 1 % strain
-    of the rule is a small fraction of F_w for a stiffening material, where a fit would state D
-    far outside the squeezes.
+    static force for ``strain`` on its own law, ``k (strain · size_x)ⁿ``, kept between
+    :data:`HC_MIN_PEAK_OVER_F_W` and :data:`HC_MAX_PEAK_OVER_F_W` times F_w, the force its D and
+    λ are stated at: a stiffening material's D depends on the force, and a fit of squeezes far
+    below or far above F_w states it there by extrapolation (the 1 % strain is a small fraction
+    of F_w for a soft, heavy object and hundreds of F_w for a light, stiff one). A linear law's
+    D does not depend on the force: Kelvin–Voigt and standard-linear-solid objects keep the
+    strain rule.
 
     Args:
         spec: the object (catalog D in N/cm, size in cm).
@@ -46,7 +56,8 @@ def default_peak_force_n(spec: ObjectSpec, strain: float = DEFAULT_SQUEEZE_STRAI
     """
     if spec.hunt_crossley:
         at_strain = spec.elastic_force_n(strain * spec.size_m[0])
-        return max(at_strain, HC_MIN_PEAK_OVER_F_W * spec.operating_force_n)
+        f_w = spec.operating_force_n
+        return min(max(at_strain, HC_MIN_PEAK_OVER_F_W * f_w), HC_MAX_PEAK_OVER_F_W * f_w)
     return spec.stiffness_n_per_m * strain * spec.size_m[0]
 
 

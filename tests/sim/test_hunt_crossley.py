@@ -143,8 +143,9 @@ def test_a_hard_squeeze_of_a_damped_object_stays_stable() -> None:
 
 
 #: population --grip --laws kv=1,hc=1,sls=1 -n 1500 --seed 1, object P1224 (W 1.28 N, D 30 N/cm
-#: at F_w, n 2.92, d_op 0.02 cm): measure --sim's default squeeze goes to 500 F_w, where the law's
-#: tangent is 60 times the one at F_w; built at F_w the step diverged ("non-finite state")
+#: at F_w, n 2.92, d_op 0.02 cm): a squeeze to 1 % strain goes to 500 F_w (measure --sim's default
+#: before it was capped at 3 F_w; --peak-force-n still can), where the law's tangent is 60 times
+#: the one at F_w; built at F_w the step diverged ("non-finite state")
 LIGHT_STIFF = ObjectSpec(
     "P1224",
     (18.266157255740307, 18.86999851884091, 13.783762496895122),
@@ -168,10 +169,8 @@ RESTING_SOLVE = ObjectSpec(
 
 
 def test_a_light_stiff_object_squeezed_far_past_f_w_is_stable_and_follows_its_law() -> None:
-    from deformctl.measure.sim import default_peak_force_n
-
     spec, paper = LIGHT_STIFF, sim_preset("paper").settings
-    peak = default_peak_force_n(spec)
+    peak = spec.elastic_force_n(0.01 * spec.size_m[0])  # the law's force at 1 % strain
     assert peak > 400 * spec.operating_force_n
     reference = hc.implicit_reference_m(spec, peak)
     assert reference is not None  # the step is built above d_op, at the peak's tangent / room
