@@ -25,7 +25,13 @@ lint: install
 	$(BIN)/ruff format --check deformctl tests bench examples
 	$(BIN)/mypy deformctl examples
 
-bench: install
+# The benchmarks also need MuJoCo (the bench extra, for bench/bench_mujoco.py); make test does not.
+BENCH_STAMP := $(VENV)/.installed-bench
+$(BENCH_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[dev,bench]'
+	touch $(BENCH_STAMP)
+
+bench: $(BENCH_STAMP)
 	$(BIN)/python -m bench
 
 # The material laws' known-truth recovery and auto's choice over 400 seeded draws per law, with

@@ -1,16 +1,15 @@
 """Simulator speed: one sponge lift attempt, one complete object, force-kernel throughput,
 implicit-step cost relative to one force evaluation, and the scaling table (cubes of
 5^3 .. 21^3 particles: model build, one lift attempt, step time, step / one force evaluation, the
-fitted exponent of step time against particle count, peak memory), the damped cube's wall time
-per simulated second (the MuJoCo comparison), one V-cycle with and without its stencil levels
-and the direct-vs-iterative solver candidates.
+fitted exponent of step time against particle count, peak memory), one V-cycle with and without
+its stencil levels and the direct-vs-iterative solver candidates (the comparison with MuJoCo:
+bench_mujoco.py).
 Every ratio is measured in this run; each scaling row runs in a fresh interpreter (its own peak
 memory), best of ``REPEATS`` attempts."""
 
 from __future__ import annotations
 
 import json
-import math
 import subprocess
 import sys
 import time
@@ -170,10 +169,6 @@ def main() -> None:
 
 
 CUBE = ObjectSpec("cube", (10.0, 10.0, 10.0), 5.0, 0.5, 30.0, 1.0)
-#: the issue's MuJoCo comparison: 9 cm cube, 5 N, D 20 N/cm, lambda 1 N·s/cm, 10 N squeeze
-DAMPED = ObjectSpec("damped", (9.0, 9.0, 9.0), 5.0, 0.5, 20.0, 1.0)
-#: MuJoCo 4.0 flex on the same damped cube, wall s per simulated s
-MUJOCO_S_PER_SIM_S = {5: 1.34, 8: 13.3, 11: 69.0}
 SIZES = (5, 8, 11, 16, 21)
 REPEATS = 3
 
@@ -231,14 +226,6 @@ def scaling_row(n: int, solver: str = "auto") -> dict[str, float | str]:
     assert outcome.series is not None
     n_steps = int(outcome.series.time_s.size)
     stats = model.solver_stats
-    # the damped cube, squeezed on the table with 10 N: wall s per simulated s
-    dsettings = SimSettings(particles_per_side=n, solver=solver)  # type: ignore[arg-type]
-    build_model(DAMPED, dsettings, gripped=True)
-    t_damped = _best_of(
-        lambda: squeeze_many(DAMPED, 1, peak_force_n=10.0, ramp_s=0.25, hold_s=0.75,
-                             settings=dsettings),
-        REPEATS,
-    )  # fmt: skip
     return {
         "n": n,
         "particles": model.lattice.n_particles,
@@ -252,7 +239,6 @@ def scaling_row(n: int, solver: str = "auto") -> dict[str, float | str]:
         "cg_its_per_solve": float(stats[1] / stats[0]) if stats[0] else 0.0,
         # explicit products A dv per step (the rest are carried; REPEATS + 1 identical attempts)
         "products_per_step": float(stats[4] / ((REPEATS + 1) * n_steps)),
-        "damped_s_per_sim_s": t_damped / 1.0,
         "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
         "estimate_mib": memory_estimate_bytes(CUBE, settings) / 2**20,
         "lifted": float(outcome.lifted),
@@ -315,7 +301,7 @@ def _row_in_subprocess(n: int, solver: str = "auto") -> dict[str, float | str]:
 
 
 def scaling() -> None:
-    """The scaling table, the solver candidates and the MuJoCo comparison."""
+    """The scaling table and the solver candidates."""
     print(
         "scaling, 10 cm cube (W 5 N, D 30 N/cm, lambda 1 N·s/cm), gripped at 1.2 x rigid limit, "
         f"best of {REPEATS}:"
@@ -353,14 +339,6 @@ def scaling() -> None:
         f"(<= 10 s), build {by_n[21]['build_s']:.2f} s (<= 10 s), peak memory "
         f"{by_n[21]['peak_rss_mib']:.0f} MiB (<= 2048 MiB)"
     )
-    print("damped 9 cm cube (5 N, D 20 N/cm, lambda 1 N·s/cm) squeezed with 10 N on the table:")
-    for n in (5, 8, 11):
-        ours = float(by_n[n]["damped_s_per_sim_s"]) if n in by_n else math.nan
-        mj = MUJOCO_S_PER_SIM_S[n]
-        print(
-            f"  {n:>2}^3: {ours:.3f} wall s per simulated s; MuJoCo 4.0 flex {mj}: "
-            f"{mj / ours:.1f}x faster (target at 11^3: >= 20x, <= 3.4 s)"
-        )
     v_cycle_cost()
     print("solver candidates (same cube, one lift attempt, s):")
     for n in (2, 3, 4, 5, 8, 11):
