@@ -269,7 +269,7 @@ def lift_catalog(
     objects = (
         catalog_objects(catalog, path=path) if isinstance(catalog, pd.DataFrame) else list(catalog)
     )
-    f_w = [obj.f_w_n(path=path) for obj in objects]  # refuses mu <= 0 before any attempt
+    f_w = [obj.f_w_n() for obj in objects]
     if factory.prepare is not None:
         objects = list(factory.prepare(objects, path))
     starts: dict[str, StartEstimate] = {}

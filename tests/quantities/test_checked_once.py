@@ -1,7 +1,8 @@
-"""Each option is checked once, where its options type is built: a run of ``measure csv`` and
-one of ``lift sim`` on one object count the rule checks (:meth:`Quantity.ok`, which every check
-runs) of the quantities their options types hold. Nothing below the options types checks them
-again."""
+"""Each option is checked once, where its options type is built, and each catalog value once,
+where its row is read: a run of ``measure csv``, ``lift sim`` and ``measure sim`` count the rule
+checks (:meth:`Quantity.ok`, which every check runs) of the quantities their options types and
+catalog rows hold. Nothing below checks them again, and each object's simulator spec is built
+once."""
 
 from __future__ import annotations
 
@@ -134,3 +135,15 @@ def test_a_simulated_run_builds_each_objects_spec_once(
     sim_specs.clear()
     _run([*argv, "--force"])
     assert dict(sim_specs) == {"a": 1, "b": 1}
+
+
+@pytest.mark.parametrize("command", ["lift", "measure"])
+def test_a_simulated_run_checks_each_catalog_value_once(
+    command: str, tmp_path: Path, checks: collections.Counter[str]
+) -> None:
+    argv = _sim_argv(command, tmp_path)
+    _run(argv)
+    checks.clear()
+    _run([*argv, "--force"])
+    for name, per_object in CATALOG_CHECKS.items():
+        assert checks[name] == 2 * per_object, (name, dict(checks))

@@ -82,9 +82,11 @@ class PlannedObject(CatalogObject):
 
     @classmethod
     def planned(cls, obj: CatalogObject, plan: Any) -> PlannedObject:
-        """``obj`` with ``plan``."""
-        values = {f.name: getattr(obj, f.name) for f in dataclasses.fields(CatalogObject)}
-        return cls(**values, plan=plan)
+        """``obj`` (already checked: not again) with ``plan``."""
+        planned = object.__new__(cls)
+        planned.__dict__.update(obj.__dict__)
+        object.__setattr__(planned, "plan", plan)
+        return planned
 
 
 def _sim_spec(obj: CatalogObject) -> Any:
