@@ -186,6 +186,19 @@ class CatalogObject(Mapping[str, Any]):
     material_relaxation_time_s: float | None = None
     row: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
+    def __post_init__(self) -> None:
+        """Check the sizes, W and μ (each its :mod:`deformctl.quantities` rule): a lift and the
+        simulator rely on them. (:meth:`from_row` checks every column as it reads it.)
+
+        Raises:
+            InputDataError: a value outside its rule, naming the object (exit 65).
+        """
+        where = f"object {self.object_id!r}"
+        for column, value in zip(SIZE_COLUMNS, self.size_cm, strict=True):
+            SIZE_CM.check_data(value, where=where, name=column)
+        WEIGHT_N.check_data(self.weight_n, where=where)
+        FRICTION_MU.check_data(self.friction_mu, where=where)
+
     @classmethod
     def from_row(cls, row: Mapping[str, Any], *, path: str | None = None) -> CatalogObject:
         """Parse one catalog row (a dict or a pandas Series).
@@ -229,18 +242,22 @@ class CatalogObject(Mapping[str, Any]):
             else None
             for v in material
         )
-        return cls(
-            object_id=object_id,
-            size_cm=(size[0], size[1], size[2]),
-            weight_n=weight,
-            friction_mu=mu,
-            material_stiffness_n_per_cm=stiffness,
-            material_damping_ns_per_cm=damping,
-            material_stiffness_exponent=exponent,
-            material_arm_stiffness_n_per_cm=arm,
-            material_relaxation_time_s=tau,
-            row=raw,
-        )
+        checked = {  # each value checked as it was read: not again
+            "object_id": object_id,
+            "size_cm": (size[0], size[1], size[2]),
+            "weight_n": weight,
+            "friction_mu": mu,
+            "material_stiffness_n_per_cm": stiffness,
+            "material_damping_ns_per_cm": damping,
+            "material_stiffness_exponent": exponent,
+            "material_arm_stiffness_n_per_cm": arm,
+            "material_relaxation_time_s": tau,
+            "row": raw,
+        }
+        obj = object.__new__(cls)
+        for name, value in checked.items():
+            object.__setattr__(obj, name, value)
+        return obj
 
     # ---- the row as a read-only mapping
 
@@ -270,16 +287,9 @@ class CatalogObject(Mapping[str, Any]):
             and self.material_damping_ns_per_cm is not None
         )
 
-    def f_w_n(self, *, path: str | None = None) -> float:
-        """F_w = W / (2 μ), N, the rigid-object force a lift search starts at.
-
-        Raises:
-            InputDataError: ``friction_mu`` or ``weight_n`` outside its rule (F_w needs both
-                > 0); naming the object (exit 65).
-        """
-        where = f"object {self.object_id!r}"
-        FRICTION_MU.check_data(self.friction_mu, where=where, path=path)
-        WEIGHT_N.check_data(self.weight_n, where=where, path=path)
+    def f_w_n(self) -> float:
+        """F_w = W / (2 μ), N, the rigid-object force a lift search starts at (W and μ are
+        checked when the object is built)."""
         return rigid_grip_force_n(self.weight_n, self.friction_mu)
 
     def to_sim_spec(self, *, path: str | None = None) -> ObjectSpec:
@@ -302,7 +312,7 @@ class CatalogObject(Mapping[str, Any]):
             )
         try:
             stiffness, damping = (_number(self.row, c, self.object_id) for c in MATERIAL_COLUMNS)
-            return ObjectSpec(
+            return ObjectSpec.from_checked(  # the row's values were checked as read
                 object_id=self.object_id,
                 size_cm=self.size_cm,
                 weight_n=self.weight_n,

@@ -240,7 +240,7 @@ class StartSeed:
             coefficients_path=self.coefficients_path,
             path=path,
         )
-        return self.estimate(features, f_w_n=[obj.f_w_n(path=path) for obj in objects])
+        return self.estimate(features, f_w_n=[obj.f_w_n() for obj in objects])
 
     def estimate(
         self, features: pd.DataFrame, *, f_w_n: Sequence[float] | np.ndarray

@@ -104,10 +104,11 @@ class RunnerFactory:
         stop_on_failure: when a runner fails for one object (raises a
             :class:`~deformctl.errors.DeformctlError`), the remaining objects are not run.
         settings: JSON-serialisable settings of the runner, for the outputs' provenance.
-        check: ``check(objects, path)``: refuse objects this runner cannot run (e.g. the
-            simulator needs material values) by raising a
-            :class:`~deformctl.errors.DeformctlError`; :func:`lift_catalog` calls it before any
-            attempt. None: no runner-specific check.
+        prepare: ``prepare(objects, path) -> objects``: refuse objects this runner cannot run
+            (e.g. the simulator needs material values) by raising a
+            :class:`~deformctl.errors.DeformctlError`, and return them as the runner runs them
+            (the simulator: each with its run plan, built once); :func:`lift_catalog` calls it
+            before any attempt. None: no runner-specific check.
         material_features: the catalog's material values are this runner's ground truth for
             D and λ (the simulator), so a seeded search may predict its start from them when
             no measured D and λ are given (:func:`deformctl.lift.seeded.object_features`).
@@ -124,7 +125,7 @@ class RunnerFactory:
     row_fields: Callable[[CatalogObject], Mapping[str, object]] = _no_row_fields
     stop_on_failure: bool = True
     settings: Mapping[str, Any] = field(default_factory=dict)
-    check: Callable[[Sequence[CatalogObject], str | None], None] | None = None
+    prepare: Callable[[Sequence[CatalogObject], str | None], Sequence[CatalogObject]] | None = None
     material_features: bool = False
     journal: bool = False
     absolute_limit: Callable[[], ForceCeiling] | None = None
@@ -254,7 +255,7 @@ def lift_catalog(
     Raises:
         UsageError: a seed with the ``paper`` protocol (before anything runs; exit 2).
         InputDataError: an object the lift cannot use, e.g. ``friction_mu = 0``, one the
-            runner refuses (``factory.check``), or (``seed``) one without D and λ (before
+            runner refuses (``factory.prepare``), or (``seed``) one without D and λ (before
             anything runs; exit 65).
         SchemaError: an object's row holds a value its table refuses (raised as the object
             finishes; with a ``journal``, the attempts made and the rows of the objects before
@@ -268,9 +269,9 @@ def lift_catalog(
     objects = (
         catalog_objects(catalog, path=path) if isinstance(catalog, pd.DataFrame) else list(catalog)
     )
-    f_w = [obj.f_w_n(path=path) for obj in objects]  # refuses mu <= 0 before any attempt
-    if factory.check is not None:
-        factory.check(objects, path)
+    f_w = [obj.f_w_n() for obj in objects]
+    if factory.prepare is not None:
+        objects = list(factory.prepare(objects, path))
     starts: dict[str, StartEstimate] = {}
     if seed is not None:
         starts = seed.starts(objects, use_material=factory.material_features, path=path)

@@ -4,13 +4,13 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
-from deformctl.catalog import catalog_objects
+from deformctl.catalog import CatalogObject, catalog_objects
 from deformctl.errors import UsageError
 from deformctl.measure.options import (
     DEFAULT_SQUEEZE_PROTOCOL,
@@ -115,21 +115,58 @@ def simulate_squeezes(
         SimulationError: the simulation produced a non-finite state.
     """
     from deformctl.presets import sim_preset
-    from deformctl.sim import squeeze
 
     s = settings or sim_preset().settings
-    p = protocol
-    if not p.strain < s.max_squeeze_strain:
+    check_squeeze_settings(protocol, s, scene_hz)
+    objects = catalog_objects(catalog, path=path)
+    specs = [obj.to_sim_spec(path=path) for obj in objects]
+    return squeeze_objects(
+        objects,
+        specs,
+        protocol=protocol,
+        settings=s,
+        seed=seed,
+        progress=progress,
+        first_index=first_index,
+        scene_hz=scene_hz,
+    )
+
+
+def check_squeeze_settings(
+    protocol: SqueezeProtocol, settings: SimSettings, scene_hz: float
+) -> None:
+    """Refuse a strain at or above the densification limit, or a bad scene rate.
+
+    Raises:
+        UsageError: either one (exit 2).
+    """
+    if not protocol.strain < settings.max_squeeze_strain:
         raise UsageError(
-            f"strain must be in (0, {s.max_squeeze_strain:g}) (the densification limit), "
-            f"got {p.strain:g}"
+            f"strain must be in (0, {settings.max_squeeze_strain:g}) (the densification limit), "
+            f"got {protocol.strain:g}"
         )
-    scene_every_steps(scene_hz, s.dt_s)  # refuses a bad rate before any squeeze
-    objects_in = catalog_objects(catalog, path=path)
-    specs = [obj.to_sim_spec(path=path) for obj in objects_in]
-    records = [obj.record() for obj in objects_in]
+    scene_every_steps(scene_hz, settings.dt_s)  # refuses a bad rate before any squeeze
+
+
+def squeeze_objects(
+    objects: Sequence[CatalogObject],
+    specs: Sequence[ObjectSpec],
+    *,
+    protocol: SqueezeProtocol,
+    settings: SimSettings,
+    seed: int = 0,
+    progress: SqueezeProgress | None = None,
+    first_index: int = 0,
+    scene_hz: float = DEFAULT_SCENE_HZ,
+) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
+    """:func:`simulate_squeezes` of objects already parsed, each with its spec (built once),
+    under settings already checked (:func:`check_squeeze_settings`)."""
+    from deformctl.sim import squeeze
+
+    s, p = settings, protocol
+    records = [obj.record() for obj in objects]
     rate_hz = 1.0 / s.dt_s
-    objects: list[dict[str, Any]] = []
+    out_objects: list[dict[str, Any]] = []
     out: list[SqueezeSeries] = []
     squeezes = p.squeezes
     for i, (spec, rec) in enumerate(zip(specs, records, strict=True)):
@@ -155,10 +192,10 @@ def simulate_squeezes(
             )
         if progress is not None:
             progress(spec.object_id, i + 1, len(specs))
-        objects.append(
+        out_objects.append(
             {**rec, "force_rate_hz": rate_hz, "position_rate_hz": rate_hz, "sim_peak_force_n": peak}
         )
-    return objects, out
+    return out_objects, out
 
 
 def _force_scale(j: int, n: int) -> float:

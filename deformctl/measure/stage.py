@@ -37,7 +37,9 @@ from deformctl.measure.recording import Recording
 from deformctl.measure.ros2_bag import read_bag
 from deformctl.measure.sim import (
     SqueezeProgress,
+    check_squeeze_settings,
     simulate_squeezes,
+    squeeze_objects,
 )
 from deformctl.parallel import (
     SweepOptions,
@@ -53,6 +55,7 @@ from deformctl.series import SqueezeSeries
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported when used
     from deformctl.sim import SimSettings
+    from deformctl.sim.engine import RunPlan
 
 
 #: Rows of a ``measure --sim`` dataset: one per object squeezed (the series are in the logs).
@@ -72,7 +75,9 @@ class SimulateCatalogTask:
     """``measure --sim`` for one catalog object (a picklable sweep task).
 
     The item carries the object's catalog row and its catalog position under
-    ``"_position"``; the noise stream is derived from (seed, position) as in the serial run.
+    ``"_position"``, or (a single-file run's local workers) its parsed object and spec under
+    ``"_planned"`` instead of the row; the noise stream is derived from (seed, position) as in
+    the serial run.
 
     Attributes:
         protocol: the squeezes (:class:`~deformctl.measure.options.SqueezeProtocol`: number,
@@ -98,15 +103,28 @@ class SimulateCatalogTask:
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """Squeeze one object: its summary row, its (object row, squeezes) as the payload."""
-        row = {k: v for k, v in item.items() if k != "_position"}
-        objects, series = simulate_squeezes(
-            pd.DataFrame([row]),
-            settings=self.settings,
-            seed=self.seed,
-            first_index=int(item["_position"]),
-            protocol=self.protocol,
-            scene_hz=self.scene_hz,
-        )
+        planned = item.get("_planned")  # (object, spec) parsed and built once by the caller
+        if planned is None:
+            row = {k: v for k, v in item.items() if k != "_position"}
+            objects, series = simulate_squeezes(
+                pd.DataFrame([row]),
+                settings=self.settings,
+                seed=self.seed,
+                first_index=int(item["_position"]),
+                protocol=self.protocol,
+                scene_hz=self.scene_hz,
+            )
+        else:
+            check_squeeze_settings(self.protocol, self.settings, self.scene_hz)
+            objects, series = squeeze_objects(
+                [planned[0]],
+                [planned[1]],
+                protocol=self.protocol,
+                settings=self.settings,
+                seed=self.seed,
+                first_index=int(item["_position"]),
+                scene_hz=self.scene_hz,
+            )
         summary = {
             "object_id": str(objects[0]["object_id"]),
             "squeezes": len(series),
@@ -146,7 +164,7 @@ LOG_SAMPLE_BYTES = 400
 
 def _check_budgets(
     catalog: pd.DataFrame, task: SimulateCatalogTask, path: str, *, single_log: bool
-) -> None:
+) -> list[tuple[CatalogObject, RunPlan]]:
     """Refuse, before simulating, a run above the memory budget (``--memory-budget-gib``).
 
     Each object's squeeze (its model plus the recorded steps, see
@@ -155,23 +173,28 @@ def _check_budgets(
     part by part and has no whole-log limit. With ``single_log`` a bad row is refused first
     (exit 65); in a dataset it is skipped here and fails alone in its worker.
 
+    Returns:
+        Each row the simulator can run, parsed, with its squeeze's plan (spec built once).
+
     Raises:
         InputDataError: ``single_log`` and a row the simulator refuses (exit 65).
         UsageError: one line naming the estimate, the budget and the option (exit 2).
     """
-    from deformctl.sim.engine import GIB, check_run_steps
+    from deformctl.sim.engine import GIB, plan_run
 
     settings = task.settings
     squeezes = task.protocol.squeezes
     steps = task.protocol.duration_s / settings.dt_s + 1.0
+    planned = []
     for record in catalog.to_dict("records"):
         try:
-            spec = CatalogObject.from_row(record).to_sim_spec(path=path)
+            obj = CatalogObject.from_row(record)
+            spec = obj.to_sim_spec(path=path)
         except InputDataError:
             if single_log:
                 raise
             continue  # a dataset's bad row fails alone, in its worker
-        check_run_steps(spec, settings, steps, "squeeze")
+        planned.append((obj, plan_run(spec, settings, steps, "squeeze")))
     samples = len(catalog) * squeezes * steps
     estimate = samples * LOG_SAMPLE_BYTES
     if single_log and estimate > settings.memory_budget_gib * GIB:
@@ -181,6 +204,7 @@ def _check_budgets(
             f"of {settings.memory_budget_gib:g} GiB; write a dataset directory (-o DIR/) or "
             "raise --memory-budget-gib"
         )
+    return planned
 
 
 def simulate_catalog_file(
@@ -212,19 +236,24 @@ def simulate_catalog_file(
     """
     check_output_path(output, force)
     catalog = select_objects(read_catalog(catalog_path), object_ids)
-    _check_budgets(catalog, task, catalog_path, single_log=True)  # bad rows first
+    planned = _check_budgets(catalog, task, catalog_path, single_log=True)  # bad rows first
     provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
     n_workers = single_file_workers(workers, len(catalog))
     if n_workers != 1:
-        objects, series = _squeeze_in_workers(catalog, task, n_workers, progress)
+        items = [
+            {"object_id": obj.object_id, "_position": i, "_planned": (obj, plan.spec)}
+            for i, (obj, plan) in enumerate(planned)
+        ]
+        objects, series = _squeeze_in_workers(items, task, n_workers, progress)
     else:
-        objects, series = simulate_squeezes(
-            catalog,
+        check_squeeze_settings(task.protocol, task.settings, task.scene_hz)
+        objects, series = squeeze_objects(
+            [obj for obj, _ in planned],
+            [plan.spec for _, plan in planned],
+            protocol=task.protocol,
             settings=task.settings,
             seed=task.seed,
             progress=progress,
-            path=catalog_path,
-            protocol=task.protocol,
             scene_hz=task.scene_hz,
         )
     write_squeeze_log(
@@ -239,13 +268,13 @@ def _positioned_items(catalog: pd.DataFrame) -> list[dict[str, Any]]:
 
 
 def _squeeze_in_workers(
-    catalog: pd.DataFrame,
+    items: list[dict[str, Any]],
     task: SimulateCatalogTask,
     workers: int | Auto,
     progress: SqueezeProgress | None,
 ) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
-    """:func:`simulate_squeezes` of ``catalog`` with one task per object on local processes."""
-    items = _positioned_items(catalog)
+    """The squeezes of ``items`` (each an object with its spec) with one task per object on
+    local processes."""
     finished = [0]
 
     def done(i: int, _: object) -> None:

@@ -341,28 +341,63 @@ def uses_iterative_solver(settings: SimSettings, n_dof: int) -> bool:
     return settings.solver == "iterative"
 
 
+@dataclass(frozen=True)
+class RunPlan:
+    """One object's simulated run, worked out once before it runs: what the memory-budget check
+    judges and the run uses (:func:`plan_run`).
+
+    Attributes:
+        spec: the simulator's object.
+        particles: the lattice's particle count.
+        steps: the run's recorded steps (a float: an absurd duration is an estimate).
+        memory_bytes: the estimated peak memory of the model, its steps and its scene frames.
+    """
+
+    spec: ObjectSpec
+    particles: int
+    steps: float
+    memory_bytes: float
+
+
 def check_lattice_size(spec: ObjectSpec, settings: SimSettings) -> None:
     """Refuse a model above ``settings.memory_budget_gib`` before anything is built.
 
     Raises:
         UsageError: one line naming the particle count, the estimate and the budget.
     """
+    _check_model(spec, settings, memory_estimate_bytes(spec, settings))
+
+
+def _check_model(spec: ObjectSpec, settings: SimSettings, model_bytes: float) -> int:
+    """The particle count of ``spec``'s lattice, when its model (``model_bytes``) fits."""
     alpha_m = settings.alpha_m(spec)
     n_particles = math.prod(particles_per_axis(spec.size_m, alpha_m))
-    estimate = memory_estimate_bytes(spec, settings)
-    if estimate > settings.memory_budget_gib * GIB:
+    if model_bytes > settings.memory_budget_gib * GIB:
         raise UsageError(
             f"object {spec.object_id!r}: alpha {alpha_m / CM:.3g} cm gives {n_particles:,} "
-            f"particles, an estimated {estimate / GIB:.3g} GiB, above the memory budget of "
+            f"particles, an estimated {model_bytes / GIB:.3g} GiB, above the memory budget of "
             f"{settings.memory_budget_gib:g} GiB; use a larger alpha_cm (or raise the budget)"
         )
+    return n_particles
 
 
 def check_run_steps(
     spec: ObjectSpec, settings: SimSettings, n_steps: float, what: str, frame_every: int = 0
 ) -> None:
     """Refuse a run whose model, recorded steps and scene frames (one every ``frame_every``
-    steps; 0: none) exceed ``settings.memory_budget_gib``.
+    steps; 0: none) exceed ``settings.memory_budget_gib`` (:func:`plan_run`, its plan dropped).
+
+    Raises:
+        UsageError: see :func:`plan_run`.
+    """
+    plan_run(spec, settings, n_steps, what, frame_every)
+
+
+def plan_run(
+    spec: ObjectSpec, settings: SimSettings, n_steps: float, what: str, frame_every: int = 0
+) -> RunPlan:
+    """The :class:`RunPlan` of a run of ``n_steps`` steps, when its model, recorded steps and
+    scene frames (one every ``frame_every`` steps; 0: none) fit ``settings.memory_budget_gib``.
 
     Made before any step is allocated (``n_steps`` comes from the protocol's durations and
     ``dt_s``; a float, so an absurd duration is an estimate, not an overflow).
@@ -371,12 +406,12 @@ def check_run_steps(
         UsageError: one line naming the steps, the estimate and the budget (exit 2); a model
             too large by itself is named as :func:`check_lattice_size` does.
     """
-    check_lattice_size(spec, settings)
-    estimate = memory_estimate_bytes(spec, settings) + float(n_steps) * STEP_BYTES
+    model = memory_estimate_bytes(spec, settings)
+    n_particles = _check_model(spec, settings, model)
+    estimate = model + float(n_steps) * STEP_BYTES
     if frame_every > 0:
-        n = math.prod(float(k) for k in particles_per_axis(spec.size_m, settings.alpha_m(spec)))
         frames = float(n_steps) / frame_every + 2.0
-        estimate += frames * n * SCENE_FRAME_BYTES_PER_PARTICLE
+        estimate += frames * float(n_particles) * SCENE_FRAME_BYTES_PER_PARTICLE
     if not estimate <= settings.memory_budget_gib * GIB:  # also refuses inf / nan
         raise UsageError(
             f"object {spec.object_id!r}: a {what} of {float(n_steps):.3g} steps of "
@@ -384,6 +419,7 @@ def check_run_steps(
             f"budget of {settings.memory_budget_gib:g} GiB; use a larger --dt-s or shorter "
             "durations, or raise --memory-budget-gib"
         )
+    return RunPlan(spec, n_particles, float(n_steps), estimate)
 
 
 def element_constants(

@@ -24,8 +24,10 @@ read catalogs.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Any
 
 from deformctl.errors import InputDataError
 from deformctl.physics import rigid_grip_force_n
@@ -92,9 +94,29 @@ class ObjectSpec:
             RELAXATION_TIME_S.check_data(float(self.relaxation_time_s), where=where)
         elif self.relaxation_time_s < 0:
             raise InputDataError(f"{where}: a relaxation time must be > 0 s")
+        self._check_one_law()
+
+    @classmethod
+    def from_checked(cls, **values: Any) -> ObjectSpec:
+        """An object from values each already checked against its rule (a catalog row's, read
+        by :meth:`deformctl.catalog.CatalogObject.to_sim_spec`): only the rule between them,
+        one material law, is checked; an absent field takes its default.
+
+        Raises:
+            InputDataError: a Hunt–Crossley material with a Maxwell arm (exit 65).
+        """
+        spec = object.__new__(cls)
+        for f in dataclasses.fields(cls):
+            object.__setattr__(spec, f.name, values.pop(f.name, f.default))
+        if values:
+            raise TypeError(f"ObjectSpec has no field {next(iter(values))!r}")
+        spec._check_one_law()
+        return spec
+
+    def _check_one_law(self) -> None:
         if self.hunt_crossley and self.standard_linear_solid:
             raise InputDataError(
-                f"{where}: a material is Hunt–Crossley (stiffness exponent "
+                f"object {self.object_id!r}: a material is Hunt–Crossley (stiffness exponent "
                 f"{self.stiffness_exponent:g}) or a standard linear solid (arm stiffness "
                 f"{self.arm_stiffness_n_per_cm:g} N/cm), not both"
             )

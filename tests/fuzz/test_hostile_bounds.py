@@ -167,7 +167,7 @@ def test_out_of_memory_is_one_line(
     def boom(*args: object, **kwargs: object) -> None:
         raise MemoryError("Unable to allocate 22.8 TiB")
 
-    monkeypatch.setattr(stage, "simulate_squeezes", boom)
+    monkeypatch.setattr(stage, "squeeze_objects", boom)
     cat = write_catalog(tmp_path / "cat.csv", [catalog_row])
     out = tmp_path / "x.mcap"
     argv = ["measure", "sim", str(cat), "--memory-budget-gib", "1e9", "-o", str(out)]

@@ -1,7 +1,8 @@
-"""Each option is checked once, where its options type is built: a run of ``measure csv`` and
-one of ``lift sim`` on one object count the rule checks (:meth:`Quantity.ok`, which every check
-runs) of the quantities their options types hold. Nothing below the options types checks them
-again."""
+"""Each option is checked once, where its options type is built, and each catalog value once,
+where its row is read: a run of ``measure csv``, ``lift sim`` and ``measure sim`` count the rule
+checks (:meth:`Quantity.ok`, which every check runs) of the quantities their options types and
+catalog rows hold. Nothing below checks them again, and each object's simulator spec is built
+once."""
 
 from __future__ import annotations
 
@@ -81,3 +82,68 @@ def test_lift_sim_checks_each_search_value_and_the_ceiling_once(
     _run([*argv, "--force"])
     for name in ("growth", "tolerance_rel", "max_attempts", "max_force_n"):
         assert checks[name] == 1, (name, dict(checks))
+
+
+#: Two simulated objects: the counts below are per object.
+TWO_OBJECTS = (
+    "object_id,size_x_cm,size_y_cm,size_z_cm,weight_n,friction_mu,"
+    "material_stiffness_n_per_cm,material_damping_ns_per_cm\n"
+    "a,10,10,10,0.7,0.5,49.18,6.47\nb,8,9,10,0.9,0.6,30.0,4.0\n"
+)
+#: Each catalog quantity's checks per object: one per value (three sizes).
+CATALOG_CHECKS = {
+    "size_cm": 3,
+    "weight_n": 1,
+    "friction_mu": 1,
+    "deformability_n_per_cm": 1,
+    "damping_ns_per_cm": 1,
+}
+FAST_SQUEEZE = ["--squeezes", "1", "--ramp-s", "0.05", "--hold-s", "0.05", "--scene-hz", "0"]
+
+
+def _sim_argv(command: str, tmp_path: Path) -> list[str]:
+    catalog = tmp_path / "cat.csv"
+    catalog.write_text(TWO_OBJECTS)
+    if command == "lift":
+        return ["lift", "sim", str(catalog), *FAST_LIFT, "-o", str(tmp_path / "l.parquet")]
+    fast = ["--alpha-cm", "10", "--dt-s", "0.002", *FAST_SQUEEZE]
+    return ["measure", "sim", str(catalog), *fast, "-o", str(tmp_path / "m.mcap")]
+
+
+@pytest.fixture
+def sim_specs(monkeypatch: pytest.MonkeyPatch) -> collections.Counter[str]:
+    """Every simulator spec built from a catalog row from now on, counted by object id."""
+    from deformctl.catalog import CatalogObject
+
+    built: collections.Counter[str] = collections.Counter()
+    to_sim_spec = CatalogObject.to_sim_spec
+
+    def counting(self: CatalogObject, *, path: str | None = None) -> object:
+        built[self.object_id] += 1
+        return to_sim_spec(self, path=path)
+
+    monkeypatch.setattr(CatalogObject, "to_sim_spec", counting)
+    return built
+
+
+@pytest.mark.parametrize("command", ["lift", "measure"])
+def test_a_simulated_run_builds_each_objects_spec_once(
+    command: str, tmp_path: Path, sim_specs: collections.Counter[str]
+) -> None:
+    argv = _sim_argv(command, tmp_path)
+    _run(argv)
+    sim_specs.clear()
+    _run([*argv, "--force"])
+    assert dict(sim_specs) == {"a": 1, "b": 1}
+
+
+@pytest.mark.parametrize("command", ["lift", "measure"])
+def test_a_simulated_run_checks_each_catalog_value_once(
+    command: str, tmp_path: Path, checks: collections.Counter[str]
+) -> None:
+    argv = _sim_argv(command, tmp_path)
+    _run(argv)
+    checks.clear()
+    _run([*argv, "--force"])
+    for name, per_object in CATALOG_CHECKS.items():
+        assert checks[name] == 2 * per_object, (name, dict(checks))

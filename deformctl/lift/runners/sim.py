@@ -57,7 +57,71 @@ if TYPE_CHECKING:  # pragma: no cover - the simulator is imported where it runs 
     from deformctl.series import TrialOutcome
     from deformctl.sim import LiftProfile, SimSettings, SlipCriterion
 
-__all__ = ["LiftTask", "check_sim_objects", "lift_sweep", "sim_runner_factory"]
+__all__ = [
+    "LiftTask",
+    "PlannedObject",
+    "check_sim_objects",
+    "lift_sweep",
+    "plan_sim_objects",
+    "sim_runner_factory",
+]
+
+
+@dataclass(frozen=True)
+class PlannedObject(CatalogObject):
+    """A catalog object with its simulated lift attempt worked out (:func:`plan_sim_objects`):
+    the budget check, the runner and the row's columns share :attr:`plan`, so the object's spec
+    is built once.
+
+    Attributes:
+        plan: the attempt's :class:`~deformctl.sim.engine.RunPlan` (spec, particle count, steps,
+            memory estimate).
+    """
+
+    plan: Any = None  # deformctl.sim.engine.RunPlan (the simulator is imported where it runs)
+
+    @classmethod
+    def planned(cls, obj: CatalogObject, plan: Any) -> PlannedObject:
+        """``obj`` (already checked: not again) with ``plan``."""
+        planned = object.__new__(cls)
+        planned.__dict__.update(obj.__dict__)
+        object.__setattr__(planned, "plan", plan)
+        return planned
+
+
+def _sim_spec(obj: CatalogObject) -> Any:
+    """The object's spec: its plan's, else built from the row (a runner used without a plan)."""
+    return obj.plan.spec if isinstance(obj, PlannedObject) else obj.to_sim_spec()
+
+
+def plan_sim_objects(
+    objects: Sequence[CatalogObject],
+    path: str | None = None,
+    *,
+    settings: SimSettings | None = None,
+    profile: LiftProfile | None = None,
+) -> list[PlannedObject]:
+    """Each object with the plan of one simulated lift attempt, refusing, before any attempt,
+    the objects the simulator cannot run.
+
+    Raises:
+        InputDataError: an object without material values (or otherwise invalid), naming the
+            catalog and the first such object (exit 65).
+        UsageError: an object's model, or its model plus the steps of one lift attempt under
+            ``profile``, would exceed ``settings.memory_budget_gib`` (exit 2).
+    """
+    from deformctl.sim import LiftProfile, SimSettings
+    from deformctl.sim.engine import plan_run
+
+    s = settings or SimSettings()
+    p = profile or LiftProfile()
+    specs = [obj.to_sim_spec(path=path) for obj in objects]  # every row refused first
+    planned = []
+    for obj, spec in zip(objects, specs, strict=True):
+        seconds = s.grip_ramp_s + s.grip_settle_s + p.rise_time_s(p.rise_m(spec)) + p.hold_s
+        plan = plan_run(spec, s, seconds / s.dt_s + 2.0, "lift attempt")
+        planned.append(PlannedObject.planned(obj, plan))
+    return planned
 
 
 def check_sim_objects(
@@ -67,24 +131,12 @@ def check_sim_objects(
     settings: SimSettings | None = None,
     profile: LiftProfile | None = None,
 ) -> None:
-    """Refuse objects the simulator cannot run, before any attempt.
+    """Refuse objects the simulator cannot run, before any attempt (:func:`plan_sim_objects`).
 
     Raises:
-        InputDataError: an object without material values (or otherwise invalid), naming the
-            catalog and the first such object (exit 65).
-        UsageError: an object's model, or its model plus the steps of one lift attempt under
-            ``profile``, would exceed ``settings.memory_budget_gib`` (exit 2).
+        InputDataError, UsageError: see :func:`plan_sim_objects`.
     """
-    from deformctl.sim import LiftProfile, SimSettings
-    from deformctl.sim.engine import check_lattice_size, check_run_steps
-
-    s = settings or SimSettings()
-    p = profile or LiftProfile()
-    specs = [obj.to_sim_spec(path=path) for obj in objects]
-    for spec in specs:
-        check_lattice_size(spec, s)
-        seconds = s.grip_ramp_s + s.grip_settle_s + p.rise_time_s(p.rise_m(spec)) + p.hold_s
-        check_run_steps(spec, s, seconds / s.dt_s + 2.0, "lift attempt")
+    plan_sim_objects(objects, path, settings=settings, profile=profile)
 
 
 def sim_runner_factory(
@@ -138,7 +190,7 @@ def sim_runner_factory(
             "support_release": r.as_dict(),
             "scene_hz": float(scene_hz),
         },
-        check=_SimCheck(chosen),
+        prepare=_SimPrepare(chosen),
         material_features=True,
     )
 
@@ -168,15 +220,16 @@ class _SimRunnerMaker:
     scene_hz: float = 0.0
 
     def __call__(self, obj: CatalogObject, max_force_n: float) -> TrialRunner:
-        return _SimAttempt(self.preset, obj.to_sim_spec(), self.scene_hz)
+        return _SimAttempt(self.preset, _sim_spec(obj), self.scene_hz)
 
 
 @dataclass(frozen=True)
-class _SimCheck:
+class _SimPrepare:
     preset: SimPreset
 
-    def __call__(self, objects: Sequence[CatalogObject], path: str | None) -> None:
-        check_sim_objects(objects, path, settings=self.preset.settings, profile=self.preset.profile)
+    def __call__(self, objects: Sequence[CatalogObject], path: str | None) -> list[PlannedObject]:
+        s, p = self.preset.settings, self.preset.profile
+        return plan_sim_objects(objects, path, settings=s, profile=p)
 
 
 @dataclass(frozen=True)
@@ -189,7 +242,7 @@ class _SimRowFields:
             "sim_preset": self.preset.name,
             "lift_accel_m_s2": p.accel_m_s2,
             "lift_speed_m_s": p.speed_m_s,
-            "lift_height_m": p.rise_m(obj.to_sim_spec()),
+            "lift_height_m": p.rise_m(_sim_spec(obj)),
             "slip_tolerance_m": c.tolerance_m,
             "slip_criterion": c.measure,
         }
@@ -240,15 +293,16 @@ def _check_budgets(catalog: pd.DataFrame, task: LiftTask) -> None:
     Raises:
         UsageError: an object's model or lift attempt above the budget (exit 2).
     """
-    runnable = []
+    s, p = task.preset.settings, task.preset.profile
     for record in catalog.to_dict("records"):
         try:
             obj = CatalogObject.from_row(record)
-            obj.to_sim_spec()
         except InputDataError:
             continue
-        runnable.append(obj)
-    check_sim_objects(runnable, settings=task.preset.settings, profile=task.preset.profile)
+        try:
+            plan_sim_objects([obj], settings=s, profile=p)
+        except InputDataError:
+            continue
 
 
 def lift_sweep(
