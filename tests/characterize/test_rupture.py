@@ -124,8 +124,8 @@ def _fast_squeeze(seed: int, *, collapse: bool) -> SqueezeSeries:
 
 @pytest.mark.parametrize("seed", range(5))
 def test_a_collapse_after_a_loading_shorter_than_two_windows_is_found(seed: int) -> None:
-    from deformctl.characterize.rupture import _loading_window
     from deformctl.signals import sg_window_length
+    from deformctl.squeeze.rupture import _loading_window
 
     s = _fast_squeeze(seed, collapse=True)
     dt = float(np.median(np.diff(s.time_s)))
