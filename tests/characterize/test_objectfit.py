@@ -242,3 +242,26 @@ def test_a_fitted_lag_that_moves_lambda_withholds_it_a_known_one_does_not() -> N
     assert not _damping_determined(lam, 1.01 * edge_se, k, {**params, "lag_s": 0.0}, data)
     known_data = replace(data, lag_s=0.0)
     assert _damping_determined(lam, 1.01 * edge_se, k, {**params, "lag_s": 0.0}, known_data)
+
+
+def test_a_lag_fitted_to_a_recording_without_one_moves_lambda_by_d_times_l() -> None:
+    # the rule's premise: the lag is bounded below by 0, so a lag fitted to a lag-free
+    # recording is all error, and λ takes +D·L with it; the standard error covers the rest
+    truth = {"stiffness_n_per_m": 2000.0, "damping_ns_per_m": 200.0}
+    shifted: list[tuple[float, float, float]] = []
+    for seed in range(12):
+        s = synthetic_law_squeeze(
+            "kv", truth, lag_s=0.0, force_noise_rel=0.01, rate_hz=100.0, seed=seed
+        )
+        fit = fit_object([s], model="kv", window_s=0.25, fit_preload=True, lag_s=None)
+        p, se = fit.chosen.params, fit.chosen.se
+        if p["lag_s"] > 1e-6:
+            error = p["damping_ns_per_m"] - truth["damping_ns_per_m"]
+            shift = p["stiffness_n_per_m"] * p["lag_s"]
+            shifted.append((error, shift, se["damping_ns_per_m"]))
+    assert len(shifted) >= 4
+    assert all(error > 0 for error, _, _ in shifted)  # one-sided, as the lag is
+    z_raw = [error / s for error, _, s in shifted]
+    z_less_shift = [(error - shift) / s for error, shift, s in shifted]
+    assert float(np.mean(z_raw)) > 1.0  # the standard error alone is too optimistic
+    assert all(abs(z) <= 2.0 for z in z_less_shift)  # less D·L it is honest
