@@ -29,7 +29,7 @@ from deformctl.measure.csv.options import DEFAULT_CSV_MEMORY_BUDGET_GIB as DEFAU
 from deformctl.measure.csv.options import CsvDialect, CsvOptions
 
 if TYPE_CHECKING:  # pragma: no cover - the readers (pandas, pyarrow, MCAP) load when it runs
-    from deformctl.measure.csv.batch import CsvFileTask
+    from deformctl.measure.csv.batch import CsvFile, CsvFileTask
     from deformctl.parallel import SweepOptions
 
 SkipRows = Annotated[
@@ -166,6 +166,20 @@ READ = OptionGroup(
 )
 
 
+def _files(paths: Sequence[str], objects_from: str | None, named: ObjectFlags) -> list[CsvFile]:
+    """Each file of ``paths`` with the object it holds (the same for a run and a dry run)."""
+    from deformctl.measure.csv.batch import csv_objects
+
+    return csv_objects(
+        paths,
+        objects_from=objects_from,
+        object_id=named.object_id,
+        weight_n=named.weight_n,
+        size_cm=named.size_cm,
+        friction_mu=named.friction_mu,
+    )
+
+
 def run(
     paths: Sequence[str],
     task: CsvFileTask,
@@ -178,17 +192,10 @@ def run(
 ) -> None:
     """Read every CSV file of ``paths`` and write their squeeze log or dataset directory (with
     its summary line unless ``quiet``)."""
-    from deformctl.measure.csv.batch import csv_objects, measure_csv_files, measure_csv_sweep
+    from deformctl.measure.csv.batch import measure_csv_files, measure_csv_sweep
     from deformctl.parallel import single_file_workers
 
-    files = csv_objects(
-        paths,
-        objects_from=objects_from,
-        object_id=named.object_id,
-        weight_n=named.weight_n,
-        size_cm=named.size_cm,
-        friction_mu=named.friction_mu,
-    )
+    files = _files(paths, objects_from, named)
     if sweep.check(output, file_workers=True):
         summary = measure_csv_sweep(files, task, output=output, sweep=sweep, force=force)
         report_dataset(summary.out_dir)
@@ -210,18 +217,10 @@ def dry_run(
 ) -> None:
     """``measure csv --dry-run``: each file's detection on stdout, its error line on stderr;
     the exit code a real run would give (65 for one bad file, 1 when some of many fail)."""
-    from deformctl.measure.csv.batch import csv_objects
     from deformctl.measure.csv.dry_run import dry_run_files, outcome_lines
     from deformctl.parallel import single_file_workers
 
-    files = csv_objects(
-        paths,
-        objects_from=objects_from,
-        object_id=named.object_id,
-        weight_n=named.weight_n,
-        size_cm=named.size_cm,
-        friction_mu=named.friction_mu,
-    )
+    files = _files(paths, objects_from, named)
     result = dry_run_files(files, task, workers=single_file_workers(sweep.workers, len(files)))
     for outcome in result.outcomes:
         lines = outcome_lines(outcome)
