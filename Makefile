@@ -161,6 +161,8 @@ MODEL_EVAL_N ?= 600
 MODEL_EVAL_SEED ?= 2
 MODEL_PRESET ?= paper
 MODEL_SIM_ARGS ?=
+# one squeeze log of 1,500 objects is about 2.1 GiB in memory (the default budget is 2 GiB)
+MODEL_MEMORY_GIB ?= 6
 MODEL_OUT ?= datasets/models/grip.skops
 MODEL_REFERENCE ?= datasets/models/grip.skops
 M := $(MODEL_RUN)
@@ -196,7 +198,7 @@ $(M)/%/lift.parquet: $(M)/%/population.csv
 	  -o $@ > $(@D)/lift.txt
 $(M)/%/squeeze.mcap: $(M)/%/population.csv
 	$(DC) measure sim $< --sim-preset $(MODEL_PRESET) $(MODEL_SIM_ARGS) --seed 0 \
-	  --workers $(WORKERS) -o $@
+	  --workers $(WORKERS) --memory-budget-gib $(MODEL_MEMORY_GIB) -o $@
 $(M)/%/coefficients.parquet: $(M)/%/squeeze.mcap
 	$(DC) characterize $< -o $@ > $(@D)/coefficients.txt
 $(M)/%/index.parquet: $(M)/%/coefficients.parquet $(M)/%/lift.parquet
