@@ -17,10 +17,10 @@ against the command line's):
   the law chosen by BIC, as the command does);
 * ``lift``: :func:`lift_catalog` with :func:`sim_runner_factory` (the ``paper`` preset;
   :class:`SimOptions` changes it) or :func:`rig_runner_factory`, and a :class:`SearchOptions`;
-* ``table``: :func:`build_index_table`; ``train``: :func:`train_model` (the paper's 3-2-1
-  network, 40 training rows, seed 0); ``predict``: :func:`load_predictor` (a model file or the
-  bundled ``grip``), :func:`read_prediction_inputs` and :func:`predict_objects`; ``inspect``:
-  :func:`describe`.
+* ``table``: :func:`build_index_table`; ``train``: :func:`train_model` (a
+  :class:`TrainOptions`: the paper's 3-2-1 network, 40 training rows, seed 0); ``predict``:
+  :func:`load_predictor` (a model file or the bundled ``grip``), :func:`read_prediction_inputs`
+  and :func:`predict_objects`; ``inspect``: :func:`describe`.
 
 Files: :func:`read_catalog`, :func:`read_table`, :func:`read_squeeze_log`,
 :func:`read_lift_log`. The packages, by pipeline stage: :mod:`~deformctl.population`,
@@ -71,6 +71,7 @@ if TYPE_CHECKING:  # for type checkers; at run time each loads on first use
     )
     from deformctl.measure.sim import simulate_squeezes
     from deformctl.measure.stage import read_recording
+    from deformctl.model import TrainOptions
     from deformctl.population import make_population, paper_objects
     from deformctl.predict import load_predictor, predict_objects, read_prediction_inputs
     from deformctl.presets import SimOptions, sim_preset

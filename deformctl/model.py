@@ -8,6 +8,7 @@ module sits below both, so the file layer does not import the training stage.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
@@ -16,6 +17,19 @@ from sklearn.neural_network import MLPRegressor
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils.validation import check_is_fitted, validate_data
+
+from deformctl.errors import UsageError
+from deformctl.population_options import PAPER_TRAIN_SIZE
+from deformctl.quantities import (
+    CALIBRATION_SIZE,
+    HIDDEN_SIZE,
+    L2_ALPHA,
+    MAX_ITER,
+    RESTARTS,
+    SEED,
+    TOL,
+    TRAIN_SIZE,
+)
 
 #: The model's inputs, in order: W (N), D (N/cm), λ (N·s/cm).
 FEATURES: tuple[str, ...] = ("weight_n", "deformability_n_per_cm", "damping_ns_per_cm")
@@ -32,6 +46,64 @@ DEFAULT_MAX_ITER = 3000
 DEFAULT_TOL = 1e-6
 
 TargetMode = Literal["ratio", "direct"]
+#: Defaults of ``train`` besides the network's: the paper's split, our restarts.
+DEFAULT_TRAIN_SIZE = PAPER_TRAIN_SIZE
+DEFAULT_RESTARTS = 8
+
+
+@dataclass(frozen=True)
+class TrainOptions:
+    """How ``train`` splits the index table and fits the network (frozen; checked when built,
+    each number by its :mod:`deformctl.quantities` rule; :func:`deformctl.train.train_model`).
+
+    Attributes:
+        hidden: hidden layer sizes (``--hidden``, each >= 1); None: the form's default, ``(2,)``
+            (the paper's) or :data:`deformctl.grip.model.DEFAULT_GRIP_HIDDEN`.
+        train_size: training rows (``--train-size``, >= 2; the paper's 40).
+        calibration_size: rows held out to calibrate the split-conformal bound
+            (``--calibration-size``, >= 0; 0: no bound).
+        seed: seeds the split and the restarts' initial weights (``--seed``, >= 0).
+        restarts: seeded initialisations (>= 1); the best on the training rows is kept.
+        max_iter, solver, activation, alpha, tol: the ``MLPRegressor``'s (``max_iter`` >= 1,
+            the L2 penalty ``alpha`` >= 0, ``tol`` > 0; a bad solver or activation name is
+            refused by scikit-learn as the network is fitted).
+        target: the paper form's target: ``"ratio"`` (L_f / W) or ``"direct"`` (L_f).
+
+    Raises:
+        UsageError: a number outside its rule, or an unknown target (exit 2).
+    """
+
+    hidden: tuple[int, ...] | None = None
+    train_size: int = DEFAULT_TRAIN_SIZE
+    calibration_size: int = 0
+    seed: int = 0
+    restarts: int = DEFAULT_RESTARTS
+    max_iter: int = DEFAULT_MAX_ITER
+    solver: str = DEFAULT_SOLVER
+    activation: str = DEFAULT_ACTIVATION
+    alpha: float = DEFAULT_ALPHA
+    tol: float = DEFAULT_TOL
+    target: TargetMode = "ratio"
+
+    def __post_init__(self) -> None:
+        if self.hidden is not None:
+            if not self.hidden:
+                raise UsageError("--hidden needs at least one layer size")
+            for size in self.hidden:
+                HIDDEN_SIZE.check(size)
+        TRAIN_SIZE.check(self.train_size)
+        CALIBRATION_SIZE.check(self.calibration_size)
+        SEED.check(self.seed)
+        RESTARTS.check(self.restarts)
+        MAX_ITER.check(self.max_iter)
+        L2_ALPHA.check(self.alpha)
+        TOL.check(self.tol)
+        if self.target not in ("ratio", "direct"):
+            raise UsageError(f"target must be 'ratio' or 'direct', got {self.target!r}")
+
+
+#: The command's defaults, for signatures.
+DEFAULT_TRAIN = TrainOptions()
 
 
 class ScaledTargetRegressor(RegressorMixin, BaseEstimator):

@@ -51,7 +51,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -118,10 +118,11 @@ class SimPreset:
         }
 
     def lift_attempt(
-        self, spec: ObjectSpec, grip_force_n: float, *, scene_hz: float = 0.0
+        self, spec: ObjectSpec, grip_force_n: float, *, scene_hz: float = 0.0, plan: Any = None
     ) -> TrialOutcome:
         """One simulated lift attempt of ``spec`` at ``grip_force_n`` under this preset (with
-        its scene at ``scene_hz`` frames per simulated second; 0: none)."""
+        its scene at ``scene_hz`` frames per simulated second; 0: none), run as ``plan`` says
+        (:func:`deformctl.sim.protocols.plan_lift_attempt` under this preset; None: made here)."""
         from deformctl.sim import lift_attempt
 
         return lift_attempt(
@@ -132,6 +133,7 @@ class SimPreset:
             criterion=self.criterion,
             release=self.release,
             scene_hz=scene_hz,
+            plan=plan,
         )
 
     def replace(
@@ -242,8 +244,10 @@ def table_preset() -> SimPreset:
     )
 
 
+@lru_cache(maxsize=len(PRESET_NAMES))
 def sim_preset(name: str = DEFAULT_PRESET) -> SimPreset:
-    """The preset called ``name`` (``"paper"`` or ``"table"``).
+    """The preset called ``name`` (``"paper"`` or ``"table"``), built (and its values checked)
+    once per process: it is frozen, and the calibration it reads is read once.
 
     Raises:
         UsageError: an unknown name (exit 2).
@@ -256,11 +260,11 @@ class SimOptions:
     """The simulator options of ``measure --sim`` and ``lift --sim``: a preset and the single
     values that override it (None: the preset's).
 
-    Built, it is checked at once: the preset's name here, every value by the simulator's own
-    settings types (:class:`~deformctl.sim.SimSettings`, :class:`~deformctl.sim.LiftProfile`,
-    :class:`~deformctl.sim.SlipCriterion`), which :meth:`preset` builds (so the simulator is
-    imported when one is built). :meth:`as_dict` is what was asked for; the rows and logs record
-    the preset :meth:`preset` returns (``NAME+overrides`` when a value changed it).
+    Built, it builds its preset once, which checks it: the preset's name, and every value by the
+    simulator's own settings types (:class:`~deformctl.sim.SimSettings`,
+    :class:`~deformctl.sim.LiftProfile`, :class:`~deformctl.sim.SlipCriterion`; so the simulator
+    is imported when one is built). :meth:`as_dict` is what was asked for; the rows and logs
+    record the preset :meth:`preset` returns (``NAME+overrides`` when a value changed it).
 
     Attributes:
         preset_name: ``paper`` (the default) or ``table`` (``--sim-preset``).
@@ -285,14 +289,10 @@ class SimOptions:
     lift_hold_s: float | None = None
     slip_tolerance_m: float | None = None
     slip_criterion: str | None = None
+    _preset: SimPreset = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        check_preset_name(self.preset_name)
-        self.preset()  # the simulator's settings types check every value
-
-    def preset(self) -> SimPreset:
-        """The preset with the values given (:meth:`SimPreset.replace`)."""
-        return sim_preset(self.preset_name).replace(
+        preset = sim_preset(self.preset_name).replace(
             settings={
                 "alpha_cm": self.alpha_cm,
                 "dt_s": self.dt_s,
@@ -306,7 +306,12 @@ class SimOptions:
             },
             criterion={"tolerance_m": self.slip_tolerance_m, "measure": self.slip_criterion},
         )
+        object.__setattr__(self, "_preset", preset)
+
+    def preset(self) -> SimPreset:
+        """The preset with the values given (:meth:`SimPreset.replace`)."""
+        return self._preset
 
     def as_dict(self) -> dict[str, Any]:
         """The options as given (None: the preset's value)."""
-        return dataclasses.asdict(self)
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.init}

@@ -36,20 +36,26 @@ from typing import Any
 from deformctl.errors import InputDataError, UsageError
 
 __all__ = [
+    "ALPHA_CM",
     "ARM_STIFFNESS_N_PER_CM",
     "AT_FORCE_N",
+    "CALIBRATION_SIZE",
     "COVERAGE",
     "DAMPING_NS_PER_CM",
+    "DT_S",
     "FORCE_THRESHOLD_FRAC",
     "FRICTION_MU",
     "GROWTH",
+    "HIDDEN_SIZE",
     "HOLD_S",
     "IMPLIED_DAMPING_RATIO",
+    "L2_ALPHA",
     "LAG_S",
     "MARKER_ID",
     "MARKER_SIZE_CM",
     "MAX_ATTEMPTS",
     "MAX_FORCE_N",
+    "MAX_ITER",
     "MAX_LIFT_RATIO",
     "MEMORY_BUDGET_GIB",
     "MIN_GAP_S",
@@ -63,7 +69,9 @@ __all__ = [
     "RECORDED_RATE_HZ",
     "RECORDED_SECANT_N_PER_CM",
     "RELAXATION_TIME_S",
+    "RESTARTS",
     "RIG_TIMEOUT_S",
+    "SEED",
     "SIZE_CM",
     "SLIP_TOLERANCE_M",
     "SQUARE_SIZE_CM",
@@ -73,7 +81,9 @@ __all__ = [
     "STIFFNESS_EXPONENT",
     "STIFFNESS_N_PER_CM",
     "STRAIN",
+    "TOL",
     "TOLERANCE_REL",
+    "TRAIN_SIZE",
     "WEIGHT_N",
     "WINDOW_S",
     "Plausible",
@@ -272,6 +282,12 @@ LAG_S = Quantity("lag_s", "--lag-s", " s", -10.0, 10.0)
 #: The memory a run may use (``measure --sim`` and ``--csv``, ``lift --sim``): the simulator's
 #: settings and a CSV export's reader check it here.
 MEMORY_BUDGET_GIB = Quantity("memory_budget_gib", "--memory-budget-gib", " GiB", 0.0, low_open=True)
+#: The simulator's lattice spacing (``--alpha-cm``; None: from the particles per side).
+ALPHA_CM = Quantity("alpha_cm", "--alpha-cm", " cm", 0.0, low_open=True)
+#: The simulator's time step (``--dt-s``): below 10 µs a one-second squeeze is 100,000 steps of
+#: recorded state (a 1e-12 s step would ask for hundreds of GiB), above 50 ms the contact and
+#: slip events of a lift are not resolved.
+DT_S = Quantity("dt_s", "--dt-s", " s", 1e-5, 0.05)
 MARKER_SIZE_CM = Quantity("marker_size_cm", "--marker-size-cm", " cm", 0.0, low_open=True)
 SQUARE_SIZE_CM = Quantity("square_size_cm", "--square-size-cm", " cm", 0.0, low_open=True)
 MARKER_ID = Quantity("marker_id", "--marker-id", "", 0, integer=True)
@@ -293,6 +309,19 @@ SLIP_TOLERANCE_M = Quantity("slip_tolerance_m", "--slip-tolerance-m", " m", 0.0,
 #: The force ceiling of a lift (``lift --max-force-n``, the catalog's ``max_force_n`` column, the
 #: search's ``max_force_n``; :mod:`deformctl.lift.ceiling`): no attempt requests more.
 MAX_FORCE_N = Quantity("max_force_n", "--max-force-n", " N", 0.0, low_open=True)
+
+# ---------------------------------------------------------------------------- training
+#: ``train``'s split and network (:class:`deformctl.model.TrainOptions`): two training rows at
+#: least (one is no regression), any number of calibration rows, layers of one node or more.
+TRAIN_SIZE = Quantity("train_size", "--train-size", "", 2, integer=True)
+CALIBRATION_SIZE = Quantity("calibration_size", "--calibration-size", "", 0, integer=True)
+HIDDEN_SIZE = Quantity("hidden", "--hidden", "", 1, integer=True)
+SEED = Quantity("seed", "--seed", "", 0, integer=True)
+RESTARTS = Quantity("restarts", "restarts", "", 1, integer=True)
+MAX_ITER = Quantity("max_iter", "max_iter", "", 1, integer=True)
+#: The network's L2 penalty (scikit-learn's ``alpha``) and its solver's stopping tolerance.
+L2_ALPHA = Quantity("alpha", "alpha", "", 0.0)
+TOL = Quantity("tol", "tol", "", 0.0, low_open=True)
 
 # ---------------------------------------------------------------------------- predicting
 #: The probability an upper bound must hold with (``predict --coverage``, the split-conformal

@@ -67,16 +67,12 @@ from deformctl.grip.groups import (
 )
 from deformctl.grip.model import DEFAULT_GRIP_HIDDEN, GripForceRegressor, make_grip_model
 from deformctl.model import (
-    DEFAULT_ACTIVATION,
-    DEFAULT_ALPHA,
     DEFAULT_HIDDEN,
-    DEFAULT_MAX_ITER,
-    DEFAULT_SOLVER,
-    DEFAULT_TOL,
+    DEFAULT_TRAIN,
     FEATURES,
     TARGET,
     ScaledTargetRegressor,
-    TargetMode,
+    TrainOptions,
     make_model,
 )
 from deformctl.reprs import short_repr
@@ -86,10 +82,6 @@ from deformctl.table import (
     standard_scales,
     standardized_distances,
 )
-
-#: Defaults of :func:`train_model` besides the network's: the paper's split, our restarts.
-DEFAULT_TRAIN_SIZE = 40
-DEFAULT_RESTARTS = 8
 
 #: ``paper``: the paper's network on (W, D, λ) (a table with one μ); ``grip``: L_f / F_w from
 #: the groups (ω_n, ζ), μ as an input (:class:`deformctl.grip.model.GripForceRegressor`).
@@ -318,18 +310,8 @@ def _training_range(
 
 def train_model(
     index_table: pd.DataFrame,
+    options: TrainOptions = DEFAULT_TRAIN,
     *,
-    hidden: tuple[int, ...] | None = None,
-    train_size: int = DEFAULT_TRAIN_SIZE,
-    calibration_size: int = 0,
-    seed: int = 0,
-    max_iter: int = DEFAULT_MAX_ITER,
-    solver: str = DEFAULT_SOLVER,
-    activation: str = DEFAULT_ACTIVATION,
-    alpha: float = DEFAULT_ALPHA,
-    tol: float = DEFAULT_TOL,
-    restarts: int = DEFAULT_RESTARTS,
-    target: TargetMode = "ratio",
     form: ModelForm | None = None,
 ) -> TrainResult:
     """Train the lifting-force model on a seeded split of ``index_table`` and score it.
@@ -350,47 +332,30 @@ def train_model(
     Args:
         index_table: an index table (:mod:`deformctl.table`): ``object_id``, the features,
             :data:`TARGET`, and ``f_w_n`` or ``friction_mu`` for the F_w baseline.
-        hidden: hidden layer sizes; default ``(2,)`` (the paper's) for the paper form and
-            :data:`DEFAULT_GRIP_HIDDEN` for the grip form.
-        train_size: number of training rows (paper: 40).
-        calibration_size: rows held out for the conformal bound (default 0: no bound).
-        seed: seeds the split and the restarts' initial weights.
-        max_iter, solver, activation, alpha, tol: passed to ``MLPRegressor``.
-        restarts: number of seeded initialisations; the best on the training rows is kept.
-        target: paper form only: ``"ratio"`` (learn L_f / W, default) or ``"direct"``.
+        options: the split, the seed, the network and its fit
+            (:class:`~deformctl.model.TrainOptions`, checked when it was built).
         form: ``"paper"``, ``"grip"`` or None (by the table).
 
     Returns:
         A :class:`TrainResult`.
 
     Raises:
-        UsageError: a hyper-parameter out of range.
+        UsageError: an unknown form, or a solver or activation scikit-learn refuses.
         SchemaError: a required column is missing.
         InputDataError: too few rows, a duplicated object, a NaN or non-finite feature or
             lifting force, a non-positive weight or lifting force (grip form: also D, μ; a λ
             below -0.05 N·s/cm), or a constant feature column (the message names it).
     """
-    if train_size < 2:
-        raise UsageError(f"train size must be >= 2, got {train_size}")
-    if calibration_size < 0:
-        raise UsageError(f"calibration size must be >= 0, got {calibration_size}")
-    if hidden is not None and (not hidden or any(int(h) < 1 for h in hidden)):
-        raise UsageError(f"hidden layer sizes must be >= 1, got {hidden}")
-    if restarts < 1:
-        raise UsageError(f"restarts must be >= 1, got {restarts}")
-    if max_iter < 1:
-        raise UsageError(f"max_iter must be >= 1, got {max_iter}")
-    if target not in ("ratio", "direct"):
-        raise UsageError(f"target must be 'ratio' or 'direct', got {target!r}")
     if form not in (None, "paper", "grip"):
         raise UsageError(f"form must be 'paper' or 'grip', got {form!r}")
+    o = options
+    train_size, calibration_size, restarts = o.train_size, o.calibration_size, o.restarts
     chosen: ModelForm = form or model_form(index_table)
     features = GRIP_FEATURES if chosen == "grip" else FEATURES
-    if hidden is None:
-        hidden = DEFAULT_GRIP_HIDDEN if chosen == "grip" else DEFAULT_HIDDEN
+    hidden = o.hidden or (DEFAULT_GRIP_HIDDEN if chosen == "grip" else DEFAULT_HIDDEN)
     table = _validate_table(index_table, train_size, features, calibration_size)
 
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(o.seed)
     order = rng.permutation(len(table))
     restart_seeds = [int(s) for s in rng.integers(0, 2**31 - 1, size=restarts)]
     n_fit = train_size + calibration_size
@@ -412,15 +377,19 @@ def train_model(
     y_calib = calib[TARGET].to_numpy(dtype=np.float64)
     y_test = test[TARGET].to_numpy(dtype=np.float64)
 
+    sizes = tuple(int(h) for h in hidden)
+    fit: dict[str, Any] = {
+        "activation": o.activation,
+        "solver": o.solver,
+        "alpha": float(o.alpha),
+        "max_iter": int(o.max_iter),
+        "tol": float(o.tol),
+    }
     params: dict[str, Any] = {
-        "hidden": [int(h) for h in hidden],
-        "activation": activation,
-        "solver": solver,
-        "alpha": float(alpha),
-        "max_iter": int(max_iter),
-        "tol": float(tol),
+        "hidden": list(sizes),
+        **fit,
         "restarts": int(restarts),
-        "target": target if chosen == "paper" else "log_ratio_f_w",
+        "target": o.target if chosen == "paper" else "log_ratio_f_w",
     }
     losses: list[float] = []
     best: ScaledTargetRegressor | GripForceRegressor | None = None
@@ -428,28 +397,10 @@ def train_model(
     best_index = -1
     best_converged = False
     for i, rs in enumerate(restart_seeds):
-        sizes = tuple(int(h) for h in hidden)
         candidate: ScaledTargetRegressor | GripForceRegressor = (
-            make_grip_model(
-                hidden=sizes,
-                activation=activation,
-                solver=solver,
-                alpha=alpha,
-                max_iter=max_iter,
-                tol=tol,
-                random_state=rs,
-            )
+            make_grip_model(hidden=sizes, random_state=rs, **fit)
             if chosen == "grip"
-            else make_model(
-                hidden=sizes,
-                activation=activation,
-                solver=solver,
-                alpha=alpha,
-                max_iter=max_iter,
-                tol=tol,
-                random_state=rs,
-                target=target,
-            )
+            else make_model(hidden=sizes, random_state=rs, target=o.target, **fit)
         )
         # One BLAS thread: the matrices are tiny, so threads only add overhead (20x slower on a
         # loaded 2-core machine) and a thread-count-dependent summation order.
@@ -502,7 +453,7 @@ def train_model(
     )
     lam_all = table["damping_ns_per_cm"].to_numpy(dtype=np.float64)
     metrics: dict[str, Any] = {
-        "seed": int(seed),
+        "seed": int(o.seed),
         "form": chosen,
         "hyperparameters": params,
         "features": list(features),
@@ -675,11 +626,12 @@ def parameter_count(hidden: tuple[int, ...], n_features: int = 3) -> int:
 
 
 def parse_hidden(text: str, *, max_parameters: int = MAX_PARAMETERS) -> tuple[int, ...]:
-    """Hidden layer sizes from ``"2"`` or a comma list such as ``"8,4"``.
+    """Hidden layer sizes from ``"2"`` or a comma list such as ``"8,4"`` (each size's rule is
+    checked where they are used, by :class:`~deformctl.model.TrainOptions`).
 
     Raises:
-        UsageError: an empty list, an item that is not an integer, a size < 1, or a network of
-            more than ``max_parameters`` weights (checked before anything is allocated).
+        UsageError: an empty list, an item that is not an integer, or a network of more than
+            ``max_parameters`` weights (checked before anything is allocated).
     """
     items = [s.strip() for s in str(text).split(",")]
     sizes: list[int] = []
@@ -690,8 +642,6 @@ def parse_hidden(text: str, *, max_parameters: int = MAX_PARAMETERS) -> tuple[in
             raise UsageError(
                 f"hidden layer sizes must be integers like 2 or 8,4; got {text!r}"
             ) from None
-        if size < 1:
-            raise UsageError(f"hidden layer sizes must be >= 1, got {text!r}")
         sizes.append(size)
     n_weights = parameter_count(tuple(sizes))
     if n_weights > max_parameters:
@@ -749,29 +699,25 @@ def train_report(result: TrainResult) -> dict[str, Any]:
 
 
 def train_laws(
-    index_table: pd.DataFrame, coefficients: pd.DataFrame, **options: Any
+    index_table: pd.DataFrame, coefficients: pd.DataFrame, options: TrainOptions = DEFAULT_TRAIN
 ) -> tuple[TrainResult, dict[str, Any]]:
     """``train --laws``: the Kelvin–Voigt rows through :func:`train_model`, every other law's
-    rows through its own network (:func:`deformctl.grip.lawtrain.train_laws`, whose keyword
-    ``options`` these are: ``train_size``, ``calibration_size``, ``seed``, ``hidden``)."""
+    rows through its own network (:func:`deformctl.grip.lawtrain.train_laws`)."""
     from deformctl.grip.lawtrain import train_laws as train_per_law
 
-    result, section = train_per_law(
-        index_table, coefficients, train_main=train_model, restarts=DEFAULT_RESTARTS, **options
-    )
-    return result, section
+    return train_per_law(index_table, coefficients, options, train_main=train_model)
 
 
 def train_with_laws(
-    table: pd.DataFrame, laws: pd.DataFrame | None, **options: Any
+    table: pd.DataFrame, laws: pd.DataFrame | None, options: TrainOptions = DEFAULT_TRAIN
 ) -> tuple[TrainResult, dict[str, Any] | None, dict[str, Any]]:
     """``train`` (``laws`` None: :func:`train_model`) or ``train --laws`` (:func:`train_laws`):
     the result, the model file's ``laws`` section (None without) and the metrics report
     (:func:`train_report`, with the laws' figures)."""
     if laws is None:
-        result, section = train_model(table, **options), None
+        result, section = train_model(table, options), None
     else:
-        result, section = train_laws(table, laws, **options)
+        result, section = train_laws(table, laws, options)
     report = train_report(result)
     if section is not None:
         from deformctl.grip.lawtrain import law_report

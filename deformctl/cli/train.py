@@ -128,7 +128,6 @@ def train(
     calibration_size: int = typer.Option(
         0,
         "--calibration-size",
-        min=0,
         help="Rows held out to calibrate the split-conformal upper bound (predict --coverage); "
         "0: no bound.",
     ),
@@ -141,7 +140,7 @@ def train(
             "--note sim_preset=paper.",
         ),
     ] = None,
-    seed: int = typer.Option(0, "--seed", help="Seeds the split and the initial weights.", min=0),
+    seed: int = typer.Option(0, "--seed", help="Seeds the split and the initial weights."),
     laws: str | None = typer.Option(
         None, "--laws", metavar="COEFFICIENTS", help="Per material law: a table of model (law)."
     ),
@@ -182,10 +181,14 @@ def train(
     # deferred: scikit-learn and skops take seconds to import and only training needs them
     from deformctl.artifacts import Provenance, atomic_output, check_output_path, read_table
     from deformctl.artifacts.model import save_model
+    from deformctl.model import TrainOptions
     from deformctl.table import flagged_rows
     from deformctl.train import model_metadata, parse_hidden, train_with_laws
 
     sizes = None if hidden is None else parse_hidden(hidden, max_parameters=max_parameters)
+    options = TrainOptions(
+        hidden=sizes, train_size=train_size, calibration_size=calibration_size, seed=seed
+    )
     notes = parse_notes(note)
     if is_stdio(output):
         raise UsageError("the model file cannot be stdout; give a file name with -o")
@@ -196,11 +199,14 @@ def train(
         check_output_path(metrics, force, binary=False)
 
     table = read_table(index, "index_table")
-    options = {"hidden": sizes, "train_size": train_size, "calibration_size": calibration_size}
     result, section, report = train_with_laws(
-        table, None if laws is None else read_table(laws), seed=seed, **options
+        table, None if laws is None else read_table(laws), options
     )
-    settings = {**options, "hidden": report["hyperparameters"]["hidden"]}
+    settings = {
+        "hidden": report["hyperparameters"]["hidden"],
+        "train_size": train_size,
+        "calibration_size": calibration_size,
+    }
     provenance = Provenance.from_invocation([index], seed=seed, settings=settings)
     report["provenance"] = provenance.to_dict()
     report["notes"] = notes

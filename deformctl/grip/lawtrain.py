@@ -36,6 +36,8 @@ from deformctl.physics import rigid_grip_force_n
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
+    from deformctl.model import TrainOptions
+
 __all__ = ["fit_law", "join_laws", "law_section"]
 
 _TARGET = "lift_force_n"
@@ -125,41 +127,31 @@ def _ranges(law: str, frame: pd.DataFrame, params: dict[str, np.ndarray]) -> dic
     return {k: [float(np.min(v)), float(np.max(v))] for k, v in values.items()}
 
 
-def fit_law(
-    law: str,
-    rows: pd.DataFrame,
-    *,
-    train_size: int,
-    calibration_size: int,
-    seed: int,
-    hidden: tuple[int, ...],
-    restarts: int,
-    activation: str,
-    solver: str,
-    alpha: float,
-    max_iter: int,
-    tol: float,
-) -> dict[str, Any]:
-    """One law's network, trained and calibrated on that law's rows (module doc): its
-    ``laws.models`` entry."""
+def fit_law(law: str, rows: pd.DataFrame, options: TrainOptions) -> dict[str, Any]:
+    """One law's network, trained and calibrated on that law's rows (module doc) under
+    ``options`` (its hidden layers default to the grip model's): its ``laws.models`` entry."""
     from sklearn.exceptions import ConvergenceWarning
     from threadpoolctl import threadpool_limits
 
     from deformctl.grip.export import _core
+    from deformctl.grip.model import DEFAULT_GRIP_HIDDEN
     from deformctl.model import scaled_mlp
+
+    o = options
+    train_size, calibration_size = o.train_size, o.calibration_size
 
     table = rows.sort_values("object_id").reset_index(drop=True)
     usable = np.all([np.isfinite(v) & (v > 0) for v in _params(law, table).values()], axis=0)
     dropped = table["object_id"].astype(str)[~usable].tolist()  # a parameter not identified
     table = table[usable].reset_index(drop=True)
-    if len(table) < train_size + calibration_size or train_size < 2:
+    if len(table) < train_size + calibration_size:
         raise InputDataError(
             f"{len(table)} {law} rows: fewer than --train-size {train_size} + "
             f"--calibration-size {calibration_size}"
         )
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(o.seed)
     order = rng.permutation(len(table))
-    restart_seeds = [int(s) for s in rng.integers(0, 2**31 - 1, size=restarts)]
+    restart_seeds = [int(s) for s in rng.integers(0, 2**31 - 1, size=o.restarts)]
     parts = {
         "train": table.iloc[order[:train_size]],
         "calibration": table.iloc[order[train_size : train_size + calibration_size]],
@@ -171,8 +163,8 @@ def fit_law(
     best, best_loss = None, math.inf
     for rs in restart_seeds:
         net = scaled_mlp(
-            hidden=hidden, activation=activation, solver=solver, alpha=alpha,
-            max_iter=max_iter, tol=tol, random_state=rs,
+            hidden=tuple(o.hidden or DEFAULT_GRIP_HIDDEN), activation=o.activation,
+            solver=o.solver, alpha=o.alpha, max_iter=o.max_iter, tol=o.tol, random_state=rs,
         )  # fmt: skip
         with warnings.catch_warnings(), threadpool_limits(limits=1):
             warnings.simplefilter("ignore", ConvergenceWarning)
@@ -253,36 +245,22 @@ def law_section(
 def train_laws(
     index_table: pd.DataFrame,
     coefficients: pd.DataFrame,
+    options: TrainOptions,
     *,
-    train_size: int,
-    calibration_size: int,
-    seed: int = 0,
-    hidden: tuple[int, ...] | None = None,
     train_main: Any,
-    restarts: int,
 ) -> tuple[Any, dict[str, Any]]:
     """``(TrainResult of the Kelvin–Voigt rows, the laws section)``: ``train --laws``
     (:func:`deformctl.train.train_laws`, which passes ``train_main``, the stage's
-    :func:`deformctl.train.train_model`, and its ``restarts``: the grip package sits below the
-    training stage).
+    :func:`deformctl.train.train_model`: the grip package sits below the training stage).
 
-    ``train_size`` and ``calibration_size`` are per law. The Kelvin–Voigt rows go through
-    :func:`deformctl.train.train_model` unchanged (the model file's main network); every other
-    law with rows gets its network (:func:`fit_law`, same seed and hyper-parameters).
+    ``options``' ``train_size`` and ``calibration_size`` are per law. The Kelvin–Voigt rows go
+    through :func:`deformctl.train.train_model` unchanged (the model file's main network); every
+    other law with rows gets its network (:func:`fit_law`, same options).
 
     Raises:
         InputDataError: no Kelvin–Voigt rows (the main network needs them), or as
             :func:`join_laws`, :func:`fit_law` and ``train_model``.
     """
-    from deformctl.grip.model import DEFAULT_GRIP_HIDDEN
-    from deformctl.model import (
-        DEFAULT_ACTIVATION,
-        DEFAULT_ALPHA,
-        DEFAULT_MAX_ITER,
-        DEFAULT_SOLVER,
-        DEFAULT_TOL,
-    )
-
     joined = join_laws(index_table, coefficients)
     laws = joined[LAW_COLUMN].to_numpy(dtype=object)
     if not np.any(laws == "kv"):
@@ -290,30 +268,9 @@ def train_laws(
             "train --laws needs Kelvin–Voigt rows (model = kv): they train the main network"
         )
     kv_rows = index_table[laws == "kv"].reset_index(drop=True)
-    result = train_main(
-        kv_rows,
-        hidden=hidden,
-        train_size=train_size,
-        calibration_size=calibration_size,
-        seed=seed,
-        form="grip",
-    )
-    sizes = tuple(hidden or DEFAULT_GRIP_HIDDEN)
+    result = train_main(kv_rows, options, form="grip")
     models = {
-        law: fit_law(
-            law,
-            joined[laws == law],
-            train_size=train_size,
-            calibration_size=calibration_size,
-            seed=seed,
-            hidden=sizes,
-            restarts=restarts,
-            activation=DEFAULT_ACTIVATION,
-            solver=DEFAULT_SOLVER,
-            alpha=DEFAULT_ALPHA,
-            max_iter=DEFAULT_MAX_ITER,
-            tol=DEFAULT_TOL,
-        )
+        law: fit_law(law, joined[laws == law], options)
         for law in KNOWN_LAWS
         if law != "kv" and np.any(laws == law)
     }

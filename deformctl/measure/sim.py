@@ -22,6 +22,7 @@ from deformctl.series import SqueezeSeries
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported when used
     from deformctl.sim import ObjectSpec, SimSettings
+    from deformctl.sim.engine import RunPlan
 
 
 #: a Hunt–Crossley object's default squeezes reach at least this multiple of F_w
@@ -115,14 +116,19 @@ def simulate_squeezes(
         SimulationError: the simulation produced a non-finite state.
     """
     from deformctl.presets import sim_preset
+    from deformctl.sim.protocols import plan_squeeze
 
-    s = settings or sim_preset().settings
-    check_squeeze_settings(protocol, s, scene_hz)
+    s, p = settings or sim_preset().settings, protocol
+    check_squeeze_settings(p, s, scene_hz)
     objects = catalog_objects(catalog, path=path)
-    specs = [obj.to_sim_spec(path=path) for obj in objects]
+    specs = [obj.to_sim_spec(path=path) for obj in objects]  # every row refused first
+    plans = [
+        plan_squeeze(spec, ramp_s=p.ramp_s, hold_s=p.hold_s, settings=s, scene_hz=scene_hz)
+        for spec in specs
+    ]
     return squeeze_objects(
         objects,
-        specs,
+        plans,
         protocol=protocol,
         settings=s,
         seed=seed,
@@ -150,7 +156,7 @@ def check_squeeze_settings(
 
 def squeeze_objects(
     objects: Sequence[CatalogObject],
-    specs: Sequence[ObjectSpec],
+    plans: Sequence[RunPlan],
     *,
     protocol: SqueezeProtocol,
     settings: SimSettings,
@@ -159,8 +165,10 @@ def squeeze_objects(
     first_index: int = 0,
     scene_hz: float = DEFAULT_SCENE_HZ,
 ) -> tuple[list[dict[str, Any]], list[SqueezeSeries]]:
-    """:func:`simulate_squeezes` of objects already parsed, each with its spec (built once),
-    under settings already checked (:func:`check_squeeze_settings`)."""
+    """:func:`simulate_squeezes` of objects already parsed, each with its squeeze's plan
+    (:func:`deformctl.sim.protocols.plan_squeeze` under ``protocol``, ``settings`` and
+    ``scene_hz``: the spec built and the steps counted once), under settings already checked
+    (:func:`check_squeeze_settings`)."""
     from deformctl.sim import squeeze
 
     s, p = settings, protocol
@@ -169,7 +177,8 @@ def squeeze_objects(
     out_objects: list[dict[str, Any]] = []
     out: list[SqueezeSeries] = []
     squeezes = p.squeezes
-    for i, (spec, rec) in enumerate(zip(specs, records, strict=True)):
+    for i, (plan, rec) in enumerate(zip(plans, records, strict=True)):
+        spec = plan.spec
         peak = (
             p.peak_force_n if p.peak_force_n is not None else default_peak_force_n(spec, p.strain)
         )
@@ -188,10 +197,11 @@ def squeeze_objects(
                     noise_position_m=p.noise_position_m,
                     seed=base_seed + j,
                     scene_hz=scene_hz,
+                    plan=plan,
                 )
             )
         if progress is not None:
-            progress(spec.object_id, i + 1, len(specs))
+            progress(spec.object_id, i + 1, len(plans))
         out_objects.append(
             {**rec, "force_rate_hz": rate_hz, "position_rate_hz": rate_hz, "sim_peak_force_n": peak}
         )

@@ -75,8 +75,8 @@ class SimulateCatalogTask:
     """``measure --sim`` for one catalog object (a picklable sweep task).
 
     The item carries the object's catalog row and its catalog position under
-    ``"_position"``, or (a single-file run's local workers) its parsed object and spec under
-    ``"_planned"`` instead of the row; the noise stream is derived from (seed, position) as in
+    ``"_position"``, or its parsed object and squeeze plan under ``"_planned"`` instead of the
+    row (every row the caller could plan); the noise stream is derived from (seed, position) as in
     the serial run.
 
     Attributes:
@@ -103,7 +103,7 @@ class SimulateCatalogTask:
 
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """Squeeze one object: its summary row, its (object row, squeezes) as the payload."""
-        planned = item.get("_planned")  # (object, spec) parsed and built once by the caller
+        planned = item.get("_planned")  # (object, plan) parsed and planned once by the caller
         if planned is None:
             row = {k: v for k, v in item.items() if k != "_position"}
             objects, series = simulate_squeezes(
@@ -162,30 +162,28 @@ def sim_provenance(
 LOG_SAMPLE_BYTES = 400
 
 
-def _check_budgets(
+def _plan(
     catalog: pd.DataFrame, task: SimulateCatalogTask, path: str, *, single_log: bool
-) -> list[tuple[CatalogObject, RunPlan]]:
-    """Refuse, before simulating, a run above the memory budget (``--memory-budget-gib``).
+) -> list[tuple[CatalogObject, RunPlan] | None]:
+    """Each row parsed, with its squeeze's plan (:func:`deformctl.sim.protocols.plan_squeeze`:
+    the spec built once, the steps counted once), refusing, before simulating, a run above the
+    memory budget (``--memory-budget-gib``).
 
-    Each object's squeeze (its model plus the recorded steps, see
-    :func:`deformctl.sim.engine.check_run_steps`) must fit; a single-file squeeze log, built in
-    memory (MCAP's summary comes at the end), must fit as a whole. A dataset directory is written
-    part by part and has no whole-log limit. With ``single_log`` a bad row is refused first
-    (exit 65); in a dataset it is skipped here and fails alone in its worker.
-
-    Returns:
-        Each row the simulator can run, parsed, with its squeeze's plan (spec built once).
+    Each object's squeeze (its model, the recorded steps and the scene frames) must fit; a
+    single-file squeeze log, built in memory (MCAP's summary comes at the end), must fit as a
+    whole. A dataset directory is written part by part and has no whole-log limit. With
+    ``single_log`` a bad row is refused first (exit 65); in a dataset it is None here and fails
+    alone in its worker.
 
     Raises:
         InputDataError: ``single_log`` and a row the simulator refuses (exit 65).
         UsageError: one line naming the estimate, the budget and the option (exit 2).
     """
-    from deformctl.sim.engine import GIB, plan_run
+    from deformctl.sim.engine import GIB
+    from deformctl.sim.protocols import plan_squeeze
 
-    settings = task.settings
-    squeezes = task.protocol.squeezes
-    steps = task.protocol.duration_s / settings.dt_s + 1.0
-    planned = []
+    settings, p = task.settings, task.protocol
+    planned: list[tuple[CatalogObject, RunPlan] | None] = []
     for record in catalog.to_dict("records"):
         try:
             obj = CatalogObject.from_row(record)
@@ -193,16 +191,20 @@ def _check_budgets(
         except InputDataError:
             if single_log:
                 raise
-            continue  # a dataset's bad row fails alone, in its worker
-        planned.append((obj, plan_run(spec, settings, steps, "squeeze")))
-    samples = len(catalog) * squeezes * steps
+            planned.append(None)  # a dataset's bad row fails alone, in its worker
+            continue
+        plan = plan_squeeze(
+            spec, ramp_s=p.ramp_s, hold_s=p.hold_s, settings=settings, scene_hz=task.scene_hz
+        )
+        planned.append((obj, plan))
+    samples = sum((plan.steps + 1.0) * p.squeezes for _, plan in filter(None, planned))
     estimate = samples * LOG_SAMPLE_BYTES
     if single_log and estimate > settings.memory_budget_gib * GIB:
         raise UsageError(
-            f"one squeeze log of {len(catalog):,} objects x {squeezes} squeezes is {samples:.3g} "
-            f"samples, an estimated {estimate / GIB:.3g} GiB in memory, above the memory budget "
-            f"of {settings.memory_budget_gib:g} GiB; write a dataset directory (-o DIR/) or "
-            "raise --memory-budget-gib"
+            f"one squeeze log of {len(catalog):,} objects x {p.squeezes} squeezes is "
+            f"{samples:.3g} samples, an estimated {estimate / GIB:.3g} GiB in memory, above the "
+            f"memory budget of {settings.memory_budget_gib:g} GiB; write a dataset directory "
+            "(-o DIR/) or raise --memory-budget-gib"
         )
     return planned
 
@@ -236,12 +238,12 @@ def simulate_catalog_file(
     """
     check_output_path(output, force)
     catalog = select_objects(read_catalog(catalog_path), object_ids)
-    planned = _check_budgets(catalog, task, catalog_path, single_log=True)  # bad rows first
+    planned = [p for p in _plan(catalog, task, catalog_path, single_log=True) if p is not None]
     provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
     n_workers = single_file_workers(workers, len(catalog))
     if n_workers != 1:
         items = [
-            {"object_id": obj.object_id, "_position": i, "_planned": (obj, plan.spec)}
+            {"object_id": obj.object_id, "_position": i, "_planned": (obj, plan)}
             for i, (obj, plan) in enumerate(planned)
         ]
         objects, series = _squeeze_in_workers(items, task, n_workers, progress)
@@ -249,7 +251,7 @@ def simulate_catalog_file(
         check_squeeze_settings(task.protocol, task.settings, task.scene_hz)
         objects, series = squeeze_objects(
             [obj for obj, _ in planned],
-            [plan.spec for _, plan in planned],
+            [plan for _, plan in planned],
             protocol=task.protocol,
             settings=task.settings,
             seed=task.seed,
@@ -262,9 +264,17 @@ def simulate_catalog_file(
     return objects, series
 
 
-def _positioned_items(catalog: pd.DataFrame) -> list[dict[str, Any]]:
-    """The :class:`SimulateCatalogTask` items of ``catalog``: each row with its ``_position``."""
-    return [{**rec, "_position": i} for i, rec in enumerate(catalog.to_dict("records"))]
+def _positioned_items(
+    catalog: pd.DataFrame, planned: list[tuple[CatalogObject, RunPlan] | None]
+) -> list[dict[str, Any]]:
+    """The :class:`SimulateCatalogTask` items of ``catalog``: each row's object with its plan
+    (the row itself where it has none) and its ``_position``."""
+    return [
+        {**rec, "_position": i}
+        if plan is None
+        else {"object_id": rec["object_id"], "_position": i, "_planned": plan}
+        for i, (rec, plan) in enumerate(zip(catalog.to_dict("records"), planned, strict=True))
+    ]
 
 
 def _squeeze_in_workers(
@@ -312,9 +322,9 @@ def simulate_catalog_sweep(
         force: overwrite the sweep files of an existing directory.
     """
     catalog = select_objects(read_catalog(catalog_path), object_ids)
-    _check_budgets(catalog, task, catalog_path, single_log=False)
+    planned = _plan(catalog, task, catalog_path, single_log=False)
     provenance = sim_provenance(catalog_path, task, list(catalog["object_id"]))
-    items = _positioned_items(catalog)
+    items = _positioned_items(catalog, planned)
     settings = {**task.protocol.as_dict(), "sim_settings": dataclasses.asdict(task.settings)}
     if task.log_epoch_ns != LOG_EPOCH_NS:  # (the default keeps older directories resumable)
         settings["log_epoch_ns"] = task.log_epoch_ns

@@ -70,12 +70,13 @@ from deformctl.lift.runners.sim import sim_runner_factory
 from deformctl.lift.search import DEFAULT_TOLERANCE_REL
 from deformctl.lift.stage import lift_catalog
 from deformctl.measure import simulate_squeezes
+from deformctl.model import TrainOptions
 from deformctl.population import golden_population
 from deformctl.repro.synthetic import synthetic_index_table
 from deformctl.resources import dataset_path
 from deformctl.series import SqueezeSeries
 from deformctl.table import build_index_table
-from deformctl.train import DEFAULT_TRAIN_SIZE, predict, train_model
+from deformctl.train import predict, train_model
 
 #: The expected numbers: ``datasets/golden/expected.json`` (package data ``deformctl.datasets``).
 EXPECTED_PATH = dataset_path("golden", "expected.json")
@@ -194,12 +195,12 @@ def reference_network(**train_options: Any) -> dict[str, Any]:
     """The CLI-default network on the 73-row synthetic table: test errors, fixed predictions.
 
     Args:
-        train_options: overrides of :func:`~deformctl.train.train_model`'s defaults (the tests
-            break the network on purpose to show the comparison catches it).
+        train_options: overrides of the command's defaults
+            (:class:`~deformctl.model.TrainOptions`; the tests break the network on purpose to
+            show the comparison catches it).
     """
     table = synthetic_index_table(noise_rel=0.0)
-    options = {"train_size": DEFAULT_TRAIN_SIZE, "seed": GOLDEN_SEED, **train_options}
-    result = train_model(table, **options)
+    result = train_model(table, TrainOptions(**{"seed": GOLDEN_SEED, **train_options}))
     test = result.metrics["model"]["test"]
     losses = sorted(result.metrics["restart_train_rms_rel_error"])
     inputs = pd.DataFrame(
@@ -240,9 +241,8 @@ def compute_golden() -> dict[str, Any]:
     index = build_index_table(coefficients, lift)
     # the paper's network on (W, D, λ), although the golden objects' μ varies (which would
     # choose the grip form): the regression watches the pipeline, not the model's form
-    result = train_model(
-        index, train_size=GOLDEN_TRAIN_SIZE, seed=GOLDEN_SEED, hidden=(2,), form="paper"
-    )
+    options = TrainOptions(train_size=GOLDEN_TRAIN_SIZE, seed=GOLDEN_SEED, hidden=(2,))
+    result = train_model(index, options, form="paper")
     m = result.metrics
     objects = {}
     for row in index.merge(lift[["object_id", "attempts"]], on="object_id").itertuples():

@@ -44,7 +44,7 @@ import scipy.sparse
 
 from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.errors import UsageError
-from deformctl.quantities import MEMORY_BUDGET_GIB
+from deformctl.quantities import ALPHA_CM, DT_S, MEMORY_BUDGET_GIB
 from deformctl.sim.hunt_crossley import hc_law, spec_elements
 from deformctl.sim.lattice import (
     Lattice,
@@ -75,10 +75,6 @@ from deformctl.sim.step import (
 )
 from deformctl.units import CM, GRAVITY_M_S2
 
-#: The time steps the simulator accepts, s: below 10 µs a one-second squeeze is 100,000 steps of
-#: recorded state (a 1e-12 s step would ask for hundreds of GiB), above 50 ms the contact and
-#: slip events of a lift are not resolved.
-DT_BOUNDS_S = (1e-5, 0.05)
 #: velocity changes the iterative solver's warm start combines
 #: (:func:`deformctl.sim.step.iterative._warm_start`).
 #: CG iterations per solve, one lift attempt of the 10 cm cube at 8^3 / 16^3 / 21^3: linear
@@ -121,7 +117,8 @@ class SimSettings:
             ``alpha = longest side / (particles_per_side - 1)``, i.e. 5 particles along the
             longest side: the squeeze stiffness is calibrated exactly for any alpha, and halving
             alpha changes the lifting force by a few % while costing ~10x.
-        dt_s: time step, s. 1 ms: halving it changes the lifting force < 2 %.
+        dt_s: time step, s (:data:`~deformctl.quantities.DT_S`: 10 µs to 50 ms). 1 ms: halving it
+            changes the lifting force < 2 %.
         particles_per_side: particles along the longest side when ``alpha_cm`` is None.
         nonlinear_springs: geometrically exact springs (True) or linear small-strain springs.
         palm_mass_kg: mass of each palm, kg (0: the felt force equals the commanded force).
@@ -189,11 +186,8 @@ class SimSettings:
     min_shear_retardation_s: float = 0.0
 
     def __post_init__(self) -> None:
-        if self.alpha_cm is not None and not (math.isfinite(self.alpha_cm) and self.alpha_cm > 0):
-            raise UsageError(f"alpha_cm must be > 0, got {self.alpha_cm}")
-        if not (math.isfinite(self.dt_s) and DT_BOUNDS_S[0] <= self.dt_s <= DT_BOUNDS_S[1]):
-            low, high = DT_BOUNDS_S
-            raise UsageError(f"dt_s must be in [{low:g}, {high:g}] s, got {self.dt_s}")
+        ALPHA_CM.check_optional(self.alpha_cm)
+        DT_S.check(self.dt_s)
         if not (0 < self.max_squeeze_strain < 1):
             raise UsageError(f"max_squeeze_strain must be in (0, 1), got {self.max_squeeze_strain}")
         MEMORY_BUDGET_GIB.check(self.memory_budget_gib)
@@ -343,29 +337,25 @@ def uses_iterative_solver(settings: SimSettings, n_dof: int) -> bool:
 
 @dataclass(frozen=True)
 class RunPlan:
-    """One object's simulated run, worked out once before it runs: what the memory-budget check
-    judges and the run uses (:func:`plan_run`).
+    """One object's simulated run, worked out once before anything is built: what the
+    memory-budget check judges and the run uses (:func:`plan_run`; the protocols' plans,
+    :func:`deformctl.sim.protocols.plan_squeeze` and
+    :func:`~deformctl.sim.protocols.plan_lift_attempt`).
 
     Attributes:
         spec: the simulator's object.
         particles: the lattice's particle count.
-        steps: the run's recorded steps (a float: an absurd duration is an estimate).
+        steps: the run's steps (a whole number as a float: an absurd duration is refused, not
+            an overflow).
         memory_bytes: the estimated peak memory of the model, its steps and its scene frames.
+        frame_every: a scene frame every this many steps (0: none).
     """
 
     spec: ObjectSpec
     particles: int
     steps: float
     memory_bytes: float
-
-
-def check_lattice_size(spec: ObjectSpec, settings: SimSettings) -> None:
-    """Refuse a model above ``settings.memory_budget_gib`` before anything is built.
-
-    Raises:
-        UsageError: one line naming the particle count, the estimate and the budget.
-    """
-    _check_model(spec, settings, memory_estimate_bytes(spec, settings))
+    frame_every: int = 0
 
 
 def _check_model(spec: ObjectSpec, settings: SimSettings, model_bytes: float) -> int:
@@ -381,30 +371,18 @@ def _check_model(spec: ObjectSpec, settings: SimSettings, model_bytes: float) ->
     return n_particles
 
 
-def check_run_steps(
-    spec: ObjectSpec, settings: SimSettings, n_steps: float, what: str, frame_every: int = 0
-) -> None:
-    """Refuse a run whose model, recorded steps and scene frames (one every ``frame_every``
-    steps; 0: none) exceed ``settings.memory_budget_gib`` (:func:`plan_run`, its plan dropped).
-
-    Raises:
-        UsageError: see :func:`plan_run`.
-    """
-    plan_run(spec, settings, n_steps, what, frame_every)
-
-
 def plan_run(
     spec: ObjectSpec, settings: SimSettings, n_steps: float, what: str, frame_every: int = 0
 ) -> RunPlan:
     """The :class:`RunPlan` of a run of ``n_steps`` steps, when its model, recorded steps and
     scene frames (one every ``frame_every`` steps; 0: none) fit ``settings.memory_budget_gib``.
 
-    Made before any step is allocated (``n_steps`` comes from the protocol's durations and
-    ``dt_s``; a float, so an absurd duration is an estimate, not an overflow).
+    Made before the model is built or any step allocated (``n_steps`` comes from the protocol's
+    durations and ``dt_s``; the estimate is a float, so an absurd duration does not overflow).
 
     Raises:
         UsageError: one line naming the steps, the estimate and the budget (exit 2); a model
-            too large by itself is named as :func:`check_lattice_size` does.
+            too large by itself: one line naming its particle count instead.
     """
     model = memory_estimate_bytes(spec, settings)
     n_particles = _check_model(spec, settings, model)
@@ -419,14 +397,14 @@ def plan_run(
             f"budget of {settings.memory_budget_gib:g} GiB; use a larger --dt-s or shorter "
             "durations, or raise --memory-budget-gib"
         )
-    return RunPlan(spec, n_particles, float(n_steps), estimate)
+    return RunPlan(spec, n_particles, float(n_steps), estimate, frame_every)
 
 
 def element_constants(
     spec: ObjectSpec, settings: SimSettings, reference_m: float | None = None
 ) -> tuple[Lattice, FloatArray, FloatArray]:
-    """Lattice and calibrated element stiffness (N/m) and damping (N·s/m; arms too), ``[m]``."""
-    check_lattice_size(spec, settings)
+    """Lattice and calibrated element stiffness (N/m) and damping (N·s/m; arms too), ``[m]``
+    (its size within the budget: the run's :class:`RunPlan` judged it before)."""
     if spec.hunt_crossley:  # the tangent and damping at the reference strain
         el = spec_elements(spec, settings, reference_m)
         return el.lattice, el.tangent_n_per_m, el.damping_ns_per_m

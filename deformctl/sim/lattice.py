@@ -93,8 +93,9 @@ class Lattice:
 
 
 def particles_per_axis(size_m: tuple[float, float, float], alpha_m: float) -> tuple[int, int, int]:
-    """Particles along each axis for spacing ``alpha_m``: ``max(2, round(s / alpha) + 1)``."""
-    n = [max(2, round(s / alpha_m) + 1) for s in size_m]
+    """Particles along each axis for spacing ``alpha_m``: ``max(2, round(s / alpha) + 1)`` (at
+    most 10¹⁸ + 1: an absurd spacing's lattice is refused by the memory budget, not an overflow)."""
+    n = [max(2, round(min(s / alpha_m, 1e18)) + 1) for s in size_m]
     return (n[0], n[1], n[2])
 
 

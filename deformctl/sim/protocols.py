@@ -20,10 +20,11 @@ from deformctl.scene import scene_every_steps
 from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
 from deformctl.sim import first_use
 from deformctl.sim.engine import (
+    RunPlan,
     SimSettings,
     build_model,
-    check_run_steps,
     clear_model_cache,
+    plan_run,
     run_model,
 )
 from deformctl.sim.hunt_crossley import implicit_reference_m
@@ -254,6 +255,28 @@ def _check_finite(rec: FloatArray, what: str, spec: ObjectSpec) -> None:
         raise SimulationError(f"object {spec.object_id!r}: non-finite state during {what}")
 
 
+def plan_squeeze(
+    spec: ObjectSpec,
+    *,
+    ramp_s: float = 0.25,
+    hold_s: float = 1.0,
+    settings: SimSettings | None = None,
+    scene_hz: float = 0.0,
+) -> RunPlan:
+    """The plan of one squeeze of ``spec`` (:func:`squeeze`'s arguments): its steps, a scene
+    frame every so many steps (``scene_hz``; 0: none) and its memory, within the budget.
+
+    Raises:
+        UsageError: a negative or infinite duration, a bad scene rate, or a squeeze above
+            ``settings.memory_budget_gib`` (exit 2).
+    """
+    s = settings or SimSettings()
+    if not (ramp_s >= 0 and hold_s >= 0):  # an endless squeeze is refused by the budget
+        raise UsageError("ramp_s and hold_s must be >= 0")
+    every = scene_every_steps(scene_hz, s.dt_s)
+    return plan_run(spec, s, max(1.0, round((ramp_s + hold_s) / s.dt_s, 0)), "squeeze", every)
+
+
 def squeeze(
     spec: ObjectSpec,
     *,
@@ -267,6 +290,7 @@ def squeeze(
     noise_position_m: float = 0.0,
     seed: int | None = None,
     scene_hz: float = 0.0,
+    plan: RunPlan | None = None,
 ) -> SqueezeSeries:
     """Force-controlled squeeze: both palms push with ``F(t)``, a linear ramp to the peak, a hold.
 
@@ -282,6 +306,8 @@ def squeeze(
             and palm positions (0: exact). seed: noise seed (``np.random.default_rng``).
         scene_hz: record the scene (:class:`deformctl.scene.SceneFrames`, noise-free) at this
             many frames per simulated second, from t = 0 (0: none; at most 1/dt).
+        plan: the squeeze's plan (:func:`plan_squeeze` of the same spec, durations, settings and
+            scene rate), made once for an object's squeezes; None: made here.
 
     Returns:
         the squeeze series (force felt, compression, commanded force, palm x positions; its
@@ -290,11 +316,9 @@ def squeeze(
     s = settings or SimSettings()
     if not (math.isfinite(peak_force_n) and peak_force_n > 0):
         raise UsageError(f"peak_force_n must be > 0, got {peak_force_n}")
-    if ramp_s < 0 or hold_s < 0 or not math.isfinite(ramp_s + hold_s):
-        raise UsageError("ramp_s and hold_s must be >= 0")
-    every = scene_every_steps(scene_hz, s.dt_s)
-    n_steps = max(1, round((ramp_s + hold_s) / s.dt_s))
-    check_run_steps(spec, s, n_steps, "squeeze", every)
+    if plan is None:
+        plan = plan_squeeze(spec, ramp_s=ramp_s, hold_s=hold_s, settings=s, scene_hz=scene_hz)
+    n_steps, every = int(plan.steps), plan.frame_every
     _kernels_ready()
     reference = implicit_reference_m(spec, peak_force_n)  # a stable step at the peak's tangent
     model = build_model(
@@ -370,6 +394,33 @@ def squeeze_many(
     ]
 
 
+def _grip_steps(settings: SimSettings) -> int:
+    """Steps of a lift attempt's grip: its force ramp and settle, before the rise."""
+    return max(1, round((settings.grip_ramp_s + settings.grip_settle_s) / settings.dt_s))
+
+
+def plan_lift_attempt(
+    spec: ObjectSpec,
+    *,
+    profile: LiftProfile | None = None,
+    settings: SimSettings | None = None,
+    scene_hz: float = 0.0,
+) -> RunPlan:
+    """The plan of one lift attempt of ``spec`` (:func:`lift_attempt`'s arguments): its steps
+    (the grip, the rise, the hold), a scene frame every so many steps and its memory, within the
+    budget.
+
+    Raises:
+        UsageError: a bad scene rate, or an attempt above ``settings.memory_budget_gib``
+            (exit 2).
+    """
+    s, p = settings or SimSettings(), profile or LiftProfile()
+    every = scene_every_steps(scene_hz, s.dt_s)
+    rise = float(np.ceil(p.rise_time_s(p.rise_m(spec)) / s.dt_s))
+    n_steps = _grip_steps(s) + rise + round(p.hold_s / s.dt_s, 0)
+    return plan_run(spec, s, n_steps, "lift attempt", every)
+
+
 def lift_attempt(
     spec: ObjectSpec,
     grip_force_n: float,
@@ -380,6 +431,7 @@ def lift_attempt(
     release: SupportRelease | None = None,
     stop_when_slipped: bool | None = None,
     scene_hz: float = 0.0,
+    plan: RunPlan | None = None,
 ) -> TrialOutcome:
     """Grip ``spec`` with ``grip_force_n`` per palm, raise the palms along ``profile``, hold.
 
@@ -396,7 +448,9 @@ def lift_attempt(
 
     ``scene_hz`` > 0 records the attempt's scene (:class:`deformctl.scene.SceneFrames`) at that
     many frames per simulated second, on the series' time base, ending with its last sample (at
-    most 1/dt; it changes no simulated number).
+    most 1/dt; it changes no simulated number). ``plan``: the attempt's plan
+    (:func:`plan_lift_attempt` of the same spec, profile, settings and scene rate), made once for
+    an object's attempts; None: made here.
     """
     s = settings or SimSettings()
     p = profile or LiftProfile()
@@ -404,7 +458,9 @@ def lift_attempt(
     r = release or SupportRelease()
     if not (math.isfinite(grip_force_n) and grip_force_n >= 0):
         raise UsageError(f"grip_force_n must be finite and >= 0, got {grip_force_n}")
-    every = scene_every_steps(scene_hz, s.dt_s)
+    if plan is None:
+        plan = plan_lift_attempt(spec, profile=p, settings=s, scene_hz=scene_hz)
+    every, n_steps = plan.frame_every, int(plan.steps)
     on_table = r.mode == "table"
     _kernels_ready()
     reference = implicit_reference_m(spec, grip_force_n)  # a stable step at the grip's tangent
@@ -413,9 +469,7 @@ def lift_attempt(
     )
     dt = s.dt_s
     rise = p.rise_m(spec)
-    n_grip = max(1, round((s.grip_ramp_s + s.grip_settle_s) / dt))
-    n_steps = n_grip + math.ceil(p.rise_time_s(rise) / dt) + round(p.hold_s / dt)
-    check_run_steps(spec, s, n_steps, "lift attempt", every)
+    n_grip = _grip_steps(s)
     n_planned = n_steps
     t = np.arange(n_steps + 1, dtype=np.float64) * dt
     if s.grip_ramp_s > 0:
@@ -514,11 +568,11 @@ def free_run(
 ) -> FreeRunSeries:
     """Release ``spec`` undeformed and at rest with its bottom ``drop_height_m`` above the table."""
     s = settings or SimSettings()
+    n_steps = int(plan_run(spec, s, max(1, round(duration_s / s.dt_s)), "free run").steps)
     _kernels_ready()
     model = build_model(
         spec, s, gripped=False, gravity=True, table=table, resting=False, lift_m=drop_height_m
     )
-    n_steps = max(1, round(duration_s / s.dt_s))
     zeros = np.zeros(n_steps + 1)
     _, _, rec = run_model(model, zeros, zeros)
     _check_finite(rec, "free run", spec)

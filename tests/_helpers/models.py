@@ -14,6 +14,7 @@ import pandas as pd
 import skops.io as sio
 
 from deformctl.artifacts.model import MODEL_FORMAT, save_model
+from deformctl.model import TrainOptions
 from deformctl.train import FEATURES, TrainResult, train_model
 
 
@@ -44,7 +45,7 @@ def _metadata(result: TrainResult) -> dict[str, object]:
 
 
 def _model(path: Path, metadata_json: str | None = None) -> Path:
-    trained = train_model(_table(), train_size=20, seed=1, restarts=1)
+    trained = train_model(_table(), TrainOptions(train_size=20, seed=1, restarts=1))
     if metadata_json is None:
         return save_model(path, trained.model, metadata=_metadata(trained), force=True)
     payload = {"format": MODEL_FORMAT, "metadata_json": metadata_json, "model": trained.model}

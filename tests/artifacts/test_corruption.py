@@ -41,6 +41,7 @@ from deformctl.artifacts.describe import describe
 from deformctl.artifacts.model import load_model, save_model
 from deformctl.cli import app
 from deformctl.errors import EXIT_DATAERR, DeformctlError
+from deformctl.model import TrainOptions
 from deformctl.population import make_population
 from deformctl.train import train_model
 from tests._helpers.builders import (
@@ -80,7 +81,7 @@ def _write_artifacts(d: Path) -> dict[str, tuple[bytes, str, Callable[[Path], An
         }
     )
     index["lift_force_n"] = index["weight_n"] * (1.2 + 0.01 * index["damping_ns_per_cm"])
-    trained = train_model(index, train_size=8, seed=0, restarts=1)
+    trained = train_model(index, TrainOptions(train_size=8, seed=0, restarts=1))
     save_model(d / "m.skops", trained.model, metadata={"seed": 0})
     return {
         **parquet,

@@ -24,6 +24,7 @@ from deformctl.artifacts.model import (
     save_model,
 )
 from deformctl.errors import InputDataError, MissingInputError, OutputExistsError, UsageError
+from deformctl.model import TrainOptions
 from deformctl.train import FEATURES, TrainResult, predict, train_model
 from tests._helpers.models import _metadata, _table
 
@@ -40,7 +41,7 @@ class Evil:
 
 @pytest.fixture(scope="module")
 def trained() -> TrainResult:
-    return train_model(_table(), train_size=20, seed=1, restarts=1)
+    return train_model(_table(), TrainOptions(train_size=20, seed=1, restarts=1))
 
 
 def test_round_trip_model_and_metadata(trained: TrainResult, tmp_path: Path) -> None:

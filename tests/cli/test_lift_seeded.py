@@ -18,6 +18,7 @@ import pytest
 from deformctl.artifacts import Provenance, read_table, validate_message, write_table
 from deformctl.artifacts.model import save_model
 from deformctl.lift import DEFAULT_START_MARGIN, DEFAULT_TOLERANCE_REL, find_min_lift_force
+from deformctl.model import TrainOptions
 from deformctl.train import make_model, train_model
 from tests._helpers.lift import (
     HEADER,
@@ -65,7 +66,7 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     paths = {"index": d / "index.parquet", "model": d / "model.skops",
              "coefficients": d / "coefficients.parquet", "other": d / "other.skops"}  # fmt: skip
     write_table(index, paths["index"], "index_table", provenance=None)
-    result = train_model(index, hidden=(4,), train_size=40, restarts=2)
+    result = train_model(index, TrainOptions(hidden=(4,), train_size=40, restarts=2))
     save_model(paths["model"], result.model, metadata=result.metrics)
     coefficients = pd.DataFrame(
         {

@@ -64,12 +64,12 @@ def test_sim_settings_refuse_a_tiny_time_step(
 ) -> None:
     from deformctl.sim import SimSettings
 
-    with pytest.raises(UsageError, match="dt_s"):
+    with pytest.raises(UsageError, match="--dt-s"):
         SimSettings(dt_s=1e-12)
     cat = write_catalog(tmp_path / "cat.csv", [catalog_row])
     result = runner.invoke(app, ["measure", "sim", str(cat), "--dt-s", "1e-12", "-o", "x.mcap"])
     assert result.exit_code == 2
-    assert "dt_s" in _one_line(result.stderr)
+    assert "--dt-s" in _one_line(result.stderr)
 
 
 @pytest.mark.parametrize("ramp", ["0", "-1", "nan"])

@@ -19,6 +19,7 @@ from typer.testing import CliRunner
 from deformctl.artifacts.model import MODEL_FORMAT, load_model
 from deformctl.cli import app
 from deformctl.errors import InputDataError
+from deformctl.model import TrainOptions
 from deformctl.train import ScaledTargetRegressor, TrainResult, train_model
 from tests._helpers.models import _table
 
@@ -28,7 +29,7 @@ DATA = Path(__file__).parents[1] / "data"
 
 @pytest.fixture(scope="module")
 def trained() -> TrainResult:
-    return train_model(_table(), train_size=20, seed=1, restarts=1)
+    return train_model(_table(), TrainOptions(train_size=20, seed=1, restarts=1))
 
 
 def _steps(m: ScaledTargetRegressor) -> list[tuple[str, object]]:

@@ -379,14 +379,14 @@ def test_parquet_tables(kind: str, data: st.DataObject) -> None:
     speed=NUMBER,
 )
 def test_simulator_budgets(dt: Any, alpha: Any, budget: Any, hold: Any, speed: Any) -> None:
-    from deformctl.lift.runners.sim import check_sim_objects
+    from deformctl.lift.runners.sim import plan_sim_objects
     from deformctl.sim import LiftProfile, SimSettings
 
     obj = CatalogObject.from_row(ROW)
     try:
         s = SimSettings(dt_s=float(dt), alpha_cm=alpha, memory_budget_gib=float(budget))
         p = LiftProfile(hold_s=float(hold), speed_m_s=float(speed))
-        check_sim_objects([obj], settings=s, profile=p)
+        plan_sim_objects([obj], settings=s, profile=p)
     except UsageError as err:
         _refused(err, 2)
         return
@@ -475,10 +475,11 @@ def test_ros2_bags(bag_bytes: bytes, data: st.DataObject) -> None:
 
 @pytest.fixture(scope="module")
 def trained_model() -> Any:
+    from deformctl.model import TrainOptions
     from deformctl.train import train_model
     from tests._helpers.models import _table
 
-    return train_model(_table(), train_size=20, seed=1, restarts=1).model
+    return train_model(_table(), TrainOptions(train_size=20, seed=1, restarts=1)).model
 
 
 def _mutate(model: Any, data: st.DataObject) -> None:

@@ -21,6 +21,7 @@ from deformctl.grip.fast import (
     resolve_model_path,
 )
 from deformctl.grip.groups import GRIP_FEATURES
+from deformctl.model import TrainOptions
 from deformctl.train import model_metadata, train_model
 from tests.grip._synthetic import grip_index
 
@@ -30,13 +31,13 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """A grip model with 30 calibration scores, a paper-form model trained at μ = 0.5."""
     out = tmp_path_factory.mktemp("models")
     table = grip_index(140, seed=5, noise=0.01)
-    grip = train_model(table, train_size=90, calibration_size=30, seed=1, restarts=1)
+    grip = train_model(table, TrainOptions(train_size=90, calibration_size=30, seed=1, restarts=1))
     save_model(out / "grip.skops", grip.model, metadata=model_metadata(grip))
     ratio = table["lift_force_n"] / table["f_w_n"]  # kept: an L_f below F_w is refused
     single = table.assign(
         friction_mu=0.5, f_w_n=table["weight_n"], lift_force_n=ratio * table["weight_n"]
     )
-    paper = train_model(single, train_size=90, seed=1, restarts=1)
+    paper = train_model(single, TrainOptions(train_size=90, seed=1, restarts=1))
     save_model(out / "paper.skops", paper.model, metadata=model_metadata(paper))
     return {"grip": out / "grip.skops", "paper": out / "paper.skops"}
 

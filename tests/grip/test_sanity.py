@@ -24,6 +24,7 @@ from deformctl.cli import app
 from deformctl.errors import InputDataError
 from deformctl.grip.fast import Predictor
 from deformctl.grip.sanity import implausible, implausible_line
+from deformctl.model import TrainOptions
 from deformctl.predict import predict_objects
 from deformctl.train import model_metadata, train_model
 
@@ -36,7 +37,9 @@ PREDICT = ["--weight-n", "2.9", "--deformability-n-per-cm", "30", "--damping-ns-
 @pytest.fixture(scope="module")
 def models(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     out = tmp_path_factory.mktemp("sanity")
-    result = train_model(grip_index(60, seed=3, noise=0.01), train_size=40, seed=0, restarts=1)
+    result = train_model(
+        grip_index(60, seed=3, noise=0.01), TrainOptions(train_size=40, seed=0, restarts=1)
+    )
     save_model(out / "good.skops", result.model, metadata=model_metadata(result))
     mlp = result.model.regressor_.steps[-1][1]
     mlp.intercepts_[-1] = mlp.intercepts_[-1] + 690.0  # log(L_f / F_w) + 690: finite weights

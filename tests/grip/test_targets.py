@@ -26,6 +26,7 @@ from deformctl.cli import app
 from deformctl.errors import InputDataError
 from deformctl.grip.fast import Predictor
 from deformctl.grip.sanity import TARGET_FACTOR, implausible, implausible_line
+from deformctl.model import TrainOptions
 from deformctl.train import model_metadata, train_model
 
 from ._synthetic import grip_index
@@ -64,7 +65,7 @@ def _with_targets(tmp_path: Path, low: float, high: float) -> Path:
 
 def test_train_stores_the_training_targets_range() -> None:
     index = grip_index(60, seed=3, noise=0.01)
-    result = train_model(index, train_size=40, seed=0, restarts=1)
+    result = train_model(index, TrainOptions(train_size=40, seed=0, restarts=1))
     ids = set(result.split.train)
     train = index[index["object_id"].isin(ids)]
     ratio = train["lift_force_n"] / train["f_w_n"]

@@ -13,6 +13,7 @@ from deformctl.grip.conformal import conformal_margin
 from deformctl.grip.fast import Predictor
 from deformctl.grip.groups import GRIP_FEATURES
 from deformctl.grip.model import GripForceRegressor
+from deformctl.model import TrainOptions
 from deformctl.train import TrainResult, model_form, model_metadata, train_model
 from tests.grip._synthetic import grip_index
 
@@ -26,7 +27,7 @@ def table() -> pd.DataFrame:
 
 @pytest.fixture(scope="module")
 def trained(table: pd.DataFrame) -> TrainResult:
-    return train_model(table, train_size=120, calibration_size=60, seed=0, restarts=2)
+    return train_model(table, TrainOptions(train_size=120, calibration_size=60, seed=0, restarts=2))
 
 
 def test_a_table_whose_mu_varies_trains_the_grip_form(
@@ -103,17 +104,17 @@ def test_a_lambda_below_the_tolerance_is_refused(table: pd.DataFrame) -> None:
     bad = table.copy()
     bad.loc[3, "damping_ns_per_cm"] = -0.2
     with pytest.raises(InputDataError, match=r"damping_ns_per_cm must be >= 0 .* for P003"):
-        train_model(bad, train_size=120, calibration_size=60, restarts=1)
+        train_model(bad, TrainOptions(train_size=120, calibration_size=60, restarts=1))
     small = table.copy()
     small.loc[3, "damping_ns_per_cm"] = -0.01  # a fit's noise around 0: counts as 0
-    result = train_model(small, train_size=120, calibration_size=60, restarts=1)
+    result = train_model(small, TrainOptions(train_size=120, calibration_size=60, restarts=1))
     assert result.metrics["negative_damping_read_as_zero"] == 1
     assert result.metrics["training_range"]["damping_ns_per_cm"][0] >= 0
 
 
 def test_too_few_rows_for_train_calibration_and_test(table: pd.DataFrame) -> None:
     with pytest.raises(InputDataError, match="120 train \\+ 140 calibration"):
-        train_model(table, train_size=120, calibration_size=140)
+        train_model(table, TrainOptions(train_size=120, calibration_size=140))
 
 
 def test_the_paper_form_records_its_single_mu(table: pd.DataFrame) -> None:
@@ -121,7 +122,7 @@ def test_the_paper_form_records_its_single_mu(table: pd.DataFrame) -> None:
     single = table.assign(
         friction_mu=0.5, f_w_n=table["weight_n"], lift_force_n=ratio * table["weight_n"]
     )
-    result = train_model(single, train_size=120, seed=0, restarts=1)
+    result = train_model(single, TrainOptions(train_size=120, seed=0, restarts=1))
     assert result.metrics["form"] == "paper"
     assert result.metrics["training_friction_mu"] == 0.5
     assert result.metrics["conformal"] is None

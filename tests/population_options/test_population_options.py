@@ -28,13 +28,13 @@ def test_the_defaults_pass_the_quantity_rules() -> None:
 
 
 def test_the_library_defaults_are_these() -> None:
+    from deformctl.model import TrainOptions
     from deformctl.population import make_population
-    from deformctl.train import train_model
 
     defaults = inspect.signature(make_population).parameters
     assert defaults["n"].default == PAPER_POPULATION_SIZE
     assert defaults["friction_mu"].default == DEFAULT_FRICTION_MU
-    assert inspect.signature(train_model).parameters["train_size"].default == PAPER_TRAIN_SIZE
+    assert TrainOptions().train_size == PAPER_TRAIN_SIZE
 
 
 def test_importing_it_imports_neither_numpy_nor_pandas() -> None:

@@ -290,12 +290,28 @@ def test_the_search_options_have_one_text(tmp_path: Path) -> None:
         assert lib == line
 
 
-@pytest.mark.parametrize("flag", ["--alpha-cm", "--dt-s", "--memory-budget-gib"])
-def test_the_simulator_settings_have_one_text(tmp_path: Path, flag: str) -> None:
+@pytest.mark.parametrize(
+    ("flag", "want"),
+    [
+        ("--alpha-cm", "error: --alpha-cm must be a finite number > 0 cm, got -1"),
+        ("--dt-s", "error: --dt-s must be a number in [1e-05, 0.05] s, got -1"),
+        (
+            "--memory-budget-gib",
+            "error: --memory-budget-gib must be a finite number > 0 GiB, got -1",
+        ),
+    ],
+)
+def test_the_simulator_settings_have_one_text(tmp_path: Path, flag: str, want: str) -> None:
+    from deformctl.presets import SimOptions
+    from deformctl.sim import SimSettings
+
     catalog = str(tmp_path / "cat.csv")
     measure = ["measure", "sim", catalog, flag, "-1", "-o", str(tmp_path / "s.mcap")]
     lift = ["lift", "sim", catalog, flag, "-1", "-o", str(tmp_path / "l.parquet")]
-    assert _error(measure) == _error(lift)
+    assert _error(measure) == _error(lift) == want
+    name = flag[2:].replace("-", "_")
+    assert _lib(lambda: SimSettings(**{name: -1.0})) == want
+    assert _lib(lambda: SimOptions(**{name: -1.0})) == want
     if flag == "--memory-budget-gib":  # the CSV reader's budget is the same quantity
         want = "error: --memory-budget-gib must be a finite number > 0 GiB, got -1"
         assert _error(_csv(tmp_path, "--weight-n", "1", flag, "-1")) == _error(lift) == want
@@ -337,3 +353,47 @@ def _predicted(**bad: float) -> str:
     with pytest.raises(InputDataError) as info:
         load_predictor("grip").predict(**values, name="A")
     return info.value.message
+
+
+@pytest.mark.parametrize(
+    ("flag", "value", "want"),
+    [
+        ("--train-size", "1", "error: --train-size must be an integer >= 2, got 1"),
+        ("--calibration-size", "-1", "error: --calibration-size must be an integer >= 0, got -1"),
+        ("--hidden", "4,0", "error: --hidden must be an integer >= 1, got 0"),
+        ("--seed", "-1", "error: --seed must be an integer >= 0, got -1"),
+    ],
+)
+def test_the_training_options_have_one_text(
+    tmp_path: Path, flag: str, value: str, want: str
+) -> None:
+    """Refused where :class:`TrainOptions` is built, before the index table is read (there is
+    none here); the library's options type refuses the same value with the same words."""
+    from deformctl.model import TrainOptions
+
+    argv = ["train", str(tmp_path / "none.parquet"), flag, value, "-o", str(tmp_path / "m.skops")]
+    assert _error(argv) == want
+    name = flag[2:].replace("-", "_")
+    given = tuple(int(v) for v in value.split(",")) if name == "hidden" else int(value)
+    assert _lib(lambda: TrainOptions(**{name: given})) == want
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(
+    ("options", "want"),
+    [
+        ({"restarts": 0}, "error: restarts must be an integer >= 1, got 0"),
+        ({"max_iter": 0}, "error: max_iter must be an integer >= 1, got 0"),
+        ({"alpha": -1e-4}, "error: alpha must be a finite number >= 0, got -0.0001"),
+        ({"tol": 0.0}, "error: tol must be a finite number > 0, got 0"),
+        ({"train_size": 2.5}, "error: --train-size must be an integer >= 2, got 2.5"),
+        ({"hidden": ()}, "error: --hidden needs at least one layer size"),
+        ({"target": "log"}, "error: target must be 'ratio' or 'direct', got 'log'"),
+    ],
+)
+def test_the_library_only_training_options_are_refused_when_built(
+    options: dict[str, Any], want: str
+) -> None:
+    from deformctl.model import TrainOptions
+
+    assert _lib(lambda: TrainOptions(**options)) == want

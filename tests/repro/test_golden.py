@@ -17,6 +17,7 @@ import pytest
 
 from deformctl.artifacts import read_catalog
 from deformctl.lift import DEFAULT_TOLERANCE_REL, find_min_lift_force
+from deformctl.model import TrainOptions
 from deformctl.population import golden_population
 from deformctl.repro import golden
 from deformctl.repro.golden import (
@@ -128,10 +129,9 @@ def _baselines(index: pd.DataFrame) -> dict[str, float]:
     # the baselines do not depend on the network: one short fit keeps this fast
     m = train_model(
         index,
-        train_size=golden.GOLDEN_TRAIN_SIZE,
-        seed=golden.GOLDEN_SEED,
-        restarts=1,
-        max_iter=5,
+        TrainOptions(
+            train_size=golden.GOLDEN_TRAIN_SIZE, seed=golden.GOLDEN_SEED, restarts=1, max_iter=5
+        ),
         form="paper",  # as compute_golden: the paper's network although the objects' μ varies
     )
     out = {"constant_ratio": float(m.metrics["constant_ratio"])}

@@ -15,8 +15,8 @@ from deformctl.sim import ObjectSpec, SimSettings
 from deformctl.sim.engine import (
     GIB,
     build_model,
-    check_lattice_size,
     memory_estimate_bytes,
+    plan_run,
     run_model,
 )
 from deformctl.sim.multigrid import solve
@@ -33,9 +33,9 @@ def test_estimate_grows_with_the_lattice_and_refuses_above_the_budget() -> None:
     fine = memory_estimate_bytes(CUBE, SimSettings(particles_per_side=21))
     assert small < 0.1 * GIB
     assert 0.1 * GIB < fine < 2.0 * GIB  # 9,261 particles fit the default budget
-    check_lattice_size(CUBE, SimSettings(particles_per_side=21))
+    plan_run(CUBE, SimSettings(particles_per_side=21), 0, "squeeze")
     with pytest.raises(UsageError) as err:
-        check_lattice_size(CUBE, SimSettings(particles_per_side=21, memory_budget_gib=0.1))
+        plan_run(CUBE, SimSettings(particles_per_side=21, memory_budget_gib=0.1), 0, "squeeze")
     message = str(err.value)
     assert "\n" not in message
     assert "9,261 particles" in message
@@ -43,7 +43,7 @@ def test_estimate_grows_with_the_lattice_and_refuses_above_the_budget() -> None:
     assert "budget of 0.1 GiB" in message
     # absurd lattices are refused without overflow
     with pytest.raises(UsageError, match="particles"):
-        check_lattice_size(CUBE, SimSettings(alpha_cm=1e-4))
+        plan_run(CUBE, SimSettings(alpha_cm=1e-4), 0, "squeeze")
 
 
 def test_estimate_is_above_what_a_build_really_takes() -> None:

@@ -152,8 +152,8 @@ def test_the_scene_counts_in_the_memory_budget() -> None:
         GIB,
         SCENE_FRAME_BYTES_PER_PARTICLE,
         STEP_BYTES,
-        check_run_steps,
         memory_estimate_bytes,
+        plan_run,
     )
 
     n_steps = 500
@@ -161,9 +161,9 @@ def test_the_scene_counts_in_the_memory_budget() -> None:
     without = memory_estimate_bytes(SPEC, FAST) + n_steps * STEP_BYTES
     frames = (n_steps + 2) * n * SCENE_FRAME_BYTES_PER_PARTICLE  # a frame every step
     tight = dataclasses.replace(FAST, memory_budget_gib=(without + 0.5 * frames) / GIB)
-    check_run_steps(SPEC, tight, n_steps, "squeeze")  # fits without its scene
-    check_run_steps(SPEC, tight, n_steps, "squeeze", frame_every=10)  # a frame every 10 steps fits
+    plan_run(SPEC, tight, n_steps, "squeeze")  # fits without its scene
+    plan_run(SPEC, tight, n_steps, "squeeze", frame_every=10)  # a frame every 10 steps fits
     with pytest.raises(UsageError, match="memory"):
-        check_run_steps(SPEC, tight, n_steps, "squeeze", frame_every=1)
+        plan_run(SPEC, tight, n_steps, "squeeze", frame_every=1)
     with pytest.raises(UsageError, match="memory"):  # refused before simulating
         squeeze(SPEC, peak_force_n=1.0, ramp_s=0.5, hold_s=0.5, settings=tight, scene_hz=500.0)

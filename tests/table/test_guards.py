@@ -19,6 +19,7 @@ from typer.testing import CliRunner
 from deformctl.artifacts import read_table, write_table
 from deformctl.cli import app
 from deformctl.errors import InputDataError
+from deformctl.model import TrainOptions
 from deformctl.table import impossible_rows
 from deformctl.train import train_model
 
@@ -144,7 +145,7 @@ def test_train_refuses_impossible_rows_naming_them() -> None:
     )  # fmt: skip
     table.loc[3, "lift_force_n"] = 1e308
     with pytest.raises(InputDataError, match=r"impossible rows in the index table: lift_force_n "):
-        train_model(table, train_size=20, seed=0, restarts=1)
+        train_model(table, TrainOptions(train_size=20, seed=0, restarts=1))
 
 
 def test_impossible_rows_is_silent_on_possible_rows() -> None:

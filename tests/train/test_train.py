@@ -21,6 +21,7 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 
 from deformctl.errors import InputDataError, SchemaError, UsageError
+from deformctl.model import TrainOptions
 from deformctl.repro.synthetic import synthetic_index_table
 from deformctl.table import lookup
 from deformctl.train import (
@@ -39,17 +40,19 @@ def table() -> pd.DataFrame:
 
 @pytest.fixture(scope="module")
 def trained(table: pd.DataFrame) -> TrainResult:
-    return train_model(table, seed=0)
+    return train_model(table, TrainOptions(seed=0))
 
 
 def test_same_seed_gives_identical_predictions(table: pd.DataFrame) -> None:
-    a = train_model(table, seed=5, restarts=2)
-    b = train_model(table.sample(frac=1.0, random_state=1), seed=5, restarts=2)  # row order
+    a = train_model(table, TrainOptions(seed=5, restarts=2))
+    b = train_model(
+        table.sample(frac=1.0, random_state=1), TrainOptions(seed=5, restarts=2)
+    )  # row order
     pd.testing.assert_frame_equal(a.predictions, b.predictions, check_exact=True)
     assert a.split == b.split
     assert a.metrics == b.metrics
     assert a.metrics["seed"] == 5
-    c = train_model(table, seed=6, restarts=1)
+    c = train_model(table, TrainOptions(seed=6, restarts=1))
     assert c.split != a.split
 
 
@@ -189,7 +192,7 @@ def test_predict_bad_inputs(trained: TrainResult) -> None:
 
 def test_fewer_rows_than_train_size_needs(table: pd.DataFrame) -> None:
     with pytest.raises(InputDataError) as exc:
-        train_model(table.iloc[:40], train_size=40)
+        train_model(table.iloc[:40], TrainOptions(train_size=40))
     assert str(exc.value) == (
         "the index table has 40 rows; a training set of 40 needs at least 41 "
         "(40 train + at least 1 test)"
@@ -214,9 +217,9 @@ def test_missing_column_and_bad_hyperparameters(table: pd.DataFrame) -> None:
     with pytest.raises(SchemaError, match="lift_force_n"):
         train_model(table.drop(columns=["lift_force_n"]))
     with pytest.raises(UsageError, match="hidden"):
-        train_model(table, hidden=(0,))
+        train_model(table, TrainOptions(hidden=(0,)))
     with pytest.raises(UsageError, match="cannot train"):
-        train_model(table, solver="newton", restarts=1)
+        train_model(table, TrainOptions(solver="newton", restarts=1))
 
 
 def test_regression_metrics_small_example() -> None:

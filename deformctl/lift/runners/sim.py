@@ -60,7 +60,6 @@ if TYPE_CHECKING:  # pragma: no cover - the simulator is imported where it runs 
 __all__ = [
     "LiftTask",
     "PlannedObject",
-    "check_sim_objects",
     "lift_sweep",
     "plan_sim_objects",
     "sim_runner_factory",
@@ -89,9 +88,12 @@ class PlannedObject(CatalogObject):
         return planned
 
 
-def _sim_spec(obj: CatalogObject) -> Any:
-    """The object's spec: its plan's, else built from the row (a runner used without a plan)."""
-    return obj.plan.spec if isinstance(obj, PlannedObject) else obj.to_sim_spec()
+def _sim_plan(obj: CatalogObject, preset: SimPreset, scene_hz: float = 0.0) -> Any:
+    """The object's plan: its own, else made from the row (a runner used without a plan)."""
+    if isinstance(obj, PlannedObject):
+        return obj.plan
+    s, p = preset.settings, preset.profile
+    return plan_sim_objects([obj], settings=s, profile=p, scene_hz=scene_hz)[0].plan
 
 
 def plan_sim_objects(
@@ -100,9 +102,11 @@ def plan_sim_objects(
     *,
     settings: SimSettings | None = None,
     profile: LiftProfile | None = None,
+    scene_hz: float = 0.0,
 ) -> list[PlannedObject]:
-    """Each object with the plan of one simulated lift attempt, refusing, before any attempt,
-    the objects the simulator cannot run.
+    """Each object with the plan of one simulated lift attempt (its scene at ``scene_hz``;
+    :func:`deformctl.sim.protocols.plan_lift_attempt`), refusing, before any attempt, the
+    objects the simulator cannot run. An object planned already is kept as it is.
 
     Raises:
         InputDataError: an object without material values (or otherwise invalid), naming the
@@ -110,33 +114,19 @@ def plan_sim_objects(
         UsageError: an object's model, or its model plus the steps of one lift attempt under
             ``profile``, would exceed ``settings.memory_budget_gib`` (exit 2).
     """
-    from deformctl.sim import LiftProfile, SimSettings
-    from deformctl.sim.engine import plan_run
+    from deformctl.sim.protocols import plan_lift_attempt
 
-    s = settings or SimSettings()
-    p = profile or LiftProfile()
-    specs = [obj.to_sim_spec(path=path) for obj in objects]  # every row refused first
-    planned = []
-    for obj, spec in zip(objects, specs, strict=True):
-        seconds = s.grip_ramp_s + s.grip_settle_s + p.rise_time_s(p.rise_m(spec)) + p.hold_s
-        plan = plan_run(spec, s, seconds / s.dt_s + 2.0, "lift attempt")
-        planned.append(PlannedObject.planned(obj, plan))
-    return planned
-
-
-def check_sim_objects(
-    objects: Sequence[CatalogObject],
-    path: str | None = None,
-    *,
-    settings: SimSettings | None = None,
-    profile: LiftProfile | None = None,
-) -> None:
-    """Refuse objects the simulator cannot run, before any attempt (:func:`plan_sim_objects`).
-
-    Raises:
-        InputDataError, UsageError: see :func:`plan_sim_objects`.
-    """
-    plan_sim_objects(objects, path, settings=settings, profile=profile)
+    todo = [obj for obj in objects if not isinstance(obj, PlannedObject)]
+    specs = iter([obj.to_sim_spec(path=path) for obj in todo])  # every row refused first
+    return [
+        obj
+        if isinstance(obj, PlannedObject)
+        else PlannedObject.planned(
+            obj,
+            plan_lift_attempt(next(specs), profile=profile, settings=settings, scene_hz=scene_hz),
+        )
+        for obj in objects
+    ]
 
 
 def sim_runner_factory(
@@ -190,7 +180,7 @@ def sim_runner_factory(
             "support_release": r.as_dict(),
             "scene_hz": float(scene_hz),
         },
-        prepare=_SimPrepare(chosen),
+        prepare=_SimPrepare(chosen, float(scene_hz)),
         material_features=True,
     )
 
@@ -201,14 +191,14 @@ def sim_runner_factory(
 
 @dataclass(frozen=True)
 class _SimAttempt:
-    """One object's trial runner: each attempt a fresh simulation under the preset."""
+    """One object's trial runner: each attempt a fresh simulation under the preset, run as
+    its plan says (spec, steps, scene frames)."""
 
     preset: SimPreset
-    spec: Any  # deformctl.sim.ObjectSpec
-    scene_hz: float = 0.0
+    plan: Any  # deformctl.sim.engine.RunPlan
 
     def __call__(self, grip_force_n: float, attempt_index: int, /) -> TrialOutcome:
-        return self.preset.lift_attempt(self.spec, grip_force_n, scene_hz=self.scene_hz)
+        return self.preset.lift_attempt(self.plan.spec, grip_force_n, plan=self.plan)
 
 
 @dataclass(frozen=True)
@@ -220,16 +210,17 @@ class _SimRunnerMaker:
     scene_hz: float = 0.0
 
     def __call__(self, obj: CatalogObject, max_force_n: float) -> TrialRunner:
-        return _SimAttempt(self.preset, _sim_spec(obj), self.scene_hz)
+        return _SimAttempt(self.preset, _sim_plan(obj, self.preset, self.scene_hz))
 
 
 @dataclass(frozen=True)
 class _SimPrepare:
     preset: SimPreset
+    scene_hz: float = 0.0
 
     def __call__(self, objects: Sequence[CatalogObject], path: str | None) -> list[PlannedObject]:
         s, p = self.preset.settings, self.preset.profile
-        return plan_sim_objects(objects, path, settings=s, profile=p)
+        return plan_sim_objects(objects, path, settings=s, profile=p, scene_hz=self.scene_hz)
 
 
 @dataclass(frozen=True)
@@ -242,7 +233,7 @@ class _SimRowFields:
             "sim_preset": self.preset.name,
             "lift_accel_m_s2": p.accel_m_s2,
             "lift_speed_m_s": p.speed_m_s,
-            "lift_height_m": p.rise_m(_sim_spec(obj)),
+            "lift_height_m": p.rise_m(_sim_plan(obj, self.preset).spec),
             "slip_tolerance_m": c.tolerance_m,
             "slip_criterion": c.measure,
         }
@@ -275,7 +266,9 @@ class LiftTask:
             InputDataError: the object cannot be lifted or simulated (recorded as failed).
         """
         factory = sim_runner_factory(preset=self.preset, scene_hz=self.scene_hz)
-        run = lift_catalog([CatalogObject.from_row(item)], factory, search=self.search)
+        planned = item.get("_planned")  # the object planned by the sweep (its spec built there)
+        obj = CatalogObject.from_row(item) if planned is None else planned
+        run = lift_catalog([obj], factory, search=self.search)
         error = run.error_message()
         return TaskOutput(
             rows=spec_rows(run.table, "lift_results"),
@@ -285,24 +278,26 @@ class LiftTask:
         )
 
 
-def _check_budgets(catalog: pd.DataFrame, task: LiftTask) -> None:
-    """The memory budgets of :func:`check_sim_objects` for the rows the simulator can run.
-
-    A row it refuses is skipped here: it fails alone, in its worker (``DIR/_failures/``).
+def _planned_items(catalog: pd.DataFrame, task: LiftTask) -> list[dict[str, Any]]:
+    """The sweep's items: each row the simulator can run as its object planned here, under
+    ``"_planned"`` (:func:`plan_sim_objects`: the spec is built once, and the memory budgets
+    are judged before any worker starts); a row it refuses as the row itself, to fail alone in
+    its worker (``DIR/_failures/``).
 
     Raises:
         UsageError: an object's model or lift attempt above the budget (exit 2).
     """
     s, p = task.preset.settings, task.preset.profile
+    items: list[dict[str, Any]] = []
     for record in catalog.to_dict("records"):
         try:
             obj = CatalogObject.from_row(record)
+            planned = plan_sim_objects([obj], settings=s, profile=p, scene_hz=task.scene_hz)
         except InputDataError:
+            items.append(record)
             continue
-        try:
-            plan_sim_objects([obj], settings=s, profile=p)
-        except InputDataError:
-            continue
+        items.append({"object_id": record["object_id"], "_planned": planned[0]})
+    return items
 
 
 def lift_sweep(
@@ -331,7 +326,7 @@ def lift_sweep(
     """
     factory = sim_runner_factory(preset=task.preset, scene_hz=task.scene_hz)
     catalog = select_objects(read_lift_objects(catalog_path), object_ids)
-    _check_budgets(catalog, task)
+    items = _planned_items(catalog, task)
     search = task.search.as_dict()
     ceiling = search.pop("max_force_n", None)
     run_settings = {"runner": factory.name, **factory.settings, **search}
@@ -345,7 +340,7 @@ def lift_sweep(
     )
     return run_sweep(
         task,
-        catalog.to_dict("records"),  # parsed in the workers: a refused row fails alone
+        items,
         out_dir=output,
         schema=table_schema("lift_results"),
         fingerprint=fingerprint,
