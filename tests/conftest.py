@@ -108,7 +108,7 @@ def write_catalog() -> Callable[[Path, Sequence[Mapping[str, Any]]], Path]:
 @pytest.fixture
 def kv_squeeze() -> SqueezeSeries:
     """A synthetic Kelvin–Voigt squeeze, D = 20 N/cm, λ = 1 N·s/cm (noisy, seed 1)."""
-    from deformctl.characterize import synthetic_kelvin_voigt_squeeze
+    from deformctl.testing.kelvin_voigt import synthetic_kelvin_voigt_squeeze
 
     return synthetic_kelvin_voigt_squeeze(KV_D_N_PER_CM, KV_LAMBDA_NS_PER_CM, seed=1)
 

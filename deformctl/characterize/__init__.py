@@ -10,8 +10,8 @@ chosen by BIC with ``auto``; D is the secant stiffness at a stated operating for
   end to end; :mod:`~deformctl.characterize.stiffness`: operating force, loading slopes, speeds,
   hysteresis; :mod:`~deformctl.characterize.columns`: the table's material columns;
   :mod:`~deformctl.characterize.material_options`: ``--model`` and ``--at-force-n``;
-  :mod:`~deformctl.characterize.plot`: one PNG per object; :mod:`~deformctl.characterize.synthetic`:
-  recordings of each law, a rupture with back-off and a relaxation, with known truth;
+  :mod:`~deformctl.characterize.plot`: one PNG per object (recordings of each law with known
+  truth are test generators: :mod:`deformctl.testing.synthetic`);
 * :mod:`~deformctl.characterize.fit`: the estimators, :func:`fit_lsq` (one object's bounded
   least-squares fit of a law) and :func:`fit_paper` (the paper's ratios), and
   :func:`characterize` (a table of many objects);
@@ -22,8 +22,9 @@ chosen by BIC with ``auto``; D is the secant stiffness at a stated operating for
 * :mod:`deformctl.squeeze`, below both stages (not in this package): the phases, the rupture
   cut, the smoothing window (:func:`default_window_s`, re-exported here) and the recording flags
   that ``measure`` and ``characterize`` share;
-* :mod:`~deformctl.characterize.models`: the exact Kelvin–Voigt response and synthetic squeezes
-  with known D and λ (ground truth for tests and examples);
+* :mod:`~deformctl.characterize.models`: the exact Kelvin–Voigt compression under a
+  piecewise-linear force (ground truth for the examples; synthetic squeezes with known D and λ
+  are in :mod:`deformctl.testing.kelvin_voigt`);
 * :mod:`~deformctl.characterize.options`: the options the command builds and the stage takes
   (:class:`FitOptions`, :class:`QualityPolicy`), checked when built;
 * :mod:`~deformctl.characterize.stage`: the ``characterize`` stage over squeeze logs, dataset
@@ -67,12 +68,7 @@ if TYPE_CHECKING:  # for type checkers; at run time each loads on first use
         check_at_force_n,
         default_lag,
     )
-    from deformctl.characterize.models import (
-        Profile,
-        kelvin_voigt_piecewise_linear,
-        kelvin_voigt_response,
-        synthetic_kelvin_voigt_squeeze,
-    )
+    from deformctl.characterize.models import kelvin_voigt_piecewise_linear
     from deformctl.characterize.objectfit import (
         ObjectFit,
         fit_object,
@@ -108,11 +104,6 @@ if TYPE_CHECKING:  # for type checkers; at run time each loads on first use
         read_and_characterize,
         squeeze_log_parts,
         sweep_warnings,
-    )
-    from deformctl.characterize.synthetic import (
-        synthetic_law_squeeze,
-        synthetic_relaxation_hold,
-        synthetic_rupture_backoff,
     )
     from deformctl.squeeze.window import (
         DEFAULT_WINDOW_RATE_HZ,

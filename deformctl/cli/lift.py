@@ -24,7 +24,7 @@ Failures, decided here:
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, NamedTuple
 
 import typer
 
@@ -122,19 +122,8 @@ def sim(
             quiet,
         )
         return
-    _lift_file(
-        catalog,
-        factory,
-        output,
-        log,
-        object_ids,
-        search,
-        seed,
-        epoch_ns,
-        sweep.workers,
-        force,
-        None if quiet else clock,
-    )
+    file = _FileRun(catalog, output, log, object_ids, search, seed, force, None if quiet else clock)
+    file.lift(factory, epoch_ns=epoch_ns, workers=sweep.workers)
 
 
 @translate_errors
@@ -175,55 +164,53 @@ def rig(
     factory = rig_runner_factory(command, timeout_s=timeout_s, slip_from_frames=judge)
     object_ids = opt.parse_object_ids(objects)
     seed = start(protocol=search.protocol, dataset=False)
-    _lift_file(
-        catalog,
-        factory,
-        output,
-        log,
-        object_ids,
-        search,
-        seed,
-        None,
-        opt.NO_SWEEP.workers,
-        force,
-        None if quiet else clock,
-    )
+    file = _FileRun(catalog, output, log, object_ids, search, seed, force, None if quiet else clock)
+    file.lift(factory)
 
 
-def _lift_file(
-    catalog: str,
-    factory: RunnerFactory,
-    output: str,
-    log: str | None,
-    object_ids: list[str] | None,
-    search: SearchOptions,
-    seed: StartSeed | None,
-    epoch_ns: int | None,
-    workers: int | Auto | None,
-    force: bool,
-    clock: RunClock | None,
-) -> None:
-    """Lift the objects of ``catalog`` into a table file (and ``log``), then report the run
-    (its summary line unless ``clock`` is None: ``--quiet``)."""
-    from deformctl.lift.stage import lift_catalog_files
+class _FileRun(NamedTuple):
+    """What ``lift sim`` and ``lift rig`` give a table-file output alike (``clock`` None:
+    ``--quiet``)."""
 
-    with progress_bar(stderr_console(), "lift") as progress:
-        run = lift_catalog_files(
-            catalog,
-            factory,
-            output=output,
-            log=log,
-            object_ids=object_ids,
-            search=search,
-            progress=progress,
-            force=force,
-            log_epoch_ns=epoch_ns,
-            seed=seed,
-            warn=warn,
-            workers=workers,
-        )
-    summary = None if clock is None else run_summary(run, clock, output, log)
-    report_run(run, quiet=is_stdio(output) or (log is not None and is_stdio(log)), summary=summary)
+    catalog: str
+    output: str
+    log: str | None
+    object_ids: list[str] | None
+    search: SearchOptions
+    seed: StartSeed | None
+    force: bool
+    clock: RunClock | None
+
+    def lift(
+        self,
+        factory: RunnerFactory,
+        *,
+        epoch_ns: int | None = None,
+        workers: int | Auto | None = opt.NO_SWEEP.workers,
+    ) -> None:
+        """Lift the objects into the table file (and the log) with ``factory``'s runner, then
+        report the run (its summary line unless ``--quiet``)."""
+        from deformctl.lift.stage import lift_catalog_files
+
+        output, log = self.output, self.log
+        with progress_bar(stderr_console(), "lift") as progress:
+            run = lift_catalog_files(
+                self.catalog,
+                factory,
+                output=output,
+                log=log,
+                object_ids=self.object_ids,
+                search=self.search,
+                progress=progress,
+                force=self.force,
+                log_epoch_ns=epoch_ns,
+                seed=self.seed,
+                warn=warn,
+                workers=workers,
+            )
+        summary = None if self.clock is None else run_summary(run, self.clock, output, log)
+        quiet = is_stdio(output) or (log is not None and is_stdio(log))
+        report_run(run, quiet=quiet, summary=summary)
 
 
 #: ``lift`` and its subcommands (registered on the root app as one group).

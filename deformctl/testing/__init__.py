@@ -1,5 +1,9 @@
 """Test generators that ship with the package: seeded synthetic recordings with known truth.
 
+:mod:`deformctl.testing.synthetic` makes a squeeze of each material law, a rupture with back-off
+and a relaxation; :mod:`deformctl.testing.kelvin_voigt` a Kelvin–Voigt squeeze with known D and
+λ from the exact response to a force profile.
+
 :mod:`deformctl.testing.shapes` draws seeded recordings of every shape real squeeze recordings
 take (falling stretches, buckling, fruit collapse, relaxation, latency, logging gaps) and writes
 them as the exports instruments write (preambles, two-row headers, CRLF/CR line ends, text

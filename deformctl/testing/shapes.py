@@ -146,7 +146,7 @@ def _kv_params(rng: np.random.Generator) -> dict[str, float]:
 def _law_squeeze(
     rng: np.random.Generator, model: str, params: Mapping[str, float], **kw: Any
 ) -> Samples:
-    from deformctl.characterize.synthetic import synthetic_law_squeeze
+    from deformctl.testing.synthetic import synthetic_law_squeeze
 
     opts: dict[str, Any] = {
         "peak_compression_m": _u(rng, 0.002, 0.015),
@@ -215,7 +215,7 @@ def shape_logging_gap(rng: np.random.Generator) -> tuple[Samples, Truth]:
 
 def shape_fruit_collapse(rng: np.random.Generator) -> tuple[Samples, Truth]:
     """A force-controlled squeeze to collapse (50–92 % within 0.1–0.4 s), then back-off."""
-    from deformctl.characterize.synthetic import synthetic_rupture_backoff
+    from deformctl.testing.synthetic import synthetic_rupture_backoff
 
     p = _kv_params(rng)
     s = synthetic_rupture_backoff(
@@ -285,7 +285,7 @@ def shape_buckling(rng: np.random.Generator) -> tuple[Samples, Truth]:
 
 def shape_relaxation(rng: np.random.Generator) -> tuple[Samples, Truth]:
     """A standard linear solid pressed fast and held: the force jumps, then decays."""
-    from deformctl.characterize.synthetic import synthetic_relaxation_hold
+    from deformctl.testing.synthetic import synthetic_relaxation_hold
 
     k = _u(rng, 200.0, 3000.0)
     s = synthetic_relaxation_hold(

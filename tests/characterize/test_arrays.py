@@ -17,11 +17,11 @@ from deformctl.characterize import (
     COEFFICIENT_COLUMNS,
     CoefficientsWarning,
     characterize_arrays,
-    synthetic_kelvin_voigt_squeeze,
-    synthetic_rupture_backoff,
 )
 from deformctl.cli import app
 from deformctl.errors import InputDataError, UsageError
+from deformctl.testing.kelvin_voigt import synthetic_kelvin_voigt_squeeze
+from deformctl.testing.synthetic import synthetic_rupture_backoff
 
 D_TRUE, LAMBDA_TRUE = 20.0, 3.0  # N/cm, N·s/cm
 runner = CliRunner()

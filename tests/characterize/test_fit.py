@@ -28,11 +28,10 @@ from deformctl.characterize import (
     characterize,
     fit_lsq,
     fit_paper,
-    kelvin_voigt_response,
-    synthetic_kelvin_voigt_squeeze,
 )
 from deformctl.errors import EXIT_DATAERR, InputDataError, UsageError
 from deformctl.series import SqueezeSeries
+from deformctl.testing.kelvin_voigt import kelvin_voigt_response, synthetic_kelvin_voigt_squeeze
 
 D_GRID_N_PER_CM = (5.0, 13.0, 30.0, 60.0)
 LAMBDA_GRID_NS_PER_CM = (0.0, 0.33, 1.0, 6.47, 15.0)

@@ -1,6 +1,6 @@
 """Identify before choosing: the law ``auto`` reports on short textbook recordings with known truth.
 
-The recording (:func:`deformctl.characterize.synthetic.synthetic_ramp_hold`): one ramp of 0.6 cm
+The recording (:func:`deformctl.testing.synthetic.synthetic_ramp_hold`): one ramp of 0.6 cm
 at 0.6 cm/s, a 1 s hold, 100 Hz, force noise 0.02 N, fitted as ``characterize`` fits a CSV export
 (a preload and a lag fitted, the window of a 100 Hz recording). The laws nest Kelvin–Voigt, so a
 richer law is reported only when its extra parameters are identified and its BIC is lower by
@@ -28,14 +28,14 @@ from deformctl.characterize.laws import secant_stiffness
 from deformctl.characterize.material_options import MODELS
 from deformctl.characterize.materials import degenerate
 from deformctl.characterize.objectfit import ObjectFit
-from deformctl.characterize.synthetic import (
+from deformctl.cli import app
+from deformctl.series import SqueezeSeries
+from deformctl.squeeze.window import default_window_s
+from deformctl.testing.synthetic import (
     FORCE_HOLD_SHAPES,
     synthetic_force_hold_squeeze,
     synthetic_ramp_hold,
 )
-from deformctl.cli import app
-from deformctl.series import SqueezeSeries
-from deformctl.squeeze.window import default_window_s
 from deformctl.units import N_PER_CM, NS_PER_CM
 
 DRAWS = int(os.environ.get("DEFORMCTL_MATERIAL_DRAWS", "5"))

@@ -20,8 +20,9 @@ import os
 import numpy as np
 import pytest
 
-from deformctl.characterize import fit_object, synthetic_law_squeeze
+from deformctl.characterize import fit_object
 from deformctl.characterize.material_options import MODELS
+from deformctl.testing.synthetic import synthetic_law_squeeze
 
 from ._truth import TRUTH
 

@@ -21,11 +21,16 @@ import pytest
 from typer.testing import CliRunner
 
 from deformctl.artifacts import read_table, write_squeeze_log
-from deformctl.characterize import characterize, fit_object, synthetic_law_squeeze
-from deformctl.characterize.synthetic import _integrate, _sample, _velocity_profile
+from deformctl.characterize import characterize, fit_object
 from deformctl.cli import app
 from deformctl.errors import UsageError
 from deformctl.series import SqueezeSeries
+from deformctl.testing.synthetic import (
+    _integrate,
+    _sample,
+    _velocity_profile,
+    synthetic_law_squeeze,
+)
 
 from ._truth import TRUTH
 

@@ -16,9 +16,9 @@ from matplotlib.image import imread
 from typer.testing import CliRunner
 
 from deformctl.artifacts import write_squeeze_log
-from deformctl.characterize import synthetic_law_squeeze
 from deformctl.characterize.plot import COLOURS, PIXELS
 from deformctl.cli import app
+from deformctl.testing.synthetic import synthetic_law_squeeze
 
 from ._truth import TRUTH
 

@@ -21,7 +21,6 @@ from deformctl.characterize import (
     fit_lsq,
     fit_paper,
     kelvin_voigt_piecewise_linear,
-    synthetic_kelvin_voigt_squeeze,
 )
 from deformctl.characterize.quality import (
     DAMPING_EXCITATION_MIN,
@@ -40,6 +39,7 @@ from deformctl.characterize.quality import (
 )
 from deformctl.errors import InputDataError, UsageError
 from deformctl.series import SqueezeSeries
+from deformctl.testing.kelvin_voigt import synthetic_kelvin_voigt_squeeze
 from tests._helpers.doubtful_logs import constant_rate, position_controlled, rupture
 
 

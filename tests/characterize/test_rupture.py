@@ -23,13 +23,15 @@ from deformctl.artifacts import read_squeeze_log, read_table, write_squeeze_log
 from deformctl.characterize import (
     characterize,
     fit_object,
-    synthetic_law_squeeze,
-    synthetic_relaxation_hold,
-    synthetic_rupture_backoff,
 )
 from deformctl.cli import app
 from deformctl.series import SqueezeSeries
 from deformctl.squeeze.rupture import cut_rupture, find_relaxation
+from deformctl.testing.synthetic import (
+    synthetic_law_squeeze,
+    synthetic_relaxation_hold,
+    synthetic_rupture_backoff,
+)
 from tests._helpers.doubtful_logs import csv_text
 
 from ._truth import TRUTH

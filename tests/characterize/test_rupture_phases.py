@@ -13,11 +13,11 @@ import itertools
 import numpy as np
 import pytest
 
-from deformctl.characterize import synthetic_kelvin_voigt_squeeze
 from deformctl.errors import UsageError
 from deformctl.measure import simulate_squeezes
 from deformctl.population import golden_population
 from deformctl.squeeze.rupture import Rupture, cut_rupture, phase_slice, ruptures_from_object
+from deformctl.testing.kelvin_voigt import synthetic_kelvin_voigt_squeeze
 from tests._helpers.doubtful_logs import rupture
 
 WINDOW_S = 0.2

@@ -21,10 +21,10 @@ import pytest
 from typer.testing import CliRunner
 
 from deformctl.artifacts import read_table, write_squeeze_log
-from deformctl.characterize import synthetic_kelvin_voigt_squeeze
 from deformctl.cli import app
 from deformctl.errors import EXIT_DATAERR, EXIT_FAILURE, EXIT_NOINPUT, EXIT_USAGE
 from deformctl.series import SqueezeSeries
+from deformctl.testing.kelvin_voigt import synthetic_kelvin_voigt_squeeze
 
 runner = CliRunner()
 #: object id → (D N/cm, λ N·s/cm): the paper's sponge and cotton bags (Table II)

@@ -21,11 +21,11 @@ from typer.testing import CliRunner
 from deformctl.artifacts import read_table, write_squeeze_log, write_table
 from deformctl.artifacts import tables as tables_module
 from deformctl.artifacts.dataset import read_dataset, read_failures
-from deformctl.characterize import synthetic_kelvin_voigt_squeeze
 from deformctl.cli import app
 from deformctl.errors import EXIT_DATAERR, EXIT_USAGE
 from deformctl.series import SqueezeSeries
 from deformctl.table import build_index_table
+from deformctl.testing.kelvin_voigt import synthetic_kelvin_voigt_squeeze
 from tests._helpers.doubtful_logs import constant_rate, position_controlled, rupture
 
 runner = CliRunner()

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from deformctl.characterize.models import kelvin_voigt_response
+from deformctl.testing.kelvin_voigt import kelvin_voigt_response
 
 #: Unit → factor to SI (the test's own table, independent of the library's).
 SI = {"s": 1.0, "ms": 1e-3, "N": 1.0, "kN": 1e3, "mN": 1e-3, "m": 1.0, "mm": 1e-3, "µm": 1e-6}

@@ -96,7 +96,7 @@ def test_fitting_a_squeeze_never_imports_scipy_signal(tmp_path: Path) -> None:
         "import sys\n"
         "import numpy as np\n"
         "from deformctl.characterize import characterize\n"
-        "from deformctl.characterize.models import kelvin_voigt_response\n"
+        "from deformctl.testing.kelvin_voigt import kelvin_voigt_response\n"
         "from deformctl.series import SqueezeSeries\n"
         "t = np.arange(0.0, 2.0, 1e-3)\n"
         "sq = []\n"

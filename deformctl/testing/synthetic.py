@@ -26,6 +26,7 @@ seeded Gaussian noise is added to force and compression.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -84,6 +85,33 @@ def _sample(
     )
 
 
+def _grid(duration_s: float, rate_hz: float) -> tuple[FloatArray, float]:
+    """The generation grid of a recording of ``duration_s`` sampled at ``rate_hz``: its times,
+    s, ``[n]``, and its step, :data:`FINE` times finer than the samples', s."""
+    h = 1.0 / (rate_hz * FINE)
+    return np.arange(round(duration_s / h) + 1, dtype=np.float64) * h, h
+
+
+def _law_squeeze(
+    model: str,
+    params: Mapping[str, float],
+    grid: tuple[FloatArray, float],
+    d: FloatArray,
+    v: FloatArray,
+    *,
+    force_noise_rel: float = 0.0,
+    force_noise_n: float = 0.0,
+    **sample: Any,
+) -> SqueezeSeries:
+    """A law's squeeze along the compression ``d`` (velocity ``v``) on ``grid``: its force,
+    sampled (:func:`_sample`'s ``sample`` options) with a noise of ``force_noise_n`` plus
+    ``force_noise_rel`` times the peak force."""
+    t, h = grid
+    force = law_force(model, params, d, v, h)
+    noise = force_noise_n + force_noise_rel * float(np.max(np.abs(force)))
+    return _sample(t, force, d, force_noise_n=noise, **sample)
+
+
 def synthetic_law_squeeze(
     model: str,
     params: Mapping[str, float],
@@ -109,9 +137,7 @@ def synthetic_law_squeeze(
     :data:`deformctl.characterize.laws.PARAMETERS`, plus an optional ``preload_n``), delayed by
     ``lag_s``, with noise of ``force_noise_rel`` times the peak force and ``position_noise_m``.
     """
-    h = 1.0 / (rate_hz * FINE)
-    duration = load_s + hold_s + release_s + rest_s
-    t = np.arange(round(duration / h) + 1, dtype=np.float64) * h
+    t, h = grid = _grid(load_s + hold_s + release_s + rest_s, rate_hz)
     knots = [(0.0, peak_compression_m / load_s), (load_s, 0.0)]
     if release_s > 0:  # else the squeeze ends with the hold
         knots += [
@@ -119,13 +145,10 @@ def synthetic_law_squeeze(
             (load_s + hold_s + release_s, 0.0),
         ]
     v = _velocity_profile(t, knots, corner_s)
-    d = _integrate(v, h)
-    force = law_force(model, params, d, v, h)
-    peak = float(np.max(np.abs(force)))
-    return _sample(
-        t, force, d, rate_hz=rate_hz, lag_s=lag_s, force_noise_n=force_noise_rel * peak,
-        position_noise_m=position_noise_m, seed=seed, object_id=object_id,
-        squeeze_index=squeeze_index,
+    return _law_squeeze(
+        model, params, grid, _integrate(v, h), v, force_noise_rel=force_noise_rel,
+        rate_hz=rate_hz, lag_s=lag_s, position_noise_m=position_noise_m, seed=seed,
+        object_id=object_id, squeeze_index=squeeze_index,
     )  # fmt: skip
 
 
@@ -156,10 +179,8 @@ def synthetic_rupture_backoff(
     ``backoff_to_frac`` of it over ``backoff_s``, while the gripper holds its position (the
     crushed object does not spring back). The true rupture force is ``rupture_force_n``.
     """
-    h = 1.0 / (rate_hz * FINE)
     t_r = rupture_force_n / force_rate_n_per_s
-    duration = t_r + collapse_s + backoff_s + rest_s
-    t = np.arange(round(duration / h) + 1, dtype=np.float64) * h
+    t, _ = _grid(t_r + collapse_s + backoff_s + rest_s, rate_hz)
     k, c = stiffness_n_per_m, damping_ns_per_m
     load = t <= t_r
     f = np.where(load, force_rate_n_per_s * t, 0.0)
@@ -232,15 +253,12 @@ def synthetic_ramp_hold(
     a 1 s hold, 100 Hz, 0.02 N (with ``f = 20 d + 1.0 ḋ`` in N, cm, s:
     ``{"stiffness_n_per_m": 2000, "damping_ns_per_m": 100}``).
     """
-    h = 1.0 / (rate_hz * FINE)
     load_s = peak_compression_m / speed_m_per_s
-    duration = load_s + hold_s
-    t = np.arange(round(duration / h) + 1, dtype=np.float64) * h
+    t, _ = grid = _grid(load_s + hold_s, rate_hz)
     v = np.where(t < load_s, speed_m_per_s, 0.0)
     d = np.minimum(speed_m_per_s * t, peak_compression_m)
-    force = law_force(model, params, d, v, h)
-    return _sample(
-        t, force, d, rate_hz=rate_hz, lag_s=0.0, force_noise_n=force_noise_n,
+    return _law_squeeze(
+        model, params, grid, d, v, force_noise_n=force_noise_n, rate_hz=rate_hz, lag_s=0.0,
         position_noise_m=0.0, seed=seed, object_id=object_id, squeeze_index=0,
     )  # fmt: skip
 
