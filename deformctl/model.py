@@ -45,10 +45,6 @@ DEFAULT_MAX_ITER = 3000
 DEFAULT_TOL = 1e-6
 
 TargetMode = Literal["ratio", "direct"]
-#: Defaults of ``train`` besides the network's: the paper's split (its 40 training rows,
-#: :data:`deformctl.population_options.PAPER_TRAIN_SIZE`), our restarts.
-DEFAULT_TRAIN_SIZE = 40
-DEFAULT_RESTARTS = 8
 
 
 @dataclass(frozen=True)
@@ -57,16 +53,14 @@ class TrainOptions:
     each number by its :mod:`deformctl.quantities` rule; :func:`deformctl.train.train_model`).
 
     Attributes:
-        hidden: hidden layer sizes (``--hidden``, each >= 1); None: the form's default, ``(2,)``
-            (the paper's) or :data:`deformctl.grip.model.DEFAULT_GRIP_HIDDEN`.
-        train_size: training rows (``--train-size``, >= 2; the paper's 40).
-        calibration_size: rows held out to calibrate the split-conformal bound
-            (``--calibration-size``, >= 0; 0: no bound).
-        seed: seeds the split and the restarts' initial weights (``--seed``, >= 0).
-        restarts: seeded initialisations (>= 1); the best on the training rows is kept.
-        max_iter, solver, activation, alpha, tol: the ``MLPRegressor``'s (``max_iter`` >= 1,
-            the L2 penalty ``alpha`` >= 0, ``tol`` > 0; a bad solver or activation name is
-            refused by scikit-learn as the network is fitted).
+        hidden: hidden layer sizes (``--hidden``); None: the form's default, ``(2,)`` (the
+            paper's) or :data:`deformctl.grip.model.DEFAULT_GRIP_HIDDEN`.
+        train_size: training rows (``--train-size``; the paper's 40).
+        calibration_size: rows held out to calibrate the conformal bound (0: no bound).
+        seed: seeds the split and the restarts' initial weights (``--seed``).
+        restarts: seeded initialisations; the best on the training rows is kept.
+        max_iter, solver, activation, alpha, tol: the ``MLPRegressor``'s (a bad solver or
+            activation name is refused by scikit-learn as the network is fitted).
         target: the paper form's target: ``"ratio"`` (L_f / W) or ``"direct"`` (L_f).
 
     Raises:
@@ -74,10 +68,10 @@ class TrainOptions:
     """
 
     hidden: tuple[int, ...] | None = None
-    train_size: int = DEFAULT_TRAIN_SIZE
+    train_size: int = 40
     calibration_size: int = 0
     seed: int = 0
-    restarts: int = DEFAULT_RESTARTS
+    restarts: int = 8
     max_iter: int = DEFAULT_MAX_ITER
     solver: str = DEFAULT_SOLVER
     activation: str = DEFAULT_ACTIVATION
@@ -86,11 +80,10 @@ class TrainOptions:
     target: TargetMode = "ratio"
 
     def __post_init__(self) -> None:
-        if self.hidden is not None:
-            if not self.hidden:
-                raise UsageError("--hidden needs at least one layer size")
-            for size in self.hidden:
-                HIDDEN_SIZE.check(size)
+        if self.hidden == ():
+            raise UsageError("--hidden needs at least one layer size")
+        for size in self.hidden or ():
+            HIDDEN_SIZE.check(size)
         TRAIN_SIZE.check(self.train_size)
         CALIBRATION_SIZE.check(self.calibration_size)
         SEED.check(self.seed)
@@ -169,51 +162,30 @@ class ScaledTargetRegressor(RegressorMixin, BaseEstimator):
         return np.asarray(inner, dtype=np.float64).reshape(-1) * scale
 
 
-def scaled_mlp(
-    *,
-    hidden: tuple[int, ...],
-    activation: str,
-    solver: str,
-    alpha: float,
-    max_iter: int,
-    tol: float,
-    random_state: int,
-) -> Pipeline:
-    """``Pipeline(StandardScaler, MLPRegressor)``: the network inside every deformctl model."""
+def scaled_mlp(options: TrainOptions, hidden: tuple[int, ...], random_state: int) -> Pipeline:
+    """``Pipeline(StandardScaler, MLPRegressor)``: the network inside every deformctl model, with
+    ``hidden`` layers, seeded by ``random_state``, fitted as ``options`` say."""
+    o = options
     mlp = MLPRegressor(
-        hidden_layer_sizes=tuple(hidden),
-        activation=activation,
-        solver=solver,
-        alpha=alpha,
-        max_iter=max_iter,
-        tol=tol,
+        hidden_layer_sizes=tuple(int(h) for h in hidden),
+        activation=o.activation,
+        solver=o.solver,
+        alpha=o.alpha,
+        max_iter=o.max_iter,
+        tol=o.tol,
         random_state=random_state,
     )
     return Pipeline([("scale", StandardScaler()), ("mlp", mlp)])
 
 
 def make_model(
-    *,
-    hidden: tuple[int, ...] = DEFAULT_HIDDEN,
-    activation: str = DEFAULT_ACTIVATION,
-    solver: str = DEFAULT_SOLVER,
-    alpha: float = DEFAULT_ALPHA,
-    max_iter: int = DEFAULT_MAX_ITER,
-    tol: float = DEFAULT_TOL,
-    random_state: int = 0,
-    target: TargetMode = "ratio",
+    options: TrainOptions = DEFAULT_TRAIN, *, random_state: int = 0
 ) -> ScaledTargetRegressor:
-    """An unfitted lifting-force model: ``ScaledTargetRegressor(Pipeline(StandardScaler, MLP))``.
+    """An unfitted lifting-force model: ``ScaledTargetRegressor(Pipeline(StandardScaler, MLP))``
+    with ``options``' network (its hidden layers by default :data:`DEFAULT_HIDDEN`).
 
-    ``target="ratio"`` learns ``L_f / W`` (W is feature 0); ``"direct"`` learns L_f itself.
+    ``options.target`` ``"ratio"`` learns ``L_f / W`` (W is feature 0); ``"direct"`` learns L_f
+    itself.
     """
-    core = scaled_mlp(
-        hidden=hidden,
-        activation=activation,
-        solver=solver,
-        alpha=alpha,
-        max_iter=max_iter,
-        tol=tol,
-        random_state=random_state,
-    )
-    return ScaledTargetRegressor(core, scale_index=0 if target == "ratio" else None)
+    core = scaled_mlp(options, options.hidden or DEFAULT_HIDDEN, random_state)
+    return ScaledTargetRegressor(core, scale_index=0 if options.target == "ratio" else None)

@@ -260,11 +260,10 @@ class SimOptions:
     """The simulator options of ``measure --sim`` and ``lift --sim``: a preset and the single
     values that override it (None: the preset's).
 
-    Built, it builds its preset once, which checks it: the preset's name, and every value by the
-    simulator's own settings types (:class:`~deformctl.sim.SimSettings`,
-    :class:`~deformctl.sim.LiftProfile`, :class:`~deformctl.sim.SlipCriterion`; so the simulator
-    is imported when one is built). :meth:`as_dict` is what was asked for; the rows and logs
-    record the preset :meth:`preset` returns (``NAME+overrides`` when a value changed it).
+    Built, it builds its preset once, which checks the name and every value (the simulator's
+    settings types: so the simulator is imported when one is built). :meth:`as_dict` is what was
+    asked for; the rows and logs record the preset :meth:`preset` returns (``NAME+overrides``
+    when a value changed it).
 
     Attributes:
         preset_name: ``paper`` (the default) or ``table`` (``--sim-preset``).

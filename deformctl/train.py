@@ -377,17 +377,13 @@ def train_model(
     y_calib = calib[TARGET].to_numpy(dtype=np.float64)
     y_test = test[TARGET].to_numpy(dtype=np.float64)
 
-    sizes = tuple(int(h) for h in hidden)
-    fit: dict[str, Any] = {
+    params: dict[str, Any] = {
+        "hidden": [int(h) for h in hidden],
         "activation": o.activation,
         "solver": o.solver,
         "alpha": float(o.alpha),
         "max_iter": int(o.max_iter),
         "tol": float(o.tol),
-    }
-    params: dict[str, Any] = {
-        "hidden": list(sizes),
-        **fit,
         "restarts": int(restarts),
         "target": o.target if chosen == "paper" else "log_ratio_f_w",
     }
@@ -398,9 +394,9 @@ def train_model(
     best_converged = False
     for i, rs in enumerate(restart_seeds):
         candidate: ScaledTargetRegressor | GripForceRegressor = (
-            make_grip_model(hidden=sizes, random_state=rs, **fit)
+            make_grip_model(o, random_state=rs)
             if chosen == "grip"
-            else make_model(hidden=sizes, random_state=rs, target=o.target, **fit)
+            else make_model(o, random_state=rs)
         )
         # One BLAS thread: the matrices are tiny, so threads only add overhead (20x slower on a
         # loaded 2-core machine) and a thread-count-dependent summation order.
@@ -698,26 +694,19 @@ def train_report(result: TrainResult) -> dict[str, Any]:
     )
 
 
-def train_laws(
-    index_table: pd.DataFrame, coefficients: pd.DataFrame, options: TrainOptions = DEFAULT_TRAIN
-) -> tuple[TrainResult, dict[str, Any]]:
-    """``train --laws``: the Kelvin–Voigt rows through :func:`train_model`, every other law's
-    rows through its own network (:func:`deformctl.grip.lawtrain.train_laws`)."""
-    from deformctl.grip.lawtrain import train_laws as train_per_law
-
-    return train_per_law(index_table, coefficients, options, train_main=train_model)
-
-
 def train_with_laws(
     table: pd.DataFrame, laws: pd.DataFrame | None, options: TrainOptions = DEFAULT_TRAIN
 ) -> tuple[TrainResult, dict[str, Any] | None, dict[str, Any]]:
-    """``train`` (``laws`` None: :func:`train_model`) or ``train --laws`` (:func:`train_laws`):
-    the result, the model file's ``laws`` section (None without) and the metrics report
-    (:func:`train_report`, with the laws' figures)."""
+    """``train`` (``laws`` None: :func:`train_model`) or ``train --laws``: the Kelvin–Voigt rows
+    through :func:`train_model`, every other law's rows through its own network
+    (:func:`deformctl.grip.lawtrain.train_laws`). Returns the result, the model file's ``laws``
+    section (None without) and the metrics report (:func:`train_report`, with the laws')."""
     if laws is None:
         result, section = train_model(table, options), None
     else:
-        result, section = train_laws(table, laws, options)
+        from deformctl.grip.lawtrain import train_laws
+
+        result, section = train_laws(table, laws, options, train_main=train_model)
     report = train_report(result)
     if section is not None:
         from deformctl.grip.lawtrain import law_report

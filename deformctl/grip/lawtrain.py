@@ -162,10 +162,7 @@ def fit_law(law: str, rows: pd.DataFrame, options: TrainOptions) -> dict[str, An
     target = np.log(y / f_w)
     best, best_loss = None, math.inf
     for rs in restart_seeds:
-        net = scaled_mlp(
-            hidden=tuple(o.hidden or DEFAULT_GRIP_HIDDEN), activation=o.activation,
-            solver=o.solver, alpha=o.alpha, max_iter=o.max_iter, tol=o.tol, random_state=rs,
-        )  # fmt: skip
+        net = scaled_mlp(o, o.hidden or DEFAULT_GRIP_HIDDEN, rs)
         with warnings.catch_warnings(), threadpool_limits(limits=1):
             warnings.simplefilter("ignore", ConvergenceWarning)
             net.fit(Z, target)
@@ -250,7 +247,7 @@ def train_laws(
     train_main: Any,
 ) -> tuple[Any, dict[str, Any]]:
     """``(TrainResult of the Kelvin–Voigt rows, the laws section)``: ``train --laws``
-    (:func:`deformctl.train.train_laws`, which passes ``train_main``, the stage's
+    (:func:`deformctl.train.train_with_laws`, which passes ``train_main``, the stage's
     :func:`deformctl.train.train_model`: the grip package sits below the training stage).
 
     ``options``' ``train_size`` and ``calibration_size`` are per law. The Kelvin–Voigt rows go

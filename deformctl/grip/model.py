@@ -45,14 +45,7 @@ from deformctl.grip.groups import (
     ZETA_SHIFT,
     groups,
 )
-from deformctl.model import (
-    DEFAULT_ACTIVATION,
-    DEFAULT_ALPHA,
-    DEFAULT_MAX_ITER,
-    DEFAULT_SOLVER,
-    DEFAULT_TOL,
-    scaled_mlp,
-)
+from deformctl.model import DEFAULT_TRAIN, TrainOptions, scaled_mlp
 from deformctl.physics import rigid_grip_force_n
 
 __all__ = ["DEFAULT_GRIP_HIDDEN", "GripForceRegressor", "check_grip_inputs", "make_grip_model"]
@@ -131,23 +124,10 @@ class GripForceRegressor(RegressorMixin, BaseEstimator):
 
 
 def make_grip_model(
-    *,
-    hidden: tuple[int, ...] = DEFAULT_GRIP_HIDDEN,
-    activation: str = DEFAULT_ACTIVATION,
-    solver: str = DEFAULT_SOLVER,
-    alpha: float = DEFAULT_ALPHA,
-    max_iter: int = DEFAULT_MAX_ITER,
-    tol: float = DEFAULT_TOL,
-    random_state: int = 0,
+    options: TrainOptions = DEFAULT_TRAIN, *, random_state: int = 0
 ) -> GripForceRegressor:
-    """An unfitted grip model: ``GripForceRegressor(Pipeline(StandardScaler, MLP))``."""
-    core = scaled_mlp(
-        hidden=hidden,
-        activation=activation,
-        solver=solver,
-        alpha=alpha,
-        max_iter=max_iter,
-        tol=tol,
-        random_state=random_state,
+    """An unfitted grip model: ``GripForceRegressor(Pipeline(StandardScaler, MLP))`` with
+    ``options``' network (its hidden layers by default :data:`DEFAULT_GRIP_HIDDEN`)."""
+    return GripForceRegressor(
+        scaled_mlp(options, options.hidden or DEFAULT_GRIP_HIDDEN, random_state)
     )
-    return GripForceRegressor(core)

@@ -166,14 +166,11 @@ def _plan(
     catalog: pd.DataFrame, task: SimulateCatalogTask, path: str, *, single_log: bool
 ) -> list[tuple[CatalogObject, RunPlan] | None]:
     """Each row parsed, with its squeeze's plan (:func:`deformctl.sim.protocols.plan_squeeze`:
-    the spec built once, the steps counted once), refusing, before simulating, a run above the
-    memory budget (``--memory-budget-gib``).
+    spec and steps worked out once), refusing before simulating a run above the memory budget.
 
-    Each object's squeeze (its model, the recorded steps and the scene frames) must fit; a
-    single-file squeeze log, built in memory (MCAP's summary comes at the end), must fit as a
-    whole. A dataset directory is written part by part and has no whole-log limit. With
-    ``single_log`` a bad row is refused first (exit 65); in a dataset it is None here and fails
-    alone in its worker.
+    Each object's squeeze (model, steps, scene frames) must fit; a single-file squeeze log, built
+    in memory (MCAP's summary comes at the end), must fit as a whole. With ``single_log`` a bad
+    row is refused first (exit 65); in a dataset it is None here and fails alone in its worker.
 
     Raises:
         InputDataError: ``single_log`` and a row the simulator refuses (exit 65).

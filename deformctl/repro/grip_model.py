@@ -262,24 +262,18 @@ def _raw_form_lines(
     from sklearn.exceptions import ConvergenceWarning
     from threadpoolctl import threadpool_limits
 
-    from deformctl.train import make_model
+    from deformctl.model import TrainOptions, make_model
 
     cols = ["weight_n", "deformability_n_per_cm", "damping_ns_per_cm", "friction_mu"]
     ids = set(meta["split"]["train"])
     rows = train[train["object_id"].astype(str).isin(ids)]
     X, y = rows[cols].astype(float), rows["lift_force_n"].to_numpy()
     hp = meta["hyperparameters"]
+    fit = ("activation", "solver", "alpha", "max_iter", "tol")
+    options = TrainOptions(hidden=tuple(hp["hidden"]), **{k: hp[k] for k in fit})
     best, best_loss = None, np.inf
     for rs in meta["restart_seeds"]:
-        model = make_model(
-            hidden=tuple(hp["hidden"]),
-            activation=hp["activation"],
-            solver=hp["solver"],
-            alpha=hp["alpha"],
-            max_iter=hp["max_iter"],
-            tol=hp["tol"],
-            random_state=rs,
-        )
+        model = make_model(options, random_state=rs)
         with warnings.catch_warnings(), threadpool_limits(limits=1):
             warnings.simplefilter("ignore", ConvergenceWarning)
             model.fit(X, y)

@@ -338,9 +338,7 @@ def uses_iterative_solver(settings: SimSettings, n_dof: int) -> bool:
 @dataclass(frozen=True)
 class RunPlan:
     """One object's simulated run, worked out once before anything is built: what the
-    memory-budget check judges and the run uses (:func:`plan_run`; the protocols' plans,
-    :func:`deformctl.sim.protocols.plan_squeeze` and
-    :func:`~deformctl.sim.protocols.plan_lift_attempt`).
+    memory-budget check judges and the run uses (:func:`plan_run`).
 
     Attributes:
         spec: the simulator's object.

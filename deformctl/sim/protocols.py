@@ -264,12 +264,8 @@ def plan_squeeze(
     scene_hz: float = 0.0,
 ) -> RunPlan:
     """The plan of one squeeze of ``spec`` (:func:`squeeze`'s arguments): its steps, a scene
-    frame every so many steps (``scene_hz``; 0: none) and its memory, within the budget.
-
-    Raises:
-        UsageError: a negative or infinite duration, a bad scene rate, or a squeeze above
-            ``settings.memory_budget_gib`` (exit 2).
-    """
+    frame every so many steps and its memory, refused (exit 2) above the memory budget, or for a
+    negative duration or a bad scene rate."""
     s = settings or SimSettings()
     if not (ramp_s >= 0 and hold_s >= 0):  # an endless squeeze is refused by the budget
         raise UsageError("ramp_s and hold_s must be >= 0")
@@ -407,13 +403,8 @@ def plan_lift_attempt(
     scene_hz: float = 0.0,
 ) -> RunPlan:
     """The plan of one lift attempt of ``spec`` (:func:`lift_attempt`'s arguments): its steps
-    (the grip, the rise, the hold), a scene frame every so many steps and its memory, within the
-    budget.
-
-    Raises:
-        UsageError: a bad scene rate, or an attempt above ``settings.memory_budget_gib``
-            (exit 2).
-    """
+    (the grip, the rise, the hold), a scene frame every so many steps and its memory, refused
+    (exit 2) above the memory budget or for a bad scene rate."""
     s, p = settings or SimSettings(), profile or LiftProfile()
     every = scene_every_steps(scene_hz, s.dt_s)
     rise = float(np.ceil(p.rise_time_s(p.rise_m(spec)) / s.dt_s))

@@ -86,8 +86,7 @@ def _sample(
 
 
 def _grid(duration_s: float, rate_hz: float) -> tuple[FloatArray, float]:
-    """The generation grid of a recording of ``duration_s`` sampled at ``rate_hz``: its times,
-    s, ``[n]``, and its step, :data:`FINE` times finer than the samples', s."""
+    """The generation grid (times ``[n]`` and step, s) of ``duration_s`` sampled at ``rate_hz``."""
     h = 1.0 / (rate_hz * FINE)
     return np.arange(round(duration_s / h) + 1, dtype=np.float64) * h, h
 
@@ -103,9 +102,8 @@ def _law_squeeze(
     force_noise_n: float = 0.0,
     **sample: Any,
 ) -> SqueezeSeries:
-    """A law's squeeze along the compression ``d`` (velocity ``v``) on ``grid``: its force,
-    sampled (:func:`_sample`'s ``sample`` options) with a noise of ``force_noise_n`` plus
-    ``force_noise_rel`` times the peak force."""
+    """A law's squeeze along ``d`` (velocity ``v``) on ``grid``, sampled (:func:`_sample`) with a
+    force noise of ``force_noise_n`` plus ``force_noise_rel`` times the peak force."""
     t, h = grid
     force = law_force(model, params, d, v, h)
     noise = force_noise_n + force_noise_rel * float(np.max(np.abs(force)))

@@ -18,8 +18,8 @@ import pytest
 from deformctl.artifacts import Provenance, read_table, validate_message, write_table
 from deformctl.artifacts.model import save_model
 from deformctl.lift import DEFAULT_START_MARGIN, DEFAULT_TOLERANCE_REL, find_min_lift_force
-from deformctl.model import TrainOptions
-from deformctl.train import make_model, train_model
+from deformctl.model import TrainOptions, make_model
+from deformctl.train import train_model
 from tests._helpers.lift import (
     HEADER,
     THRESHOLD_N,
@@ -77,8 +77,7 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     )
     write_table(coefficients, paths["coefficients"], "coefficients", provenance=None)
     # a model for another feature set: (W, D) only
-    two = make_model(hidden=(2,)).fit(index[["weight_n", "deformability_n_per_cm"]],
-                                      index["lift_force_n"])  # fmt: skip
+    two = make_model().fit(index[["weight_n", "deformability_n_per_cm"]], index["lift_force_n"])
     save_model(paths["other"], two, metadata={"features": ["weight_n", "deformability_n_per_cm"]})
     return paths
 

@@ -182,20 +182,20 @@ def test_unknown_sls_damping_takes_the_most_cautious_parameters(setup: dict[str,
 def test_training_drops_unidentified_law_rows_and_refuses_unknown_laws(tmp_path: Path) -> None:
     from deformctl.errors import InputDataError
     from deformctl.model import TrainOptions
-    from deformctl.train import train_laws
+    from deformctl.train import train_with_laws
 
     index = law_index(200, seed=5, noise=0.01)
     sls = index.index[index["model"] == "sls"][:3]
     index.loc[sls, "sls_arm_stiffness_n_per_cm"] = np.nan
     options = TrainOptions(train_size=20, calibration_size=20, seed=0)
-    _, section = train_laws(index.drop(columns=LAW_COLS), index, options)
+    _, section, _ = train_with_laws(index.drop(columns=LAW_COLS), index, options)
     dropped = section["models"]["sls"]["dropped_unidentified"]
     assert dropped == sorted(index.loc[sls, "object_id"].tolist())
     used = {i for ids in section["models"]["sls"]["split"].values() for i in ids}
     assert not set(dropped) & used
     bad = index.assign(model=np.where(index["model"] == "hc", "zener9", index["model"]))
     with pytest.raises(InputDataError, match="'model' is 'zener9'"):
-        train_laws(index.drop(columns=LAW_COLS), bad, options)
+        train_with_laws(index.drop(columns=LAW_COLS), bad, options)
 
 
 def test_the_recognised_laws_are_every_law_characterize_fits() -> None:

@@ -19,6 +19,7 @@ from deformctl.model import (
     DEFAULT_TOL,
     FEATURES,
     ScaledTargetRegressor,
+    TrainOptions,
     make_model,
 )
 
@@ -69,7 +70,7 @@ def test_make_model_puts_its_settings_into_the_network() -> None:
         DEFAULT_TOL,
         0,
     )
-    direct = make_model(hidden=[4, 3], target="direct", random_state=7, alpha=0.5)  # type: ignore[arg-type]
+    direct = make_model(TrainOptions(hidden=(4, 3), target="direct", alpha=0.5), random_state=7)
     assert direct.scale_index is None
     inner = direct.regressor.named_steps["mlp"]
     assert (inner.hidden_layer_sizes, inner.random_state, inner.alpha) == ((4, 3), 7, 0.5)

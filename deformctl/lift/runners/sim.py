@@ -279,10 +279,9 @@ class LiftTask:
 
 
 def _planned_items(catalog: pd.DataFrame, task: LiftTask) -> list[dict[str, Any]]:
-    """The sweep's items: each row the simulator can run as its object planned here, under
-    ``"_planned"`` (:func:`plan_sim_objects`: the spec is built once, and the memory budgets
-    are judged before any worker starts); a row it refuses as the row itself, to fail alone in
-    its worker (``DIR/_failures/``).
+    """The sweep's items: each row the simulator can run as its object planned here (under
+    ``"_planned"``: the spec built once, the budgets judged before any worker starts); a row it
+    refuses as the row itself, to fail alone in its worker (``DIR/_failures/``).
 
     Raises:
         UsageError: an object's model or lift attempt above the budget (exit 2).
