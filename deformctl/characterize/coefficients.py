@@ -30,14 +30,26 @@ from deformctl.characterize.quality import (
     quality_text,
 )
 from deformctl.series import Rupture
+from deformctl.squeeze.flags import LAG_ESTIMATED, LAG_GIVEN
 from deformctl.units import CM, N_PER_CM, NS_PER_CM
 
 #: The object's own values ``characterize`` copies from the squeeze log into its row (NaN, or
 #: ``""`` for ``source``, when the log does not have them), so that ``predict`` and
 #: ``lift --sim`` need no catalog: the weight, the size and μ the log's object row stores
 #: (``measure --weight-n``, ``--size-cm``, ``--friction-mu`` or the catalog of ``measure --sim``)
-#: and where the squeezes came from (the log's ``source``: ``sim``, ``ros2_bag``, ``csv``).
-OBJECT_COLUMNS: tuple[str, ...] = ("weight_n", *SIZE_COLUMNS, "friction_mu", "source")
+#: and where the squeezes came from (the log's ``source``: ``sim``, ``ros2_bag``, ``csv``), and
+#: the lag ``measure --lag-s`` took out of the force before the fit, with whether it was given or
+#: estimated (``force_lag_s``, ``force_lag_source``: NaN and ``""`` when none).
+OBJECT_COLUMNS: tuple[str, ...] = (
+    "weight_n",
+    *SIZE_COLUMNS,
+    "friction_mu",
+    "source",
+    "force_lag_s",
+    "force_lag_source",
+)
+#: The object columns that are numbers > 0 (NaN otherwise).
+_POSITIVE_OBJECT_COLUMNS = ("weight_n", *SIZE_COLUMNS, "friction_mu")
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from deformctl.characterize.objectfit import ObjectFit
@@ -254,17 +266,32 @@ def _positive(value: object) -> float:
 def object_fields(obj: Mapping[str, object] | None) -> dict[str, object]:
     """The :data:`OBJECT_COLUMNS` of an object row of a squeeze log.
 
-    A value that is missing, not a number or not > 0 is NaN. ``source`` is the log's own
-    (``ros2_bag``, ``csv``, ...); a ``measure --sim`` object row, which stores the simulated
+    A weight, size or μ that is missing, not a number or not > 0 is NaN. ``source`` is the log's
+    own (``ros2_bag``, ``csv``, ...); a ``measure --sim`` object row, which stores the simulated
     peak force rather than a source, is ``sim``; ``""`` when the log does not say.
+    ``force_lag_s`` is the lag the log says ``measure`` took out of the force (NaN when none or
+    not a finite number) and ``force_lag_source`` where it came from (``given``, ``auto``;
+    ``""`` otherwise).
     """
     obj = obj or {}
-    out: dict[str, object] = {c: _positive(obj.get(c)) for c in OBJECT_COLUMNS[:-1]}
+    out: dict[str, object] = {c: _positive(obj.get(c)) for c in _POSITIVE_OBJECT_COLUMNS}
     source = obj.get("source")
     if not isinstance(source, str) or not source:
         source = "sim" if "sim_peak_force_n" in obj else ""
     out["source"] = source
+    lag, lag_source = obj.get("force_lag_s"), obj.get("force_lag_source")
+    known = lag_source in (LAG_GIVEN, LAG_ESTIMATED) and _is_number(lag)
+    out["force_lag_s"] = float(lag) if known else math.nan  # type: ignore[arg-type]
+    out["force_lag_source"] = lag_source if known else ""
     return out
+
+
+def _is_number(value: object) -> bool:
+    return (
+        isinstance(value, int | float)
+        and not isinstance(value, bool)
+        and math.isfinite(float(value))
+    )
 
 
 def _coefficient_frame(rows: Sequence[Mapping[str, object]]) -> pd.DataFrame:

@@ -59,7 +59,7 @@ import numpy as np
 import pandas as pd
 
 from deformctl.characterize.coefficients import CoefficientFit, _coefficient_frame
-from deformctl.characterize.material_options import check_model
+from deformctl.characterize.material_options import check_model, lag_estimated
 from deformctl.characterize.objectfit import ObjectFit, fit_object
 from deformctl.characterize.options import (
     Method,
@@ -386,7 +386,9 @@ def characterize(
         lag_s: lsq: the force's lag behind the compression, s, for every object or per object
             id; None fits it. The library's default is 0 (simulated squeezes have none; the
             stage fits it for rig recordings, :func:`deformctl.characterize.default_lag`).
-        objects: object id → its catalog fields (``weight_n``, ``friction_mu`` for F_w).
+        objects: object id → its catalog fields (``weight_n``, ``friction_mu`` for F_w;
+            ``force_lag_source`` ``auto``, a lag ``measure`` estimated and took out of the
+            force: λ is withheld, :func:`deformctl.characterize.material_options.lag_estimated`).
         **options: passed to the estimator (``window_s``, ...).
 
     Returns:
@@ -454,6 +456,7 @@ def _fit_rows(
                 at_force_n=at_force_n,
                 weight_n=_number(meta.get("weight_n")),
                 friction_mu=_number(meta.get("friction_mu")),
+                lag_estimated=lag_estimated(meta),
             )
             fit = CoefficientFit.from_object(obj)
             if fits_out is not None:

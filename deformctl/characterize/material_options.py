@@ -14,6 +14,7 @@ from typing import Any, Literal
 
 from deformctl.errors import UsageError
 from deformctl.quantities import AT_FORCE_N
+from deformctl.squeeze.flags import LAG_ESTIMATED, LAG_GIVEN
 
 Model = Literal["kv", "hc", "sls", "exp"]
 #: The laws (:mod:`deformctl.characterize.laws`), Kelvin–Voigt first: ``auto`` keeps it unless
@@ -82,11 +83,22 @@ DEFAULT_MATERIALS = MaterialOptions()
 
 
 def default_lag(obj: Mapping[str, object] | None) -> float | None:
-    """The lag of an object whose log does not choose one: fitted (None) for rig recordings,
-    0 for simulated squeezes (the simulator's force and position share one clock), 0 for logs
-    that do not say where they came from."""
+    """The lag of an object whose log does not choose one: 0 when ``measure`` took a given lag
+    out of the force (``force_lag_source`` ``given``: ``--lag-s SECONDS``, the rig's latency;
+    none is left), else fitted (None) for rig recordings, 0 for simulated squeezes (the
+    simulator's force and position share one clock), 0 for logs that do not say where they came
+    from."""
+    if obj is not None and obj.get("force_lag_source") == LAG_GIVEN:
+        return 0.0
     source = None if obj is None else obj.get("source")
     return None if source in RIG_SOURCES else 0.0
+
+
+def lag_estimated(obj: Mapping[str, object] | None) -> bool:
+    """Whether ``measure`` shifted the object's force by a lag it estimated (``--lag-s auto``,
+    ``force_lag_source`` ``auto``): the estimate is the latency less λ/D, so the shift takes λ
+    with it and the fit withholds λ (:func:`deformctl.characterize.objectfit.fit_object`)."""
+    return obj is not None and obj.get("force_lag_source") == LAG_ESTIMATED
 
 
 __all__ = [
@@ -95,4 +107,5 @@ __all__ = [
     "MaterialOptions",
     "check_at_force_n",
     "default_lag",
+    "lag_estimated",
 ]

@@ -63,7 +63,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from deformctl.errors import InputDataError, UsageError
-from deformctl.squeeze.flags import RECORDING_FLAGS, TIME_UNIT_DOUBTFUL
+from deformctl.squeeze.flags import LAG_ESTIMATED, RECORDING_FLAGS, TIME_UNIT_DOUBTFUL
 
 if TYPE_CHECKING:  # pragma: no cover - a table is handed in; this module does not need pandas
     import pandas as pd
@@ -327,13 +327,20 @@ def describe_flag(flag: str, row: Mapping[str, Any]) -> str:
         exc = _num(row.get("damping_excitation"), ".2g")
         energy = _num(row.get("hysteresis_energy_j"), ".3g")
         loop = f"; the loop dissipates {energy} J" if energy not in ("NaN", "?") else ""
+        if row.get("force_lag_source") == LAG_ESTIMATED:
+            return (
+                f"{flag} (λ is not determined: the force was shifted by the lag measure "
+                f"--lag-s auto estimated, {_num(row.get('force_lag_s'), '.3g')} s, which is the "
+                "latency less λ/D and takes λ with it; a latency known from the rig goes to "
+                f"measure --lag-s SECONDS{loop})"
+            )
         excitation = row.get("damping_excitation")
         if isinstance(excitation, int | float) and excitation >= DAMPING_EXCITATION_MIN:
             lag = row.get("lag_s")
             lagged = isinstance(lag, int | float) and lag > 0
             rests = (
-                f", or λ rests on the fitted force lag of {_num(lag, '.3g')} s (a known latency "
-                "goes to measure --lag-s)"
+                f", or λ rests on the fitted force lag of {_num(lag, '.3g')} s (a latency known "
+                "from the rig goes to measure --lag-s SECONDS)"
                 if lagged
                 else ""
             )

@@ -73,8 +73,8 @@ LagS = Annotated[
     typer.Option(
         "--lag-s",
         metavar="auto|S",
-        help="Shift the force S s earlier (auto: by the estimated lag) [default: flag a lag, "
-        "no shift].",
+        help="Shift the force S s earlier, the rig's latency (auto: by the estimated lag, "
+        "which keeps D and withholds λ) [default: flag a lag, no shift].",
     ),
 ]
 ObjectsFrom = Annotated[

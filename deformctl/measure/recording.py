@@ -59,6 +59,11 @@ class Recording:
         source, phase, ruptures: see :meth:`log_fields`.
         flags: the recording's defects (:mod:`deformctl.measure.defects`), which
             ``characterize`` adds to the object's quality.
+        force_lag_s: the lag of the force behind the position that the reader took out of the
+            force (it moved the force that much earlier), s; None when it took none out.
+        force_lag_source: where that lag came from: ``given`` (``--lag-s SECONDS``, a latency
+            the user knows) or ``auto`` (``--lag-s auto``, estimated from the recording); ``""``
+            with no lag taken out.
         defects: each defect's flag, line and numbers.
         details: what the reader found in the file and did (a CSV's layout, columns, units,
             preamble, force sign, lag), stored with the object under the source's name.
@@ -75,6 +80,8 @@ class Recording:
     phase: str = "all"
     ruptures: tuple[Rupture, ...] = ()
     flags: tuple[str, ...] = ()
+    force_lag_s: float | None = None
+    force_lag_source: str = ""
     defects: tuple[Mapping[str, Any], ...] = ()
     details: Mapping[str, Any] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
@@ -99,7 +106,10 @@ class Recording:
         log is a rig recording, which ``characterize`` fits with a preload by default),
         ``phase`` and ``ruptures`` (the points where squeezes were cut, see
         :class:`deformctl.series.Rupture`); ``recording_flags`` and ``recording_defects`` (the
-        recording's defects) and, under the source's name (``csv``), the :attr:`details`.
+        recording's defects); ``force_lag_s`` and ``force_lag_source`` when a lag was taken out
+        of the force (``characterize`` then knows the lag is accounted for, see
+        :func:`deformctl.characterize.default_lag`); and, under the source's name (``csv``), the
+        :attr:`details`.
         """
         out: dict[str, Any] = {
             "force_rate_hz": self.force_rate_hz,
@@ -114,6 +124,9 @@ class Recording:
         if self.flags:
             out["recording_flags"] = list(self.flags)
             out["recording_defects"] = [dict(d) for d in self.defects]
+        if self.force_lag_s is not None:
+            out["force_lag_s"] = self.force_lag_s
+            out["force_lag_source"] = self.force_lag_source
         if self.details:
             out[self.source or "recording"] = dict(self.details)
         return out

@@ -13,6 +13,12 @@ from __future__ import annotations
 LOGGING_GAP = "logging_gap"
 COARSE_FORCE = "coarse_force"
 FORCE_LAG = "force_lag"
+#: ``force_lag_source`` of a squeeze log's object row, when ``measure`` took a lag out of the
+#: force (``force_lag_s``): given (``--lag-s SECONDS``, a latency known from the rig: no lag is
+#: left, ``characterize`` fits none) or estimated (``--lag-s auto``: the estimate is the latency
+#: less λ/D, so the shift takes λ with it and ``characterize`` withholds λ).
+LAG_GIVEN = "given"
+LAG_ESTIMATED = "auto"
 #: The squeezes give energy back (their force-compression loops run the wrong way): the samples
 #: run backwards in time, or the force lags the position (:mod:`deformctl.measure.ros2_bag`).
 ENERGY_RETURNED = "energy_returned"
@@ -30,7 +36,8 @@ DOUBT_FLAGS: tuple[str, ...] = (FORCE_UNIT_DOUBTFUL, COMPRESSION_UNIT_DOUBTFUL, 
 RECORDING_FLAGS: dict[str, str] = {
     LOGGING_GAP: "the recording has a gap of more than 5 sample intervals",
     COARSE_FORCE: "the force's resolution is coarser than 2 % of its peak",
-    FORCE_LAG: "the force lags the position; λ is low by D × the lag (measure --lag-s auto)",
+    FORCE_LAG: "the force lags the position; λ is low by D × the lag (measure --lag-s SECONDS "
+    "with the rig's latency; --lag-s auto keeps D, not λ)",
     ENERGY_RETURNED: "the squeezes give energy back, which no passive object does: the "
     "samples run backwards in time, or the force lags the position; λ is wrong",
     FORCE_UNIT_DOUBTFUL: "the peak force is implausible for a soft object (below 50 mN or "

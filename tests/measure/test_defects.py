@@ -4,11 +4,12 @@ Each defect is made on a known Kelvin–Voigt squeeze: a 6 s logging gap, a forc
 0.1 N on a 2 N peak, repeated timestamps, a force that lags the position by 0.17 s. Each flag
 fires on its defect with the numbers that make it, is silent on the clean squeeze, and reaches
 ``characterize``'s quality. The lag is estimated within a sample and ``--lag-s auto`` removes the
-negative damping it causes.
+negative damping it causes; a lag given with ``--lag-s SECONDS`` keeps λ, an estimated one does not.
 """
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -17,6 +18,8 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
+from deformctl.artifacts.mcap import read_squeeze_log
+from deformctl.characterize.objectfit import ObjectFit, fit_object
 from deformctl.cli import app
 from deformctl.measure import CsvOptions, read_recording
 from deformctl.measure.defects import (
@@ -26,6 +29,7 @@ from deformctl.measure.defects import (
     logging_gaps,
     merge_duplicate_times,
 )
+from deformctl.squeeze.window import default_window_s
 
 from ._exports import Squeeze, kv_squeeze, write_export
 
@@ -138,22 +142,58 @@ def test_constant_rate_lag_is_not_identifiable() -> None:
 
 def test_force_lag_flag_and_lag_auto_remove_the_negative_damping(tmp_path: Path) -> None:
     """0.17 s of latency on D = 20 N/cm, λ = 0: an unshifted fit would give λ ≈ −3.4 N·s/cm;
-    the bounded fit holds it at 0 and says so; --lag-s auto: λ ≈ 0, ok."""
+    the bounded fit holds it at 0 and says so. The log records the lag ``measure`` took out and
+    where it came from. Given (``--lag-s 0.17``, the rig's latency): no lag is fitted after it
+    and λ ≈ 0 is ``ok``. Estimated (``--lag-s auto``): D is right, λ is withheld, because the
+    estimate is the latency less λ/D: the same latency on λ = 1 N·s/cm is shifted by 0.12 s and
+    then reads as λ ≈ 0 just as well (below), so no λ after the estimate can be ``ok``."""
     path = write_export(tmp_path / "kiwi.csv", _lagged(0.17))
     row, err = _characterize(path)
     assert "force_lag" in row["quality"].split(",")
     assert "at_bound" in row["quality"].split(",")
     assert row["damping_ns_per_cm"] == 0.0
     assert re.search(r"object 'kiwi': force_lag: the force lags the position by 0\.1[67]\d* s", err)
+    assert math.isnan(row["force_lag_s"])
+    assert row["force_lag_source"] == ""
     shifted, err = _characterize(path, "--lag-s", "auto", "--force")
-    assert shifted["quality"] == "ok", err
+    assert shifted["quality"] == "damping_unidentifiable", err
     assert shifted["deformability_n_per_cm"] == pytest.approx(20.0, rel=0.02)
-    assert shifted["damping_ns_per_cm"] == pytest.approx(0.0, abs=0.3)
+    assert math.isnan(shifted["damping_ns_per_cm"])
     assert re.search(r"force shifted 0\.1[67]\d* s earlier \(--lag-s auto\)", err)
-    fixed, _ = _characterize(path, "--lag-s", "0.17", "--force")
-    assert fixed["damping_ns_per_cm"] == pytest.approx(0.0, abs=0.3)
+    assert "the force was shifted by the lag measure --lag-s auto estimated, 0.169 s" in err
+    assert shifted["force_lag_source"] == "auto"
+    assert shifted["force_lag_s"] == pytest.approx(0.17, abs=0.01)
+    (obj,) = read_squeeze_log(path.with_suffix(".mcap"))[0]
+    assert (obj["force_lag_source"], obj["force_lag_s"]) == ("auto", pytest.approx(0.17, abs=0.01))
+    fixed, err = _characterize(path, "--lag-s", "0.17", "--force")
+    assert fixed["quality"] == "ok", err
+    assert fixed["damping_ns_per_cm"] == pytest.approx(0.0, abs=0.05)
+    assert fixed["deformability_n_per_cm"] == pytest.approx(20.0, rel=0.02)
+    assert (fixed["force_lag_source"], fixed["force_lag_s"], fixed["lag_s"]) == ("given", 0.17, 0.0)
+    # why the estimate withholds λ: λ = 1 N·s/cm behind the same latency, shifted by its estimate
+    damped_late = write_export(tmp_path / "damped_late.csv", _lagged(0.17, lam=1.0))
+    late, err = _characterize(damped_late, "--lag-s", "auto")
+    assert re.search(r"force shifted 0\.1[12]\d* s earlier", err)  # 0.17 − λ/D = 0.12 s
+    assert late["quality"] == "damping_unidentifiable"
+    assert math.isnan(late["damping_ns_per_cm"])
+    kept = shifted_fit(damped_late, "auto")  # what the law says, before any rule withholds λ
+    assert kept.chosen.params["damping_ns_per_m"] / 100.0 < 0.3  # λ = 1 reads as about 0
+    given, _ = _characterize(damped_late, "--lag-s", "0.17", "--force")
+    assert given["quality"] == "ok"
+    assert given["damping_ns_per_cm"] == pytest.approx(1.0, rel=0.05)
     damped = write_export(tmp_path / "damped.csv", kv_squeeze(20.0, 3.0))
     row, err = _characterize(damped, "--lag-s", "auto")
     assert row["quality"] == "ok"
     assert row["damping_ns_per_cm"] == pytest.approx(3.0, rel=0.05)  # a lead is not shifted
     assert re.search(r"--lag-s auto: the force's lag is -0\.1[45]\d* s \(.*\): not shifted", err)
+    assert row["force_lag_source"] == ""
+
+
+def shifted_fit(csv: Path, lag: str) -> ObjectFit:
+    """The Kelvin–Voigt fit ``characterize`` makes of ``measure csv --lag-s LAG``'s squeezes,
+    its lag fitted."""
+    rec = read_recording(csv, CsvOptions(lag_s=lag), "x")
+    return fit_object(
+        rec.squeezes, model="kv", window_s=default_window_s(rec.position_rate_hz),
+        fit_preload=True, lag_s=None,
+    )  # fmt: skip

@@ -12,7 +12,8 @@ their units (:mod:`deformctl.measure.csv.columns`), and the numbers are converte
 3. the force's sign: compressive force is the sign that grows with the compression
    (``force_sign="auto"``; a flip is reported and recorded);
 4. the recording's defects are found and reported (:mod:`deformctl.measure.defects`), and the
-   force's lag behind the position is estimated and, with ``lag_s``, shifted out;
+   force's lag behind the position is estimated and, with ``lag_s``, shifted out (the lag
+   taken out and whether it was given or estimated are recorded, :attr:`Recording.force_lag_s`);
 5. the recording is cut into squeezes (:mod:`deformctl.measure.segment`).
 
 What was found (layout, preamble, columns and units, force sign, lag) is returned in
@@ -63,6 +64,7 @@ from deformctl.plausibility import (
     unit_doubts,
 )
 from deformctl.series import FloatArray
+from deformctl.squeeze.flags import LAG_ESTIMATED, LAG_GIVEN
 from deformctl.units import GIB, NS_PER_S, UNITS
 
 #: Multiply a value in the unit by the factor to get SI; keys are lower-case unit names.
@@ -217,13 +219,16 @@ def _read(
     _check_compression(compression_m, roles[pos_role], size_x_cm, name)
     lag = estimate_lag(time_s, force_n, compression_m)
     shift_s = 0.0
+    removed: tuple[float, str] | None = None  # the lag taken out and where it came from
     if options.lag_s == "auto":
         if lag.lag_s is not None and lag.lag_s > 0:
             shift_s = lag.lag_s
+            removed = (shift_s, LAG_ESTIMATED)
         else:
             warnings.append(f"--lag-s auto: the force's lag is {lag.describe()}: not shifted")
     elif isinstance(options.lag_s, float):
         shift_s = options.lag_s
+        removed = (shift_s, LAG_GIVEN)
     if shift_s:
         time_s, force_n, position = shift_force(time_s, force_n, position, shift_s)
         compression_m = compression_of(time_s, force_n, position)
@@ -265,6 +270,8 @@ def _read(
         phase=segmentation.phase,
         ruptures=tuple(ruptures),
         flags=tuple(d.flag for d in defects),
+        force_lag_s=None if removed is None else removed[0],
+        force_lag_source="" if removed is None else removed[1],
         defects=tuple(d.as_dict() for d in defects),
         details=details,
         notes=tuple(notes),
