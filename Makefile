@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install test lint bench golden-spread reproduce _report calibrate examples clean model hc-check \
+.PHONY: install test test-cpu lint bench golden-spread reproduce _report calibrate examples clean model hc-check \
   sls-check grip-study-laws phantom-check \
   _grip_train _grip_eval grip-study materials scene-figure fuzz
 
@@ -19,6 +19,11 @@ $(STAMP): pyproject.toml
 
 test: install
 	$(BIN)/python -m pytest -n 2 -q
+
+# make test under a CPU timer (bench/suite_cpu.py): the files and tests that took the most CPU
+# time, then "make test: N s CPU (target ≤ 360 s)" with the wall time and the load average
+test-cpu: install
+	$(BIN)/python -m bench.suite_cpu
 
 lint: install
 	$(BIN)/ruff check deformctl tests bench examples

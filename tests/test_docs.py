@@ -141,27 +141,35 @@ def test_every_shell_block_runs_and_prints_what_the_page_shows(path: Path, tmp_p
     assert not stale, "\n\n".join(stale)
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("path", WHEEL_PAGES, ids=_id)
-def test_the_guides_run_from_a_wheel_installed_venv(
-    path: Path, fresh_venv: Path, tmp_path: Path
-) -> None:
-    """As a wheel user follows a page: ``pip install`` of the wheel into a fresh venv, its
-    ``bin/`` first on PATH (``deformctl``, ``python`` and ``python3`` are the venv's, the
-    checkout is nowhere on the path), ``deformctl warmup``, then ``deformctl examples DIR``
-    and the page's ``sh`` blocks in order in ``DIR``, its output blocks checked as above.
-    The simulator's kernels come compiled from the checkout (:func:`seed_kernel_cache`)."""
+@pytest.fixture(scope="module")
+def wheel_user_venv(fresh_venv: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """:func:`fresh_venv` as a wheel user leaves it after ``pip install`` and ``deformctl warmup``
+    (once per install, as a user does): its ``bin/`` first on PATH (``deformctl``, ``python`` and
+    ``python3`` are the venv's, the checkout is nowhere on the path). The simulator's kernels come
+    compiled from the checkout (:func:`seed_kernel_cache`)."""
     seed_kernel_cache(fresh_venv)
-    env = venv_env(fresh_venv)
     found = subprocess.run(
         ["bash", "-c", "command -v deformctl python python3; "
          "python -c 'import deformctl; print(deformctl.__file__)'; deformctl warmup"],
-        cwd=tmp_path, env=env, capture_output=True, text=True, check=True,
+        cwd=tmp_path_factory.mktemp("user"), env=venv_env(fresh_venv), capture_output=True,
+        text=True, check=True,
     ).stdout.split()  # fmt: skip
     assert len(found) == 4, found
     assert all(Path(p).is_relative_to(fresh_venv) for p in found), found
+    return fresh_venv
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", WHEEL_PAGES, ids=_id)
+def test_the_guides_run_from_a_wheel_installed_venv(
+    path: Path, wheel_user_venv: Path, tmp_path: Path
+) -> None:
+    """As a wheel user follows a page: in the warmed-up venv (:func:`wheel_user_venv`),
+    ``deformctl examples DIR`` and the page's ``sh`` blocks in order in ``DIR``, its output
+    blocks checked as above."""
+    env = venv_env(wheel_user_venv)
     cwd = tmp_path / path.stem
-    subprocess.run([fresh_venv / "bin" / "deformctl", "examples", cwd], env=env, check=True,
+    subprocess.run([wheel_user_venv / "bin" / "deformctl", "examples", cwd], env=env, check=True,
                    capture_output=True)  # fmt: skip
     stale = _run_page(path, cwd, env)
     assert not stale, "\n\n".join(stale)

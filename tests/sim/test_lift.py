@@ -19,9 +19,11 @@ from deformctl.sim import (
 from ._helpers import min_lift_force_n
 
 PROFILE = LiftProfile()  # default S-curve, a_max = 2 m/s²
-# the default lattice (direct solver) and a fine one (11 particles per longest side: iterative)
+# the default lattice (5 particles along the longest side: a two-level V-cycle) and a fine one
+# (9: three levels, level 1 swept as a block stencil, as on every finer lattice; 11 costs twice
+# as much for the same solver path)
 DEFAULT = SimSettings()
-FINE = SimSettings(particles_per_side=11)
+FINE = SimSettings(particles_per_side=9)
 LATTICES = [
     pytest.param(DEFAULT, id="default"),
     pytest.param(FINE, id="fine", marks=pytest.mark.slow),
@@ -109,7 +111,14 @@ def test_shortfall_measure_includes_elastic_sag(settings: SimSettings) -> None:
     assert shortfall.slip_m > 1e-3  # the soft body hangs lower than it rested
 
 
-@pytest.mark.parametrize("settings", LATTICES)
+# the sponge's flat lattice needs 11 particles along its longest side for three levels
+@pytest.mark.parametrize(
+    "settings",
+    [
+        pytest.param(DEFAULT, id="default"),
+        pytest.param(SimSettings(particles_per_side=11), id="fine", marks=pytest.mark.slow),
+    ],
+)
 def test_lift_attempt_is_bit_identical_for_the_same_inputs(settings: SimSettings) -> None:
     spec = ObjectSpec("sponge", (17.8, 19.1, 9.2), 0.7, 0.5, 49.18, 6.47)
     a = lift_attempt(spec, 0.9, settings=settings)
