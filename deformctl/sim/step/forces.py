@@ -2,9 +2,10 @@
 and a standard linear solid's Maxwell arms, :mod:`.maxwell`), gravity and the palms' drive, as
 the implicit step's right-hand side, and the BDF2 predictor.
 
-The linear Kelvin loop (:func:`_element_rhs`) is the same code with or without Hunt–Crossley
-elements: :func:`_step_impulse` branches once per step, on ``body.law.exponent``, to it or to
-:func:`_element_rhs_hc`.
+:func:`_step_impulse` branches once per step, on ``body.law.exponent``, to the linear Kelvin
+elements or to the Hunt–Crossley ones (:func:`_element_rhs_hc`). The Kelvin elements run by
+index-offset runs (:func:`deformctl.sim.step.runs._element_rhs_runs`, in vector instructions);
+:func:`_element_rhs` is the same sums element by element, the reference they are tested against.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.sim.step.bundles import Body, Palms
 from deformctl.sim.step.laws import hunt_crossley_damping, hunt_crossley_spring
 from deformctl.sim.step.maxwell import _arm_rhs
+from deformctl.sim.step.runs import _element_rhs_runs
 
 
 @njit(cache=True)
@@ -87,7 +89,8 @@ def spring_forces_numpy(
 
 @njit(cache=True)
 def _element_rhs(body: Body, x: FloatArray, vel: FloatArray, h: float, out: FloatArray) -> None:
-    """Element forces minus ``h K v`` (tangent at rest), accumulated into ``out`` ``[n, 3]``.
+    """Element forces minus ``h K v`` (tangent at rest), accumulated into ``out`` ``[n, 3]``: the
+    element-by-element form of what the step computes by runs (:mod:`deformctl.sim.step.runs`).
 
     The dampers are ``c = retardation k`` (:func:`deformctl.sim.engine.element_constants`), so
     the loop reads one constant per element and forms ``c`` and ``h k`` from it (the same
@@ -226,16 +229,30 @@ def _step_impulse(
     base_x, dof_of, particle_mass = body.base_x, body.dof_of, body.particle_mass
     palm_x_dof, width_damping = palms.x_dof, palms.width_damping
     n = base_x.shape[0]
-    for p in range(n):
-        for a in range(3):
-            d = dof_of[3 * p + a]
-            x[p, a] = base_x[p, a] + q[d]
-            vel[p, a] = v[d]
-            fp[p, a] = 0.0
     if body.law.exponent != 1.0:
+        for p in range(n):
+            for a in range(3):
+                d = dof_of[3 * p + a]
+                x[p, a] = base_x[p, a] + q[d]
+                vel[p, a] = v[d]
+                fp[p, a] = 0.0
         _element_rhs_hc(body, x, vel, dt, fp)
     else:
-        _element_rhs(body, x, vel, dt, fp)
+        # the Kelvin elements by runs (the same sums as _element_rhs, vectorised)
+        runs = body.runs
+        xs, vs, out = runs.xs, runs.vs, runs.out
+        for p in range(n):
+            for a in range(3):
+                d = dof_of[3 * p + a]
+                xv = base_x[p, a] + q[d]
+                x[p, a] = xv
+                xs[a, p] = xv
+                vel[p, a] = v[d]
+                vs[a, p] = v[d]
+        _element_rhs_runs(runs, body.retardation, body.nonlinear, dt)
+        for p in range(n):
+            for a in range(3):
+                fp[p, a] = out[a, p]
     if body.arm.stiffness.shape[0] > 0:  # a standard linear solid's Maxwell arms
         _arm_rhs(body, x, vel, dt, fp)
     fq[:] = 0.0
