@@ -219,7 +219,8 @@ def _step_impulse(
     fq: FloatArray,
 ) -> None:
     """The step's right-hand side ``fq = h (f(x, v) + f_ext - h K v)`` in DOFs (also fills the
-    particle positions ``x`` and velocities ``vel``).
+    particle positions ``x``; ``vel`` and ``fp`` are scratch, the particle velocities and forces
+    where the Hunt–Crossley elements or the Maxwell arms need them).
 
     ``q, v`` are the step's base state (the BDF2 predictor, or the last state for backward Euler)
     and ``dt`` the implicit step ``h`` (``2 dt / 3`` for BDF2); ``particle_mass`` is ``[n]`` and
@@ -229,16 +230,12 @@ def _step_impulse(
     base_x, dof_of, particle_mass = body.base_x, body.dof_of, body.particle_mass
     palm_x_dof, width_damping = palms.x_dof, palms.width_damping
     n = base_x.shape[0]
-    if body.law.exponent != 1.0:
-        for p in range(n):
-            for a in range(3):
-                d = dof_of[3 * p + a]
-                x[p, a] = base_x[p, a] + q[d]
-                vel[p, a] = v[d]
-                fp[p, a] = 0.0
-        _element_rhs_hc(body, x, vel, dt, fp)
-    else:
-        # the Kelvin elements by runs (the same sums as _element_rhs, vectorised)
+    kelvin = body.law.exponent == 1.0
+    arms = body.arm.stiffness.shape[0] > 0  # a standard linear solid's Maxwell arms
+    fq[:] = 0.0
+    if kelvin:
+        # the Kelvin elements by runs (the same sums as _element_rhs, vectorised), into
+        # runs.out by coordinate
         runs = body.runs
         xs, vs, out = runs.xs, runs.vs, runs.out
         for p in range(n):
@@ -247,22 +244,37 @@ def _step_impulse(
                 xv = base_x[p, a] + q[d]
                 x[p, a] = xv
                 xs[a, p] = xv
-                vel[p, a] = v[d]
                 vs[a, p] = v[d]
         _element_rhs_runs(runs, body.retardation, body.nonlinear, dt)
+        if not arms:  # straight from runs.out, in the same order as from fp below
+            for p in range(n):
+                fz = out[2, p] - particle_mass[p] * gravity
+                fq[dof_of[3 * p]] += out[0, p]
+                fq[dof_of[3 * p + 1]] += out[1, p]
+                fq[dof_of[3 * p + 2]] += fz
+        else:
+            for p in range(n):
+                for a in range(3):
+                    vel[p, a] = vs[a, p]
+                    fp[p, a] = out[a, p]
+    else:
         for p in range(n):
             for a in range(3):
-                fp[p, a] = out[a, p]
-    if body.arm.stiffness.shape[0] > 0:  # a standard linear solid's Maxwell arms
-        _arm_rhs(body, x, vel, dt, fp)
-    fq[:] = 0.0
-    for p in range(n):
-        fp[p, 2] -= particle_mass[p] * gravity
-        for a in range(3):
-            fq[dof_of[3 * p + a]] += fp[p, a]
+                d = dof_of[3 * p + a]
+                x[p, a] = base_x[p, a] + q[d]
+                vel[p, a] = v[d]
+                fp[p, a] = 0.0
+        _element_rhs_hc(body, x, vel, dt, fp)
+    if arms or not kelvin:
+        if arms:
+            _arm_rhs(body, x, vel, dt, fp)
+        for p in range(n):
+            fp[p, 2] -= particle_mass[p] * gravity
+            for a in range(3):
+                fq[dof_of[3 * p + a]] += fp[p, a]
     if palm_x_dof[0] >= 0:
         fw = width_damping * (v[palm_x_dof[1]] - v[palm_x_dof[0]])
-        if body.law.exponent != 1.0:
+        if not kelvin:
             fw *= _width_scale(body, palm_x_dof, q)
         fq[palm_x_dof[0]] += f_now + fw
         fq[palm_x_dof[1]] -= f_now + fw
