@@ -18,7 +18,9 @@ process's CPU time is what a shared machine's load inflates least, and on an idl
 the wall time), ours best of 3 (before and after MuJoCo's run), MuJoCo's one run (its steps are
 ~100-1,000 x dearer, so one run of hundreds of steps is its own average); their ratio, per
 simulated second and per step; each engine's compression at the end (the two model the same
-squeeze, not the same numbers); and the fitted exponent of the cost against the particle count.
+squeeze, not the same numbers); the fitted exponent of the cost against the particle count; and,
+at the largest size, where our call spends its time (:func:`ours_breakdown`: the step loop
+against the whole call, the CG's V-cycles and products per step).
 The window is short (0.2 s, so that MuJoCo's 16^3 fits in minutes); our steps cost more in the
 ramp than in the hold, so the short window does not favour ours.
 ``python -m bench.bench_mujoco --sizes 5 8 11 16 21`` chooses the sizes (default
@@ -35,7 +37,8 @@ import time
 import numpy as np
 
 from deformctl.sim import ObjectSpec, SimSettings, squeeze
-from deformctl.sim.engine import build_model
+from deformctl.sim.engine import build_model, run_model
+from deformctl.sim.hunt_crossley import implicit_reference_m
 
 #: the damped cube: 9 cm, 5 N, mu 0.5, D 20 N/cm, lambda 1 N·s/cm
 DAMPED = ObjectSpec("damped", (9.0, 9.0, 9.0), 5.0, 0.5, 20.0, 1.0)
@@ -125,6 +128,38 @@ def ours_squeeze(n: int) -> tuple[float, float]:
     return time.process_time() - t0, float(series.compression_m[-1])
 
 
+def ours_breakdown(n: int, repeats: int = 3) -> str:
+    """Where one of our squeezes at ``n``^3 spends its CPU time: the whole call against the step
+    loop alone (the kernel on the model :func:`squeeze` builds and caches, with the same force
+    ramp; best of ``repeats`` each, alternating; the difference is the call's checks, model
+    look-up and series), and the CG's work per step (V-cycles, and explicit products ``A dv``:
+    the others are carried from step to step)."""
+    settings = SimSettings(particles_per_side=n, dt_s=OURS_DT_S)
+    model = build_model(
+        DAMPED, settings, gripped=True, reference_m=implicit_reference_m(DAMPED, PEAK_N)
+    )
+    steps = round((RAMP_S + HOLD_S) / OURS_DT_S)
+    force = PEAK_N * np.clip(np.arange(steps + 1) * OURS_DT_S / RAMP_S, 0.0, 1.0)
+
+    call = loop = float("inf")
+    model.solver_stats[:] = 0
+    for _ in range(repeats):
+        t0 = time.process_time()
+        squeeze(DAMPED, peak_force_n=PEAK_N, ramp_s=RAMP_S, hold_s=HOLD_S, settings=settings)
+        call = min(call, time.process_time() - t0)
+        t0 = time.process_time()
+        run_model(model, force, np.zeros(steps + 1))
+        loop = min(loop, time.process_time() - t0)
+    stats = model.solver_stats / (2 * repeats)  # the same steps in both
+    return (
+        f"ours at {n}^3: a squeeze {call * 1e3:.1f} ms CPU, its step loop alone "
+        f"{loop * 1e3:.1f} ms (the rest, checks, model look-up and series: "
+        f"{(call - loop) * 1e3:+.1f} ms); per step {loop / steps * 1e6:.0f} us, "
+        f"{stats[1] / steps:.2f} V-cycles and {stats[4] / steps:.2f} explicit products A dv of "
+        "the CG"
+    )
+
+
 def _exponent(particles: list[int], cost: list[float]) -> float:
     return float(np.polyfit(np.log(particles), np.log(cost), 1)[0])
 
@@ -179,6 +214,8 @@ def main(argv: list[str] | None = None) -> None:
             f"{_exponent(particles, [r[1] for r in big]):.2f}, MuJoCo "
             f"{_exponent(particles, [r[2] for r in big]):.2f}"
         )
+    if rows:
+        print(ours_breakdown(round(rows[-1][0] ** (1 / 3))))
     at16 = [r for r in rows if r[0] == 16**3]
     if at16:
         print(f"target: >= 1000 x MuJoCo at 16^3: {at16[0][2] / at16[0][1]:.0f} x")

@@ -66,12 +66,15 @@ from deformctl.sim.step import (
     Contacts,
     DirectSolver,
     Drive,
+    ElementRuns,
     HuntCrossley,
     IterativeSolver,
     Maxwell,
     Palms,
+    element_runs,
     integrate,
     integrate_iterative,
+    with_scratch,
 )
 from deformctl.units import CM, GRAVITY_M_S2
 
@@ -249,6 +252,7 @@ class Model:
         gravity_m_s2: gravity along -z (0 when off).
         law: the Hunt–Crossley elements (:func:`deformctl.sim.hunt_crossley.hc_law`); arm: the
             Maxwell arms (:mod:`deformctl.sim.sls`; their implicit share is in the damping).
+        runs: the elements as the linear Kelvin loop reads them (:mod:`deformctl.sim.step.runs`).
     """
 
     spec: ObjectSpec
@@ -283,6 +287,7 @@ class Model:
     gravity_m_s2: float
     law: HuntCrossley
     arm: Maxwell
+    runs: ElementRuns
 
 
 @lru_cache(maxsize=16)
@@ -633,6 +638,7 @@ def _build_model(
         gravity_m_s2=g,
         law=law,
         arm=maxwell_arms(spec, stiffness),
+        runs=element_runs(lattice.edges, lattice.rest_length_m, lattice.direction, stiffness),
     )
 
 
@@ -683,6 +689,7 @@ def run_model(
         model.base_x, model.dof_of, model.particle_masses_kg, lat.edges, lat.rest_length_m,
         lat.direction, model.stiffness_n_per_m, model.retardation_s, s.nonlinear_springs,
         model.law, unloaded(model.arm) if arm is None else arm,
+        with_scratch(model.runs, lat.n_particles),
     )  # fmt: skip
     palms = Palms(
         model.palm_x_dof, model.palm_z_dof, model.palm_x0, model.palm_stop_m, s.palm_mass_kg,

@@ -38,7 +38,8 @@ Modules, by responsibility: :mod:`.bundles` (the kernels' arguments as named tup
 body, palms and contact rows, the run's drive, the solver), :mod:`.forces` (element forces and
 the step's right-hand side, the BDF2 predictor), :mod:`.contact` (row gaps and targets, the rows
 a step visits), :mod:`.delassus` and :mod:`.dense` (the direct solver's contact problem),
-:mod:`.record` (the record matrix, columns ``REC_*``), :mod:`.direct` (:func:`integrate`) and
+:mod:`.record` (the record matrix, columns ``REC_*``), :mod:`.runs` (the Kelvin elements laid out
+for vector instructions), :mod:`.direct` (:func:`integrate`) and
 :mod:`.iterative` (:func:`integrate_iterative`).
 """
 
@@ -49,6 +50,7 @@ from deformctl.sim.step.bundles import (
     Contacts,
     DirectSolver,
     Drive,
+    ElementRuns,
     HuntCrossley,
     IterativeSolver,
     Maxwell,
@@ -77,6 +79,7 @@ from deformctl.sim.step.record import (
     REC_TABLE_N,
     REC_TIME,
 )
+from deformctl.sim.step.runs import element_runs, with_scratch
 
 __all__ = [
     "N_REC",
@@ -101,12 +104,15 @@ __all__ = [
     "Contacts",
     "DirectSolver",
     "Drive",
+    "ElementRuns",
     "HuntCrossley",
     "IterativeSolver",
     "Maxwell",
     "Palms",
+    "element_runs",
     "integrate",
     "integrate_iterative",
     "spring_forces",
     "spring_forces_numpy",
+    "with_scratch",
 ]

@@ -72,6 +72,31 @@ class Maxwell(NamedTuple):
     base: FloatArray
 
 
+class ElementRuns(NamedTuple):
+    """The linear Kelvin elements as runs of one index offset, and the scratch of their forces
+    (:mod:`deformctl.sim.step.runs`).
+
+    Attributes:
+        seg: per run its first particle, its length (slots), its particle index offset and its
+            first slot, ``[runs, 4]``.
+        k, rest, n0: per slot the element's stiffness N/m, rest length m, and rest direction
+            ``[3, slots]``; zero in the gaps.
+        real: whether a slot holds an element (false in the gaps), ``[slots]``.
+        xs, vs, out: scratch, the positions, velocities and forces by coordinate, ``[3, n]``.
+        f: scratch, one run's forces, ``[3, longest run]``.
+    """
+
+    seg: IntArray
+    k: FloatArray
+    rest: FloatArray
+    n0: FloatArray
+    real: NDArray[np.bool_]
+    xs: FloatArray
+    vs: FloatArray
+    f: FloatArray
+    out: FloatArray
+
+
 class Body(NamedTuple):
     """The lattice and its Kelvin elements.
 
@@ -87,6 +112,7 @@ class Body(NamedTuple):
             above); with them ``k`` is the tangent the implicit step was built with and
             ``retardation k`` a linear damper added to each element.
         arm: the Maxwell arms of a standard linear solid (none: ``arm.stiffness`` is empty).
+        runs: the same elements laid out for the linear Kelvin loop (:class:`ElementRuns`).
     """
 
     base_x: FloatArray
@@ -100,6 +126,7 @@ class Body(NamedTuple):
     nonlinear: bool
     law: HuntCrossley
     arm: Maxwell
+    runs: ElementRuns
 
 
 class Palms(NamedTuple):

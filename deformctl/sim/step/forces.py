@@ -2,9 +2,10 @@
 and a standard linear solid's Maxwell arms, :mod:`.maxwell`), gravity and the palms' drive, as
 the implicit step's right-hand side, and the BDF2 predictor.
 
-The linear Kelvin loop (:func:`_element_rhs`) is the same code with or without Hunt–Crossley
-elements: :func:`_step_impulse` branches once per step, on ``body.law.exponent``, to it or to
-:func:`_element_rhs_hc`.
+:func:`_step_impulse` branches once per step, on ``body.law.exponent``, to the linear Kelvin
+elements or to the Hunt–Crossley ones (:func:`_element_rhs_hc`). The Kelvin elements run by
+index-offset runs (:func:`deformctl.sim.step.runs._element_rhs_runs`, in vector instructions);
+:func:`_element_rhs` is the same sums element by element, the reference they are tested against.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.sim.step.bundles import Body, Palms
 from deformctl.sim.step.laws import hunt_crossley_damping, hunt_crossley_spring
 from deformctl.sim.step.maxwell import _arm_rhs
+from deformctl.sim.step.runs import _element_rhs_runs
 
 
 @njit(cache=True)
@@ -87,7 +89,8 @@ def spring_forces_numpy(
 
 @njit(cache=True)
 def _element_rhs(body: Body, x: FloatArray, vel: FloatArray, h: float, out: FloatArray) -> None:
-    """Element forces minus ``h K v`` (tangent at rest), accumulated into ``out`` ``[n, 3]``.
+    """Element forces minus ``h K v`` (tangent at rest), accumulated into ``out`` ``[n, 3]``: the
+    element-by-element form of what the step computes by runs (:mod:`deformctl.sim.step.runs`).
 
     The dampers are ``c = retardation k`` (:func:`deformctl.sim.engine.element_constants`), so
     the loop reads one constant per element and forms ``c`` and ``h k`` from it (the same
@@ -216,7 +219,8 @@ def _step_impulse(
     fq: FloatArray,
 ) -> None:
     """The step's right-hand side ``fq = h (f(x, v) + f_ext - h K v)`` in DOFs (also fills the
-    particle positions ``x`` and velocities ``vel``).
+    particle positions ``x``; ``vel`` and ``fp`` are scratch, the particle velocities and forces
+    where the Hunt–Crossley elements or the Maxwell arms need them).
 
     ``q, v`` are the step's base state (the BDF2 predictor, or the last state for backward Euler)
     and ``dt`` the implicit step ``h`` (``2 dt / 3`` for BDF2); ``particle_mass`` is ``[n]`` and
@@ -226,26 +230,51 @@ def _step_impulse(
     base_x, dof_of, particle_mass = body.base_x, body.dof_of, body.particle_mass
     palm_x_dof, width_damping = palms.x_dof, palms.width_damping
     n = base_x.shape[0]
-    for p in range(n):
-        for a in range(3):
-            d = dof_of[3 * p + a]
-            x[p, a] = base_x[p, a] + q[d]
-            vel[p, a] = v[d]
-            fp[p, a] = 0.0
-    if body.law.exponent != 1.0:
-        _element_rhs_hc(body, x, vel, dt, fp)
-    else:
-        _element_rhs(body, x, vel, dt, fp)
-    if body.arm.stiffness.shape[0] > 0:  # a standard linear solid's Maxwell arms
-        _arm_rhs(body, x, vel, dt, fp)
+    kelvin = body.law.exponent == 1.0
+    arms = body.arm.stiffness.shape[0] > 0  # a standard linear solid's Maxwell arms
     fq[:] = 0.0
-    for p in range(n):
-        fp[p, 2] -= particle_mass[p] * gravity
-        for a in range(3):
-            fq[dof_of[3 * p + a]] += fp[p, a]
+    if kelvin:
+        # the Kelvin elements by runs (the same sums as _element_rhs, vectorised), into
+        # runs.out by coordinate
+        runs = body.runs
+        xs, vs, out = runs.xs, runs.vs, runs.out
+        for p in range(n):
+            for a in range(3):
+                d = dof_of[3 * p + a]
+                xv = base_x[p, a] + q[d]
+                x[p, a] = xv
+                xs[a, p] = xv
+                vs[a, p] = v[d]
+        _element_rhs_runs(runs, body.retardation, body.nonlinear, dt)
+        if not arms:  # straight from runs.out, in the same order as from fp below
+            for p in range(n):
+                fz = out[2, p] - particle_mass[p] * gravity
+                fq[dof_of[3 * p]] += out[0, p]
+                fq[dof_of[3 * p + 1]] += out[1, p]
+                fq[dof_of[3 * p + 2]] += fz
+        else:
+            for p in range(n):
+                for a in range(3):
+                    vel[p, a] = vs[a, p]
+                    fp[p, a] = out[a, p]
+    else:
+        for p in range(n):
+            for a in range(3):
+                d = dof_of[3 * p + a]
+                x[p, a] = base_x[p, a] + q[d]
+                vel[p, a] = v[d]
+                fp[p, a] = 0.0
+        _element_rhs_hc(body, x, vel, dt, fp)
+    if arms or not kelvin:
+        if arms:
+            _arm_rhs(body, x, vel, dt, fp)
+        for p in range(n):
+            fp[p, 2] -= particle_mass[p] * gravity
+            for a in range(3):
+                fq[dof_of[3 * p + a]] += fp[p, a]
     if palm_x_dof[0] >= 0:
         fw = width_damping * (v[palm_x_dof[1]] - v[palm_x_dof[0]])
-        if body.law.exponent != 1.0:
+        if not kelvin:
             fw *= _width_scale(body, palm_x_dof, q)
         fq[palm_x_dof[0]] += f_now + fw
         fq[palm_x_dof[1]] -= f_now + fw

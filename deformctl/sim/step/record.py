@@ -101,18 +101,28 @@ def _record_step(
         q[i] += h * v[i]
         if abs(v[i]) > max_speed:
             max_speed = abs(v[i])
-    com = np.zeros(3)
+    # the centre of mass in scalars (an array's entries would be stored and reloaded each time)
+    com_x = 0.0
+    com_y = 0.0
+    com_z = 0.0
     min_z = 1e300
     penetration = 0.0
     xl = palm_x0[0] + q[palm_x_dof[0]] if gripped else -np.inf
     xr = palm_x0[1] + q[palm_x_dof[1]] if gripped else np.inf
     for p in range(n):
-        for a in range(3):
-            x[p, a] = base_x[p, a] + q[dof_of[3 * p + a]]
-            com[a] += particle_mass[p] * x[p, a]
-        if x[p, 2] < min_z:
-            min_z = x[p, 2]
-        pen = max(xl - x[p, 0], x[p, 0] - xr)
+        m = particle_mass[p]
+        px = base_x[p, 0] + q[dof_of[3 * p]]
+        py = base_x[p, 1] + q[dof_of[3 * p + 1]]
+        pz = base_x[p, 2] + q[dof_of[3 * p + 2]]
+        x[p, 0] = px
+        x[p, 1] = py
+        x[p, 2] = pz
+        com_x += m * px
+        com_y += m * py
+        com_z += m * pz
+        if pz < min_z:
+            min_z = pz
+        pen = max(xl - px, px - xr)
         if pen > penetration:
             penetration = pen
     if gripped:
@@ -120,9 +130,9 @@ def _record_step(
         rec[step, REC_PALM_XR] = xr
     rec[step, REC_TIME] = (step + 1) * dt
     rec[step, REC_PALM_Z] = palm_z_acc[0]
-    rec[step, REC_COM_Z] = com[2] / total_mass - com_z0
-    rec[step, REC_COM_X] = com[0] / total_mass
-    rec[step, REC_COM_Y] = com[1] / total_mass
+    rec[step, REC_COM_Z] = com_z / total_mass - com_z0
+    rec[step, REC_COM_X] = com_x / total_mass
+    rec[step, REC_COM_Y] = com_y / total_mass
     rec[step, REC_SLIP_L] = slip[0]
     rec[step, REC_SLIP_R] = slip[1]
     rec[step, REC_FRICTION_L] = fric_l
