@@ -9,7 +9,7 @@ and two special sets through the same pipeline and calls this module:
     The friction pairs: the first :data:`N_MU_PAIRS` objects of a population that can be gripped
     at μ = 0.25, each twice, at μ = 0.25 (``<id>-mu0.25``) and at μ = 1.0 (``<id>-mu1``).
 
-``python -m deformctl.repro.grip_model population --seed S --kv-n N --laws hc=1,sls=1 --laws-n M --laws-seed T -o OUT.csv``
+``python -m deformctl.repro.grip_model population --seed S --kv-n N --laws L --laws-n M ...``
     The model's population of every law: ``population --grip -n N --seed S`` (the Kelvin–Voigt
     population the model was trained on before the law mix, bit for bit, so that its Kelvin–Voigt
     network and figures stay today's), then ``population --grip --laws LAWS -n M --seed S

@@ -1,4 +1,4 @@
-"""The grip model's population of every law (``python -m deformctl.repro.grip_model population``)."""
+"""The grip model's population of every law (`grip_model population`)."""
 
 from __future__ import annotations
 
@@ -16,7 +16,8 @@ def test_the_kelvin_voigt_part_is_the_population_of_before_bit_for_bit() -> None
     before = grip_population(40, seed=1)
     kv = both.iloc[:40]
     pd.testing.assert_frame_equal(kv[list(before.columns)], before)
-    assert (kv[EXPONENT_COLUMN] == 1.0).all() and (kv[ARM_COLUMN] == 0.0).all()
+    assert (kv[EXPONENT_COLUMN] == 1.0).all()
+    assert (kv[ARM_COLUMN] == 0.0).all()
     assert kv[RELAXATION_COLUMN].isna().all()
     assert list(catalog_laws(kv)) == ["kv"] * 40
 
@@ -24,7 +25,8 @@ def test_the_kelvin_voigt_part_is_the_population_of_before_bit_for_bit() -> None
 def test_the_other_laws_come_from_their_own_seed_with_their_own_ids() -> None:
     both = model_population(seed=1, kv_n=40, laws="hc=1,sls=1", laws_n=60, laws_seed=11)
     others = both.iloc[40:]
-    assert len(others) == 60 and others["object_id"].str.startswith(LAW_ID_PREFIX).all()
+    assert len(others) == 60
+    assert others["object_id"].str.startswith(LAW_ID_PREFIX).all()
     assert both["object_id"].is_unique
     laws = set(catalog_laws(others))
     assert laws == {"hc", "sls"}
@@ -45,7 +47,8 @@ def test_the_command_writes_the_catalog(tmp_path) -> None:  # type: ignore[no-un
     args = ["population", "--seed", "1", "--kv-n", "10", "--laws", "sls=1", "--laws-n", "5"]
     assert main([*args, "--laws-seed", "3", "-o", str(out)]) == 0
     frame = pd.read_csv(out)
-    assert len(frame) == 15 and list(catalog_laws(frame)).count("sls") == 5
+    assert len(frame) == 15
+    assert list(catalog_laws(frame)).count("sls") == 5
 
 
 @pytest.mark.parametrize("laws", ["xx=1", "hc=-1"])
