@@ -12,10 +12,10 @@ and two special sets through the same pipeline and calls this module:
 ``python -m deformctl.repro.grip_model population --seed S --kv-n N --laws L --laws-n M ...``
     The model's population of every law: ``population --grip -n N --seed S`` (the Kelvin–Voigt
     population the model was trained on before the law mix, bit for bit, so that its Kelvin–Voigt
-    network and figures stay today's), then ``population --grip --laws LAWS -n M --seed S
-    --id-prefix L``, seed T (the other laws' objects; their own seed, so that they are not the
-    Kelvin–Voigt objects' draws with another law). The Kelvin–Voigt rows take the law columns'
-    Kelvin–Voigt values (exponent 1, no arm).
+    network and figures stay today's), then ``population --grip --laws L -n M --seed T
+    --id-prefix L`` (``--laws-seed T``: the other laws' objects from their own seed, so that they
+    are not the Kelvin–Voigt objects' draws with another law). The Kelvin–Voigt rows take the
+    law columns' Kelvin–Voigt values (exponent 1, no arm).
 
 ``python -m deformctl.repro.grip_model report RUN_DIR --model MODEL``
     Reads the run directory's index tables (:data:`RUN_FILES`) and prints, on the fresh
