@@ -9,6 +9,14 @@ and two special sets through the same pipeline and calls this module:
     The friction pairs: the first :data:`N_MU_PAIRS` objects of a population that can be gripped
     at μ = 0.25, each twice, at μ = 0.25 (``<id>-mu0.25``) and at μ = 1.0 (``<id>-mu1``).
 
+``python -m deformctl.repro.grip_model population --seed S --kv-n N --laws L --laws-n M ...``
+    The model's population of every law: ``population --grip -n N --seed S`` (the Kelvin–Voigt
+    population the model was trained on before the law mix, bit for bit, so that its Kelvin–Voigt
+    network and figures stay today's), then ``population --grip --laws L -n M --seed T
+    --id-prefix L`` (``--laws-seed T``: the other laws' objects from their own seed, so that they
+    are not the Kelvin–Voigt objects' draws with another law). The Kelvin–Voigt rows take the
+    law columns' Kelvin–Voigt values (exponent 1, no arm).
+
 ``python -m deformctl.repro.grip_model report RUN_DIR --model MODEL``
     Reads the run directory's index tables (:data:`RUN_FILES`) and prints, on the fresh
     population: the model's median and max relative error beside the constant-ratio, F_w and
@@ -33,7 +41,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from deformctl.catalog import MATERIAL_COLUMNS
+from deformctl.catalog import ARM_COLUMN, EXPONENT_COLUMN, MATERIAL_COLUMNS, RELAXATION_COLUMN
 from deformctl.errors import DeformctlError
 from deformctl.grip.fast import Estimates, Predictor
 from deformctl.population import GRIP_MAX_STRAIN_AT_F_W, grip_strain_at_f_w
@@ -45,6 +53,8 @@ RUN_FILES = {
     "mu": "mu/index.parquet",
     "paper": "paper/index.parquet",
 }
+#: The id prefix of the other laws' objects in :func:`model_population`.
+LAW_ID_PREFIX = "L"
 #: How many objects the friction pairs take, and their two μ.
 N_MU_PAIRS = 8
 MU_PAIR = (0.25, 1.0)
@@ -75,6 +85,20 @@ def mu_catalog(population: pd.DataFrame, n: int = N_MU_PAIRS) -> pd.DataFrame:
         part["friction_mu"] = mu
         rows.append(part)
     return pd.concat(rows, ignore_index=True)
+
+
+def model_population(seed: int, kv_n: int, laws: str, laws_n: int, laws_seed: int) -> pd.DataFrame:
+    """The model's population of every law (module doc): ``kv_n`` Kelvin–Voigt objects as
+    ``population --grip`` draws them alone (seed ``seed``), then ``laws_n`` objects of the mix
+    ``laws`` (seed ``laws_seed``)."""
+    from deformctl.population import grip_population
+
+    kv = grip_population(kv_n, seed=seed)
+    if laws_n == 0:
+        return kv
+    others = grip_population(laws_n, seed=laws_seed, laws=laws, id_prefix=LAW_ID_PREFIX)
+    kv = kv.assign(**{EXPONENT_COLUMN: 1.0, ARM_COLUMN: 0.0, RELAXATION_COLUMN: np.nan})
+    return pd.concat([kv, others[list(kv.columns)]], ignore_index=True)
 
 
 def _predict(predictor: Predictor, index: pd.DataFrame, coverage: float | None) -> Estimates:
@@ -435,6 +459,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     cat = sub.add_parser("mu-catalog", help="the friction pairs' catalog")
     cat.add_argument("population")
     cat.add_argument("-o", "--output", required=True)
+    pop = sub.add_parser("population", help="the model's population of every law")
+    pop.add_argument("--seed", type=int, required=True)
+    pop.add_argument("--kv-n", type=int, required=True)
+    pop.add_argument("--laws", required=True)
+    pop.add_argument("--laws-n", type=int, required=True)
+    pop.add_argument("--laws-seed", type=int, required=True)
+    pop.add_argument("-o", "--output", required=True)
     rep = sub.add_parser("report", help="evaluate the model on the run directory")
     rep.add_argument("run_dir")
     rep.add_argument("--model", default="grip")
@@ -453,6 +484,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             from deformctl.artifacts import read_catalog, write_catalog
 
             write_catalog(mu_catalog(read_catalog(args.population)), args.output, force=True)
+            return 0
+        if args.command == "population":
+            from deformctl.artifacts import write_catalog
+
+            both = model_population(args.seed, args.kv_n, args.laws, args.laws_n, args.laws_seed)
+            write_catalog(both, args.output, force=True)
             return 0
         ref = None if args.reference == "none" else args.reference
         text, missed = report(args.run_dir, args.model, ref)
