@@ -12,18 +12,7 @@ from deformctl.characterize import characterize
 from deformctl.characterize.quality import BELOW_SQUEEZES, parse_quality
 from deformctl.presets import sim_preset
 from deformctl.sim import ObjectSpec, squeeze_many
-
-#: population --grip --laws kv=1,hc=1,sls=1 -n 1500 --seed 1, object P1224: W 1.28 N,
-#: F_w 0.65 N, D 30.05 N/cm at F_w, n 2.92
-P1224 = ObjectSpec(
-    "P1224",
-    (18.266157255740307, 18.86999851884091, 13.783762496895122),
-    1.2823604904060122,
-    0.9791332774328168,
-    30.04844412194788,
-    0.03169091107723927,
-    2.923045909747441,
-)
+from tests._helpers.hard_objects import P1224
 
 
 def _fit(spec: ObjectSpec, peak_force_n: float) -> dict[str, object]:

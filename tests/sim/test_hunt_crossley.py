@@ -28,6 +28,7 @@ from deformctl.sim import ObjectSpec, squeeze
 from deformctl.sim import hunt_crossley as hc
 from deformctl.sim.lattice import build_lattice
 from deformctl.sim.statics import unit_squeeze_stiffness_n_per_m
+from tests._helpers.hard_objects import P1224
 
 runner = CliRunner()
 #: the paper preset on a small lattice (5 particles per side: the tests stay fast)
@@ -146,15 +147,7 @@ def test_a_hard_squeeze_of_a_damped_object_stays_stable() -> None:
 #: at F_w, n 2.92, d_op 0.02 cm): a squeeze to 1 % strain goes to 500 F_w (measure --sim's default
 #: before it was capped at 3 F_w; --peak-force-n still can), where the law's tangent is 60 times
 #: the one at F_w; built at F_w the step diverged ("non-finite state")
-LIGHT_STIFF = ObjectSpec(
-    "P1224",
-    (18.266157255740307, 18.86999851884091, 13.783762496895122),
-    1.2823604904060122,
-    0.9791332774328168,
-    30.04844412194788,
-    0.03169091107723927,
-    2.923045909747441,
-)
+LIGHT_STIFF = P1224
 #: population --grip --laws kv=1,hc=1,sls=1 -n 600 --seed 2, object P524: the linear solve of its
 #: resting pre-stress (an 8 x 5 x 5 lattice with massless palm surfaces) stalled in the line search
 RESTING_SOLVE = ObjectSpec(
