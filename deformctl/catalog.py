@@ -64,6 +64,13 @@ EXPONENT_COLUMN = "material_stiffness_exponent"
 #: relaxation time τ (needed when k2 > 0; an empty cell is allowed when k2 is 0).
 ARM_COLUMN = "material_arm_stiffness_n_per_cm"
 RELAXATION_COLUMN = "material_relaxation_time_s"
+#: The law columns' values of an object that is neither Hunt–Crossley nor a standard linear
+#: solid (exponent 1, no arm, no relaxation time): a Kelvin–Voigt row, and an absent column's.
+KELVIN_VOIGT_LAW_VALUES: dict[str, float] = {
+    EXPONENT_COLUMN: 1.0,
+    ARM_COLUMN: 0.0,
+    RELAXATION_COLUMN: float("nan"),
+}
 #: The catalog columns, in order; the two material columns are the simulator's ground truth.
 CATALOG_COLUMNS: tuple[str, ...] = (
     "object_id",
@@ -226,8 +233,13 @@ class CatalogObject(Mapping[str, Any]):
             size = tuple(_number(raw, c, object_id) for c in SIZE_COLUMNS)
             weight = _number(raw, "weight_n", object_id)
             mu = _number(raw, "friction_mu", object_id)
-            exponent = _number(raw, EXPONENT_COLUMN, object_id) if EXPONENT_COLUMN in raw else 1.0
-            arm = _number(raw, ARM_COLUMN, object_id) if ARM_COLUMN in raw else 0.0
+            kv = KELVIN_VOIGT_LAW_VALUES
+            exponent = (
+                _number(raw, EXPONENT_COLUMN, object_id)
+                if EXPONENT_COLUMN in raw
+                else kv[EXPONENT_COLUMN]
+            )
+            arm = _number(raw, ARM_COLUMN, object_id) if ARM_COLUMN in raw else kv[ARM_COLUMN]
             tau = (
                 _number(raw, RELAXATION_COLUMN, object_id)
                 if arm > 0.0 or not _absent(raw, RELAXATION_COLUMN)

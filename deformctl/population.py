@@ -42,6 +42,7 @@ from deformctl.catalog import (
     ARM_COLUMN,
     CATALOG_COLUMNS,
     EXPONENT_COLUMN,
+    KELVIN_VOIGT_LAW_VALUES,
     MATERIAL_COLUMNS,
     RELAXATION_COLUMN,
     SIZE_COLUMNS,
@@ -345,8 +346,9 @@ def catalog_laws(catalog: pd.DataFrame) -> np.ndarray:
         return np.asarray(pd.to_numeric(catalog[name], errors="coerce").fillna(absent))
 
     laws = np.full(n, "kv", dtype=object)
-    laws[column(EXPONENT_COLUMN, 1.0) > 1.0] = "hc"
-    laws[column(ARM_COLUMN, 0.0) > 0.0] = "sls"
+    kv = KELVIN_VOIGT_LAW_VALUES
+    laws[column(EXPONENT_COLUMN, kv[EXPONENT_COLUMN]) > 1.0] = "hc"
+    laws[column(ARM_COLUMN, kv[ARM_COLUMN]) > 0.0] = "sls"
     return laws
 
 
@@ -435,6 +437,7 @@ def _draw_laws(
     hc, sls = law == "hc", law == "sls"
     d = batch[MATERIAL_COLUMNS[0]].to_numpy(dtype=np.float64)
     batch[MATERIAL_COLUMNS[1]] = np.where(sls, 0.0, batch[MATERIAL_COLUMNS[1]])
-    batch[EXPONENT_COLUMN] = np.where(hc, exponent, 1.0)
-    batch[ARM_COLUMN] = np.where(sls, ratio * d, 0.0)
-    batch[RELAXATION_COLUMN] = np.where(sls, tau, np.nan)
+    kv = KELVIN_VOIGT_LAW_VALUES
+    batch[EXPONENT_COLUMN] = np.where(hc, exponent, kv[EXPONENT_COLUMN])
+    batch[ARM_COLUMN] = np.where(sls, ratio * d, kv[ARM_COLUMN])
+    batch[RELAXATION_COLUMN] = np.where(sls, tau, kv[RELAXATION_COLUMN])

@@ -36,6 +36,7 @@ from deformctl.artifacts.io import display_name, read_input_bytes
 from deformctl.catalog import (
     ARM_COLUMN,
     EXPONENT_COLUMN,
+    KELVIN_VOIGT_LAW_VALUES,
     MATERIAL_COLUMNS,
     RELAXATION_COLUMN,
     SIZE_COLUMNS,
@@ -120,7 +121,7 @@ def _hunt_crossley_material(table: pd.DataFrame, out: pd.DataFrame) -> None:
         d_w = (f_w / k) ** (1.0 / n)
         out[MATERIAL_COLUMNS[0]] = np.where(hc, f_w / d_w, out[MATERIAL_COLUMNS[0]])
         out[MATERIAL_COLUMNS[1]] = np.where(hc, lam * d_w**n, out[MATERIAL_COLUMNS[1]])
-    out[EXPONENT_COLUMN] = np.where(hc, n, 1.0)
+    out[EXPONENT_COLUMN] = np.where(hc, n, KELVIN_VOIGT_LAW_VALUES[EXPONENT_COLUMN])
 
 
 def _standard_linear_solid_material(table: pd.DataFrame, out: pd.DataFrame) -> None:
@@ -141,8 +142,9 @@ def _standard_linear_solid_material(table: pd.DataFrame, out: pd.DataFrame) -> N
         sls, column("sls_stiffness_n_per_cm"), out[MATERIAL_COLUMNS[0]]
     )
     out[MATERIAL_COLUMNS[1]] = np.where(sls, 0.0, out[MATERIAL_COLUMNS[1]])
-    out[ARM_COLUMN] = np.where(sls, column("sls_arm_stiffness_n_per_cm"), 0.0)
-    out[RELAXATION_COLUMN] = np.where(sls, column("sls_relaxation_time_s"), np.nan)
+    kv = KELVIN_VOIGT_LAW_VALUES
+    out[ARM_COLUMN] = np.where(sls, column("sls_arm_stiffness_n_per_cm"), kv[ARM_COLUMN])
+    out[RELAXATION_COLUMN] = np.where(sls, column("sls_relaxation_time_s"), kv[RELAXATION_COLUMN])
 
 
 def read_lift_objects(path: str) -> pd.DataFrame:

@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from deformctl.catalog import ARM_COLUMN, EXPONENT_COLUMN, MATERIAL_COLUMNS, RELAXATION_COLUMN
+from deformctl.catalog import KELVIN_VOIGT_LAW_VALUES, MATERIAL_COLUMNS
 from deformctl.errors import DeformctlError
 from deformctl.grip.fast import Estimates, Predictor
 from deformctl.population import GRIP_MAX_STRAIN_AT_F_W, grip_strain_at_f_w
@@ -97,7 +97,7 @@ def model_population(seed: int, kv_n: int, laws: str, laws_n: int, laws_seed: in
     if laws_n == 0:
         return kv
     others = grip_population(laws_n, seed=laws_seed, laws=laws, id_prefix=LAW_ID_PREFIX)
-    kv = kv.assign(**{EXPONENT_COLUMN: 1.0, ARM_COLUMN: 0.0, RELAXATION_COLUMN: np.nan})
+    kv = kv.assign(**KELVIN_VOIGT_LAW_VALUES)
     return pd.concat([kv, others[list(kv.columns)]], ignore_index=True)
 
 
