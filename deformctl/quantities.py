@@ -71,6 +71,7 @@ __all__ = [
     "RELAXATION_TIME_S",
     "RESTARTS",
     "RIG_TIMEOUT_S",
+    "SCENE_HZ",
     "SEED",
     "SIZE_CM",
     "SLIP_TOLERANCE_M",
@@ -288,6 +289,9 @@ ALPHA_CM = Quantity("alpha_cm", "--alpha-cm", " cm", 0.0, low_open=True)
 #: recorded state (a 1e-12 s step would ask for hundreds of GiB), above 50 ms the contact and
 #: slip events of a lift are not resolved.
 DT_S = Quantity("dt_s", "--dt-s", " s", 1e-5, 0.05)
+#: The scene's frame rate in a simulated run's log (``--scene-hz``, frames per simulated second;
+#: 0: no scene); :func:`deformctl.scene.check_scene_hz` adds its ceiling, the step rate 1/dt.
+SCENE_HZ = Quantity("scene_hz", "--scene-hz", " Hz", 0.0, why="0: no scene")
 MARKER_SIZE_CM = Quantity("marker_size_cm", "--marker-size-cm", " cm", 0.0, low_open=True)
 SQUARE_SIZE_CM = Quantity("square_size_cm", "--square-size-cm", " cm", 0.0, low_open=True)
 MARKER_ID = Quantity("marker_id", "--marker-id", "", 0, integer=True)

@@ -8,8 +8,9 @@ the positions of the object's surface particles, both palms' positions, the norm
 force each palm carries, and whether each palm's contact stuck or slipped since the previous
 frame.
 
-The rate is one quantity with one validation home, :func:`scene_every_steps`: ``--scene-hz`` of
-simulated time, 0 for no scene, at most the simulator's step rate 1/dt.
+The rate is one quantity (:data:`~deformctl.quantities.SCENE_HZ`: frames per second of simulated
+time, 0 for no scene) checked once, by :func:`check_scene_hz` (at most the simulator's step rate
+1/dt), where the options type that carries it is built; :func:`scene_every_steps` only counts.
 
 Stick and slip. Each palm grips its face of the lattice as one rigid patch
 (:mod:`deformctl.sim.engine`, "Palm model"), so a palm's contact is in one state at a time: it
@@ -23,13 +24,13 @@ eight orders above the one and three below the other.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from deformctl.arraytypes import BoolArray, FloatArray, IntArray
 from deformctl.errors import UsageError
+from deformctl.quantities import SCENE_HZ
 
 #: Scene frames per second of simulated time unless asked otherwise (a video's rate).
 DEFAULT_SCENE_HZ = 30.0
@@ -39,29 +40,34 @@ STICK_SPEED_M_S = 1e-9
 NO_PALM = -1
 
 
-def scene_every_steps(scene_hz: float, dt_s: float) -> int:
-    """Steps between two scene frames for ``scene_hz`` frames per simulated second (0: none).
-
-    The frames fall on every ``round(1 / (scene_hz dt))``-th step (at least every step), so the
-    rate is ``scene_hz`` to within half a step.
+def check_scene_hz(scene_hz: float, dt_s: float) -> float:
+    """``scene_hz`` as a float when it is a scene rate the simulator can record at time step
+    ``dt_s``: the rule :data:`~deformctl.quantities.SCENE_HZ` and at most one frame per step.
 
     Raises:
         UsageError: ``scene_hz`` negative, not finite, or above the step rate ``1 / dt_s``
             (exit 2).
     """
-    if isinstance(scene_hz, bool) or not isinstance(scene_hz, int | float):
-        raise UsageError(f"--scene-hz must be a number of frames per second, got {scene_hz!r}")
-    if not math.isfinite(scene_hz) or scene_hz < 0:
-        raise UsageError(f"--scene-hz must be a finite number >= 0 (0: no scene), got {scene_hz}")
+    hz: float = SCENE_HZ.check(scene_hz)
     step_rate = 1.0 / dt_s
-    if scene_hz > step_rate * (1.0 + 1e-12):
+    if hz > step_rate * (1.0 + 1e-12):
         raise UsageError(
-            f"--scene-hz {scene_hz:g} is above the simulator's step rate {step_rate:g} Hz "
+            f"--scene-hz {hz:g} is above the simulator's step rate {step_rate:g} Hz "
             f"(dt {dt_s:g} s): at most one frame per step"
         )
-    if scene_hz == 0:
+    return hz
+
+
+def scene_every_steps(scene_hz: float, dt_s: float) -> int:
+    """Steps between two scene frames for ``scene_hz`` frames per simulated second (0: none),
+    a rate checked already (:func:`check_scene_hz`).
+
+    The frames fall on every ``round(1 / (scene_hz dt))``-th step (at least every step), so the
+    rate is ``scene_hz`` to within half a step.
+    """
+    if not scene_hz > 0:
         return 0
-    return max(1, round(step_rate / scene_hz))
+    return max(1, round(1.0 / dt_s / scene_hz))
 
 
 @dataclass(frozen=True)

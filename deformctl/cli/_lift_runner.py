@@ -25,6 +25,7 @@ from deformctl.lift.options import (
 )
 
 if TYPE_CHECKING:  # pragma: no cover - the runners (numba; pandas, MCAP) load when they run
+    from deformctl.lift.runners.sim import LiftTask
     from deformctl.parallel import SweepOptions
     from deformctl.presets import SimPreset
 
@@ -211,28 +212,19 @@ SEARCH = OptionGroup(
 
 def lift_dataset(
     catalog: str,
-    preset: SimPreset,
-    log: str | None,
-    search: SearchOptions,
-    log_epoch_ns: int | None,
-    scene_hz: float,
+    task: LiftTask,
     output: str,
     sweep: SweepOptions,
+    *,
     object_ids: Sequence[str] | None,
     force: bool,
     quiet: bool = False,
 ) -> None:
-    """``lift sim -o DIR/``: every object's search (under its force ceiling) through the sweep
-    executor, then its summary (unless ``quiet``); each part's log has the scene at ``scene_hz``.
+    """``lift sim -o DIR/``: every object's search (:class:`~deformctl.lift.runners.sim.LiftTask`:
+    the preset, the search under its force ceiling, the logs' epoch and scene rate) through the
+    sweep executor, then its summary (unless ``quiet``)."""
+    from deformctl.lift.runners.sim import lift_sweep
 
-    Raises:
-        UsageError: ``--log`` (each part has its log).
-    """
-    if log is not None:
-        raise UsageError("--log is not used with a dataset directory output (DIR/_logs/ has them)")
-    from deformctl.lift.runners.sim import LiftTask, lift_sweep
-
-    task = LiftTask(preset=preset, search=search, log_epoch_ns=log_epoch_ns, scene_hz=scene_hz)
     summary = lift_sweep(
         catalog, task, output=output, sweep=sweep, object_ids=object_ids, force=force
     )

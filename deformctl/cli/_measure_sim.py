@@ -115,7 +115,6 @@ def simulate_task(
     from deformctl.measure.options import SqueezeProtocol
     from deformctl.measure.stage import SimulateCatalogTask
     from deformctl.presets import DEFAULT_PRESET, SimOptions
-    from deformctl.scene import scene_every_steps
 
     if peak_force_n is not None and strain is not None:
         raise UsageError("give --peak-force-n or --strain, not both")
@@ -136,15 +135,13 @@ def simulate_task(
         dt_s=dt_s,
         memory_budget_gib=memory_budget_gib,
     ).preset()
-    scene_hz = scene_rate(scene_hz)
-    scene_every_steps(scene_hz, preset.settings.dt_s)
     epoch_ns = parse_log_epoch(log_epoch)
     return SimulateCatalogTask(
         protocol=protocol,
         settings=preset.settings,
         seed=0 if seed is None else seed,
         sim_preset=preset.name,
-        scene_hz=scene_hz,
+        scene_hz=scene_rate(scene_hz),
         **({} if epoch_ns is None else {"log_epoch_ns": epoch_ns}),
     )
 

@@ -176,8 +176,8 @@ SceneHz = Annotated[
 
 
 def scene_rate(value: float | None) -> float:
-    """The rate ``--scene-hz`` asks for (its default when not given); checked where it is used
-    (:func:`deformctl.scene.scene_every_steps`)."""
+    """The rate ``--scene-hz`` asks for (its default when not given); checked by the options type
+    built with it (:func:`deformctl.scene.check_scene_hz`)."""
     return DEFAULT_SCENE_HZ if value is None else float(value)
 
 

@@ -99,29 +99,23 @@ def sim(
     dataset = sweep.check(output, file_workers=True)
     if scene_hz is not None and log is None and not dataset:
         raise UsageError("--scene-hz needs --log FILE: the scene is written into the lift log")
+    if dataset and log is not None:
+        raise UsageError("--log is not used with a dataset directory output (DIR/_logs/ has them)")
     # the scene goes into a log: without one, the attempts record none
     scene = opt.scene_rate(scene_hz) if log is not None or dataset else 0.0
-    from deformctl.lift.runners.sim import sim_runner_factory
+    epoch_ns = opt.parse_log_epoch(log_epoch)
+    from deformctl.lift.runners.sim import LiftTask, sim_runner_factory
 
+    # the scene rate is checked once, by the task or the factory built with it
+    if dataset:
+        task = LiftTask(preset=preset, search=search, log_epoch_ns=epoch_ns, scene_hz=scene)
+        start(protocol=search.protocol, dataset=True)  # refuses a start seed
+        object_ids = opt.parse_object_ids(objects)
+        lift_dataset(catalog, task, output, sweep, object_ids=object_ids, force=force, quiet=quiet)
+        return
     factory = sim_runner_factory(preset=preset, scene_hz=scene)
     object_ids = opt.parse_object_ids(objects)
-    seed = start(protocol=search.protocol, dataset=dataset)
-    epoch_ns = opt.parse_log_epoch(log_epoch)
-    if dataset:
-        lift_dataset(
-            catalog,
-            preset,
-            log,
-            search,
-            epoch_ns,
-            scene,
-            output,
-            sweep,
-            object_ids,
-            force,
-            quiet,
-        )
-        return
+    seed = start(protocol=search.protocol, dataset=False)
     file = _FileRun(catalog, output, log, object_ids, search, seed, force, None if quiet else clock)
     file.lift(factory, epoch_ns=epoch_ns, workers=sweep.workers)
 

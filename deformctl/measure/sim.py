@@ -17,7 +17,7 @@ from deformctl.measure.options import (
     DEFAULT_SQUEEZE_STRAIN,
     SqueezeProtocol,
 )
-from deformctl.scene import DEFAULT_SCENE_HZ, scene_every_steps
+from deformctl.scene import DEFAULT_SCENE_HZ, check_scene_hz
 from deformctl.series import SqueezeSeries
 
 if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported when used
@@ -151,7 +151,7 @@ def check_squeeze_settings(
             f"strain must be in (0, {settings.max_squeeze_strain:g}) (the densification limit), "
             f"got {protocol.strain:g}"
         )
-    scene_every_steps(scene_hz, settings.dt_s)  # refuses a bad rate before any squeeze
+    check_scene_hz(scene_hz, settings.dt_s)
 
 
 def squeeze_objects(

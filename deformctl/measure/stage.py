@@ -23,7 +23,7 @@ from deformctl.artifacts.dataset import LogPartWriter, dataset_fingerprint
 from deformctl.artifacts.io import check_input_path
 from deformctl.artifacts.mcap import LOG_EPOCH_NS
 from deformctl.artifacts.provenance import Provenance, input_digest
-from deformctl.catalog import CatalogObject, MeasuredObject, select_objects
+from deformctl.catalog import CatalogObject, MeasuredObject, catalog_objects, select_objects
 from deformctl.errors import InputDataError, UsageError
 from deformctl.measure.csv.options import CsvOptions
 from deformctl.measure.csv.reader import read_csv
@@ -38,7 +38,6 @@ from deformctl.measure.ros2_bag import read_bag
 from deformctl.measure.sim import (
     SqueezeProgress,
     check_squeeze_settings,
-    simulate_squeezes,
     squeeze_objects,
 )
 from deformctl.parallel import (
@@ -56,6 +55,7 @@ from deformctl.series import SqueezeSeries
 if TYPE_CHECKING:  # pragma: no cover - typing only; the simulator is imported when used
     from deformctl.sim import SimSettings
     from deformctl.sim.engine import RunPlan
+    from deformctl.sim.objects import ObjectSpec
 
 
 #: Rows of a ``measure --sim`` dataset: one per object squeezed (the series are in the logs).
@@ -101,30 +101,31 @@ class SimulateCatalogTask:
     log_epoch_ns: int = LOG_EPOCH_NS
     scene_hz: float = DEFAULT_SCENE_HZ
 
+    def __post_init__(self) -> None:
+        """Refuse a strain at or above the densification limit or a bad scene rate, once: the
+        runs below take the task as checked.
+
+        Raises:
+            UsageError: either one (exit 2).
+        """
+        check_squeeze_settings(self.protocol, self.settings, self.scene_hz)
+
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """Squeeze one object: its summary row, its (object row, squeezes) as the payload."""
         planned = item.get("_planned")  # (object, plan) parsed and planned once by the caller
-        if planned is None:
+        if planned is None:  # a row the caller could not plan: parsed here (and refused)
             row = {k: v for k, v in item.items() if k != "_position"}
-            objects, series = simulate_squeezes(
-                pd.DataFrame([row]),
-                settings=self.settings,
-                seed=self.seed,
-                first_index=int(item["_position"]),
-                protocol=self.protocol,
-                scene_hz=self.scene_hz,
-            )
-        else:
-            check_squeeze_settings(self.protocol, self.settings, self.scene_hz)
-            objects, series = squeeze_objects(
-                [planned[0]],
-                [planned[1]],
-                protocol=self.protocol,
-                settings=self.settings,
-                seed=self.seed,
-                first_index=int(item["_position"]),
-                scene_hz=self.scene_hz,
-            )
+            (obj,) = catalog_objects(pd.DataFrame([row]))
+            planned = (obj, self.plan(obj.to_sim_spec()))
+        objects, series = squeeze_objects(
+            [planned[0]],
+            [planned[1]],
+            protocol=self.protocol,
+            settings=self.settings,
+            seed=self.seed,
+            first_index=int(item["_position"]),
+            scene_hz=self.scene_hz,
+        )
         summary = {
             "object_id": str(objects[0]["object_id"]),
             "squeezes": len(series),
@@ -133,6 +134,16 @@ class SimulateCatalogTask:
             "peak_force_n": float(objects[0]["sim_peak_force_n"]),
         }
         return TaskOutput(rows=[summary], payload=(objects[0], series))
+
+    def plan(self, spec: ObjectSpec) -> RunPlan:
+        """The plan of ``spec``'s squeezes under this task
+        (:func:`deformctl.sim.protocols.plan_squeeze`: steps, scene frames, memory)."""
+        from deformctl.sim.protocols import plan_squeeze
+
+        p = self.protocol
+        return plan_squeeze(
+            spec, ramp_s=p.ramp_s, hold_s=p.hold_s, settings=self.settings, scene_hz=self.scene_hz
+        )
 
 
 def sim_provenance(
@@ -177,7 +188,6 @@ def _plan(
         UsageError: one line naming the estimate, the budget and the option (exit 2).
     """
     from deformctl.sim.engine import GIB
-    from deformctl.sim.protocols import plan_squeeze
 
     settings, p = task.settings, task.protocol
     planned: list[tuple[CatalogObject, RunPlan] | None] = []
@@ -190,10 +200,7 @@ def _plan(
                 raise
             planned.append(None)  # a dataset's bad row fails alone, in its worker
             continue
-        plan = plan_squeeze(
-            spec, ramp_s=p.ramp_s, hold_s=p.hold_s, settings=settings, scene_hz=task.scene_hz
-        )
-        planned.append((obj, plan))
+        planned.append((obj, task.plan(spec)))
     samples = sum((plan.steps + 1.0) * p.squeezes for _, plan in filter(None, planned))
     estimate = samples * LOG_SAMPLE_BYTES
     if single_log and estimate > settings.memory_budget_gib * GIB:
@@ -226,7 +233,8 @@ def simulate_catalog_file(
     measured wall time (:mod:`deformctl.parallel.auto`; the first objects are squeezed here).
 
     Returns:
-        The objects' rows and the squeezes written (see :func:`simulate_squeezes`).
+        The objects' rows and the squeezes written (see
+        :func:`deformctl.measure.sim.simulate_squeezes`).
 
     Raises:
         OutputExistsError: ``output`` exists and ``force`` is false (exit 1).
@@ -245,7 +253,6 @@ def simulate_catalog_file(
         ]
         objects, series = _squeeze_in_workers(items, task, n_workers, progress)
     else:
-        check_squeeze_settings(task.protocol, task.settings, task.scene_hz)
         objects, series = squeeze_objects(
             [obj for obj, _ in planned],
             [plan for _, plan in planned],

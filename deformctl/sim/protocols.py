@@ -16,7 +16,7 @@ import numpy as np
 from deformctl.arraytypes import FloatArray
 from deformctl.errors import SimulationError, UsageError
 from deformctl.physics import rigid_grip_force_n
-from deformctl.scene import scene_every_steps
+from deformctl.scene import check_scene_hz, scene_every_steps
 from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
 from deformctl.sim import first_use
 from deformctl.sim.engine import (
@@ -264,8 +264,8 @@ def plan_squeeze(
     scene_hz: float = 0.0,
 ) -> RunPlan:
     """The plan of one squeeze of ``spec`` (:func:`squeeze`'s arguments): its steps, a scene
-    frame every so many steps and its memory, refused (exit 2) above the memory budget, or for a
-    negative duration or a bad scene rate."""
+    frame every so many steps (``scene_hz`` checked already: :func:`deformctl.scene.check_scene_hz`)
+    and its memory, refused (exit 2) above the memory budget, or for a negative duration."""
     s = settings or SimSettings()
     if not (ramp_s >= 0 and hold_s >= 0):  # an endless squeeze is refused by the budget
         raise UsageError("ramp_s and hold_s must be >= 0")
@@ -313,6 +313,7 @@ def squeeze(
     if not (math.isfinite(peak_force_n) and peak_force_n > 0):
         raise UsageError(f"peak_force_n must be > 0, got {peak_force_n}")
     if plan is None:
+        scene_hz = check_scene_hz(scene_hz, s.dt_s)
         plan = plan_squeeze(spec, ramp_s=ramp_s, hold_s=hold_s, settings=s, scene_hz=scene_hz)
     n_steps, every = int(plan.steps), plan.frame_every
     _kernels_ready()
@@ -403,8 +404,9 @@ def plan_lift_attempt(
     scene_hz: float = 0.0,
 ) -> RunPlan:
     """The plan of one lift attempt of ``spec`` (:func:`lift_attempt`'s arguments): its steps
-    (the grip, the rise, the hold), a scene frame every so many steps and its memory, refused
-    (exit 2) above the memory budget or for a bad scene rate."""
+    (the grip, the rise, the hold), a scene frame every so many steps (``scene_hz`` checked
+    already: :func:`deformctl.scene.check_scene_hz`) and its memory, refused (exit 2) above the
+    memory budget."""
     s, p = settings or SimSettings(), profile or LiftProfile()
     every = scene_every_steps(scene_hz, s.dt_s)
     rise = float(np.ceil(p.rise_time_s(p.rise_m(spec)) / s.dt_s))
@@ -450,6 +452,7 @@ def lift_attempt(
     if not (math.isfinite(grip_force_n) and grip_force_n >= 0):
         raise UsageError(f"grip_force_n must be finite and >= 0, got {grip_force_n}")
     if plan is None:
+        scene_hz = check_scene_hz(scene_hz, s.dt_s)
         plan = plan_lift_attempt(spec, profile=p, settings=s, scene_hz=scene_hz)
     every, n_steps = plan.frame_every, int(plan.steps)
     on_table = r.mode == "table"

@@ -117,12 +117,12 @@ ONCE: dict[str, tuple[Callable[[Path], list[str]], tuple[str, ...]]] = {
         _lift_sim,
         (
             *("growth", "tolerance_rel", "max_attempts", "max_force_n"),
-            *("alpha_cm", "dt_s", "memory_budget_gib"),
+            *("alpha_cm", "dt_s", "memory_budget_gib", "scene_hz"),
         ),
     ),
     "measure sim": (
         _measure_sim,
-        ("squeezes", "ramp_s", "hold_s", "alpha_cm", "dt_s", "memory_budget_gib"),
+        ("squeezes", "ramp_s", "hold_s", "alpha_cm", "dt_s", "memory_budget_gib", "scene_hz"),
     ),
     "train": (
         _train,

@@ -1,4 +1,4 @@
-"""deformctl.scene: the scene rate (one validation home) and the frames' shape contract."""
+"""deformctl.scene: the scene rate (one rule, checked by ``check_scene_hz``) and the frames' shape contract."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from deformctl.errors import UsageError
-from deformctl.scene import DEFAULT_SCENE_HZ, SceneFrames, scene_every_steps
+from deformctl.scene import DEFAULT_SCENE_HZ, SceneFrames, check_scene_hz, scene_every_steps
 
 
 @pytest.mark.parametrize(
@@ -22,6 +22,7 @@ from deformctl.scene import DEFAULT_SCENE_HZ, SceneFrames, scene_every_steps
     ],
 )
 def test_steps_between_frames(hz: float, dt: float, every: int) -> None:
+    assert check_scene_hz(hz, dt) == hz
     assert scene_every_steps(hz, dt) == every
     if every:  # the frame period is the one asked for to within half a step
         assert abs(every - 1.0 / (hz * dt)) <= 0.5
@@ -30,7 +31,7 @@ def test_steps_between_frames(hz: float, dt: float, every: int) -> None:
 @pytest.mark.parametrize("hz", [-1.0, -1e-9, math.inf, math.nan, 1000.1, 5000.0])
 def test_bad_rates_are_usage_errors(hz: float) -> None:
     with pytest.raises(UsageError, match="--scene-hz"):
-        scene_every_steps(hz, 1e-3)
+        check_scene_hz(hz, 1e-3)
 
 
 def test_frames_refuse_inconsistent_shapes() -> None:

@@ -50,7 +50,7 @@ from deformctl.lift.options import DEFAULT_SEARCH, SearchOptions
 from deformctl.lift.search import TrialRunner
 from deformctl.lift.stage import RunnerFactory, lift_catalog
 from deformctl.parallel import SweepOptions, SweepSummary, TaskOutput, run_sweep
-from deformctl.scene import DEFAULT_SCENE_HZ, scene_every_steps
+from deformctl.scene import DEFAULT_SCENE_HZ, check_scene_hz
 
 if TYPE_CHECKING:  # pragma: no cover - the simulator is imported where it runs (see below)
     from deformctl.presets import SimPreset
@@ -165,22 +165,26 @@ def sim_runner_factory(
             settings=dataclasses.asdict(settings) if settings is not None else None,
             criterion=dataclasses.asdict(criterion) if criterion is not None else None,
         )
-    p, s, c, r = chosen.profile, chosen.settings, chosen.criterion, chosen.release
-    scene_every_steps(scene_hz, s.dt_s)  # refuses a bad rate before any attempt
+    return _runner_factory(chosen, check_scene_hz(scene_hz, chosen.settings.dt_s))
+
+
+def _runner_factory(preset: SimPreset, scene_hz: float) -> RunnerFactory:
+    """:func:`sim_runner_factory` of a preset and a scene rate checked already."""
+    p, s, c, r = preset.profile, preset.settings, preset.criterion, preset.release
     return RunnerFactory(
         name="sim",
-        make=_SimRunnerMaker(chosen, float(scene_hz)),
-        row_fields=_SimRowFields(chosen),
+        make=_SimRunnerMaker(preset, scene_hz),
+        row_fields=_SimRowFields(preset),
         stop_on_failure=False,
         settings={
-            "sim_preset": chosen.name,
+            "sim_preset": preset.name,
             "sim_settings": dataclasses.asdict(s),
             "lift_profile": p.as_dict(),
             "slip_criterion": dataclasses.asdict(c),
             "support_release": r.as_dict(),
-            "scene_hz": float(scene_hz),
+            "scene_hz": scene_hz,
         },
-        prepare=_SimPrepare(chosen, float(scene_hz)),
+        prepare=_SimPrepare(preset, scene_hz),
         material_features=True,
     )
 
@@ -248,7 +252,8 @@ class LiftTask:
         search: the search options.
         log_epoch_ns: where each part's lift log begins, ns since the Unix epoch (None: the
             log writer's fixed epoch, 2000-01-01).
-        scene_hz: scene frames per simulated second in the part logs (0: none).
+        scene_hz: scene frames per simulated second in the part logs (0: none; checked when
+            the task is built, :func:`deformctl.scene.check_scene_hz`).
     """
 
     #: loaded by the fork server of local workers (:mod:`deformctl.sim._warm_worker`)
@@ -259,13 +264,21 @@ class LiftTask:
     log_epoch_ns: int | None = None
     scene_hz: float = DEFAULT_SCENE_HZ
 
+    def __post_init__(self) -> None:
+        hz = check_scene_hz(self.scene_hz, self.preset.settings.dt_s)
+        object.__setattr__(self, "scene_hz", hz)
+
+    def factory(self) -> RunnerFactory:
+        """The task's runner factory (:func:`sim_runner_factory`; the rate checked already)."""
+        return _runner_factory(self.preset, self.scene_hz)
+
     def __call__(self, item: dict[str, Any]) -> TaskOutput:
         """One object's search: its lift_results row, its attempts as the payload.
 
         Raises:
             InputDataError: the object cannot be lifted or simulated (recorded as failed).
         """
-        factory = sim_runner_factory(preset=self.preset, scene_hz=self.scene_hz)
+        factory = self.factory()
         planned = item.get("_planned")  # the object planned by the sweep (its spec built there)
         obj = CatalogObject.from_row(item) if planned is None else planned
         run = lift_catalog([obj], factory, search=self.search)
@@ -323,7 +336,7 @@ def lift_sweep(
         object_ids: these objects, in this order (None: all).
         force: overwrite the sweep files of an existing directory.
     """
-    factory = sim_runner_factory(preset=task.preset, scene_hz=task.scene_hz)
+    factory = task.factory()
     catalog = select_objects(read_lift_objects(catalog_path), object_ids)
     items = _planned_items(catalog, task)
     search = task.search.as_dict()
