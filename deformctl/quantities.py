@@ -40,28 +40,40 @@ __all__ = [
     "ARM_STIFFNESS_N_PER_CM",
     "AT_FORCE_N",
     "CALIBRATION_SIZE",
+    "CG_TOLERANCE_M_S",
     "COVERAGE",
     "DAMPING_NS_PER_CM",
     "DT_S",
     "FORCE_THRESHOLD_FRAC",
     "FRICTION_MU",
+    "GRIP_RAMP_S",
+    "GRIP_SETTLE_S",
     "GROWTH",
     "HIDDEN_SIZE",
     "HOLD_S",
     "IMPLIED_DAMPING_RATIO",
     "L2_ALPHA",
     "LAG_S",
+    "LIFT_ACCEL_M_S2",
+    "LIFT_HEIGHT_M",
+    "LIFT_HOLD_S",
+    "LIFT_JERK_TIME_S",
+    "LIFT_SPEED_M_S",
     "MARKER_ID",
     "MARKER_SIZE_CM",
     "MAX_ATTEMPTS",
     "MAX_FORCE_N",
     "MAX_ITER",
     "MAX_LIFT_RATIO",
+    "MAX_SQUEEZE_STRAIN",
     "MEMORY_BUDGET_GIB",
     "MIN_GAP_S",
+    "MIN_SHEAR_RETARDATION_S",
     "MIN_SQUEEZE_S",
     "NOISE_FORCE_N",
     "NOISE_POSITION_M",
+    "PALM_MASS_KG",
+    "PARTICLES_PER_SIDE",
     "PEAK_FORCE_N",
     "RAMP_S",
     "RECORDED_PEAK_COMPRESSION_M",
@@ -69,10 +81,13 @@ __all__ = [
     "RECORDED_RATE_HZ",
     "RECORDED_SECANT_N_PER_CM",
     "RELAXATION_TIME_S",
+    "RELEASE_TIME_S",
     "RESTARTS",
     "RIG_TIMEOUT_S",
     "SCENE_HZ",
     "SEED",
+    "SHEAR_DAMPING_RATIO",
+    "SIM_SLIP_TOLERANCE_M",
     "SIZE_CM",
     "SLIP_TOLERANCE_M",
     "SQUARE_SIZE_CM",
@@ -82,6 +97,7 @@ __all__ = [
     "STIFFNESS_EXPONENT",
     "STIFFNESS_N_PER_CM",
     "STRAIN",
+    "TABLE_MU",
     "TOL",
     "TOLERANCE_REL",
     "TRAIN_SIZE",
@@ -292,6 +308,23 @@ DT_S = Quantity("dt_s", "--dt-s", " s", 1e-5, 0.05)
 #: The scene's frame rate in a simulated run's log (``--scene-hz``, frames per simulated second;
 #: 0: no scene); :func:`deformctl.scene.check_scene_hz` adds its ceiling, the step rate 1/dt.
 SCENE_HZ = Quantity("scene_hz", "--scene-hz", " Hz", 0.0, why="0: no scene")
+#: The simulator's other settings (:class:`deformctl.sim.SimSettings`, library only): the
+#: densification strain, the lattice's particles along the longest side, the CG tolerance, the
+#: shear share of the damping and its retardation floor, the palms' mass, the table's μ, and the
+#: grip's ramp and settle before a lift.
+MAX_SQUEEZE_STRAIN = Quantity("max_squeeze_strain", "max_squeeze_strain", "", 0.0, 1.0, True, True)
+PARTICLES_PER_SIDE = Quantity("particles_per_side", "particles_per_side", "", 2, integer=True)
+CG_TOLERANCE_M_S = Quantity("cg_tolerance_m_s", "cg_tolerance_m_s", " m/s", 0.0, low_open=True)
+SHEAR_DAMPING_RATIO = Quantity(
+    "shear_damping_ratio", "shear_damping_ratio", "", 0.0, 1.0, low_open=True
+)
+MIN_SHEAR_RETARDATION_S = Quantity(
+    "min_shear_retardation_s", "min_shear_retardation_s", " s", 0.0, 1.0
+)
+PALM_MASS_KG = Quantity("palm_mass_kg", "palm_mass_kg", " kg", 0.0)
+TABLE_MU = Quantity("table_mu", "table_mu", "", 0.0)
+GRIP_RAMP_S = Quantity("grip_ramp_s", "grip_ramp_s", " s", 0.0)
+GRIP_SETTLE_S = Quantity("grip_settle_s", "grip_settle_s", " s", 0.0)
 MARKER_SIZE_CM = Quantity("marker_size_cm", "--marker-size-cm", " cm", 0.0, low_open=True)
 SQUARE_SIZE_CM = Quantity("square_size_cm", "--square-size-cm", " cm", 0.0, low_open=True)
 MARKER_ID = Quantity("marker_id", "--marker-id", "", 0, integer=True)
@@ -310,6 +343,21 @@ START_MARGIN = Quantity("start_margin", "--start-margin", "", 1.0)
 START_INTERPOLATE = Quantity("start_interpolate", "--start-interpolate", "", 1, integer=True)
 RIG_TIMEOUT_S = Quantity("rig_timeout_s", "--rig-timeout", " s", 0.0, low_open=True)
 SLIP_TOLERANCE_M = Quantity("slip_tolerance_m", "--slip-tolerance-m", " m", 0.0, low_open=True)
+#: A simulated lift's profile (:class:`deformctl.sim.LiftProfile`, ``lift sim --lift-...``): the
+#: peak acceleration and cruise speed, the rise (None: half the object's height), the hold after
+#: it, and each acceleration ramp (0: the acceleration steps).
+LIFT_ACCEL_M_S2 = Quantity("lift_accel_m_s2", "--lift-accel-m-s2", " m/s²", 0.0, low_open=True)
+LIFT_SPEED_M_S = Quantity("lift_speed_m_s", "--lift-speed-m-s", " m/s", 0.0, low_open=True)
+LIFT_HEIGHT_M = Quantity("lift_height_m", "--lift-height-m", " m", 0.0, low_open=True)
+LIFT_HOLD_S = Quantity("lift_hold_s", "--lift-hold-s", " s", 0.0)
+LIFT_JERK_TIME_S = Quantity("lift_jerk_time_s", "jerk_time_s", " s", 0.0)
+#: How long a support takes to give way at the start of the rise
+#: (:class:`deformctl.sim.SupportRelease`; 0: at once).
+RELEASE_TIME_S = Quantity("release_time_s", "release_time_s", " s", 0.0)
+#: The simulator's slip tolerance (:class:`deformctl.sim.SlipCriterion`, ``lift sim``): 0 is
+#: allowed there (no sliding at all), unlike a rig's frames (:data:`SLIP_TOLERANCE_M`), whose
+#: marker tracking always moves a little.
+SIM_SLIP_TOLERANCE_M = Quantity("slip_tolerance_m", "--slip-tolerance-m", " m", 0.0)
 #: The force ceiling of a lift (``lift --max-force-n``, the catalog's ``max_force_n`` column, the
 #: search's ``max_force_n``; :mod:`deformctl.lift.ceiling`): no attempt requests more.
 MAX_FORCE_N = Quantity("max_force_n", "--max-force-n", " N", 0.0, low_open=True)

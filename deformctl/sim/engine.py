@@ -44,7 +44,20 @@ import scipy.sparse
 
 from deformctl.arraytypes import FloatArray, IntArray
 from deformctl.errors import UsageError
-from deformctl.quantities import ALPHA_CM, DT_S, MEMORY_BUDGET_GIB
+from deformctl.quantities import (
+    ALPHA_CM,
+    CG_TOLERANCE_M_S,
+    DT_S,
+    GRIP_RAMP_S,
+    GRIP_SETTLE_S,
+    MAX_SQUEEZE_STRAIN,
+    MEMORY_BUDGET_GIB,
+    MIN_SHEAR_RETARDATION_S,
+    PALM_MASS_KG,
+    PARTICLES_PER_SIDE,
+    SHEAR_DAMPING_RATIO,
+    TABLE_MU,
+)
 from deformctl.sim.hunt_crossley import hc_law, spec_elements
 from deformctl.sim.lattice import (
     Lattice,
@@ -191,29 +204,22 @@ class SimSettings:
     def __post_init__(self) -> None:
         ALPHA_CM.check_optional(self.alpha_cm)
         DT_S.check(self.dt_s)
-        if not (0 < self.max_squeeze_strain < 1):
-            raise UsageError(f"max_squeeze_strain must be in (0, 1), got {self.max_squeeze_strain}")
+        MAX_SQUEEZE_STRAIN.check(self.max_squeeze_strain)
         MEMORY_BUDGET_GIB.check(self.memory_budget_gib)
         if self.solver not in ("auto", "direct", "iterative"):
             raise UsageError(f"solver must be auto, direct or iterative, got {self.solver!r}")
-        if not (math.isfinite(self.cg_tolerance_m_s) and self.cg_tolerance_m_s > 0):
-            raise UsageError(f"cg_tolerance_m_s must be > 0, got {self.cg_tolerance_m_s}")
-        if self.particles_per_side < 2:
-            raise UsageError(f"particles_per_side must be >= 2, got {self.particles_per_side}")
+        CG_TOLERANCE_M_S.check(self.cg_tolerance_m_s)
+        PARTICLES_PER_SIDE.check(self.particles_per_side)
         if self.integrator not in ("euler", "bdf2"):
             raise UsageError(f"integrator must be euler or bdf2, got {self.integrator!r}")
         if self.palm_layer not in ("particle", "surface"):
             raise UsageError(f"palm_layer must be particle or surface, got {self.palm_layer!r}")
-        r = self.shear_damping_ratio
-        if not (math.isfinite(r) and 0 < r <= 1):
-            raise UsageError(f"shear_damping_ratio must be in (0, 1], got {r}")
-        b = self.min_shear_retardation_s
-        if not (math.isfinite(b) and 0 <= b <= 1):
-            raise UsageError(f"min_shear_retardation_s must be in [0, 1] s, got {b}")
-        for name in ("palm_mass_kg", "table_mu", "grip_ramp_s", "grip_settle_s"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise UsageError(f"{name} must be finite and >= 0, got {value}")
+        SHEAR_DAMPING_RATIO.check(self.shear_damping_ratio)
+        MIN_SHEAR_RETARDATION_S.check(self.min_shear_retardation_s)
+        PALM_MASS_KG.check(self.palm_mass_kg)
+        TABLE_MU.check(self.table_mu)
+        GRIP_RAMP_S.check(self.grip_ramp_s)
+        GRIP_SETTLE_S.check(self.grip_settle_s)
 
     @property
     def implicit_step_s(self) -> float:

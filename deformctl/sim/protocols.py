@@ -16,6 +16,15 @@ import numpy as np
 from deformctl.arraytypes import FloatArray
 from deformctl.errors import SimulationError, UsageError
 from deformctl.physics import rigid_grip_force_n
+from deformctl.quantities import (
+    LIFT_ACCEL_M_S2,
+    LIFT_HEIGHT_M,
+    LIFT_HOLD_S,
+    LIFT_JERK_TIME_S,
+    LIFT_SPEED_M_S,
+    RELEASE_TIME_S,
+    SIM_SLIP_TOLERANCE_M,
+)
 from deformctl.scene import check_scene_hz, scene_every_steps
 from deformctl.series import LiftAttemptSeries, SqueezeSeries, TrialOutcome
 from deformctl.sim import first_use
@@ -63,16 +72,11 @@ class LiftProfile:
     jerk_time_s: float = 0.05
 
     def __post_init__(self) -> None:
-        for name in ("accel_m_s2", "speed_m_s"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise UsageError(f"lift profile {name} must be > 0, got {value}")
-        if not (math.isfinite(self.jerk_time_s) and self.jerk_time_s >= 0):
-            raise UsageError(f"lift profile jerk_time_s must be >= 0, got {self.jerk_time_s}")
-        if not (math.isfinite(self.hold_s) and self.hold_s >= 0):
-            raise UsageError(f"lift profile hold_s must be >= 0, got {self.hold_s}")
-        if self.height_m is not None and not (math.isfinite(self.height_m) and self.height_m > 0):
-            raise UsageError(f"lift profile height_m must be > 0, got {self.height_m}")
+        LIFT_ACCEL_M_S2.check(self.accel_m_s2)
+        LIFT_SPEED_M_S.check(self.speed_m_s)
+        LIFT_HEIGHT_M.check_optional(self.height_m)
+        LIFT_HOLD_S.check(self.hold_s)
+        LIFT_JERK_TIME_S.check(self.jerk_time_s)
 
     @property
     def peak_accel_m_s2(self) -> float:
@@ -162,8 +166,7 @@ class SlipCriterion:
     stop_early: bool = False
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.tolerance_m) and self.tolerance_m >= 0):
-            raise UsageError(f"slip tolerance_m must be >= 0, got {self.tolerance_m}")
+        SIM_SLIP_TOLERANCE_M.check(self.tolerance_m)
         if self.measure not in ("contact", "shortfall"):
             raise UsageError(f"slip measure must be 'contact' or 'shortfall', got {self.measure!r}")
 
@@ -191,8 +194,7 @@ class SupportRelease:
     def __post_init__(self) -> None:
         if self.mode not in ("table", "support"):
             raise UsageError(f"support release mode must be table or support, got {self.mode!r}")
-        if not (math.isfinite(self.release_time_s) and self.release_time_s >= 0):
-            raise UsageError(f"release_time_s must be >= 0, got {self.release_time_s}")
+        RELEASE_TIME_S.check(self.release_time_s)
 
     def gravity_scale(self, t_s: FloatArray, t_release_s: float) -> FloatArray | None:
         """The fraction of the weight acting at times ``t_s`` (None: all of it, always)."""

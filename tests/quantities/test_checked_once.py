@@ -118,6 +118,9 @@ ONCE: dict[str, tuple[Callable[[Path], list[str]], tuple[str, ...]]] = {
         (
             *("growth", "tolerance_rel", "max_attempts", "max_force_n"),
             *("alpha_cm", "dt_s", "memory_budget_gib", "scene_hz"),
+            *("particles_per_side", "shear_damping_ratio", "grip_settle_s"),
+            *("lift_accel_m_s2", "lift_speed_m_s", "lift_height_m", "lift_hold_s"),
+            "slip_tolerance_m",
         ),
     ),
     "measure sim": (

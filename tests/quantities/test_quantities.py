@@ -28,8 +28,13 @@ from deformctl.quantities import (
     DAMPING_NS_PER_CM,
     FRICTION_MU,
     GROWTH,
+    LIFT_ACCEL_M_S2,
+    LIFT_HEIGHT_M,
     MAX_ATTEMPTS,
+    PARTICLES_PER_SIDE,
     RAMP_S,
+    SHEAR_DAMPING_RATIO,
+    SIM_SLIP_TOLERANCE_M,
     SIZE_CM,
     STIFFNESS_N_PER_CM,
     TOLERANCE_REL,
@@ -62,6 +67,11 @@ runner = CliRunner()
         (GROWTH, [1.0001, 2], [1.0, 0.5, math.nan]),
         (TOLERANCE_REL, [1e-6, 0.5], [0.0, 1.0, -0.01]),
         (MAX_ATTEMPTS, [1, 50], [0, -1, 2.5, True, math.nan]),
+        (PARTICLES_PER_SIDE, [2, 13], [1, 0, 4.5, math.inf]),
+        (SHEAR_DAMPING_RATIO, [1e-9, 1.0], [0.0, 1.0001, -0.5, math.nan]),
+        (LIFT_ACCEL_M_S2, [1e-9, 9.81], [0.0, -1, math.inf]),
+        (LIFT_HEIGHT_M, [1e-9, 0.05], [0.0, -0.01, math.nan]),
+        (SIM_SLIP_TOLERANCE_M, [0.0, 5e-4], [-1e-9, math.inf, math.nan]),
     ],
 )
 def test_each_rule_holds_at_its_edges(quantity: Quantity, good: list[Any], bad: list[Any]) -> None:
@@ -316,6 +326,33 @@ def test_the_simulator_settings_have_one_text(tmp_path: Path, flag: str, want: s
         want = "error: --memory-budget-gib must be a finite number > 0 GiB, got -1"
         assert _error(_csv(tmp_path, "--weight-n", "1", flag, "-1")) == _error(lift) == want
         assert _lib(lambda: CsvOptions(memory_budget_gib=-1)) == want
+
+
+@pytest.mark.parametrize(
+    ("flag", "field", "want"),
+    [
+        ("--lift-accel-m-s2", "accel_m_s2", "--lift-accel-m-s2 must be a finite number > 0 m/s²"),
+        ("--lift-speed-m-s", "speed_m_s", "--lift-speed-m-s must be a finite number > 0 m/s"),
+        ("--lift-height-m", "height_m", "--lift-height-m must be a finite number > 0 m"),
+        ("--lift-hold-s", "hold_s", "--lift-hold-s must be a finite number >= 0 s"),
+        ("--slip-tolerance-m", "tolerance_m", "--slip-tolerance-m must be a finite number >= 0 m"),
+    ],
+)
+def test_the_lift_profile_and_slip_have_one_text(
+    tmp_path: Path, flag: str, field: str, want: str
+) -> None:
+    """``lift sim``'s profile and slip flags, the options type behind them and the simulator's
+    own types refuse a bad value with the one line of its rule."""
+    from deformctl.presets import SimOptions
+    from deformctl.sim import LiftProfile, SlipCriterion
+
+    want = f"error: {want}, got -1"
+    catalog = str(tmp_path / "cat.csv")
+    assert _error(["lift", "sim", catalog, flag, "-1", "-o", str(tmp_path / "l.parquet")]) == want
+    option = flag[2:].replace("-", "_")
+    assert _lib(lambda: SimOptions(**{option: -1.0})) == want
+    kind = SlipCriterion if field == "tolerance_m" else LiftProfile
+    assert _lib(lambda: kind(**{field: -1.0})) == want
 
 
 def test_the_coverage_and_the_lag_have_one_text(tmp_path: Path) -> None:
