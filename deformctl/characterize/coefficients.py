@@ -101,7 +101,7 @@ class CoefficientFit:
             (0..1); λ needs it well above 0 (see
             :func:`deformctl.characterize.quality.damping_identifiable`).
         design_condition: condition number of the fitted design with unit-RMS columns.
-        damping_bound_active: ``constrain_damping`` held λ at 0.
+        damping_bound_active: the bound λ ≥ 0 held λ at 0.
         damping_unidentifiable: λ was not identifiable (and is NaN).
         compression_min_cm, compression_max_cm: range of d over the samples used, cm.
         force_min_n, force_max_n: range of f over the samples used, N.

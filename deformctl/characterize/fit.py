@@ -44,7 +44,7 @@ excitation and design condition, the preload) and quality flags
 from D, a squeeze that ruptured is fitted up to its rupture
 (:mod:`deformctl.squeeze.rupture`), and the policy (warnings, ``strict``, negative D) is
 applied before a table is written. ``preload="fit"`` adds an intercept F0 (a
-contact preload) to the model; ``constrain_damping`` bounds λ ≥ 0 (``scipy.optimize.lsq_linear``).
+contact preload) to the model; the lsq fits always bound λ ≥ 0.
 """
 
 from __future__ import annotations
@@ -207,7 +207,6 @@ def fit_lsq(
     *,
     window_s: float = DEFAULT_WINDOW_S,
     preload: Preload = "zero",
-    constrain_damping: bool = False,
     model: str = "kv",
     lag_s: float | None = 0.0,
     at_force_n: float | None = None,
@@ -221,7 +220,6 @@ def fit_lsq(
         squeezes: the object's squeezes (same ``object_id``), arrays ``[n]``.
         window_s: averaging window, s.
         preload: ``"zero"`` or ``"fit"`` (an intercept F0, reported as ``preload_n``).
-        constrain_damping: kept for old callers; λ ≥ 0 always holds.
         model: ``kv`` (default), ``hc``, ``sls`` or ``auto``.
         lag_s: the force's lag behind the compression, s; None fits it.
         at_force_n: the operating force D is stated at, N (None: the median loading force).
@@ -231,7 +229,6 @@ def fit_lsq(
             windows.
         UsageError: an invalid option value.
     """
-    del constrain_damping  # the lsq fits are always bounded
     _check_options(window_s, DEFAULT_POLYORDER, DEFAULT_MIN_COMPRESSION_FRAC)
     check_preload(preload)
     check_model(model)
@@ -360,7 +357,6 @@ def characterize(
     method: Method = "lsq",
     *,
     preload: Preload | Mapping[str, Preload] = "zero",
-    constrain_damping: bool = False,
     recorded_ruptures: Mapping[str, Sequence[Rupture]] | None = None,
     model: str = "auto",
     at_force_n: float | None = None,
@@ -376,7 +372,6 @@ def characterize(
             :func:`deformctl.characterize.objectfit.fit_object`) or ``"paper"``
             (:func:`fit_paper`).
         preload: lsq only: ``"zero"`` or ``"fit"``, for every object or per object id.
-        constrain_damping: lsq: kept for old callers; the lsq fits always bound λ ≥ 0.
         recorded_ruptures: object id → the ruptures ``measure`` cut off (from the log); they
             count for the ``rupture`` flag and the rupture columns with those found here.
         model: lsq: ``kv``, ``hc``, ``sls``, ``exp`` or ``auto`` (all four, chosen by
@@ -396,15 +391,14 @@ def characterize(
         ``quality`` is ``ok`` or the flags of :mod:`deformctl.characterize.quality`).
 
     Raises:
-        UsageError: an unknown method or model, or a preload or damping bound with
-            ``method="paper"``, or ``at_force_n`` above an object's peak force.
+        UsageError: an unknown method or model, a fitted preload with ``method="paper"``, or
+            ``at_force_n`` above an object's peak force.
         InputDataError: any object whose squeezes cannot be fitted (the message names it).
     """
     rows = _fit_rows(
         squeezes_by_object,
         method,
         preload=preload,
-        constrain_damping=constrain_damping,
         recorded_ruptures=recorded_ruptures,
         model=model,
         at_force_n=at_force_n,
@@ -427,7 +421,6 @@ def _fit_rows(
     method: Method,
     *,
     preload: Preload | Mapping[str, Preload],
-    constrain_damping: bool,
     recorded_ruptures: Mapping[str, Sequence[Rupture]] | None,
     model: str = "auto",
     at_force_n: float | None = None,
@@ -439,7 +432,7 @@ def _fit_rows(
     """The rows of :func:`characterize`, one per object (lsq: each object's material fit goes
     into ``fits_out`` when given)."""
     check_method(method)
-    check_paper_options(method, preload, constrain_damping)
+    check_paper_options(method, preload)
     check_model(model)
     rows: list[dict[str, object]] = []
     for object_id, squeezes in squeezes_by_object.items():

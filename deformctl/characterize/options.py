@@ -48,14 +48,14 @@ def check_preload(preload: object) -> Preload:
     return preload  # type: ignore[return-value]
 
 
-def check_paper_options(method: str, preload: object, constrain_damping: bool) -> None:
-    """The paper estimator fits neither a preload nor a damping bound.
+def check_paper_options(method: str, preload: object) -> None:
+    """The paper estimator fits no preload.
 
     Raises:
-        UsageError: ``method="paper"`` with ``preload="fit"`` or ``constrain_damping`` (exit 2).
+        UsageError: ``method="paper"`` with ``preload="fit"`` (exit 2).
     """
-    if method == "paper" and (preload == "fit" or constrain_damping):
-        raise UsageError("the paper estimator has no preload or damping bound; use --method lsq")
+    if method == "paper" and preload == "fit":
+        raise UsageError("the paper estimator has no preload; use --method lsq")
 
 
 @dataclass(frozen=True)
@@ -70,20 +70,18 @@ class FitOptions:
         preload: lsq: ``fit`` (an intercept F0) or ``zero`` for every object; None: per object,
             ``fit`` for a rig recording, ``zero`` for a simulated squeeze
             (:func:`deformctl.characterize.default_preload`).
-        constrain_damping: lsq: kept for old callers (the lsq fits are always bounded, λ >= 0).
         materials: lsq: the material law (``--model``) and the operating force D is stated at
             (``--at-force-n``), :class:`~deformctl.characterize.material_options.MaterialOptions`.
 
     Raises:
-        UsageError: an unknown method or preload, a window outside its rule, a preload or damping
-            bound with the paper method, or materials that are not a ``MaterialOptions`` (exit 2;
+        UsageError: an unknown method or preload, a window outside its rule, a preload with the
+            paper method, or materials that are not a ``MaterialOptions`` (exit 2;
             the law and the force are checked when the ``MaterialOptions`` is built).
     """
 
     method: Method = "lsq"
     window_s: float | None = None
     preload: Preload | None = None
-    constrain_damping: bool = False
     materials: MaterialOptions = DEFAULT_MATERIALS
 
     def __post_init__(self) -> None:
@@ -96,7 +94,7 @@ class FitOptions:
         WINDOW_S.check_optional(self.window_s)
         if self.preload is not None:
             check_preload(self.preload)
-        check_paper_options(self.method, self.preload, self.constrain_damping)
+        check_paper_options(self.method, self.preload)
 
     def as_dict(self) -> dict[str, Any]:
         """The options as given, for provenance and a sweep's fingerprint (``*_option``: None
@@ -105,7 +103,6 @@ class FitOptions:
             "method": self.method,
             "window_s_option": self.window_s,
             "preload_option": self.preload,
-            "constrain_damping": self.constrain_damping,
             **self.materials.as_dict(),
         }
 

@@ -123,7 +123,6 @@ def _fit_object(
         {oid: group},
         options.method,
         preload=mode,
-        constrain_damping=options.constrain_damping,
         recorded_ruptures={oid: ruptures_from_object(dict(obj or {}))},
         model=options.materials.model,
         at_force_n=options.materials.at_force_n,

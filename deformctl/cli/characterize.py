@@ -38,7 +38,7 @@ Preload = Annotated[
     ),
 ]
 #: Deprecated, hidden: the lsq fits always bound λ >= 0, so the flag changes no number. It is
-#: still accepted (one deprecation line) and recorded in the provenance, as before.
+#: still accepted for this release, with one deprecation line, and goes no further than here.
 ConstrainDamping = Annotated[
     bool, typer.Option("--constrain-damping", hidden=True, help="Deprecated: has no effect.")
 ]
@@ -203,11 +203,11 @@ def characterize(
     )
 
     fit = FitOptions(
-        method=check_method(method), window_s=window_s,
+        method=check_method(method),
+        window_s=window_s,
         preload=None if preload is None else check_preload(preload),
-        constrain_damping=constrain_damping,
         materials=MaterialOptions(model=model, at_force_n=at_force_n),
-    )  # fmt: skip
+    )
     policy = QualityPolicy(strict=strict, allow_flagged=allow_flagged)
     if constrain_damping:
         typer.echo(

@@ -328,8 +328,7 @@ def test_one_smoothing_per_squeeze_and_one_table_per_log() -> None:
         assert smoothed.compression_m.tobytes() == d.tobytes()
         assert smoothed.rate_m_per_s.tobytes() == v.tobytes()
     by_object = {"a": squeezes[:3], "b": squeezes[3:]}
-    rows = _fit_rows(by_object, "lsq", preload="zero", constrain_damping=False,
-                     recorded_ruptures=None)  # fmt: skip
+    rows = _fit_rows(by_object, "lsq", preload="zero", recorded_ruptures=None)
     one_by_one = pd.concat([_coefficient_frame([r]) for r in rows], ignore_index=True)
     pd.testing.assert_frame_equal(_coefficient_frame(rows), one_by_one, check_exact=True)
     pd.testing.assert_frame_equal(characterize(by_object), one_by_one, check_exact=True)

@@ -49,9 +49,9 @@ def _two(**kw: float) -> list[SqueezeSeries]:
 
 def test_clean_squeezes_are_ok_with_every_option() -> None:
     squeezes = _two(d_n_per_cm=20.0, lam_ns_per_cm=3.0)
-    for kw in ({}, {"preload": "fit"}, {"constrain_damping": True}):
-        fit = fit_lsq(squeezes, **kw)  # type: ignore[arg-type]
-        assert fit.quality == "ok", (kw, fit)
+    for preload in ("zero", "fit"):
+        fit = fit_lsq(squeezes, preload=preload)
+        assert fit.quality == "ok", (preload, fit)
         assert fit.deformability_n_per_cm == pytest.approx(20.0, rel=0.01)
         assert fit.damping_ns_per_cm == pytest.approx(3.0, rel=0.01)
         assert not fit.damping_bound_active
@@ -63,14 +63,13 @@ def test_clean_squeezes_are_ok_with_every_option() -> None:
 def test_negative_damping_is_held_at_the_bound() -> None:
     # λ is never negative with ok; the lsq fits are bounded (λ >= 0) and say so
     squeezes = _two(d_n_per_cm=20.0, lam_ns_per_cm=-2.0)
-    for kw in ({}, {"constrain_damping": True}):
-        fit = fit_lsq(squeezes, **kw)  # type: ignore[arg-type]
-        assert fit.damping_ns_per_cm == 0.0
-        assert fit.damping_bound_active
-        assert math.isnan(fit.damping_se_ns_per_cm)
-        assert fit.flags == ("at_bound",)
-        assert fit.material["params_at_bound"] == "damping_ns_per_m"
-        assert fit.deformability_n_per_cm == pytest.approx(20.0, rel=0.02)
+    fit = fit_lsq(squeezes)
+    assert fit.damping_ns_per_cm == 0.0
+    assert fit.damping_bound_active
+    assert math.isnan(fit.damping_se_ns_per_cm)
+    assert fit.flags == ("at_bound",)
+    assert fit.material["params_at_bound"] == "damping_ns_per_m"
+    assert fit.deformability_n_per_cm == pytest.approx(20.0, rel=0.02)
 
 
 def test_a_negative_damping_is_flagged_whatever_its_standard_error() -> None:

@@ -1,4 +1,4 @@
-"""deformctl.scene: the scene rate (one rule, checked by ``check_scene_hz``) and the frames' shape contract."""
+"""deformctl.scene: the scene rate (one rule, ``check_scene_hz``) and the frames' shape contract."""
 
 from __future__ import annotations
 
