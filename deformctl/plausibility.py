@@ -302,8 +302,11 @@ def unit_doubts(
 
     def no_reading(kind: str, value_si: float, judge: Any, text: str, to_value: Any = None) -> None:
         reading, every = readings[kind], _units_of(kind)
-        if suggest_unit(value_si / reading.si, every, to_value=to_value or (lambda v: v),
-                        ok=judge.plausible, target=judge.target) is None:  # fmt: skip
+        as_value = to_value or (lambda v: v)
+        unit = suggest_unit(
+            value_si / reading.si, every, to_value=as_value, ok=judge.plausible, target=judge.target
+        )
+        if unit is None:
             raise InputDataError(
                 f"{reading.what}: {text} is implausible under every {kind} unit "
                 f"({', '.join(every)}): no reading of it is a squeeze",
@@ -314,42 +317,40 @@ def unit_doubts(
     if not time.stated and math.isfinite(rate_hz) and 0 < rate_hz < MIN_UNSTATED_RATE_HZ:
         rate = RECORDED_RATE_HZ
         no_reading("time", 1.0 / rate_hz, rate, f"sample rate {rate_hz:.3g} Hz", lambda dt: 1 / dt)
-        out.append((
-            rate.flag,
+        clause = _reading_clause(suggest("time", 1.0 / rate_hz, rate, lambda dt: 1 / dt))
+        text = (
             f"{time.what}: time unit not stated and the sample rate is {rate_hz:.3g} Hz (below "
-            f"{MIN_UNSTATED_RATE_HZ:g} Hz)"
-            f"{_reading_clause(suggest('time', 1.0 / rate_hz, rate, lambda dt: 1 / dt))}",
-            {"rate_hz": rate_hz},
-        ))  # fmt: skip
+            f"{MIN_UNSTATED_RATE_HZ:g} Hz){clause}"
+        )
+        out.append((rate.flag, text, {"rate_hz": rate_hz}))
     force_odd = compression_odd = False
     peak, judge = peak_force_n, RECORDED_PEAK_FORCE_N
     if math.isfinite(peak) and 0 < peak < judge.doubt_low:
         no_reading("force", peak, judge, f"peak force {peak:.3g} N")
         force_odd = True
-        out.append((
-            judge.flag,
-            f"{force.what}: peak force {peak:.3g} N is below {judge.doubt_low * 1e3:g} mN"
-            f"{_reading_clause(suggest('force', peak, judge))}",
-            {"peak_force_n": peak},
-        ))  # fmt: skip
+        clause = _reading_clause(suggest("force", peak, judge))
+        text = (
+            f"{force.what}: peak force {peak:.3g} N is below {judge.doubt_low * 1e3:g} mN{clause}"
+        )
+        out.append((judge.flag, text, {"peak_force_n": peak}))
     elif judge.doubt_high < peak <= judge.high:
         force_odd = True
-        out.append((
-            judge.flag,
+        clause = _reading_clause(suggest("force", peak, judge))
+        text = (
             f"{force.what}: peak force {peak:.3g} N is above {judge.doubt_high / 1e3:g} kN for a "
-            f"soft object{_reading_clause(suggest('force', peak, judge))}",
-            {"peak_force_n": peak},
-        ))  # fmt: skip
+            f"soft object{clause}"
+        )
+        out.append((judge.flag, text, {"peak_force_n": peak}))
     peak, judge = peak_compression_m, RECORDED_PEAK_COMPRESSION_M
     if math.isfinite(peak) and 0 < peak < judge.doubt_low:
         no_reading("length", peak, judge, f"peak compression {peak * 1e6:.3g} µm")
         compression_odd = True
-        out.append((
-            judge.flag,
+        clause = _reading_clause(suggest("length", peak, judge))
+        text = (
             f"{length.what}: peak compression {peak * 1e6:.3g} µm is below "
-            f"{judge.doubt_low * 1e6:g} µm{_reading_clause(suggest('length', peak, judge))}",
-            {"peak_compression_m": peak},
-        ))  # fmt: skip
+            f"{judge.doubt_low * 1e6:g} µm{clause}"
+        )
+        out.append((judge.flag, text, {"peak_compression_m": peak}))
     if not (force_odd or compression_odd):
         secant = _secant_doubt(peak_force_n, peak_compression_m, readings)
         if secant is not None:

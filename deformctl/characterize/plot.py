@@ -74,9 +74,13 @@ def plot_object(obj: ObjectFit, object_id: str, quality: str, path: str | Path) 
     for k, (g, s) in enumerate(zip(obj.grids, obj.data.squeezes, strict=True)):
         t = offset + g.dt_s * np.arange(g.force_n.shape[0])
         ax_fd.plot(
-            1e3 * g.compression_m, g.force_n, ".", ms=1.5, color="0.65",
+            1e3 * g.compression_m,
+            g.force_n,
+            ".",
+            ms=1.5,
+            color="0.65",
             label="samples" if k == 0 else None,
-        )  # fmt: skip
+        )
         ax_t.plot(t, g.force_n, color="tab:red", lw=1, label="force" if k == 0 else None)
         ax_f2.plot(t, 1e3 * g.compression_m, color="tab:purple", lw=1)
         centre = offset + s.mean_time()
@@ -85,14 +89,22 @@ def plot_object(obj: ObjectFit, object_id: str, quality: str, path: str | Path) 
             bold = fit is chosen
             label = f"{fit.model} (BIC {fit.bic:.1f})" if k == 0 else None
             ax_fd.plot(
-                1e3 * s.mean_compression(), pred, "-", color=COLOURS[fit.model],
-                lw=2.5 if bold else 1.0, label=label,
-            )  # fmt: skip
+                1e3 * s.mean_compression(),
+                pred,
+                "-",
+                color=COLOURS[fit.model],
+                lw=2.5 if bold else 1.0,
+                label=label,
+            )
             resid = s.mean_force(fit.params.get("lag_s", 0.0)) - pred
             ax_r.plot(
-                centre, resid, "-", color=COLOURS[fit.model], lw=1.5 if bold else 0.8,
+                centre,
+                resid,
+                "-",
+                color=COLOURS[fit.model],
+                lw=1.5 if bold else 0.8,
                 label=fit.model if k == 0 else None,
-            )  # fmt: skip
+            )
         offset = float(t[-1]) + 10.0 * g.dt_s
     ax_fd.axhline(obj.operating_force_n, color="k", ls=":", lw=1, label="operating force")
     ax_fd.set(xlabel="compression (mm)", ylabel="force (N)", title="force against compression")
@@ -106,9 +118,12 @@ def plot_object(obj: ObjectFit, object_id: str, quality: str, path: str | Path) 
     top = max(float(np.max(g.compression_m)) for g in obj.grids)
     d = np.linspace(0.0, top, 200)
     ax_el.plot(
-        1e3 * d, elastic_force(chosen.model, chosen.params, d), color=COLOURS[chosen.model],
-        lw=2, label=f"{chosen.model}: rate-free curve",
-    )  # fmt: skip
+        1e3 * d,
+        elastic_force(chosen.model, chosen.params, d),
+        color=COLOURS[chosen.model],
+        lw=2,
+        label=f"{chosen.model}: rate-free curve",
+    )
     for slope, frac, name in (
         (obj.loading.small_strain_n_per_m, 0.1, "small-strain slope"),
         (obj.loading.large_strain_n_per_m, 0.95, "large-strain slope"),
@@ -119,10 +134,11 @@ def plot_object(obj: ObjectFit, object_id: str, quality: str, path: str | Path) 
             xs = np.array([x0 - 0.05 * top, x0 + 0.05 * top])
             ax_el.plot(1e3 * xs, y0 + slope * (xs - x0), "k--", lw=1, label=name)
     ax_el.set(
-        xlabel="compression (mm)", ylabel="force above the preload (N)",
+        xlabel="compression (mm)",
+        ylabel="force above the preload (N)",
         title=f"D = {obj.deformability_n_per_m / 100:.4g} N/cm at {obj.operating_force_n:.4g} N; "
         f"stiffening ×{obj.loading.stiffening_ratio:.3g}",
-    )  # fmt: skip
+    )
     ax_el.legend(fontsize=8)
     fig.suptitle(f"{object_id}: {chosen.model} — {quality}", fontsize=13)
     fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.96))

@@ -102,10 +102,18 @@ def render_summary(result: LogCoefficients) -> str:
     df: pd.DataFrame = result.table
     rows = [
         (
-            "object", "model", "D (N/cm)", "at (N)", "λ (N·s/cm)", "R²", "samples", "squeezes",
-            "quality", "window (s)",
+            "object",
+            "model",
+            "D (N/cm)",
+            "at (N)",
+            "λ (N·s/cm)",
+            "R²",
+            "samples",
+            "squeezes",
+            "quality",
+            "window (s)",
         )
-    ]  # fmt: skip
+    ]
     for rec in df.to_dict("records"):
         oid = str(rec["object_id"])
         at = rec.get("operating_force_n", math.nan)
@@ -217,8 +225,9 @@ def characterize(
         )
     if sweep.check(output):
         if len(logs) != 1 or plot is not None:
-            raise UsageError("a dataset directory output (-o DIR/) takes one log directory "
-                             "and no --plot")  # fmt: skip
+            raise UsageError(
+                "a dataset directory output (-o DIR/) takes one log directory and no --plot"
+            )
         task = CharacterizeTask(fit=fit, policy=policy)
         summary = characterize_sweep(logs[0], task, output=output, sweep=sweep, force=force)
         for line in sweep_warnings(summary.out_dir):
@@ -232,5 +241,10 @@ def characterize(
     for path in result.plots:
         typer.echo(f"plot: {path}", err=True)
     flagged = int((result.table["quality"] != "ok").sum())
-    clock.finish(done=len(result.table), flagged=flagged, failed=0, quiet=quiet,
-                 output="stdout" if is_stdio(output) else output)  # fmt: skip
+    clock.finish(
+        done=len(result.table),
+        flagged=flagged,
+        failed=0,
+        quiet=quiet,
+        output="stdout" if is_stdio(output) else output,
+    )

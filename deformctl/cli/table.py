@@ -204,8 +204,13 @@ def table(
         _lookup(inputs[0], lookup_text, interpolate_k, as_json)
         return
     assert output is not None
-    _build(inputs, output, allow_unconverged=allow_unconverged, allow_flagged=allow_flagged,
-           force=force)  # fmt: skip
+    _build(
+        inputs,
+        output,
+        allow_unconverged=allow_unconverged,
+        allow_flagged=allow_flagged,
+        force=force,
+    )
 
 
 def _build(
