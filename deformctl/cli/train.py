@@ -144,6 +144,13 @@ def train(
     laws: str | None = typer.Option(
         None, "--laws", metavar="COEFFICIENTS", help="Per material law: a table of model (law)."
     ),
+    law_train_size: int | None = typer.Option(
+        None,
+        "--law-train-size",
+        help="With --laws: at most this many rows train each other law's network (a law with "
+        "fewer rows trains on every row not calibrating) [default: --train-size].",
+    ),
+
     metrics: str | None = typer.Option(
         None, "--metrics", help="Also write the metrics as JSON here (- for stdout)."
     ),
@@ -187,7 +194,11 @@ def train(
 
     sizes = None if hidden is None else parse_hidden(hidden, max_parameters=max_parameters)
     options = TrainOptions(
-        hidden=sizes, train_size=train_size, calibration_size=calibration_size, seed=seed
+        hidden=sizes,
+        train_size=train_size,
+        calibration_size=calibration_size,
+        seed=seed,
+        law_train_size=law_train_size,
     )
     notes = parse_notes(note)
     if is_stdio(output):
@@ -206,6 +217,7 @@ def train(
         "hidden": report["hyperparameters"]["hidden"],
         "train_size": train_size,
         "calibration_size": calibration_size,
+        **({} if law_train_size is None else {"law_train_size": law_train_size}),
     }
     provenance = Provenance.from_invocation([index], seed=seed, settings=settings)
     report["provenance"] = provenance.to_dict()

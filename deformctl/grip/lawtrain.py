@@ -87,7 +87,11 @@ def join_laws(index_table: pd.DataFrame, coefficients: pd.DataFrame) -> pd.DataF
 
 
 def _params(law: str, frame: pd.DataFrame) -> dict[str, np.ndarray]:
-    cols = {c: frame[c].to_numpy(dtype=np.float64) for c in LAW_PARAMETER_COLUMNS[law]}
+    nan = np.full(len(frame), np.nan)
+    cols = {
+        c: frame[c].to_numpy(dtype=np.float64) if c in frame.columns else nan
+        for c in LAW_PARAMETER_COLUMNS[law]
+    }
     W = frame["weight_n"].to_numpy(dtype=np.float64)
     D = frame["deformability_n_per_cm"].to_numpy(dtype=np.float64)
     return law_parameter_values(law, cols, W, D)
@@ -129,7 +133,12 @@ def _ranges(law: str, frame: pd.DataFrame, params: dict[str, np.ndarray]) -> dic
 
 def fit_law(law: str, rows: pd.DataFrame, options: TrainOptions) -> dict[str, Any]:
     """One law's network, trained and calibrated on that law's rows (module doc) under
-    ``options`` (its hidden layers default to the grip model's): its ``laws.models`` entry."""
+    ``options`` (its hidden layers default to the grip model's; at most ``law_train_size``
+    training rows when given): its ``laws.models`` entry.
+
+    A row whose law parameters are not all known (NaN: damping not identifiable, or no object
+    size for ``hc``) is left out and named under ``dropped_unidentified``.
+    """
     from sklearn.exceptions import ConvergenceWarning
     from threadpoolctl import threadpool_limits
 
@@ -138,16 +147,22 @@ def fit_law(law: str, rows: pd.DataFrame, options: TrainOptions) -> dict[str, An
     from deformctl.model import scaled_mlp
 
     o = options
-    train_size, calibration_size = o.train_size, o.calibration_size
+    calibration_size = o.calibration_size
 
     table = rows.sort_values("object_id").reset_index(drop=True)
     usable = np.all([np.isfinite(v) & (v > 0) for v in _params(law, table).values()], axis=0)
     dropped = table["object_id"].astype(str)[~usable].tolist()  # a parameter not identified
     table = table[usable].reset_index(drop=True)
-    if len(table) < train_size + calibration_size:
+    if o.law_train_size is None:
+        train_size, flag = o.train_size, "--train-size"
+    else:  # at most law_train_size: a smaller law trains on every row not calibrating
+        train_size = min(o.law_train_size, len(table) - calibration_size)
+        flag = "--law-train-size"
+    known = f" ({len(dropped)} more with a parameter unknown)" if dropped else ""
+    if train_size < 2 or len(table) < train_size + calibration_size:
         raise InputDataError(
-            f"{len(table)} {law} rows: fewer than --train-size {train_size} + "
-            f"--calibration-size {calibration_size}"
+            f"{len(table)} {law} rows with every parameter known{known}: fewer than {flag} "
+            f"{max(train_size, 2)} + --calibration-size {calibration_size}"
         )
     rng = np.random.default_rng(o.seed)
     order = rng.permutation(len(table))
