@@ -150,7 +150,6 @@ def train(
         help="With --laws: at most this many rows train each other law's network (a law with "
         "fewer rows trains on every row not calibrating) [default: --train-size].",
     ),
-
     metrics: str | None = typer.Option(
         None, "--metrics", help="Also write the metrics as JSON here (- for stdout)."
     ),

@@ -34,9 +34,9 @@ import numpy as np
 from deformctl.errors import InputDataError
 from deformctl.grip.fast import Estimates, Predictor, _window
 from deformctl.grip.laws import (
+    EARLIER_LAW_FEATURES,
     KNOWN_LAWS,
     LAW_MIX_KEY,
-    EARLIER_LAW_FEATURES,
     LAW_PARAMETER_COLUMNS,
     LAW_PARAMETERS,
     OPTIONAL_PARAMETER_COLUMNS,

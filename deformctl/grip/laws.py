@@ -41,10 +41,10 @@ from deformctl.grip.groups import group_values
 __all__ = [
     "KNOWN_LAWS",
     "LAW_COLUMN",
+    "LAW_FEATURES",
     "LAW_MIX_KEY",
     "LAW_PARAMETERS",
     "LAW_PARAMETER_COLUMNS",
-    "LAW_FEATURES",
     "OPTIONAL_PARAMETER_COLUMNS",
     "SHAPE_PARAMETERS",
     "law_features",
@@ -170,9 +170,7 @@ def law_parameter_values(
     if law == "hc":
         n = np.asarray(columns["hc_exponent"], dtype=np.float64)
         nan = np.full(n.shape, np.nan)
-        lx, ly, lz = (
-            np.asarray(columns.get(f"size_{a}_cm", nan), dtype=np.float64) for a in "xyz"
-        )
+        lx, ly, lz = (np.asarray(columns.get(f"size_{a}_cm", nan), dtype=np.float64) for a in "xyz")
         D = np.asarray(deformability_n_per_cm, dtype=np.float64)
         with np.errstate(divide="ignore", invalid="ignore"):
             return {

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -38,7 +39,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from deformctl.model import TrainOptions
 
-__all__ = ["fit_law", "join_laws", "law_section"]
+__all__ = ["fit_law", "join_laws", "law_inputs", "law_section"]
 
 _TARGET = "lift_force_n"
 _CHECK_POINTS = 5
@@ -97,8 +98,12 @@ def _params(law: str, frame: pd.DataFrame) -> dict[str, np.ndarray]:
     return law_parameter_values(law, cols, W, D)
 
 
-def _inputs(law: str, frame: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
-    """(groups, F_w, parameters) of a law's rows; a NaN or non-positive parameter refused."""
+def law_inputs(
+    law: str, frame: pd.DataFrame, features: Sequence[str] | None = None
+) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """(network inputs, F_w, parameters) of a law's rows (``features``: the law's inputs by
+    default, :func:`~deformctl.grip.laws.law_groups`); a NaN or non-positive parameter is
+    refused (InputDataError)."""
     W, D, lam, mu = (
         frame[c].to_numpy(dtype=np.float64)
         for c in ("weight_n", "deformability_n_per_cm", "damping_ns_per_cm", "friction_mu")
@@ -109,7 +114,8 @@ def _inputs(law: str, frame: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, dict
             bad = frame["object_id"].astype(str)[~(np.isfinite(v) & (v > 0))].tolist()
             raise InputDataError(f"{law} parameter {k} is missing or <= 0 for {', '.join(bad[:5])}")
     lam0 = np.maximum(np.where(np.isfinite(lam), lam, 0.0), 0.0)
-    return law_groups(law, W, D, lam0, mu, params, ZETA_SHIFT), rigid_grip_force_n(W, mu), params
+    Z = law_groups(law, W, D, lam0, mu, params, ZETA_SHIFT, features)
+    return Z, rigid_grip_force_n(W, mu), params
 
 
 def _ranges(law: str, frame: pd.DataFrame, params: dict[str, np.ndarray]) -> dict[str, list[float]]:
@@ -172,7 +178,7 @@ def fit_law(law: str, rows: pd.DataFrame, options: TrainOptions) -> dict[str, An
         "calibration": table.iloc[order[train_size : train_size + calibration_size]],
         "test": table.iloc[order[train_size + calibration_size :]],
     }
-    Z, f_w, params = _inputs(law, parts["train"])
+    Z, f_w, params = law_inputs(law, parts["train"])
     y = parts["train"][_TARGET].to_numpy(dtype=np.float64)
     target = np.log(y / f_w)
     best, best_loss = None, math.inf
@@ -190,7 +196,7 @@ def fit_law(law: str, rows: pd.DataFrame, options: TrainOptions) -> dict[str, An
     def predict(frame: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
         if not len(frame):
             return np.empty(0), np.empty(0)
-        z, fw, _ = _inputs(law, frame)
+        z, fw, _ = law_inputs(law, frame)
         with threadpool_limits(limits=1):
             return np.exp(best.predict(z)) * fw, frame[_TARGET].to_numpy(dtype=np.float64)
 
