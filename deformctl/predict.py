@@ -421,9 +421,6 @@ def _law_columns() -> tuple[str, ...]:
     return (LAW_COLUMN, *(c for cols in LAW_PARAMETER_COLUMNS.values() for c in cols))
 
 
-#: The object's size (x squeezed, z up): the ``hc`` network's shape inputs.
-_SIZE_COLUMNS: tuple[str, ...] = ("size_x_cm", "size_y_cm", "size_z_cm")
-
 #: Coefficients-table columns that bound the grip force (the smallest finite one is the object's
 #: safe force, ``max_safe_force_n``): ``characterize``'s rupture force, and a yield force.
 SAFE_FORCE_COLUMNS: tuple[str, ...] = ("rupture_force_n", "yield_force_n")
@@ -541,7 +538,7 @@ def prediction_inputs(
     """
     import pandas as pd
 
-    from deformctl.catalog import catalog_weights
+    from deformctl.catalog import SIZE_COLUMNS, catalog_weights
     from deformctl.table import format_ids
 
     frame = table.copy()
@@ -557,7 +554,7 @@ def prediction_inputs(
             raise InputDataError(
                 f"{len(missing)} object(s) are not in the catalog: {format_ids(missing)}"
             )
-        for col in ("weight_n", "friction_mu", *_SIZE_COLUMNS):
+        for col in ("weight_n", "friction_mu", *SIZE_COLUMNS):  # sizes: the hc network's
             if col in catalog.columns:
                 frame[col] = _join_catalog_column(frame, catalog, col, ids, warnings, catalog_name)
     frame = _check_object_values(frame, catalog)

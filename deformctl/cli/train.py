@@ -99,17 +99,6 @@ def coverage_lines(report: dict[str, Any]) -> list[str]:
     return lines
 
 
-def parse_notes(notes: list[str] | None) -> dict[str, str]:
-    """``KEY=VALUE`` pairs of ``--note`` (exit 2 for a note without ``=`` or an empty key)."""
-    out: dict[str, str] = {}
-    for note in notes or []:
-        key, sep, value = note.partition("=")
-        if not sep or not key.strip():
-            raise UsageError(f"--note takes KEY=VALUE, got {note!r}")
-        out[key.strip()] = value.strip()
-    return out
-
-
 @translate_errors
 def train(
     index: str = typer.Argument(..., help="The index table (Parquet) written by `table`."),
@@ -189,7 +178,7 @@ def train(
     from deformctl.artifacts.model import save_model
     from deformctl.model import TrainOptions
     from deformctl.table import flagged_rows
-    from deformctl.train import model_metadata, parse_hidden, train_with_laws
+    from deformctl.train import model_metadata, parse_hidden, parse_notes, train_with_laws
 
     sizes = None if hidden is None else parse_hidden(hidden, max_parameters=max_parameters)
     options = TrainOptions(

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from deformctl.catalog import SIZE_COLUMNS
 from deformctl.errors import InputDataError
 from deformctl.grip.groups import group_values
 
@@ -73,13 +74,13 @@ LAW_PARAMETERS: dict[str, tuple[str, ...]] = {
 #: The coefficients columns each law's parameters are computed from.
 LAW_PARAMETER_COLUMNS: dict[str, tuple[str, ...]] = {
     "kv": (),
-    "hc": ("hc_exponent", "size_x_cm", "size_y_cm", "size_z_cm"),
+    "hc": ("hc_exponent", *SIZE_COLUMNS),
     "sls": ("sls_stiffness_n_per_cm", "sls_arm_stiffness_n_per_cm", "sls_relaxation_time_s"),
 }
 
 #: Parameter columns a row may lack: its parameters are then unknown (NaN) and predicted at the
 #: most cautious value of the training range, flagged; a missing law column is refused.
-OPTIONAL_PARAMETER_COLUMNS: frozenset[str] = frozenset({"size_x_cm", "size_y_cm", "size_z_cm"})
+OPTIONAL_PARAMETER_COLUMNS: frozenset[str] = frozenset(SIZE_COLUMNS)
 #: The parameters of :data:`LAW_PARAMETERS` that describe the object's shape, not its material
 #: (unknown when the row has no size: flagged ``shape_assumed``).
 SHAPE_PARAMETERS: frozenset[str] = frozenset({"weight_strain", "aspect_y_x", "aspect_z_x"})
@@ -170,7 +171,7 @@ def law_parameter_values(
     if law == "hc":
         n = np.asarray(columns["hc_exponent"], dtype=np.float64)
         nan = np.full(n.shape, np.nan)
-        lx, ly, lz = (np.asarray(columns.get(f"size_{a}_cm", nan), dtype=np.float64) for a in "xyz")
+        lx, ly, lz = (np.asarray(columns.get(c, nan), dtype=np.float64) for c in SIZE_COLUMNS)
         D = np.asarray(deformability_n_per_cm, dtype=np.float64)
         with np.errstate(divide="ignore", invalid="ignore"):
             return {
