@@ -164,6 +164,8 @@ MODEL_LAWS ?= hc=1,sls=1
 MODEL_LAWS_N ?= 1000
 MODEL_TRAIN ?= 300
 MODEL_CAL ?= 150
+# each other law's network trains on at most this many rows (all its rows not calibrating)
+MODEL_LAW_TRAIN ?= 1000
 MODEL_SEED ?= 1
 MODEL_LAWS_SEED ?= 11
 MODEL_EVAL_N ?= 200
@@ -190,7 +192,8 @@ model: install
 _grip_train: $(M)/train/index.parquet
 	$(DC) train $< -o $(MODEL_OUT) --force --train-size $(MODEL_TRAIN) \
 	  --calibration-size $(MODEL_CAL) --seed 0 --metrics $(M)/train/metrics.json \
-	  --laws $(M)/train/coefficients.parquet --note population=grip \
+	  --laws $(M)/train/coefficients.parquet --law-train-size $(MODEL_LAW_TRAIN) \
+	  --note population=grip \
 	  --note population_kv="n=$(MODEL_N) seed=$(MODEL_SEED)" \
 	  --note population_laws="$(MODEL_LAWS) n=$(MODEL_LAWS_N) seed=$(MODEL_LAWS_SEED)" \
 	  --note sim_preset=$(MODEL_PRESET) --note features_from="measure sim + characterize"

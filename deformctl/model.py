@@ -23,6 +23,7 @@ from deformctl.quantities import (
     CALIBRATION_SIZE,
     HIDDEN_SIZE,
     L2_ALPHA,
+    LAW_TRAIN_SIZE,
     MAX_ITER,
     RESTARTS,
     SEED,
@@ -62,6 +63,9 @@ class TrainOptions:
         max_iter, solver, activation, alpha, tol: the ``MLPRegressor``'s (a bad solver or
             activation name is refused by scikit-learn as the network is fitted).
         target: the paper form's target: ``"ratio"`` (L_f / W) or ``"direct"`` (L_f).
+        law_train_size: with ``train --laws``, at most this many rows train each other law's
+            network (``--law-train-size``; a law with fewer rows trains on every row not
+            calibrating); None: ``train_size`` rows, as the Kelvin–Voigt network.
 
     Raises:
         UsageError: a number outside its rule, or an unknown target (exit 2).
@@ -78,6 +82,7 @@ class TrainOptions:
     alpha: float = DEFAULT_ALPHA
     tol: float = DEFAULT_TOL
     target: TargetMode = "ratio"
+    law_train_size: int | None = None
 
     def __post_init__(self) -> None:
         if self.hidden == ():
@@ -91,6 +96,8 @@ class TrainOptions:
         MAX_ITER.check(self.max_iter)
         L2_ALPHA.check(self.alpha)
         TOL.check(self.tol)
+        if self.law_train_size is not None:
+            LAW_TRAIN_SIZE.check(self.law_train_size)
         if self.target not in ("ratio", "direct"):
             raise UsageError(f"target must be 'ratio' or 'direct', got {self.target!r}")
 

@@ -256,7 +256,8 @@ def predict_objects_with_laws(
     if inputs.get(LAW_COLUMN) is None:
         est = predict_objects(predictor, inputs, coverage=coverage, names=names, source=source)
         kv = np.array(["kv"] * n, dtype=object)
-        return LawPrediction(est, kv, np.zeros(n, dtype=bool), np.zeros(n, dtype=bool))
+        none = np.zeros(n, dtype=bool)
+        return LawPrediction(est, kv, none, none, none)
     with error_context(source) if source else contextlib.nullcontext():
         laws = read_laws(list(inputs[LAW_COLUMN]), labels)
     if predictor.needs_friction and inputs.get("friction_mu") is None:
@@ -327,6 +328,8 @@ def output_columns(
         cols["material_law"] = [str(v) for v in laws.law_used]
         if np.any(laws.law_assumed):
             cols["law_assumed"] = np.asarray(laws.law_assumed, dtype=bool)
+        if np.any(laws.shape_assumed):
+            cols["shape_assumed"] = np.asarray(laws.shape_assumed, dtype=bool)
     if inputs.get("quality") is not None:
         cols["quality"] = list(inputs["quality"])
     return cols
@@ -535,7 +538,7 @@ def prediction_inputs(
     """
     import pandas as pd
 
-    from deformctl.catalog import catalog_weights
+    from deformctl.catalog import SIZE_COLUMNS, catalog_weights
     from deformctl.table import format_ids
 
     frame = table.copy()
@@ -551,7 +554,7 @@ def prediction_inputs(
             raise InputDataError(
                 f"{len(missing)} object(s) are not in the catalog: {format_ids(missing)}"
             )
-        for col in ("weight_n", "friction_mu"):
+        for col in ("weight_n", "friction_mu", *SIZE_COLUMNS):  # sizes: the hc network's
             if col in catalog.columns:
                 frame[col] = _join_catalog_column(frame, catalog, col, ids, warnings, catalog_name)
     frame = _check_object_values(frame, catalog)

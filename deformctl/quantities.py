@@ -54,6 +54,7 @@ __all__ = [
     "IMPLIED_DAMPING_RATIO",
     "L2_ALPHA",
     "LAG_S",
+    "LAW_TRAIN_SIZE",
     "LIFT_ACCEL_M_S2",
     "LIFT_HEIGHT_M",
     "LIFT_HOLD_S",
@@ -366,6 +367,8 @@ MAX_FORCE_N = Quantity("max_force_n", "--max-force-n", " N", 0.0, low_open=True)
 #: ``train``'s split and network (:class:`deformctl.model.TrainOptions`): two training rows at
 #: least (one is no regression), any number of calibration rows, layers of one node or more.
 TRAIN_SIZE = Quantity("train_size", "--train-size", "", 2, integer=True)
+#: The cap on each other law's training rows (``train --law-train-size``).
+LAW_TRAIN_SIZE = Quantity("law_train_size", "--law-train-size", "", 2, integer=True)
 CALIBRATION_SIZE = Quantity("calibration_size", "--calibration-size", "", 0, integer=True)
 HIDDEN_SIZE = Quantity("hidden", "--hidden", "", 1, integer=True)
 SEED = Quantity("seed", "--seed", "", 0, integer=True)

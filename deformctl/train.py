@@ -621,6 +621,17 @@ def parameter_count(hidden: tuple[int, ...], n_features: int = 3) -> int:
     return sum((a + 1) * b for a, b in itertools.pairwise(sizes))
 
 
+def parse_notes(notes: list[str] | None) -> dict[str, str]:
+    """``KEY=VALUE`` pairs of ``train --note`` (exit 2 for a note without ``=`` or an empty key)."""
+    out: dict[str, str] = {}
+    for note in notes or []:
+        key, sep, value = note.partition("=")
+        if not sep or not key.strip():
+            raise UsageError(f"--note takes KEY=VALUE, got {note!r}")
+        out[key.strip()] = value.strip()
+    return out
+
+
 def parse_hidden(text: str, *, max_parameters: int = MAX_PARAMETERS) -> tuple[int, ...]:
     """Hidden layer sizes from ``"2"`` or a comma list such as ``"8,4"`` (each size's rule is
     checked where they are used, by :class:`~deformctl.model.TrainOptions`).

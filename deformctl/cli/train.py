@@ -99,17 +99,6 @@ def coverage_lines(report: dict[str, Any]) -> list[str]:
     return lines
 
 
-def parse_notes(notes: list[str] | None) -> dict[str, str]:
-    """``KEY=VALUE`` pairs of ``--note`` (exit 2 for a note without ``=`` or an empty key)."""
-    out: dict[str, str] = {}
-    for note in notes or []:
-        key, sep, value = note.partition("=")
-        if not sep or not key.strip():
-            raise UsageError(f"--note takes KEY=VALUE, got {note!r}")
-        out[key.strip()] = value.strip()
-    return out
-
-
 @translate_errors
 def train(
     index: str = typer.Argument(..., help="The index table (Parquet) written by `table`."),
@@ -143,6 +132,12 @@ def train(
     seed: int = typer.Option(0, "--seed", help="Seeds the split and the initial weights."),
     laws: str | None = typer.Option(
         None, "--laws", metavar="COEFFICIENTS", help="Per material law: a table of model (law)."
+    ),
+    law_train_size: int | None = typer.Option(
+        None,
+        "--law-train-size",
+        help="With --laws: at most this many rows train each other law's network (a law with "
+        "fewer rows trains on every row not calibrating) [default: --train-size].",
     ),
     metrics: str | None = typer.Option(
         None, "--metrics", help="Also write the metrics as JSON here (- for stdout)."
@@ -183,11 +178,15 @@ def train(
     from deformctl.artifacts.model import save_model
     from deformctl.model import TrainOptions
     from deformctl.table import flagged_rows
-    from deformctl.train import model_metadata, parse_hidden, train_with_laws
+    from deformctl.train import model_metadata, parse_hidden, parse_notes, train_with_laws
 
     sizes = None if hidden is None else parse_hidden(hidden, max_parameters=max_parameters)
     options = TrainOptions(
-        hidden=sizes, train_size=train_size, calibration_size=calibration_size, seed=seed
+        hidden=sizes,
+        train_size=train_size,
+        calibration_size=calibration_size,
+        seed=seed,
+        law_train_size=law_train_size,
     )
     notes = parse_notes(note)
     if is_stdio(output):
@@ -206,6 +205,7 @@ def train(
         "hidden": report["hyperparameters"]["hidden"],
         "train_size": train_size,
         "calibration_size": calibration_size,
+        **({} if law_train_size is None else {"law_train_size": law_train_size}),
     }
     provenance = Provenance.from_invocation([index], seed=seed, settings=settings)
     report["provenance"] = provenance.to_dict()

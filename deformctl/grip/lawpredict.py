@@ -10,6 +10,8 @@ naming the cause, when
   network from its D and λ at F_w);
 * one of its law parameters lies outside that law's training range (the line names the
   parameter and the range);
+* a law parameter or (``hc``) the object's size is unknown: the row is predicted at the most
+  cautious value of the law's training range, flagged ``damping_assumed`` or ``shape_assumed``;
 * its law is unknown (a blank ``model`` cell: characterize could not tell): it is predicted by
   every law the model knows and the row has parameters for, and the most cautious one (the
   largest bound, or L_f without a coverage) is used, flagged ``law_assumed``.
@@ -32,13 +34,17 @@ import numpy as np
 from deformctl.errors import InputDataError
 from deformctl.grip.fast import Estimates, Predictor, _window
 from deformctl.grip.laws import (
+    EARLIER_LAW_FEATURES,
     KNOWN_LAWS,
     LAW_MIX_KEY,
     LAW_PARAMETER_COLUMNS,
     LAW_PARAMETERS,
+    OPTIONAL_PARAMETER_COLUMNS,
+    SHAPE_PARAMETERS,
     law_features,
     law_groups,
     law_parameter_values,
+    network_parameters,
     sls_damping_ns_per_cm,
 )
 from deformctl.grip.sanity import implausible, implausible_line, scores_problem, target_ratio_range
@@ -59,12 +65,15 @@ class LawPrediction:
         law_assumed: ``[n]`` True where the row's law was unknown (the most cautious law used).
         parameters_assumed: ``[n]`` True where a law parameter was unknown (the most cautious
             value over the law's training range used; the CLI flags it ``damping_assumed``).
+        shape_assumed: ``[n]`` True where the network needs the object's size and the row has
+            none (the most cautious shape of the training range used; ``shape_assumed``).
     """
 
     estimates: Estimates
     law_used: np.ndarray
     law_assumed: np.ndarray
     parameters_assumed: np.ndarray
+    shape_assumed: np.ndarray
 
 
 def law_mix(predictor: Predictor) -> Mapping[str, Any] | None:
@@ -113,7 +122,8 @@ def _law_predictor(base: Predictor, law: str, entry: Any) -> Predictor:
     except (KeyError, TypeError, ValueError, IndexError):
         raise InputDataError(bad, path=path) from None
     n_in = len(features)
-    shapes_ok = features == law_features(law) and mean.shape == scale.shape == (n_in,)
+    known = (law_features(law), *EARLIER_LAW_FEATURES.get(law, ()))
+    shapes_ok = features in known and mean.shape == scale.shape == (n_in,)
     width = n_in
     for w, b in zip(weights, biases, strict=False):
         shapes_ok &= w.ndim == 2 and w.shape[0] == width and b.shape == (w.shape[1],)
@@ -160,15 +170,21 @@ def _law_rows(
     f_w: np.ndarray,
     params: Mapping[str, np.ndarray],
 ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-    """(L_f, parameters assumed, the parameters used) of rows of ``law``; a NaN parameter takes
-    the value of the law's training range with the largest L_f (a grid of that range)."""
-    names = LAW_PARAMETERS[law]
+    """(L_f, [n, 2] unknown (a law parameter, the shape), the parameters used) of rows of
+    ``law``; a NaN parameter the network uses takes the value of the law's training range with
+    the largest L_f (a grid of that range)."""
+    names = network_parameters(net.metadata["features"])
     used = {k: np.array(params[k], dtype=np.float64) for k in names}
-    unknown = np.zeros(W.size, dtype=bool)
+    unknown_law = np.zeros(W.size, dtype=bool)
+    unknown_shape = np.zeros(W.size, dtype=bool)
     for k in names:
-        unknown |= ~np.isfinite(used[k])
+        if k in SHAPE_PARAMETERS:
+            unknown_shape |= ~np.isfinite(used[k])
+        else:
+            unknown_law |= ~np.isfinite(used[k])
     if law == "hc":
-        unknown |= ~np.isfinite(lam)
+        unknown_law |= ~np.isfinite(lam)
+    unknown = unknown_law | unknown_shape
     grids = [np.linspace(*net.ranges.get(k, (np.nan, np.nan)), _PARAMETER_GRID) for k in names]
     for i in np.flatnonzero(unknown):
         cand = np.array(
@@ -186,7 +202,8 @@ def _law_rows(
         for k in names:
             used[k][i] = p[k][best]
     lam_used = np.where(np.isfinite(lam), lam, 0.0)
-    return _lift(net, law, W, D, lam_used, f_w, used), unknown, used
+    flags = np.column_stack([unknown_law, unknown_shape])
+    return _lift(net, law, W, D, lam_used, f_w, used), flags, used
 
 
 def _lift(
@@ -203,7 +220,8 @@ def _lift(
         lam = sls_damping_ns_per_cm(
             D, omega, params["arm_stiffness_ratio"], params["relaxation_time_omega_n"]
         )
-    Z = law_groups(law, W, D, lam, W / (2.0 * f_w), params, net.zeta_shift)  # μ = W / (2 F_w)
+    mu = W / (2.0 * f_w)  # F_w = W / (2 μ)
+    Z = law_groups(law, W, D, lam, mu, params, net.zeta_shift, net.metadata["features"])
     return np.asarray(np.exp(net._network(Z)) * f_w)
 
 
@@ -266,10 +284,11 @@ def predict_laws(
     law_used = np.array(["kv"] * n, dtype=object)
     law_assumed = np.zeros(n, dtype=bool)
     params_assumed = np.zeros(n, dtype=bool)
+    shape_assumed = np.zeros(n, dtype=bool)
     replaced: dict[int, list[str]] = {}
     notes: dict[int, list[str]] = {}
     # every law's prediction of the rows it can predict: (lift, upper, outside parts, assumed)
-    per_law: dict[str, dict[int, tuple[float, float, list[str], bool]]] = {}
+    per_law: dict[str, dict[int, tuple[float, float, list[str], tuple[bool, bool]]]] = {}
     for law, net in nets.items():
         rows = [i for i in range(n) if laws[i] in (law, "")]
         if not rows:
@@ -279,18 +298,22 @@ def predict_laws(
             rows = [i for i in rows if laws[i] == law]
         if not rows:
             continue
-        missing = [c for c in cols if c not in inputs]
+        missing = [c for c in cols if c not in inputs and c not in OPTIONAL_PARAMETER_COLUMNS]
         if missing:
             raise InputDataError(
                 f"the table has no column {missing[0]!r} for its {law} rows "
                 f"({', '.join(labels[i] for i in rows[:5])})"
             )
         idx = np.asarray(rows)
-        raw = {c: np.broadcast_to(np.asarray(inputs[c], dtype=np.float64), (n,))[idx] for c in cols}
+        raw = {
+            c: np.broadcast_to(np.asarray(inputs.get(c, np.nan), dtype=np.float64), (n,))[idx]
+            for c in cols
+        }
         params = law_parameter_values(law, raw, W[idx], D[idx])
         blank = laws[idx] == ""
         if blank.any():  # an unknown law is this law only where the row has its parameters
-            has = np.all([np.isfinite(params[k]) for k in LAW_PARAMETERS[law]], axis=0)
+            material = [k for k in LAW_PARAMETERS[law] if k not in SHAPE_PARAMETERS]
+            has = np.all([np.isfinite(params[k]) for k in material], axis=0)
             keep = ~blank | has
             idx = idx[keep]
             params = {k: v[keep] for k, v in params.items()}
@@ -307,21 +330,22 @@ def predict_laws(
             )[idx],
             **params,
         }
-        entry: dict[int, tuple[float, float, list[str], bool]] = {}
+        entry: dict[int, tuple[float, float, list[str], tuple[bool, bool]]] = {}
         for j, i in enumerate(idx.tolist()):
             parts = _outside(net, checked, j)
             entry[i] = (
                 float(law_lift[j]),
                 float(upper[i] if q is None else law_upper[j]),
                 parts,
-                bool(assumed[j]),
+                (bool(assumed[j, 0]), bool(assumed[j, 1])),
             )
         per_law[law] = entry
     for i in range(n):
         law = str(laws[i])
         if law in per_law and i in per_law[law]:
-            lf, up, parts, was_assumed = per_law[law][i]
-            lift[i], params_assumed[i], law_used[i] = lf, was_assumed, law
+            lf, up, parts, (was_assumed, no_shape) = per_law[law][i]
+            lift[i], law_used[i] = lf, law
+            params_assumed[i], shape_assumed[i] = was_assumed, no_shape
             upper[i] = up if coverage is not None else np.nan
             outside[i] = bool(parts)
             replaced[i] = []
@@ -335,7 +359,15 @@ def predict_laws(
                     f"predicted at the value of the model's {law} range with the largest L_f "
                     "(damping_assumed = true)"
                 )
+            if no_shape:
+                replaced[i].append(
+                    f"{labels[i]}: the {law} network needs the object's size (size_x_cm, "
+                    "size_y_cm, size_z_cm; x squeezed, z up) and the row has none; predicted at "
+                    f"the shape of the model's {law} range with the largest L_f "
+                    "(shape_assumed = true, bound_guaranteed = false)"
+                )
             guaranteed[i] = coverage is not None and not parts and not was_assumed
+            guaranteed[i] &= not no_shape
         elif law == "":
             law_assumed[i] = True
             options = {"kv": (float(lift[i]), float(upper[i]))}
@@ -348,7 +380,7 @@ def predict_laws(
             if chosen != "kv":
                 lift[i], upper[i] = options[chosen]
                 replaced[i] = []
-                params_assumed[i] = per_law[chosen][i][3]
+                params_assumed[i], shape_assumed[i] = per_law[chosen][i][3]
                 outside[i] = bool(per_law[chosen][i][2])
             guaranteed[i] = False
             notes.setdefault(i, []).append(
@@ -384,7 +416,7 @@ def predict_laws(
         warnings=warnings,
         prediction_implausible=odd,
     )
-    return LawPrediction(est, law_used, law_assumed, params_assumed)
+    return LawPrediction(est, law_used, law_assumed, params_assumed, shape_assumed)
 
 
 def _merge_warnings(

@@ -6,9 +6,15 @@ law's parameters in its own columns. The grip model takes them in a dimensionles
 
 * ``kv`` (Kelvin–Voigt): nothing more; the bundled network of ``[log10 ω_n, log10(ζ + ζ_0)]``
   (:mod:`deformctl.grip.groups`) exactly as before;
-* ``hc`` (Hunt–Crossley): the exponent ``n`` (column ``hc_exponent``), a network of
-  ``[log10 ω_n, log10(ζ + ζ_0), n, log10 μ]`` (D and λ are the row's, stated at F_w; μ, which
-  only scales F_w for Kelvin–Voigt, moves a stiffening object's ratio by 2.7 %);
+* ``hc`` (Hunt–Crossley): the exponent ``n`` (column ``hc_exponent``) and the object's shape,
+  a network of ``[log10 ω_n, log10(ζ + ζ_0), n, log10 μ, log10 ε_W, log10(L_y / L_x),
+  log10(L_z / L_x)]`` (D and λ are the row's, stated at F_w; μ, which only scales F_w for
+  Kelvin–Voigt, moves a stiffening object's ratio by 2.7 %). ``ε_W = W / (D L_x)`` is the strain
+  a force equal to the weight causes along the squeeze axis x (``size_x_cm``), and ``L_y / L_x``,
+  ``L_z / L_x`` (z up) the aspect ratios: a stiffening lattice is soft where it is not
+  compressed, so how far the jaws pre-strain it sets how it holds its own weight (the
+  shape inputs halve the held-out error, docs/explanation/model.md). A network trained
+  before the shape inputs (the first four only) is still read;
 * ``sls`` (standard linear solid): the arm's stiffness over the relaxed one ``k2 / D`` and the
   relaxation time in units of the object's own time scale ``τ ω_n``, a network of
   ``[log10 ω_n, log10(k2 / D), log10(τ ω_n)]`` (its damping λ = k2 τ is then fixed by them).
@@ -29,18 +35,23 @@ from typing import Any
 
 import numpy as np
 
+from deformctl.catalog import SIZE_COLUMNS
 from deformctl.errors import InputDataError
 from deformctl.grip.groups import group_values
 
 __all__ = [
     "KNOWN_LAWS",
     "LAW_COLUMN",
+    "LAW_FEATURES",
     "LAW_MIX_KEY",
     "LAW_PARAMETERS",
     "LAW_PARAMETER_COLUMNS",
+    "OPTIONAL_PARAMETER_COLUMNS",
+    "SHAPE_PARAMETERS",
     "law_features",
     "law_groups",
     "law_parameter_values",
+    "network_parameters",
     "read_laws",
     "recognised_laws",
     "unknown_law_line",
@@ -52,17 +63,56 @@ LAW_COLUMN = "model"
 KNOWN_LAWS: tuple[str, ...] = ("kv", "hc", "sls")
 #: Where a model file's metadata states its law mix, ranges, networks and scores.
 LAW_MIX_KEY = "laws"
-#: Each law's physically meaningful parameters the model sees (beyond W, D, λ, μ), in order.
+#: Each law's physically meaningful parameters the model sees (beyond W, D, λ, μ), in order
+#: (for ``hc`` also the object's shape: ``weight_strain`` = W / (D L_x), ``aspect_y_x`` and
+#: ``aspect_z_x``).
 LAW_PARAMETERS: dict[str, tuple[str, ...]] = {
     "kv": (),
-    "hc": ("stiffness_exponent",),
+    "hc": ("stiffness_exponent", "weight_strain", "aspect_y_x", "aspect_z_x"),
     "sls": ("arm_stiffness_ratio", "relaxation_time_omega_n"),
 }
 #: The coefficients columns each law's parameters are computed from.
 LAW_PARAMETER_COLUMNS: dict[str, tuple[str, ...]] = {
     "kv": (),
-    "hc": ("hc_exponent",),
+    "hc": ("hc_exponent", *SIZE_COLUMNS),
     "sls": ("sls_stiffness_n_per_cm", "sls_arm_stiffness_n_per_cm", "sls_relaxation_time_s"),
+}
+
+#: Parameter columns a row may lack: its parameters are then unknown (NaN) and predicted at the
+#: most cautious value of the training range, flagged; a missing law column is refused.
+OPTIONAL_PARAMETER_COLUMNS: frozenset[str] = frozenset(SIZE_COLUMNS)
+#: The parameters of :data:`LAW_PARAMETERS` that describe the object's shape, not its material
+#: (unknown when the row has no size: flagged ``shape_assumed``).
+SHAPE_PARAMETERS: frozenset[str] = frozenset({"weight_strain", "aspect_y_x", "aspect_z_x"})
+#: Each law network's inputs, in order (:func:`law_groups`' columns).
+LAW_FEATURES: dict[str, tuple[str, ...]] = {
+    "hc": (
+        "log10_natural_frequency_rad_s",
+        "log10_damping_ratio_shifted",
+        "stiffness_exponent",
+        "log10_friction_mu",
+        "log10_weight_strain",
+        "log10_aspect_y_x",
+        "log10_aspect_z_x",
+    ),
+    "sls": (
+        "log10_natural_frequency_rad_s",
+        "log10_arm_stiffness_ratio",
+        "log10_relaxation_time_omega_n",
+    ),
+}
+#: Input lists of law networks written before, still read (a network states its own list).
+EARLIER_LAW_FEATURES: dict[str, tuple[tuple[str, ...], ...]] = {
+    "hc": (LAW_FEATURES["hc"][:4],),
+}
+#: The law parameter each network input is computed from (inputs of W, D, λ, μ alone: none).
+FEATURE_PARAMETER: dict[str, str] = {
+    "stiffness_exponent": "stiffness_exponent",
+    "log10_weight_strain": "weight_strain",
+    "log10_aspect_y_x": "aspect_y_x",
+    "log10_aspect_z_x": "aspect_z_x",
+    "log10_arm_stiffness_ratio": "arm_stiffness_ratio",
+    "log10_relaxation_time_omega_n": "relaxation_time_omega_n",
 }
 
 
@@ -119,7 +169,17 @@ def law_parameter_values(
     if law == "kv":
         return {}
     if law == "hc":
-        return {"stiffness_exponent": np.asarray(columns["hc_exponent"], dtype=np.float64)}
+        n = np.asarray(columns["hc_exponent"], dtype=np.float64)
+        nan = np.full(n.shape, np.nan)
+        lx, ly, lz = (np.asarray(columns.get(c, nan), dtype=np.float64) for c in SIZE_COLUMNS)
+        D = np.asarray(deformability_n_per_cm, dtype=np.float64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return {
+                "stiffness_exponent": n,
+                "weight_strain": np.asarray(weight_n, dtype=np.float64) / (D * lx),
+                "aspect_y_x": ly / lx,
+                "aspect_z_x": lz / lx,
+            }
     k1 = np.asarray(columns["sls_stiffness_n_per_cm"], dtype=np.float64)
     k2 = np.asarray(columns["sls_arm_stiffness_n_per_cm"], dtype=np.float64)
     tau = np.asarray(columns["sls_relaxation_time_s"], dtype=np.float64)
@@ -141,43 +201,38 @@ def law_groups(
     mu: np.ndarray,
     params: Mapping[str, np.ndarray],
     zeta_shift: float,
+    features: Sequence[str] | None = None,
 ) -> np.ndarray:
-    """``[n, k]`` network inputs of a non-KV law (module doc)."""
+    """``[n, k]`` network inputs of a non-KV law (module doc): the columns ``features`` names
+    (default: the law's, :data:`LAW_FEATURES`; a network written before states its own)."""
+    if law not in LAW_FEATURES:
+        raise ValueError(f"no law network for {law!r}")
     omega, zeta = group_values(W, D, lam)
-    if law == "hc":
-        return np.column_stack(
-            [
-                np.log10(omega),
-                np.log10(zeta + zeta_shift),
-                params["stiffness_exponent"],
-                np.log10(np.broadcast_to(mu, omega.shape)),
-            ]
-        )
-    if law == "sls":
-        return np.column_stack(
-            [
-                np.log10(omega),
-                np.log10(params["arm_stiffness_ratio"]),
-                np.log10(params["relaxation_time_omega_n"]),
-            ]
-        )
-    raise ValueError(f"no law network for {law!r}")
+    names = LAW_FEATURES[law] if features is None else tuple(features)
+    columns = {
+        "log10_natural_frequency_rad_s": lambda: np.log10(omega),
+        "log10_damping_ratio_shifted": lambda: np.log10(zeta + zeta_shift),
+        "log10_friction_mu": lambda: np.log10(np.broadcast_to(mu, omega.shape)),
+    }
+    out = []
+    for name in names:
+        if name in columns:
+            out.append(columns[name]())
+        elif name.startswith("log10_"):
+            out.append(np.log10(params[FEATURE_PARAMETER[name]]))
+        else:
+            out.append(np.asarray(params[FEATURE_PARAMETER[name]], dtype=np.float64))
+    return np.column_stack(out)
 
 
 def law_features(law: str) -> tuple[str, ...]:
     """The names of the law network's inputs (:func:`law_groups`' columns)."""
-    if law == "hc":
-        return (
-            "log10_natural_frequency_rad_s",
-            "log10_damping_ratio_shifted",
-            "stiffness_exponent",
-            "log10_friction_mu",
-        )
-    return (
-        "log10_natural_frequency_rad_s",
-        "log10_arm_stiffness_ratio",
-        "log10_relaxation_time_omega_n",
-    )
+    return LAW_FEATURES[law]
+
+
+def network_parameters(features: Sequence[str]) -> tuple[str, ...]:
+    """The law parameters a network with inputs ``features`` uses, in order."""
+    return tuple(FEATURE_PARAMETER[f] for f in features if f in FEATURE_PARAMETER)
 
 
 #: A law network's entries a summary leaves out (arrays, ids).

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -38,7 +39,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from deformctl.model import TrainOptions
 
-__all__ = ["fit_law", "join_laws", "law_section"]
+__all__ = ["fit_law", "join_laws", "law_inputs", "law_section"]
 
 _TARGET = "lift_force_n"
 _CHECK_POINTS = 5
@@ -87,14 +88,22 @@ def join_laws(index_table: pd.DataFrame, coefficients: pd.DataFrame) -> pd.DataF
 
 
 def _params(law: str, frame: pd.DataFrame) -> dict[str, np.ndarray]:
-    cols = {c: frame[c].to_numpy(dtype=np.float64) for c in LAW_PARAMETER_COLUMNS[law]}
+    nan = np.full(len(frame), np.nan)
+    cols = {
+        c: frame[c].to_numpy(dtype=np.float64) if c in frame.columns else nan
+        for c in LAW_PARAMETER_COLUMNS[law]
+    }
     W = frame["weight_n"].to_numpy(dtype=np.float64)
     D = frame["deformability_n_per_cm"].to_numpy(dtype=np.float64)
     return law_parameter_values(law, cols, W, D)
 
 
-def _inputs(law: str, frame: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
-    """(groups, F_w, parameters) of a law's rows; a NaN or non-positive parameter refused."""
+def law_inputs(
+    law: str, frame: pd.DataFrame, features: Sequence[str] | None = None
+) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """(network inputs, F_w, parameters) of a law's rows (``features``: the law's inputs by
+    default, :func:`~deformctl.grip.laws.law_groups`); a NaN or non-positive parameter is
+    refused (InputDataError)."""
     W, D, lam, mu = (
         frame[c].to_numpy(dtype=np.float64)
         for c in ("weight_n", "deformability_n_per_cm", "damping_ns_per_cm", "friction_mu")
@@ -105,7 +114,8 @@ def _inputs(law: str, frame: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, dict
             bad = frame["object_id"].astype(str)[~(np.isfinite(v) & (v > 0))].tolist()
             raise InputDataError(f"{law} parameter {k} is missing or <= 0 for {', '.join(bad[:5])}")
     lam0 = np.maximum(np.where(np.isfinite(lam), lam, 0.0), 0.0)
-    return law_groups(law, W, D, lam0, mu, params, ZETA_SHIFT), rigid_grip_force_n(W, mu), params
+    Z = law_groups(law, W, D, lam0, mu, params, ZETA_SHIFT, features)
+    return Z, rigid_grip_force_n(W, mu), params
 
 
 def _ranges(law: str, frame: pd.DataFrame, params: dict[str, np.ndarray]) -> dict[str, list[float]]:
@@ -129,7 +139,12 @@ def _ranges(law: str, frame: pd.DataFrame, params: dict[str, np.ndarray]) -> dic
 
 def fit_law(law: str, rows: pd.DataFrame, options: TrainOptions) -> dict[str, Any]:
     """One law's network, trained and calibrated on that law's rows (module doc) under
-    ``options`` (its hidden layers default to the grip model's): its ``laws.models`` entry."""
+    ``options`` (its hidden layers default to the grip model's; at most ``law_train_size``
+    training rows when given): its ``laws.models`` entry.
+
+    A row whose law parameters are not all known (NaN: damping not identifiable, or no object
+    size for ``hc``) is left out and named under ``dropped_unidentified``.
+    """
     from sklearn.exceptions import ConvergenceWarning
     from threadpoolctl import threadpool_limits
 
@@ -138,16 +153,22 @@ def fit_law(law: str, rows: pd.DataFrame, options: TrainOptions) -> dict[str, An
     from deformctl.model import scaled_mlp
 
     o = options
-    train_size, calibration_size = o.train_size, o.calibration_size
+    calibration_size = o.calibration_size
 
     table = rows.sort_values("object_id").reset_index(drop=True)
     usable = np.all([np.isfinite(v) & (v > 0) for v in _params(law, table).values()], axis=0)
     dropped = table["object_id"].astype(str)[~usable].tolist()  # a parameter not identified
     table = table[usable].reset_index(drop=True)
-    if len(table) < train_size + calibration_size:
+    if o.law_train_size is None:
+        train_size, flag = o.train_size, "--train-size"
+    else:  # at most law_train_size: a smaller law trains on every row not calibrating
+        train_size = min(o.law_train_size, len(table) - calibration_size)
+        flag = "--law-train-size"
+    known = f" ({len(dropped)} more with a parameter unknown)" if dropped else ""
+    if train_size < 2 or len(table) < train_size + calibration_size:
         raise InputDataError(
-            f"{len(table)} {law} rows: fewer than --train-size {train_size} + "
-            f"--calibration-size {calibration_size}"
+            f"{len(table)} {law} rows with every parameter known{known}: fewer than {flag} "
+            f"{max(train_size, 2)} + --calibration-size {calibration_size}"
         )
     rng = np.random.default_rng(o.seed)
     order = rng.permutation(len(table))
@@ -157,7 +178,7 @@ def fit_law(law: str, rows: pd.DataFrame, options: TrainOptions) -> dict[str, An
         "calibration": table.iloc[order[train_size : train_size + calibration_size]],
         "test": table.iloc[order[train_size + calibration_size :]],
     }
-    Z, f_w, params = _inputs(law, parts["train"])
+    Z, f_w, params = law_inputs(law, parts["train"])
     y = parts["train"][_TARGET].to_numpy(dtype=np.float64)
     target = np.log(y / f_w)
     best, best_loss = None, math.inf
@@ -175,7 +196,7 @@ def fit_law(law: str, rows: pd.DataFrame, options: TrainOptions) -> dict[str, An
     def predict(frame: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
         if not len(frame):
             return np.empty(0), np.empty(0)
-        z, fw, _ = _inputs(law, frame)
+        z, fw, _ = law_inputs(law, frame)
         with threadpool_limits(limits=1):
             return np.exp(best.predict(z)) * fw, frame[_TARGET].to_numpy(dtype=np.float64)
 

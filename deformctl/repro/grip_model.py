@@ -356,9 +356,10 @@ def _law_section(out: _Lines, predictor: Predictor, run: Path) -> None:
     out.add("")
     out.add("## Per material law (the row's law as characterize states it)")
     out.add("")
-    keep = ["model", "hc_exponent", "sls_stiffness_n_per_cm", "sls_arm_stiffness_n_per_cm",
-            "sls_relaxation_time_s", "weight_n", "deformability_n_per_cm", "damping_ns_per_cm",
-            "friction_mu"]  # fmt: skip
+    from deformctl.grip.laws import LAW_COLUMN, LAW_PARAMETER_COLUMNS
+
+    keep = [LAW_COLUMN, *dict.fromkeys(c for cs in LAW_PARAMETER_COLUMNS.values() for c in cs)]
+    keep += ["weight_n", "deformability_n_per_cm", "damping_ns_per_cm", "friction_mu"]
     inputs = {
         c: joined[c].to_numpy(dtype=object if c == "model" else float)
         for c in keep

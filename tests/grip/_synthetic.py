@@ -49,11 +49,14 @@ def grip_index(n: int, seed: int, noise: float = 0.0, prefix: str = "P") -> pd.D
 
 
 def law_ratio(law: np.ndarray, omega: np.ndarray, zeta: np.ndarray, n_exp: np.ndarray,
-              k2_over_d: np.ndarray, tau_omega: np.ndarray) -> np.ndarray:  # fmt: skip
+              k2_over_d: np.ndarray, tau_omega: np.ndarray,
+              height_ratio: np.ndarray) -> np.ndarray:  # fmt: skip
     """The known law of :func:`law_index`: KV's ratio; HC's grows with n (+15 % per unit of
-    n - 1, the study's 3-17 %); SLS's with k2/D (+6 % per decade) and τ ω_n (+2 % per decade)."""
+    n - 1, the study's 3-17 %) and with the height over the squeezed length L_z / L_x (+10 %
+    per decade);
+    SLS's with k2/D (+6 % per decade) and τ ω_n (+2 % per decade)."""
     r = ratio(omega, zeta)
-    hc = r * (1.0 + 0.15 * (n_exp - 1.0))
+    hc = r * (1.0 + 0.15 * (n_exp - 1.0)) * (1.0 + 0.1 * np.log10(height_ratio))
     sls = r * (1.0 + 0.06 * np.log10(np.maximum(k2_over_d, 1e-9)) + 0.02 * np.log10(
         np.maximum(tau_omega, 1e-9)))  # fmt: skip
     return np.where(law == "hc", hc, np.where(law == "sls", sls, r))
@@ -83,7 +86,9 @@ def law_index(
     omega, zeta = group_values(w, d, lam)
     f_w = w / (2 * mu)
     eps = np.random.default_rng(seed + 7919).normal(0.0, noise, n) if noise else np.zeros(n)
-    r = law_ratio(law, omega, zeta, n_exp, k2 / d, np.nan_to_num(tau) * omega)
+    size = {a: cat[f"size_{a}_cm"].to_numpy() for a in "xyz"}
+    height = size["z"] / size["x"]
+    r = law_ratio(law, omega, zeta, n_exp, k2 / d, np.nan_to_num(tau) * omega, height)
     nan = np.full(n, np.nan)
     return pd.DataFrame(
         {
@@ -100,12 +105,13 @@ def law_index(
             "sls_stiffness_n_per_cm": np.where(law == "sls", d, nan),
             "sls_arm_stiffness_n_per_cm": np.where(law == "sls", k2, nan),
             "sls_relaxation_time_s": np.where(law == "sls", tau, nan),
+            **{f"size_{a}_cm": v for a, v in size.items()},
         }
     )
 
 
 LAW_COLS = ["model", "hc_exponent", "sls_stiffness_n_per_cm", "sls_arm_stiffness_n_per_cm",
-            "sls_relaxation_time_s"]  # fmt: skip
+            "sls_relaxation_time_s", "size_x_cm", "size_y_cm", "size_z_cm"]  # fmt: skip
 
 
 def train_cli(d: Path, index: pd.DataFrame, name: str, laws: bool = True) -> Path:

@@ -203,3 +203,76 @@ def test_the_recognised_laws_are_every_law_characterize_fits() -> None:
     from deformctl.grip.laws import recognised_laws
 
     assert sorted(recognised_laws()) == sorted(PARAMETERS)
+
+
+def test_an_hc_row_without_its_size_is_predicted_at_the_most_cautious_shape(
+    setup: dict[str, Path],
+) -> None:
+    fresh = read_table(setup["fresh"])
+    rows = fresh[fresh["model"] == "hc"].head(3)
+    known = _predict(setup["mixed"], rows)
+    assert known.estimates.bound_guaranteed.all()
+    assert not known.shape_assumed.any()
+    blind = _predict(setup["mixed"], rows.drop(columns=["size_x_cm", "size_y_cm", "size_z_cm"]))
+    assert blind.shape_assumed.all()
+    assert not blind.parameters_assumed.any()
+    assert not blind.estimates.bound_guaranteed.any()
+    # the largest L_f over the training shapes (a grid): not below the row's own shape's
+    assert np.all(blind.estimates.lift_force_n >= 0.99 * known.estimates.lift_force_n)
+    lines = [w for w in blind.estimates.warnings if "shape_assumed = true" in w]
+    assert len(lines) == 3
+    assert all("size_x_cm" in w for w in lines)
+    # the CLI states the flag as a column
+    path = setup["dir"] / "no-size.parquet"
+    write_table(rows.drop(columns=["size_x_cm", "size_y_cm", "size_z_cm"]), path, "index_table",
+                provenance=None)  # fmt: skip
+    result = runner.invoke(app, ["predict", str(setup["mixed"]), str(path), "--coverage", "0.9"])
+    assert result.exit_code == 0, result.stderr
+    header = result.stdout.splitlines()[0].split(",")
+    assert "shape_assumed" in header
+    col = header.index("shape_assumed")
+    assert [r.split(",")[col] for r in result.stdout.splitlines()[1:4]] == ["True"] * 3
+
+
+def test_an_hc_network_from_before_the_shape_inputs_is_still_read(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from deformctl.grip import laws
+
+    four = laws.LAW_FEATURES["hc"][:4]
+    assert four in laws.EARLIER_LAW_FEATURES["hc"]
+    with monkeypatch.context() as m:
+        m.setitem(laws.LAW_FEATURES, "hc", four)
+        old = _train(tmp_path, law_index(330, seed=6, noise=0.01), "fourinputs")
+    entry = Predictor.load(old).metadata["laws"]["models"]["hc"]
+    assert tuple(entry["features"]) == four
+    fresh = law_index(60, seed=12, noise=0.0, prefix="T")
+    hc = fresh[fresh["model"] == "hc"].drop(columns=["size_x_cm", "size_y_cm", "size_z_cm"])
+    out = _predict(old, hc)
+    assert not out.shape_assumed.any()  # the old network needs no size
+    assert np.all(np.isfinite(out.estimates.lift_force_n))
+    rel = np.abs(out.estimates.lift_force_n / hc["lift_force_n"].to_numpy() - 1)
+    assert np.median(rel) < 0.05
+
+
+def test_law_train_size_caps_each_law_and_leaves_kelvin_voigt_alone() -> None:
+    from deformctl.errors import InputDataError, UsageError
+    from deformctl.model import TrainOptions
+    from deformctl.train import train_with_laws
+
+    index = law_index(240, seed=5, noise=0.01)
+    counts = index["model"].value_counts()
+    base = TrainOptions(train_size=30, calibration_size=20, seed=0)
+    capped = TrainOptions(train_size=30, calibration_size=20, seed=0, law_train_size=1000)
+    kv_a, plain, _ = train_with_laws(index.drop(columns=LAW_COLS), index, base)
+    kv_b, section, _ = train_with_laws(index.drop(columns=LAW_COLS), index, capped)
+    for law in ("hc", "sls"):
+        assert plain["models"][law]["n_train"] == 30
+        assert section["models"][law]["n_train"] == counts[law] - 20
+        assert section["models"][law]["n_test"] == 0
+    assert kv_a.training_range == kv_b.training_range
+    with pytest.raises(UsageError, match="--law-train-size must be an integer >= 2, got 1"):
+        TrainOptions(law_train_size=1)
+    no_size = index.drop(columns=["size_x_cm"])
+    with pytest.raises(InputDataError, match="hc rows with every parameter known"):
+        train_with_laws(index.drop(columns=LAW_COLS), no_size, base)
