@@ -21,15 +21,29 @@ from deformctl.artifacts import write_lift_log, write_squeeze_log
 from deformctl.artifacts.mcap import load_mcap, read_lift_log, read_squeeze_log
 from deformctl.artifacts.mcap.bulk import _bulk_squeeze_log
 from deformctl.artifacts.mcap.scene import (
+    GREY,
+    PALM,
     SCENE_DECIMALS,
+    SLIPPING,
+    STUCK,
+    TABLE,
+    TABLE_THICKNESS_M,
+    _box,
+    _color,
+    _entity,
+    _pose,
+    _vector,
     check_scene_update,
     foxglove_schema_bytes,
     scene_frames_of,
+    scene_messages,
 )
 from deformctl.artifacts.schema import load_json_schema
 from deformctl.errors import SchemaError
+from deformctl.scene import SceneFrames
 from deformctl.series import LiftAttempt
 from deformctl.sim import ObjectSpec, SimSettings, lift_attempt, squeeze
+from deformctl.units import NS_PER_S
 
 REPO = Path(__file__).resolve().parents[2]
 SPEC = ObjectSpec("cube", (4.0, 4.0, 4.0), 1.0, 0.5, 10.0, 0.5)
@@ -229,3 +243,113 @@ def test_the_compiled_spheres_are_pythons_percent_text() -> None:
     colour = np.zeros(2, np.int64)
     assert writer.frame(odd, colour).decode() == _python_spheres(odd, colour, colours)
     assert writer.frame(np.zeros((0, 3)), np.zeros(0, np.int64)) == b""
+
+
+def test_all_frames_at_once_are_each_frames_python_text() -> None:
+    """One compiled pass over a run's frames gives, per frame, its head, ``%.7f``'s spheres and
+    its tail; a frame the loop cannot vouch for (a value a hair from a rounding tie, a NaN) is
+    Python's text, the frames around it the loop's."""
+    from deformctl.artifacts.mcap._scene_text import SpheresWriter
+
+    colours = ['{"r":0.1}', '{"r":0.25,"g":1.0}']
+    writer = SpheresWriter('{"w":1.0}', '{"x":0.01}', colours)
+    rng = np.random.default_rng(11)
+    xyz = rng.normal(0.0, 0.05, (6, 40, 3))
+    xyz[2, 5, 1] = 0.12345675  # within the tie window once scaled
+    xyz[4, 0, 0] = np.nan
+    colour = rng.integers(0, len(colours), (6, 40))
+    heads = [f'{{"frame":{f},"spheres":['.encode() for f in range(6)]
+    tails = [b"]}"] * 6
+    got = writer.messages(xyz, colour, heads, tails)
+    for f in range(6):
+        want = heads[f] + _python_spheres(xyz[f], colour[f], colours).encode() + tails[f]
+        assert got[f] == want
+    assert writer.messages(
+        np.zeros((2, 0, 3)), np.zeros((2, 0), np.int64), heads[:2], tails[:2]
+    ) == [h + t for h, t in zip(heads[:2], tails[:2], strict=True)]
+
+
+def _frame_by_frame(scene: SceneFrames, object_id: str, index: int, start_ns: int) -> list[bytes]:
+    """A run's ``/scene`` and ``/palms`` messages built one frame at a time in Python, with
+    ``json.dumps`` and ``%``-formatting: what the log carries."""
+    meta_head = json.dumps(
+        [
+            {"key": "object_id", "value": object_id},
+            {"key": "run", "value": "lift"},
+            {"key": "index", "value": str(index)},
+        ],
+        separators=(",", ":"),
+    )[:-1]
+    d = scene.particle_diameter_m
+    table = ""
+    if scene.table:
+        first = scene.positions_m[0]
+        centre = np.array([first[:, 0].mean(), first[:, 1].mean(), -0.5 * TABLE_THICKNESS_M])
+        size = (3.0 * float(np.ptp(first[:, 0])), 2.0 * float(np.ptp(first[:, 1])), 0.004)
+        table = _box(centre, size, _color(TABLE))
+    sphere = '{"pose":%s,"size":%s,"color":%s}'
+    colours = [_color(GREY), _color(STUCK), _color(SLIPPING)]
+    out = []
+    t0 = scene.time_s[0]
+    for k in range(len(scene)):
+        log_ns = start_ns + int(np.rint((scene.time_s[k] - t0) * NS_PER_S))
+        sec, nsec = divmod(log_ns, NS_PER_S)
+        stamp = f'{{"sec":{sec},"nsec":{nsec}}}'
+        meta = f'{meta_head},{{"key":"time_s","value":"{float(scene.time_s[k])!r}"}}]'
+
+        centres = scene.palm_centres_m(k)
+        cubes = ",".join(_box(c, scene.palm_size_m, _color(PALM)) for c in centres)
+        spheres = []
+        for p, side in zip(scene.positions_m[k], scene.contact_side, strict=True):
+            c = colours[0] if side < 0 else colours[1 + int(scene.slipping[k, side])]
+            spheres.append(sphere % (_pose(*p.tolist()), _vector(d, d, d), c))
+        entities = [
+            _entity(stamp, "palms", meta, cubes=cubes),
+            _entity(stamp, "object", meta, spheres=",".join(spheres)),
+        ]
+        if table:
+            entities.append(_entity(stamp, "table", meta, cubes=table))
+        out.append(f'{{"deletions":[],"entities":[{",".join(entities)}]}}'.encode())
+        palms = {"object_id": object_id, "run": "lift", "index": index}
+        palms["time_s"] = float(scene.time_s[k])
+        for side, name in enumerate(("left", "right")):
+            palms[f"palm_{name}_x_m"] = float(scene.palm_x_m[k, side])
+        palms["palm_z_m"] = float(scene.palm_z_m[k])
+        for key, values in (
+            ("normal", scene.normal_force_n),
+            ("tangential", scene.tangential_force_n),
+        ):
+            for side, name in enumerate(("left", "right")):
+                palms[f"{key}_{name}_n"] = float(values[k, side])
+        for side, name in enumerate(("left", "right")):
+            palms[f"slip_{name}_m"] = float(scene.slip_m[k, side])
+        for side, name in enumerate(("left", "right")):
+            palms[f"slipping_{name}"] = int(scene.slipping[k, side])
+        out.append(json.dumps(palms, separators=(",", ":")).encode())
+    return out
+
+
+def test_a_runs_messages_are_the_frame_by_frame_text(
+    lift_log: tuple[Path, list[LiftAttempt]],
+) -> None:
+    """The messages made for a whole run at once are, byte for byte, the ones made frame by
+    frame (both attempts: one slips, one holds; the object on the table)."""
+    _, attempts = lift_log
+    for attempt in attempts:
+        scene = attempt.outcome.scene
+        assert scene is not None
+        assert scene.table
+        start = 1_700_000_000_123_456_789
+        got = scene_messages(
+            scene,
+            object_id="cube",
+            run="lift",
+            index=attempt.attempt_index,
+            start_ns=start,
+            t0_s=float(scene.time_s[0]),
+        )
+        assert [t for t, _, _ in got[::2]] == [t for t, _, _ in got[1::2]]
+        assert [topic for _, topic, _ in got] == ["/scene", "/palms"] * len(scene)
+        assert [data for _, _, data in got] == _frame_by_frame(
+            scene, "cube", attempt.attempt_index, start
+        )

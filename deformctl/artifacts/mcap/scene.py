@@ -114,6 +114,69 @@ def _spheres_writer(diameter_m: float) -> Any:
     return SpheresWriter(_IDENTITY, _vector(d, d, d), colours)
 
 
+#: Where a frame's own values go in the per-run template of its ``/scene`` message.
+_STAMP, _META, _CUBES, _SPHERES = "\x00", "\x01", "\x02", "\x03"
+#: The ``/palms`` fields after the run's head, in order (the last two integers).
+_PALM_FIELDS = (
+    "time_s",
+    "palm_left_x_m",
+    "palm_right_x_m",
+    "palm_z_m",
+    "normal_left_n",
+    "normal_right_n",
+    "tangential_left_n",
+    "tangential_right_n",
+    "slip_left_m",
+    "slip_right_m",
+)
+
+
+def _template(text: str) -> str:
+    """``text`` as a ``%`` template: its markers ``%s`` (stamp, meta, cubes, in that order)."""
+    text = text.replace("%", "%%")
+    for marker in (_STAMP, _META, _CUBES):
+        text = text.replace(marker, "%s")
+    return text
+
+
+def _scene_templates(table: str) -> tuple[str, str]:
+    """The templates of a frame's ``/scene`` message before and after its spheres: filled with
+    (stamp, meta, cubes, stamp, meta) and (stamp, meta) or ().  Control characters never occur
+    in JSON text, so they mark the frame's values."""
+    text = '{"deletions":[],"entities":[%s,%s' % (  # noqa: UP031
+        _entity(_STAMP, "palms", _META, cubes=_CUBES),
+        _entity(_STAMP, "object", _META, spheres=_SPHERES),
+    )
+    if table:
+        text += "," + _entity(_STAMP, "table", _META, cubes=table)
+    before, after = text.split(_SPHERES)
+    return _template(before), _template(after + "]}")
+
+
+def _palm_texts(scene: SceneFrames, palm_head: str) -> list[bytes]:
+    """Each frame's ``/palms`` message: ``palm_head`` and the frame's contact state, the same
+    text as ``json.dumps`` (a finite float's ``repr`` is its JSON form)."""
+    columns = np.column_stack(
+        [
+            scene.time_s,
+            scene.palm_x_m,
+            scene.palm_z_m,
+            scene.normal_force_n,
+            scene.tangential_force_n,
+            scene.slip_m,
+        ]
+    )
+    if not np.isfinite(columns).all():  # json.dumps's refusal, as before
+        json.dumps(float(columns[~np.isfinite(columns)][0]), allow_nan=False)
+    fields = ",".join(f'"{key}":%r' for key in _PALM_FIELDS)
+    template = f'{palm_head},{fields},"slipping_left":%d,"slipping_right":%d}}'
+    flags = scene.slipping.astype(np.int64).tolist()
+    return [
+        (template % (*row, *flag)).encode()
+        for row, flag in zip(columns.tolist(), flags, strict=True)
+    ]
+
+
 def scene_messages(
     scene: SceneFrames,
     *,
@@ -124,6 +187,10 @@ def scene_messages(
     t0_s: float,
 ) -> list[tuple[int, str, bytes]]:
     """Every ``/scene`` and ``/palms`` message of one run, in log-time order.
+
+    The run's fixed text (the entities' layout, the metadata's head, the table, the spheres'
+    orientation, size and colours) is made once; each frame fills in its time stamp, palm
+    positions and particles, the particles of all frames in one compiled pass.
 
     Args:
         scene: the run's frames.
@@ -146,7 +213,6 @@ def scene_messages(
     spheres = _spheres_writer(scene.particle_diameter_m)
     side = scene.contact_side.astype(np.int64)
     on_palm = side != NO_PALM
-    palm_colour = _color(PALM)
     table = ""
     if scene.table:
         first = scene.positions_m[0]
@@ -157,47 +223,36 @@ def scene_messages(
             TABLE_THICKNESS_M,
         )
         table = _box(centre, size, _color(TABLE))
+    before, after = _scene_templates(table)
     head = {"object_id": object_id, "run": run, "index": int(index)}
     palm_head = json.dumps(head, separators=(",", ":"))[:-1]
     times = start_ns + np.rint((scene.time_s - t0_s) * NS_PER_S).astype(np.int64)
     palm_of = np.maximum(side, 0)
     colour = np.where(on_palm, 1 + 2 * palm_of + scene.slipping[:, palm_of].astype(np.int64), 0)
-    sphere_text = [spheres.frame(scene.positions_m[k], colour[k]) for k in range(len(times))]
+    # the drawn palms (SceneFrames.palm_centres_m of every frame): outside the object, each inner
+    # face on its contact face, at the palms' height
+    half = 0.5 * scene.palm_size_m[0]
+    y, z0 = scene.palm_centre_m
+    left = (scene.palm_x_m[:, 0] - half).tolist()
+    right = (scene.palm_x_m[:, 1] + half).tolist()
+    heights = (z0 + scene.palm_z_m).tolist()
+    palm_size = _vector(*scene.palm_size_m)
+    cube = '{"pose":{"position":{"x":%.7f,"y":%.7f,"z":%.7f},"orientation":' + _IDENTITY
+    cube += '},"size":' + palm_size + ',"color":' + _color(PALM) + "}"
+    heads, tails = [], []
+    log_ns = times.tolist()
+    for k, t_s in enumerate(scene.time_s.tolist()):
+        stamp = '{"sec":%d,"nsec":%d}' % divmod(log_ns[k], NS_PER_S)  # noqa: UP031
+        meta = '%s,{"key":"time_s","value":"%r"}]' % (meta_head, t_s)  # noqa: UP031
+        cubes = f"{cube % (left[k], y, heights[k])},{cube % (right[k], y, heights[k])}"
+        heads.append((before % (stamp, meta, cubes, stamp, meta)).encode())
+        tails.append((after % ((stamp, meta) if table else ())).encode())
+    updates = spheres.messages(scene.positions_m, colour, heads, tails)
+    palms = _palm_texts(scene, palm_head)
     out: list[tuple[int, str, bytes]] = []
-    for k, log_ns in enumerate(times.tolist()):
-        stamp = '{"sec":%d,"nsec":%d}' % divmod(log_ns, NS_PER_S)  # noqa: UP031
-        meta = '%s,{"key":"time_s","value":"%r"}]' % (meta_head, float(scene.time_s[k]))  # noqa: UP031
-        centres = scene.palm_centres_m(k)
-        cubes = ",".join(_box(centres[s], scene.palm_size_m, palm_colour) for s in (0, 1))
-        before, after = _entity(stamp, "object", meta, spheres="\0").split("\0")
-        entities = [_entity(stamp, "palms", meta, cubes=cubes), before]
-        tail = after
-        if table:
-            tail += "," + _entity(stamp, "table", meta, cubes=table)
-        update = b"".join(
-            (
-                ('{"deletions":[],"entities":[%s' % ",".join(entities)).encode(),  # noqa: UP031
-                sphere_text[k],
-                (tail + "]}").encode(),
-            )
-        )
-        out.append((log_ns, SCENE_TOPIC, update))
-        palms = {
-            "time_s": float(scene.time_s[k]),
-            "palm_left_x_m": float(scene.palm_x_m[k, 0]),
-            "palm_right_x_m": float(scene.palm_x_m[k, 1]),
-            "palm_z_m": float(scene.palm_z_m[k]),
-            "normal_left_n": float(scene.normal_force_n[k, 0]),
-            "normal_right_n": float(scene.normal_force_n[k, 1]),
-            "tangential_left_n": float(scene.tangential_force_n[k, 0]),
-            "tangential_right_n": float(scene.tangential_force_n[k, 1]),
-            "slip_left_m": float(scene.slip_m[k, 0]),
-            "slip_right_m": float(scene.slip_m[k, 1]),
-            "slipping_left": int(scene.slipping[k, 0]),
-            "slipping_right": int(scene.slipping[k, 1]),
-        }
-        body = json.dumps(palms, separators=(",", ":"), allow_nan=False)
-        out.append((log_ns, PALMS_TOPIC, f"{palm_head},{body[1:]}".encode()))
+    for k, t in enumerate(log_ns):
+        out.append((t, SCENE_TOPIC, updates[k]))
+        out.append((t, PALMS_TOPIC, palms[k]))
     return out
 
 
