@@ -293,3 +293,25 @@ def test_sample_messages_are_exactly_json_dumps_bytes(tmp_path: Path) -> None:
     for data in datas:
         assert data == json.dumps(json.loads(data), separators=(",", ":")).encode()
     assert json.loads(datas[1])["force_n"] == 1 / 3
+
+
+def test_samples_and_scene_messages_merge_in_log_time_order_samples_first_at_ties() -> None:
+    """add_samples' merge: scene messages before the first sample of a later time, a sample
+    before a scene message of the same time, each topic numbered 0, 1, 2, ... in order."""
+    from deformctl.artifacts.mcap.contents import LIFT_SAMPLE, PALMS_TOPIC, lift_topic
+    from deformctl.artifacts.mcap.write import KIND_LIFT, _LogWriter
+
+    buf = io.BytesIO()
+    log = _LogWriter(buf, KIND_LIFT, None, 0)  # type: ignore[arg-type]
+    topic = lift_topic("A", LIFT_SAMPLE)
+    scene = [(t, PALMS_TOPIC, b"{}") for t in (5, 10, 25, 99)]
+    log.add_samples(topic, [10, 20, 30], {"object_id": "A"}, {"x": [1.0, 2.5, 3.0]}, scene)
+    log.add_samples(topic, [40], {"object_id": "A"}, {"x": [4.0]}, [(40, PALMS_TOPIC, b"{}")])
+    log.finish()
+    buf.seek(0)
+    messages = make_reader(buf).iter_messages(log_time_order=False)
+    got = [(c.topic == topic, m.log_time, m.sequence, m.data) for _, c, m in messages]
+    order = ["S5/0", "A10/0", "S10/1", "A20/1", "S25/2", "A30/2", "S99/3", "A40/3", "S40/4"]
+    assert [f"{'A' if a else 'S'}{t}/{q}" for a, t, q, _ in got] == order
+    assert got[1][3] == b'{"object_id":"A","x":1.0}'
+    assert got[3][3] == b'{"object_id":"A","x":2.5}'

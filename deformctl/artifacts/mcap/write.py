@@ -6,7 +6,6 @@ See :mod:`deformctl.artifacts.mcap` for the layout and the time line (:data:`LOG
 
 from __future__ import annotations
 
-import heapq
 import io
 import json
 import math
@@ -136,9 +135,26 @@ class _LogWriter:
         fields = ",".join(f"{json.dumps(k)}:%r" for k in columns)
         template = f"{head},{fields}}}" if base else f"{{{fields}}}"
         rows = zip(times_ns, zip(*columns.values(), strict=True), strict=True)
-        samples = ((t, topic, (template % row).encode()) for t, row in rows)
-        for log_time, where, data in heapq.merge(samples, scene, key=lambda m: m[0]):
-            self.add_encoded(where, log_time, data)
+        # the merge by hand, one bound call per sample: a scene message goes before the first
+        # sample of a later time (at equal times the sample first)
+        add, cid = self._w.add_message, self.channel(topic)
+        seq = self._sequence[topic]
+        pending = iter(scene)
+        nxt = next(pending, None)
+        for t, row in rows:
+            if nxt is not None and nxt[0] < t:
+                self._sequence[topic] = seq
+                while nxt is not None and nxt[0] < t:
+                    self.add_encoded(nxt[1], nxt[0], nxt[2])
+                    nxt = next(pending, None)
+                seq = self._sequence[topic]
+            data = (template % row).encode()
+            add(channel_id=cid, log_time=t, data=data, publish_time=t, sequence=seq)
+            seq += 1
+        self._sequence[topic] = seq
+        while nxt is not None:
+            self.add_encoded(nxt[1], nxt[0], nxt[2])
+            nxt = next(pending, None)
 
     def add_encoded(self, topic: str, log_time_ns: int, data: bytes) -> None:
         cid = self.channel(topic)
