@@ -282,15 +282,24 @@ def _summary_lines(summary: Mapping[str, Any]) -> list[str]:
         lines += [f"    {k:<26} {v[0]:.6g} .. {v[1]:.6g}" for k, v in ranges.items()]
         m = models.get(law)
         if m:
-            conf = (m.get("conformal") or {}).get("0.9") or {}
-            lines.append(
-                f"    {law} network: {m.get('n_train')} train / {m.get('n_calibration')} "
-                f"calibration / {m.get('n_test')} test; test median rel. error "
-                f"{_pct(m.get('test_median_rel_error'))}, max {_pct(m.get('test_max_rel_error'))}"
-                f"; P = 0.9 coverage {_pct(conf.get('coverage'))}, mean margin "
-                f"{_pct(conf.get('mean_margin'))}"
-            )
+            lines.append(f"    {law} network: {network_line(m)}")
     return lines
+
+
+def network_line(m: Mapping[str, Any]) -> str:
+    """A law network's rows and test figures in one line (``inspect``, ``train --laws``); a
+    network with no test rows (every row trained or calibrated) says where its test is."""
+    rows = f"{m.get('n_train')} train / {m.get('n_calibration')} calibration / "
+    if not m.get("n_test"):
+        fresh = "python -m deformctl.repro.grip_model report"
+        return f"{rows}0 test rows (tested on fresh objects: {fresh})"
+    conf = (m.get("conformal") or {}).get("0.9") or {}
+    return (
+        f"{rows}{m.get('n_test')} test rows; test median rel. error "
+        f"{_pct(m.get('test_median_rel_error'))}, max {_pct(m.get('test_max_rel_error'))}; "
+        f"P = 0.9 coverage {_pct(conf.get('coverage'))}, mean margin "
+        f"{_pct(conf.get('mean_margin'))}"
+    )
 
 
 def _pct(value: Any) -> str:

@@ -30,6 +30,7 @@ from deformctl.grip.laws import (
     law_features,
     law_groups,
     law_parameter_values,
+    network_line,
     read_laws,
 )
 from deformctl.physics import rigid_grip_force_n
@@ -311,20 +312,7 @@ def law_report(section: dict[str, Any]) -> dict[str, Any]:
     return report
 
 
-def _percent(value: Any) -> str:
-    return "n/a" if value is None else f"{100.0 * value:.2f} %"
-
-
 def law_lines(report: dict[str, Any]) -> list[str]:
     """One line per law network of ``train --laws``: its rows and its test figures."""
-    out = []
     section = report.get("laws") or {}
-    for law, m in (section.get("models") or {}).items():
-        conf = (m.get("conformal") or {}).get("0.9") or {}
-        out.append(
-            f"{law}: {m['n_train']} train / {m['n_calibration']} calibration / {m['n_test']} "
-            f"test rows; test median rel. error {_percent(m.get('test_median_rel_error'))}, max "
-            f"{_percent(m.get('test_max_rel_error'))}; P = 0.9 coverage "
-            f"{_percent(conf.get('coverage'))}, mean margin {_percent(conf.get('mean_margin'))}"
-        )
-    return out
+    return [f"{law}: {network_line(m)}" for law, m in (section.get("models") or {}).items()]

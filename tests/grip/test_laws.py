@@ -257,6 +257,7 @@ def test_an_hc_network_from_before_the_shape_inputs_is_still_read(
 
 def test_law_train_size_caps_each_law_and_leaves_kelvin_voigt_alone() -> None:
     from deformctl.errors import InputDataError, UsageError
+    from deformctl.grip.lawtrain import law_lines
     from deformctl.model import TrainOptions
     from deformctl.train import train_with_laws
 
@@ -265,7 +266,10 @@ def test_law_train_size_caps_each_law_and_leaves_kelvin_voigt_alone() -> None:
     base = TrainOptions(train_size=30, calibration_size=20, seed=0)
     capped = TrainOptions(train_size=30, calibration_size=20, seed=0, law_train_size=1000)
     kv_a, plain, _ = train_with_laws(index.drop(columns=LAW_COLS), index, base)
-    kv_b, section, _ = train_with_laws(index.drop(columns=LAW_COLS), index, capped)
+    kv_b, section, report = train_with_laws(index.drop(columns=LAW_COLS), index, capped)
+    lines = law_lines(report)
+    assert len(lines) == 2
+    assert all("0 test rows (tested on fresh objects" in line for line in lines)
     for law in ("hc", "sls"):
         assert plain["models"][law]["n_train"] == 30
         assert section["models"][law]["n_train"] == counts[law] - 20
