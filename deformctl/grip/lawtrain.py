@@ -40,7 +40,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from deformctl.model import TrainOptions
 
-__all__ = ["fit_law", "join_laws", "law_inputs", "law_section"]
+__all__ = ["best_network", "fit_law", "join_laws", "known_rows", "law_inputs", "law_section"]
 
 _TARGET = "lift_force_n"
 _CHECK_POINTS = 5
@@ -99,6 +99,42 @@ def _params(law: str, frame: pd.DataFrame) -> dict[str, np.ndarray]:
     return law_parameter_values(law, cols, W, D)
 
 
+def known_rows(law: str, rows: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """``(rows sorted by id with every law parameter known, the ids of the others)``: a NaN or
+    non-positive parameter (damping not identifiable, or no object size for ``hc``)."""
+    table = rows.sort_values("object_id").reset_index(drop=True)
+    usable = np.all([np.isfinite(v) & (v > 0) for v in _params(law, table).values()], axis=0)
+    dropped = table["object_id"].astype(str)[~usable].tolist()
+    return table[usable].reset_index(drop=True), dropped
+
+
+def best_network(
+    options: TrainOptions, Z: np.ndarray, y: np.ndarray, f_w: np.ndarray, seeds: Sequence[int]
+) -> tuple[Any, float]:
+    """The law network (``options``' hidden layers, default the grip model's) fitted to
+    ``log(y / F_w)`` from each seed in ``seeds``, the one with the smallest RMS relative error
+    of L_f on these rows kept (one BLAS thread): ``(network, that error)``."""
+    from sklearn.exceptions import ConvergenceWarning
+    from threadpoolctl import threadpool_limits
+
+    from deformctl.grip.model import DEFAULT_GRIP_HIDDEN
+    from deformctl.model import scaled_mlp
+
+    target = np.log(y / f_w)
+    best, best_loss = None, math.inf
+    for rs in seeds:
+        net = scaled_mlp(options, options.hidden or DEFAULT_GRIP_HIDDEN, rs)
+        with warnings.catch_warnings(), threadpool_limits(limits=1):
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            net.fit(Z, target)
+            pred = np.exp(net.predict(Z)) * f_w
+        loss = float(np.sqrt(np.mean(((pred - y) / y) ** 2)))
+        if loss < best_loss:
+            best, best_loss = net, loss
+    assert best is not None
+    return best, best_loss
+
+
 def law_inputs(
     law: str, frame: pd.DataFrame, features: Sequence[str] | None = None
 ) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
@@ -146,20 +182,13 @@ def fit_law(law: str, rows: pd.DataFrame, options: TrainOptions) -> dict[str, An
     A row whose law parameters are not all known (NaN: damping not identifiable, or no object
     size for ``hc``) is left out and named under ``dropped_unidentified``.
     """
-    from sklearn.exceptions import ConvergenceWarning
     from threadpoolctl import threadpool_limits
 
     from deformctl.grip.export import _core
-    from deformctl.grip.model import DEFAULT_GRIP_HIDDEN
-    from deformctl.model import scaled_mlp
 
     o = options
     calibration_size = o.calibration_size
-
-    table = rows.sort_values("object_id").reset_index(drop=True)
-    usable = np.all([np.isfinite(v) & (v > 0) for v in _params(law, table).values()], axis=0)
-    dropped = table["object_id"].astype(str)[~usable].tolist()  # a parameter not identified
-    table = table[usable].reset_index(drop=True)
+    table, dropped = known_rows(law, rows)
     if o.law_train_size is None:
         train_size, flag = o.train_size, "--train-size"
     else:  # at most law_train_size: a smaller law trains on every row not calibrating
@@ -181,18 +210,7 @@ def fit_law(law: str, rows: pd.DataFrame, options: TrainOptions) -> dict[str, An
     }
     Z, f_w, params = law_inputs(law, parts["train"])
     y = parts["train"][_TARGET].to_numpy(dtype=np.float64)
-    target = np.log(y / f_w)
-    best, best_loss = None, math.inf
-    for rs in restart_seeds:
-        net = scaled_mlp(o, o.hidden or DEFAULT_GRIP_HIDDEN, rs)
-        with warnings.catch_warnings(), threadpool_limits(limits=1):
-            warnings.simplefilter("ignore", ConvergenceWarning)
-            net.fit(Z, target)
-            pred = np.exp(net.predict(Z)) * f_w
-        loss = float(np.sqrt(np.mean(((pred - y) / y) ** 2)))
-        if loss < best_loss:
-            best, best_loss = net, loss
-    assert best is not None
+    best, best_loss = best_network(o, Z, y, f_w, restart_seeds)
 
     def predict(frame: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
         if not len(frame):
