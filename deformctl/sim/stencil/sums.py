@@ -14,13 +14,19 @@ from numba.extending import overload
 
 from deformctl.arraytypes import FloatArray, IntArray
 
+#: index constants as unsigned integers: indices computed from them are unsigned, so the
+#: compiled sums carry no negative-index wraparound (the same values, fewer instructions)
+_U1 = np.uint64(1)
+_U2 = np.uint64(2)
+_U3 = np.uint64(3)
+
 
 @njit(cache=True, inline="always")
 def _offsets(shape: IntArray) -> IntArray:
     """:func:`direction_offsets` inside the kernels."""
     ny = shape[1]
     nz = shape[2]
-    off = np.empty(9, dtype=np.int64)
+    off = np.empty(9, dtype=np.uint64)
     off[0] = ny * nz
     off[1] = nz
     off[2] = 1
@@ -38,34 +44,35 @@ def _sum_out(
     coef: FloatArray, xg: FloatArray, pp: int, off: IntArray
 ) -> tuple[float, float, float]:
     """``sum w n n^T x_q`` over the particle's 9 outgoing elements (neighbours ``pp + off``)."""
-    s0 = coef[pp, 0] * xg[3 * (pp + off[0])]
-    s1 = coef[pp, 1] * xg[3 * (pp + off[1]) + 1]
-    s2 = coef[pp, 2] * xg[3 * (pp + off[2]) + 2]
+    u = np.uint64(pp)
+    s0 = coef[u, 0] * xg[_U3 * (u + off[0])]
+    s1 = coef[u, 1] * xg[_U3 * (u + off[1]) + _U1]
+    s2 = coef[u, 2] * xg[_U3 * (u + off[2]) + _U2]
     # xy diagonals
     for d in range(3, 5):
-        q = 3 * (pp + off[d])
+        q = _U3 * (u + off[d])
         k = 3 + 3 * (d - 3)
-        c0 = coef[pp, k]
-        c1 = coef[pp, k + 1]
-        c2 = coef[pp, k + 2]
-        s0 += c0 * xg[q] + c1 * xg[q + 1]
-        s1 += c1 * xg[q] + c2 * xg[q + 1]
+        c0 = coef[u, k]
+        c1 = coef[u, k + 1]
+        c2 = coef[u, k + 2]
+        s0 += c0 * xg[q] + c1 * xg[q + _U1]
+        s1 += c1 * xg[q] + c2 * xg[q + _U1]
     for d in range(5, 7):
-        q = 3 * (pp + off[d])
+        q = _U3 * (u + off[d])
         k = 3 + 3 * (d - 3)
-        c0 = coef[pp, k]
-        c1 = coef[pp, k + 1]
-        c2 = coef[pp, k + 2]
-        s0 += c0 * xg[q] + c1 * xg[q + 2]
-        s2 += c1 * xg[q] + c2 * xg[q + 2]
+        c0 = coef[u, k]
+        c1 = coef[u, k + 1]
+        c2 = coef[u, k + 2]
+        s0 += c0 * xg[q] + c1 * xg[q + _U2]
+        s2 += c1 * xg[q] + c2 * xg[q + _U2]
     for d in range(7, 9):
-        q = 3 * (pp + off[d])
+        q = _U3 * (u + off[d])
         k = 3 + 3 * (d - 3)
-        c0 = coef[pp, k]
-        c1 = coef[pp, k + 1]
-        c2 = coef[pp, k + 2]
-        s1 += c0 * xg[q + 1] + c1 * xg[q + 2]
-        s2 += c1 * xg[q + 1] + c2 * xg[q + 2]
+        c0 = coef[u, k]
+        c1 = coef[u, k + 1]
+        c2 = coef[u, k + 2]
+        s1 += c0 * xg[q + _U1] + c1 * xg[q + _U2]
+        s2 += c1 * xg[q + _U1] + c2 * xg[q + _U2]
     return s0, s1, s2
 
 
@@ -73,39 +80,40 @@ def _sum_out(
 def _sum_in(coef: FloatArray, xg: FloatArray, pp: int, off: IntArray) -> tuple[float, float, float]:
     """``sum w n n^T x_q`` over the particle's 9 incoming elements (neighbours ``pp - off``,
     which own them)."""
-    q0 = pp - off[0]
-    q1 = pp - off[1]
-    q2 = pp - off[2]
-    s0 = coef[q0, 0] * xg[3 * q0]
-    s1 = coef[q1, 1] * xg[3 * q1 + 1]
-    s2 = coef[q2, 2] * xg[3 * q2 + 2]
+    u = np.uint64(pp)
+    q0 = u - off[0]
+    q1 = u - off[1]
+    q2 = u - off[2]
+    s0 = coef[q0, 0] * xg[_U3 * q0]
+    s1 = coef[q1, 1] * xg[_U3 * q1 + _U1]
+    s2 = coef[q2, 2] * xg[_U3 * q2 + _U2]
     for d in range(3, 5):
-        qq = pp - off[d]
-        q = 3 * qq
+        qq = u - off[d]
+        q = _U3 * qq
         k = 3 + 3 * (d - 3)
         c0 = coef[qq, k]
         c1 = coef[qq, k + 1]
         c2 = coef[qq, k + 2]
-        s0 += c0 * xg[q] + c1 * xg[q + 1]
-        s1 += c1 * xg[q] + c2 * xg[q + 1]
+        s0 += c0 * xg[q] + c1 * xg[q + _U1]
+        s1 += c1 * xg[q] + c2 * xg[q + _U1]
     for d in range(5, 7):
-        qq = pp - off[d]
-        q = 3 * qq
+        qq = u - off[d]
+        q = _U3 * qq
         k = 3 + 3 * (d - 3)
         c0 = coef[qq, k]
         c1 = coef[qq, k + 1]
         c2 = coef[qq, k + 2]
-        s0 += c0 * xg[q] + c1 * xg[q + 2]
-        s2 += c1 * xg[q] + c2 * xg[q + 2]
+        s0 += c0 * xg[q] + c1 * xg[q + _U2]
+        s2 += c1 * xg[q] + c2 * xg[q + _U2]
     for d in range(7, 9):
-        qq = pp - off[d]
-        q = 3 * qq
+        qq = u - off[d]
+        q = _U3 * qq
         k = 3 + 3 * (d - 3)
         c0 = coef[qq, k]
         c1 = coef[qq, k + 1]
         c2 = coef[qq, k + 2]
-        s1 += c0 * xg[q + 1] + c1 * xg[q + 2]
-        s2 += c1 * xg[q + 1] + c2 * xg[q + 2]
+        s1 += c0 * xg[q + _U1] + c1 * xg[q + _U2]
+        s2 += c1 * xg[q + _U1] + c2 * xg[q + _U2]
     return s0, s1, s2
 
 
@@ -114,7 +122,7 @@ def _upper_offsets(shape: IntArray) -> IntArray:
     """Index offsets of :data:`UPPER_OFFSETS` inside the kernels."""
     ny = shape[1]
     nz = shape[2]
-    off = np.empty(13, dtype=np.int64)
+    off = np.empty(13, dtype=np.uint64)
     i = 0
     for dx in range(-1, 2):
         for dy in range(-1, 2):
@@ -130,17 +138,18 @@ def _block_sum_out(
     coef: FloatArray, xg: FloatArray, pp: int, off: IntArray
 ) -> tuple[float, float, float]:
     """``-sum A_pq x_q`` over the particle's 13 upper neighbours (blocks stored with it)."""
+    u = np.uint64(pp)
     s0 = 0.0
     s1 = 0.0
     s2 = 0.0
     for i in range(13):
-        q = 3 * (pp + off[i])
+        q = _U3 * (u + off[i])
         x0 = xg[q]
-        x1 = xg[q + 1]
-        x2 = xg[q + 2]
-        s0 -= coef[pp, i, 0] * x0 + coef[pp, i, 1] * x1 + coef[pp, i, 2] * x2
-        s1 -= coef[pp, i, 3] * x0 + coef[pp, i, 4] * x1 + coef[pp, i, 5] * x2
-        s2 -= coef[pp, i, 6] * x0 + coef[pp, i, 7] * x1 + coef[pp, i, 8] * x2
+        x1 = xg[q + _U1]
+        x2 = xg[q + _U2]
+        s0 -= coef[u, i, 0] * x0 + coef[u, i, 1] * x1 + coef[u, i, 2] * x2
+        s1 -= coef[u, i, 3] * x0 + coef[u, i, 4] * x1 + coef[u, i, 5] * x2
+        s2 -= coef[u, i, 6] * x0 + coef[u, i, 7] * x1 + coef[u, i, 8] * x2
     return s0, s1, s2
 
 
@@ -150,19 +159,20 @@ def _block_sum_in(
 ) -> tuple[float, float, float]:
     """``-sum A_pq x_q`` over the particle's 13 lower neighbours (their blocks, stored with the
     particle after the upper ones)."""
+    u = np.uint64(pp)
     s0 = 0.0
     s1 = 0.0
     s2 = 0.0
     for i in range(13):
-        qq = pp - off[i]
-        q = 3 * qq
+        qq = u - off[i]
+        q = _U3 * qq
         x0 = xg[q]
-        x1 = xg[q + 1]
-        x2 = xg[q + 2]
+        x1 = xg[q + _U1]
+        x2 = xg[q + _U2]
         j = 13 + i
-        s0 -= coef[pp, j, 0] * x0 + coef[pp, j, 1] * x1 + coef[pp, j, 2] * x2
-        s1 -= coef[pp, j, 3] * x0 + coef[pp, j, 4] * x1 + coef[pp, j, 5] * x2
-        s2 -= coef[pp, j, 6] * x0 + coef[pp, j, 7] * x1 + coef[pp, j, 8] * x2
+        s0 -= coef[u, j, 0] * x0 + coef[u, j, 1] * x1 + coef[u, j, 2] * x2
+        s1 -= coef[u, j, 3] * x0 + coef[u, j, 4] * x1 + coef[u, j, 5] * x2
+        s2 -= coef[u, j, 6] * x0 + coef[u, j, 7] * x1 + coef[u, j, 8] * x2
     return s0, s1, s2
 
 
@@ -225,11 +235,12 @@ def _block_scatter_out(
     coef: FloatArray, axg: FloatArray, pp: int, off: IntArray, d0: float, d1: float, d2: float
 ) -> None:
     """``(A x)_q += A_qp delta`` for the particle's 13 upper neighbours (``A_qp = A_pq^T``)."""
+    u = np.uint64(pp)
     for i in range(13):
-        q = 3 * (pp + off[i])
-        axg[q] += coef[pp, i, 0] * d0 + coef[pp, i, 3] * d1 + coef[pp, i, 6] * d2
-        axg[q + 1] += coef[pp, i, 1] * d0 + coef[pp, i, 4] * d1 + coef[pp, i, 7] * d2
-        axg[q + 2] += coef[pp, i, 2] * d0 + coef[pp, i, 5] * d1 + coef[pp, i, 8] * d2
+        q = _U3 * (u + off[i])
+        axg[q] += coef[u, i, 0] * d0 + coef[u, i, 3] * d1 + coef[u, i, 6] * d2
+        axg[q + _U1] += coef[u, i, 1] * d0 + coef[u, i, 4] * d1 + coef[u, i, 7] * d2
+        axg[q + _U2] += coef[u, i, 2] * d0 + coef[u, i, 5] * d1 + coef[u, i, 8] * d2
 
 
 @njit(cache=True, inline="always")
@@ -237,24 +248,25 @@ def _scatter_out(
     coef: FloatArray, axg: FloatArray, pp: int, off: IntArray, d0: float, d1: float, d2: float
 ) -> None:
     """``(A x)_q -= w n n^T delta`` for the particle's outgoing neighbours ``q = pp + off``."""
-    q = 3 * (pp + off[0])
-    axg[q] -= coef[pp, 0] * d0
-    q = 3 * (pp + off[1])
-    axg[q + 1] -= coef[pp, 1] * d1
-    q = 3 * (pp + off[2])
-    axg[q + 2] -= coef[pp, 2] * d2
+    u = np.uint64(pp)
+    q = _U3 * (u + off[0])
+    axg[q] -= coef[u, 0] * d0
+    q = _U3 * (u + off[1])
+    axg[q + _U1] -= coef[u, 1] * d1
+    q = _U3 * (u + off[2])
+    axg[q + _U2] -= coef[u, 2] * d2
     for d in range(3, 5):
-        q = 3 * (pp + off[d])
+        q = _U3 * (u + off[d])
         k = 3 + 3 * (d - 3)
-        axg[q] -= coef[pp, k] * d0 + coef[pp, k + 1] * d1
-        axg[q + 1] -= coef[pp, k + 1] * d0 + coef[pp, k + 2] * d1
+        axg[q] -= coef[u, k] * d0 + coef[u, k + 1] * d1
+        axg[q + _U1] -= coef[u, k + 1] * d0 + coef[u, k + 2] * d1
     for d in range(5, 7):
-        q = 3 * (pp + off[d])
+        q = _U3 * (u + off[d])
         k = 3 + 3 * (d - 3)
-        axg[q] -= coef[pp, k] * d0 + coef[pp, k + 1] * d2
-        axg[q + 2] -= coef[pp, k + 1] * d0 + coef[pp, k + 2] * d2
+        axg[q] -= coef[u, k] * d0 + coef[u, k + 1] * d2
+        axg[q + _U2] -= coef[u, k + 1] * d0 + coef[u, k + 2] * d2
     for d in range(7, 9):
-        q = 3 * (pp + off[d])
+        q = _U3 * (u + off[d])
         k = 3 + 3 * (d - 3)
-        axg[q + 1] -= coef[pp, k] * d1 + coef[pp, k + 1] * d2
-        axg[q + 2] -= coef[pp, k + 1] * d1 + coef[pp, k + 2] * d2
+        axg[q + _U1] -= coef[u, k] * d1 + coef[u, k + 1] * d2
+        axg[q + _U2] -= coef[u, k + 1] * d1 + coef[u, k + 2] * d2

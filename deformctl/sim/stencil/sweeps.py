@@ -11,7 +11,7 @@ from numba import njit
 
 from deformctl.arraytypes import BoolArray, FloatArray, Int32Array, IntArray
 from deformctl.sim.stencil.build import Rows, Stencil
-from deformctl.sim.stencil.sums import _kernel_offsets, _scatter, _sums_in, _sums_out
+from deformctl.sim.stencil.sums import _U1, _U2, _U3, _kernel_offsets, _scatter, _sums_in, _sums_out
 
 
 @njit(cache=True, inline="always")
@@ -19,10 +19,11 @@ def _solve_free(
     p: int, pp: int, r0: float, r1: float, r2: float, block_inv: FloatArray, xg: FloatArray
 ) -> None:
     """``x_p = block_p^-1 r`` for a particle whose three coordinates are free."""
-    base = 3 * pp
-    xg[base] = block_inv[p, 0] * r0 + block_inv[p, 1] * r1 + block_inv[p, 2] * r2
-    xg[base + 1] = block_inv[p, 3] * r0 + block_inv[p, 4] * r1 + block_inv[p, 5] * r2
-    xg[base + 2] = block_inv[p, 6] * r0 + block_inv[p, 7] * r1 + block_inv[p, 8] * r2
+    base = _U3 * np.uint64(pp)
+    u = np.uint64(p)
+    xg[base] = block_inv[u, 0] * r0 + block_inv[u, 1] * r1 + block_inv[u, 2] * r2
+    xg[base + _U1] = block_inv[u, 3] * r0 + block_inv[u, 4] * r1 + block_inv[u, 5] * r2
+    xg[base + _U2] = block_inv[u, 6] * r0 + block_inv[u, 7] * r1 + block_inv[u, 8] * r2
 
 
 @njit(cache=True)
@@ -355,13 +356,15 @@ def stencil_product(
         pp = p + halo
         s0, s1, s2 = _sums_in(coef, xg, pp, off)
         t0, t1, t2 = _sums_out(coef, xg, pp, off)
-        q = 3 * pp
+        q = _U3 * np.uint64(pp)
+        u = np.uint64(p)
+        c = _U3 * u
         x0 = xg[q]
-        x1 = xg[q + 1]
-        x2 = xg[q + 2]
-        out[dof_of[3 * p]] = block[p, 0] * x0 + block[p, 1] * x1 + block[p, 2] * x2 - s0 - t0
-        out[dof_of[3 * p + 1]] = block[p, 3] * x0 + block[p, 4] * x1 + block[p, 5] * x2 - s1 - t1
-        out[dof_of[3 * p + 2]] = block[p, 6] * x0 + block[p, 7] * x1 + block[p, 8] * x2 - s2 - t2
+        x1 = xg[q + _U1]
+        x2 = xg[q + _U2]
+        out[dof_of[c]] = block[u, 0] * x0 + block[u, 1] * x1 + block[u, 2] * x2 - s0 - t0
+        out[dof_of[c + _U1]] = block[u, 3] * x0 + block[u, 4] * x1 + block[u, 5] * x2 - s1 - t1
+        out[dof_of[c + _U2]] = block[u, 6] * x0 + block[u, 7] * x1 + block[u, 8] * x2 - s2 - t2
     for k in range(palm.shape[0]):
         g = palm[k]
         acc = 0.0
