@@ -143,9 +143,9 @@ def forward_sweep_from_zero(
     for p in range(n):
         pp = p + halo
         on_face = gripped and (p < face or p >= n - face)
-        g0 = dof_of[3 * p]
-        g1 = dof_of[3 * p + 1]
-        g2 = dof_of[3 * p + 2]
+        g0 = np.uint64(dof_of[3 * p])
+        g1 = np.uint64(dof_of[3 * p + 1])
+        g2 = np.uint64(dof_of[3 * p + 2])
         f0 = (not on_face) and not fixed[g0]
         f1 = not fixed[g1]
         f2 = (not on_face) and not fixed[g2]
@@ -198,9 +198,9 @@ def residual_after_forward(
                 work[3 * p + 2] = 0.0
     for p in range(n):
         t0, t1, t2 = _sums_out(coef, work, p + halo, off)
-        g0 = dof_of[3 * p]
-        g1 = dof_of[3 * p + 1]
-        g2 = dof_of[3 * p + 2]
+        g0 = np.uint64(dof_of[3 * p])
+        g1 = np.uint64(dof_of[3 * p + 1])
+        g2 = np.uint64(dof_of[3 * p + 2])
         out[g0] = 0.0 if fixed[g0] else t0
         out[g1] = 0.0 if fixed[g1] else t1
         out[g2] = 0.0 if fixed[g2] else t2
@@ -244,19 +244,19 @@ def backward_sweep(
     off = _kernel_offsets(coef, shape)
     for p in range(n - 1, -1, -1):
         pp = p + halo
-        base = 3 * pp
+        base = _U3 * np.uint64(pp)
         on_face = gripped and (p < face or p >= n - face)
-        g0 = dof_of[3 * p]
-        g1 = dof_of[3 * p + 1]
-        g2 = dof_of[3 * p + 2]
+        g0 = np.uint64(dof_of[3 * p])
+        g1 = np.uint64(dof_of[3 * p + 1])
+        g2 = np.uint64(dof_of[3 * p + 2])
         f0 = (not on_face) and not fixed[g0]
         f1 = not fixed[g1]
         f2 = (not on_face) and not fixed[g2]
         if not (f0 or f1 or f2):
             continue
         old0 = xg[base]
-        old1 = xg[base + 1]
-        old2 = xg[base + 2]
+        old1 = xg[base + _U1]
+        old2 = xg[base + _U2]
         s0, s1, s2 = _sums_in(coef, xg, pp, off)
         t0, t1, t2 = _sums_out(coef, xg, pp, off)
         if f0 and f1 and f2:
@@ -268,11 +268,11 @@ def backward_sweep(
             )  # fmt: skip
         if with_product:
             axg[base] = b[g0] if f0 else 0.0
-            axg[base + 1] = b[g1] if f1 else 0.0
-            axg[base + 2] = b[g2] if f2 else 0.0
+            axg[base + _U1] = b[g1] if f1 else 0.0
+            axg[base + _U2] = b[g2] if f2 else 0.0
             d0 = xg[base] - old0
-            d1 = xg[base + 1] - old1
-            d2 = xg[base + 2] - old2
+            d1 = xg[base + _U1] - old1
+            d2 = xg[base + _U2] - old2
             _scatter(coef, axg, pp, off, d0, d1, d2)
     np_ = palm.shape[0]
     axp = np.zeros(4)
