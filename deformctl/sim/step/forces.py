@@ -240,7 +240,7 @@ def _step_impulse(
         xs, vs, out = runs.xs, runs.vs, runs.out
         for p in range(n):
             for a in range(3):
-                d = dof_of[3 * p + a]
+                d = np.uint64(dof_of[3 * p + a])  # unsigned: no wraparound in the gathers
                 xv = base_x[p, a] + q[d]
                 x[p, a] = xv
                 xs[a, p] = xv
@@ -249,9 +249,9 @@ def _step_impulse(
         if not arms:  # straight from runs.out, in the same order as from fp below
             for p in range(n):
                 fz = out[2, p] - particle_mass[p] * gravity
-                fq[dof_of[3 * p]] += out[0, p]
-                fq[dof_of[3 * p + 1]] += out[1, p]
-                fq[dof_of[3 * p + 2]] += fz
+                fq[np.uint64(dof_of[3 * p])] += out[0, p]
+                fq[np.uint64(dof_of[3 * p + 1])] += out[1, p]
+                fq[np.uint64(dof_of[3 * p + 2])] += fz
         else:
             for p in range(n):
                 for a in range(3):

@@ -111,9 +111,9 @@ def _record_step(
     xr = palm_x0[1] + q[palm_x_dof[1]] if gripped else np.inf
     for p in range(n):
         m = particle_mass[p]
-        px = base_x[p, 0] + q[dof_of[3 * p]]
-        py = base_x[p, 1] + q[dof_of[3 * p + 1]]
-        pz = base_x[p, 2] + q[dof_of[3 * p + 2]]
+        px = base_x[p, 0] + q[np.uint64(dof_of[3 * p])]  # unsigned: no wraparound
+        py = base_x[p, 1] + q[np.uint64(dof_of[3 * p + 1])]
+        pz = base_x[p, 2] + q[np.uint64(dof_of[3 * p + 2])]
         x[p, 0] = px
         x[p, 1] = py
         x[p, 2] = pz
