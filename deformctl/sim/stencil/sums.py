@@ -11,8 +11,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 from numba.extending import overload
+from numpy.typing import NDArray
 
 from deformctl.arraytypes import FloatArray, IntArray
+
+UIntArray = NDArray[np.uint64]
 
 #: index constants as unsigned integers: indices computed from them are unsigned, so the
 #: compiled sums carry no negative-index wraparound (the same values, fewer instructions)
@@ -22,7 +25,7 @@ _U3 = np.uint64(3)
 
 
 @njit(cache=True, inline="always")
-def _offsets(shape: IntArray) -> IntArray:
+def _offsets(shape: IntArray) -> UIntArray:
     """:func:`direction_offsets` inside the kernels."""
     ny = shape[1]
     nz = shape[2]
@@ -118,7 +121,7 @@ def _sum_in(coef: FloatArray, xg: FloatArray, pp: int, off: IntArray) -> tuple[f
 
 
 @njit(cache=True, inline="always")
-def _upper_offsets(shape: IntArray) -> IntArray:
+def _upper_offsets(shape: IntArray) -> UIntArray:
     """Index offsets of :data:`UPPER_OFFSETS` inside the kernels."""
     ny = shape[1]
     nz = shape[2]

@@ -296,16 +296,16 @@ def backward_sweep(
                 axp[j - palm[0]] += a_val[kk] * delta
             else:
                 axg[3 * halo + rep[j]] += a_val[kk] * delta
-    base = 3 * halo
+    first = 3 * halo
     for g in range(rep.shape[0]):
         if fixed[g]:
             x[g] = 0.0
             if with_product:
                 ax[g] = 0.0
         else:
-            x[g] = xg[base + rep[g]]
+            x[g] = xg[first + rep[g]]
             if with_product:
-                ax[g] = axg[base + rep[g]]
+                ax[g] = axg[first + rep[g]]
     if with_product:
         for k in range(np_):
             if not fixed[palm[k]]:
@@ -356,15 +356,15 @@ def stencil_product(
         pp = p + halo
         s0, s1, s2 = _sums_in(coef, xg, pp, off)
         t0, t1, t2 = _sums_out(coef, xg, pp, off)
-        q = _U3 * np.uint64(pp)
+        qu = _U3 * np.uint64(pp)
         u = np.uint64(p)
-        c = _U3 * u
-        x0 = xg[q]
-        x1 = xg[q + _U1]
-        x2 = xg[q + _U2]
-        out[dof_of[c]] = block[u, 0] * x0 + block[u, 1] * x1 + block[u, 2] * x2 - s0 - t0
-        out[dof_of[c + _U1]] = block[u, 3] * x0 + block[u, 4] * x1 + block[u, 5] * x2 - s1 - t1
-        out[dof_of[c + _U2]] = block[u, 6] * x0 + block[u, 7] * x1 + block[u, 8] * x2 - s2 - t2
+        cu = _U3 * u
+        x0 = xg[qu]
+        x1 = xg[qu + _U1]
+        x2 = xg[qu + _U2]
+        out[dof_of[cu]] = block[u, 0] * x0 + block[u, 1] * x1 + block[u, 2] * x2 - s0 - t0
+        out[dof_of[cu + _U1]] = block[u, 3] * x0 + block[u, 4] * x1 + block[u, 5] * x2 - s1 - t1
+        out[dof_of[cu + _U2]] = block[u, 6] * x0 + block[u, 7] * x1 + block[u, 8] * x2 - s2 - t2
     for k in range(palm.shape[0]):
         g = palm[k]
         acc = 0.0
