@@ -356,8 +356,8 @@ LIFT_JERK_TIME_S = Quantity("lift_jerk_time_s", "jerk_time_s", " s", 0.0)
 #: (:class:`deformctl.sim.SupportRelease`; 0: at once).
 RELEASE_TIME_S = Quantity("release_time_s", "release_time_s", " s", 0.0)
 #: The simulator's slip tolerance (:class:`deformctl.sim.SlipCriterion`, ``lift sim``): 0 is
-#: allowed there (no sliding at all), unlike a rig's frames (:data:`SLIP_TOLERANCE_M`), whose
-#: marker tracking always moves a little.
+#: allowed there, since contacts in stick do not slide at all (a held attempt's slip is exactly
+#: 0.0), unlike a rig's frames (:data:`SLIP_TOLERANCE_M`), whose marker tracking always jitters.
 SIM_SLIP_TOLERANCE_M = Quantity("slip_tolerance_m", "--slip-tolerance-m", " m", 0.0)
 #: The force ceiling of a lift (``lift --max-force-n``, the catalog's ``max_force_n`` column, the
 #: search's ``max_force_n``; :mod:`deformctl.lift.ceiling`): no attempt requests more.

@@ -24,7 +24,8 @@ Failures, decided here:
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Annotated, NamedTuple
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -114,10 +115,15 @@ def sim(
         lift_dataset(catalog, task, output, sweep, object_ids=object_ids, force=force, quiet=quiet)
         return
     factory = sim_runner_factory(preset=preset, scene_hz=scene)
-    object_ids = opt.parse_object_ids(objects)
-    seed = start(protocol=search.protocol, dataset=False)
-    file = _FileRun(catalog, output, log, object_ids, search, seed, force, None if quiet else clock)
-    file.lift(factory, epoch_ns=epoch_ns, workers=sweep.workers)
+    run = _FileRun(catalog=catalog, output=output, log=log, objects=objects, force=force)
+    run.lift(
+        factory,
+        search,
+        start,
+        clock=None if quiet else clock,
+        epoch_ns=epoch_ns,
+        workers=sweep.workers,
+    )
 
 
 @translate_errors
@@ -156,36 +162,38 @@ def rig(
 
     timeout_s = DEFAULT_RIG_TIMEOUT_S if rig_timeout is None else rig_timeout
     factory = rig_runner_factory(command, timeout_s=timeout_s, slip_from_frames=judge)
-    object_ids = opt.parse_object_ids(objects)
-    seed = start(protocol=search.protocol, dataset=False)
-    file = _FileRun(catalog, output, log, object_ids, search, seed, force, None if quiet else clock)
-    file.lift(factory)
+    run = _FileRun(catalog=catalog, output=output, log=log, objects=objects, force=force)
+    run.lift(factory, search, start, clock=None if quiet else clock)
 
 
-class _FileRun(NamedTuple):
-    """What ``lift sim`` and ``lift rig`` give a table-file output alike (``clock`` None:
-    ``--quiet``)."""
+@dataclass(frozen=True, kw_only=True)
+class _FileRun:
+    """The table-file output that ``lift sim`` and ``lift rig`` share: the catalog, the
+    outputs, the ``--objects`` chosen and ``--force``."""
 
     catalog: str
     output: str
     log: str | None
-    object_ids: list[str] | None
-    search: SearchOptions
-    seed: StartSeed | None
+    objects: str | None
     force: bool
-    clock: RunClock | None
 
     def lift(
         self,
         factory: RunnerFactory,
+        search: SearchOptions,
+        start: Start,
         *,
+        clock: RunClock | None,
         epoch_ns: int | None = None,
         workers: int | Auto | None = opt.NO_SWEEP.workers,
     ) -> None:
-        """Lift the objects into the table file (and the log) with ``factory``'s runner, then
-        report the run (its summary line unless ``--quiet``)."""
+        """Lift the objects into the table file (and the log) with ``factory``'s runner, the
+        search from ``start``'s seed (if any), then report the run (its summary line unless
+        ``clock`` is None: ``--quiet``)."""
         from deformctl.lift.stage import lift_catalog_files
 
+        object_ids = opt.parse_object_ids(self.objects)
+        seed = start(protocol=search.protocol, dataset=False)
         output, log = self.output, self.log
         with progress_bar(stderr_console(), "lift") as progress:
             run = lift_catalog_files(
@@ -193,16 +201,16 @@ class _FileRun(NamedTuple):
                 factory,
                 output=output,
                 log=log,
-                object_ids=self.object_ids,
-                search=self.search,
+                object_ids=object_ids,
+                search=search,
                 progress=progress,
                 force=self.force,
                 log_epoch_ns=epoch_ns,
-                seed=self.seed,
+                seed=seed,
                 warn=warn,
                 workers=workers,
             )
-        summary = None if self.clock is None else run_summary(run, self.clock, output, log)
+        summary = None if clock is None else run_summary(run, clock, output, log)
         quiet = is_stdio(output) or (log is not None and is_stdio(log))
         report_run(run, quiet=quiet, summary=summary)
 

@@ -29,7 +29,7 @@ from deformctl.measure.options import (
 from deformctl.series import FloatArray, Rupture, SqueezeSeries
 from deformctl.squeeze.rupture import cut_rupture, phase_slice, slice_squeeze
 from deformctl.squeeze.window import DEFAULT_WINDOW_S, default_window_s
-from deformctl.units import NS_PER_S
+from deformctl.units import s_to_ns
 
 
 def segment_squeezes(
@@ -136,7 +136,7 @@ def _to_squeezes(
             compression_m=compression_m[sl],
             start_time_ns=None
             if clock_origin_ns is None
-            else clock_origin_ns + round(float(t[0]) * NS_PER_S),
+            else clock_origin_ns + s_to_ns(float(t[0])),
         )
         sq, rupture = cut_rupture(whole, window_s=window, recording_offset_s=float(t[0]))
         if rupture is not None:

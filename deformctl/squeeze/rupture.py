@@ -77,7 +77,7 @@ import numpy as np
 from deformctl.series import FloatArray, Rupture, SqueezeSeries, ruptures_from_object
 from deformctl.signals import noise_std, sg_smooth, sg_window_length, uniform_grid
 from deformctl.squeeze.phase import check_phase
-from deformctl.units import NS_PER_S
+from deformctl.units import s_to_ns
 
 __all__ = [
     "HOLD_TOL_FRAC",
@@ -488,7 +488,7 @@ def slice_squeeze(s: SqueezeSeries, sl: slice) -> SqueezeSeries:
     }
     start_ns = s.start_time_ns
     if start_ns is not None and t.size:
-        start_ns += round(float(t[0] - s.time_s[0]) * NS_PER_S)
+        start_ns += s_to_ns(float(t[0] - s.time_s[0]))
     return SqueezeSeries(
         object_id=s.object_id,
         squeeze_index=s.squeeze_index,

@@ -55,7 +55,9 @@ def test_friction_cone_holds_inside_without_creep_and_slips_outside(settings: Si
     limit = rigid_lift_force_n(spec, profile)
     held = lift_attempt(spec, 1.05 * limit, profile=profile, settings=settings)
     assert held.lifted
-    assert held.slip_m < 0.5e-3
+    # stick is exact: the contacts do not slide at all, so the simulator's slip tolerance may be
+    # 0 (quantities.SIM_SLIP_TOLERANCE_M), unlike a rig's frames, whose tracking jitters
+    assert held.slip_m == 0.0
     assert held.series is not None
     # no creep during the 2 s hold: the object's height is constant to round-off
     hold = held.series.time_s >= held.series.time_s[-1] - 2.0

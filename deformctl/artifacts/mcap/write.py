@@ -37,7 +37,7 @@ from deformctl.artifacts.schema import json_schema_bytes, load_json_schema
 from deformctl.errors import InputDataError
 from deformctl.scene import SceneFrames
 from deformctl.series import LiftAttempt, SqueezeSeries
-from deformctl.units import NS_PER_S
+from deformctl.units import NS_PER_S, s_to_ns
 from deformctl.version import __version__
 
 
@@ -74,7 +74,7 @@ class _LogWriter:
     def ended(self, last_ns: int) -> None:
         """The squeeze / attempt just written ended at ``last_ns``."""
         self._floor_ns = last_ns
-        self._next_ns = last_ns + round(GAP_S * NS_PER_S)
+        self._next_ns = last_ns + s_to_ns(GAP_S)
 
     def add_objects(self, objects: Iterable[Mapping[str, Any]], path: str) -> None:
         for obj in objects:

@@ -65,7 +65,7 @@ from deformctl.plausibility import (
 )
 from deformctl.series import FloatArray
 from deformctl.squeeze.flags import LAG_ESTIMATED, LAG_GIVEN
-from deformctl.units import GIB, NS_PER_S, UNITS
+from deformctl.units import GIB, UNITS, s_to_ns
 
 #: Multiply a value in the unit by the factor to get SI; keys are lower-case unit names.
 TIME_UNITS_S: dict[str, float] = {k.lower(): u.si for k, u in UNITS["time"].items()}
@@ -250,7 +250,7 @@ def _read(
         segment=segmentation.segments(False),
         path=name,
         window_s=_detection_window_s(rate_hz),
-        clock_origin_ns=round(float(time_s[0]) * NS_PER_S) if absolute else None,
+        clock_origin_ns=s_to_ns(float(time_s[0])) if absolute else None,
     )
     details: dict[str, Any] = {
         "layout": layout.as_dict(),

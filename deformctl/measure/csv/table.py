@@ -275,13 +275,6 @@ def _grouped(cell: str, decimal: str, thousands: str) -> bool:
     return bool(re.match(rf"^[+-]?[1-9]\d{{0,2}}(?:{sep}\d{{3}})+(?:{dec}\d*)?$", cell))
 
 
-def to_float(cell: str, decimal: str = ".", thousands: str | None = None) -> float:
-    """``cell`` as a float (raises ValueError when it is not a plain number)."""
-    if not is_number(cell, decimal, thousands):
-        raise ValueError(cell)
-    return float(_normalise(cell, decimal, thousands))
-
-
 def _numeric_row(cells: Sequence[str], decimal: str, thousands: str | None) -> bool:
     """Two or more cells, more than half of the non-empty ones numbers."""
     filled = [c for c in cells if c]
