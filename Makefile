@@ -17,7 +17,11 @@ $(STAMP): pyproject.toml
 	$(BIN)/deformctl warmup
 	touch $(STAMP)
 
+# The warm-up first: after an edit of a kernel source the kernels compile here once, not in each of
+# the two pytest processes and again in the wheel's venv (which copies the checkout's compiled
+# kernels: tests/_helpers/wheel.py); about 2 s of CPU when they are compiled already.
 test: install
+	$(BIN)/deformctl warmup
 	$(BIN)/python -m pytest -n 2 -q
 
 # make test under a CPU timer (bench/suite_cpu.py): the files and tests that took the most CPU

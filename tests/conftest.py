@@ -11,8 +11,9 @@
   (5 x 4 x 3 particles), built once per session; treat it as read-only.
 * :func:`dask_cluster`: a Dask scheduler and two workers, each its own process, on 127.0.0.1
   (``tests/_helpers/dask_cluster.py``), stopped after the test.
-* :func:`wheel_file`, :func:`fresh_venv`: the wheel of the source tree and a fresh venv with it
-  installed, built once per session (``tests/_helpers/wheel.py``).
+* :func:`wheel_file`, :func:`fresh_venv`, :func:`warm_venv`: the wheel of the source tree, a
+  fresh venv with it installed, and that venv after ``deformctl warmup``, each made once per
+  session, shared by the xdist workers (``tests/_helpers/wheel.py``).
 
 Hypothesis draws its examples from a fixed seed (``derandomize``) and keeps no example database,
 so every run of ``make test`` tries the same cases on every machine: a fuzz test that finds a bug
@@ -31,7 +32,7 @@ import pytest
 from hypothesis import settings
 
 from tests._helpers.dask_cluster import dask_cluster  # noqa: F401 - a shared fixture
-from tests._helpers.wheel import fresh_venv, wheel_file  # noqa: F401 - shared fixtures
+from tests._helpers.wheel import fresh_venv, warm_venv, wheel_file  # noqa: F401 - shared fixtures
 
 #: the markers of the long tests, which a developer's inner loop can skip with
 #: ``pytest -m "not slow and not e2e and not docs"`` (``make test`` and CI run them all)

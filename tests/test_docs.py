@@ -34,7 +34,7 @@ from pathlib import Path
 import pytest
 
 from tests._helpers import docs_output
-from tests._helpers.wheel import seed_kernel_cache, venv_env
+from tests._helpers.wheel import venv_env
 
 pytestmark = pytest.mark.docs
 
@@ -142,21 +142,19 @@ def test_every_shell_block_runs_and_prints_what_the_page_shows(path: Path, tmp_p
 
 
 @pytest.fixture(scope="module")
-def wheel_user_venv(fresh_venv: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """:func:`fresh_venv` as a wheel user leaves it after ``pip install`` and ``deformctl warmup``
-    (once per install, as a user does): its ``bin/`` first on PATH (``deformctl``, ``python`` and
-    ``python3`` are the venv's, the checkout is nowhere on the path). The simulator's kernels come
-    compiled from the checkout (:func:`seed_kernel_cache`)."""
-    seed_kernel_cache(fresh_venv)
+def wheel_user_venv(warm_venv: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """:func:`warm_venv` (``pip install`` and ``deformctl warmup`` done) as a wheel user who
+    activated it sees it: its ``bin/`` first on PATH (``deformctl``, ``python`` and ``python3``
+    are the venv's, the checkout is nowhere on the path)."""
     found = subprocess.run(
         ["bash", "-c", "command -v deformctl python python3; "
-         "python -c 'import deformctl; print(deformctl.__file__)'; deformctl warmup"],
-        cwd=tmp_path_factory.mktemp("user"), env=venv_env(fresh_venv), capture_output=True,
+         "python -c 'import deformctl; print(deformctl.__file__)'"],
+        cwd=tmp_path_factory.mktemp("user"), env=venv_env(warm_venv), capture_output=True,
         text=True, check=True,
     ).stdout.split()  # fmt: skip
     assert len(found) == 4, found
-    assert all(Path(p).is_relative_to(fresh_venv) for p in found), found
-    return fresh_venv
+    assert all(Path(p).is_relative_to(warm_venv) for p in found), found
+    return warm_venv
 
 
 @pytest.mark.slow
