@@ -7,5 +7,6 @@ from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+UIntArray = NDArray[np.uint64]
 Int32Array = NDArray[np.int32]
 BoolArray = NDArray[np.bool_]

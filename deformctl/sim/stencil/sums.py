@@ -11,11 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 from numba.extending import overload
-from numpy.typing import NDArray
 
-from deformctl.arraytypes import FloatArray, IntArray
-
-UIntArray = NDArray[np.uint64]
+from deformctl.arraytypes import FloatArray, IntArray, UIntArray
 
 #: index constants as unsigned integers: indices computed from them are unsigned, so the
 #: compiled sums carry no negative-index wraparound (the same values, fewer instructions)
