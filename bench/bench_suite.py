@@ -13,6 +13,7 @@ Takes as long as ``make test`` (about 5 minutes on 2 idle cores). ``BENCH_SUITE=
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -33,8 +34,9 @@ def main() -> None:
     )
     lines = done.stdout.splitlines()
     start = next((i for i, line in enumerate(lines) if line.startswith("top ")), len(lines))
-    shown = [line for line in lines[start:] if not line.startswith(("=", "SKIPPED", "PASSED"))]
-    print("\n".join(line for line in shown if line.strip()))
+    end = next((i for i in range(start, len(lines)) if lines[i].startswith("=")), len(lines))
+    tail = [x for x in lines if x.startswith("make test:") or re.match(r"^\d+ (passed|failed)", x)]
+    print("\n".join([*lines[start:end], *tail]))
     if done.returncode != 0:
         print(f"the suite failed (pytest exit {done.returncode}): the time is not make test's")
 
