@@ -159,9 +159,27 @@ def _descendants(pid: int) -> dict[int, int]:
 def _start_sweep(cat: Path, out: Path) -> subprocess.Popen[bytes]:
     cmd = [sys.executable, "-m", "deformctl", "lift", "sim", str(cat), "-o", f"{out}/",
            *FAST_LIFT, "--partition-size", "2", "--workers", "2"]  # fmt: skip
+    # faulthandler on: a client that does not exit is made to print every thread's stack
+    env = {**os.environ, "PYTHONFAULTHANDLER": "1"}
     return subprocess.Popen(
-        cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True
+        cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True, env=env
     )
+
+
+def _wait_or_explain(proc: subprocess.Popen[bytes], timeout_s: float) -> None:
+    """Wait for ``proc``; if it does not exit in ``timeout_s``, fail with its process tree and
+    its threads' stacks (SIGABRT makes faulthandler print them) instead of a bare timeout."""
+    try:
+        proc.wait(timeout=timeout_s)
+        return
+    except subprocess.TimeoutExpired:
+        tree = _descendants(proc.pid)
+    with contextlib.suppress(ProcessLookupError):
+        os.kill(proc.pid, signal.SIGABRT)
+    with contextlib.suppress(subprocess.TimeoutExpired):
+        proc.wait(timeout=10)
+    err = proc.stderr.read().decode(errors="replace") if proc.stderr else ""
+    pytest.fail(f"the client did not exit within {timeout_s:g} s; its processes {tree}\n{err}")
 
 
 def _wait_for_parts(proc: subprocess.Popen[bytes], out: Path, n: int) -> None:
@@ -197,7 +215,7 @@ def test_killed_sweep_resumes_with_nothing_lost_or_duplicated(
             workers = [p for p, parent in tree.items() if parent != proc.pid]
             assert workers, tree
             os.kill(workers[0], signal.SIGKILL)
-            proc.wait(timeout=30)
+            _wait_or_explain(proc, 60.0)  # about 3 s idle; a loaded 2-core machine is slower
             err = proc.stderr.read().decode() if proc.stderr else ""
             assert proc.returncode == 1, err
             assert "a local worker process died" in err
