@@ -128,6 +128,7 @@ class _LocalBackend:
         self._futures: dict[Future[ObjectResult], int] = {}
         self._part_futures: dict[Future[None], int] = {}
         self._written: list[int] = []
+        self._dead = False  # a worker found dead by wait_some's watch, not by the pool
         self.capacity = 2 * workers
 
     def submit(self, position: int, item: dict[str, Any]) -> None:
@@ -145,9 +146,19 @@ class _LocalBackend:
         self._part_futures[fut] = part.index
 
     def wait_some(self) -> list[tuple[int, ObjectResult]]:
-        """Wait for an object or a part-writer job; the objects finished (maybe none)."""
+        """Wait for an object or a part-writer job; the objects finished (maybe none).
+
+        Every :data:`_WATCHDOG_S` without one, the workers are checked: a worker killed while it
+        was sending a result leaves the pool's result-reading thread waiting for the rest of
+        that message for ever, so the pool never learns it is broken and no future ends.
+        """
         pending: list[Future[Any]] = [*self._futures, *self._part_futures]
-        done, _ = wait(pending, return_when=FIRST_COMPLETED)
+        done: set[Future[Any]] = set()
+        while pending and not done:
+            done, _ = wait(pending, timeout=_WATCHDOG_S, return_when=FIRST_COMPLETED)
+            if not done and _a_worker_died(self._pool):
+                self._dead = True
+                raise DeformctlError(_WORKER_DIED)
         out = []
         for fut in done:
             try:
@@ -167,7 +178,7 @@ class _LocalBackend:
         return written
 
     def close(self) -> None:
-        if self._pool._broken:
+        if self._pool._broken or self._dead:
             _abandon_pool(self._pool)
         else:
             self._pool.shutdown(wait=True, cancel_futures=True)
@@ -185,7 +196,18 @@ def _abandon_pool(pool: ProcessPoolExecutor) -> None:
     for proc in list(processes.values()):
         with contextlib.suppress(Exception):
             proc.kill()
+    # a result-reading thread stuck inside a dead worker's half-sent result reads on until
+    # every write end of the result pipe is closed: the workers' (killed) and this process's
+    results = getattr(pool, "_result_queue", None)
+    with contextlib.suppress(Exception):
+        results._writer.close()  # type: ignore[union-attr]
     pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _a_worker_died(pool: ProcessPoolExecutor) -> bool:
+    """Whether a process of ``pool`` has exited (workers run until the pool shuts down)."""
+    processes = getattr(pool, "_processes", None) or {}
+    return any(proc.exitcode is not None for proc in list(processes.values()))
 
 
 def _worker_context(task: Callable[..., Any], preload: Sequence[str] = ()) -> Any:

@@ -130,6 +130,27 @@ def snapshot(path: Path) -> dict[str, bytes]:
     }
 
 
+def half_sent_result_task(item: dict[str, Any]) -> list[dict[str, Any]]:
+    """The toy task, but the worker that runs ``obj-03`` dies half-way through sending a result:
+    it writes a message header and part of the message onto the pool's result pipe, then
+    SIGKILLs itself (a worker killed while its result is on the way)."""
+    if item["object_id"] == "obj-03":
+        import gc
+        import multiprocessing.queues
+        import signal
+        import struct
+
+        (results,) = [o for o in gc.get_objects() if type(o) is multiprocessing.queues.SimpleQueue]
+        os.write(results._writer.fileno(), struct.pack("!i", 1 << 20) + b"\x80" * 100)
+        os.kill(os.getpid(), signal.SIGKILL)
+    return toy_task(item)
+
+
+def _half_sent_main(out_dir: str) -> None:
+    """Entry point of the subprocess whose worker dies half-way through sending a result."""
+    sweep(make_items(20), Path(out_dir), workers=2, task=half_sent_result_task)
+
+
 def _client_main(out_dir: str) -> None:
     """Entry point of the subprocess the client-kill test SIGKILLs part-way."""
     sweep(make_items(20, sleep_s=0.15), Path(out_dir), workers=1, partition_size=2)

@@ -216,6 +216,31 @@ def test_resume_recomputes_missing_corrupt_and_partial_parts_only(tmp_path: Path
     pd.testing.assert_frame_equal(read_dataset(out), expected_rows(items))
 
 
+def test_a_worker_killed_while_sending_its_result_fails_the_sweep_instead_of_hanging(
+    tmp_path: Path,
+) -> None:
+    """The pool's result reader waits for ever for the rest of a half-sent result, so the pool
+    itself never learns that the worker died; the sweep's own watch on its workers does."""
+    out = tmp_path / "o"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), *sys.path])}
+    code = f"from tests._helpers.sweeps import _half_sent_main; _half_sent_main({str(out)!r})"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code],
+        env=env,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        _, err = proc.communicate(timeout=60)  # about 2 s idle
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait(timeout=10)
+    assert proc.returncode == 1, err
+    assert "a local worker process died" in err, err
+
+
 def test_resume_after_the_client_is_killed(tmp_path: Path) -> None:
     out = tmp_path / "o"
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), *sys.path])}
