@@ -128,7 +128,6 @@ class _LocalBackend:
         self._futures: dict[Future[ObjectResult], int] = {}
         self._part_futures: dict[Future[None], int] = {}
         self._written: list[int] = []
-        self._dead = False  # a worker found dead by wait_some's watch, not by the pool
         self.capacity = 2 * workers
 
     def submit(self, position: int, item: dict[str, Any]) -> None:
@@ -157,7 +156,6 @@ class _LocalBackend:
         while pending and not done:
             done, _ = wait(pending, timeout=_WATCHDOG_S, return_when=FIRST_COMPLETED)
             if not done and _a_worker_died(self._pool):
-                self._dead = True
                 raise DeformctlError(_WORKER_DIED)
         out = []
         for fut in done:
@@ -178,7 +176,8 @@ class _LocalBackend:
         return written
 
     def close(self) -> None:
-        if self._pool._broken or self._dead:
+        # a dead worker the pool itself may never notice (see wait_some): abandon it too
+        if self._pool._broken or _a_worker_died(self._pool):
             _abandon_pool(self._pool)
         else:
             self._pool.shutdown(wait=True, cancel_futures=True)

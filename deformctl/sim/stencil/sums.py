@@ -41,7 +41,7 @@ def _offsets(shape: IntArray) -> UIntArray:
 
 @njit(cache=True, inline="always")
 def _sum_out(
-    coef: FloatArray, xg: FloatArray, pp: int, off: IntArray
+    coef: FloatArray, xg: FloatArray, pp: int, off: UIntArray
 ) -> tuple[float, float, float]:
     """``sum w n n^T x_q`` over the particle's 9 outgoing elements (neighbours ``pp + off``)."""
     u = np.uint64(pp)
@@ -77,7 +77,9 @@ def _sum_out(
 
 
 @njit(cache=True, inline="always")
-def _sum_in(coef: FloatArray, xg: FloatArray, pp: int, off: IntArray) -> tuple[float, float, float]:
+def _sum_in(
+    coef: FloatArray, xg: FloatArray, pp: int, off: UIntArray
+) -> tuple[float, float, float]:
     """``sum w n n^T x_q`` over the particle's 9 incoming elements (neighbours ``pp - off``,
     which own them)."""
     u = np.uint64(pp)
@@ -135,7 +137,7 @@ def _upper_offsets(shape: IntArray) -> UIntArray:
 
 @njit(cache=True, inline="always")
 def _block_sum_out(
-    coef: FloatArray, xg: FloatArray, pp: int, off: IntArray
+    coef: FloatArray, xg: FloatArray, pp: int, off: UIntArray
 ) -> tuple[float, float, float]:
     """``-sum A_pq x_q`` over the particle's 13 upper neighbours (blocks stored with it)."""
     u = np.uint64(pp)
@@ -155,7 +157,7 @@ def _block_sum_out(
 
 @njit(cache=True, inline="always")
 def _block_sum_in(
-    coef: FloatArray, xg: FloatArray, pp: int, off: IntArray
+    coef: FloatArray, xg: FloatArray, pp: int, off: UIntArray
 ) -> tuple[float, float, float]:
     """``-sum A_pq x_q`` over the particle's 13 lower neighbours (their blocks, stored with the
     particle after the upper ones)."""
@@ -176,24 +178,24 @@ def _block_sum_in(
     return s0, s1, s2
 
 
-def _sums_in(coef: FloatArray, xg: FloatArray, pp: int, off: IntArray) -> tuple[float, ...]:
+def _sums_in(coef: FloatArray, xg: FloatArray, pp: int, off: UIntArray) -> tuple[float, ...]:
     """The lower neighbours' terms ``-sum A_pq x_q`` of either stencil kind (numba only)."""
     raise NotImplementedError  # pragma: no cover - replaced by the overload in compiled code
 
 
-def _sums_out(coef: FloatArray, xg: FloatArray, pp: int, off: IntArray) -> tuple[float, ...]:
+def _sums_out(coef: FloatArray, xg: FloatArray, pp: int, off: UIntArray) -> tuple[float, ...]:
     """The upper neighbours' terms of either stencil kind (numba only)."""
     raise NotImplementedError  # pragma: no cover
 
 
 def _scatter(
-    coef: FloatArray, axg: FloatArray, pp: int, off: IntArray, d0: float, d1: float, d2: float
+    coef: FloatArray, axg: FloatArray, pp: int, off: UIntArray, d0: float, d1: float, d2: float
 ) -> None:
     """A particle's change ``delta`` into its upper neighbours' ``A x`` (numba only)."""
     raise NotImplementedError  # pragma: no cover
 
 
-def _kernel_offsets(coef: FloatArray, shape: IntArray) -> IntArray:
+def _kernel_offsets(coef: FloatArray, shape: IntArray) -> UIntArray:
     """The neighbour offsets of the stencil kind of ``coef`` (numba only)."""
     raise NotImplementedError  # pragma: no cover
 
@@ -232,7 +234,7 @@ def _kernel_offsets_kind(coef, shape):  # type: ignore[no-untyped-def]
 
 @njit(cache=True, inline="always")
 def _block_scatter_out(
-    coef: FloatArray, axg: FloatArray, pp: int, off: IntArray, d0: float, d1: float, d2: float
+    coef: FloatArray, axg: FloatArray, pp: int, off: UIntArray, d0: float, d1: float, d2: float
 ) -> None:
     """``(A x)_q += A_qp delta`` for the particle's 13 upper neighbours (``A_qp = A_pq^T``)."""
     u = np.uint64(pp)
@@ -245,7 +247,7 @@ def _block_scatter_out(
 
 @njit(cache=True, inline="always")
 def _scatter_out(
-    coef: FloatArray, axg: FloatArray, pp: int, off: IntArray, d0: float, d1: float, d2: float
+    coef: FloatArray, axg: FloatArray, pp: int, off: UIntArray, d0: float, d1: float, d2: float
 ) -> None:
     """``(A x)_q -= w n n^T delta`` for the particle's outgoing neighbours ``q = pp + off``."""
     u = np.uint64(pp)
