@@ -28,8 +28,10 @@ def _reverse(t: np.ndarray, values: np.ndarray) -> None:
 
 
 def _bag(path: Path, lam: float, reverse: bool, seed: int = 1) -> Path:
+    """A one-palm bag; the force at 250 Hz (the loop's sign does not depend on the rate)."""
     edit = _reverse if reverse else None
-    write_bag(path, 30.0, lam, seed=seed, wrench_topics=(LEFT,), edit_force=edit, edit_pose=edit)
+    write_bag(path, 30.0, lam, seed=seed, force_rate_hz=250.0, wrench_topics=(LEFT,),
+              edit_force=edit, edit_pose=edit)  # fmt: skip
     return path
 
 
