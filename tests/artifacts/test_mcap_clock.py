@@ -47,7 +47,7 @@ def _log_times(path: Path) -> list[tuple[str, int]]:
 @pytest.fixture(scope="module")
 def bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("clock") / "run.mcap"
-    write_bag(path, 30.0, 0.5, seed=4, pose_rate_hz=1000.0, pose_offset_s=0.0,
+    write_bag(path, 30.0, 0.5, seed=4, force_rate_hz=250.0, pose_rate_hz=250.0, pose_offset_s=0.0,
               receive_delay_s=RECEIVE_DELAY_S)  # fmt: skip
     return path
 
