@@ -179,7 +179,7 @@ def _still_pose(tp: np.ndarray, pos: np.ndarray) -> None:
 )
 def test_bag_bad_streams(tmp_path: Path, kwargs: dict[str, object], match: str) -> None:
     path = tmp_path / "bad.mcap"
-    write_bag(path, 20.0, 1.0, n_squeezes=1, **kwargs)  # type: ignore[arg-type]
+    write_bag(path, 20.0, 1.0, n_squeezes=1, force_rate_hz=250.0, **kwargs)  # type: ignore[arg-type]
     msg = _err(
         lambda: (
             read_recording(
