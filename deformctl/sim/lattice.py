@@ -167,7 +167,13 @@ def build_lattice(
             weight_list.append(cells / share)
     edges = np.concatenate(edge_list).astype(np.int64)
     weights = np.concatenate(weight_list)
-    delta = positions[edges[:, 1]] - positions[edges[:, 0]]
+    # each element's rest vector is its lattice offset times the spacing (x: between its layers),
+    # not the difference of two rounded positions: one family's elements share it bit for bit
+    # (the step reads a family's rest direction and length once: deformctl.sim.step.runs)
+    offset = grid[edges[:, 1]] - grid[edges[:, 0]]
+    delta = offset * spacing
+    if half:
+        delta[:, 0] = layer_x[grid[edges[:, 1], 0]] - layer_x[grid[edges[:, 0], 0]]
     rest = np.linalg.norm(delta, axis=1)
     return Lattice(
         shape=shape,

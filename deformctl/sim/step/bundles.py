@@ -77,8 +77,9 @@ class ElementRuns(NamedTuple):
     (:mod:`deformctl.sim.step.runs`).
 
     Attributes:
-        seg: per run its first particle, its length (slots), its particle index offset and its
-            first slot, ``[runs, 4]``.
+        seg: per run its first particle, its length (slots), its particle index offset, its
+            first slot and whether it is uniform (1: its elements share one rest direction and
+            length, read from its first slot), ``[runs, 5]``.
         k, rest, n0: per slot the element's stiffness N/m, rest length m, and rest direction
             ``[3, slots]``; zero in the gaps.
         real: whether a slot holds an element (false in the gaps), ``[slots]``.
