@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, get_args, get_origin
 
 from typer._coercion import build_runtime_param
 
@@ -35,9 +35,15 @@ _FLOAT = re.compile(r"-?(?:0|[1-9][0-9]{0,17})(?:\.[0-9]{1,17})?(?:[eE][-+]?[0-9
 def plain_value(annotation: Any, value: Any, multiple: bool) -> Any:
     """``value`` coerced to ``annotation`` as typer's pydantic adapter coerces it, for the plain
     cases: a ``str``, ``bool``, ``int`` or ``float`` value of that very type, a decimal text for
-    an ``int`` or ``float``, a list of texts for a repeated ``list[str]`` option; otherwise
-    :data:`NOT_PLAIN`."""
+    an ``int`` or ``float``, a list of texts for a repeated ``list[str]`` option, a tuple of
+    plain values for a fixed ``tuple[...]`` of those types; otherwise :data:`NOT_PLAIN`."""
     kind = type(value)
+    if get_origin(annotation) is tuple and not multiple:
+        items = get_args(annotation)
+        if kind not in (list, tuple) or Ellipsis in items or len(items) != len(value):
+            return NOT_PLAIN
+        out = tuple(plain_value(item, v, False) for item, v in zip(items, value, strict=True))
+        return NOT_PLAIN if any(v is NOT_PLAIN for v in out) else out
     if multiple:
         if annotation == list[str] and kind in (list, tuple):
             return list(value) if all(type(v) is str for v in value) else NOT_PLAIN

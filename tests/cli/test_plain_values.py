@@ -68,6 +68,24 @@ def test_a_repeated_text_option_is_a_list_of_its_texts() -> None:
     assert plain_value(list[int], ("1",), multiple=True) is NOT_PLAIN
 
 
+@pytest.mark.parametrize("annotation", [tuple[float, float, float], tuple[str, str]])
+def test_a_fixed_tuple_of_plain_values_is_a_tuple_of_them(annotation: Any) -> None:
+    adapter = try_build_adapter(annotation, OptionInfo())
+    assert adapter is not None
+    taken = 0
+    for value in [("1", "2.5", "-3"), ("6", "6"), ("a", "b"), ("1", "x", "2"), ("1", "2", "3", "4"),
+                  (1.0, 2.0, 3.0), ["0.5", "1e2", "7"], ("1_0", "2", "3")]:  # fmt: skip
+        plain = plain_value(annotation, value, multiple=False)
+        if plain is NOT_PLAIN:
+            continue
+        taken += 1
+        expected = adapter.validate_python(value)
+        assert type(plain) is tuple, (value, plain)
+        assert len(plain) == len(expected), (value, plain)
+        assert all(_same(a, b) for a, b in zip(plain, expected, strict=True)), (value, plain)
+    assert taken >= 2
+
+
 def _all_commands() -> list[Any]:
     """Every command that runs (with its group's parameters too)."""
     found: list[Any] = []
