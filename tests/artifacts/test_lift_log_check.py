@@ -1,8 +1,9 @@
-"""A lift log's samples are checked as columns, and refused as message by message.
+"""A lift log's samples are parsed and checked as columns, and refused as message by message.
 
-Reading a lift log checks its many sample messages in one pass (``schema.message_columns``)
-instead of one JSON Schema check each; a log that pass does not vouch for is checked message by
-message, so what is read, and the first bad message an error names, are the same either way.
+Reading a lift log parses its many sample messages at once (``jsonsafe.loads_objects``) and
+checks them in one pass (``schema.message_columns``) instead of one JSON Schema check each; a
+log these do not vouch for is read message by message, so what is read, and the first bad
+message an error names, are the same either way.
 """
 
 from __future__ import annotations
@@ -68,6 +69,10 @@ LOGS = {
     "a missing key": [*GOOD[:4], json.dumps({k: v for k, v in BASE.items() if k != "object_id"})],
     "a text for a number": [GOOD[0], _sample(1, palm_z_m="0.1")],
     "not an object": [GOOD[0], "[1, 2]"],
+    "a NaN": [GOOD[0], _sample(1, slip_m=float("nan")), GOOD[2]],
+    "a number no float holds": [GOOD[0], _sample(1).replace('"slip_m": 0.001', '"slip_m": 1e999')],
+    "a nested object": [GOOD[0], _sample(1, slip_m={"m": 0.0})],
+    "two objects in one": [GOOD[0], _sample(1) + _sample(2)],
 }
 
 
@@ -76,6 +81,7 @@ def test_a_lift_log_reads_as_message_by_message(name: str, monkeypatch: pytest.M
     raw = _log(LOGS[name])
     fast = _read(raw)
     monkeypatch.setattr(mcap_contents, "message_columns", lambda *_: None)  # one by one
+    monkeypatch.setattr(mcap_contents.jsonsafe, "loads_objects", lambda *_: None)
     assert fast == _read(raw)
     assert (fast[0] == "ok") == (name == "clean")  # the bad logs are refused
     if name == "a bound, then bad JSON":
@@ -90,6 +96,13 @@ def test_a_clean_log_checks_no_sample_one_by_one(monkeypatch: pytest.MonkeyPatch
         "validate_message",
         lambda name, *a, **k: checked.append(name) or real(name, *a, **k),
     )
-    assert _read(_log(GOOD))[0] == "ok"
+    parses: list[object] = []
+    loads = mcap_contents.jsonsafe.loads
+    contents = load_mcap(_log(GOOD), "l.mcap")
+    monkeypatch.setattr(
+        mcap_contents.jsonsafe, "loads", lambda *a, **k: parses.append(a) or loads(*a, **k)
+    )
+    assert len(lift_attempts_from_contents(contents)) == 1
     assert "lift_attempt_sample" not in checked
+    assert len(parses) < len(GOOD)  # the samples were parsed at once
     assert checked == ["lift_attempt_result"]  # not a flat schema: checked one by one

@@ -382,9 +382,10 @@ def _check_channels(contents: McapContents) -> dict[int, tuple[str, str | None]]
 def _decoded_messages(contents: McapContents, schema_name: str) -> list[dict[str, Any]]:
     """Parse and JSON-Schema-validate every message of ``schema_name``, in file order.
 
-    A message on an object's own channel must name that object. When every message parses and
-    passes the column check (:func:`~deformctl.artifacts.schema.message_columns`, which vouches
-    for a flat schema's messages in one pass), none is checked again one by one; otherwise each
+    A message on an object's own channel must name that object. When every message parses (flat
+    objects in one parse, :func:`deformctl.jsonsafe.loads_objects`) and passes the column check
+    (:func:`~deformctl.artifacts.schema.message_columns`, which vouches for a flat schema's
+    messages in one pass), none is checked again one by one; otherwise each
     is, in file order, so the first bad message is the one named.
     """
     channels = {
@@ -396,8 +397,11 @@ def _decoded_messages(contents: McapContents, schema_name: str) -> list[dict[str
         if (found := channels.get(msg.channel_id)) is not None
     ]
     try:  # any failure here is found again, and named, message by message below
-        parsed: list[Any] | None = [jsonsafe.loads(msg.data) for _, msg, _ in picked]
-        valid = message_columns(schema_name, parsed or []) is not None
+        texts = [msg.data for _, msg, _ in picked]
+        parsed = jsonsafe.loads_objects(texts)  # flat objects: one parse for them all
+        if parsed is None:
+            parsed = [jsonsafe.loads(text) for text in texts]
+        valid = message_columns(schema_name, parsed) is not None
     except Exception:  # the loop below raises what the first bad message raises
         parsed, valid = None, False
     out: list[dict[str, Any]] = []
