@@ -47,7 +47,7 @@ from deformctl.artifacts.io import atomic_output, atomic_write_bytes
 from deformctl.artifacts.schema import load_table_spec, validate_frame
 from deformctl.artifacts.tables import read_table, table_schema
 from deformctl.errors import InputDataError, MissingInputError, OutputExistsError, SchemaError
-from deformctl.version import __version__
+from deformctl.version import version_string
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -142,7 +142,7 @@ def dataset_fingerprint(
         "command": command,
         "kind": kind,
         "schema_version": version,
-        "tool_version": __version__,
+        "tool_version": version_string(),
         "settings": dict(settings),
         "inputs": dict(inputs),
         "seed": seed,

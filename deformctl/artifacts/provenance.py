@@ -21,7 +21,7 @@ import numpy as np
 from deformctl import jsonsafe
 from deformctl.artifacts.io import PathArg, display_name, is_stdio
 from deformctl.errors import MissingInputError, SchemaError
-from deformctl.version import __version__
+from deformctl.version import version_string
 
 TOOL = "deformctl"
 STDIN_HASH = "stdin"  #: recorded instead of a hash for an input read from ``-``
@@ -126,7 +126,7 @@ class Provenance:
         }
         norm = json.loads(to_json(dict(settings or {})))
         return cls(
-            tool_version=__version__,
+            tool_version=version_string(),
             command_line=tuple(args),
             inputs=hashes,
             seed=None if seed is None else int(seed),

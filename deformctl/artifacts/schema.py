@@ -23,14 +23,16 @@ import operator
 from collections.abc import Callable
 from dataclasses import dataclass
 from importlib.resources import files
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import jsonschema
 import numpy as np
 import pandas as pd
 
 from deformctl.artifacts.io import PathArg
 from deformctl.errors import SchemaError
+
+if TYPE_CHECKING:  # pragma: no cover - jsonschema loads when a message needs it
+    import jsonschema
 
 TABLE_KINDS = ("catalog", "coefficients", "lift_results", "index_table", "predictions")
 MESSAGE_SCHEMAS = (
@@ -165,7 +167,10 @@ def schema_version(schema: dict[str, Any]) -> int:
 
 @functools.cache
 def json_validator(name: str) -> jsonschema.protocols.Validator:
-    """A compiled, cached validator for ``schemas/<name>.schema.json``."""
+    """A compiled, cached validator for ``schemas/<name>.schema.json`` (jsonschema is imported
+    here: a valid message passes :func:`fast_check` without it)."""
+    import jsonschema
+
     schema = load_json_schema(name)
     cls = jsonschema.validators.validator_for(schema)
     cls.check_schema(schema)
@@ -423,6 +428,8 @@ def validate_message(
     check = fast_check(name)
     if check is not None and check(message):
         return
+    import jsonschema
+
     error = jsonschema.exceptions.best_match(json_validator(name).iter_errors(message))
     if error is not None:
         field = ".".join(str(p) for p in error.absolute_path) or None

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 import typer
 
-from deformctl.cli._group import OneLineErrorGroup
+from deformctl.cli._group import HelpCommand, OneLineErrorGroup
 
 if TYPE_CHECKING:  # pragma: no cover - built on first use (module __getattr__)
     app: typer.Typer
@@ -124,7 +124,7 @@ def build_app(
         if isinstance(group, typer.Typer):
             built.add_typer(group, name=name)
         else:
-            built.command()(function)
+            built.command(cls=HelpCommand)(function)
     return built
 
 

@@ -1,5 +1,6 @@
-"""The root command group: click's usage errors as the project's one line, and a ``--help``
-that does not import pydantic."""
+"""The root command group: click's usage errors as the project's one line, a ``--help``
+that does not import pydantic, and a command whose plain option values do not either
+(:mod:`deformctl.cli._plain_values`)."""
 
 from __future__ import annotations
 
@@ -11,11 +12,12 @@ import typer
 from typer._click import exceptions as click_exc  # typer vendors click: its exceptions
 from typer.core import TyperCommand, TyperGroup
 
+from deformctl.cli import _plain_values
 from deformctl.cli._common import _one_line
 from deformctl.errors import EXIT_FAILURE, EXIT_USAGE
 
 if TYPE_CHECKING:  # pragma: no cover - annotations only
-    from typer._click import Context
+    from typer._click import Command, Context
     from typer.core import TyperOption
 
 
@@ -33,11 +35,25 @@ class _HelpFlagDefault:
         return option
 
 
+class PlainValuesGroup(TyperGroup):
+    """A group whose subcommands coerce plain option values without pydantic
+    (:func:`deformctl.cli._plain_values.install`, on the subcommand it resolves)."""
+
+    def resolve_command(
+        self, ctx: Context, args: list[str]
+    ) -> tuple[str | None, Command | None, list[str]]:
+        """The subcommand ``args[0]``, its plain parameters given
+        :class:`~deformctl.cli._plain_values.PlainFirst`."""
+        name, command, rest = super().resolve_command(ctx, args)
+        _plain_values.install(command)
+        return name, command, rest
+
+
 class HelpCommand(_HelpFlagDefault, TyperCommand):
-    """A subcommand whose ``--help`` does not import pydantic."""
+    """A command whose ``--help`` (or its help flag, not given) does not import pydantic."""
 
 
-class OneLineErrorGroup(_HelpFlagDefault, TyperGroup):
+class OneLineErrorGroup(_HelpFlagDefault, PlainValuesGroup):
     """The root command group: every click usage error becomes one ``error: ...`` line, exit 2.
 
     Click prints a usage error (an unknown command or option, ``--seed abc``, a missing argument)

@@ -15,9 +15,8 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import typer
 from typer._click import exceptions as click_exc  # typer vendors click: its exceptions
-from typer.core import TyperGroup
 
-from deformctl.cli._group import HelpCommand, _HelpFlagDefault
+from deformctl.cli._group import HelpCommand, PlainValuesGroup, _HelpFlagDefault
 
 if TYPE_CHECKING:  # pragma: no cover - annotations only
     from typer._click import Command, Context
@@ -87,7 +86,7 @@ def rewrite(
     return [old.subcommand, *moved, *rest], notice
 
 
-class SourceGroup(_HelpFlagDefault, TyperGroup):
+class SourceGroup(_HelpFlagDefault, PlainValuesGroup):
     """A command whose subcommands are its sources; it also runs the old flag forms
     (:data:`OLD_FLAGS`), with one deprecation line on stderr."""
 

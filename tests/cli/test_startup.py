@@ -84,7 +84,7 @@ def test_the_watch_sees_a_command_that_runs(tmp_path: Path) -> None:
         "print(json.dumps(sorted(m for m in ('pandas', 'numpy', 'pydantic') "
         "if m in sys.modules)))"
     )
-    assert _loaded_after(code) == ["numpy", "pandas", "pydantic"]
+    assert _loaded_after(code) == ["numpy", "pandas"]  # not pydantic (test_plain_values.py)
     assert out.is_file()
 
 

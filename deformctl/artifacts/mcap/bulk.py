@@ -1,4 +1,4 @@
-"""Bulk squeeze-log reading: the same result as the reference reader, several times faster.
+"""Bulk squeeze-log reading: the same result as the reference reader, faster.
 
 A squeeze log holds one JSON message per sample: 3,753 per simulated object, 7.5 million in a
 2,000-object sweep. Decoding them one by one (a Message record from the mcap library, a JSON
@@ -11,7 +11,9 @@ when every check it makes is at least as strict as the reference path's (``load_
 ``squeezes_from_contents`` and ``decode_objects``) and it gives the same objects and squeezes, bit
 for bit; on anything else (a damaged, unusual or hostile file, a message that does not match, an
 error of any kind) it gives up and the reference path reads the file again, so the refusals and
-their messages are the reference path's.
+their messages are the reference path's. The reference path now parses and checks flat
+samples at once too (``contents._decoded_messages``); what the bulk reader saves over it is the
+mcap library's record objects (about 1.7x on a four-object log).
 """
 
 from __future__ import annotations

@@ -27,7 +27,12 @@ from deformctl import jsonsafe
 from deformctl.artifacts.io import PathArg, display_name
 from deformctl.artifacts.mcap.integrity import MCAP_MAGIC, locate_damage
 from deformctl.artifacts.provenance import Provenance
-from deformctl.artifacts.schema import load_json_schema, schema_version, validate_message
+from deformctl.artifacts.schema import (
+    load_json_schema,
+    message_columns,
+    schema_version,
+    validate_message,
+)
 from deformctl.errors import InputDataError, SchemaError
 from deformctl.reprs import short_repr
 from deformctl.units import NS_PER_S
@@ -377,25 +382,43 @@ def _check_channels(contents: McapContents) -> dict[int, tuple[str, str | None]]
 def _decoded_messages(contents: McapContents, schema_name: str) -> list[dict[str, Any]]:
     """Parse and JSON-Schema-validate every message of ``schema_name``, in file order.
 
-    A message on an object's own channel must name that object.
+    A message on an object's own channel must name that object. When every message parses (flat
+    objects in one parse, :func:`deformctl.jsonsafe.loads_objects`) and passes the column check
+    (:func:`~deformctl.artifacts.schema.message_columns`, which vouches for a flat schema's
+    messages in one pass), none is checked again one by one; otherwise each
+    is, in file order, so the first bad message is the one named.
     """
     channels = {
         cid: found for cid, found in _check_channels(contents).items() if found[0] == schema_name
     }
+    picked = [
+        (i, msg, found)
+        for i, msg in enumerate(contents.messages)
+        if (found := channels.get(msg.channel_id)) is not None
+    ]
+    try:  # any failure here is found again, and named, message by message below
+        texts = [msg.data for _, msg, _ in picked]
+        parsed = jsonsafe.loads_objects(texts)  # flat objects: one parse for them all
+        if parsed is None:
+            parsed = [jsonsafe.loads(text) for text in texts]
+        valid = message_columns(schema_name, parsed) is not None
+    except Exception:  # the loop below raises what the first bad message raises
+        parsed, valid = None, False
     out: list[dict[str, Any]] = []
-    for i, msg in enumerate(contents.messages):
-        found = channels.get(msg.channel_id)
-        if found is None:
-            continue
+    for k, (i, msg, found) in enumerate(picked):
         topic = contents.channels[msg.channel_id].topic
         where = f"message {i} on {topic}"
-        try:
-            obj = jsonsafe.loads(msg.data)
-        except ValueError as err:
-            raise SchemaError(
-                f"{where}: not valid JSON ({_short(err)})", path=contents.path, field=topic
-            ) from None
-        validate_message(schema_name, obj, path=contents.path, where=where)
+        if parsed is not None:
+            obj = parsed[k]
+        else:
+            try:
+                obj = jsonsafe.loads(msg.data)
+            except ValueError as err:
+                raise SchemaError(
+                    f"{where}: not valid JSON ({_short(err)})", path=contents.path, field=topic
+                ) from None
+        if not valid:
+            validate_message(schema_name, obj, path=contents.path, where=where)
         if found[1] is not None and obj["object_id"] != found[1]:
             raise SchemaError(
                 f"{where}: object_id {obj['object_id']!r} on the channel of {found[1]!r}",

@@ -27,7 +27,6 @@ import json
 from importlib.resources import files
 from typing import Any, NamedTuple
 
-import jsonschema
 import numpy as np
 
 from deformctl.artifacts.mcap.contents import PALMS_TOPIC, SCENE_TOPIC, McapContents
@@ -308,6 +307,8 @@ def scene_frames_of(contents: McapContents, *, validate: bool = True) -> list[Sc
 
 @functools.cache
 def _scene_validator() -> Any:
+    import jsonschema  # only a log's scene check needs it
+
     schema = foxglove_schema()
     return jsonschema.validators.validator_for(schema)(schema)
 
@@ -319,6 +320,8 @@ def check_scene_update(update: Any, *, path: str) -> None:
     Raises:
         SchemaError: it does not match, naming where (exit 65).
     """
+    import jsonschema
+
     error = jsonschema.exceptions.best_match(_scene_validator().iter_errors(update))
     if error is not None:
         where = "/".join(str(p) for p in error.absolute_path) or "(root)"

@@ -38,7 +38,7 @@ from deformctl.errors import InputDataError
 from deformctl.scene import SceneFrames
 from deformctl.series import LiftAttempt, SqueezeSeries
 from deformctl.units import NS_PER_S, s_to_ns
-from deformctl.version import __version__
+from deformctl.version import version_string
 
 
 class _LogWriter:
@@ -53,7 +53,7 @@ class _LogWriter:
             enable_crcs=True,
             enable_data_crcs=True,
         )
-        self._w.start(profile="", library=f"deformctl {__version__}")
+        self._w.start(profile="", library=f"deformctl {version_string()}")
         self._w.add_metadata("deformctl", {"kind": kind, "format_version": FORMAT_VERSION})
         if provenance is not None:
             self._w.add_metadata("provenance", provenance.to_mcap_metadata())
