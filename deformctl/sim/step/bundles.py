@@ -246,7 +246,8 @@ class IterativeSolver(NamedTuple):
 class StepState(NamedTuple):
     """The state a step updates in place: DOF displacements ``q`` and velocities ``v`` (the step's
     base state until recorded), the new velocities ``vnew``, the velocities at the start of the
-    step ``v_last``, the row impulses ``lam`` and the particle positions ``x`` ``[n, 3]``."""
+    step ``v_last`` (with backward Euler only at the palm x DOFs, the record's only reader), the
+    row impulses ``lam`` and the particle positions ``x`` ``[n, 3]``."""
 
     q: FloatArray
     v: FloatArray

@@ -139,7 +139,7 @@ def integrate(
     targets = RowTargets(gap, target, friction)
     for step in range(n_steps):
         f_now = force_cmd[step + 1]
-        _predict(q, v, q_last, v_last, q_prev, v_prev, bdf2)
+        _predict(q, v, q_last, v_last, q_prev, v_prev, bdf2, palms.x_dof)
         _arm_predict(body.arm, bdf2)
         _step_impulse(
             body, palms, q, v, gravity * gravity_scale[step + 1], f_now, h_step, x, vel, fp, fq

@@ -291,6 +291,7 @@ def _predict(
     q_prev: FloatArray,
     v_prev: FloatArray,
     bdf2: bool,
+    read: IntArray,
 ) -> None:
     """Shift the history and turn ``q, v`` into the step's base state.
 
@@ -298,8 +299,15 @@ def _predict(
     earlier; on exit ``q_prev, v_prev`` hold that earlier state, ``q_last, v_last`` the start of
     this step, and ``q, v`` the base of the implicit update: unchanged for backward Euler, the
     BDF2 predictor ``(4 x_n - x_{n-1}) / 3`` otherwise (a run starts from rest, so the first
-    step's history is the start state itself).
+    step's history is the start state itself). Backward Euler reads no history, so there only
+    ``v_last`` at the DOFs ``read`` (the palm x DOFs, whose start velocities the record reads;
+    negative entries none) is kept, and nothing else is copied.
     """
+    if not bdf2:
+        for a in range(read.shape[0]):
+            if read[a] >= 0:
+                v_last[read[a]] = v[read[a]]
+        return
     for i in range(q.shape[0]):  # one pass
         qp = q_last[i]
         vp = v_last[i]
@@ -309,6 +317,5 @@ def _predict(
         v_prev[i] = vp
         q_last[i] = qn
         v_last[i] = vn
-        if bdf2:
-            q[i] = (4.0 * qn - qp) / 3.0
-            v[i] = (4.0 * vn - vp) / 3.0
+        q[i] = (4.0 * qn - qp) / 3.0
+        v[i] = (4.0 * vn - vp) / 3.0

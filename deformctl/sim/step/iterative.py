@@ -229,14 +229,17 @@ def integrate_iterative(
     fp = np.empty((n, 3))
     fq = np.empty(n_dof)
     bt = np.empty(n_dof)
-    dv = np.zeros(n_dof)
-    dv_hist = np.zeros((warm_history, n_dof))
-    y_hist = np.zeros((warm_history, n_dof))
+    # the history of velocity changes and their images, one row more than kept: the step's dv
+    # and adv are the spare row, which becomes the newest (no copy) as the oldest becomes spare
+    dv_hist = np.zeros((warm_history + 1, n_dof))
+    y_hist = np.zeros((warm_history + 1, n_dof))
     order = np.arange(warm_history)
+    spare = warm_history
     n_hist = 0
     residual_in_work = False
-    adv = np.zeros(n_dof)  # A dv, carried as dv changes (CG's initial product)
-    err_hist = np.zeros(warm_history)  # 2-norm error bound of each kept image
+    dv = dv_hist[spare]
+    adv = y_hist[spare]  # A dv, carried as dv changes (CG's initial product)
+    err_hist = np.zeros(warm_history + 1)  # 2-norm error bound of each kept image
     a_abs = 0.0  # max_i sum_j |A_ij|, the scale of a product's rounding
     for i in range(n_dof):
         row_abs = 0.0
@@ -315,7 +318,7 @@ def integrate_iterative(
     targets = RowTargets(gap, target, bound)
     for step in range(n_steps):
         f_now = force_cmd[step + 1]
-        _predict(q, v, q_last, v_last, q_prev, v_prev, bdf2)
+        _predict(q, v, q_last, v_last, q_prev, v_prev, bdf2, palm_x_dof)
         _arm_predict(body.arm, bdf2)
         _step_impulse(
             body, palms, q, v, gravity * gravity_scale[step + 1], f_now, h_step, x, vel, fp, fq
@@ -494,31 +497,29 @@ def integrate_iterative(
                         if row_dof2[general[g]] >= 0:
                             bt[row_dof2[general[g]]] -= lg[g]
             _fixed_residual(a_ptr0, h_a_idx, h_a_val, fixed_list, n_fixed, dv, bt, react)
-            dv2 = 0.0
-            if residual_in_work:
-                # A dv without a product: b - r on the free DOFs (r: CG's final residual, first
-                # in its scratch), b + the row impulse on the fixed ones (from _fixed_residual);
-                # exact up to the error of CG's initial product and rounding
-                for i in range(n_dof):
-                    adv[i] = bt[i] + react[i] if fixed[i] else bt[i] - work[i]
-                    dv2 += dv[i] * dv[i]
-            else:
+            if not residual_in_work:
                 product(mg, work, dv, adv)
                 stats[4] += 1
                 adv_err = 0.0
-                for i in range(n_dof):
-                    dv2 += dv[i] * dv[i]
-            adv_err += PRODUCT_ROUNDING * a_abs * np.sqrt(dv2)
-            adv_known = True
+            # one pass: A dv without a product when CG's residual is at hand (b - r on the free
+            # DOFs, r: CG's final residual, first in its scratch; b + the row impulse on the fixed
+            # ones, from _fixed_residual; exact up to the error of CG's initial product and
+            # rounding), |dv|^2, the new velocities and the lattice's fastest x and z DOFs
+            dv2 = 0.0
             speed_x = 0.0
             speed_z = 0.0
             for i in range(n_dof):
+                if residual_in_work:
+                    adv[i] = bt[i] + react[i] if fixed[i] else bt[i] - work[i]
+                dv2 += dv[i] * dv[i]
                 vnew[i] = v[i] + dv[i]
                 a = dof_axis[i]
                 if a == 0:
                     speed_x = max(speed_x, abs(vnew[i]))
                 elif a == 2:
                     speed_z = max(speed_z, abs(vnew[i]))
+            adv_err += PRODUCT_ROUNDING * a_abs * np.sqrt(dv2)
+            adv_known = True
             if chosen and max(2.0 * speed_x, speed_z) * h_step >= 0.4 * row_margin:
                 # fast enough that a left-out row could close its gap: all rows, chosen again
                 # next step
@@ -603,16 +604,17 @@ def integrate_iterative(
                         changed = True
             if not changed:
                 break
-        # the history: the oldest slot takes this step's dv and its image A dv
-        slot = order[warm_history - 1]
+        # the history: this step's dv and its image A dv (the spare row) become the newest, the
+        # oldest row the next step's spare
+        oldest = order[warm_history - 1]
         for a in range(warm_history - 1, 0, -1):
             order[a] = order[a - 1]
-        order[0] = slot
+        order[0] = spare
+        err_hist[spare] = adv_err
+        spare = oldest
+        dv = dv_hist[spare]
+        adv = y_hist[spare]
         n_hist = min(n_hist + 1, warm_history)
-        for i in range(n_dof):
-            dv_hist[slot, i] = dv[i]
-            y_hist[slot, i] = adv[i]
-        err_hist[slot] = adv_err
         _arm_update(body, x, vnew, h_step)  # before x moves to the new positions
         _record_step(step, tally, motion, body, palms, contacts, drive, rows, n_rows, f_now, h_step)
         if _slipped_past(rec, step, stop_slip, stop_from):
