@@ -321,7 +321,9 @@ def integrate(
                 if f >= 0 and state[r] == 1 and state[f] == 1:
                     state[r] = 3
         _arm_update(body, x, vnew, h_step)  # before x moves to the new positions
-        _record_step(step, tally, motion, body, palms, contacts, drive, all_rows, nr, f_now, h_step)
+        _record_step(
+            step, tally, motion, body, palms, contacts, drive, all_rows, nr, f_now, h_step, -1.0
+        )
         if _slipped_past(rec, step, stop_slip, stop_from):
             return q, v, rec[: step + 1]
     return q, v, rec

@@ -43,6 +43,8 @@ def _warm_start(
     dv: FloatArray,
     adv: FloatArray,
     err_hist: FloatArray,
+    gram: FloatArray,
+    same_free: bool,
 ) -> float:
     """CG's initial guess from the last ``n_hist`` (at most 3) velocity changes ``dv_k`` (rows
     ``order[0], order[1], ...`` of ``dv_hist``, newest first) and their images ``y_k = A dv_k``
@@ -53,7 +55,11 @@ def _warm_start(
     the normal equations with a 1e-12 relative ridge. The span contains the linear extrapolation
     ``2 dv_1 - dv_2``, the guess while fewer than two are known or the small system is singular.
     The Gram entries are accumulated in one pass, in scalars (a pass per entry, or accumulating
-    into an array, costs several times more).
+    into an array, costs several times more). ``gram`` ``[4]`` carries ``y_1.y_1, y_1.y_2,
+    y_2.y_2`` of the last call and whether they are set (its last entry nonzero): when the free
+    DOFs are the same as then (``same_free``), the history has moved by one image since, so
+    they are this call's ``y_2.y_2, y_2.y_3, y_3.y_3``, the same sums in the same order, and
+    the pass forms only the entries of the new image.
 
     Returns:
         a bound on the 2-norm error of ``adv`` on the free DOFs: ``sum_k |c_k| (err_k + rho
@@ -65,6 +71,8 @@ def _warm_start(
     """
     n_dof = dv.shape[0]
     k = min(n_hist, 3)  # a longer history keeps its newest three
+    carried = same_free and gram[3] != 0.0
+    gram[3] = 0.0
     if k >= 2:
         y1 = y_hist[order[0]]
         y2 = y_hist[order[1]]
@@ -72,22 +80,44 @@ def _warm_start(
         w3 = 1.0 if k >= 3 else 0.0
         g11 = g12 = g13 = g22 = g23 = g33 = 0.0
         t1 = t2 = t3 = 0.0
-        for i in range(n_dof):
-            if fixed[i]:
-                continue
-            a1 = y1[i]
-            a2 = y2[i]
-            a3 = w3 * y3[i]
-            r = rhs[i]
-            g11 += a1 * a1
-            g12 += a1 * a2
-            g13 += a1 * a3
-            g22 += a2 * a2
-            g23 += a2 * a3
-            g33 += a3 * a3
-            t1 += a1 * r
-            t2 += a2 * r
-            t3 += a3 * r
+        if k >= 3 and carried:
+            g22 = gram[0]
+            g23 = gram[1]
+            g33 = gram[2]
+            for i in range(n_dof):
+                if fixed[i]:
+                    continue
+                a1 = y1[i]
+                a2 = y2[i]
+                a3 = y3[i]
+                r = rhs[i]
+                g11 += a1 * a1
+                g12 += a1 * a2
+                g13 += a1 * a3
+                t1 += a1 * r
+                t2 += a2 * r
+                t3 += a3 * r
+        else:
+            for i in range(n_dof):
+                if fixed[i]:
+                    continue
+                a1 = y1[i]
+                a2 = y2[i]
+                a3 = w3 * y3[i]
+                r = rhs[i]
+                g11 += a1 * a1
+                g12 += a1 * a2
+                g13 += a1 * a3
+                g22 += a2 * a2
+                g23 += a2 * a3
+                g33 += a3 * a3
+                t1 += a1 * r
+                t2 += a2 * r
+                t3 += a3 * r
+        gram[0] = g11
+        gram[1] = g12
+        gram[2] = g22
+        gram[3] = 1.0
         trace = g11 + g22 + g33
         if trace > 0.0:
             g = np.empty((k, k))
@@ -240,6 +270,8 @@ def integrate_iterative(
     dv = dv_hist[spare]
     adv = y_hist[spare]  # A dv, carried as dv changes (CG's initial product)
     err_hist = np.zeros(warm_history + 1)  # 2-norm error bound of each kept image
+    gram = np.zeros(4)  # the warm start's Gram entries carried to the next step
+    gram_version = -1  # the free DOFs' version (fixed_version) at the last warm start
     a_abs = 0.0  # max_i sum_j |A_ij|, the scale of a product's rounding
     for i in range(n_dof):
         row_abs = 0.0
@@ -349,7 +381,11 @@ def integrate_iterative(
                 state[r] = 0
                 lam[r] = 0.0
             lam_last[r] = lam_before
-        adv_err = _warm_start(dv_hist, y_hist, order, n_hist, fixed, fq, dv, adv, err_hist)
+        same_free = fixed_version == gram_version
+        adv_err = _warm_start(
+            dv_hist, y_hist, order, n_hist, fixed, fq, dv, adv, err_hist, gram, same_free
+        )
+        gram_version = fixed_version
         # A dv is carried through the images while its error bound stays far below CG's
         # tolerance (then CG's stopping test still holds for the true residual); else CG forms
         # the product (the image is then exact, and the bounds start again from rounding)
@@ -504,8 +540,10 @@ def integrate_iterative(
             # one pass: A dv without a product when CG's residual is at hand (b - r on the free
             # DOFs, r: CG's final residual, first in its scratch; b + the row impulse on the fixed
             # ones, from _fixed_residual; exact up to the error of CG's initial product and
-            # rounding), |dv|^2, the new velocities and the lattice's fastest x and z DOFs
+            # rounding), |dv|^2, the new velocities, the fastest DOF (for the record) and the
+            # lattice's fastest x and z DOFs
             dv2 = 0.0
+            speed = 0.0
             speed_x = 0.0
             speed_z = 0.0
             for i in range(n_dof):
@@ -513,6 +551,8 @@ def integrate_iterative(
                     adv[i] = bt[i] + react[i] if fixed[i] else bt[i] - work[i]
                 dv2 += dv[i] * dv[i]
                 vnew[i] = v[i] + dv[i]
+                if abs(vnew[i]) > speed:
+                    speed = abs(vnew[i])
                 a = dof_axis[i]
                 if a == 0:
                     speed_x = max(speed_x, abs(vnew[i]))
@@ -616,7 +656,9 @@ def integrate_iterative(
         adv = y_hist[spare]
         n_hist = min(n_hist + 1, warm_history)
         _arm_update(body, x, vnew, h_step)  # before x moves to the new positions
-        _record_step(step, tally, motion, body, palms, contacts, drive, rows, n_rows, f_now, h_step)
+        _record_step(
+            step, tally, motion, body, palms, contacts, drive, rows, n_rows, f_now, h_step, speed
+        )
         if _slipped_past(rec, step, stop_slip, stop_from):
             return q, v, rec[: step + 1]
     return q, v, rec

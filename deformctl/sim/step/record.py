@@ -54,6 +54,7 @@ def _record_step(
     n_rows: int,
     f_now: float,
     h: float,
+    max_speed: float,
 ) -> None:
     """Record step ``step`` and advance ``v <- vnew``, ``q <- q + h v`` (palm quantities before
     the position update use the new velocities); copy the positions into ``drive.frames`` on
@@ -64,6 +65,8 @@ def _record_step(
     the implicit step (impulses are ``h`` times the force) and ``v_last`` the velocity at the
     start of the step (for the palm's acceleration). The centre of mass is mass-weighted. The
     contact forces sum the impulses of rows ``rows[:n_rows]`` (every row with an impulse).
+    ``max_speed`` is the largest ``|vnew|`` (m/s) when the caller has it at hand, else negative
+    (then it is found here).
     """
     rec, slip, palm_z_acc, total_mass, com_z0 = tally
     q, v, vnew, v_last, lam, x = state
@@ -95,12 +98,17 @@ def _record_step(
         acc_r = (vnew[palm_x_dof[1]] - v_last[palm_x_dof[1]]) / dt
         rec[step, REC_NORMAL_L] = f_now - palm_mass * acc_l
         rec[step, REC_NORMAL_R] = f_now + palm_mass * acc_r
-    max_speed = 0.0
-    for i in range(n_dof):
-        v[i] = vnew[i]
-        q[i] += h * v[i]
-        if abs(v[i]) > max_speed:
-            max_speed = abs(v[i])
+    if max_speed >= 0.0:
+        for i in range(n_dof):
+            v[i] = vnew[i]
+            q[i] += h * v[i]
+    else:
+        max_speed = 0.0
+        for i in range(n_dof):
+            v[i] = vnew[i]
+            q[i] += h * v[i]
+            if abs(v[i]) > max_speed:
+                max_speed = abs(v[i])
     # the centre of mass in scalars (an array's entries would be stored and reloaded each time)
     com_x = 0.0
     com_y = 0.0
