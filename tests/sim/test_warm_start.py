@@ -16,9 +16,8 @@ def _guess_and_image(dv_hist, y_hist, order, n_hist, fixed, rhs):  # type: ignor
     out = np.full(rhs.shape[0], np.nan)
     image = np.full(rhs.shape[0], np.nan)
     err = np.zeros(dv_hist.shape[0])
-    _warm_start(
-        dv_hist, y_hist, np.asarray(order, dtype=np.int64), n_hist, fixed, rhs, out, image, err
-    )
+    order = np.asarray(order, dtype=np.int64)
+    _warm_start(dv_hist, y_hist, order, n_hist, fixed, rhs, out, image, err, np.zeros(4), False)
     return out, image
 
 
@@ -66,6 +65,41 @@ def test_the_guess_comes_with_its_image_from_the_same_combination() -> None:
             continue
         want = a @ guess
         np.testing.assert_allclose(image, want, rtol=1e-10, atol=1e-10 * np.abs(want).max())
+
+
+def test_the_carried_gram_sums_give_the_same_bits_as_a_full_pass() -> None:
+    """A step later the history has moved by one image: with the same free DOFs the sums
+    carried from the call before are the ones a full pass forms, so guess, image and error bound
+    are bit for bit those of a full pass; with other free DOFs nothing is carried."""
+    rng = np.random.default_rng(5)
+    n = 50
+    dv = rng.normal(size=(4, n))
+    y = rng.normal(size=(4, n))
+    err = np.abs(rng.normal(size=4))
+    fixed = np.zeros(n, dtype=bool)
+    fixed[::6] = True
+    rhs = [rng.normal(size=n), rng.normal(size=n)]
+    gram = np.zeros(4)
+    args = (np.zeros(n), np.zeros(n), err)
+    # step 1 on images 2, 1, 0 (newest first), step 2 on 3, 2, 1: carried or formed afresh
+    _warm_start(dv, y, np.array([2, 1, 0]), 3, fixed, rhs[0], *args, gram, False)
+    order = np.array([3, 2, 1])
+    carried = (np.zeros(n), np.zeros(n))
+    fresh = (np.zeros(n), np.zeros(n))
+    bound_carried = _warm_start(dv, y, order, 3, fixed, rhs[1], *carried, err, gram, True)
+    bound_fresh = _warm_start(dv, y, order, 3, fixed, rhs[1], *fresh, err, np.zeros(4), False)
+    assert bound_carried == bound_fresh
+    assert np.array_equal(carried[0], fresh[0])
+    assert np.array_equal(carried[1], fresh[1])
+    # the carried sums are used only when the caller says the free DOFs are the same: wrong
+    # sums with same_free False change nothing (the call overwrites them, so a new copy each)
+    wrong = np.array([1e9, -1e9, 1e9, 1.0])
+    other = (np.zeros(n), np.zeros(n))
+    _warm_start(dv, y, order, 3, fixed, rhs[1], *other, err, wrong.copy(), False)
+    assert np.array_equal(other[0], fresh[0])
+    used = (np.zeros(n), np.zeros(n))
+    _warm_start(dv, y, order, 3, fixed, rhs[1], *used, err, wrong.copy(), True)
+    assert not np.array_equal(used[0], fresh[0])  # the test can see a carried sum
 
 
 def test_least_squares_recovers_a_combination_and_beats_extrapolation() -> None:
